@@ -1,0 +1,78 @@
+"""Step throughput of every env id, as ratios to CartPole-v1 measured in the same run.
+
+    python benchmarks/step_throughput.py [--seconds 2] [--batches 1,64,1024,4096]
+
+Prints steps/s of each id through ``gym.make`` (default wrappers, random
+actions, resets when episodes end) next to ``CartPole-v1``, and env-steps/s of
+the native vector env at several batch sizes (one process, one core). These
+machines are noisy: compare the ratios, not the absolute numbers. Goals (issue
+2): single env >= 0.5x CartPole-v1; vector env >= 2,000,000 env-steps/s at
+batch 4096.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+import gymnasium as gym
+import numpy as np
+
+import steamtemp_gym
+
+
+def single_rate(env_id: str, seconds: float, **kwargs) -> float:
+    env = gym.make(env_id, **kwargs)
+    env.reset(seed=0)
+    actions = [env.action_space.sample() for _ in range(256)]
+    for a in actions[:50]:  # warm-up (compilation)
+        _, _, term, trunc, _ = env.step(a)
+        if term or trunc:
+            env.reset()
+    n, t0 = 0, time.perf_counter()
+    while True:
+        for a in actions:
+            _, _, term, trunc, _ = env.step(a)
+            if term or trunc:
+                env.reset()
+        n += len(actions)
+        dt = time.perf_counter() - t0
+        if dt > seconds:
+            return n / dt
+
+
+def vector_rate(env_id: str, batch: int, seconds: float) -> float:
+    venv = gym.make_vec(env_id, num_envs=batch, vectorization_mode="vector_entry_point",
+                        scenario="load_following")  # fmt: skip
+    venv.reset(seed=0)
+    a = np.zeros(venv.action_space.shape, dtype=np.float32)
+    venv.step(a)
+    n, t0 = 0, time.perf_counter()
+    while True:
+        venv.step(a)
+        n += batch
+        dt = time.perf_counter() - t0
+        if dt > seconds:
+            return n / dt
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--seconds", type=float, default=2.0)
+    ap.add_argument("--batches", default="1,64,1024,4096")
+    ap.add_argument("--envs", default=",".join(steamtemp_gym.ENV_IDS))
+    args = ap.parse_args()
+    batches = [int(b) for b in args.batches.split(",")]
+    ref = single_rate("CartPole-v1", args.seconds)
+    print(f"CartPole-v1 via gym.make: {ref:,.0f} steps/s (reference)")
+    print(f"{'env id':36s} {'steps/s':>10s} {'xCartPole':>9s} " + " ".join(
+        f"{'B=' + str(b):>12s}" for b in batches))  # fmt: skip
+    for env_id in args.envs.split(","):
+        r = single_rate(env_id, args.seconds, scenario="load_following")
+        vec = [vector_rate(env_id, b, args.seconds) for b in batches]
+        print(f"{env_id:36s} {r:10,.0f} {r / ref:9.2f} " + " ".join(f"{v:12,.0f}" for v in vec))
+    print("vector columns: env-steps/s of the native vector env at batch B (one core)")
+
+
+if __name__ == "__main__":
+    main()

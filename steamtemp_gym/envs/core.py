@@ -1,0 +1,253 @@
+"""The batched simulation core shared by SteamTempEnv (a batch of one) and the vector env.
+
+Composition (DESIGN.md): plant + scenario + sensors + reward. Per control step:
+
+1. the plant kernel advances every row by dt with the commands held (ZOH) and
+   the disturbances evaluated at the start of the step, and fills its outputs;
+2. :func:`advance` (one compiled call) moves time, evaluates the scenario
+   schedules at the new time (disturbances for the next step, setpoint, noise
+   level), adds sensor noise, builds the normalized observation, the reward
+   (rewards.py), ``terminated`` (trip band) and ``truncated`` (scenario end).
+
+Sensor noise is counter-based (splitmix64 of the row's key, the step counter
+and the channel, Box-Muller), so a row's noise depends only on its seed: the
+vector env reproduces the single env bit for bit, whatever the batch size.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from steamtemp_gym import scenarios as sc
+from steamtemp_gym.plants.base import N_DIST, Plant
+from steamtemp_gym.rewards import RewardConfig, reward
+from steamtemp_gym.signals import OBS_LIMIT, T0_K, for_plant
+
+N_CH = len(sc.CHANNELS)
+# channel indices (order of scenarios.CHANNELS)
+C_LOAD, C_SP, C_BIAS, C_FOUL, C_SPRAYT = 0, 1, 2, 3, 4
+MIN_BREAKPOINTS = 64
+
+
+@njit(cache=True)
+def _splitmix64(z):
+    z = z + np.uint64(0x9E3779B97F4A7C15)
+    z = (z ^ (z >> np.uint64(30))) * np.uint64(0xBF58476D1CE4E5B9)
+    z = (z ^ (z >> np.uint64(27))) * np.uint64(0x94D049BB133111EB)
+    return z ^ (z >> np.uint64(31))
+
+
+@njit(cache=True)
+def gauss(key, counter, channel):
+    """Standard normal number determined by (key, counter, channel)."""
+    s = _splitmix64(key ^ _splitmix64(np.uint64(counter) * np.uint64(64) + np.uint64(channel)))
+    r1 = _splitmix64(s)
+    r2 = _splitmix64(r1)
+    u1 = (np.float64(r1 >> np.uint64(11)) + 0.5) * (1.0 / 9007199254740992.0)
+    u2 = np.float64(r2 >> np.uint64(11)) * (1.0 / 9007199254740992.0)
+    return np.sqrt(-2.0 * np.log(u1)) * np.cos(2.0 * np.pi * u2)
+
+
+@njit(cache=True)
+def _interp(bt, bv, n, t):
+    """Piecewise-linear schedule value and slope at t (held constant at the ends)."""
+    if t <= bt[0] or n == 1:
+        return bv[0], 0.0
+    if t >= bt[n - 1]:
+        return bv[n - 1], 0.0
+    k = 1
+    while bt[k] < t:
+        k += 1
+    # bt[k-1] < t <= bt[k]; a jump (equal times) is taken at its time
+    dt = bt[k] - bt[k - 1]
+    if dt <= 0.0:
+        return bv[k], 0.0
+    slope = (bv[k] - bv[k - 1]) / dt
+    return bv[k - 1] + slope * (t - bt[k - 1]), slope
+
+
+@njit(cache=True)
+def eval_schedules(b, t, bp_t, bp_v, bp_n, sp_nom, D, sp):
+    """Disturbances D[b] and setpoint sp[b] of row b at time t."""
+    load, rate = _interp(bp_t[b, C_LOAD], bp_v[b, C_LOAD], bp_n[b, C_LOAD], t)
+    D[b, 0] = load
+    D[b, 1] = rate
+    D[b, 2] = _interp(bp_t[b, C_BIAS], bp_v[b, C_BIAS], bp_n[b, C_BIAS], t)[0]
+    D[b, 3] = _interp(bp_t[b, C_FOUL], bp_v[b, C_FOUL], bp_n[b, C_FOUL], t)[0]
+    D[b, 4] = _interp(bp_t[b, C_SPRAYT], bp_v[b, C_SPRAYT], bp_n[b, C_SPRAYT], t)[0]
+    sp[b] = sp_nom + _interp(bp_t[b, C_SP], bp_v[b, C_SP], bp_n[b, C_SP], t)[0]
+
+
+@njit(cache=True)
+def observe(b, Z, obs_idx, obs_cs, i_meas, key, counter, noise, sp, D, obs):
+    """Write the normalized observation of row b (noisy measurements, setpoint, error, load)."""
+    n = obs_idx.shape[0]
+    meas = 0.0
+    for j in range(n):
+        v = Z[b, obs_idx[j]]
+        if obs_cs[j, 2] > 0.0 and noise[b] > 0.0:
+            v += noise[b] * gauss(key[b], counter[b], j)
+        if obs_idx[j] == i_meas:
+            meas = v
+        o = (v - obs_cs[j, 0]) / obs_cs[j, 1]
+        obs[b, j] = min(max(o, -OBS_LIMIT), OBS_LIMIT)
+    extra = ((sp[b] - obs_cs[n, 0]) / obs_cs[n, 1], (sp[b] - meas) / T0_K, (D[b, 0] - 0.75) / 0.25)
+    for j in range(3):
+        obs[b, n + j] = min(max(extra[j], -OBS_LIMIT), OBS_LIMIT)
+
+
+@njit(cache=True)
+def advance(Z, U, U_prev, bp_t, bp_v, bp_n, ep, key, counter, ints, cfg, obs_cs, D, sp, obs, out):
+    """Everything after the plant step, for every row (see module docstring).
+
+    Args:
+        ep: (B, 3) per-row [time_s, duration_s, noise_std_C]; time advanced in place.
+        ints: [i_outlet, i_measured, n_obs_plant, n_valves, n_sprays, obs idx..., valve idx...,
+            spray idx...] (output indices).
+        cfg: [dt, sp_nom, trip_below_K, trip_above_K, spray_scale, reward weights...].
+        out: (B, 3) written: [reward, terminated, truncated].
+    """
+    i_out, i_meas, n_obs, n_v, n_s = ints[0], ints[1], ints[2], ints[3], ints[4]
+    obs_idx = ints[5 : 5 + n_obs]
+    s_idx = ints[5 + n_obs + n_v : 5 + n_obs + n_v + n_s]
+    dt, sp_nom, trip_lo, trip_hi, s_scale = cfg[0], cfg[1], cfg[2], cfg[3], cfg[4]
+    w = cfg[5:]
+    noise = ep[:, 2]
+    for b in range(Z.shape[0]):
+        ep[b, 0] += dt
+        counter[b] += 1
+        eval_schedules(b, ep[b, 0], bp_t, bp_v, bp_n, sp_nom, D, sp)
+        observe(b, Z, obs_idx, obs_cs, i_meas, key, counter, noise, sp, D, obs)
+        e = sp[b] - Z[b, i_out]
+        term = not (-trip_hi <= e <= trip_lo)  # also catches NaN
+        spray = 0.0
+        for j in range(n_s):
+            spray += Z[b, s_idx[j]] / s_scale
+        move = 0.0
+        for j in range(U.shape[1]):
+            move += abs(U[b, j] - U_prev[b, j])
+            U_prev[b, j] = U[b, j]
+        out[b, 0] = reward(e, spray, move, term, w)
+        out[b, 1] = 1.0 if term else 0.0
+        out[b, 2] = 1.0 if ep[b, 0] >= ep[b, 1] - 1e-9 else 0.0
+
+
+class Core:
+    """Batched state of B copies of one plant under per-row scenarios.
+
+    Args:
+        plant: The plant instance (parameters fixed).
+        batch: Number of rows.
+        reward_cfg: Reward weights.
+    """
+
+    def __init__(self, plant: Plant, batch: int, reward_cfg: RewardConfig) -> None:
+        self.plant = plant
+        self.B = batch
+        self.signals = for_plant(plant)
+        B, n_x, n_z, n_u = batch, plant.n_x, plant.n_z, plant.n_u
+        self.X = np.zeros((B, n_x))
+        self.Z = np.zeros((B, n_z))
+        self.U = np.zeros((B, n_u))
+        self.U_prev = np.zeros((B, n_u))
+        self.D = np.zeros((B, N_DIST))
+        self.sp = np.zeros(B)
+        self.ep = np.zeros((B, 3))
+        self.key = np.zeros(B, dtype=np.uint64)
+        self.counter = np.zeros(B, dtype=np.int64)
+        self.out = np.zeros((B, 3))
+        self._alloc_schedules(MIN_BREAKPOINTS)
+        observed = [i for i, s in enumerate(plant.outputs) if s.observed]
+        self.obs = np.zeros((B, len(observed) + 3), dtype=np.float64)
+        self.obs_cs = np.array(
+            [[s.center, s.scale, float(s.noisy)] for s in self.signals.observation], dtype=np.float64
+        )
+        idx = plant.index
+        self.i_out = idx[plant.outlet]
+        self.valve_idx = [idx[v] for v in plant.valves]
+        self.spray_idx = [idx[s] for s in plant.sprays]
+        self.ints = np.array(
+            [self.i_out, idx[plant.outlet_measured], len(observed), len(plant.valves), len(plant.sprays)]
+            + observed
+            + self.valve_idx
+            + self.spray_idx,
+            dtype=np.int64,
+        )
+        spray_scale = plant.outputs[self.spray_idx[0]].scale if self.spray_idx else 1.0
+        trip_lo, trip_hi = plant.trip_band_K
+        self.cfg = np.concatenate(
+            [[plant.dt_s, plant.setpoint_C, trip_lo, trip_hi, spray_scale], reward_cfg.to_array()]
+        )
+        self.scenario: list[sc.Scenario | None] = [None] * B
+
+    def _alloc_schedules(self, k: int) -> None:
+        self.bp_t = np.zeros((self.B, N_CH, k))
+        self.bp_v = np.zeros((self.B, N_CH, k))
+        self.bp_n = np.ones((self.B, N_CH), dtype=np.int64)
+
+    def reset_row(self, b: int, scenario: sc.Scenario, key: int) -> None:
+        """Start row b at t = 0 of ``scenario`` in steady state, with noise key ``key``."""
+        need = sc.max_breakpoints([scenario])
+        if need > self.bp_t.shape[2]:
+            old = (self.bp_t, self.bp_v, self.bp_n)
+            self._alloc_schedules(need)
+            self.bp_t[:, :, : old[0].shape[2]] = old[0]
+            self.bp_v[:, :, : old[1].shape[2]] = old[1]
+            self.bp_n[:] = old[2]
+        sc.pack(scenario, self.bp_t[b], self.bp_v[b], self.bp_n[b])
+        self.scenario[b] = scenario
+        self.ep[b] = (0.0, scenario.duration_s, scenario.noise_std_C)
+        self.key[b] = np.uint64(key)
+        self.counter[b] = 0
+        self.out[b] = 0.0
+        eval_schedules(b, 0.0, self.bp_t, self.bp_v, self.bp_n, self.plant.setpoint_C, self.D, self.sp)
+        self.plant.steady_state(self.D[b : b + 1], self.sp[b : b + 1], self.X[b : b + 1])
+        # outputs of the steady state: a zero-length step fills Z
+        self.plant.kernel()(
+            self.X[b : b + 1], self.U[b : b + 1], self.D[b : b + 1], self.plant.P,
+            self.plant.jrow, self.plant.jcol, 0.0, 1, self.Z[b : b + 1],
+        )  # fmt: skip
+        self.U[b] = self.Z[b, self.valve_idx]
+        self.U_prev[b] = self.U[b]
+        observe(b, self.Z, self.ints[5 : 5 + self.ints[2]], self.obs_cs, self.ints[1],
+                self.key, self.counter, self.ep[:, 2], self.sp, self.D, self.obs)  # fmt: skip
+
+    def step(self, U: np.ndarray) -> None:
+        """Advance every row by one control interval with commands U in [0, 1]."""
+        self.U[:] = U
+        self.plant.step(self.X, self.U, self.D, self.Z)
+        advance(
+            self.Z, self.U, self.U_prev, self.bp_t, self.bp_v, self.bp_n, self.ep, self.key,
+            self.counter, self.ints, self.cfg, self.obs_cs, self.D, self.sp, self.obs, self.out,
+        )  # fmt: skip
+
+    def info_columns(self) -> dict[str, np.ndarray]:
+        """Physical values of every row, in engineering units (arrays of shape (B,) or (B, k))."""
+        Z, idx = self.Z, self.plant.index
+        valves = Z[:, self.valve_idx]
+        info = {
+            "time_s": self.ep[:, 0].copy(),
+            "outlet_temp_C": Z[:, self.i_out].copy(),
+            "measured_temp_C": Z[:, idx[self.plant.outlet_measured]].copy(),
+            "setpoint_C": self.sp.copy(),
+            "load": self.D[:, 0].copy(),
+            "spray_valve": valves[:, 0].copy() if valves.shape[1] == 1 else valves,
+            "spray_flow_kg_s": Z[:, self.spray_idx].sum(axis=1),
+        }
+        for name in self.plant.extra_info:
+            info[name] = Z[:, idx[name]].copy()
+        return info
+
+
+def check_action(action: np.ndarray, shape: tuple[int, ...]) -> np.ndarray:
+    """Validate an action batch: right shape, finite; returns commands in [0, 1]."""
+    a = np.asarray(action, dtype=np.float64)
+    if a.shape != shape:
+        if a.size == int(np.prod(shape)) and a.ndim <= len(shape):
+            a = a.reshape(shape)
+        else:
+            raise ValueError(f"action has shape {np.shape(action)}, expected {shape}")
+    if not np.all(np.isfinite(a)):
+        raise ValueError(f"action contains NaN or infinite values: {action!r}")
+    return (np.clip(a, -1.0, 1.0) + 1.0) * 0.5

@@ -1,0 +1,100 @@
+"""SteamTempEnv: one Gymnasium env for every plant (a batch of one of envs/core.py).
+
+Observation: the plant's measured signals (noisy where a thermocouple reads
+them), the setpoint, the control error and the load demand, each normalized as
+``env.unwrapped.signals`` describes. Action: valve/damper commands in [-1, 1]
+(opening (a + 1)/2). Reward: rewards.py. ``terminated`` when the true outlet
+temperature leaves the plant's trip band (``plant.trip_band_K`` around the
+setpoint: superheater/turbine protection); ``truncated`` at the end of the
+scenario. ``info`` carries physical values in engineering units.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+
+from steamtemp_gym import scenarios as sc
+from steamtemp_gym.envs import options as opts
+from steamtemp_gym.envs.core import Core, check_action
+from steamtemp_gym.signals import OBS_LIMIT
+
+
+def draw_episode(rng: np.random.Generator, scenario: Any, duration_s: float) -> tuple[sc.Scenario, int]:
+    """The scenario and noise key of a new episode, drawn from one env's generator."""
+    if scenario == sc.RANDOM:
+        scenario = sc.random_scenario(rng, duration_s)
+    key = int(rng.integers(0, 2**63 - 1, dtype=np.int64))
+    return scenario, key
+
+
+def spaces(core: Core) -> tuple[gym.spaces.Box, gym.spaces.Box]:
+    """Single-env observation and action spaces."""
+    n_obs = core.obs.shape[1]
+    obs_space = gym.spaces.Box(-OBS_LIMIT, OBS_LIMIT, shape=(n_obs,), dtype=np.float64)
+    act_space = gym.spaces.Box(-1.0, 1.0, shape=(core.plant.n_u,), dtype=np.float32)
+    return obs_space, act_space
+
+
+class SteamTempEnv(gym.Env):
+    """Superheated steam temperature control of one plant (see module docstring).
+
+    Args:
+        plant_id: Registered id whose plant to simulate.
+        **options: ``scenario`` (name, YAML path, Scenario or "random"; default
+            "random"), ``render_mode`` (None or "rgb_array"), ``reward`` (dict of
+            RewardConfig overrides), ``params`` (dict of plant parameter overrides).
+    """
+
+    metadata = {"render_modes": ["rgb_array"], "render_fps": 10}
+
+    def __init__(self, plant_id: str, **options: Any) -> None:
+        plant, self._scenario_spec, reward_cfg, self.render_mode = opts.build(plant_id, options)
+        self.plant = plant
+        self.core = Core(plant, 1, reward_cfg)
+        self.signals = self.core.signals
+        self.observation_space, self.action_space = spaces(self.core)
+        self._shape = (plant.n_u,)
+        self._history: list[dict[str, Any]] = []
+        self._needs_reset = True
+
+    @property
+    def scenario(self) -> sc.Scenario | None:
+        """The scenario of the current episode."""
+        return self.core.scenario[0]
+
+    def reset(self, *, seed: int | None = None, options: dict | None = None):
+        super().reset(seed=seed)
+        if options:
+            raise ValueError(f"reset() takes no options, got {sorted(options)}")
+        scenario, key = draw_episode(self.np_random, self._scenario_spec, self.plant.default_duration_s)
+        self.core.reset_row(0, scenario, key)
+        self._needs_reset = False
+        info = self._info()
+        self._history = [info] if self.render_mode else []
+        return self.core.obs[0].copy(), info
+
+    def step(self, action):
+        if self._needs_reset:
+            raise RuntimeError("call reset() before step() (and after the episode ends)")
+        u = check_action(action, self._shape)
+        self.core.step(u[None, :])
+        r, term, trunc = self.core.out[0]
+        terminated, truncated = bool(term), bool(trunc)
+        self._needs_reset = terminated or truncated
+        info = self._info()
+        if self.render_mode:
+            self._history.append(info)
+        return self.core.obs[0].copy(), float(r), terminated, truncated, info
+
+    def _info(self) -> dict[str, Any]:
+        return {k: float(v[0]) if v.ndim == 1 else v[0].copy() for k, v in self.core.info_columns().items()}
+
+    def render(self):
+        if self.render_mode != "rgb_array":
+            return None
+        from steamtemp_gym.envs.render import trend_image
+
+        return trend_image(self._history, self.plant, self.scenario)

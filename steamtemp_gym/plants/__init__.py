@@ -1,0 +1,31 @@
+"""The plants, one module each; :data:`PLANTS` maps every env id to its plant class.
+
+Adding a plant = one module here plus one entry in :data:`PLANTS` (the id is
+registered with Gymnasium by ``steamtemp_gym/__init__.py``).
+"""
+
+from __future__ import annotations
+
+import importlib
+
+from steamtemp_gym.plants.base import Plant
+
+#: env id -> "module:Class" of its plant (imported lazily).
+PLANTS: dict[str, str] = {
+    "steamtemp/SupercriticalFSH-v0": "steamtemp_gym.plants.supercritical_fsh:SupercriticalFSH",
+}
+
+
+def plant_class(plant_id: str) -> type[Plant]:
+    """The plant class of an env id; ValueError listing the known ids otherwise."""
+    try:
+        path = PLANTS[plant_id]
+    except (KeyError, TypeError):
+        raise ValueError(f"unknown plant id {plant_id!r}; valid ids: {sorted(PLANTS)}") from None
+    module, cls = path.split(":")
+    return getattr(importlib.import_module(module), cls)
+
+
+def make(plant_id: str, **params) -> Plant:
+    """A plant instance with parameter overrides (ValueError on unknown or impossible values)."""
+    return plant_class(plant_id)(**params)

@@ -1,0 +1,34 @@
+"""Spray attemperator: algebraic mass and energy balance (negligible storage).
+
+    W_out = W_in + w_sp,   h_out = (W_in h_in + w_sp h_sp) / W_out
+
+(../shared/REFERENCE_DATA.md; 001_458073198cb84e92.txt eq. (17)-(20) in
+steady form). Spray flow through the valve follows the incompressible valve
+equation w_sp = v C_v sqrt(rho_w dp) with a linear characteristic.
+"""
+
+from __future__ import annotations
+
+import math
+
+from numba import njit
+
+
+@njit(cache=True)
+def mix(W_in, h_in, w_sp, h_sp):
+    """Outlet flow (kg/s) and enthalpy (J/kg) of the attemperator."""
+    W_out = W_in + w_sp
+    return W_out, (W_in * h_in + w_sp * h_sp) / W_out
+
+
+@njit(cache=True)
+def spray_flow(opening, Cv, rho_w, dp):
+    """Spray water flow (kg/s) through a linear valve: opening * Cv * sqrt(rho_w * dp).
+
+    Args:
+        opening: Valve opening in [0, 1] (clipped). Cv: valve flow coefficient,
+            m2 (kg/s per sqrt(kg/m3 * Pa)). rho_w: water density (kg/m3).
+        dp: Pressure drop across the valve (Pa), clipped at zero.
+    """
+    v = min(max(opening, 0.0), 1.0)
+    return v * Cv * math.sqrt(rho_w * max(dp, 0.0))

@@ -1,0 +1,127 @@
+"""What every plant provides to the generic env (the plant side of DESIGN.md).
+
+A plant is pure physics: a frozen parameter dataclass, a packed parameter
+vector ``P`` for the kernels, and a compiled batched step
+``step(X, U, D, dt)`` over arrays shaped (batch, n_states) that also fills the
+plant's physical outputs Z (batch, n_outputs). The disturbance vector D holds
+the common scenario vocabulary (:data:`DIST`); each plant maps it onto its own
+inputs. U holds actuator commands in [0, 1] (the env maps actions in [-1, 1]).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+from typing import Any, ClassVar
+
+import numpy as np
+
+#: Disturbance vector entries handed to every plant kernel, in order.
+DIST: tuple[str, ...] = (
+    "load",  # load demand, fraction of rated
+    "load_rate_per_s",  # slope of the load demand schedule (1/s)
+    "heat_absorption_bias",  # relative heat-absorption error
+    "fouling",  # gas-side heat-transfer multiplier
+    "spray_water_temp_offset_C",  # K
+)
+N_DIST = len(DIST)
+
+
+@dataclass(frozen=True)
+class Signal:
+    """A named physical signal with its unit and the scaling used for observations.
+
+    ``(value - center) / scale`` is about [-1, 1] in normal operation.
+    """
+
+    name: str
+    unit: str
+    center: float
+    scale: float
+    observed: bool = True
+    noisy: bool = False
+    description: str = ""
+
+
+def validate_params(params: Any, positive: tuple[str, ...] = (), bounds: dict | None = None) -> None:
+    """Raise ValueError naming the field for non-finite, non-positive or out-of-bound values."""
+    for f in dataclasses.fields(params):
+        v = getattr(params, f.name)
+        if isinstance(v, (int, float)) and not isinstance(v, bool):
+            if not np.isfinite(v):
+                raise ValueError(f"{type(params).__name__}.{f.name} must be finite, got {v!r}")
+    for name in positive:
+        v = getattr(params, name)
+        if not v > 0:
+            raise ValueError(f"{type(params).__name__}.{name} must be > 0, got {v!r}")
+    for name, (lo, hi) in (bounds or {}).items():
+        v = getattr(params, name)
+        if not lo <= v <= hi:
+            raise ValueError(
+                f"{type(params).__name__}.{name} = {v!r} is outside the physical range [{lo}, {hi}]"
+            )
+
+
+class Plant:
+    """Base class of the plants; subclasses fill the class attributes and the kernels.
+
+    Attributes:
+        id: Gymnasium id, e.g. ``steamtemp/SupercriticalFSH-v0``.
+        source: The reference document the plant implements.
+        Params: Frozen dataclass of physical parameters (with units and sources).
+        actions: The actuator command signals (valves, dampers), in order.
+        outputs: The physical outputs Z, in order; observed ones form the observation.
+        setpoint_C: Nominal main-steam temperature setpoint.
+        outlet: Name of the true main-steam temperature output.
+        outlet_measured: Name of the measured main-steam temperature output.
+        valves: Names of the valve-opening outputs. sprays: names of the spray-flow outputs.
+        trip_band_K: (below, above) setpoint at which the unit trips (episode terminates).
+    """
+
+    id: ClassVar[str]
+    source: ClassVar[str]
+    Params: ClassVar[type]
+    actions: ClassVar[tuple[Signal, ...]]
+    outputs: ClassVar[tuple[Signal, ...]]
+    setpoint_C: ClassVar[float]
+    outlet: ClassVar[str] = "outlet_temp_C"
+    outlet_measured: ClassVar[str] = "outlet_temp_meas_C"
+    valves: ClassVar[tuple[str, ...]] = ("spray_valve",)
+    sprays: ClassVar[tuple[str, ...]] = ("spray_flow_kg_s",)
+    extra_info: ClassVar[tuple[str, ...]] = ()
+    trip_band_K: ClassVar[tuple[float, float]] = (60.0, 40.0)
+    default_duration_s: ClassVar[float] = 3600.0
+
+    def __init__(self, **overrides: Any) -> None:
+        valid = {f.name for f in dataclasses.fields(self.Params)}
+        unknown = sorted(set(overrides) - valid)
+        if unknown:
+            raise ValueError(
+                f"unknown parameter(s) {unknown} for {self.id}; valid parameters: {sorted(valid)}"
+            )
+        self.params = self.Params(**overrides)
+        self.P, self.jrow, self.jcol, self.n_x = self.pack(self.params)
+        self.dt_s = float(self.params.dt_s)
+        self.n_sub = int(self.params.n_substeps)
+        self.n_u = len(self.actions)
+        self.n_z = len(self.outputs)
+        self.index = {s.name: i for i, s in enumerate(self.outputs)}
+
+    # -- to be provided by subclasses ---------------------------------------------
+    @staticmethod
+    def pack(params: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
+        """(P, jrow, jcol, n_states) for the kernels."""
+        raise NotImplementedError
+
+    def kernel(self):  # pragma: no cover - abstract
+        """The compiled batched step ``step(X, U, D, P, jrow, jcol, dt, n_sub, Z)``."""
+        raise NotImplementedError
+
+    def steady_state(self, D: np.ndarray, setpoint_C: np.ndarray, X: np.ndarray) -> None:
+        """Write into X the steady state at the disturbances D holding ``setpoint_C``."""
+        raise NotImplementedError
+
+    # -- generic ---------------------------------------------------------------------
+    def step(self, X: np.ndarray, U: np.ndarray, D: np.ndarray, Z: np.ndarray) -> None:
+        """Advance X by one control interval with commands U (in [0, 1]); fill Z."""
+        self.kernel()(X, U, D, self.P, self.jrow, self.jcol, self.dt_s, self.n_sub, Z)

@@ -1,0 +1,76 @@
+"""The default reward, in engineering terms, and its options.
+
+Per control interval (all temperatures in K, e = setpoint - true outlet temperature):
+
+    r = -( w_abs |e|/T0 + w_sq (e/T0)^2 + w_band max(0, |e| - band_K)/T0
+           + w_spray sum(spray flow / spray scale) + w_move sum|u_k - u_{k-1}| )
+        - trip_penalty  if the step terminates the episode (unit trip)
+
+T0 = 20 K is the normalizing temperature of 000_f43a9a359eb2e47e.txt (its
+|Delta T_a| <= 20 K maps to [-1, 1]); band_K = 5 K is the inner band plant
+engineers read (REFERENCE_DATA.md: +-5 / +-8 K). The spray term charges spray
+water (it costs cycle efficiency); the move term charges valve travel (wear,
+reversals). u are the valve commands in [0, 1]. The reward uses the *true*
+outlet temperature (the agent sees only the measured one).
+
+Options: ``gym.make(id, reward={"w_move": 0.0, ...})``; unknown keys raise ValueError.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, fields
+
+import numpy as np
+from numba import njit
+
+
+@dataclass(frozen=True)
+class RewardConfig:
+    """Weights of the default reward (see module docstring)."""
+
+    T0_K: float = 20.0
+    w_abs: float = 1.0
+    w_sq: float = 0.0
+    band_K: float = 5.0
+    w_band: float = 1.0
+    w_spray: float = 0.02
+    w_move: float = 0.1
+    trip_penalty: float = 100.0
+
+    def __post_init__(self) -> None:
+        for f in fields(self):
+            v = getattr(self, f.name)
+            if not isinstance(v, (int, float)) or not np.isfinite(v) or v < 0:
+                raise ValueError(f"reward option {f.name!r} must be a finite number >= 0, got {v!r}")
+        if self.T0_K <= 0:
+            raise ValueError("reward option 'T0_K' must be > 0")
+
+    @classmethod
+    def from_options(cls, options: dict | RewardConfig | None) -> RewardConfig:
+        """Build from a dict of overrides, rejecting unknown keys."""
+        if options is None:
+            return cls()
+        if isinstance(options, RewardConfig):
+            return options
+        if not isinstance(options, dict):
+            raise ValueError(f"reward options must be a dict, got {type(options).__name__}")
+        valid = [f.name for f in fields(cls)]
+        unknown = sorted(set(options) - set(valid))
+        if unknown:
+            raise ValueError(f"unknown reward option(s) {unknown}; valid options: {valid}")
+        return cls(**options)
+
+    def to_array(self) -> np.ndarray:
+        """Weights in the order the kernel reads them."""
+        return np.array(list(asdict(self).values()), dtype=np.float64)
+
+
+@njit(cache=True)
+def reward(e, spray_norm, move, terminated, w):
+    """Reward of one transition (see module docstring); w = RewardConfig.to_array()."""
+    a = abs(e) / w[0]
+    r = w[1] * a + w[2] * a * a + w[4] * max(0.0, abs(e) - w[3]) / w[0]
+    r += w[5] * spray_norm + w[6] * move
+    if terminated:
+        r += w[7]
+    return -r

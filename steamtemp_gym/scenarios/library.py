@@ -1,0 +1,72 @@
+"""Named scenarios shared by every plant (common vocabulary of DESIGN.md).
+
+- ``load_ramp_100_50``: the test of 000_f43a9a359eb2e47e.txt: load 100 -> 50 % at
+  5 %/min from minute 20 to minute 30, then held to minute 60.
+- ``load_ramp_50_100``: the same ramp upward.
+- ``load_cycle``: the IDAES 320 MW dynamic example (REFERENCE_DATA.md): 100 -> 50 %
+  at 5 %/min, hold 30 min, back to 100 % at 5 %/min, hold 20 min.
+- ``setpoint_step``: +10 K setpoint step at 5 min, rated load (REFERENCE_DATA.md:
+  5-10 K step tests).
+- ``heat_imbalance_step``: +8 % heat-absorption step (over 60 s) at 5 min, rated load.
+- ``load_following``: AGC-like ramps of 1-2 %/min between 50 and 100 % (a fixed
+  draw, seed 2026), holds of 3-8 min, 60 min.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from steamtemp_gym.scenarios import Scenario, register
+
+MIN = 60.0
+
+
+def _load_following() -> Scenario:
+    rng = np.random.default_rng(2026)
+    t, load, pts = 0.0, 0.9, [(0.0, 0.9)]
+    while t < 3600.0:
+        t += rng.uniform(180.0, 480.0)
+        target = float(np.clip(load + rng.choice([-1, 1]) * rng.uniform(0.1, 0.3), 0.5, 1.0))
+        t_end = t + abs(target - load) / (rng.uniform(0.01, 0.02) / MIN)
+        pts += [(t, load), (t_end, target)]
+        t, load = t_end, target
+    return Scenario(
+        name="load_following",
+        duration_s=3600.0,
+        load=tuple(pts),
+        noise_std_C=0.2,
+        description="AGC-like ramps of 1-2 %/min within 50-100 % load",
+    )
+
+
+register(Scenario(
+    name="load_ramp_100_50",
+    duration_s=60 * MIN,
+    load=((0.0, 1.0), (20 * MIN, 1.0), (30 * MIN, 0.5)),
+    description="load 100 -> 50 % at 5 %/min from minute 20 to 30 (000_*.txt, Fig. 4 and 7)",
+))
+register(Scenario(
+    name="load_ramp_50_100",
+    duration_s=60 * MIN,
+    load=((0.0, 0.5), (20 * MIN, 0.5), (30 * MIN, 1.0)),
+    description="load 50 -> 100 % at 5 %/min from minute 20 to 30",
+))
+register(Scenario(
+    name="load_cycle",
+    duration_s=80 * MIN,
+    load=((0.0, 1.0), (10 * MIN, 1.0), (20 * MIN, 0.5), (50 * MIN, 0.5), (60 * MIN, 1.0)),
+    description="100 -> 50 % at 5 %/min, hold 30 min, back, hold 20 min (IDAES example)",
+))
+register(Scenario(
+    name="setpoint_step",
+    duration_s=30 * MIN,
+    setpoint_offset_C=((0.0, 0.0), (5 * MIN, 0.0), (5 * MIN, 10.0)),
+    description="+10 K setpoint step at minute 5, rated load",
+))
+register(Scenario(
+    name="heat_imbalance_step",
+    duration_s=40 * MIN,
+    heat_absorption_bias=((0.0, 0.0), (5 * MIN, 0.0), (6 * MIN, 0.08)),
+    description="+8 % superheater heat absorption (firing imbalance) at minute 5, rated load",
+))
+register(_load_following())
