@@ -16,6 +16,8 @@ vector env reproduces the single env bit for bit, whatever the batch size.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numba import njit
 
@@ -133,6 +135,14 @@ def advance(Z, U, U_prev, bp_t, bp_v, bp_n, ep, key, counter, ints, cfg, obs_cs,
         out[b, 2] = 1.0 if ep[b, 0] >= ep[b, 1] - 1e-9 else 0.0
 
 
+@njit(cache=True)
+def to_commands(A, U):
+    """Actuator commands U = (clip(A, -1, 1) + 1) / 2 (openings in [0, 1])."""
+    for b in range(A.shape[0]):
+        for j in range(A.shape[1]):
+            U[b, j] = 0.5 * (min(max(A[b, j], -1.0), 1.0) + 1.0)
+
+
 class Core:
     """Batched state of B copies of one plant under per-row scenarios.
 
@@ -180,6 +190,10 @@ class Core:
             [[plant.dt_s, plant.setpoint_C, trip_lo, trip_hi, spray_scale], reward_cfg.to_array()]
         )
         self.scenario: list[sc.Scenario | None] = [None] * B
+        self._info_idx = [("outlet_temp_C", self.i_out),
+                          ("measured_temp_C", idx[plant.outlet_measured]),
+                          ("spray_valve", self.valve_idx[0])]  # fmt: skip
+        self._info_idx += [(name, idx[name]) for name in plant.extra_info]
 
     def _alloc_schedules(self, k: int) -> None:
         self.bp_t = np.zeros((self.B, N_CH, k))
@@ -213,14 +227,26 @@ class Core:
         observe(b, self.Z, self.ints[5 : 5 + self.ints[2]], self.obs_cs, self.ints[1],
                 self.key, self.counter, self.ep[:, 2], self.sp, self.D, self.obs)  # fmt: skip
 
-    def step(self, U: np.ndarray) -> None:
-        """Advance every row by one control interval with commands U in [0, 1]."""
-        self.U[:] = U
+    def step(self, A: np.ndarray) -> None:
+        """Advance every row by one control interval with (validated) actions A in [-1, 1]."""
+        to_commands(A, self.U)
         self.plant.step(self.X, self.U, self.D, self.Z)
         advance(
             self.Z, self.U, self.U_prev, self.bp_t, self.bp_v, self.bp_n, self.ep, self.key,
             self.counter, self.ints, self.cfg, self.obs_cs, self.D, self.sp, self.obs, self.out,
         )  # fmt: skip
+
+    def info_row(self, b: int) -> dict[str, float | np.ndarray]:
+        """Physical values of row b, in engineering units (python floats; valve array if several)."""
+        z = self.Z[b].tolist()
+        info = {name: z[i] for name, i in self._info_idx}
+        info["time_s"] = float(self.ep[b, 0])
+        info["setpoint_C"] = float(self.sp[b])
+        info["load"] = float(self.D[b, 0])
+        info["spray_flow_kg_s"] = sum(z[i] for i in self.spray_idx)
+        if len(self.valve_idx) > 1:
+            info["spray_valve"] = self.Z[b, self.valve_idx]
+        return info
 
     def info_columns(self) -> dict[str, np.ndarray]:
         """Physical values of every row, in engineering units (arrays of shape (B,) or (B, k))."""
@@ -240,14 +266,14 @@ class Core:
         return info
 
 
-def check_action(action: np.ndarray, shape: tuple[int, ...]) -> np.ndarray:
-    """Validate an action batch: right shape, finite; returns commands in [0, 1]."""
+def check_action(action, shape: tuple[int, ...]) -> np.ndarray:
+    """Validate an action batch (right shape, finite) and return it as float64 of ``shape``."""
     a = np.asarray(action, dtype=np.float64)
     if a.shape != shape:
-        if a.size == int(np.prod(shape)) and a.ndim <= len(shape):
+        if a.ndim <= len(shape) and a.size == shape[0] * shape[1]:
             a = a.reshape(shape)
         else:
-            raise ValueError(f"action has shape {np.shape(action)}, expected {shape}")
-    if not np.all(np.isfinite(a)):
+            raise ValueError(f"action has shape {np.shape(action)}, expected {shape[1:] if shape[0] == 1 else shape}")
+    if not math.isfinite(a.sum()):  # NaN and +-inf propagate into the sum
         raise ValueError(f"action contains NaN or infinite values: {action!r}")
-    return (np.clip(a, -1.0, 1.0) + 1.0) * 0.5
+    return a

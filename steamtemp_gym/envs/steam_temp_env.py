@@ -52,11 +52,12 @@ class SteamTempEnv(gym.Env):
 
     def __init__(self, plant_id: str, **options: Any) -> None:
         plant, self._scenario_spec, reward_cfg, self.render_mode = opts.build(plant_id, options)
+        self._params_overrides = dict(options.get("params") or {})
         self.plant = plant
         self.core = Core(plant, 1, reward_cfg)
         self.signals = self.core.signals
         self.observation_space, self.action_space = spaces(self.core)
-        self._shape = (plant.n_u,)
+        self._shape = (1, plant.n_u)
         self._history: list[dict[str, Any]] = []
         self._needs_reset = True
 
@@ -79,18 +80,17 @@ class SteamTempEnv(gym.Env):
     def step(self, action):
         if self._needs_reset:
             raise RuntimeError("call reset() before step() (and after the episode ends)")
-        u = check_action(action, self._shape)
-        self.core.step(u[None, :])
-        r, term, trunc = self.core.out[0]
-        terminated, truncated = bool(term), bool(trunc)
+        self.core.step(check_action(action, self._shape))
+        r, term, trunc = self.core.out[0].tolist()
+        terminated, truncated = term > 0.5, trunc > 0.5
         self._needs_reset = terminated or truncated
         info = self._info()
         if self.render_mode:
             self._history.append(info)
-        return self.core.obs[0].copy(), float(r), terminated, truncated, info
+        return self.core.obs[0].copy(), r, terminated, truncated, info
 
     def _info(self) -> dict[str, Any]:
-        return {k: float(v[0]) if v.ndim == 1 else v[0].copy() for k, v in self.core.info_columns().items()}
+        return self.core.info_row(0)
 
     def render(self):
         if self.render_mode != "rgb_array":

@@ -34,6 +34,7 @@ class SteamTempVectorEnv(VectorEnv):
         if options.get("render_mode") is not None:
             raise ValueError("the native vector env does not render; use SteamTempEnv")
         plant, self._scenario_spec, reward_cfg, _ = opts.build(plant_id, options)
+        self._params_overrides = dict(options.get("params") or {})
         self.plant = plant
         self.num_envs = int(num_envs)
         self.core = Core(plant, self.num_envs, reward_cfg)
@@ -67,8 +68,7 @@ class SteamTempVectorEnv(VectorEnv):
     def step(self, actions):
         if not self._started:
             raise RuntimeError("call reset() before step()")
-        u = check_action(actions, self._shape)
-        self.core.step(u)
+        self.core.step(check_action(actions, self._shape))
         rewards = self.core.out[:, 0].copy()
         terminated = self.core.out[:, 1] > 0.5
         truncated = self.core.out[:, 2] > 0.5

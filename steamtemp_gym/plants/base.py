@@ -75,6 +75,8 @@ class Plant:
         outlet: Name of the true main-steam temperature output.
         outlet_measured: Name of the measured main-steam temperature output.
         valves: Names of the valve-opening outputs. sprays: names of the spray-flow outputs.
+        cascade_inner: Per valve, the measured intermediate (attemperator-outlet) temperature a
+            conventional cascade controls with that valve.
         trip_band_K: (below, above) setpoint at which the unit trips (episode terminates).
     """
 
@@ -88,6 +90,7 @@ class Plant:
     outlet_measured: ClassVar[str] = "outlet_temp_meas_C"
     valves: ClassVar[tuple[str, ...]] = ("spray_valve",)
     sprays: ClassVar[tuple[str, ...]] = ("spray_flow_kg_s",)
+    cascade_inner: ClassVar[tuple[str, ...]] = ("attemp_out_temp_meas_C",)
     extra_info: ClassVar[tuple[str, ...]] = ()
     trip_band_K: ClassVar[tuple[float, float]] = (60.0, 40.0)
     default_duration_s: ClassVar[float] = 3600.0

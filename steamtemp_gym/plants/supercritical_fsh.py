@@ -106,7 +106,7 @@ class FSHParams:
     tau_tc1_s: float = 5.0  # thermocouple
     tau_tc2_s: float = 20.0  # thermowell
     dt_s: float = 2.0  # control interval
-    n_substeps: int = 1  # ROS2 steps per control interval
+    n_substeps: int = 2  # ROS2 steps per control interval (1 step: 0.074 K error on the ramp)
 
     def __post_init__(self) -> None:
         validate_params(
@@ -151,10 +151,11 @@ I_KA, I_V, I_CM, I_UAG, I_TGN, I_DTG, I_GEXP = 6, 7, 8, 9, 10, 11, 12
 I_CV, I_DPB, I_TFW, I_DTFW = 13, 14, 15, 16
 I_TAUF, I_TBIR, I_TAUW, I_TAUUP, I_FWR = 17, 18, 19, 20, 21
 I_TAUV, I_RATEV, I_TC1, I_TC2 = 22, 23, 24, 25
-I_TAB = 26  # start of the h_up(L) and dh_up(L) schedule tables
+I_TAB = 26  # start of the load tables: h_up, dh_up, h_fw, cp_fw, dcp_fw, rho_fw
 TAB_LOADS = np.linspace(0.2, 1.2, 21)
 N_TAB = TAB_LOADS.shape[0]
-N_P = I_TAB + 2 * N_TAB
+T_HUP, T_DHUP, T_HFW, T_CPFW, T_DCPFW, T_RHOFW = (I_TAB + k * N_TAB for k in range(6))
+N_P = I_TAB + 6 * N_TAB
 # State indices
 S_LF, S_LW, S_HUP, S_V, S_TC1, S_TC2, S_TA1, S_TA2 = 0, 1, 2, 3, 4, 5, 6, 7
 S_CHAIN = 8
@@ -180,14 +181,26 @@ def _table(P, off, load):
     return (1.0 - a) * P[off + k] + a * P[off + k + 1]
 
 
-@njit(cache=True)
-def _spray_water(P, lw, dT):
-    """Spray water: (h (J/kg), rho (kg/m3), valve dp (Pa)) at steam-flow fraction lw."""
+def _spray_water_exact(P: np.ndarray, lw: float, dT: float) -> tuple[float, float, float]:
+    """Spray water (h J/kg, rho kg/m3, valve dp Pa) from IF97 at steam-flow fraction lw."""
     p = _pressure(P, lw)
     dp = P[I_DPB] * lw * lw
     T_fw = P[I_TFW] - P[I_DTFW] * (1.0 - lw) + dT
     h = h_pT(p + dp, T_fw)
     return h, rho_ph(p + dp, h), dp
+
+
+@njit(cache=True)
+def _spray_water(P, lw, dT):
+    """Spray water (h J/kg, rho kg/m3, valve dp Pa) at steam-flow fraction lw and offset dT (K).
+
+    Feed-pump discharge water, tabulated over load from IF97 at pack time; the
+    temperature offset enters by a second-order Taylor step in T
+    (h + cp dT + dcp/dT dT^2 / 2; error < 0.05 kJ/kg at +-15 K).
+    """
+    cp = _table(P, T_CPFW, lw)
+    h = _table(P, T_HFW, lw) + dT * (cp + 0.5 * dT * _table(P, T_DCPFW, lw))
+    return h, _table(P, T_RHOFW, lw), P[I_DPB] * lw * lw
 
 
 @njit(cache=True)
@@ -216,8 +229,8 @@ def _h_up_target(P, lf, lw):
     """Upstream SH outlet enthalpy set by the fuel/water-ratio schedule and ratio error."""
     lw = min(max(lw, 0.05), 1.3)
     lf = min(max(lf, 0.05), 1.3)
-    h_up = _table(P, I_TAB, lw)
-    dh_rise = _table(P, I_TAB + N_TAB, lw)
+    h_up = _table(P, T_HUP, lw)
+    dh_rise = _table(P, T_DHUP, lw)
     return h_up + P[I_FWR] * (lf / lw - 1.0) * dh_rise
 
 
@@ -404,15 +417,19 @@ def _calibrate(params: FSHParams, P: np.ndarray, n_x: int) -> None:
     P[I_UAG] = b
     s = params.spray_design_fraction
     for k, L in enumerate(TAB_LOADS):
+        h_sp, rho_sp, _ = _spray_water_exact(P, L, 0.0)
+        h_p, _, _ = _spray_water_exact(P, L, 1.0)
+        h_m, _, _ = _spray_water_exact(P, L, -1.0)
+        P[T_HFW + k], P[T_RHOFW + k] = h_sp, rho_sp
+        P[T_CPFW + k] = 0.5 * (h_p - h_m)
+        P[T_DCPFW + k] = h_p - 2.0 * h_sp + h_m
         p = _pressure(P, L)
         h_out = h_pT(p, params.T_out_C + K0)
         h_e = _design_inlet(P, L, h_out, x)
-        h_sp, _, _ = _spray_water(P, L, 0.0)
-        P[I_TAB + k] = (h_e - s * h_sp) / (1.0 - s)
-        P[I_TAB + N_TAB + k] = P[I_TAB + k] - h_sp
+        P[T_HUP + k] = (h_e - s * h_sp) / (1.0 - s)
+        P[T_DHUP + k] = P[T_HUP + k] - h_sp
     # Valve coefficient: fully open passes spray_max_fraction of rated flow at rated load.
-    P[I_CV] = 1.0
-    h_sp, rho_sp, dp = _spray_water(P, 1.0, 0.0)
+    h_sp, rho_sp, dp = _spray_water_exact(P, 1.0, 0.0)
     P[I_CV] = params.spray_max_fraction * W / math.sqrt(rho_sp * dp)
 
 

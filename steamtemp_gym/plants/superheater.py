@@ -94,6 +94,11 @@ def chain_rhs(x, off, n, h0, dh0, W, dW, p, dp, kA, dkA, V, Cm, UAg, Tg, Qrad, f
     q_tot = 0.0
     T = 0.0
     tm_max = 0.0
+    dTdp = 0.0
+    if want_jac and flow:
+        # one (dT/dp)_h per chain, at its middle segment: A need only approximate J
+        h_mid = x[off + 2 * (n // 2) + 1]
+        dTdp = (T_ph(p + 1.0e3, h_mid) - T_ph(p, h_mid)) * 1.0e-3
     for i in range(n):
         im = off + 2 * i
         ih = im + 1
@@ -110,7 +115,6 @@ def chain_rhs(x, off, n, h0, dh0, W, dW, p, dp, kA, dkA, V, Cm, UAg, Tg, Qrad, f
             tm_max = Tm
         if want_jac:
             if flow:
-                dTdp = (T_ph(p + 1.0e3, h) - T) * 1.0e-3
                 # metal row: d/d(flow) of -kA (Tm - T(p, h))
                 jl[joff] = (-dkA * dW * (Tm - T) + kA * dTdp * dp) / Cm
                 joff += 1

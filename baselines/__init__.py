@@ -1,0 +1,30 @@
+"""Baseline controllers: one module each, a registry, the Policy protocol.
+
+``baselines.make(name, env) -> Policy``; ``baselines.NAMES`` lists them. Adding a
+controller = one module plus one entry in ``_REGISTRY``.
+"""
+
+from __future__ import annotations
+
+import importlib
+from typing import Any
+
+from baselines.policy import Policy
+
+_REGISTRY: dict[str, str] = {
+    "cascade_pi": "baselines.cascade_pi:CascadePI",
+}
+NAMES: tuple[str, ...] = tuple(_REGISTRY)
+
+
+def make(name: str, env: Any, **kwargs: Any) -> Policy:
+    """The baseline ``name`` for ``env``; ValueError listing the valid names otherwise."""
+    try:
+        path = _REGISTRY[name]
+    except (KeyError, TypeError):
+        raise ValueError(f"unknown baseline {name!r}; valid names: {list(NAMES)}") from None
+    module, cls = path.split(":")
+    return getattr(importlib.import_module(module), cls)(env, **kwargs)
+
+
+__all__ = ["NAMES", "Policy", "make"]

@@ -1,0 +1,67 @@
+"""Plant identification by open-loop step tests through the env (what a commissioning
+engineer does on site): hold the unit at a constant load, let it settle, step one
+valve, record the measured signals, and read off gain, Tu and Tg with the metrics
+module (steamtemp_gym.metrics.step_response_metrics). Used to tune the baselines.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import gymnasium as gym
+import numpy as np
+
+from steamtemp_gym.metrics import step_response_metrics
+from steamtemp_gym.scenarios import Scenario
+
+
+@dataclass(frozen=True)
+class FOPDT:
+    """First order plus dead time K exp(-theta s)/(tau s + 1), from Tu (theta) and Tg (tau)."""
+
+    K: float
+    tau_s: float
+    theta_s: float
+
+
+def step_test(env_id: str, valve: int, signals: list[str], *, load: float = 1.0, dv: float = 0.05,
+              duration_s: float = 2400.0, params: dict | None = None) -> dict[str, FOPDT]:  # fmt: skip
+    """Step valve ``valve`` by ``dv`` (opening) at constant ``load``; FOPDT of each signal.
+
+    Returns:
+        Signal name -> FOPDT with K in signal units per unit valve opening.
+    """
+    sc = Scenario(name="step_test", duration_s=duration_s + 60.0, load=((0.0, load),))
+    env = gym.make(env_id, scenario=sc, params=params or {})
+    obs, info = env.reset(seed=0)
+    sig = env.unwrapped.signals
+    names = [s.name for s in sig.observation]
+    openings = np.atleast_1d(info["spray_valve"]).astype(float)
+    a = 2.0 * openings - 1.0
+    a[valve] = 2.0 * (openings[valve] + dv) - 1.0
+    t, rec = [0.0], [sig.decode(obs)]
+    while True:
+        obs, _, term, trunc, info = env.step(a.astype(np.float32))
+        t.append(info["time_s"])
+        rec.append(sig.decode(obs))
+        if term or trunc:
+            break
+    out = {}
+    for name in signals:
+        if name not in names:
+            raise ValueError(f"{env_id} does not observe {name!r}; observed: {names}")
+        y = np.array([r[name] for r in rec])
+        m = step_response_metrics(np.array(t), y)
+        out[name] = FOPDT(K=m["gain"] / dv, tau_s=m["Tg_s"], theta_s=m["Tu_s"])
+    return out
+
+
+def simc_pi(model: FOPDT, tau_c: float | None = None) -> tuple[float, float]:
+    """SIMC PI tuning (Skogestad, J. Process Control 13, 2003): (Kc, Ti_s).
+
+    Kc = tau / (K (tau_c + theta)), Ti = min(tau, 4 (tau_c + theta)), default tau_c = theta
+    (the "tight control, good robustness" choice). Kc has the sign of 1/K.
+    """
+    theta = max(model.theta_s, 1e-3)
+    tc = theta if tau_c is None else tau_c
+    return model.tau_s / (model.K * (tc + theta)), min(model.tau_s, 4.0 * (tc + theta))

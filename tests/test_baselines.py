@@ -1,0 +1,82 @@
+"""Baselines (parametrized over baselines.NAMES and every env id) and the leaderboard CLI."""
+
+from __future__ import annotations
+
+import json
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+import baselines
+import steamtemp_gym
+from agents.evaluation import run_episode
+from baselines.policy import Policy
+
+IDS = steamtemp_gym.ENV_IDS
+
+
+class HoldValves:
+    """Open-loop reference for the tests: keep every valve where the steady state put it."""
+
+    def reset(self):
+        self.a = None
+
+    def predict(self, obs, state=None, episode_start=None, deterministic=True):
+        return self.a, None
+
+
+@pytest.mark.parametrize("env_id", IDS)
+@pytest.mark.parametrize("name", baselines.NAMES)
+def test_baseline_is_a_policy_and_beats_open_loop(env_id, name):
+    env = gym.make(env_id, scenario="heat_imbalance_step")
+    policy = baselines.make(name, env)
+    assert isinstance(policy, Policy)
+    res = run_episode(env, policy, seed=0)
+    assert res["metrics"]["tripped"] == 0.0
+    _, info = env.reset(seed=0)
+    hold = HoldValves()
+    hold.reset()
+    hold.a = (2.0 * np.atleast_1d(info["spray_valve"]) - 1.0).astype(np.float32)
+    hold.reset = lambda: None
+    ref = run_episode(env, hold, seed=0)
+    assert res["metrics"]["iae_K_s"] < 0.5 * ref["metrics"]["iae_K_s"]
+    # batched observations give the same actions as single ones
+    obs = np.stack([env.reset(seed=s)[0] for s in range(3)])
+    policy.reset()
+    a_batch, _ = policy.predict(obs, episode_start=np.ones(3, bool))
+    for i in range(3):
+        policy.reset()
+        a_i, _ = policy.predict(obs[i], episode_start=np.array([True]))
+        np.testing.assert_allclose(a_batch[i], a_i, rtol=1e-6)
+
+
+@pytest.mark.parametrize("env_id", IDS)
+def test_cascade_pi_holds_the_load_ramp_within_the_once_through_band(env_id):
+    """REFERENCE_DATA.md: +-10 K allowed in load-change tests of once-through units, +-8 K drum."""
+    env = gym.make(env_id, scenario="load_ramp_100_50")
+    res = run_episode(env, baselines.make("cascade_pi", env), seed=0)
+    assert res["metrics"]["max_abs_dev_K"] < 8.0
+    sp = gym.make(env_id, scenario="setpoint_step")
+    m = run_episode(sp, baselines.make("cascade_pi", sp), seed=0)["metrics"]
+    assert m["overshoot_pct"] < 20.0 and m["settling_time_s"] < 900.0
+
+
+def test_unknown_baseline_raises():
+    with pytest.raises(ValueError, match="valid names"):
+        baselines.make("no_such_controller", gym.make(IDS[0]))
+
+
+def test_leaderboard_cli(tmp_path):
+    from agents.leaderboard import main
+
+    main(["--envs", IDS[0], "--scenarios", "setpoint_step", "--seeds", "0,1", "--out", str(tmp_path)])
+    rows = json.loads((tmp_path / "leaderboard.json").read_text())
+    assert len(rows) == 2 * len(baselines.NAMES)
+    assert {r["seed"] for r in rows} == {0, 1}
+    assert all(np.isfinite(r["metrics"]["iae_K_s"]) for r in rows)
+    md = (tmp_path / "leaderboard.md").read_text()
+    assert "cascade_pi" in md and "setpoint_step" in md
+    assert list((tmp_path / "plots").glob("*.png"))
+    with pytest.raises(SystemExit):
+        main(["--envs", "steamtemp/Nope-v0", "--out", str(tmp_path)])
