@@ -1,7 +1,7 @@
 """Plant identification by open-loop step tests through the env (what a commissioning
-engineer does on site): hold the unit at a constant load, let it settle, step one
-valve, record the measured signals, and read off gain, Tu and Tg with the metrics
-module (steamtemp_gym.metrics.step_response_metrics). Used to tune the baselines.
+engineer does on site): hold the unit at a constant load, step one valve, record
+the measured signals, and read off gain, Tu and Tg with the metrics module
+(steamtemp_gym.metrics.step_response_metrics). Used to tune the baselines.
 """
 
 from __future__ import annotations
@@ -24,34 +24,44 @@ class FOPDT:
     theta_s: float
 
 
-def step_test(env_id: str, valve: int, signals: list[str], *, load: float = 1.0, dv: float = 0.05,
-              duration_s: float = 2400.0, params: dict | None = None) -> dict[str, FOPDT]:  # fmt: skip
-    """Step valve ``valve`` by ``dv`` (opening) at constant ``load``; FOPDT of each signal.
-
-    Returns:
-        Signal name -> FOPDT with K in signal units per unit valve opening.
-    """
-    sc = Scenario(name="step_test", duration_s=duration_s + 60.0, load=((0.0, load),))
-    env = gym.make(env_id, scenario=sc, params=params or {})
+def _record(env, a: np.ndarray) -> tuple[np.ndarray, list[dict]]:
     obs, info = env.reset(seed=0)
     sig = env.unwrapped.signals
-    names = [s.name for s in sig.observation]
-    openings = np.atleast_1d(info["spray_valve"]).astype(float)
-    a = 2.0 * openings - 1.0
-    a[valve] = 2.0 * (openings[valve] + dv) - 1.0
     t, rec = [0.0], [sig.decode(obs)]
     while True:
         obs, _, term, trunc, info = env.step(a.astype(np.float32))
         t.append(info["time_s"])
         rec.append(sig.decode(obs))
         if term or trunc:
-            break
+            return np.array(t), rec
+
+
+def step_test(env_id: str, valve: int, signals: list[str], *, load: float = 1.0, dv: float = 0.05,
+              duration_s: float = 2400.0, params: dict | None = None) -> dict[str, FOPDT]:  # fmt: skip
+    """Step valve ``valve`` by ``dv`` (opening) at constant ``load``; FOPDT of each signal.
+
+    The test is run twice with the same seed, with and without the step, and the
+    response is their difference: the plant's own random disturbances (same seed,
+    same sequence) cancel, as a commissioning engineer would wish they did.
+
+    Returns:
+        Signal name -> FOPDT with K in signal units per unit valve opening.
+    """
+    sc = Scenario(name="step_test", duration_s=duration_s, load=((0.0, load),))
+    env = gym.make(env_id, scenario=sc, params=params or {})
+    _, info = env.reset(seed=0)
+    names = [s.name for s in env.unwrapped.signals.observation]
+    hold = 2.0 * np.atleast_1d(info["spray_valve"]).astype(float) - 1.0
+    stepped = hold.copy()
+    stepped[valve] += 2.0 * dv
+    t, base = _record(env, hold)
+    _, rec = _record(env, stepped)
     out = {}
     for name in signals:
         if name not in names:
             raise ValueError(f"{env_id} does not observe {name!r}; observed: {names}")
-        y = np.array([r[name] for r in rec])
-        m = step_response_metrics(np.array(t), y)
+        y = np.array([r[name] - r0[name] for r, r0 in zip(rec, base)])
+        m = step_response_metrics(t, y)
         out[name] = FOPDT(K=m["gain"] / dv, tau_s=m["Tg_s"], theta_s=m["Tu_s"])
     return out
 

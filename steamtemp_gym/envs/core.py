@@ -9,9 +9,11 @@ Composition (DESIGN.md): plant + scenario + sensors + reward. Per control step:
    level), adds sensor noise, builds the normalized observation, the reward
    (rewards.py), ``terminated`` (trip band) and ``truncated`` (scenario end).
 
-Sensor noise is counter-based (splitmix64 of the row's key, the step counter
-and the channel, Box-Muller), so a row's noise depends only on its seed: the
-vector env reproduces the single env bit for bit, whatever the batch size.
+Sensor noise is counter-based (steamtemp_gym/rng.py: a pure function of the
+row's key, the step counter and the channel), so a row's noise depends only on
+its seed: the vector env reproduces the single env bit for bit, whatever the
+batch size. Plants with internal random disturbances get the same key through
+``Plant.seed_rows``.
 """
 
 from __future__ import annotations
@@ -24,31 +26,13 @@ from numba import njit
 from steamtemp_gym import scenarios as sc
 from steamtemp_gym.plants.base import N_DIST, Plant
 from steamtemp_gym.rewards import RewardConfig, reward
+from steamtemp_gym.rng import gauss
 from steamtemp_gym.signals import OBS_LIMIT, T0_K, for_plant
 
 N_CH = len(sc.CHANNELS)
 # channel indices (order of scenarios.CHANNELS)
 C_LOAD, C_SP, C_BIAS, C_FOUL, C_SPRAYT = 0, 1, 2, 3, 4
 MIN_BREAKPOINTS = 64
-
-
-@njit(cache=True)
-def _splitmix64(z):
-    z = z + np.uint64(0x9E3779B97F4A7C15)
-    z = (z ^ (z >> np.uint64(30))) * np.uint64(0xBF58476D1CE4E5B9)
-    z = (z ^ (z >> np.uint64(27))) * np.uint64(0x94D049BB133111EB)
-    return z ^ (z >> np.uint64(31))
-
-
-@njit(cache=True)
-def gauss(key, counter, channel):
-    """Standard normal number determined by (key, counter, channel)."""
-    s = _splitmix64(key ^ _splitmix64(np.uint64(counter) * np.uint64(64) + np.uint64(channel)))
-    r1 = _splitmix64(s)
-    r2 = _splitmix64(r1)
-    u1 = (np.float64(r1 >> np.uint64(11)) + 0.5) * (1.0 / 9007199254740992.0)
-    u2 = np.float64(r2 >> np.uint64(11)) * (1.0 / 9007199254740992.0)
-    return np.sqrt(-2.0 * np.log(u1)) * np.cos(2.0 * np.pi * u2)
 
 
 @njit(cache=True)
@@ -217,6 +201,7 @@ class Core:
         self.out[b] = 0.0
         eval_schedules(b, 0.0, self.bp_t, self.bp_v, self.bp_n, self.plant.setpoint_C, self.D, self.sp)
         self.plant.steady_state(self.D[b : b + 1], self.sp[b : b + 1], self.X[b : b + 1])
+        self.plant.seed_rows(self.X[b : b + 1], self.key[b : b + 1])
         # outputs of the steady state: a zero-length step fills Z
         self.plant.kernel()(
             self.X[b : b + 1], self.U[b : b + 1], self.D[b : b + 1], self.plant.P,

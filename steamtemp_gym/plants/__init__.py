@@ -13,6 +13,7 @@ from steamtemp_gym.plants.base import Plant
 #: env id -> "module:Class" of its plant (imported lazily).
 PLANTS: dict[str, str] = {
     "steamtemp/SupercriticalFSH-v0": "steamtemp_gym.plants.supercritical_fsh:SupercriticalFSH",
+    "steamtemp/Cascade300MW-v0": "steamtemp_gym.plants.cascade_300mw:Cascade300MW",
 }
 
 

@@ -124,6 +124,13 @@ class Plant:
         """Write into X the steady state at the disturbances D holding ``setpoint_C``."""
         raise NotImplementedError
 
+    def seed_rows(self, X: np.ndarray, keys: np.ndarray) -> None:
+        """Seed the plant's own random disturbances of rows X from the episodes' keys (uint64).
+
+        Called by the env right after :meth:`steady_state`; a no-op for plants without
+        internal random inputs (use steamtemp_gym.rng in the kernel).
+        """
+
     # -- generic ---------------------------------------------------------------------
     def step(self, X: np.ndarray, U: np.ndarray, D: np.ndarray, Z: np.ndarray) -> None:
         """Advance X by one control interval with commands U (in [0, 1]); fill Z."""

@@ -214,14 +214,24 @@ def register(scenario: Scenario, plants: Sequence[str] | None = None) -> Scenari
     return scenario
 
 
+def _load_plant(plant_id: str | None) -> None:
+    """Import the plant's module so its own named scenarios are registered."""
+    if plant_id is not None:
+        from steamtemp_gym import plants
+
+        plants.plant_class(plant_id)
+
+
 def names(plant_id: str | None = None) -> list[str]:
     """Names of the registered scenarios valid for ``plant_id`` (all if None), plus ``random``."""
+    _load_plant(plant_id)
     out = [n for n, (_, pl) in _REGISTRY.items() if pl is None or plant_id is None or plant_id in pl]
     return sorted(out) + [RANDOM]
 
 
 def get(name: str, plant_id: str | None = None) -> Scenario:
     """A registered scenario by name; ValueError listing the valid names otherwise."""
+    _load_plant(plant_id)
     entry = _REGISTRY.get(name)
     if entry is None or (plant_id is not None and entry[1] is not None and plant_id not in entry[1]):
         raise ValueError(f"unknown scenario {name!r}; valid names: {names(plant_id)} or a YAML path")
