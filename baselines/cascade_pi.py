@@ -1,20 +1,32 @@
 """Conventional cascade PI: the steam temperature control plants run today.
 
-Per spray valve: an outer PI on the main-steam temperature error sets the
-setpoint of the attemperator-outlet (intermediate) temperature, an inner PI on
-that temperature moves the spray valve (the standard two-loop arrangement of
-spray attemperation, e.g. the cascade of 004_d5464191c442fd5a.txt whose inner
-loop is a P controller). Both loops are tuned by the SIMC rules (Skogestad
-2003, tau_c = theta) on first-order-plus-dead-time models read from an
-open-loop valve step test at rated load (baselines/identification.py): the
-inner loop on valve -> intermediate temperature, the outer loop on
-intermediate -> outlet temperature (gain K_out/K_in, dead time and balance
-time of the outlet response less those of the intermediate one).
+Every actuator gets the loop its plant declares in ``Plant.control_loops``
+(inner, outer):
+
+- cascade (inner and outer): an outer PI on the outer temperature (MAIN: the
+  main-steam error against the setpoint) sets the setpoint of the inner
+  (attemperator-outlet) temperature, an inner PI on that temperature moves the
+  spray valve: the standard two-loop arrangement of spray attemperation (e.g.
+  the cascade of 004_d5464191c442fd5a.txt, whose inner loop is a P controller);
+- inner only: a PI holds the inner temperature at its value at the episode start
+  (a first-stage spray holding the temperature ahead of the next stage);
+- outer only: a PI on the outer signal moves the actuator directly (a gas
+  recirculation damper holding the reheat temperature).
+
+Actuators without a loop stay where the episode started. Loops are tuned by the
+SIMC rules (Skogestad 2003, tau_c = theta) on first-order-plus-dead-time models
+read from open-loop step tests of each actuator at rated load
+(baselines/identification.py): the inner loop on actuator -> inner
+temperature, the outer loop of a cascade on inner -> outer temperature (gain
+K_out/K_in, dead time and balance time of the outer response less those of the
+inner one), a single loop on actuator -> its temperature. Where k loops share the
+main-steam error (two spray stages), each outer gain is divided by k so that
+their sum has the SIMC loop gain.
 
 Discrete PI in position form at the plant's control interval, bumpless start
-(integrators initialized from the measured valve position and intermediate
-temperature), anti-windup by conditional integration when the valve saturates.
-The policy sees exactly the observation an agent sees.
+(integrators initialized from the measured actuator positions and
+temperatures), anti-windup by conditional integration when the actuator
+saturates. The policy sees exactly the observation an agent sees.
 """
 
 from __future__ import annotations
@@ -26,90 +38,103 @@ from typing import Any
 import numpy as np
 
 from baselines.identification import FOPDT, simc_pi, step_test
+from steamtemp_gym.plants.base import MAIN
+
+NO_LOOP = (0.0, np.inf, 0.0, np.inf)
 
 
 @functools.lru_cache(maxsize=16)
 def _tuning(env_id: str, params_json: str) -> tuple[tuple[float, float, float, float], ...]:
-    """((Kc_outer, Ti_outer, Kc_inner, Ti_inner) per valve) from step tests at rated load."""
+    """(Kc_outer, Ti_outer, Kc_inner, Ti_inner) per action from step tests at rated load."""
     import gymnasium as gym
 
     params = json.loads(params_json)
     plant = gym.make(env_id, params=params).unwrapped.plant
     out = []
-    for j, inner in enumerate(plant.cascade_inner):
-        m = step_test(env_id, j, [inner, plant.outlet_measured], params=params)
-        mi, mo = m[inner], m[plant.outlet_measured]
-        outer = FOPDT(
-            K=mo.K / mi.K,
-            tau_s=max(mo.tau_s - mi.tau_s, 0.2 * mo.tau_s),
-            theta_s=max(mo.theta_s - mi.theta_s, plant.dt_s),
-        )
-        kc_o, ti_o = simc_pi(outer)
-        kc_i, ti_i = simc_pi(mi)
+    n_main = sum(outer == MAIN for _, outer in plant.control_loops)
+    for j, (inner, outer) in enumerate(plant.control_loops):
+        outer_sig = plant.outlet_measured if outer == MAIN else outer
+        m = step_test(env_id, j, [s for s in (inner, outer_sig) if s], params=params)
+        kc_o, ti_o, kc_i, ti_i = NO_LOOP
+        if inner:
+            kc_i, ti_i = simc_pi(m[inner])
+        if outer_sig and inner:
+            mi, mo = m[inner], m[outer_sig]
+            kc_o, ti_o = simc_pi(FOPDT(
+                K=mo.K / mi.K,
+                tau_s=max(mo.tau_s - mi.tau_s, 0.2 * mo.tau_s),
+                theta_s=max(mo.theta_s - mi.theta_s, plant.dt_s),
+            ))  # fmt: skip
+        elif outer_sig:
+            kc_o, ti_o = simc_pi(m[outer_sig])
+        if outer == MAIN:  # loops sharing the main-steam error share its loop gain
+            kc_o /= n_main
         out.append((kc_o, ti_o, kc_i, ti_i))
     return tuple(out)
 
 
 class CascadePI:
-    """Cascade PI for every spray valve of a plant (see module docstring).
+    """Conventional loops for every actuator of a plant (see module docstring).
 
     Args:
         env: The env (or vector env) the policy will act on; used for its signals and plant.
-        tuning: Optional ((Kc_o, Ti_o, Kc_i, Ti_i), ...) per valve, overriding the step-test tuning.
+        tuning: Optional ((Kc_o, Ti_o, Kc_i, Ti_i), ...) per loop, overriding the step tests.
     """
 
     def __init__(self, env: Any, tuning: Any = None) -> None:
         u = env.unwrapped
         plant = u.plant
         names = [s.name for s in u.signals.observation]
-        obs_sig = u.signals.observation
-        self._scale = np.array([s.scale for s in obs_sig])
-        self._center = np.array([s.center for s in obs_sig])
+        self._scale = np.array([s.scale for s in u.signals.observation])
+        self._center = np.array([s.center for s in u.signals.observation])
         self.i_err = names.index("error_K")
-        self.i_inner = [names.index(n) for n in plant.cascade_inner]
         self.i_valve = [names.index(n) for n in plant.valves]
-        self.n_u = plant.n_u
+        self.loops = []  # (inner idx | None, outer: "main" | idx | None)
+        for inner, outer in plant.control_loops:
+            self.loops.append((names.index(inner) if inner else None,
+                               MAIN if outer == MAIN else (names.index(outer) if outer else None)))  # fmt: skip
         self.dt = plant.dt_s
-        env_id = plant.id
         params = json.dumps(getattr(u, "_params_overrides", {}) or {}, sort_keys=True)
-        self.gains = np.array(tuning if tuning is not None else _tuning(env_id, params))
-        self._state: dict[str, np.ndarray] | None = None
+        self.gains = np.array(tuning if tuning is not None else _tuning(plant.id, params), dtype=float)
+        self._st: dict[str, np.ndarray] | None = None
 
     def reset(self) -> None:
-        self._state = None
-
-    def _phys(self, obs: np.ndarray, idx: list[int]) -> np.ndarray:
-        return obs[:, idx] * self._scale[idx] + self._center[idx]
+        self._st = None
 
     def predict(self, observation, state=None, episode_start=None, deterministic=True):
         obs = np.atleast_2d(np.asarray(observation, dtype=np.float64))
-        e_out = obs[:, self.i_err] * self._scale[self.i_err]  # setpoint - measured outlet, K
-        t_in = self._phys(obs, self.i_inner)  # (n, k) intermediate temperatures
-        valve = self._phys(obs, self.i_valve)  # (n, k) valve positions
-        st = self._state
-        fresh = st is None or st["v0"].shape != valve.shape
-        if episode_start is not None:
-            restart = np.broadcast_to(np.asarray(episode_start, dtype=bool), (obs.shape[0],))
+        y = obs * self._scale + self._center  # physical values
+        valve = y[:, self.i_valve]
+        n = obs.shape[0]
+        st = self._st
+        if st is None or st["y0"].shape != y.shape:
+            st = self._st = {"y0": y.copy(), "v0": valve.copy(), "r0": np.zeros_like(valve),
+                             "io": np.zeros_like(valve), "ii": np.zeros_like(valve)}  # fmt: skip
+            restart = np.ones(n, dtype=bool)
+        elif episode_start is not None:
+            restart = np.broadcast_to(np.asarray(episode_start, dtype=bool), (n,))
         else:
-            restart = np.zeros(obs.shape[0], dtype=bool)
-        if fresh:
-            st = self._state = {"r0": t_in.copy(), "v0": valve.copy(),
-                                "io": np.zeros_like(valve), "ii": np.zeros_like(valve)}  # fmt: skip
-        elif restart.any():
-            st["r0"][restart], st["v0"][restart] = t_in[restart], valve[restart]
+            restart = np.zeros(n, dtype=bool)
+        if restart.any():
+            st["y0"][restart], st["v0"][restart] = y[restart], valve[restart]
             st["io"][restart], st["ii"][restart] = 0.0, 0.0
-        kc_o, ti_o, kc_i, ti_i = self.gains.T
-        e = e_out[:, None]
-        r = st["r0"] + kc_o * (e + st["io"])  # intermediate-temperature setpoint
-        e_i = r - t_in
-        v = st["v0"] + kc_i * (e_i + st["ii"])
-        v_sat = np.clip(v, 0.0, 1.0)
-        # conditional integration: integrate unless it drives a saturated valve further
-        push = kc_i * e_i
-        ok = ~(((v >= 1.0) & (push > 0)) | ((v <= 0.0) & (push < 0)))
-        st["ii"] = np.where(ok, st["ii"] + self.dt / ti_i * e_i, st["ii"])
-        st["io"] = np.where(ok, st["io"] + self.dt / ti_o * e, st["io"])
-        action = (2.0 * v_sat - 1.0).astype(np.float32)
-        if np.ndim(observation) == 1:
-            action = action[0]
-        return action, None
+        e_main = obs[:, self.i_err] * self._scale[self.i_err]  # setpoint - measured outlet
+        v = st["v0"].copy()
+        for j, (inner, outer) in enumerate(self.loops):
+            kc_o, ti_o, kc_i, ti_i = self.gains[j]
+            if outer is None:
+                e_o = np.zeros(n)
+            else:
+                e_o = e_main if outer == MAIN else st["y0"][:, outer] - y[:, outer]
+            if inner is None:  # single loop on the outer signal
+                push, v[:, j] = kc_o * e_o, st["v0"][:, j] + kc_o * (e_o + st["io"][:, j])
+            else:
+                r = st["y0"][:, inner] + kc_o * (e_o + st["io"][:, j])  # inner setpoint
+                e_i = r - y[:, inner]
+                push, v[:, j] = kc_i * e_i, st["v0"][:, j] + kc_i * (e_i + st["ii"][:, j])
+                ok_i = ~(((v[:, j] >= 1.0) & (push > 0)) | ((v[:, j] <= 0.0) & (push < 0)))
+                st["ii"][:, j] += np.where(ok_i, self.dt / ti_i * e_i, 0.0)
+            ok = ~(((v[:, j] >= 1.0) & (push > 0)) | ((v[:, j] <= 0.0) & (push < 0)))
+            st["io"][:, j] += np.where(ok, self.dt / ti_o * e_o, 0.0)
+        action = (2.0 * np.clip(v, 0.0, 1.0) - 1.0).astype(np.float32)
+        return (action[0] if np.ndim(observation) == 1 else action), None

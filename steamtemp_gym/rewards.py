@@ -2,9 +2,14 @@
 
 Per control interval (all temperatures in K, e = setpoint - true outlet temperature):
 
-    r = -( w_abs |e|/T0 + w_sq (e/T0)^2 + w_band max(0, |e| - band_K)/T0
+    c(e) = w_abs |e|/T0 + w_sq (e/T0)^2 + w_band max(0, |e| - band_K)/T0
+    r = -( c(e) + w_secondary sum_k c(e_k)
            + w_spray sum(spray flow / spray scale) + w_move sum|u_k - u_{k-1}| )
         - trip_penalty  if the step terminates the episode (unit trip)
+
+e_k are the errors of the plant's secondary controlled temperatures
+(``Plant.secondary``, e.g. the reheat steam temperature of 002_*.txt, whose
+controller design scores STE and RTE together).
 
 T0 = 20 K is the normalizing temperature of 000_f43a9a359eb2e47e.txt (its
 |Delta T_a| <= 20 K maps to [-1, 1]); band_K = 5 K is the inner band plant
@@ -36,6 +41,7 @@ class RewardConfig:
     w_spray: float = 0.02
     w_move: float = 0.1
     trip_penalty: float = 100.0
+    w_secondary: float = 1.0
 
     def __post_init__(self) -> None:
         for f in fields(self):
@@ -65,12 +71,23 @@ class RewardConfig:
         return np.array(list(asdict(self).values()), dtype=np.float64)
 
 
+N_WEIGHTS = len(fields(RewardConfig))
+
+
 @njit(cache=True)
-def reward(e, spray_norm, move, terminated, w):
-    """Reward of one transition (see module docstring); w = RewardConfig.to_array()."""
+def temperature_cost(e, w):
+    """c(e) of the module docstring for a temperature error e (K)."""
     a = abs(e) / w[0]
-    r = w[1] * a + w[2] * a * a + w[4] * max(0.0, abs(e) - w[3]) / w[0]
-    r += w[5] * spray_norm + w[6] * move
+    return w[1] * a + w[2] * a * a + w[4] * max(0.0, abs(e) - w[3]) / w[0]
+
+
+@njit(cache=True)
+def reward(e, secondary_cost, spray_norm, move, terminated, w):
+    """Reward of one transition (see module docstring); w = RewardConfig.to_array().
+
+    ``secondary_cost`` is the sum of temperature_cost over the secondary errors.
+    """
+    r = temperature_cost(e, w) + w[8] * secondary_cost + w[5] * spray_norm + w[6] * move
     if terminated:
         r += w[7]
     return -r

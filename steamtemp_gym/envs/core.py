@@ -25,7 +25,7 @@ from numba import njit
 
 from steamtemp_gym import scenarios as sc
 from steamtemp_gym.plants.base import N_DIST, Plant
-from steamtemp_gym.rewards import RewardConfig, reward
+from steamtemp_gym.rewards import N_WEIGHTS, RewardConfig, reward, temperature_cost
 from steamtemp_gym.rng import gauss
 from steamtemp_gym.signals import OBS_LIMIT, T0_K, for_plant
 
@@ -89,16 +89,19 @@ def advance(Z, U, U_prev, bp_t, bp_v, bp_n, ep, key, counter, ints, cfg, obs_cs,
 
     Args:
         ep: (B, 3) per-row [time_s, duration_s, noise_std_C]; time advanced in place.
-        ints: [i_outlet, i_measured, n_obs_plant, n_valves, n_sprays, obs idx..., valve idx...,
-            spray idx...] (output indices).
-        cfg: [dt, sp_nom, trip_below_K, trip_above_K, spray_scale, reward weights...].
+        ints: [i_outlet, i_measured, n_obs_plant, n_valves, n_sprays, n_secondary, obs idx...,
+            valve idx..., spray idx..., secondary idx...] (output indices).
+        cfg: [dt, sp_nom, trip_below_K, trip_above_K, spray_scale, reward weights...,
+            secondary setpoints...].
         out: (B, 3) written: [reward, terminated, truncated].
     """
-    i_out, i_meas, n_obs, n_v, n_s = ints[0], ints[1], ints[2], ints[3], ints[4]
-    obs_idx = ints[5 : 5 + n_obs]
-    s_idx = ints[5 + n_obs + n_v : 5 + n_obs + n_v + n_s]
+    i_out, i_meas, n_obs, n_v, n_s, n_sec = ints[0], ints[1], ints[2], ints[3], ints[4], ints[5]
+    obs_idx = ints[6 : 6 + n_obs]
+    s_idx = ints[6 + n_obs + n_v : 6 + n_obs + n_v + n_s]
+    sec_idx = ints[6 + n_obs + n_v + n_s : 6 + n_obs + n_v + n_s + n_sec]
     dt, sp_nom, trip_lo, trip_hi, s_scale = cfg[0], cfg[1], cfg[2], cfg[3], cfg[4]
-    w = cfg[5:]
+    w = cfg[5 : 5 + N_WEIGHTS]
+    sec_sp = cfg[5 + N_WEIGHTS :]
     noise = ep[:, 2]
     for b in range(Z.shape[0]):
         ep[b, 0] += dt
@@ -114,7 +117,10 @@ def advance(Z, U, U_prev, bp_t, bp_v, bp_n, ep, key, counter, ints, cfg, obs_cs,
         for j in range(U.shape[1]):
             move += abs(U[b, j] - U_prev[b, j])
             U_prev[b, j] = U[b, j]
-        out[b, 0] = reward(e, spray, move, term, w)
+        sec = 0.0
+        for j in range(n_sec):
+            sec += temperature_cost(sec_sp[j] - Z[b, sec_idx[j]], w)
+        out[b, 0] = reward(e, sec, spray, move, term, w)
         out[b, 1] = 1.0 if term else 0.0
         out[b, 2] = 1.0 if ep[b, 0] >= ep[b, 1] - 1e-9 else 0.0
 
@@ -162,17 +168,20 @@ class Core:
         self.valve_idx = [idx[v] for v in plant.valves]
         self.spray_idx = [idx[s] for s in plant.sprays]
         self.ints = np.array(
-            [self.i_out, idx[plant.outlet_measured], len(observed), len(plant.valves), len(plant.sprays)]
+            [self.i_out, idx[plant.outlet_measured], len(observed), len(plant.valves),
+             len(plant.sprays), len(plant.secondary)]
             + observed
             + self.valve_idx
-            + self.spray_idx,
+            + self.spray_idx
+            + [idx[name] for name, _ in plant.secondary],
             dtype=np.int64,
-        )
+        )  # fmt: skip
         spray_scale = plant.outputs[self.spray_idx[0]].scale if self.spray_idx else 1.0
         trip_lo, trip_hi = plant.trip_band_K
         self.cfg = np.concatenate(
-            [[plant.dt_s, plant.setpoint_C, trip_lo, trip_hi, spray_scale], reward_cfg.to_array()]
-        )
+            [[plant.dt_s, plant.setpoint_C, trip_lo, trip_hi, spray_scale], reward_cfg.to_array(),
+             [sp for _, sp in plant.secondary]]
+        )  # fmt: skip
         self.scenario: list[sc.Scenario | None] = [None] * B
         self._info_idx = [("outlet_temp_C", self.i_out),
                           ("measured_temp_C", idx[plant.outlet_measured]),
@@ -209,7 +218,7 @@ class Core:
         )  # fmt: skip
         self.U[b] = self.Z[b, self.valve_idx]
         self.U_prev[b] = self.U[b]
-        observe(b, self.Z, self.ints[5 : 5 + self.ints[2]], self.obs_cs, self.ints[1],
+        observe(b, self.Z, self.ints[6 : 6 + self.ints[2]], self.obs_cs, self.ints[1],
                 self.key, self.counter, self.ep[:, 2], self.sp, self.D, self.obs)  # fmt: skip
 
     def step(self, A: np.ndarray) -> None:

@@ -25,6 +25,8 @@ DIST: tuple[str, ...] = (
     "spray_water_temp_offset_C",  # K
 )
 N_DIST = len(DIST)
+#: ``outer`` entry of Plant.control_loops meaning the main-steam temperature against its setpoint.
+MAIN = "main"
 
 
 @dataclass(frozen=True)
@@ -75,8 +77,13 @@ class Plant:
         outlet: Name of the true main-steam temperature output.
         outlet_measured: Name of the measured main-steam temperature output.
         valves: Names of the valve-opening outputs. sprays: names of the spray-flow outputs.
-        cascade_inner: Per valve, the measured intermediate (attemperator-outlet) temperature a
-            conventional cascade controls with that valve.
+        control_loops: Per action, the conventional loop that moves it, as (inner, outer)
+            measured signals: inner is the fast temperature the actuator acts on (e.g. the
+            attemperator outlet) or None, outer is MAIN (the main-steam error against the
+            setpoint), another signal held at its value at the episode start, or None (the
+            inner signal is held at its start value). Used by baselines/cascade_pi.py.
+        secondary: Other controlled temperatures scored by the reward, as (true output name,
+            setpoint in C), e.g. the reheat steam temperature.
         trip_band_K: (below, above) setpoint at which the unit trips (episode terminates).
     """
 
@@ -90,7 +97,10 @@ class Plant:
     outlet_measured: ClassVar[str] = "outlet_temp_meas_C"
     valves: ClassVar[tuple[str, ...]] = ("spray_valve",)
     sprays: ClassVar[tuple[str, ...]] = ("spray_flow_kg_s",)
-    cascade_inner: ClassVar[tuple[str, ...]] = ("attemp_out_temp_meas_C",)
+    control_loops: ClassVar[tuple[tuple[str | None, str | None], ...]] = (
+        ("attemp_out_temp_meas_C", MAIN),
+    )
+    secondary: ClassVar[tuple[tuple[str, float], ...]] = ()
     extra_info: ClassVar[tuple[str, ...]] = ()
     trip_band_K: ClassVar[tuple[float, float]] = (60.0, 40.0)
     default_duration_s: ClassVar[float] = 3600.0

@@ -143,7 +143,7 @@ from numba import njit
 from scipy.linalg import expm
 
 from steamtemp_gym import scenarios as sc
-from steamtemp_gym.plants.base import Plant, Signal, validate_params
+from steamtemp_gym.plants.base import MAIN, Plant, Signal, validate_params
 from steamtemp_gym.rng import splitmix64, uniform
 from steamtemp_gym.steam import cp_pT, h_pT
 
@@ -482,7 +482,7 @@ class Cascade300MW(Plant):
         ),
     )
     setpoint_C = 535.0
-    cascade_inner = ("intermediate_temp_C",)
+    control_loops = (("intermediate_temp_C", MAIN),)
     extra_info = ("intermediate_temp_C", "omega_K", "omega2_kg_s", "outer_disturbance_K")
     default_duration_s = 3600.0
 

@@ -1,0 +1,187 @@
+"""Validation of steamtemp/BoilerTurbineMIMO-v0 against 002_f625244f6c852ffd.txt.
+
+- Table 1: the heat-exchanger section of eq. (1)-(6) (the platen secondary SH, a fluid and a
+  metal state) has Jacobian eigenvalues whose time constants are within 10 % of 6.5 s and
+  137 s at 2270 t/h and of 8.3 s and 217 s at 1135 t/h (the extracted -0.046 1/s is
+  1/217 s = 0.0046 1/s), at the plant's own steady operating points;
+- steady states at 25/50/90/100 % load hold STE and RTE with SP1, SP2 and RGD inside (0, 1)
+  and are stationary;
+- Fig. 6: unit step responses of STE and RTE to SP1, SP2 and RGD differ strongly between
+  25 % and 90 % load (gain or time-constant ratio >= 1.5 for every pair);
+- the optional FF bias action raises both temperatures;
+- ROS2 at the control interval against 16 substeps over a load ramp.
+"""
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+import steamtemp_gym  # noqa: F401  (registers the ids)
+from steamtemp_gym import scenarios
+from steamtemp_gym.envs.core import eval_schedules
+from steamtemp_gym.metrics import step_response_metrics
+from steamtemp_gym.plants import boiler_turbine_mimo as bt
+
+PLANT = bt.BoilerTurbineMIMO()
+ENV_ID = "steamtemp/BoilerTurbineMIMO-v0"
+ACT = [bt.S_V1, bt.S_V2, bt.S_G]
+TABLE1 = {1.0: (6.5, 137.0), 0.5: (8.3, 217.0)}  # load: (fast, slow) time constants in s
+
+
+def steady(loads, plant=PLANT, fouling=1.0, bias=0.0, spray_dT=0.0):
+    loads = np.atleast_1d(loads).astype(float)
+    D = np.zeros((loads.size, 5))
+    D[:, 0], D[:, 2], D[:, 3], D[:, 4] = loads, bias, fouling, spray_dT
+    X = np.zeros((loads.size, plant.n_x))
+    plant.steady_state(D, np.full(loads.size, plant.setpoint_C), X)
+    Z = np.zeros((loads.size, plant.n_z))
+    U = X[:, [bt.S_V1, bt.S_V2, bt.S_G, bt.S_FB][: plant.n_u]].copy()
+    plant.kernel()(X, U, D, plant.P, plant.jrow, plant.jcol, 0.0, 1, Z)
+    return X, D, Z, U
+
+
+def section_jacobian(x, u, d):
+    """Central-difference Jacobian of the plant rhs on the platen's (metal, fluid) states."""
+    P = PLANT.P
+    o_pl = bt._offsets(P)[1]
+    idx, eps = [o_pl, o_pl + 1], [1e-2, 10.0]  # K, J/kg
+    f = np.zeros(PLANT.n_x)
+    jd, ju, jl = np.zeros(PLANT.n_x), np.zeros(PLANT.n_x), np.zeros(len(PLANT.jrow))
+    J = np.zeros((2, 2))
+    for j, (i, e) in enumerate(zip(idx, eps, strict=True)):
+        cols = []
+        for s in (1.0, -1.0):
+            xs = x.copy()
+            xs[i] += s * e
+            bt.rhs(xs, u, d, P, f, jd, ju, jl, False)
+            cols.append(f[idx].copy())
+        J[:, j] = (cols[0] - cols[1]) / (2.0 * e)
+    return J
+
+
+@pytest.mark.parametrize("load", [1.0, 0.5])
+def test_table1_eigenvalues_of_the_heat_exchanger_section(load):
+    assert PLANT.params.n_seg_platen == 1  # the section of eq. (1)-(3): one fluid, one metal
+    X, D, Z, U = steady(load)
+    assert Z[0, bt.Z_W] * 3.6 == pytest.approx(2270.0 * load, rel=1e-9)  # t/h of Table 1
+    eig = np.linalg.eigvals(section_jacobian(X[0], U[0], D[0]))
+    assert np.all(np.abs(eig.imag) < 1e-12) and np.all(eig.real < 0)
+    tau_fast, tau_slow = np.sort(-1.0 / eig.real)
+    fast_ref, slow_ref = TABLE1[load]
+    print(
+        f"\n{2270 * load:.0f} t/h at {Z[0, bt.Z_P]:.2f} MPa: tau = {tau_fast:.2f} s "
+        f"({tau_fast / fast_ref - 1:+.1%}), {tau_slow:.1f} s ({tau_slow / slow_ref - 1:+.1%})"
+    )
+    assert tau_fast == pytest.approx(fast_ref, rel=0.10)
+    assert tau_slow == pytest.approx(slow_ref, rel=0.10)
+
+
+@pytest.mark.parametrize("load", [0.25, 0.5, 0.9, 1.0])
+def test_steady_state_holds_both_setpoints_with_actuators_inside(load):
+    X, D, Z, U = steady(load)
+    assert Z[0, bt.Z_STE] == pytest.approx(PLANT.params.T_ms_C, abs=0.01)
+    assert Z[0, bt.Z_RTE] == pytest.approx(PLANT.params.T_rh_C, abs=0.01)
+    for i in (bt.Z_V1, bt.Z_V2, bt.Z_G):
+        assert 0.02 < Z[0, i] < 0.98, (load, i, Z[0, i])
+    # stationary: 200 s with the inputs held change nothing measurable
+    Z0 = Z.copy()
+    for _ in range(100):
+        PLANT.step(X, U, D, Z)
+    temps = [bt.Z_STE, bt.Z_RTE, bt.Z_T1, bt.Z_T2]
+    np.testing.assert_allclose(Z[0, temps], Z0[0, temps], atol=1e-3)
+    # the sprays absorb moderate disturbances (STE held, both valves inside their range)
+    for dist in ({"bias": 0.05}, {"bias": -0.05}, {"fouling": 0.9}, {"spray_dT": 15.0}):
+        _, _, Zd, _ = steady(load, **dist)
+        assert Zd[0, bt.Z_STE] == pytest.approx(PLANT.params.T_ms_C, abs=0.01), dist
+        assert 0.0 < Zd[0, bt.Z_V1] < 1.0 and 0.0 < Zd[0, bt.Z_V2] < 1.0, dist
+
+
+def step_responses(loads=(0.25, 0.9), du=0.05, steps=3000):
+    """Metrics of STE and RTE after a +du step of SP1, SP2, RGD: {(load, input, output): dict}."""
+    rows = [(L, k) for L in loads for k in range(3)]
+    X, D, Z, U = steady([L for L, _ in rows])
+    PLANT.step(X, U, D, Z)
+    for b, (_, k) in enumerate(rows):
+        U[b, k] += du
+    y = [Z[:, [bt.Z_STE, bt.Z_RTE]].copy()]
+    for _ in range(steps):
+        PLANT.step(X, U, D, Z)
+        y.append(Z[:, [bt.Z_STE, bt.Z_RTE]].copy())
+    y = np.array(y)
+    t = np.arange(steps + 1) * PLANT.dt_s
+    out = {}
+    for b, (L, k) in enumerate(rows):
+        for o, name in enumerate(("STE", "RTE")):
+            assert abs(y[-1, b, o] - y[-50, b, o]) < 0.01 * abs(y[-1, b, o] - y[0, b, o])  # settled
+            out[(L, ("SP1", "SP2", "RGD")[k], name)] = step_response_metrics(t, y[:, b, o])
+    return out
+
+
+def test_step_responses_depend_strongly_on_load():
+    """Fig. 6: 25 % (slow) vs 90 % load; tau = Tu + Tg of the inflection tangent."""
+    m = step_responses()
+    sign = {"SP1": -1.0, "SP2": -1.0, "RGD": 1.0}  # more spray colder; more recirculation hotter
+    lines = [f"{'pair':10s} {'K 25%':>7s} {'K 90%':>7s} {'tau 25%':>8s} {'tau 90%':>8s} "
+             f"{'K ratio':>7s} {'tau ratio':>9s}"]  # fmt: skip
+    for inp in ("SP1", "SP2", "RGD"):
+        for out in ("STE", "RTE"):
+            lo, hi = m[(0.25, inp, out)], m[(0.9, inp, out)]
+            assert np.sign(lo["gain"]) == np.sign(hi["gain"]) == sign[inp], (inp, out)
+            k_ratio = max(lo["gain"] / hi["gain"], hi["gain"] / lo["gain"])
+            tau_lo, tau_hi = lo["Tu_s"] + lo["Tg_s"], hi["Tu_s"] + hi["Tg_s"]
+            assert tau_lo > tau_hi  # slower at low load (less steam flow)
+            lines.append(f"{inp}->{out:6s} {lo['gain']:7.2f} {hi['gain']:7.2f} {tau_lo:8.0f} "
+                         f"{tau_hi:8.0f} {k_ratio:7.2f} {tau_lo / tau_hi:9.2f}")  # fmt: skip
+            assert max(k_ratio, tau_lo / tau_hi) >= 1.5, (inp, out, k_ratio, tau_lo / tau_hi)
+    print("\nstep +0.05 opening, K in K:\n" + "\n".join(lines))
+
+
+def test_fuel_bias_option_adds_an_action_that_heats_both_outputs():
+    env = gym.make(ENV_ID, scenario="setpoint_step", params={"fuel_bias_action": True})
+    obs, info = env.reset(seed=0)
+    assert env.action_space.shape == (4,) and len(info["spray_valve"]) == 4
+    assert "fuel_bias" in [s.name for s in env.unwrapped.signals.observation]
+    assert gym.make(ENV_ID).action_space.shape == (3,)
+    plant = bt.BoilerTurbineMIMO(fuel_bias_action=True)
+    X, D, Z, U = steady([0.9, 0.9], plant=plant)
+    U[1, 3] += 0.125  # bias = fuel_bias_max (2 u - 1): +2.5 % of rated firing
+    for _ in range(600):
+        plant.step(X, U, D, Z)
+    dT = Z[1, [bt.Z_STE, bt.Z_RTE]] - Z[0, [bt.Z_STE, bt.Z_RTE]]
+    assert Z[1, bt.Z_LF] - Z[0, bt.Z_LF] == pytest.approx(0.025, rel=1e-3)
+    print(f"\nFF +2.5 %, 20 min at 90 % load: STE {dT[0]:+.1f} K, RTE {dT[1]:+.1f} K")
+    assert dT[0] > 2.0 and dT[1] > 1.0, dT
+
+
+def test_reheat_temperature_is_observed_and_reported():
+    env = gym.make(ENV_ID, scenario="load_ramp_100_50")
+    obs, info = env.reset(seed=0)
+    names = [s.name for s in env.unwrapped.signals.observation]
+    assert "reheat_temp_meas_C" in names and "reheat_temp_C" not in names
+    assert info["reheat_temp_C"] == pytest.approx(566.0, abs=0.01)
+    decoded = env.unwrapped.signals.decode(obs)
+    assert decoded["reheat_temp_meas_C"] == pytest.approx(566.0, abs=0.01)
+
+
+def test_ros2_at_the_control_interval_matches_16_substeps():
+    """100 -> 50 % ramp with all three actuators moving: STE and RTE within 0.1 K."""
+    fine = bt.BoilerTurbineMIMO(n_substeps=16)
+    sc = scenarios.get("load_ramp_100_50")
+    bp_t, bp_v = np.zeros((1, 5, 8)), np.zeros((1, 5, 8))
+    bp_n = np.ones((1, 5), np.int64)
+    scenarios.pack(sc, bp_t[0], bp_v[0], bp_n[0])
+    D, sp = np.zeros((2, 5)), np.zeros(2)
+    eval_schedules(0, 1000.0, bp_t, bp_v, bp_n, 538.0, D, sp)
+    D[1] = D[0]
+    X, _, Z, U0 = steady([D[0, 0]] * 2)
+    err = np.zeros(2)
+    for k in range(int(1800.0 / PLANT.dt_s)):
+        t = 1000.0 + k * PLANT.dt_s
+        eval_schedules(0, t, bp_t, bp_v, bp_n, 538.0, D, sp)
+        D[1] = D[0]
+        U = U0 + 0.05 * np.sin(2 * np.pi * t / np.array([300.0, 420.0, 600.0]))
+        PLANT.step(X[:1], U[:1], D[:1], Z[:1])
+        fine.step(X[1:], U[1:], D[1:], Z[1:])
+        err = np.maximum(err, np.abs(Z[0, [bt.Z_STE, bt.Z_RTE]] - Z[1, [bt.Z_STE, bt.Z_RTE]]))
+    print(f"\nROS2 dt = {PLANT.dt_s} s vs 16 substeps: max STE {err[0]:.3f} K, RTE {err[1]:.3f} K")
+    assert np.all(err < 0.1), err
