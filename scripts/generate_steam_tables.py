@@ -2,7 +2,7 @@
 
 Offline generator for the compiled steam-property lookups of :mod:`steamtemp_gym.steam`.
 Rerunnable: ``python scripts/generate_steam_tables.py [--workers N] [--out PATH]``
-(about two minutes on two cores). Requires ``iapws`` (the ``tables`` extra); the run-time
+(about 30 s on two cores). Requires ``iapws`` (the ``tables`` extra); the run-time
 package never imports it.
 
 Source and method
@@ -11,7 +11,7 @@ All values come from the *forward* IAPWS-IF97 equations as implemented by the ``
 package (``iapws.iapws97._Region1``, ``_Region2`` (Gibbs, in p and T), ``_Region3``
 (Helmholtz, in rho and T), ``_TSat_P`` (region 4) and ``_t_P`` (B23 boundary)), i.e. exactly
 the equations ``iapws.IAPWS97`` evaluates. The private functions are called directly, with
-our own tightly converged Newton iterations (relative tolerance ~1e-13), because
+our own tightly converged Newton iterations (relative tolerance 1e-12), because
 ``IAPWS97(P=, h=)`` takes ~1.6 ms per call and stops its region-3 ``fsolve`` at ~1e-8, too
 loose for finite-difference derivatives. Region boundaries follow ``IAPWS97`` exactly:
 
@@ -52,7 +52,25 @@ central, one-sided at segment ends) of the converged solutions. The boundary cur
 (and the saturation properties Tsat, rho_l, rho_v) are stored on the same q grid as
 cubic-Hermite data (value, d/dq). Grids are piecewise uniform (a few zones per axis,
 refined near the saturation line at low pressure, near the critical point and along the
-pseudo-critical line); see ``SEGMENTS`` and ``BLOCKS`` below.
+pseudo-critical line); see ``SEGMENTS`` and ``BLOCKS`` below: 25 630 nodes, 0.82 MB per
+quantity (each concatenated table must stay below numba's 1 MB constant-freezing limit,
+which the script checks). Measured accuracy: see :mod:`steamtemp_gym.steam`.
+
+Fast path
+---------
+Superheated steam in the rectangle ``FAST_P`` x ``FAST_H`` (2-35 MPa x 2850-3950 kJ/kg,
+entirely in region 2; ``check_fast_rectangle`` verifies that against h_v(p), h23(p) and
+h(p, 800 C)) gets its own uniform Hermite-bicubic tables ``fast_T`` and ``fast_rho``
+(0.5 MPa x 20 kJ/kg, 67 x 56 nodes, 120 kB each) so that the run-time lookup needs no
+patch or curve evaluation there. Node values come from the region-2 Newton solve
+``state_ph``; d/dh is analytic (1/cp, -rho alpha_v / cp), so is d/dp at constant h
+((dT/dp)_h = v (T alpha_v - 1) / cp, (drho/dp)_h = rho (kappa_T - alpha_v (dT/dp)_h)),
+checked against central differences of the values; d2/dp dh is the central difference
+(step ``FD_STEP``) of the analytic d/dh. ``fast_h`` holds h(p, tau) with
+tau = (T - T(p, 2850)) / (T(p, 3950) - T(p, 2850)) on 67 x 33 nodes, the start value of the
+run-time h(p, T) inversion. The spacing was chosen from the measured interpolation error
+(max |dT| 3e-5 K at 0.5 MPa x 20 kJ/kg, dominated by the p spacing at 2-4 MPa; 1.5e-6 K at
+0.25 MPa x 10 kJ/kg for four times the size), i.e. as accurate as the patch tables.
 
 Units in the file: p in MPa, h in kJ/kg, T in K, rho in kg/m3 (the run-time module
 converts to SI).
@@ -65,7 +83,7 @@ import hashlib
 import math
 import re
 import time
-from collections.abc import Callable
+from collections.abc import Sequence
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
@@ -73,7 +91,7 @@ from pathlib import Path
 import numpy as np
 from iapws import iapws97 as if97
 
-LAYOUT_VERSION = 1
+LAYOUT_VERSION = 2
 
 PC = float(if97.Pc)  # 22.064 MPa
 TC = float(if97.Tc)  # 647.096 K
@@ -86,6 +104,13 @@ PMAX = 35.0  # MPa
 S_MIN = 0.01  # segment 1 ends at p = pc - S_MIN**2 (100 Pa below the critical point)
 MARGIN = 1.0  # kJ/kg overlap of region-3 patches beyond the 1/3 and 2/3 boundaries
 FD_STEP = 1e-4  # finite-difference step in q (MPa for q = p, sqrt(MPa) for q = sqrt(pc - p))
+
+# Fast path: uniform (p, h) rectangle inside IF97 region 2, as (start, end, n_cells).
+# max_p h_v(p) = 2803 kJ/kg, h23(p) <= 2623 kJ/kg and h(35 MPa, 800 C) = 3996 kJ/kg, so no
+# saturation or region boundary and no table edge crosses it (``build_fast`` checks).
+FAST_P = (2.0, 35.0, 66)  # MPa
+FAST_H = (2850.0, 3950.0, 55)  # kJ/kg
+FAST_TAU = 32  # cells of the h(p, tau) start table of h_pT on the fast rectangle
 
 # Curve indices per segment (the run-time module checks these names).
 CURVES = {
@@ -165,11 +190,12 @@ class State:
     rho: float
     cp: float  # kJ/(kg K)
     alpha: float  # cubic expansion coefficient (1/K)
+    kt: float  # isothermal compressibility (1/MPa)
 
 
 def _state_from(d: dict, p: float) -> State:
     return State(p=p, T=float(d["T"]), h=float(d["h"]), rho=1.0 / float(d["v"]),
-                 cp=float(d["cp"]), alpha=float(d["alfav"]))
+                 cp=float(d["cp"]), alpha=float(d["alfav"]), kt=float(d["kt"]))
 
 
 def region12_pT(region: int, p: float, T: float) -> State:
@@ -304,7 +330,7 @@ def curve_values(seg: int, p: float) -> dict[str, float]:
 # ---------------------------------------------------------------------------------------
 
 
-def axis_nodes(zones) -> np.ndarray:
+def axis_nodes(zones: Sequence[tuple[float, float, int]]) -> np.ndarray:
     """Node coordinates of a piecewise-uniform axis given as (start, end, n_cells) zones."""
     pts = [zones[0][0]]
     for a, b, n in zones:
@@ -380,7 +406,7 @@ def build_segment(seg: int, pool: ProcessPoolExecutor) -> dict[str, np.ndarray]:
         idx = []
         for o in offs:
             idx.append(len(jobs))
-            jobs.append((seg, q + o) if o != 0.0 else (seg, q))
+            jobs.append((seg, q + o))
         centre = len(jobs)
         jobs.append((seg, q))
         stencils.append((idx, w, centre))
@@ -412,7 +438,87 @@ def build_segment(seg: int, pool: ProcessPoolExecutor) -> dict[str, np.ndarray]:
     return out
 
 
-def zones_array(zones) -> np.ndarray:
+# ---------------------------------------------------------------------------------------
+# Fast path: uniform (p, h) tables in region 2
+# ---------------------------------------------------------------------------------------
+
+
+def fast_row(p: float) -> dict[str, np.ndarray]:
+    """Fast-path node data along one pressure (no cross derivatives yet).
+
+    Returns (n, 3) arrays of value, d/dp and d/dh (d/dtau for "h"): "T" and "rho" at the
+    h nodes of ``FAST_H``, and "h" at the tau nodes of the h_pT start table, where
+    T = T(p, h_0) + tau (T(p, h_n) - T(p, h_0)) spans the rectangle's h range at p.
+    The p-derivatives (at constant h, resp. tau) are analytic:
+    (dT/dp)_h = v (T alpha_v - 1) / cp, (drho/dp)_h = rho (kappa_T - alpha_v (dT/dp)_h),
+    (dh/dp)_T = v (1 - T alpha_v); the factor 1e3 converts MPa m3/kg to kJ/kg.
+    """
+    hn = np.linspace(*FAST_H[:2], FAST_H[2] + 1)
+    T = np.empty((hn.size, 3))
+    rho = np.empty((hn.size, 3))
+    guess = region12_pT(2, p, float(if97._Backward2_T_Ph(p, hn[0])))
+    for j, h in enumerate(hn):
+        st = state_ph(2, p, h, guess)
+        guess = st
+        dTdp = 1e3 * (st.T * st.alpha - 1.0) / (st.rho * st.cp)
+        T[j] = st.T, dTdp, 1.0 / st.cp
+        rho[j] = st.rho, st.rho * (st.kt - st.alpha * dTdp), -st.rho * st.alpha / st.cp
+    tau = np.linspace(0.0, 1.0, FAST_TAU + 1)
+    hg = np.empty((tau.size, 3))
+    span = T[-1, 0] - T[0, 0]
+    dspan = T[-1, 1] - T[0, 1]
+    for k, x in enumerate(tau):
+        st = region12_pT(2, p, T[0, 0] + x * span)
+        hg[k] = (st.h, 1e3 * (1.0 - st.T * st.alpha) / st.rho + st.cp * (T[0, 1] + x * dspan),
+                 st.cp * span)
+    return {"T": T, "rho": rho, "h": hg}
+
+
+def check_fast_rectangle() -> None:
+    """Raise unless the fast rectangle lies strictly inside region 2 and the table domain."""
+    p0, p1 = FAST_P[:2]
+    h0, h1 = FAST_H[:2]
+    ps = np.linspace(p0, p1, 331)
+    h_v = max(sat_state(p, 1, False).h for p in ps if p <= P13)
+    h_23 = max(curve_state("h23", p, 2).h for p in ps if p >= P13)
+    h_max = min(curve_state("hmax", p, 2).h for p in ps)
+    if not (p0 >= PMIN and p1 <= PMAX and h_v < h0 and h_23 < h0 and h1 < h_max):
+        raise RuntimeError(
+            f"fast rectangle {FAST_P[:2]} MPa x {FAST_H[:2]} kJ/kg leaves region 2 or the "
+            f"table domain (max h_v {h_v:.1f}, max h23 {h_23:.1f}, min hmax {h_max:.1f})"
+        )
+
+
+def build_fast(pool: ProcessPoolExecutor) -> dict[str, np.ndarray]:
+    """Fast-path Hermite tables: (n_p, n, 4) of value, d/dp, d/dx and d2/(dp dx).
+
+    x is h for "fast_T" and "fast_rho", tau for "fast_h". The cross derivative is the
+    central difference (step ``FD_STEP`` MPa, at constant h or tau) of the analytic d/dx;
+    the same stencil checks the analytic d/dp against a difference of the values.
+    """
+    check_fast_rectangle()
+    pn = np.linspace(*FAST_P[:2], FAST_P[2] + 1)
+    d = FD_STEP
+    jobs = [x for p in pn for x in (p - d, p, p + d)]
+    res = list(pool.map(fast_row, jobs, chunksize=3))
+    out: dict[str, np.ndarray] = {}
+    for key, name in (("T", "fast_T"), ("rho", "fast_rho"), ("h", "fast_h")):
+        lo = np.stack([r[key] for r in res[0::3]])
+        mid = np.stack([r[key] for r in res[1::3]])
+        hi = np.stack([r[key] for r in res[2::3]])
+        tab = np.empty(mid.shape[:2] + (4,))
+        tab[..., :3] = mid
+        tab[..., 3] = (hi[..., 2] - lo[..., 2]) / (2 * d)
+        fd = (hi[..., 0] - lo[..., 0]) / (2 * d)
+        err = np.abs(fd - mid[..., 1]).max() / np.abs(mid[..., 1]).max()
+        if err > 1e-6:
+            raise RuntimeError(f"{name}: analytic d/dp differs from finite differences ({err:.2g})")
+        out[name] = tab
+    out["fast_axes"] = np.array([FAST_P, FAST_H, (0.0, 1.0, FAST_TAU)], dtype=np.float64)
+    return out
+
+
+def zones_array(zones: Sequence[tuple[float, float, int]]) -> np.ndarray:
     """(n_zones, 3) array of (start, end, n_cells)."""
     return np.asarray(zones, dtype=np.float64)
 
@@ -459,6 +565,8 @@ def main(argv: list[str] | None = None) -> None:
         for seg in SEGMENTS:
             data.update(build_segment(seg, pool))
             print(f"segment {seg} done ({time.time() - t0:.0f} s)", flush=True)
+        data.update(build_fast(pool))
+        print(f"fast tables done ({time.time() - t0:.0f} s)", flush=True)
     for seg, spec in SEGMENTS.items():
         data[f"qzones{seg}"] = zones_array(spec["zones"])
         data[f"curvenames{seg}"] = np.array(CURVES[seg])
@@ -469,10 +577,13 @@ def main(argv: list[str] | None = None) -> None:
         data[f"xizones_{b.name}"] = zones_array(b.zones)
     data["constants"] = np.array([PC, TC, P13, T13, TMIN, TMAX, PMIN, PMAX, S_MIN])
     data["layout_version"] = np.array(LAYOUT_VERSION)
-    for qty in ("T", "rho"):  # the run-time module concatenates these; numba freezes <= 1 MB
-        nbytes = sum(v.nbytes for k, v in data.items() if k.startswith(f"{qty}_"))
+    # run-time arrays (patch tables concatenated per quantity); numba freezes <= 1 MB
+    sizes = {f"{qty}_*": sum(v.nbytes for k, v in data.items() if k.startswith(f"{qty}_"))
+             for qty in ("T", "rho")}
+    sizes.update({k: data[k].nbytes for k in ("fast_T", "fast_rho", "fast_h")})
+    for name, nbytes in sizes.items():
         if nbytes > 10**6:
-            raise RuntimeError(f"{qty} tables take {nbytes} bytes > 1 MB; coarsen the grids")
+            raise RuntimeError(f"{name} tables take {nbytes} bytes > 1 MB; coarsen the grids")
     args.out.parent.mkdir(parents=True, exist_ok=True)
     np.savez_compressed(args.out, **data)
     digest = tables_digest(data)

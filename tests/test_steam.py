@@ -113,11 +113,19 @@ def random_pT():
 
 @pytest.fixture(scope="module")
 def pseudo_critical():
-    """250 points near the pseudo-critical line: 22.1-30 MPa, 360-430 C."""
+    """270 points near the pseudo-critical line, 22.1-30 MPa, 360-430 C.
+
+    150 uniform in the (p, T) box plus 120 hugging the line itself (p log-spaced towards
+    22.1 MPa, T within ~0.5 K of Tpc(p) ~ 647.1 + 3.75 dp - 0.02 dp^2, dp = p - pc), where
+    cp reaches a few thousand kJ/(kg K).
+    """
     rng = np.random.default_rng(20240603)
-    n = 250
-    p = rng.uniform(22.1, 30.0, n)
-    T = rng.uniform(633.15, 703.15, n)
+    p = rng.uniform(22.1, 30.0, 150)
+    T = rng.uniform(633.15, 703.15, 150)
+    dp = 10.0 ** rng.uniform(math.log10(22.1 - PC), math.log10(30.0 - PC), 120)
+    t_pc = 647.1 + 3.75 * dp - 0.02 * dp**2 + rng.normal(0.0, 0.5, 120) * np.minimum(1.0, dp)
+    p = np.r_[p, PC + dp]
+    T = np.r_[T, t_pc]
     h_ref, cp_ref = _ref_pT(p, T)
     T_ref, rho_ref, _ = _ref_ph(p, h_ref)
     Tt, dT, rho = _batch_ph(p * MPA, h_ref * KJ)
@@ -138,6 +146,28 @@ def sat_vapour_side():
     Tt, dT, rho = _batch_ph(p * MPA, h_ref * KJ)
     return {"p": p, "T": T, "h_ref": h_ref, "T_ref": T_ref, "rho_ref": rho_ref,
             "h": _batch_h(p * MPA, T) / KJ, "T_tab": Tt, "rho": rho}
+
+
+@pytest.fixture(scope="module")
+def fast_ph():
+    """600 random (p, h) in the fast-path rectangle (FAST_RECT, pure region 2).
+
+    400 uniform, 100 within 40 kJ/kg of its lower-h edge at 25-35 MPa (largest cp) and
+    100 within 40 kJ/kg of that edge at 2-5 MPa (largest interpolation error).
+    """
+    p0, p1, h0, h1 = (v / s for v, s in zip(steam.FAST_RECT, (MPA, MPA, KJ, KJ),
+                                            strict=True))
+    rng = np.random.default_rng(20240605)
+    p = np.r_[rng.uniform(p0, p1, 400), rng.uniform(25.0, p1, 100), rng.uniform(p0, 5.0, 100)]
+    h = np.r_[rng.uniform(h0, h1, 400), h0 + rng.uniform(0.0, 40.0, 200)]
+    T_ref, rho_ref, cp_ref, region = (np.empty(p.size) for _ in range(4))
+    for k, (a, b) in enumerate(zip(p, h, strict=True)):
+        w = IAPWS97(P=float(a), h=float(b))
+        T_ref[k], rho_ref[k], cp_ref[k], region[k] = w.T, w.rho, w.cp, w.region
+    T, dT, rho = _batch_ph(p * MPA, h * KJ)
+    return {"p": p, "h": h, "T_ref": T_ref, "rho_ref": rho_ref, "cp_ref": cp_ref,
+            "region": region, "T": T, "dT": dT, "rho": rho,
+            "h_back": _batch_h(p * MPA, T_ref) / KJ, "h_trip": _batch_h(p * MPA, T) / KJ}
 
 
 # ---------------------------------------------------------------------------------------
@@ -165,6 +195,8 @@ def test_T_rho_pseudo_critical(pseudo_critical):
     assert err.max() <= TOL_T, f"max |dT| = {err.max():.3g} K"
     rel = np.abs(d["rho"] / d["rho_ref"] - 1.0)
     assert rel.max() <= TOL_RHO, f"max rho rel err = {rel.max():.3g}"
+    assert d["cp_ref"].max() > 1000.0  # the set does reach the cp spike
+    assert np.max(np.abs(d["dT"] * d["cp_ref"] * KJ - 1.0)) < 1e-3  # dT/dh = 1/cp
 
 
 def test_T_ph_saturated_vapour_side(sat_vapour_side):
@@ -233,6 +265,68 @@ def test_rho_derivative_and_combined_lookup():
 
 
 # ---------------------------------------------------------------------------------------
+# fast path (uniform table on FAST_RECT)
+# ---------------------------------------------------------------------------------------
+
+
+def test_fast_path_accuracy(fast_ph):
+    d = fast_ph
+    assert np.all(d["region"] == 2)
+    err = np.abs(d["T"] - d["T_ref"])
+    k = err.argmax()
+    assert err.max() <= TOL_T, f"max |dT| = {err.max():.3g} K at p={d['p'][k]}, h={d['h'][k]}"
+    rel = np.abs(d["rho"] / d["rho_ref"] - 1.0)
+    assert rel.max() <= TOL_RHO, f"max rho rel err = {rel.max():.3g}"
+    assert np.max(np.abs(d["dT"] * d["cp_ref"] * KJ - 1.0)) < 1e-3  # dT/dh = 1/cp
+    err_h = np.abs(d["h_back"] - d["h"])
+    assert err_h.max() <= TOL_H, f"max |dh| = {err_h.max():.3g} kJ/kg"
+    # h_pT inverts the fast T table exactly
+    assert np.max(np.abs(d["h_trip"] - d["h"])) < 1e-6
+
+
+def test_fast_path_is_used_inside_the_rectangle_only():
+    p0, p1, h0, h1 = steam.FAST_RECT
+    rng = np.random.default_rng(12)
+    for _ in range(200):
+        p = rng.uniform(0.5, 35.0) * MPA
+        lo, hi = steam.h_limits_p(p)
+        h = lo + rng.random() * (hi - lo)
+        inside = p0 <= p <= p1 and h0 <= h <= h1
+        ref = (steam._fast if inside else steam._patch_lookup)(p * 1e-6, h * 1e-3, 2)
+        T, dT, rho, drho = steam.T_rho_ph(p, h)
+        assert (T, dT, rho, drho) == (ref[0], ref[1] * 1e-3, ref[2], ref[3] * 1e-3)
+    # p above P_MAX is clamped before the rectangle test
+    assert steam.T_rho_ph(40 * MPA, 3.3e6) == steam.T_rho_ph(p1, 3.3e6)
+
+
+def test_fast_path_agrees_with_patches_on_its_edges():
+    """Both paths at the same points of the rectangle's edges (h = h_min, h = h_max and
+    p = p_min; p_max is the table edge) agree to the tables' accuracy, so T_ph, rho_ph and
+    h_pT jump by no more than that when (p, h) crosses an edge."""
+    p0, p1, h0, h1 = (v / s for v, s in zip(steam.FAST_RECT, (MPA, MPA, KJ, KJ),
+                                            strict=True))
+    ps = np.linspace(p0, p1, 331)
+    hs = np.linspace(h0, h1, 441)
+    pts = np.r_[np.c_[ps, np.full(ps.size, h0)], np.c_[ps, np.full(ps.size, h1)],
+                np.c_[np.full(hs.size, p0), hs]]
+    for p, h in pts:
+        fast = np.array(steam._fast(p, h, 2))
+        patch = np.array(steam._patch_lookup(p, h, 2))
+        assert abs(fast[0] - patch[0]) <= 2e-4, (p, h, fast, patch)  # K
+        assert np.all(np.abs(fast[1:] / patch[1:] - 1.0) <= [1e-4, 1e-6, 1e-4]), (p, h)
+        T = fast[0]
+        assert abs(steam._fast_h_of_T(p, T) - steam._patch_h_of_T(p, T)) <= 2e-3  # kJ/kg
+    # the public lookups 1 mJ/kg (1 Pa) inside and outside the edges
+    for p in ps[::10]:
+        for h in (h0, h1):
+            pair = [steam.T_ph(p * MPA, (h + dh) * KJ) for dh in (-1e-6, 1e-6)]
+            assert abs(pair[0] - pair[1]) <= 2e-4
+    for h in hs[::10]:
+        pair = [steam.T_ph(p0 * MPA + dp, h * KJ) for dp in (-1.0, 1.0)]
+        assert abs(pair[0] - pair[1]) <= 2e-4
+
+
+# ---------------------------------------------------------------------------------------
 # h_pT
 # ---------------------------------------------------------------------------------------
 
@@ -246,7 +340,8 @@ def test_h_pT_random(random_pT):
 def test_h_pT_pseudo_critical(pseudo_critical):
     d = pseudo_critical
     err = np.abs(d["h"] - d["h_ref"])
-    assert err.max() <= TOL_H, f"max |dh| = {err.max():.3g} kJ/kg (cp up to {d['cp_ref'].max():.0f})"
+    msg = f"max |dh| = {err.max():.3g} kJ/kg (cp up to {d['cp_ref'].max():.0f} kJ/(kg K))"
+    assert err.max() <= TOL_H, msg
 
 
 def test_h_pT_saturated_vapour_side(sat_vapour_side):
