@@ -74,14 +74,14 @@ class RewardConfig:
 N_WEIGHTS = len(fields(RewardConfig))
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def temperature_cost(e, w):
     """c(e) of the module docstring for a temperature error e (K)."""
     a = abs(e) / w[0]
     return w[1] * a + w[2] * a * a + w[4] * max(0.0, abs(e) - w[3]) / w[0]
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def reward(e, secondary_cost, spray_norm, move, terminated, w):
     """Reward of one transition (see module docstring); w = RewardConfig.to_array().
 

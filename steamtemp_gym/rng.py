@@ -8,7 +8,7 @@ import numpy as np
 from numba import njit
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def splitmix64(z):
     """The splitmix64 finalizer of a uint64."""
     z = z + np.uint64(0x9E3779B97F4A7C15)
@@ -17,14 +17,14 @@ def splitmix64(z):
     return z ^ (z >> np.uint64(31))
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def uniform(key, counter, channel):
     """Uniform number in (0, 1) determined by (key, counter, channel); channel < 64."""
     z = splitmix64(np.uint64(key) ^ splitmix64(np.uint64(counter) * np.uint64(64) + np.uint64(channel)))
     return (np.float64(z >> np.uint64(11)) + 0.5) * (1.0 / 9007199254740992.0)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def gauss(key, counter, channel):
     """Standard normal number determined by (key, counter, channel) (Box-Muller); channel < 32."""
     u1 = uniform(key, counter, 2 * channel)

@@ -35,7 +35,7 @@ C_LOAD, C_SP, C_BIAS, C_FOUL, C_SPRAYT = 0, 1, 2, 3, 4
 MIN_BREAKPOINTS = 64
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _interp(bt, bv, n, t):
     """Piecewise-linear schedule value and slope at t (held constant at the ends)."""
     if t <= bt[0] or n == 1:
@@ -53,7 +53,7 @@ def _interp(bt, bv, n, t):
     return bv[k - 1] + slope * (t - bt[k - 1]), slope
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def eval_schedules(b, t, bp_t, bp_v, bp_n, sp_nom, D, sp):
     """Disturbances D[b] and setpoint sp[b] of row b at time t."""
     load, rate = _interp(bp_t[b, C_LOAD], bp_v[b, C_LOAD], bp_n[b, C_LOAD], t)
@@ -65,7 +65,7 @@ def eval_schedules(b, t, bp_t, bp_v, bp_n, sp_nom, D, sp):
     sp[b] = sp_nom + _interp(bp_t[b, C_SP], bp_v[b, C_SP], bp_n[b, C_SP], t)[0]
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def observe(b, Z, obs_idx, obs_cs, i_meas, key, counter, noise, sp, D, obs):
     """Write the normalized observation of row b (noisy measurements, setpoint, error, load)."""
     n = obs_idx.shape[0]
@@ -83,7 +83,7 @@ def observe(b, Z, obs_idx, obs_cs, i_meas, key, counter, noise, sp, D, obs):
         obs[b, n + j] = min(max(extra[j], -OBS_LIMIT), OBS_LIMIT)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def advance(Z, U, U_prev, bp_t, bp_v, bp_n, ep, key, counter, ints, cfg, obs_cs, D, sp, obs, out):
     """Everything after the plant step, for every row (see module docstring).
 
@@ -125,7 +125,7 @@ def advance(Z, U, U_prev, bp_t, bp_v, bp_n, ep, key, counter, ints, cfg, obs_cs,
         out[b, 2] = 1.0 if ep[b, 0] >= ep[b, 1] - 1e-9 else 0.0
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def to_commands(A, U):
     """Actuator commands U = (clip(A, -1, 1) + 1) / 2 (openings in [0, 1])."""
     for b in range(A.shape[0]):

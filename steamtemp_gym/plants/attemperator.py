@@ -14,14 +14,14 @@ import math
 from numba import njit
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def mix(W_in, h_in, w_sp, h_sp):
     """Outlet flow (kg/s) and enthalpy (J/kg) of the attemperator."""
     W_out = W_in + w_sp
     return W_out, (W_in * h_in + w_sp * h_sp) / W_out
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def spray_flow(opening, Cv, rho_w, dp):
     """Spray water flow (kg/s) through a linear valve: opening * Cv * sqrt(rho_w * dp).
 

@@ -50,7 +50,7 @@ from numba import njit
 GAMMA = 1.0 + 1.0 / np.sqrt(2.0)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def block_solve(gh, jd, ju, jl, jrow, jcol, r, z):
     """Solve (I - gh*A) z = r by block forward substitution.
 
@@ -102,7 +102,7 @@ def make_batched_step(rhs: Callable, outputs: Callable, project: Callable) -> Ca
         ``step(X, U, D, P, jrow, jcol, dt, n_sub, Z)``, in place on X and Z.
     """
 
-    @njit
+    @njit(error_model="numpy")
     def step(X, U, D, P, jrow, jcol, dt, n_sub, Z):  # noqa: N803
         n = X.shape[1]
         nc = jrow.shape[0]

@@ -11,7 +11,7 @@ from __future__ import annotations
 from numba import njit
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def thermowell_rhs(T, T1, T2, tau1, tau2):
     """(dT1/dt, dT2/dt, dd1/dT1, dd2/dT2) of the two-lag thermowell."""
     return (T - T1) / tau1, (T1 - T2) / tau2, -1.0 / tau1, -1.0 / tau2

@@ -164,7 +164,7 @@ INLET_COLS = (S_HUP, S_V)  # states the FSH inlet enthalpy depends on
 Z_TOUT, Z_TOUTM, Z_TATT, Z_TATTM, Z_TUP, Z_W, Z_P, Z_V, Z_WSP, Z_LF, Z_Q, Z_TMMAX = range(12)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _pressure(P, lw):
     """Sliding pressure (Pa) at steam-flow fraction lw."""
     lo, hi = P[I_SLL], P[I_SLH]
@@ -172,7 +172,7 @@ def _pressure(P, lw):
     return P[I_PMIN] + r * (P[I_PNOM] - P[I_PMIN])
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _table(P, off, load):
     """Linear interpolation of a schedule table stored in P over TAB_LOADS."""
     x = (min(max(load, 0.2), 1.2) - 0.2) / 0.05
@@ -190,7 +190,7 @@ def _spray_water_exact(P: np.ndarray, lw: float, dT: float) -> tuple[float, floa
     return h, rho_ph(p + dp, h), dp
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _spray_water(P, lw, dT):
     """Spray water (h J/kg, rho kg/m3, valve dp Pa) at steam-flow fraction lw and offset dT (K).
 
@@ -203,7 +203,7 @@ def _spray_water(P, lw, dT):
     return h, _table(P, T_RHOFW, lw), P[I_DPB] * lw * lw
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _boundary(x, u, d, P):
     """Algebraic part shared by rhs and outputs.
 
@@ -224,7 +224,7 @@ def _boundary(x, u, d, P):
     return W, p, w_sp, h0, h_sp, kA, UAg, Tg
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _h_up_target(P, lf, lw):
     """Upstream SH outlet enthalpy set by the fuel/water-ratio schedule and ratio error."""
     lw = min(max(lw, 0.05), 1.3)
@@ -234,7 +234,7 @@ def _h_up_target(P, lf, lw):
     return h_up + P[I_FWR] * (lf / lw - 1.0) * dh_rise
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _dpressure(P, lw):
     """d(sliding pressure)/d(steam-flow fraction) (Pa)."""
     if P[I_SLL] < lw < P[I_SLH]:
@@ -242,7 +242,7 @@ def _dpressure(P, lw):
     return 0.0
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def rhs(x, u, d, P, f, jd, ju, jl, want_jac):
     """dx/dt of the FSH plant (see module docstring); Jacobian pattern from FSHPlant.pack."""
     n = int(P[I_N])
@@ -254,7 +254,7 @@ def rhs(x, u, d, P, f, jd, ju, jl, want_jac):
     W, p, w_sp, h0, h_sp, kA, UAg, Tg = _boundary(x, u, d, P)
     # dh0/d(h_up) and dh0/dv (attemperator balance, linear valve), order of INLET_COLS
     v = min(max(x[S_V], 1e-6), 1.0)
-    dh0 = np.array([(W - w_sp) / W, (h_sp - x[S_HUP]) * w_sp / v / W])
+    dh0 = ((W - w_sp) / W, (h_sp - x[S_HUP]) * w_sp / v / W)
     dW = P[I_WNOM] if 0.05 < x[S_LW] < 1.3 else 0.0
     dp = _dpressure(P, x[S_LW])
     _, T_out, _ = chain_rhs(
@@ -272,7 +272,7 @@ def rhs(x, u, d, P, f, jd, ju, jl, want_jac):
         jd[S_TC1], jd[S_TC2], jd[S_TA1], jd[S_TA2] = j1, j2, j3, j4
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def outputs(x, u, d, P, z):
     """Physical outputs (order of FSHPlant.outputs)."""
     n = int(P[I_N])
@@ -300,7 +300,7 @@ def outputs(x, u, d, P, z):
     z[Z_TMMAX] = tm_max - K0
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def project(x, P):
     """Keep states inside their physical ranges after a step."""
     n = int(P[I_N])
@@ -313,7 +313,7 @@ def project(x, P):
         x[S_CHAIN + 2 * i + 1] = min(max(x[S_CHAIN + 2 * i + 1], 1.5e6), 4.2e6)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _outlet_steady(x, v, d, P, lw):
     """Steady FSH outlet enthalpy for valve opening v (x holds h_up; chain written into x)."""
     n = int(P[I_N])
@@ -322,7 +322,7 @@ def _outlet_steady(x, v, d, P, lw):
     return chain_steady(x, S_CHAIN, n, h0, W, p, kA[0], UAg, Tg, 0.0)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def steady(D, sp_K, P, X):
     """Steady state at each row's disturbances, valve set by bisection to hold sp_K."""
     n = int(P[I_N])
@@ -360,7 +360,7 @@ def steady(D, sp_K, P, X):
         x[S_TA2] = T_att
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _design_inlet(P, lw, h_target, x):
     """Inlet enthalpy h_e such that the steady chain at load lw gives outlet h_target (secant)."""
     n = int(P[I_N])

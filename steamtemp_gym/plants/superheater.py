@@ -58,7 +58,7 @@ def chain_pattern(
     return pat
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def steam_side_kA(kA_nom, W, W_nom):
     """Steam-side conductance kA = kA_nom max(W/W_nom, 0.1)^0.8 (W/K) and dkA/dW."""
     r = W / W_nom
@@ -68,15 +68,15 @@ def steam_side_kA(kA_nom, W, W_nom):
     return kA, HTC_EXPONENT * kA / W
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def chain_rhs(x, off, n, h0, dh0, W, dW, p, dp, kA, dkA, V, Cm, UAg, Tg, Qrad, f, jd, ju, jl,
               joff, want_jac, flow):  # fmt: skip
     """Right-hand side of an n-segment chain, writing f (and jd, ju, jl from joff).
 
     Args:
         x: Plant state vector. off: index of the chain's first state. n: segments.
-        h0: Inlet enthalpy (J/kg). dh0: its derivatives by the states ``inlet_cols``
-            of chain_pattern.
+        h0: Inlet enthalpy (J/kg). dh0: tuple of its derivatives by the states
+            ``inlet_cols`` of chain_pattern.
         W: Steam mass flow (kg/s); dW its derivative by the flow state.
         p: Pressure (Pa); dp its derivative by the flow state.
         kA: Steam-side conductance per segment at this flow (W/K); dkA = d(kA)/dW.
@@ -119,8 +119,8 @@ def chain_rhs(x, off, n, h0, dh0, W, dW, p, dp, kA, dkA, V, Cm, UAg, Tg, Qrad, f
                 jl[joff] = (-dkA * dW * (Tm - T) + kA * dTdp * dp) / Cm
                 joff += 1
             if i == 0:
-                for k in range(dh0.shape[0]):
-                    jl[joff] = W * dh0[k] / Mf
+                for dh in dh0:
+                    jl[joff] = W * dh / Mf
                     joff += 1
             if flow:
                 jl[joff] = (dW * (h_prev - h) + dkA * dW * (Tm - T) - kA * dTdp * dp) / Mf
@@ -137,7 +137,7 @@ def chain_rhs(x, off, n, h0, dh0, W, dW, p, dp, kA, dkA, V, Cm, UAg, Tg, Qrad, f
     return q_tot, T, tm_max
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def chain_steady(x, off, n, h0, W, p, kA, UAg, Tg, Qrad):
     """Write the steady state of a chain for inlet enthalpy h0 into x; return outlet h.
 

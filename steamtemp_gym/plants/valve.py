@@ -12,7 +12,7 @@ from __future__ import annotations
 from numba import njit
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def valve_rhs(v, u, tau, rate):
     """(dv/dt, d(dv/dt)/dv) for command u, time constant tau (s), rate limit rate (1/s)."""
     u = min(max(u, 0.0), 1.0)
