@@ -30,7 +30,11 @@ def run_episode(env: Any, policy: Any, seed: int) -> dict[str, Any]:
             break
     tr = {k: np.asarray(v, dtype=np.float64) for k, v in trace.items()}
     metrics = trajectory_metrics(
-        tr["time_s"], tr["outlet_temp_C"], tr["setpoint_C"], tr["spray_valve"], tr["spray_flow_kg_s"]
+        tr["time_s"],
+        tr["outlet_temp_C"],
+        tr["setpoint_C"],
+        tr["spray_valve"],
+        tr["spray_flow_kg_s"],
     )
     metrics["return"] = float(ret)
     metrics["tripped"] = float(terminated)

@@ -60,7 +60,9 @@ def _plot(out: Path, env_id: str, scenario: str, traces: dict[str, dict]) -> Pat
     ax1.plot(t, sp, "k--", lw=1, label="setpoint")
     for name, tr in traces.items():
         ax1.plot(tr["time_s"] / 60, tr["outlet_temp_C"], lw=1.2, label=name)
-        ax2.plot(tr["time_s"] / 60, 100 * np.atleast_2d(tr["spray_valve"].T).T[:, 0], lw=1, label=name)
+        ax2.plot(
+            tr["time_s"] / 60, 100 * np.atleast_2d(tr["spray_valve"].T).T[:, 0], lw=1, label=name
+        )
     ax1.set_ylabel("main steam [C]")
     ax1.legend(fontsize=7)
     ax1.grid(alpha=0.3)
@@ -81,7 +83,8 @@ def _plot(out: Path, env_id: str, scenario: str, traces: dict[str, dict]) -> Pat
 
 def _markdown(rows: list[dict]) -> str:
     lines = ["# steamtemp_gym leaderboard", "",
-             "Means over seeds. IAE in K s, deviations in K, times in s, spray in kg; return is the "
+             "Means over seeds. IAE in K s, deviations in K, times in s, spray in kg; "
+             "return is the "
              "default reward summed over the episode (higher is better).", ""]  # fmt: skip
     keys = sorted({(r["env"], r["scenario"]) for r in rows})
     for env_id, sc in keys:
@@ -129,13 +132,18 @@ def main(argv: list[str] | None = None) -> None:
                                  "metrics": res["metrics"]})  # fmt: skip
                     traces.setdefault(name, res["trace"])
                 m = rows[-1]["metrics"]
-                print(f"{env_id:32s} {sc:22s} {name:14s} IAE {m['iae_K_s']:9.1f} K s  "
-                      f"max|dev| {m['max_abs_dev_K']:6.2f} K  return {m['return']:9.2f}", flush=True)
+                print(
+                    f"{env_id:32s} {sc:22s} {name:14s} IAE {m['iae_K_s']:9.1f} K s  "
+                    f"max|dev| {m['max_abs_dev_K']:6.2f} K  return {m['return']:9.2f}",
+                    flush=True,
+                )
             _plot(out, env_id, sc, traces)
     (out / "leaderboard.json").write_text(json.dumps(rows, indent=1, default=float))
     (out / "leaderboard.md").write_text(_markdown(rows))
-    print(f"wrote {out / 'leaderboard.json'}, {out / 'leaderboard.md'} and plots/ "
-          f"({len(rows)} episodes, {time.time() - t0:.0f} s)")
+    print(
+        f"wrote {out / 'leaderboard.json'}, {out / 'leaderboard.md'} and plots/ "
+        f"({len(rows)} episodes, {time.time() - t0:.0f} s)"
+    )
 
 
 if __name__ == "__main__":

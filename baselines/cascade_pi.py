@@ -91,11 +91,14 @@ class CascadePI:
         self.i_valve = [names.index(n) for n in plant.valves]
         self.loops = []  # (inner idx | None, outer: "main" | idx | None)
         for inner, outer in plant.control_loops:
-            self.loops.append((names.index(inner) if inner else None,
-                               MAIN if outer == MAIN else (names.index(outer) if outer else None)))  # fmt: skip
+            i_in = names.index(inner) if inner else None
+            i_out = MAIN if outer == MAIN else (names.index(outer) if outer else None)
+            self.loops.append((i_in, i_out))
         self.dt = plant.dt_s
         params = json.dumps(getattr(u, "_params_overrides", {}) or {}, sort_keys=True)
-        self.gains = np.array(tuning if tuning is not None else _tuning(plant.id, params), dtype=float)
+        self.gains = np.array(
+            tuning if tuning is not None else _tuning(plant.id, params), dtype=float
+        )
         self._st: dict[str, np.ndarray] | None = None
 
     def reset(self) -> None:

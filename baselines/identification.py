@@ -36,8 +36,16 @@ def _record(env, a: np.ndarray) -> tuple[np.ndarray, list[dict]]:
             return np.array(t), rec
 
 
-def step_test(env_id: str, valve: int, signals: list[str], *, load: float = 1.0, dv: float = 0.05,
-              duration_s: float = 2400.0, params: dict | None = None) -> dict[str, FOPDT]:  # fmt: skip
+def step_test(
+    env_id: str,
+    valve: int,
+    signals: list[str],
+    *,
+    load: float = 1.0,
+    dv: float = 0.05,
+    duration_s: float = 2400.0,
+    params: dict | None = None,
+) -> dict[str, FOPDT]:
     """Step valve ``valve`` by ``dv`` (opening) at constant ``load``; FOPDT of each signal.
 
     The test is run twice with the same seed, with and without the step, and the
@@ -60,7 +68,7 @@ def step_test(env_id: str, valve: int, signals: list[str], *, load: float = 1.0,
     for name in signals:
         if name not in names:
             raise ValueError(f"{env_id} does not observe {name!r}; observed: {names}")
-        y = np.array([r[name] - r0[name] for r, r0 in zip(rec, base)])
+        y = np.array([r[name] - r0[name] for r, r0 in zip(rec, base, strict=True)])
         m = step_response_metrics(t, y)
         out[name] = FOPDT(K=m["gain"] / dv, tau_s=m["Tg_s"], theta_s=m["Tu_s"])
     return out

@@ -47,7 +47,9 @@ class RewardConfig:
         for f in fields(self):
             v = getattr(self, f.name)
             if not isinstance(v, (int, float)) or not np.isfinite(v) or v < 0:
-                raise ValueError(f"reward option {f.name!r} must be a finite number >= 0, got {v!r}")
+                raise ValueError(
+                    f"reward option {f.name!r} must be a finite number >= 0, got {v!r}"
+                )
         if self.T0_K <= 0:
             raise ValueError("reward option 'T0_K' must be > 0")
 

@@ -20,7 +20,9 @@ def splitmix64(z):
 @njit(cache=True, error_model="numpy")
 def uniform(key, counter, channel):
     """Uniform number in (0, 1) determined by (key, counter, channel); channel < 64."""
-    z = splitmix64(np.uint64(key) ^ splitmix64(np.uint64(counter) * np.uint64(64) + np.uint64(channel)))
+    z = splitmix64(
+        np.uint64(key) ^ splitmix64(np.uint64(counter) * np.uint64(64) + np.uint64(channel))
+    )
     return (np.float64(z >> np.uint64(11)) + 0.5) * (1.0 / 9007199254740992.0)
 
 

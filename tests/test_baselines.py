@@ -70,7 +70,9 @@ def test_unknown_baseline_raises():
 def test_leaderboard_cli(tmp_path):
     from agents.leaderboard import main
 
-    main(["--envs", IDS[0], "--scenarios", "setpoint_step", "--seeds", "0,1", "--out", str(tmp_path)])
+    main(
+        ["--envs", IDS[0], "--scenarios", "setpoint_step", "--seeds", "0,1", "--out", str(tmp_path)]
+    )
     rows = json.loads((tmp_path / "leaderboard.json").read_text())
     assert len(rows) == 2 * len(baselines.NAMES)
     assert {r["seed"] for r in rows} == {0, 1}

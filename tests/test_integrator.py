@@ -6,7 +6,6 @@ the start of each interval, a valve command that moves every interval.
 """
 
 import numpy as np
-import pytest
 from scipy.integrate import solve_ivp
 
 from steamtemp_gym import scenarios
@@ -19,9 +18,12 @@ def test_ros2_matches_radau_over_the_load_ramp():
     plant = fsh.SupercriticalFSH()
     P, dt = plant.P, plant.dt_s
     sc = scenarios.get("load_ramp_100_50")
-    bp_t = np.zeros((1, 5, 8)); bp_v = np.zeros((1, 5, 8)); bp_n = np.ones((1, 5), np.int64)  # noqa: E702
+    bp_t = np.zeros((1, 5, 8))
+    bp_v = np.zeros((1, 5, 8))
+    bp_n = np.ones((1, 5), np.int64)  # noqa: E702
     scenarios.pack(sc, bp_t[0], bp_v[0], bp_n[0])
-    D = np.zeros((1, 5)); sp = np.zeros(1)  # noqa: E702
+    D = np.zeros((1, 5))
+    sp = np.zeros(1)  # noqa: E702
     t0, t1 = 1100.0, 2600.0  # the ramp (1200-1800 s) and the recovery after it
     eval_schedules(0, t0, bp_t, bp_v, bp_n, 593.0, D, sp)
     X = np.zeros((1, plant.n_x))
@@ -39,11 +41,20 @@ def test_ros2_matches_radau_over_the_load_ramp():
         U = np.array([[v0 + 0.04 * np.sin(2 * np.pi * t / 300.0)]])
         plant.step(X, U, D, Z)
 
-        def rhs(_t, x, u=U[0], d=D[0].copy()):
+        u, d = U[0], D[0].copy()
+
+        def rhs(_t, x, u=u, d=d):
             fsh.rhs(x, u, d, P, f, jd, ju, jl, False)
             return f.copy()
 
-        sol = solve_ivp(rhs, (0.0, dt), x_ref, method="Radau", rtol=1e-8, atol=1e-6 * np.maximum(1.0, np.abs(x_ref)))
+        sol = solve_ivp(
+            rhs,
+            (0.0, dt),
+            x_ref,
+            method="Radau",
+            rtol=1e-8,
+            atol=1e-6 * np.maximum(1.0, np.abs(x_ref)),
+        )
         assert sol.success
         x_ref = sol.y[:, -1]
         p = fsh._pressure(P, x_ref[fsh.S_LW])

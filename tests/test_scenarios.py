@@ -37,8 +37,13 @@ def test_random_is_seeded():
 
 
 def test_kernel_schedule_matches_python_interpolation():
-    s = Scenario(name="x", duration_s=100.0, load=((0, 1.0), (10, 1.0), (30, 0.6), (30, 0.7)),
-                 setpoint_offset_C=((0, 0), (50, 0), (50, 5)), fouling=((0, 1.0), (100, 1.2)))  # fmt: skip
+    s = Scenario(
+        name="x",
+        duration_s=100.0,
+        load=((0, 1.0), (10, 1.0), (30, 0.6), (30, 0.7)),
+        setpoint_offset_C=((0, 0), (50, 0), (50, 5)),
+        fouling=((0, 1.0), (100, 1.2)),
+    )
     bp_t, bp_v, bp_n = np.zeros((1, 5, 8)), np.zeros((1, 5, 8)), np.ones((1, 5), np.int64)
     scenarios.pack(s, bp_t[0], bp_v[0], bp_n[0])
     D, sp = np.zeros((1, 5)), np.zeros(1)

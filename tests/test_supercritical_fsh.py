@@ -28,7 +28,9 @@ def steady(load, **dist):
     X = np.zeros((1, PLANT.n_x))
     PLANT.steady_state(D, np.array([PLANT.setpoint_C]), X)
     Z = np.zeros((1, PLANT.n_z))
-    PLANT.kernel()(X, X[:, fsh.S_V : fsh.S_V + 1].copy(), D, PLANT.P, PLANT.jrow, PLANT.jcol, 0.0, 1, Z)
+    PLANT.kernel()(
+        X, X[:, fsh.S_V : fsh.S_V + 1].copy(), D, PLANT.P, PLANT.jrow, PLANT.jcol, 0.0, 1, Z
+    )
     return X, D, Z
 
 
@@ -72,7 +74,11 @@ def spray_step(load, dv=0.05, steps=1500):
         y_meas.append(Z[0, fsh.Z_TOUTM])
     dw = Z[0, fsh.Z_WSP] - w0
     t = np.array(t)
-    return dw, step_response_metrics(t, np.array(y_true)), step_response_metrics(t, np.array(y_meas))
+    return (
+        dw,
+        step_response_metrics(t, np.array(y_true)),
+        step_response_metrics(t, np.array(y_meas)),
+    )
 
 
 def test_spray_step_response_grows_as_load_falls():

@@ -161,7 +161,8 @@ class Core:
         observed = [i for i, s in enumerate(plant.outputs) if s.observed]
         self.obs = np.zeros((B, len(observed) + 3), dtype=np.float64)
         self.obs_cs = np.array(
-            [[s.center, s.scale, float(s.noisy)] for s in self.signals.observation], dtype=np.float64
+            [[s.center, s.scale, float(s.noisy)] for s in self.signals.observation],
+            dtype=np.float64,
         )
         idx = plant.index
         self.i_out = idx[plant.outlet]
@@ -208,7 +209,9 @@ class Core:
         self.key[b] = np.uint64(key)
         self.counter[b] = 0
         self.out[b] = 0.0
-        eval_schedules(b, 0.0, self.bp_t, self.bp_v, self.bp_n, self.plant.setpoint_C, self.D, self.sp)
+        eval_schedules(
+            b, 0.0, self.bp_t, self.bp_v, self.bp_n, self.plant.setpoint_C, self.D, self.sp
+        )
         self.plant.steady_state(self.D[b : b + 1], self.sp[b : b + 1], self.X[b : b + 1])
         self.plant.seed_rows(self.X[b : b + 1], self.key[b : b + 1])
         # outputs of the steady state: a zero-length step fills Z
@@ -231,7 +234,7 @@ class Core:
         )  # fmt: skip
 
     def info_row(self, b: int) -> dict[str, float | np.ndarray]:
-        """Physical values of row b, in engineering units (python floats; valve array if several)."""
+        """Physical values of row b in engineering units (floats; an array for several valves)."""
         z = self.Z[b].tolist()
         info = {name: z[i] for name, i in self._info_idx}
         info["time_s"] = float(self.ep[b, 0])
@@ -267,7 +270,10 @@ def check_action(action, shape: tuple[int, ...]) -> np.ndarray:
         if a.ndim <= len(shape) and a.size == shape[0] * shape[1]:
             a = a.reshape(shape)
         else:
-            raise ValueError(f"action has shape {np.shape(action)}, expected {shape[1:] if shape[0] == 1 else shape}")
+            raise ValueError(
+                f"action has shape {np.shape(action)}, "
+                f"expected {shape[1:] if shape[0] == 1 else shape}"
+            )
     if not math.isfinite(a.sum()):  # NaN and +-inf propagate into the sum
         raise ValueError(f"action contains NaN or infinite values: {action!r}")
     return a

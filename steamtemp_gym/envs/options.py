@@ -21,7 +21,9 @@ def build(plant_id: str, options: dict[str, Any]) -> tuple[Plant, Any, RewardCon
     """
     unknown = sorted(set(options) - set(OPTIONS))
     if unknown:
-        raise ValueError(f"unknown option(s) {unknown} for {plant_id}; valid options: {list(OPTIONS)}")
+        raise ValueError(
+            f"unknown option(s) {unknown} for {plant_id}; valid options: {list(OPTIONS)}"
+        )
     render_mode = options.get("render_mode")
     if render_mode not in RENDER_MODES:
         raise ValueError(f"unknown render_mode {render_mode!r}; valid: {list(RENDER_MODES)}")

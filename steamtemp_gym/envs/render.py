@@ -21,7 +21,7 @@ def trend_figure(history: list[dict[str, Any]], title: str = ""):
     fig = Figure(figsize=(8, 6), dpi=80)
     ax1, ax2, ax3 = fig.subplots(3, 1, sharex=True, gridspec_kw={"height_ratios": [2, 1, 1]})
     sp = np.array([h["setpoint_C"] for h in history])
-    for band, alpha in zip(BANDS_K, (0.25, 0.12)):
+    for band, alpha in zip(BANDS_K, (0.25, 0.12), strict=True):
         ax1.fill_between(t, sp - band, sp + band, color="tab:green", alpha=alpha, lw=0,
                          label=f"+-{band:g} K")  # fmt: skip
     ax1.plot(t, sp, "k--", lw=1, label="setpoint")

@@ -22,7 +22,9 @@ from steamtemp_gym.envs.core import Core, check_action
 from steamtemp_gym.signals import OBS_LIMIT
 
 
-def draw_episode(rng: np.random.Generator, scenario: Any, duration_s: float) -> tuple[sc.Scenario, int]:
+def draw_episode(
+    rng: np.random.Generator, scenario: Any, duration_s: float
+) -> tuple[sc.Scenario, int]:
     """The scenario and noise key of a new episode, drawn from one env's generator."""
     if scenario == sc.RANDOM:
         scenario = sc.random_scenario(rng, duration_s)
@@ -70,7 +72,9 @@ class SteamTempEnv(gym.Env):
         super().reset(seed=seed)
         if options:
             raise ValueError(f"reset() takes no options, got {sorted(options)}")
-        scenario, key = draw_episode(self.np_random, self._scenario_spec, self.plant.default_duration_s)
+        scenario, key = draw_episode(
+            self.np_random, self._scenario_spec, self.plant.default_duration_s
+        )
         self.core.reset_row(0, scenario, key)
         self._needs_reset = False
         info = self._info()

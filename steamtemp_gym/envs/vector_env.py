@@ -12,7 +12,6 @@ from __future__ import annotations
 
 from typing import Any
 
-import gymnasium as gym
 import numpy as np
 from gymnasium.utils import seeding
 from gymnasium.vector import AutoresetMode, VectorEnv
@@ -49,14 +48,18 @@ class SteamTempVectorEnv(VectorEnv):
 
     def _reset_rows(self, rows) -> None:
         for b in rows:
-            scenario, key = draw_episode(self._rngs[b], self._scenario_spec, self.plant.default_duration_s)
+            scenario, key = draw_episode(
+                self._rngs[b], self._scenario_spec, self.plant.default_duration_s
+            )
             self.core.reset_row(int(b), scenario, key)
 
     def reset(self, *, seed: int | list[int] | None = None, options: dict | None = None):
         if options:
             raise ValueError(f"reset() takes no options, got {sorted(options)}")
         if seed is not None:
-            seeds = [seed + i for i in range(self.num_envs)] if isinstance(seed, int) else list(seed)
+            seeds = (
+                [seed + i for i in range(self.num_envs)] if isinstance(seed, int) else list(seed)
+            )
             if len(seeds) != self.num_envs:
                 raise ValueError(f"expected {self.num_envs} seeds, got {len(seeds)}")
             self._rngs = [seeding.np_random(s)[0] for s in seeds]
@@ -90,5 +93,3 @@ class SteamTempVectorEnv(VectorEnv):
 
     def close_extras(self, **kwargs: Any) -> None:
         pass
-
-

@@ -11,6 +11,7 @@ inputs. U holds actuator commands in [0, 1] (the env maps actions in [-1, 1]).
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
@@ -45,7 +46,9 @@ class Signal:
     description: str = ""
 
 
-def validate_params(params: Any, positive: tuple[str, ...] = (), bounds: dict | None = None) -> None:
+def validate_params(
+    params: Any, positive: tuple[str, ...] = (), bounds: dict | None = None
+) -> None:
     """Raise ValueError naming the field for non-finite, non-positive or out-of-bound values."""
     for f in dataclasses.fields(params):
         v = getattr(params, f.name)
@@ -104,6 +107,12 @@ class Plant:
     extra_info: ClassVar[tuple[str, ...]] = ()
     trip_band_K: ClassVar[tuple[float, float]] = (60.0, 40.0)
     default_duration_s: ClassVar[float] = 3600.0
+    #: Params field holding the main-steam setpoint (C); overrides ``setpoint_C``.
+    setpoint_param: ClassVar[str | None] = None
+    #: Compiled (rhs, outputs, project) for the shared ROS2 kernel (plants/integrator.py);
+    #: a plant with its own kernel overrides :meth:`kernel` instead.
+    kernels: ClassVar[tuple[Callable, Callable, Callable] | None] = None
+    _compiled: ClassVar[dict[type, Callable]] = {}
 
     def __init__(self, **overrides: Any) -> None:
         valid = {f.name for f in dataclasses.fields(self.Params)}
@@ -119,6 +128,8 @@ class Plant:
         self.n_u = len(self.actions)
         self.n_z = len(self.outputs)
         self.index = {s.name: i for i, s in enumerate(self.outputs)}
+        if self.setpoint_param:
+            self.setpoint_C = float(getattr(self.params, self.setpoint_param))
 
     # -- to be provided by subclasses ---------------------------------------------
     @staticmethod
@@ -126,9 +137,19 @@ class Plant:
         """(P, jrow, jcol, n_states) for the kernels."""
         raise NotImplementedError
 
-    def kernel(self):  # pragma: no cover - abstract
-        """The compiled batched step ``step(X, U, D, P, jrow, jcol, dt, n_sub, Z)``."""
-        raise NotImplementedError
+    def kernel(self) -> Callable:
+        """The compiled batched step ``step(X, U, D, P, jrow, jcol, dt, n_sub, Z)``.
+
+        Built from :attr:`kernels` by the shared ROS2 integrator once per class and
+        process (numba cannot cache kernels built around function arguments).
+        """
+        cls = type(self)
+        step = Plant._compiled.get(cls)
+        if step is None:
+            from steamtemp_gym.plants.integrator import make_batched_step
+
+            step = Plant._compiled[cls] = make_batched_step(*cls.kernels)
+        return step
 
     def steady_state(self, D: np.ndarray, setpoint_C: np.ndarray, X: np.ndarray) -> None:
         """Write into X the steady state at the disturbances D holding ``setpoint_C``."""

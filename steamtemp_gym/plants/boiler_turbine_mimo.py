@@ -107,7 +107,6 @@ from numba import njit
 
 from steamtemp_gym.plants.attemperator import spray_flow
 from steamtemp_gym.plants.base import MAIN, Plant, Signal, validate_params
-from steamtemp_gym.plants.integrator import make_batched_step
 from steamtemp_gym.plants.sensors import thermowell_rhs
 from steamtemp_gym.plants.superheater import chain_pattern, chain_rhs, chain_steady, steam_side_kA
 from steamtemp_gym.plants.valve import valve_rhs
@@ -841,8 +840,6 @@ def _pack(params: BoilerTurbineParams) -> tuple[np.ndarray, np.ndarray, np.ndarr
     return P, jrow, jcol, n_x
 
 
-_KERNEL = None
-
 _FUEL_BIAS_ACTION = Signal(
     "fuel_bias_cmd",
     "1",
@@ -850,6 +847,11 @@ _FUEL_BIAS_ACTION = Signal(
     0.5,
     description="FF bias on the fuel demand, 0.5 = none, +-fuel_bias_max",
 )
+
+
+#: compiled parts of the shared ROS2 kernel (bound here: in the class body
+#: ``outputs`` names the Signal tuple)
+KERNELS = (rhs, outputs, project)
 
 
 class BoilerTurbineMIMO(Plant):
@@ -909,13 +911,12 @@ class BoilerTurbineMIMO(Plant):
     )
     trip_band_K = (60.0, 40.0)
 
-    @staticmethod
-    def pack(params: BoilerTurbineParams) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
-        return _pack(params)
+    pack = staticmethod(_pack)
+    kernels = KERNELS
+    setpoint_param = "T_ms_C"
 
     def __init__(self, **overrides) -> None:
         super().__init__(**overrides)
-        self.setpoint_C = self.params.T_ms_C
         self.reheat_setpoint_C = self.params.T_rh_C
         self.secondary = (("reheat_temp_C", self.params.T_rh_C),)  # RTE is scored too
         if self.params.fuel_bias_action:
@@ -927,12 +928,6 @@ class BoilerTurbineMIMO(Plant):
                 for s in type(self).outputs
             )  # fmt: skip
             self.n_u = len(self.actions)
-
-    def kernel(self):
-        global _KERNEL
-        if _KERNEL is None:
-            _KERNEL = make_batched_step(rhs, outputs, project)
-        return _KERNEL
 
     def steady_state(self, D: np.ndarray, setpoint_C: np.ndarray, X: np.ndarray) -> None:
         steady(D, setpoint_C + K0, self.P, X)

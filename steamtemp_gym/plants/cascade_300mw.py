@@ -486,13 +486,8 @@ class Cascade300MW(Plant):
     extra_info = ("intermediate_temp_C", "omega_K", "omega2_kg_s", "outer_disturbance_K")
     default_duration_s = 3600.0
 
-    def __init__(self, **overrides) -> None:
-        super().__init__(**overrides)
-        self.setpoint_C = self.params.T_out_C
-
-    @staticmethod
-    def pack(params: CascadeParams) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
-        return _pack(params)
+    pack = staticmethod(_pack)
+    setpoint_param = "T_out_C"
 
     def kernel(self):
         return step

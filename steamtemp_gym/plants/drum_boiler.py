@@ -104,7 +104,6 @@ from numba import njit
 from steamtemp_gym.plants import drum as dr
 from steamtemp_gym.plants.attemperator import mix, spray_flow
 from steamtemp_gym.plants.base import Plant, Signal, validate_params
-from steamtemp_gym.plants.integrator import make_batched_step
 from steamtemp_gym.plants.sensors import thermowell_rhs
 from steamtemp_gym.plants.superheater import chain_pattern, chain_rhs, chain_steady, steam_side_kA
 from steamtemp_gym.plants.valve import valve_rhs
@@ -694,7 +693,9 @@ def _pack(params: DrumBoilerParams) -> tuple[np.ndarray, np.ndarray, np.ndarray,
     return P, jrow, jcol, n_x
 
 
-_KERNEL = None
+#: compiled parts of the shared ROS2 kernel (bound here: in the class body
+#: ``outputs`` names the Signal tuple)
+KERNELS = (rhs, outputs, project)
 
 
 class DrumBoilerSH(Plant):
@@ -731,19 +732,9 @@ class DrumBoilerSH(Plant):
         "steam_flow_kg_s", "feedwater_flow_kg_s", "firing_rate",
     )  # fmt: skip
 
-    @staticmethod
-    def pack(params: DrumBoilerParams) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
-        return _pack(params)
-
-    def __init__(self, **overrides) -> None:
-        super().__init__(**overrides)
-        self.setpoint_C = self.params.T_out_C
-
-    def kernel(self):
-        global _KERNEL
-        if _KERNEL is None:
-            _KERNEL = make_batched_step(rhs, outputs, project)
-        return _KERNEL
+    pack = staticmethod(_pack)
+    kernels = KERNELS
+    setpoint_param = "T_out_C"
 
     def steady_state(self, D: np.ndarray, setpoint_C: np.ndarray, X: np.ndarray) -> None:
         steady(D, setpoint_C + K0, self.P, X)

@@ -60,7 +60,6 @@ from numba import njit
 
 from steamtemp_gym.plants.attemperator import mix, spray_flow
 from steamtemp_gym.plants.base import Plant, Signal, validate_params
-from steamtemp_gym.plants.integrator import make_batched_step
 from steamtemp_gym.plants.sensors import thermowell_rhs
 from steamtemp_gym.plants.superheater import chain_pattern, chain_rhs, chain_steady, steam_side_kA
 from steamtemp_gym.plants.valve import valve_rhs
@@ -141,7 +140,9 @@ class FSHParams:
         if self.spray_design_fraction >= self.spray_max_fraction:
             raise ValueError("FSHParams.spray_design_fraction must be below spray_max_fraction")
         if self.Tg_nom_C - self.dTg_dload_K * 0.8 <= self.T_out_C:
-            raise ValueError("FSHParams: gas temperature at 20 % firing must exceed the steam outlet")
+            raise ValueError(
+                "FSHParams: gas temperature at 20 % firing must exceed the steam outlet"
+            )
 
 
 # ---------------------------------------------------------------- packed parameters
@@ -325,7 +326,6 @@ def _outlet_steady(x, v, d, P, lw):
 @njit(cache=True, error_model="numpy")
 def steady(D, sp_K, P, X):
     """Steady state at each row's disturbances, valve set by bisection to hold sp_K."""
-    n = int(P[I_N])
     for b in range(X.shape[0]):
         x = X[b]
         d = D[b]
@@ -400,6 +400,7 @@ def _calibrate(params: FSHParams, P: np.ndarray, n_x: int) -> None:
     n = params.n_segments
     W = params.W_nom_kg_s
     kA = P[I_KA]
+
     # secant on UAg for the rated balance
     def out(uag: float) -> float:
         return chain_steady(x, S_CHAIN, n, h_e0, W, p_nom, kA, uag, P[I_TGN], 0.0) - h_a0
@@ -473,7 +474,9 @@ def _pack(params: FSHParams) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
     return P, jrow, jcol, n_x
 
 
-_KERNEL = None
+#: compiled parts of the shared ROS2 kernel (bound here: in the class body
+#: ``outputs`` names the Signal tuple)
+KERNELS = (rhs, outputs, project)
 
 
 class SupercriticalFSH(Plant):
@@ -500,19 +503,9 @@ class SupercriticalFSH(Plant):
     setpoint_C = 593.0
     extra_info = ("attemp_out_temp_C", "heat_absorption_MW", "pressure_MPa", "steam_flow_kg_s")
 
-    @staticmethod
-    def pack(params: FSHParams) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
-        return _pack(params)
-
-    def __init__(self, **overrides) -> None:
-        super().__init__(**overrides)
-        self.setpoint_C = self.params.T_out_C
-
-    def kernel(self):
-        global _KERNEL
-        if _KERNEL is None:
-            _KERNEL = make_batched_step(rhs, outputs, project)
-        return _KERNEL
+    pack = staticmethod(_pack)
+    kernels = KERNELS
+    setpoint_param = "T_out_C"
 
     def steady_state(self, D: np.ndarray, setpoint_C: np.ndarray, X: np.ndarray) -> None:
         steady(D, setpoint_C + K0, self.P, X)

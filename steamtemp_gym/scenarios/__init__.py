@@ -90,18 +90,22 @@ def _as_schedule(name: str, value: Any) -> Schedule:
     pts = []
     for item in value:
         if not isinstance(item, (list, tuple)) or len(item) != 2:
-            raise ValueError(f"scenario field {name!r}: breakpoint {item!r} is not a [t_s, value] pair")
+            raise ValueError(
+                f"scenario field {name!r}: breakpoint {item!r} is not a [t_s, value] pair"
+            )
         try:
             t, v = float(item[0]), float(item[1])
         except (TypeError, ValueError) as exc:
-            raise ValueError(f"scenario field {name!r}: breakpoint {item!r} is not numeric") from exc
+            raise ValueError(
+                f"scenario field {name!r}: breakpoint {item!r} is not numeric"
+            ) from exc
         if not (math.isfinite(t) and math.isfinite(v)):
             raise ValueError(f"scenario field {name!r}: breakpoint {item!r} is not finite")
         pts.append((t, v))
     times = [p[0] for p in pts]
     if times[0] < 0.0:
         raise ValueError(f"scenario field {name!r}: breakpoint times must be >= 0, got {times[0]}")
-    if any(b < a for a, b in zip(times, times[1:])):
+    if any(b < a for a, b in zip(times[:-1], times[1:], strict=True)):
         raise ValueError(f"scenario field {name!r}: breakpoint times must be non-decreasing")
     lo, hi = _LIMITS[name]
     for _, v in pts:
@@ -144,18 +148,26 @@ class Scenario:
         try:
             duration = float(self.duration_s)
         except (TypeError, ValueError) as exc:
-            raise ValueError(f"scenario 'duration_s' must be a number, got {self.duration_s!r}") from exc
+            raise ValueError(
+                f"scenario 'duration_s' must be a number, got {self.duration_s!r}"
+            ) from exc
         if not (math.isfinite(duration) and duration > 0.0):
-            raise ValueError(f"scenario 'duration_s' must be finite and > 0, got {self.duration_s!r}")
+            raise ValueError(
+                f"scenario 'duration_s' must be finite and > 0, got {self.duration_s!r}"
+            )
         object.__setattr__(self, "duration_s", duration)
         for ch in CHANNELS:
             object.__setattr__(self, ch, _as_schedule(ch, getattr(self, ch)))
         try:
             noise = float(self.noise_std_C)
         except (TypeError, ValueError) as exc:
-            raise ValueError(f"scenario 'noise_std_C' must be a number, got {self.noise_std_C!r}") from exc
+            raise ValueError(
+                f"scenario 'noise_std_C' must be a number, got {self.noise_std_C!r}"
+            ) from exc
         if not (math.isfinite(noise) and 0.0 <= noise <= 10.0):
-            raise ValueError(f"scenario 'noise_std_C' must be in [0, 10] K, got {self.noise_std_C!r}")
+            raise ValueError(
+                f"scenario 'noise_std_C' must be in [0, 10] K, got {self.noise_std_C!r}"
+            )
         object.__setattr__(self, "noise_std_C", noise)
 
     def value(self, channel: str, t: float) -> float:
@@ -177,11 +189,15 @@ class Scenario:
     def from_dict(cls, data: Mapping[str, Any], source: str = "scenario") -> Scenario:
         """Build from a mapping (as read from YAML), rejecting unknown keys."""
         if not isinstance(data, Mapping):
-            raise ValueError(f"{source}: expected a mapping of scenario fields, got {type(data).__name__}")
+            raise ValueError(
+                f"{source}: expected a mapping of scenario fields, got {type(data).__name__}"
+            )
         valid = {f.name for f in fields(cls)}
         unknown = sorted(set(data) - valid)
         if unknown:
-            raise ValueError(f"{source}: unknown scenario field(s) {unknown}; valid fields: {sorted(valid)}")
+            raise ValueError(
+                f"{source}: unknown scenario field(s) {unknown}; valid fields: {sorted(valid)}"
+            )
         for key in ("name", "duration_s", "load"):
             if key not in data:
                 raise ValueError(f"{source}: missing required field {key!r}")
@@ -225,7 +241,9 @@ def _load_plant(plant_id: str | None) -> None:
 def names(plant_id: str | None = None) -> list[str]:
     """Names of the registered scenarios valid for ``plant_id`` (all if None), plus ``random``."""
     _load_plant(plant_id)
-    out = [n for n, (_, pl) in _REGISTRY.items() if pl is None or plant_id is None or plant_id in pl]
+    out = [
+        n for n, (_, pl) in _REGISTRY.items() if pl is None or plant_id is None or plant_id in pl
+    ]
     return sorted(out) + [RANDOM]
 
 
@@ -233,8 +251,12 @@ def get(name: str, plant_id: str | None = None) -> Scenario:
     """A registered scenario by name; ValueError listing the valid names otherwise."""
     _load_plant(plant_id)
     entry = _REGISTRY.get(name)
-    if entry is None or (plant_id is not None and entry[1] is not None and plant_id not in entry[1]):
-        raise ValueError(f"unknown scenario {name!r}; valid names: {names(plant_id)} or a YAML path")
+    if entry is None or (
+        plant_id is not None and entry[1] is not None and plant_id not in entry[1]
+    ):
+        raise ValueError(
+            f"unknown scenario {name!r}; valid names: {names(plant_id)} or a YAML path"
+        )
     return entry[0]
 
 
@@ -248,7 +270,9 @@ def resolve(spec: str | Path | Scenario, plant_id: str | None = None) -> Scenari
         if spec == RANDOM:
             return RANDOM
         return get(spec, plant_id)
-    raise ValueError(f"scenario must be a name, a YAML path or a Scenario, got {type(spec).__name__}")
+    raise ValueError(
+        f"scenario must be a name, a YAML path or a Scenario, got {type(spec).__name__}"
+    )
 
 
 # --------------------------------------------------------------------------- random

@@ -39,34 +39,44 @@ def _load_following() -> Scenario:
     )
 
 
-register(Scenario(
-    name="load_ramp_100_50",
-    duration_s=60 * MIN,
-    load=((0.0, 1.0), (20 * MIN, 1.0), (30 * MIN, 0.5)),
-    description="load 100 -> 50 % at 5 %/min from minute 20 to 30 (000_*.txt, Fig. 4 and 7)",
-))
-register(Scenario(
-    name="load_ramp_50_100",
-    duration_s=60 * MIN,
-    load=((0.0, 0.5), (20 * MIN, 0.5), (30 * MIN, 1.0)),
-    description="load 50 -> 100 % at 5 %/min from minute 20 to 30",
-))
-register(Scenario(
-    name="load_cycle",
-    duration_s=80 * MIN,
-    load=((0.0, 1.0), (10 * MIN, 1.0), (20 * MIN, 0.5), (50 * MIN, 0.5), (60 * MIN, 1.0)),
-    description="100 -> 50 % at 5 %/min, hold 30 min, back, hold 20 min (IDAES example)",
-))
-register(Scenario(
-    name="setpoint_step",
-    duration_s=30 * MIN,
-    setpoint_offset_C=((0.0, 0.0), (5 * MIN, 0.0), (5 * MIN, 10.0)),
-    description="+10 K setpoint step at minute 5, rated load",
-))
-register(Scenario(
-    name="heat_imbalance_step",
-    duration_s=40 * MIN,
-    heat_absorption_bias=((0.0, 0.0), (5 * MIN, 0.0), (6 * MIN, 0.08)),
-    description="+8 % superheater heat absorption (firing imbalance) at minute 5, rated load",
-))
+register(
+    Scenario(
+        name="load_ramp_100_50",
+        duration_s=60 * MIN,
+        load=((0.0, 1.0), (20 * MIN, 1.0), (30 * MIN, 0.5)),
+        description="load 100 -> 50 % at 5 %/min from minute 20 to 30 (000_*.txt, Fig. 4 and 7)",
+    )
+)
+register(
+    Scenario(
+        name="load_ramp_50_100",
+        duration_s=60 * MIN,
+        load=((0.0, 0.5), (20 * MIN, 0.5), (30 * MIN, 1.0)),
+        description="load 50 -> 100 % at 5 %/min from minute 20 to 30",
+    )
+)
+register(
+    Scenario(
+        name="load_cycle",
+        duration_s=80 * MIN,
+        load=((0.0, 1.0), (10 * MIN, 1.0), (20 * MIN, 0.5), (50 * MIN, 0.5), (60 * MIN, 1.0)),
+        description="100 -> 50 % at 5 %/min, hold 30 min, back, hold 20 min (IDAES example)",
+    )
+)
+register(
+    Scenario(
+        name="setpoint_step",
+        duration_s=30 * MIN,
+        setpoint_offset_C=((0.0, 0.0), (5 * MIN, 0.0), (5 * MIN, 10.0)),
+        description="+10 K setpoint step at minute 5, rated load",
+    )
+)
+register(
+    Scenario(
+        name="heat_imbalance_step",
+        duration_s=40 * MIN,
+        heat_absorption_bias=((0.0, 0.0), (5 * MIN, 0.0), (6 * MIN, 0.08)),
+        description="+8 % superheater heat absorption (firing imbalance) at minute 5, rated load",
+    )
+)
 register(_load_following())
