@@ -53,8 +53,7 @@ def section_jacobian(x, u, d):
         for s in (1.0, -1.0):
             xs = x.copy()
             xs[i] += s * e
-            bt.rhs(xs, u, d, P, f, jd, ju, jl, False)
-            cols.append(f[idx].copy())
+            cols.append(PLANT.continuous_rhs(xs, u, d)[idx])
         J[:, j] = (cols[0] - cols[1]) / (2.0 * e)
     return J
 

@@ -55,12 +55,8 @@ def steady(plant, load, **dist):
 
 
 def rhs_of(plant, u, d):
-    n = plant.n_x
-    f, jd, ju, jl = np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(len(plant.jrow))
-
     def F(x):
-        db.rhs(x, u, d, plant.P, f, jd, ju, jl, False)
-        return f.copy()
+        return plant.continuous_rhs(x, u, d)
 
     return F
 

@@ -11,57 +11,82 @@ from scipy.integrate import solve_ivp
 from steamtemp_gym import scenarios
 from steamtemp_gym.envs.core import eval_schedules
 from steamtemp_gym.plants import supercritical_fsh as fsh
+from steamtemp_gym.plants.valve import valve_rhs
 from steamtemp_gym.steam import T_ph
+
+
+def radau_reference(plant, x0, commands, D_of_k):
+    """Radau (rtol 1e-8) on the continuous model: the valve ODE of valve.py feeds the rhs."""
+    P, dt = plant.P, plant.dt_s
+    f, jd, ju = np.empty(plant.n_x), np.empty(plant.n_x), np.zeros(plant.n_x)
+    jl = np.empty(len(plant.jrow))
+    n = int(P[fsh.I_N])
+    x_ref, out = x0.copy(), []
+    for k, cmd in enumerate(commands):
+        d = D_of_k(k)
+
+        def rhs(_t, x, cmd=cmd, d=d):
+            vdot = valve_rhs(x[fsh.S_V], cmd, P[fsh.I_TAUV], P[fsh.I_RATEV])[0]
+            fsh.rhs(x, np.array([vdot]), d, P, f, jd, ju, jl, False)
+            return f.copy()
+
+        atol = 1e-6 * np.maximum(1.0, np.abs(x_ref))
+        sol = solve_ivp(rhs, (0.0, dt), x_ref, method="Radau", rtol=1e-8, atol=atol)
+        assert sol.success
+        x_ref = sol.y[:, -1]
+        p = fsh._pressure(P, x_ref[fsh.S_LW])
+        out.append(T_ph(p, x_ref[fsh.S_CHAIN + 2 * n - 1]) - 273.15)
+    return np.array(out)
+
+
+def run_kernel(plant, X, commands, D_of_k):
+    Z = np.zeros((1, plant.n_z))
+    out = []
+    for k, cmd in enumerate(commands):
+        plant.step(X, np.array([[cmd]]), D_of_k(k)[None, :], Z)
+        out.append(Z[0, fsh.Z_TOUT])
+    return np.array(out)
 
 
 def test_ros2_matches_radau_over_the_load_ramp():
     plant = fsh.SupercriticalFSH()
-    P, dt = plant.P, plant.dt_s
+    dt = plant.dt_s
     sc = scenarios.get("load_ramp_100_50")
-    bp_t = np.zeros((1, 5, 8))
-    bp_v = np.zeros((1, 5, 8))
-    bp_n = np.ones((1, 5), np.int64)  # noqa: E702
+    bp_t, bp_v, bp_n = np.zeros((1, 5, 8)), np.zeros((1, 5, 8)), np.ones((1, 5), np.int64)
     scenarios.pack(sc, bp_t[0], bp_v[0], bp_n[0])
-    D = np.zeros((1, 5))
-    sp = np.zeros(1)  # noqa: E702
     t0, t1 = 1100.0, 2600.0  # the ramp (1200-1800 s) and the recovery after it
-    eval_schedules(0, t0, bp_t, bp_v, bp_n, 593.0, D, sp)
+
+    def D_of_k(k):
+        D, sp = np.zeros((1, 5)), np.zeros(1)
+        eval_schedules(0, t0 + k * dt, bp_t, bp_v, bp_n, 593.0, D, sp)
+        return D[0]
+
     X = np.zeros((1, plant.n_x))
-    plant.steady_state(D, sp, X)
+    plant.steady_state(D_of_k(0)[None, :], np.array([593.0]), X)
     v0 = X[0, fsh.S_V]
-    x_ref = X[0].copy()
-    Z = np.zeros((1, plant.n_z))
-    n = int(P[fsh.I_N])
-    f, jd, ju = np.empty(plant.n_x), np.empty(plant.n_x), np.zeros(plant.n_x)
-    jl = np.empty(len(plant.jrow))
-    errs = []
-    for k in range(int((t1 - t0) / dt)):
-        t = t0 + k * dt
-        eval_schedules(0, t, bp_t, bp_v, bp_n, 593.0, D, sp)
-        U = np.array([[v0 + 0.04 * np.sin(2 * np.pi * t / 300.0)]])
-        plant.step(X, U, D, Z)
+    steps = int((t1 - t0) / dt)
+    commands = v0 + 0.04 * np.sin(2 * np.pi * (t0 + dt * np.arange(steps)) / 300.0)
+    ref = radau_reference(plant, X[0], commands, D_of_k)
+    got = run_kernel(plant, X, commands, D_of_k)
+    err = np.max(np.abs(got - ref))
+    assert err <= 0.05, f"max outlet error {err:.4f} K"
+    print(f"ROS2 dt={dt} s, {plant.n_sub} substeps: max outlet error {err * 1e3:.2f} mK")
 
-        u, d = U[0], D[0].copy()
 
-        def rhs(_t, x, u=u, d=d):
-            fsh.rhs(x, u, d, P, f, jd, ju, jl, False)
-            return f.copy()
-
-        sol = solve_ivp(
-            rhs,
-            (0.0, dt),
-            x_ref,
-            method="Radau",
-            rtol=1e-8,
-            atol=1e-6 * np.maximum(1.0, np.abs(x_ref)),
-        )
-        assert sol.success
-        x_ref = sol.y[:, -1]
-        p = fsh._pressure(P, x_ref[fsh.S_LW])
-        T_ref = T_ph(p, x_ref[fsh.S_CHAIN + 2 * n - 1]) - 273.15
-        errs.append(abs(Z[0, fsh.Z_TOUT] - T_ref))
-    assert max(errs) <= 0.05, f"max outlet error {max(errs):.4f} K"
-    print(f"ROS2 dt={dt} s, {plant.n_sub} substeps: max outlet error {max(errs) * 1e3:.2f} mK")
+def test_random_valve_steps_are_integrated_accurately():
+    """Jumpy, rate-limited commands (an RL agent's) at rated load against Radau."""
+    plant = fsh.SupercriticalFSH()
+    D = np.zeros(5)
+    D[0], D[3] = 1.0, 1.0
+    X = np.zeros((1, plant.n_x))
+    plant.steady_state(D[None, :], np.array([593.0]), X)
+    rng = np.random.default_rng(0)
+    commands = np.clip(X[0, fsh.S_V] + rng.uniform(-0.3, 0.3, size=150), 0.0, 1.0)
+    ref = radau_reference(plant, X[0], commands, lambda k: D)
+    got = run_kernel(plant, X, commands, lambda k: D)
+    err = np.max(np.abs(got - ref))
+    assert err <= 0.1, f"max outlet error {err:.4f} K"
+    print(f"random valve steps: max outlet error {err * 1e3:.1f} mK")
 
 
 def test_ros2_is_second_order_for_any_matrix():

@@ -13,6 +13,7 @@ from steamtemp_gym.plants.base import Plant
 #: env id -> "module:Class" of its plant (imported lazily).
 PLANTS: dict[str, str] = {
     "steamtemp/SupercriticalFSH-v0": "steamtemp_gym.plants.supercritical_fsh:SupercriticalFSH",
+    "steamtemp/BensonSubcritical-v0": "steamtemp_gym.plants.benson_subcritical:BensonSubcritical",
     "steamtemp/BoilerTurbineMIMO-v0": "steamtemp_gym.plants.boiler_turbine_mimo:BoilerTurbineMIMO",
     "steamtemp/DrumBoilerSH-v0": "steamtemp_gym.plants.drum_boiler:DrumBoilerSH",
     "steamtemp/Cascade300MW-v0": "steamtemp_gym.plants.cascade_300mw:Cascade300MW",

@@ -112,6 +112,9 @@ class Plant:
     #: Compiled (rhs, outputs, project) for the shared ROS2 kernel (plants/integrator.py);
     #: a plant with its own kernel overrides :meth:`kernel` instead.
     kernels: ClassVar[tuple[Callable, Callable, Callable] | None] = None
+    #: (valve state index, P index of its time constant, P index of its rate limit) for
+    #: the first actions; integrated exactly by the shared kernel (plants/integrator.py).
+    actuators: ClassVar[tuple[tuple[int, int, int], ...]] = ()
     _compiled: ClassVar[dict[type, Callable]] = {}
 
     def __init__(self, **overrides: Any) -> None:
@@ -148,7 +151,7 @@ class Plant:
         if step is None:
             from steamtemp_gym.plants.integrator import make_batched_step
 
-            step = Plant._compiled[cls] = make_batched_step(*cls.kernels)
+            step = Plant._compiled[cls] = make_batched_step(*cls.kernels, cls.actuators or None)
         return step
 
     def steady_state(self, D: np.ndarray, setpoint_C: np.ndarray, X: np.ndarray) -> None:
@@ -163,6 +166,24 @@ class Plant:
         """
 
     # -- generic ---------------------------------------------------------------------
+    def continuous_rhs(self, x: np.ndarray, u: np.ndarray, d: np.ndarray) -> np.ndarray:
+        """dx/dt of the continuous model at commands u (openings in [0, 1]).
+
+        The kernels' ``rhs`` receives the actuators' chord velocities instead of their
+        commands (plants/integrator.py); this maps commands through the valve ODE of
+        plants/valve.py first. For tests, linearization and reference solutions.
+        """
+        from steamtemp_gym.plants.valve import valve_rhs
+
+        P = self.P
+        uc = np.array(u, dtype=np.float64)
+        for j, (iv, it, ir) in enumerate(self.actuators):
+            uc[j] = valve_rhs(x[iv], u[j], P[it], P[ir])[0]
+        n = self.n_x
+        f, jd, ju, jl = np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(max(len(self.jrow), 1))
+        self.kernels[0](x, uc, d, P, f, jd, ju, jl, False)
+        return f
+
     def step(self, X: np.ndarray, U: np.ndarray, D: np.ndarray, Z: np.ndarray) -> None:
         """Advance X by one control interval with commands U (in [0, 1]); fill Z."""
         self.kernel()(X, U, D, self.P, self.jrow, self.jcol, self.dt_s, self.n_sub, Z)

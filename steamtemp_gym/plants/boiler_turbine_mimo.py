@@ -406,9 +406,10 @@ def rhs(x, u, d, P, f, jd, ju, jl, want_jac):
     f[S_LF] = (fd - x[S_LF]) / P[I_TAUF]
     f[S_LW] = (d[0] - x[S_LW]) / P[I_TAUW]
     f[S_HUP] = (_h_up_target(P, x[S_LF], x[S_LW]) - x[S_HUP]) / P[I_TAUUP]
-    f[S_V1], jv1 = valve_rhs(x[S_V1], u[0], P[I_TAUV], P[I_RATEV])
-    f[S_V2], jv2 = valve_rhs(x[S_V2], u[1], P[I_TAUV], P[I_RATEV])
-    f[S_G], jg = valve_rhs(x[S_G], u[2], P[I_TAUD], P[I_RATED])
+    # SP1, SP2, RGD: exact chord velocities from the shared kernel (plants/integrator.py)
+    f[S_V1], jv1 = u[0], 0.0
+    f[S_V2], jv2 = u[1], 0.0
+    f[S_G], jg = u[2], 0.0
     if P[I_FBACT] > 0.5:
         f[S_FB], jfb = valve_rhs(x[S_FB], u[3], P[I_TAUFB], 1.0)
     else:
@@ -913,6 +914,7 @@ class BoilerTurbineMIMO(Plant):
 
     pack = staticmethod(_pack)
     kernels = KERNELS
+    actuators = ((S_V1, I_TAUV, I_RATEV), (S_V2, I_TAUV, I_RATEV), (S_G, I_TAUD, I_RATED))
     setpoint_param = "T_ms_C"
 
     def __init__(self, **overrides) -> None:

@@ -106,7 +106,6 @@ from steamtemp_gym.plants.attemperator import mix, spray_flow
 from steamtemp_gym.plants.base import Plant, Signal, validate_params
 from steamtemp_gym.plants.sensors import thermowell_rhs
 from steamtemp_gym.plants.superheater import chain_pattern, chain_rhs, chain_steady, steam_side_kA
-from steamtemp_gym.plants.valve import valve_rhs
 from steamtemp_gym.steam import T_dTdh_ph, h_pT, rho_ph, sat_p
 
 K0 = 273.15
@@ -397,7 +396,7 @@ def rhs(x, u, d, P, f, jd, ju, jl, want_jac):
     f[S_IL] = -P[I_KPL] / P[I_TIL] * level
     q_fd = q_s - P[I_KPL] * level + x[S_IL]
     f[S_QF] = (max(q_fd, 0.0) - x[S_QF]) / P[I_TAUFW]
-    f[S_V], jv = valve_rhs(x[S_V], u[0], P[I_TAUV], P[I_RATEV])
+    f[S_V], jv = u[0], 0.0  # exact chord velocity of the valve (plants/integrator.py)
     # primary superheater: saturated steam at q_s
     gex = P[I_GEXP] * dLf / L_f
     UAg1 = P[I_UAG1] * mult
@@ -734,6 +733,7 @@ class DrumBoilerSH(Plant):
 
     pack = staticmethod(_pack)
     kernels = KERNELS
+    actuators = ((S_V, I_TAUV, I_RATEV),)
     setpoint_param = "T_out_C"
 
     def steady_state(self, D: np.ndarray, setpoint_C: np.ndarray, X: np.ndarray) -> None:

@@ -47,6 +47,8 @@ from collections.abc import Callable
 import numpy as np
 from numba import njit
 
+from steamtemp_gym.plants.valve import valve_travel
+
 GAMMA = 1.0 + 1.0 / np.sqrt(2.0)
 
 
@@ -89,7 +91,9 @@ def block_solve(gh, jd, ju, jl, jrow, jcol, r, z):
         j += 2
 
 
-def make_batched_step(rhs: Callable, outputs: Callable, project: Callable) -> Callable:
+def make_batched_step(
+    rhs: Callable, outputs: Callable, project: Callable, actuators: np.ndarray | None = None
+) -> Callable:
     """Build the compiled batched ROS2 step of a plant.
 
     Args:
@@ -97,10 +101,22 @@ def make_batched_step(rhs: Callable, outputs: Callable, project: Callable) -> Ca
         outputs: Compiled output map.
         project: Compiled ``project(x, p)`` that clips states to their physical
             ranges after each step (valve opening in [0, 1], ...).
+        actuators: int array (k, 3): for each of the first k actions, the state index of
+            its valve and the P indices of its time constant and rate limit
+            (plants/valve.py). Their motion over each substep is computed exactly
+            (valve_travel) and ``rhs`` receives, in place of those commands, the chord
+            velocity (v_end - v_start)/h, which must be the valve's derivative with a
+            zero Jacobian entry: ROS2 then moves the valve exactly along that chord and
+            the rest of the plant sees it to second order. (Measured on the FSH under
+            random valve steps: 0.24 K outlet error with ROS2 on the valve, see
+            tests/test_integrator.py.)
 
     Returns:
         ``step(X, U, D, P, jrow, jcol, dt, n_sub, Z)``, in place on X and Z.
     """
+
+    act = np.zeros((0, 3), dtype=np.int64) if actuators is None else np.asarray(actuators, np.int64)
+    n_act = act.shape[0]
 
     @njit(error_model="numpy")
     def step(X, U, D, P, jrow, jcol, dt, n_sub, Z):  # noqa: N803
@@ -115,16 +131,23 @@ def make_batched_step(rhs: Callable, outputs: Callable, project: Callable) -> Ca
         x2 = np.empty(n)
         h = dt / n_sub
         gh = GAMMA * h
+        uc = np.empty(U.shape[1])
         for b in range(X.shape[0]):
             x = X[b]
             u = U[b]
             d = D[b]
             for _ in range(n_sub):
-                rhs(x, u, d, P, f, jd, ju, jl, True)
+                for j in range(U.shape[1]):
+                    uc[j] = u[j]
+                for j in range(n_act):
+                    iv = act[j, 0]
+                    v_end = valve_travel(x[iv], u[j], P[act[j, 1]], P[act[j, 2]], h)[0]
+                    uc[j] = (v_end - x[iv]) / h if h > 0.0 else 0.0
+                rhs(x, uc, d, P, f, jd, ju, jl, True)
                 block_solve(gh, jd, ju, jl, jrow, jcol, f, k1)
                 for i in range(n):
                     x2[i] = x[i] + h * k1[i]
-                rhs(x2, u, d, P, f, jd, ju, jl, False)
+                rhs(x2, uc, d, P, f, jd, ju, jl, False)
                 for i in range(n):
                     f[i] -= 2.0 * k1[i]
                 block_solve(gh, jd, ju, jl, jrow, jcol, f, k2)

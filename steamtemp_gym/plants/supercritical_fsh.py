@@ -62,7 +62,6 @@ from steamtemp_gym.plants.attemperator import mix, spray_flow
 from steamtemp_gym.plants.base import Plant, Signal, validate_params
 from steamtemp_gym.plants.sensors import thermowell_rhs
 from steamtemp_gym.plants.superheater import chain_pattern, chain_rhs, chain_steady, steam_side_kA
-from steamtemp_gym.plants.valve import valve_rhs
 from steamtemp_gym.steam import T_dTdh_ph, h_pT, rho_ph
 
 K0 = 273.15
@@ -251,7 +250,7 @@ def rhs(x, u, d, P, f, jd, ju, jl, want_jac):
     f[S_LF] = (fd - x[S_LF]) / P[I_TAUF]
     f[S_LW] = (d[0] - x[S_LW]) / P[I_TAUW]
     f[S_HUP] = (_h_up_target(P, x[S_LF], x[S_LW]) - x[S_HUP]) / P[I_TAUUP]
-    f[S_V], jv = valve_rhs(x[S_V], u[0], P[I_TAUV], P[I_RATEV])
+    f[S_V] = u[0]  # exact chord velocity of the valve (plants/integrator.py)
     W, p, w_sp, h0, h_sp, kA, UAg, Tg = _boundary(x, u, d, P)
     # dh0/d(h_up) and dh0/dv (attemperator balance, linear valve), order of INLET_COLS
     v = min(max(x[S_V], 1e-6), 1.0)
@@ -269,7 +268,7 @@ def rhs(x, u, d, P, f, jd, ju, jl, want_jac):
         jd[S_LF] = -1.0 / P[I_TAUF]
         jd[S_LW] = -1.0 / P[I_TAUW]
         jd[S_HUP] = -1.0 / P[I_TAUUP]
-        jd[S_V] = jv
+        jd[S_V] = 0.0
         jd[S_TC1], jd[S_TC2], jd[S_TA1], jd[S_TA2] = j1, j2, j3, j4
 
 
@@ -505,6 +504,7 @@ class SupercriticalFSH(Plant):
 
     pack = staticmethod(_pack)
     kernels = KERNELS
+    actuators = ((S_V, I_TAUV, I_RATEV),)
     setpoint_param = "T_out_C"
 
     def steady_state(self, D: np.ndarray, setpoint_C: np.ndarray, X: np.ndarray) -> None:

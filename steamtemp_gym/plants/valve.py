@@ -3,11 +3,14 @@
     dv/dt = clip((u - v) / tau, -r, r),   u, v in [0, 1]
 
 (../shared/REFERENCE_DATA.md: "Valve: first-order lag plus rate limit plus
-saturation"). Returns the derivative and the diagonal Jacobian entry (0 while
-rate limited).
+saturation"). With the command held over an interval the motion has a closed
+form (:func:`valve_travel`); the shared integrator uses it so that jumpy
+commands (an RL agent's) are integrated exactly (plants/integrator.py).
 """
 
 from __future__ import annotations
+
+import math
 
 from numba import njit
 
@@ -22,3 +25,25 @@ def valve_rhs(v, u, tau, rate):
     if dv < -rate:
         return -rate, 0.0
     return dv, -1.0 / tau
+
+
+@njit(cache=True, error_model="numpy")
+def valve_travel(v, u, tau, rate, h):
+    """Exact motion over h at held command u: (opening at the end, mean opening).
+
+    A rate-limited phase until |u - v| = rate tau, then the exponential approach.
+    """
+    u = min(max(u, 0.0), 1.0)
+    if h <= 0.0:
+        return v, v
+    e = u - v
+    s = 1.0 if e > 0.0 else -1.0
+    t1 = max((abs(e) - rate * tau) / rate, 0.0)  # rate-limited phase
+    if t1 >= h:
+        return v + s * rate * h, v + 0.5 * s * rate * h
+    v1 = v + s * rate * t1
+    e1 = u - v1
+    t2 = h - t1
+    a = math.exp(-t2 / tau)
+    integral = v * t1 + 0.5 * s * rate * t1 * t1 + u * t2 - e1 * tau * (1.0 - a)
+    return u - e1 * a, integral / h
