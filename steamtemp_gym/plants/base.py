@@ -59,7 +59,7 @@ def validate_params(
         v = getattr(params, name)
         if not v > 0:
             raise ValueError(f"{type(params).__name__}.{name} must be > 0, got {v!r}")
-    for name, (lo, hi) in (bounds or {}).items():
+    for name, (lo, hi) in bounds.items():
         v = getattr(params, name)
         if not lo <= v <= hi:
             raise ValueError(

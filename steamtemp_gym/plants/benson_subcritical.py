@@ -121,7 +121,7 @@ from numba import njit
 
 from steamtemp_gym.plants.attemperator import mix, spray_flow
 from steamtemp_gym.plants.base import MAIN, Plant, Signal, validate_params
-from steamtemp_gym.plants.integrator import make_batched_step
+from steamtemp_gym.plants.integrator import make_batched_step, pattern_arrays
 from steamtemp_gym.plants.sensors import thermowell_rhs
 from steamtemp_gym.plants.superheater import chain_pattern, chain_rhs, chain_steady, steam_side_kA
 from steamtemp_gym.plants.valve import valve_travel
@@ -269,8 +269,6 @@ class BensonParams:
                 "fwr_kp": (0.0, 1.0),
                 "fwr_ki_per_s": (0.0, 0.05),
                 "T_bir_s": (0.0, 600.0),
-                "n_substeps": (1, 50),
-                "dt_s": (0.1, 60.0),
             },
         )
         name = type(self).__name__
@@ -978,8 +976,7 @@ def _pack(pr: BensonParams) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
     n_x = off + 1
     P[I_NX] = n_x
     _calibrate(pr, P)
-    jrow = np.array([r for r, _ in pat], dtype=np.int64)
-    jcol = np.array([c for _, c in pat], dtype=np.int64)
+    jrow, jcol = pattern_arrays(pat)
     P.setflags(write=False)
     return P, jrow, jcol, n_x
 

@@ -107,6 +107,7 @@ from numba import njit
 
 from steamtemp_gym.plants.attemperator import spray_flow
 from steamtemp_gym.plants.base import MAIN, Plant, Signal, validate_params
+from steamtemp_gym.plants.integrator import pattern_arrays
 from steamtemp_gym.plants.sensors import thermowell_rhs
 from steamtemp_gym.plants.superheater import chain_pattern, chain_rhs, chain_steady, steam_side_kA
 from steamtemp_gym.plants.valve import valve_rhs
@@ -241,8 +242,6 @@ class BoilerTurbineParams:
                 "n_seg_platen": (1, 20),
                 "n_seg_final": (1, 20),
                 "n_seg_reheat": (1, 20),
-                "n_substeps": (1, 50),
-                "dt_s": (0.1, 60.0),
             },
         )
         name = type(self).__name__
@@ -835,8 +834,7 @@ def _pack(params: BoilerTurbineParams) -> tuple[np.ndarray, np.ndarray, np.ndarr
     _calibrate(params, P, n_x)
     pat = patterns(params)
     assert len(pat) == P[I_JOFF_R] + 4 * n4
-    jrow = np.array([r for r, _ in pat], dtype=np.int64)
-    jcol = np.array([c for _, c in pat], dtype=np.int64)
+    jrow, jcol = pattern_arrays(pat)
     P.setflags(write=False)
     return P, jrow, jcol, n_x
 

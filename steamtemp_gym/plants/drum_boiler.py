@@ -104,6 +104,7 @@ from numba import njit
 from steamtemp_gym.plants import drum as dr
 from steamtemp_gym.plants.attemperator import mix, spray_flow
 from steamtemp_gym.plants.base import Plant, Signal, validate_params
+from steamtemp_gym.plants.integrator import pattern_arrays
 from steamtemp_gym.plants.sensors import thermowell_rhs
 from steamtemp_gym.plants.superheater import chain_pattern, chain_rhs, chain_steady, steam_side_kA
 from steamtemp_gym.steam import T_dTdh_ph, h_pT, rho_ph, sat_p
@@ -181,7 +182,6 @@ class DrumBoilerParams:
             positive=tuple(n for n in self.__dataclass_fields__ if n not in ("dT_fw_dload_K",)),
             bounds={
                 "n_segments": (1, 40),
-                "n_substeps": (1, 50),
                 "p_drum_MPa": (2.0, 16.0),
                 "p_fw_MPa": (2.0, 30.0),
                 "beta": (0.0, 2.0),
@@ -191,7 +191,6 @@ class DrumBoilerParams:
                 "spray_design_fraction": (0.005, 0.2),
                 "spray_max_fraction": (0.01, 0.3),
                 "gas_flow_exponent": (0.0, 1.0),
-                "dt_s": (0.1, 60.0),
             },
         )
         for i in (1, 2):
@@ -686,8 +685,7 @@ def _pack(params: DrumBoilerParams) -> tuple[np.ndarray, np.ndarray, np.ndarray,
     n_x = S_CHAIN1 + 4 * n + 4
     _calibrate(params, P, n_x)
     pat = pattern(n)
-    jrow = np.array([r for r, _ in pat], dtype=np.int64)
-    jcol = np.array([c for _, c in pat], dtype=np.int64)
+    jrow, jcol = pattern_arrays(pat)
     P.setflags(write=False)
     return P, jrow, jcol, n_x
 

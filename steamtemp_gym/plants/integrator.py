@@ -91,6 +91,15 @@ def block_solve(gh, jd, ju, jl, jrow, jcol, r, z):
         j += 2
 
 
+def pattern_arrays(pattern: list[tuple[int, int]]) -> tuple[np.ndarray, np.ndarray]:
+    """(jrow, jcol) int arrays of a strictly-lower Jacobian pattern, checked sorted by row."""
+    jrow = np.array([r for r, _ in pattern], dtype=np.int64)
+    jcol = np.array([c for _, c in pattern], dtype=np.int64)
+    if np.any(np.diff(jrow) < 0) or np.any(jcol >= jrow):
+        raise ValueError("Jacobian pattern must be strictly lower and sorted by row")
+    return jrow, jcol
+
+
 def make_batched_step(
     rhs: Callable, outputs: Callable, project: Callable, actuators: np.ndarray | None = None
 ) -> Callable:

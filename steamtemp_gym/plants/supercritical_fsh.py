@@ -60,6 +60,7 @@ from numba import njit
 
 from steamtemp_gym.plants.attemperator import mix, spray_flow
 from steamtemp_gym.plants.base import Plant, Signal, validate_params
+from steamtemp_gym.plants.integrator import pattern_arrays
 from steamtemp_gym.plants.sensors import thermowell_rhs
 from steamtemp_gym.plants.superheater import chain_pattern, chain_rhs, chain_steady, steam_side_kA
 from steamtemp_gym.steam import T_dTdh_ph, h_pT, rho_ph
@@ -116,7 +117,6 @@ class FSHParams:
             ),
             bounds={
                 "n_segments": (1, 40),
-                "n_substeps": (1, 50),
                 "p_nom_MPa": (15.0, 31.0),
                 "p_min_MPa": (1.0, 31.0),
                 "T_out_C": (450.0, 650.0),
@@ -127,7 +127,6 @@ class FSHParams:
                 "dTg_dload_K": (0.0, 800.0),
                 "dT_fw_dload_K": (0.0, 200.0),
                 "T_fw_nom_C": (100.0, 350.0),
-                "dt_s": (0.1, 60.0),
             },
         )
         if self.tube_od_m <= self.tube_id_m:
@@ -467,8 +466,7 @@ def _pack(params: FSHParams) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
     n_x = S_CHAIN + 2 * n
     _calibrate(params, P, n_x)
     pat = chain_pattern(S_CHAIN, n, INLET_COLS, S_LW)
-    jrow = np.array([r for r, _ in pat], dtype=np.int64)
-    jcol = np.array([c for _, c in pat], dtype=np.int64)
+    jrow, jcol = pattern_arrays(pat)
     P.setflags(write=False)
     return P, jrow, jcol, n_x
 
