@@ -81,6 +81,13 @@ def _plot(out: Path, env_id: str, scenario: str, traces: dict[str, dict]) -> Pat
     return path
 
 
+def _mean(values: list[float]) -> float:
+    """Mean over the finite values (NaN where a metric does not apply, e.g. no setpoint step)."""
+    v = np.asarray(values, dtype=float)
+    v = v[np.isfinite(v)]
+    return float(v.mean()) if v.size else float("nan")
+
+
 def _markdown(rows: list[dict]) -> str:
     lines = ["# steamtemp_gym leaderboard", "",
              "Means over seeds. IAE in K s, deviations in K, times in s, spray in kg; "
@@ -94,7 +101,7 @@ def _markdown(rows: list[dict]) -> str:
         pols = sorted({r["policy"] for r in rows if r["env"] == env_id and r["scenario"] == sc})
         for p in pols:
             sel = [r for r in rows if (r["env"], r["scenario"], r["policy"]) == (env_id, sc, p)]
-            vals = [np.nanmean([r["metrics"][m] for r in sel]) for m in TABLE_METRICS]
+            vals = [_mean([r["metrics"][m] for r in sel]) for m in TABLE_METRICS]
             trips = int(sum(r["metrics"]["tripped"] for r in sel))
             lines.append(f"| {p} | " + " | ".join(f"{v:.4g}" for v in vals) + f" | {trips} |")
         lines.append("")
