@@ -44,14 +44,26 @@ def _make_policy(name: str, env_id: str, env):
     return baselines.make(name, env)
 
 
-def _plot(out: Path, env_id: str, scenario: str, traces: dict[str, dict]) -> Path:
+def _plot(
+    out: Path, env_id: str, scenario: str, traces: dict[str, dict], secondary: tuple = ()
+) -> Path:
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, (ax1, ax2) = plt.subplots(2, 1, figsize=(9, 6), sharex=True,
-                                   gridspec_kw={"height_ratios": [2, 1]})  # fmt: skip
+    n = 2 + len(secondary)
+    fig, axes = plt.subplots(n, 1, figsize=(9, 3 + 1.5 * n), sharex=True,
+                             gridspec_kw={"height_ratios": [2] + [1] * (n - 1)})  # fmt: skip
+    ax1, ax2 = axes[0], axes[-1]
+    for ax, (name, sp2) in zip(axes[1:-1], secondary, strict=True):
+        for band, alpha in ((5, 0.2), (8, 0.1)):
+            ax.axhspan(sp2 - band, sp2 + band, color="tab:green", alpha=alpha, lw=0)
+        ax.axhline(sp2, color="k", ls="--", lw=1)
+        for pname, tr in traces.items():
+            ax.plot(tr["time_s"] / 60, tr[name], lw=1.2, label=pname)
+        ax.set_ylabel(name.replace("_C", " [C]"))
+        ax.grid(alpha=0.3)
     first = next(iter(traces.values()))
     t = first["time_s"] / 60
     sp = first["setpoint_C"]
@@ -144,7 +156,7 @@ def main(argv: list[str] | None = None) -> None:
                     f"max|dev| {m['max_abs_dev_K']:6.2f} K  return {m['return']:9.2f}",
                     flush=True,
                 )
-            _plot(out, env_id, sc, traces)
+            _plot(out, env_id, sc, traces, env.unwrapped.plant.secondary)
     (out / "leaderboard.json").write_text(json.dumps(rows, indent=1, default=float))
     (out / "leaderboard.md").write_text(_markdown(rows))
     print(

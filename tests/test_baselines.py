@@ -82,3 +82,13 @@ def test_leaderboard_cli(tmp_path):
     assert list((tmp_path / "plots").glob("*.png"))
     with pytest.raises(SystemExit):
         main(["--envs", "steamtemp/Nope-v0", "--out", str(tmp_path)])
+
+
+@pytest.mark.parametrize("env_id", [i for i in IDS if gym.make(i).unwrapped.plant.secondary])
+def test_secondary_temperatures_are_traced_and_scored(env_id):
+    env = gym.make(env_id, scenario="heat_imbalance_step")
+    res = run_episode(env, baselines.make("cascade_pi", env), seed=0)
+    for name, sp in env.unwrapped.plant.secondary:
+        assert res["trace"][name][0] == pytest.approx(sp, abs=0.05)
+        assert np.isfinite(res["metrics"][f"{name}_max_abs_dev_K"])
+        assert res["metrics"][f"{name}_iae_K_s"] > 0.0
