@@ -18,8 +18,6 @@ batch size. Plants with internal random disturbances get the same key through
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 from numba import njit
 
@@ -127,10 +125,18 @@ def advance(Z, U, U_prev, bp_t, bp_v, bp_n, ep, key, counter, ints, cfg, obs_cs,
 
 @njit(cache=True, error_model="numpy")
 def to_commands(A, U):
-    """Actuator commands U = (clip(A, -1, 1) + 1) / 2 (openings in [0, 1])."""
+    """Actuator commands U = (clip(A, -1, 1) + 1) / 2 (openings in [0, 1]).
+
+    Returns False, leaving U untouched, if A holds a NaN or an infinity.
+    """
+    for b in range(A.shape[0]):
+        for j in range(A.shape[1]):
+            if not np.isfinite(A[b, j]):
+                return False
     for b in range(A.shape[0]):
         for j in range(A.shape[1]):
             U[b, j] = 0.5 * (min(max(A[b, j], -1.0), 1.0) + 1.0)
+    return True
 
 
 class Core:
@@ -188,6 +194,7 @@ class Core:
                           ("measured_temp_C", idx[plant.outlet_measured]),
                           ("spray_valve", self.valve_idx[0])]  # fmt: skip
         self._info_idx += [(name, idx[name]) for name in plant.extra_info]
+        self._valves = self.valve_idx if len(self.valve_idx) > 1 else None
 
     def _alloc_schedules(self, k: int) -> None:
         self.bp_t = np.zeros((self.B, N_CH, k))
@@ -225,8 +232,13 @@ class Core:
                 self.key, self.counter, self.ep[:, 2], self.sp, self.D, self.obs)  # fmt: skip
 
     def step(self, A: np.ndarray) -> None:
-        """Advance every row by one control interval with (validated) actions A in [-1, 1]."""
-        to_commands(A, self.U)
+        """Advance every row by one control interval with actions A (shape checked) in [-1, 1].
+
+        Raises:
+            ValueError: A holds NaN or infinite values (nothing is changed).
+        """
+        if not to_commands(A, self.U):
+            raise ValueError(f"action contains NaN or infinite values: {A.tolist()!r}")
         self.plant.step(self.X, self.U, self.D, self.Z)
         advance(
             self.Z, self.U, self.U_prev, self.bp_t, self.bp_v, self.bp_n, self.ep, self.key,
@@ -240,9 +252,12 @@ class Core:
         info["time_s"] = float(self.ep[b, 0])
         info["setpoint_C"] = float(self.sp[b])
         info["load"] = float(self.D[b, 0])
-        info["spray_flow_kg_s"] = sum(z[i] for i in self.spray_idx)
-        if len(self.valve_idx) > 1:
-            info["spray_valve"] = self.Z[b, self.valve_idx]
+        spray = 0.0
+        for i in self.spray_idx:
+            spray += z[i]
+        info["spray_flow_kg_s"] = spray
+        if self._valves is not None:
+            info["spray_valve"] = np.array([z[i] for i in self.valve_idx])
         return info
 
     def info_columns(self) -> dict[str, np.ndarray]:
@@ -264,8 +279,16 @@ class Core:
 
 
 def check_action(action, shape: tuple[int, ...]) -> np.ndarray:
-    """Validate an action batch (right shape, finite) and return it as float64 of ``shape``."""
-    a = np.asarray(action, dtype=np.float64)
+    """Check an action batch's shape; return it as a float array of ``shape``.
+
+    Finiteness is checked by :meth:`Core.step` (compiled, before anything changes).
+    """
+    a = np.asarray(action)
+    if a.dtype.kind != "f":
+        try:
+            a = a.astype(np.float64)
+        except (TypeError, ValueError) as exc:
+            raise ValueError(f"action must be numeric, got {action!r}") from exc
     if a.shape != shape:
         if a.ndim <= len(shape) and a.size == shape[0] * shape[1]:
             a = a.reshape(shape)
@@ -274,6 +297,4 @@ def check_action(action, shape: tuple[int, ...]) -> np.ndarray:
                 f"action has shape {np.shape(action)}, "
                 f"expected {shape[1:] if shape[0] == 1 else shape}"
             )
-    if not math.isfinite(a.sum()):  # NaN and +-inf propagate into the sum
-        raise ValueError(f"action contains NaN or infinite values: {action!r}")
     return a
