@@ -221,11 +221,8 @@ class Core:
         )
         self.plant.steady_state(self.D[b : b + 1], self.sp[b : b + 1], self.X[b : b + 1])
         self.plant.seed_rows(self.X[b : b + 1], self.key[b : b + 1])
-        # outputs of the steady state: a zero-length step fills Z
-        self.plant.kernel()(
-            self.X[b : b + 1], self.U[b : b + 1], self.D[b : b + 1], self.plant.P,
-            self.plant.jrow, self.plant.jcol, 0.0, 1, self.Z[b : b + 1],
-        )  # fmt: skip
+        rows = slice(b, b + 1)  # outputs of the steady state: a zero-length step fills Z
+        self.plant.step(self.X[rows], self.U[rows], self.D[rows], self.Z[rows], dt=0.0)
         self.U[b] = self.Z[b, self.valve_idx]
         self.U_prev[b] = self.U[b]
         observe(b, self.Z, self.ints[6 : 6 + self.ints[2]], self.obs_cs, self.ints[1],
@@ -262,19 +259,14 @@ class Core:
 
     def info_columns(self) -> dict[str, np.ndarray]:
         """Physical values of every row, in engineering units (arrays of shape (B,) or (B, k))."""
-        Z, idx = self.Z, self.plant.index
-        valves = Z[:, self.valve_idx]
-        info = {
-            "time_s": self.ep[:, 0].copy(),
-            "outlet_temp_C": Z[:, self.i_out].copy(),
-            "measured_temp_C": Z[:, idx[self.plant.outlet_measured]].copy(),
-            "setpoint_C": self.sp.copy(),
-            "load": self.D[:, 0].copy(),
-            "spray_valve": valves[:, 0].copy() if valves.shape[1] == 1 else valves,
-            "spray_flow_kg_s": Z[:, self.spray_idx].sum(axis=1),
-        }
-        for name in self.plant.extra_info:
-            info[name] = Z[:, idx[name]].copy()
+        Z = self.Z
+        info = {name: Z[:, i].copy() for name, i in self._info_idx}  # same keys as info_row
+        info["time_s"] = self.ep[:, 0].copy()
+        info["setpoint_C"] = self.sp.copy()
+        info["load"] = self.D[:, 0].copy()
+        info["spray_flow_kg_s"] = Z[:, self.spray_idx].sum(axis=1)
+        if self._valves is not None:
+            info["spray_valve"] = Z[:, self._valves]
         return info
 
 

@@ -184,6 +184,12 @@ class Plant:
         self.kernels[0](x, uc, d, P, f, jd, ju, jl, False)
         return f
 
-    def step(self, X: np.ndarray, U: np.ndarray, D: np.ndarray, Z: np.ndarray) -> None:
-        """Advance X by one control interval with commands U (in [0, 1]); fill Z."""
-        self.kernel()(X, U, D, self.P, self.jrow, self.jcol, self.dt_s, self.n_sub, Z)
+    def step(
+        self, X: np.ndarray, U: np.ndarray, D: np.ndarray, Z: np.ndarray, dt: float | None = None
+    ) -> None:
+        """Advance X by ``dt`` (default: one control interval) with commands U; fill Z.
+
+        ``dt = 0`` only evaluates the outputs of the current state.
+        """
+        dt = self.dt_s if dt is None else dt
+        self.kernel()(X, U, D, self.P, self.jrow, self.jcol, dt, self.n_sub, Z)
