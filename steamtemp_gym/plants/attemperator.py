@@ -1,4 +1,4 @@
-"""Spray attemperator: algebraic mass and energy balance (negligible storage).
+"""Spray attemperator: algebraic mass and energy balance (negligible storage), protection.
 
     W_out = W_in + w_sp,   h_out = (W_in h_in + w_sp h_sp) / W_out
 
@@ -32,3 +32,17 @@ def spray_flow(opening, Cv, rho_w, dp):
     """
     v = min(max(opening, 0.0), 1.0)
     return v * Cv * math.sqrt(rho_w * max(dp, 0.0))
+
+
+@njit(cache=True, error_model="numpy")
+def protected_spray(w_valve, W_in, h_in, h_sp, h_min):
+    """Spray flow (kg/s) after the attemperator protection: at most the flow whose mix
+    reaches ``h_min`` (J/kg; the enthalpy a margin above saturation), never below zero.
+
+    Plants limit spray so that the attemperator outlet stays well above saturation
+    (10-15 K: no water droplets reach the next stage's tubes). The cap solves the
+    energy balance W_in h_in + w h_sp = (W_in + w) h_min for w.
+    """
+    if h_in <= h_min or h_min <= h_sp:
+        return 0.0
+    return min(w_valve, W_in * (h_in - h_min) / (h_min - h_sp))

@@ -28,6 +28,16 @@ DIST: tuple[str, ...] = (
 N_DIST = len(DIST)
 #: ``outer`` entry of Plant.control_loops meaning the main-steam temperature against its setpoint.
 MAIN = "main"
+#: ``outer`` entry of Plant.control_loops meaning: hold the inner temperature at a setpoint
+#: scheduled on load (a function generator set at commissioning from the plant's steady
+#: states, as first-stage sprays are run), not at the main-steam error.
+SCHEDULED = "scheduled"
+#: Default trip band (below, above) the setpoint, K. Above: rated + 28 K is the excursion
+#: a steam turbine may never exceed (IEC 60045-1, "Steam turbines - Part 1: Specifications",
+#: main-steam temperature limits: +8 K continuous, +14 K for 400 h/yr, +28 K for 80 h/yr in
+#: swings of at most 15 min); below: -50 K, the low-main-steam-temperature protection of
+#: turbines against loss of superheat (plausible default, unverified).
+TRIP_BAND_K = (50.0, 28.0)
 
 
 @dataclass(frozen=True)
@@ -87,7 +97,11 @@ class Plant:
             inner signal is held at its start value). Used by baselines/cascade_pi.py.
         secondary: Other controlled temperatures scored by the reward, as (true output name,
             setpoint in C), e.g. the reheat steam temperature.
-        trip_band_K: (below, above) setpoint at which the unit trips (episode terminates).
+        design_spray: Name of the output (kg/s) giving the total spray flow the plant's
+            schedules are designed for at the current operating point (what the undisturbed
+            plant needs in steady state at that load). The reward charges spray above it.
+        trip_band_K: (below, above) setpoint at which the unit trips (episode terminates);
+            :data:`TRIP_BAND_K` by default.
     """
 
     id: ClassVar[str]
@@ -105,7 +119,8 @@ class Plant:
     )
     secondary: ClassVar[tuple[tuple[str, float], ...]] = ()
     extra_info: ClassVar[tuple[str, ...]] = ()
-    trip_band_K: ClassVar[tuple[float, float]] = (60.0, 40.0)
+    design_spray: ClassVar[str | None] = None
+    trip_band_K: ClassVar[tuple[float, float]] = TRIP_BAND_K
     default_duration_s: ClassVar[float] = 3600.0
     #: Params field holding the main-steam setpoint (C); overrides ``setpoint_C``.
     setpoint_param: ClassVar[str | None] = None

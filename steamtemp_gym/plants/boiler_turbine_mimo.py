@@ -908,7 +908,6 @@ class BoilerTurbineMIMO(Plant):
         "pressure_MPa",
         "heat_absorption_MW",
     )
-    trip_band_K = (60.0, 40.0)
 
     pack = staticmethod(_pack)
     kernels = KERNELS
