@@ -4,7 +4,8 @@ Per control interval (all temperatures in K, e = setpoint - true outlet temperat
 
     c(e) = w_abs |e|/T0 + w_sq (e/T0)^2 + w_band max(0, |e| - band_K)/T0
     r = -( c(e) + w_secondary sum_k c(e_k)
-           + w_spray sum(spray flow / spray scale) + w_move sum|u_k - u_{k-1}| )
+           + w_spray max(0, sum(spray flow) - design spray) / spray scale
+           + w_move sum|u_k - u_{k-1}| )
         - trip_penalty  if the step terminates the episode (unit trip)
 
 e_k are the errors of the plant's secondary controlled temperatures
@@ -14,9 +15,18 @@ controller design scores STE and RTE together).
 T0 = 20 K is the normalizing temperature of 000_f43a9a359eb2e47e.txt (its
 |Delta T_a| <= 20 K maps to [-1, 1]); band_K = 5 K is the inner band plant
 engineers read (REFERENCE_DATA.md: +-5 / +-8 K). The spray term charges spray
-water (it costs cycle efficiency); the move term charges valve travel (wear,
-reversals). u are the valve commands in [0, 1]. The reward uses the *true*
+water above the plant's design spray at the current operating point
+(``Plant.design_spray``: what the boiler's schedules are designed to need; spray
+beyond it bypasses heating surfaces and costs cycle efficiency), so a controller
+that holds the setpoint with the design spray scores close to zero apart from the
+temperature terms; the spray scale is the observation scale of the first spray
+flow (about the design spray at rated load). The move term charges valve travel
+(wear, reversals). u are the valve commands in [0, 1]. The reward uses the *true*
 outlet temperature (the agent sees only the measured one).
+
+The trip (``terminated``) is the outlet leaving the plant's trip band,
+``Plant.trip_band_K``: by default 50 K below and 28 K above the setpoint (the
+turbine's main-steam limits, steamtemp_gym/plants/base.py:TRIP_BAND_K).
 
 Options: ``gym.make(id, reward={"w_move": 0.0, ...})``; unknown keys raise ValueError.
 """

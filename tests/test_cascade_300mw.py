@@ -249,8 +249,8 @@ def test_disturbance_mapping(plant):
 def run_rows(plant, D, n, keys):
     X = np.zeros((len(D), plant.n_x))
     Z = np.zeros((len(D), plant.n_z))
-    plant.steady_state(D, np.full(len(D), 535.0), X)
     plant.seed_rows(X, np.asarray(keys, dtype=np.uint64))
+    plant.steady_state(D, np.full(len(D), 535.0), X)
     U = X[:, [S_V]].copy()
     om = np.empty((n, len(D), 2))
     for k in range(n):
@@ -262,19 +262,27 @@ def run_rows(plant, D, n, keys):
 def test_nongaussian_disturbances_statistics_and_determinism():
     plant = make(ID)
     a, b = plant.params.omega_halfwidth_K, plant.params.omega2_scale_kg_s
+    tau = plant.params.omega_corr_time_s
     D = np.array([[1.0, 0, 0, 1, 0], [0.8, 0, 0, 1, 0], [1.0, 0, 0.02, 1, 0], [0.6, 0, 0, 1, 3.0]])
     X, om = run_rows(plant, D, 25000, [11, 12, 13, 14])
-    w, w2 = om[..., 0].ravel(), om[..., 1].ravel()
-    n = w.size
+    # many independent episodes for the marginal of the coloured omega
+    _, many = run_rows(plant, np.repeat(D[:1], 200, axis=0), 3000, np.arange(200))
+    w, w2 = many[..., 0], om[..., 1].ravel()
+    n = w2.size
     assert np.all(np.abs(w) <= a) and np.all(w2 >= -b)
-    assert abs(w.mean()) < 4 * a / np.sqrt(3 * n) and abs(w2.mean()) < 4 * b / np.sqrt(n)
-    assert w.std() == pytest.approx(a / np.sqrt(3), rel=0.01)
+    assert abs(w.mean()) < 0.05 * a and abs(w2.mean()) < 4 * b / np.sqrt(n)
+    assert w.std() == pytest.approx(a / np.sqrt(3), rel=0.02)  # uniform marginal
     assert w2.std() == pytest.approx(b, rel=0.02)
     kurt = np.mean((w - w.mean()) ** 4) / w.var() ** 2 - 3.0
     skew = np.mean((w2 - w2.mean()) ** 3) / w2.std() ** 3
-    assert kurt == pytest.approx(-1.2, abs=0.03)  # uniform, not Gaussian (0)
+    assert kurt == pytest.approx(-1.2, abs=0.05)  # uniform, not Gaussian (0)
     assert skew == pytest.approx(2.0, abs=0.15)  # exponential, not Gaussian (0)
-    assert abs(np.corrcoef(w[:-4], w[4:])[0, 1]) < 0.02  # white
+    # omega coloured: the autocorrelation of a Gaussian AR(1) through the copula,
+    # (6/pi) asin(rho/2) with rho = exp(-lag/tau); omega_2 white
+    for lag in (1, 150, 300):
+        acf = np.mean(w[:-lag] * w[lag:]) / (a * a / 3.0)
+        assert acf == pytest.approx(6 / np.pi * np.arcsin(np.exp(-lag / tau) / 2), abs=0.03)
+    assert abs(np.corrcoef(w2[:-4], w2[4:])[0, 1]) < 0.02  # white
     # deterministic given the episode key, independent of the batch composition
     _, again = run_rows(plant, D[[2, 0]], 300, [13, 11])
     np.testing.assert_array_equal(again[:, 0], om[:300, 2])
@@ -282,8 +290,8 @@ def test_nongaussian_disturbances_statistics_and_determinism():
     assert not np.array_equal(om[:300, 0], om[:300, 1])
     # seed_rows: per-episode keys make different sequences, equal keys equal ones
     Xs = np.zeros((3, plant.n_x))
-    plant.steady_state(D[[0, 0, 0]], np.full(3, 535.0), Xs)
     plant.seed_rows(Xs, np.array([7, 8, 7], dtype=np.uint64))
+    plant.steady_state(D[[0, 0, 0]], np.full(3, 535.0), Xs)
     assert Xs[0, S_SEED] == Xs[2, S_SEED] != Xs[1, S_SEED] and np.all(Xs[:, S_CNT] == 0)
     Z = np.zeros((3, plant.n_z))
     U = Xs[:, [S_V]].copy()
@@ -316,13 +324,13 @@ def test_setpoint_step_535_545_scenario():
     assert ramp.value("load", 2000.0) == pytest.approx(0.5)
 
 
-def cascade_run(env, kc2=8.0, kp=0.5, ti=100.0, steps=2000):
+def cascade_run(env, kc2=8.0, kp=0.5, ti=100.0, steps=2000, seed=0):
     """The paper's cascade structure: inner P G_C2 = kc2 (kg/s per K), outer PI (K/K)."""
     sig = env.unwrapped.signals
     names = [s.name for s in sig.observation]
     dec = sig.decode
     w_max = env.unwrapped.plant.params.spray_max_kg_s
-    obs, info = env.reset(seed=0)
+    obs, info = env.reset(seed=seed)
     v0 = info["spray_valve"]
     integ = 0.0
     rows = []
@@ -344,13 +352,21 @@ def cascade_run(env, kc2=8.0, kp=0.5, ti=100.0, steps=2000):
 
 
 def test_paper_cascade_tracks_setpoint_step():
+    """The paper's cascade on its test: the +10 K step is tracked; what remains is the
+    coloured omega's error, of the order of the paper's 1.7 K std (Section 5)."""
     env = gym.make(ID, scenario="setpoint_step_535_545")
-    r = cascade_run(env)
-    t, y, sp, v = r.T
-    assert t[-1] == 2000.0
-    after = t >= 1200.0
-    assert np.mean(y[after]) == pytest.approx(545.0, abs=0.3)
-    assert np.std(y[after] - sp[after]) < 1.0  # omega, omega_2 fluctuations only
-    assert np.max(y) - 545.0 < 3.0  # overshoot
-    # the +10 K step asks for more than the valve can give for a short while only
-    assert np.sum((v <= 0.005) | (v >= 0.995)) < 150
+    means, stds, peaks, sat = [], [], [], []
+    for seed in range(3):
+        t, y, sp, v = cascade_run(env, seed=seed).T
+        assert t[-1] == 2000.0
+        after = t >= 1200.0
+        means.append(np.mean(y[after] - sp[after]))
+        stds.append(np.std(y[after] - sp[after]))
+        peaks.append(np.max(y) - 545.0)
+        sat.append(np.sum((v <= 0.005) | (v >= 0.995)))
+    assert abs(np.mean(means)) < 0.75
+    assert 1.0 <= np.mean(stds) <= 2.5
+    assert np.mean(peaks) < 8.0
+    # 0.25 K sensor noise through G_C2 = 8 kg/s per K chatters the valve into its stops
+    # part of the time (the paper's plant has no sensor noise); it is not pinned
+    assert max(sat) < 0.35 * len(t)

@@ -9,6 +9,11 @@ Composition (DESIGN.md): plant + scenario + sensors + reward. Per control step:
    level), adds sensor noise, builds the normalized observation, the reward
    (rewards.py), ``terminated`` (trip band) and ``truncated`` (scenario end).
 
+The coloured heat-absorption disturbance of the scenario (an Ornstein-Uhlenbeck
+process, scenarios/__init__.py) is a per-row state ``ou`` advanced by its exact
+discretization, x_k+1 = a x_k + s sqrt(1 - a^2) n_k with a = exp(-dt/tau), and added
+to the heat-absorption bias the plant receives.
+
 Sensor noise is counter-based (steamtemp_gym/rng.py: a pure function of the
 row's key, the step counter and the channel), so a row's noise depends only on
 its seed: the vector env reproduces the single env bit for bit, whatever the
@@ -31,6 +36,13 @@ N_CH = len(sc.CHANNELS)
 # channel indices (order of scenarios.CHANNELS)
 C_LOAD, C_SP, C_BIAS, C_FOUL, C_SPRAYT = 0, 1, 2, 3, 4
 MIN_BREAKPOINTS = 64
+#: per-row episode values in Core.ep
+E_TIME, E_DUR, E_NOISE, E_OU_STD, E_OU_TAU = 0, 1, 2, 3, 4
+#: length of the header of Core.ints (before the index lists)
+N_HEAD = 7
+#: counter-based random channel of the coloured heat-absorption disturbance (observation
+#: noise uses channels 0 .. n_obs - 1)
+OU_CHANNEL = 31
 
 
 @njit(cache=True, error_model="numpy")
@@ -52,12 +64,12 @@ def _interp(bt, bv, n, t):
 
 
 @njit(cache=True, error_model="numpy")
-def eval_schedules(b, t, bp_t, bp_v, bp_n, sp_nom, D, sp):
-    """Disturbances D[b] and setpoint sp[b] of row b at time t."""
+def eval_schedules(b, t, bp_t, bp_v, bp_n, sp_nom, ou, D, sp):
+    """Disturbances D[b] and setpoint sp[b] of row b at time t (ou: coloured bias, added)."""
     load, rate = _interp(bp_t[b, C_LOAD], bp_v[b, C_LOAD], bp_n[b, C_LOAD], t)
     D[b, 0] = load
     D[b, 1] = rate
-    D[b, 2] = _interp(bp_t[b, C_BIAS], bp_v[b, C_BIAS], bp_n[b, C_BIAS], t)[0]
+    D[b, 2] = _interp(bp_t[b, C_BIAS], bp_v[b, C_BIAS], bp_n[b, C_BIAS], t)[0] + ou[b]
     D[b, 3] = _interp(bp_t[b, C_FOUL], bp_v[b, C_FOUL], bp_n[b, C_FOUL], t)[0]
     D[b, 4] = _interp(bp_t[b, C_SPRAYT], bp_v[b, C_SPRAYT], bp_n[b, C_SPRAYT], t)[0]
     sp[b] = sp_nom + _interp(bp_t[b, C_SP], bp_v[b, C_SP], bp_n[b, C_SP], t)[0]
@@ -82,35 +94,54 @@ def observe(b, Z, obs_idx, obs_cs, i_meas, key, counter, noise, sp, D, obs):
 
 
 @njit(cache=True, error_model="numpy")
-def advance(Z, U, U_prev, bp_t, bp_v, bp_n, ep, key, counter, ints, cfg, obs_cs, D, sp, obs, out):
+def ou_step(x, std, tau, dt, key, counter):
+    """One exact step of the Ornstein-Uhlenbeck process (stationary std, correlation tau)."""
+    if std <= 0.0:
+        return 0.0
+    a = np.exp(-dt / tau)
+    return a * x + std * np.sqrt(1.0 - a * a) * gauss(key, counter, OU_CHANNEL)
+
+
+@njit(cache=True, error_model="numpy")
+def advance(Z, U, U_prev, bp_t, bp_v, bp_n, ep, ou, key, counter, ints, cfg, obs_cs, D, sp, obs,
+            out):  # fmt: skip
     """Everything after the plant step, for every row (see module docstring).
 
     Args:
-        ep: (B, 3) per-row [time_s, duration_s, noise_std_C]; time advanced in place.
-        ints: [i_outlet, i_measured, n_obs_plant, n_valves, n_sprays, n_secondary, obs idx...,
-            valve idx..., spray idx..., secondary idx...] (output indices).
+        ep: (B, 5) per-row [time_s, duration_s, noise_std_C, ou_std, ou_tau_s]; time advanced
+            in place.
+        ou: (B,) coloured heat-absorption disturbance, advanced in place.
+        ints: [i_outlet, i_measured, n_obs_plant, n_valves, n_sprays, n_secondary, i_design,
+            obs idx..., valve idx..., spray idx..., secondary idx...] (output indices;
+            i_design < 0: the plant declares no design spray).
         cfg: [dt, sp_nom, trip_below_K, trip_above_K, spray_scale, reward weights...,
             secondary setpoints...].
         out: (B, 3) written: [reward, terminated, truncated].
     """
     i_out, i_meas, n_obs, n_v, n_s, n_sec = ints[0], ints[1], ints[2], ints[3], ints[4], ints[5]
-    obs_idx = ints[6 : 6 + n_obs]
-    s_idx = ints[6 + n_obs + n_v : 6 + n_obs + n_v + n_s]
-    sec_idx = ints[6 + n_obs + n_v + n_s : 6 + n_obs + n_v + n_s + n_sec]
+    i_design = ints[6]
+    o = N_HEAD
+    obs_idx = ints[o : o + n_obs]
+    s_idx = ints[o + n_obs + n_v : o + n_obs + n_v + n_s]
+    sec_idx = ints[o + n_obs + n_v + n_s : o + n_obs + n_v + n_s + n_sec]
     dt, sp_nom, trip_lo, trip_hi, s_scale = cfg[0], cfg[1], cfg[2], cfg[3], cfg[4]
     w = cfg[5 : 5 + N_WEIGHTS]
     sec_sp = cfg[5 + N_WEIGHTS :]
-    noise = ep[:, 2]
+    noise = ep[:, E_NOISE]
     for b in range(Z.shape[0]):
-        ep[b, 0] += dt
+        ep[b, E_TIME] += dt
         counter[b] += 1
-        eval_schedules(b, ep[b, 0], bp_t, bp_v, bp_n, sp_nom, D, sp)
+        ou[b] = ou_step(ou[b], ep[b, E_OU_STD], ep[b, E_OU_TAU], dt, key[b], counter[b])
+        eval_schedules(b, ep[b, E_TIME], bp_t, bp_v, bp_n, sp_nom, ou, D, sp)
         observe(b, Z, obs_idx, obs_cs, i_meas, key, counter, noise, sp, D, obs)
         e = sp[b] - Z[b, i_out]
         term = not (-trip_hi <= e <= trip_lo)  # also catches NaN
         spray = 0.0
         for j in range(n_s):
-            spray += Z[b, s_idx[j]] / s_scale
+            spray += Z[b, s_idx[j]]
+        if i_design >= 0:  # only spray above the design spray of this operating point
+            spray = max(spray - Z[b, i_design], 0.0)
+        spray /= s_scale
         move = 0.0
         for j in range(U.shape[1]):
             move += abs(U[b, j] - U_prev[b, j])
@@ -120,7 +151,7 @@ def advance(Z, U, U_prev, bp_t, bp_v, bp_n, ep, key, counter, ints, cfg, obs_cs,
             sec += temperature_cost(sec_sp[j] - Z[b, sec_idx[j]], w)
         out[b, 0] = reward(e, sec, spray, move, term, w)
         out[b, 1] = 1.0 if term else 0.0
-        out[b, 2] = 1.0 if ep[b, 0] >= ep[b, 1] - 1e-9 else 0.0
+        out[b, 2] = 1.0 if ep[b, E_TIME] >= ep[b, E_DUR] - 1e-9 else 0.0
 
 
 @njit(cache=True, error_model="numpy")
@@ -159,12 +190,15 @@ class Core:
         self.U_prev = np.zeros((B, n_u))
         self.D = np.zeros((B, N_DIST))
         self.sp = np.zeros(B)
-        self.ep = np.zeros((B, 3))
+        self.ep = np.zeros((B, 5))
+        self.ou = np.zeros(B)
         self.key = np.zeros(B, dtype=np.uint64)
         self.counter = np.zeros(B, dtype=np.int64)
         self.out = np.zeros((B, 3))
         self._alloc_schedules(MIN_BREAKPOINTS)
         observed = [i for i, s in enumerate(plant.outputs) if s.observed]
+        if len(observed) >= OU_CHANNEL:
+            raise ValueError(f"{plant.id}: at most {OU_CHANNEL - 1} observed outputs")
         self.obs = np.zeros((B, len(observed) + 3), dtype=np.float64)
         self.obs_cs = np.array(
             [[s.center, s.scale, float(s.noisy)] for s in self.signals.observation],
@@ -176,7 +210,8 @@ class Core:
         self.spray_idx = [idx[s] for s in plant.sprays]
         self.ints = np.array(
             [self.i_out, idx[plant.outlet_measured], len(observed), len(plant.valves),
-             len(plant.sprays), len(plant.secondary)]
+             len(plant.sprays), len(plant.secondary),
+             idx[plant.design_spray] if plant.design_spray else -1]
             + observed
             + self.valve_idx
             + self.spray_idx
@@ -212,21 +247,24 @@ class Core:
             self.bp_n[:] = old[2]
         sc.pack(scenario, self.bp_t[b], self.bp_v[b], self.bp_n[b])
         self.scenario[b] = scenario
-        self.ep[b] = (0.0, scenario.duration_s, scenario.noise_std_C)
+        self.ep[b] = (0.0, scenario.duration_s, scenario.noise_std_C,
+                      scenario.heat_absorption_noise_std, scenario.heat_absorption_noise_tau_s)
+        self.ou[b] = scenario.heat_absorption_noise_std * gauss(np.uint64(key), 0, OU_CHANNEL)
         self.key[b] = np.uint64(key)
         self.counter[b] = 0
         self.out[b] = 0.0
         eval_schedules(
-            b, 0.0, self.bp_t, self.bp_v, self.bp_n, self.plant.setpoint_C, self.D, self.sp
+            b, 0.0, self.bp_t, self.bp_v, self.bp_n, self.plant.setpoint_C, self.ou, self.D,
+            self.sp,
         )
-        self.plant.steady_state(self.D[b : b + 1], self.sp[b : b + 1], self.X[b : b + 1])
         self.plant.seed_rows(self.X[b : b + 1], self.key[b : b + 1])
+        self.plant.steady_state(self.D[b : b + 1], self.sp[b : b + 1], self.X[b : b + 1])
         rows = slice(b, b + 1)  # outputs of the steady state: a zero-length step fills Z
         self.plant.step(self.X[rows], self.U[rows], self.D[rows], self.Z[rows], dt=0.0)
         self.U[b] = self.Z[b, self.valve_idx]
         self.U_prev[b] = self.U[b]
-        observe(b, self.Z, self.ints[6 : 6 + self.ints[2]], self.obs_cs, self.ints[1],
-                self.key, self.counter, self.ep[:, 2], self.sp, self.D, self.obs)  # fmt: skip
+        observe(b, self.Z, self.ints[N_HEAD : N_HEAD + self.ints[2]], self.obs_cs, self.ints[1],
+                self.key, self.counter, self.ep[:, E_NOISE], self.sp, self.D, self.obs)  # fmt: skip
 
     def step(self, A: np.ndarray) -> None:
         """Advance every row by one control interval with actions A (shape checked) in [-1, 1].
@@ -238,7 +276,7 @@ class Core:
             raise ValueError(f"action contains NaN or infinite values: {A.tolist()!r}")
         self.plant.step(self.X, self.U, self.D, self.Z)
         advance(
-            self.Z, self.U, self.U_prev, self.bp_t, self.bp_v, self.bp_n, self.ep, self.key,
+            self.Z, self.U, self.U_prev, self.bp_t, self.bp_v, self.bp_n, self.ep, self.ou, self.key,
             self.counter, self.ints, self.cfg, self.obs_cs, self.D, self.sp, self.obs, self.out,
         )  # fmt: skip
 

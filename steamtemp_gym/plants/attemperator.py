@@ -46,3 +46,17 @@ def protected_spray(w_valve, W_in, h_in, h_sp, h_min):
     if h_in <= h_min or h_min <= h_sp:
         return 0.0
     return min(w_valve, W_in * (h_in - h_min) / (h_min - h_sp))
+
+
+@njit(cache=True, error_model="numpy")
+def protected_spray_out(w_valve, W_out, h_in, h_sp, h_min):
+    """:func:`protected_spray` for an attemperator whose OUTLET flow W_out (kg/s) is given.
+
+    Where the downstream flow is set (turbine, load controller) and the spray replaces
+    steam upstream (W_in = W_out - w), the energy balance
+    (W_out - w) h_in + w h_sp = W_out h_min gives the cap w = W_out (h_in - h_min)/(h_in - h_sp);
+    the same limit as protected_spray with W_in = W_out - w.
+    """
+    if h_in <= h_min or h_min <= h_sp:
+        return 0.0
+    return min(w_valve, W_out * (h_in - h_min) / (h_in - h_sp))

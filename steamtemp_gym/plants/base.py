@@ -176,8 +176,9 @@ class Plant:
     def seed_rows(self, X: np.ndarray, keys: np.ndarray) -> None:
         """Seed the plant's own random disturbances of rows X from the episodes' keys (uint64).
 
-        Called by the env right after :meth:`steady_state`; a no-op for plants without
-        internal random inputs (use steamtemp_gym.rng in the kernel).
+        Called by the env right before :meth:`steady_state` (so that the steady state can
+        include the disturbances' initial values); a no-op for plants without internal
+        random inputs (use steamtemp_gym.rng in the kernel).
         """
 
     # -- generic ---------------------------------------------------------------------

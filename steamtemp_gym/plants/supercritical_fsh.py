@@ -58,14 +58,21 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from steamtemp_gym.plants.attemperator import mix, spray_flow
+from steamtemp_gym.plants.attemperator import mix, protected_spray_out, spray_flow
 from steamtemp_gym.plants.base import Plant, Signal, validate_params
 from steamtemp_gym.plants.integrator import pattern_arrays
 from steamtemp_gym.plants.sensors import thermowell_rhs
-from steamtemp_gym.plants.superheater import chain_pattern, chain_rhs, chain_steady, steam_side_kA
-from steamtemp_gym.steam import T_dTdh_ph, h_pT, rho_ph
+from steamtemp_gym.plants.superheater import (
+    HTC_EXPONENT,
+    chain_pattern,
+    chain_rhs,
+    chain_steady,
+    steam_side_kA,
+)
+from steamtemp_gym.steam import T_dTdh_ph, Tsat_p, h_pT, rho_ph
 
 K0 = 273.15
+P_CRIT_PA = 22.064e6  # critical pressure of water (IAPWS-IF97)
 
 
 @dataclass(frozen=True)
@@ -95,11 +102,17 @@ class FSHParams:
     dp_boiler_nom_MPa: float = 4.0  # feed-pump discharge minus FSH pressure at rated flow
     T_fw_nom_C: float = 290.0  # feedwater after the HP heaters at rated load
     dT_fw_dload_K: float = 70.0  # feedwater temperature drop per unit load reduction
-    tau_firing_s: float = 90.0  # mills and furnace
-    T_bir_s: float = 30.0  # boiler-input-rate feed-forward lead
+    tau_mill_s: float = 60.0  # coal mill: grinding and pulverized-coal inventory lag
+    tau_firing_s: float = 90.0  # furnace and waterwall heat release behind the mills
+    T_bir_s: float = 30.0  # boiler-input-rate feed-forward lead (imperfect: < the lags)
     tau_steam_s: float = 20.0  # steam-flow response to load demand
     tau_upstream_s: float = 120.0  # upstream superheaters' thermal lag
     fwr_coupling: float = 0.3  # share of a firing/flow ratio error reaching the FSH inlet
+    fwr_mismatch: float = 0.01  # FWR schedule error: relative enthalpy-rise error at 50 % load
+    bias_upstream_share: float = 0.3  # share of a heat-absorption bias reaching h_up
+    n_line: int = 3  # lags in series of the outlet header and main-steam line
+    tau_line_s: float = 45.0  # their total time constant at rated flow (~ 1/flow^0.8)
+    attemp_margin_K: float = 12.0  # protection: attemperator outlet >= Tsat + margin
     tau_valve_s: float = 2.0
     valve_rate_per_s: float = 0.1  # full stroke in 10 s
     tau_tc1_s: float = 5.0  # thermocouple
@@ -113,7 +126,11 @@ class FSHParams:
             positive=tuple(
                 n
                 for n in self.__dataclass_fields__
-                if n not in ("dTg_dload_K", "dT_fw_dload_K", "T_bir_s", "fwr_coupling")
+                if n
+                not in (
+                    "dTg_dload_K", "dT_fw_dload_K", "T_bir_s", "fwr_coupling", "fwr_mismatch",
+                    "bias_upstream_share",
+                )
             ),
             bounds={
                 "n_segments": (1, 40),
@@ -123,6 +140,13 @@ class FSHParams:
                 "spray_design_fraction": (0.0, 0.2),
                 "spray_max_fraction": (0.01, 0.3),
                 "fwr_coupling": (0.0, 1.0),
+                "fwr_mismatch": (-0.05, 0.05),
+                "bias_upstream_share": (0.0, 1.0),
+                "n_line": (1, 8),
+                "tau_line_s": (1.0, 600.0),
+                "tau_mill_s": (1.0, 600.0),
+                "tau_firing_s": (1.0, 900.0),
+                "attemp_margin_K": (1.0, 50.0),
                 "T_bir_s": (0.0, 600.0),
                 "dTg_dload_K": (0.0, 800.0),
                 "dT_fw_dload_K": (0.0, 200.0),
@@ -150,17 +174,31 @@ I_KA, I_V, I_CM, I_UAG, I_TGN, I_DTG, I_GEXP = 6, 7, 8, 9, 10, 11, 12
 I_CV, I_DPB, I_TFW, I_DTFW = 13, 14, 15, 16
 I_TAUF, I_TBIR, I_TAUW, I_TAUUP, I_FWR = 17, 18, 19, 20, 21
 I_TAUV, I_RATEV, I_TC1, I_TC2 = 22, 23, 24, 25
-I_TAB = 26  # start of the load tables: h_up, dh_up, h_fw, cp_fw, dcp_fw, rho_fw
+I_TAUM, I_MIS, I_BUP, I_NL, I_TAUL, I_SPD = 26, 27, 28, 29, 30, 31
+I_TAB = 32  # start of the load tables: h_up, dh_up, h_fw, cp_fw, dcp_fw, rho_fw, h_min
 TAB_LOADS = np.linspace(0.2, 1.2, 21)
 N_TAB = TAB_LOADS.shape[0]
-T_HUP, T_DHUP, T_HFW, T_CPFW, T_DCPFW, T_RHOFW = (I_TAB + k * N_TAB for k in range(6))
-N_P = I_TAB + 6 * N_TAB
-# State indices
+T_HUP, T_DHUP, T_HFW, T_CPFW, T_DCPFW, T_RHOFW, T_HMIN = (I_TAB + k * N_TAB for k in range(7))
+N_P = I_TAB + 7 * N_TAB
+# State indices; after the chain (2 n states): the coal mill, then the n_line line lags
 S_LF, S_LW, S_HUP, S_V, S_TC1, S_TC2, S_TA1, S_TA2 = 0, 1, 2, 3, 4, 5, 6, 7
 S_CHAIN = 8
 INLET_COLS = (S_HUP, S_V)  # states the FSH inlet enthalpy depends on
 # Output indices (order of FSHPlant.outputs)
-Z_TOUT, Z_TOUTM, Z_TATT, Z_TATTM, Z_TUP, Z_W, Z_P, Z_V, Z_WSP, Z_LF, Z_Q, Z_TMMAX = range(12)
+(Z_TOUT, Z_TOUTM, Z_TATT, Z_TATTM, Z_TUP, Z_W, Z_P, Z_V, Z_WSP, Z_LF, Z_Q, Z_TMMAX,
+ Z_DSP, Z_TFSH, Z_MILL) = range(15)  # fmt: skip
+
+
+@njit(cache=True)
+def s_mill(n):
+    """State index of the coal-mill output (fraction of rated fuel) for n FSH segments."""
+    return S_CHAIN + 2 * n
+
+
+@njit(cache=True)
+def s_line(n):
+    """State index of the first outlet-header / main-steam-line lag (K)."""
+    return S_CHAIN + 2 * n + 1
 
 
 @njit(cache=True, error_model="numpy")
@@ -206,31 +244,42 @@ def _spray_water(P, lw, dT):
 def _boundary(x, u, d, P):
     """Algebraic part shared by rhs and outputs.
 
-    Returns (W, p, w_sp, h0, h_sp, kA_seg, UAg_seg, Tg) for state x, command u, disturbance d.
-    kA_seg is the pair (kA, dkA/dW).
+    Returns (W, p, w_sp, h0, h_sp, kA_seg, UAg_seg, Tg, capped) for state x, command u,
+    disturbance d. kA_seg is the pair (kA, dkA/dW); capped: the spray is limited below the
+    valve's flow (attemperator protection or the 0.5 W bound), so the valve has no effect.
     """
     lw = min(max(x[S_LW], 0.05), 1.3)
     lf = min(max(x[S_LF], 0.05), 1.3)
     W = lw * P[I_WNOM]
     p = _pressure(P, lw)
     h_sp, rho_sp, dp = _spray_water(P, lw, d[4])
-    w_sp = min(spray_flow(x[S_V], P[I_CV], rho_sp, dp), 0.5 * W)
+    w_valve = spray_flow(x[S_V], P[I_CV], rho_sp, dp)
+    w_sp = min(w_valve, 0.5 * W)
+    h_min = _table(P, T_HMIN, lw)
+    if h_min > 0.0:  # subcritical: the attemperator protection (module docstring)
+        w_sp = protected_spray_out(w_sp, W, x[S_HUP], h_sp, h_min)
+    capped = w_sp < w_valve
     _, h0 = mix(W - w_sp, x[S_HUP], w_sp, h_sp)
     kA = steam_side_kA(P[I_KA], W, P[I_WNOM])
     gas = max(d[3] * (1.0 + d[2]), 0.0)
     UAg = P[I_UAG] * lf ** P[I_GEXP] * gas
     Tg = P[I_TGN] - P[I_DTG] * (1.0 - lf)
-    return W, p, w_sp, h0, h_sp, kA, UAg, Tg
+    return W, p, w_sp, h0, h_sp, kA, UAg, Tg, capped
 
 
 @njit(cache=True, error_model="numpy")
-def _h_up_target(P, lf, lw):
-    """Upstream SH outlet enthalpy set by the fuel/water-ratio schedule and ratio error."""
+def _h_up_target(P, lf, lw, bias):
+    """Upstream SH outlet enthalpy: fuel/water-ratio schedule, its error and ratio error.
+
+    ``bias`` is the relative heat-absorption error (D[2]); its share bias_upstream_share
+    of the enthalpy rise from the feedwater reaches the upstream superheaters' outlet.
+    """
     lw = min(max(lw, 0.05), 1.3)
     lf = min(max(lf, 0.05), 1.3)
     h_up = _table(P, T_HUP, lw)
     dh_rise = _table(P, T_DHUP, lw)
-    return h_up + P[I_FWR] * (lf / lw - 1.0) * dh_rise
+    mis = P[I_MIS] * 4.0 * lw * (1.0 - lw)  # FWR schedule error, zero at rated load
+    return h_up + (P[I_FWR] * (lf / lw - 1.0) + mis + P[I_BUP] * bias) * dh_rise
 
 
 @njit(cache=True, error_model="numpy")
@@ -242,24 +291,48 @@ def _dpressure(P, lw):
 
 
 @njit(cache=True, error_model="numpy")
+def _line_tau(P, W):
+    """Time constant (s) of each outlet-header / main-steam-line lag at steam flow W (kg/s).
+
+    tau_line/n_line at rated flow, growing as (W_nom/W)^0.8 (metal storage behind the
+    steam-side conductance of Dittus-Boelter, superheater.py), floored at 10 % flow.
+    """
+    r = max(W / P[I_WNOM], 0.1)
+    return P[I_TAUL] / P[I_NL] * r**-HTC_EXPONENT
+
+
+@njit(cache=True, error_model="numpy")
 def rhs(x, u, d, P, f, jd, ju, jl, want_jac):
     """dx/dt of the FSH plant (see module docstring); Jacobian pattern from FSHPlant.pack."""
     n = int(P[I_N])
+    sm = s_mill(n)
     fd = min(max(d[0] + P[I_TBIR] * d[1], 0.05), 1.3)
-    f[S_LF] = (fd - x[S_LF]) / P[I_TAUF]
+    f[sm] = (fd - x[sm]) / P[I_TAUM]
+    f[S_LF] = (x[sm] - x[S_LF]) / P[I_TAUF]
     f[S_LW] = (d[0] - x[S_LW]) / P[I_TAUW]
-    f[S_HUP] = (_h_up_target(P, x[S_LF], x[S_LW]) - x[S_HUP]) / P[I_TAUUP]
+    f[S_HUP] = (_h_up_target(P, x[S_LF], x[S_LW], d[2]) - x[S_HUP]) / P[I_TAUUP]
     f[S_V] = u[0]  # exact chord velocity of the valve (plants/integrator.py)
-    W, p, w_sp, h0, h_sp, kA, UAg, Tg = _boundary(x, u, d, P)
+    W, p, w_sp, h0, h_sp, kA, UAg, Tg, capped = _boundary(x, u, d, P)
     # dh0/d(h_up) and dh0/dv (attemperator balance, linear valve), order of INLET_COLS
     v = min(max(x[S_V], 1e-6), 1.0)
     dh0 = ((W - w_sp) / W, (h_sp - x[S_HUP]) * w_sp / v / W)
+    if capped:
+        dh0 = (dh0[0], 0.0)
     dW = P[I_WNOM] if 0.05 < x[S_LW] < 1.3 else 0.0
     dp = _dpressure(P, x[S_LW])
-    _, T_out, _ = chain_rhs(
+    _, T_fsh, _ = chain_rhs(
         x, S_CHAIN, n, h0, dh0, W, dW, p, dp, kA[0], kA[1], P[I_V], P[I_CM], UAg, Tg, 0.0,
         f, jd, ju, jl, 0, want_jac, True,
     )  # fmt: skip
+    # outlet header and main-steam line: n_line lags in series (module docstring)
+    sl = s_line(n)
+    nl = int(P[I_NL])
+    tau = _line_tau(P, W)
+    T_prev = T_fsh
+    for k in range(nl):
+        f[sl + k] = (T_prev - x[sl + k]) / tau
+        T_prev = x[sl + k]
+    T_out = T_prev
     T_att, _ = T_dTdh_ph(p, h0)
     f[S_TC1], f[S_TC2], j1, j2 = thermowell_rhs(T_out, x[S_TC1], x[S_TC2], P[I_TC1], P[I_TC2])
     f[S_TA1], f[S_TA2], j3, j4 = thermowell_rhs(T_att, x[S_TA1], x[S_TA2], P[I_TC1], P[I_TC2])
@@ -269,14 +342,22 @@ def rhs(x, u, d, P, f, jd, ju, jl, want_jac):
         jd[S_HUP] = -1.0 / P[I_TAUUP]
         jd[S_V] = 0.0
         jd[S_TC1], jd[S_TC2], jd[S_TA1], jd[S_TA2] = j1, j2, j3, j4
+        jd[sm] = -1.0 / P[I_TAUM]
+        j = 4 * n + 1  # after chain_pattern's entries
+        jl[j] = T_dTdh_ph(p, x[S_CHAIN + 2 * n - 1])[1] / tau
+        for k in range(nl):
+            jd[sl + k] = -1.0 / tau
+            if k > 0:
+                jl[j + k] = 1.0 / tau
 
 
 @njit(cache=True, error_model="numpy")
 def outputs(x, u, d, P, z):
     """Physical outputs (order of FSHPlant.outputs)."""
     n = int(P[I_N])
-    W, p, w_sp, h0, h_sp, kA, UAg, Tg = _boundary(x, u, d, P)
-    T_out, _ = T_dTdh_ph(p, x[S_CHAIN + 2 * n - 1])
+    W, p, w_sp, h0, h_sp, kA, UAg, Tg, capped = _boundary(x, u, d, P)
+    T_fsh, _ = T_dTdh_ph(p, x[S_CHAIN + 2 * n - 1])
+    T_out = x[s_line(n) + int(P[I_NL]) - 1]
     T_att, _ = T_dTdh_ph(p, h0)
     T_up, _ = T_dTdh_ph(p, x[S_HUP])
     q = 0.0
@@ -297,6 +378,9 @@ def outputs(x, u, d, P, z):
     z[Z_LF] = x[S_LF]
     z[Z_Q] = q * 1e-6
     z[Z_TMMAX] = tm_max - K0
+    z[Z_DSP] = P[I_SPD] * W
+    z[Z_TFSH] = T_fsh - K0
+    z[Z_MILL] = x[s_mill(n)]
 
 
 @njit(cache=True, error_model="numpy")
@@ -307,6 +391,9 @@ def project(x, P):
     x[S_LF] = min(max(x[S_LF], 0.05), 1.3)
     x[S_LW] = min(max(x[S_LW], 0.05), 1.3)
     x[S_HUP] = min(max(x[S_HUP], 2.0e6), 4.0e6)
+    x[s_mill(n)] = min(max(x[s_mill(n)], 0.05), 1.3)
+    for k in range(int(P[I_NL])):
+        x[s_line(n) + k] = min(max(x[s_line(n) + k], 400.0), 1300.0)
     for i in range(n):
         x[S_CHAIN + 2 * i] = min(max(x[S_CHAIN + 2 * i], 400.0), 1300.0)
         x[S_CHAIN + 2 * i + 1] = min(max(x[S_CHAIN + 2 * i + 1], 1.5e6), 4.2e6)
@@ -317,7 +404,7 @@ def _outlet_steady(x, v, d, P, lw):
     """Steady FSH outlet enthalpy for valve opening v (x holds h_up; chain written into x)."""
     n = int(P[I_N])
     x[S_V] = v
-    W, p, w_sp, h0, h_sp, kA, UAg, Tg = _boundary(x, x[S_V : S_V + 1], d, P)
+    W, p, w_sp, h0, h_sp, kA, UAg, Tg, capped = _boundary(x, x[S_V : S_V + 1], d, P)
     return chain_steady(x, S_CHAIN, n, h0, W, p, kA[0], UAg, Tg, 0.0)
 
 
@@ -328,9 +415,11 @@ def steady(D, sp_K, P, X):
         x = X[b]
         d = D[b]
         L = min(max(d[0], 0.05), 1.3)
+        n = int(P[I_N])
         x[S_LF] = L
+        x[s_mill(n)] = L
         x[S_LW] = L
-        x[S_HUP] = _h_up_target(P, L, L)
+        x[S_HUP] = _h_up_target(P, L, L, d[2])
         p = _pressure(P, L)
         lo, hi = 0.0, 1.0
         T_lo, _ = T_dTdh_ph(p, _outlet_steady(x, lo, d, P, L))
@@ -349,11 +438,13 @@ def steady(D, sp_K, P, X):
                     hi = v
             v = 0.5 * (lo + hi)
         h_out = _outlet_steady(x, v, d, P, L)
-        W, p, w_sp, h0, h_sp, kA, UAg, Tg = _boundary(x, x[S_V : S_V + 1], d, P)
+        W, p, w_sp, h0, h_sp, kA, UAg, Tg, capped = _boundary(x, x[S_V : S_V + 1], d, P)
         T_out, _ = T_dTdh_ph(p, h_out)
         T_att, _ = T_dTdh_ph(p, h0)
         x[S_TC1] = T_out
         x[S_TC2] = T_out
+        for k in range(int(P[I_NL])):
+            x[s_line(n) + k] = T_out
         x[S_TA1] = T_att
         x[S_TA2] = T_att
 
@@ -427,6 +518,9 @@ def _calibrate(params: FSHParams, P: np.ndarray, n_x: int) -> None:
         h_e = _design_inlet(P, L, h_out, x)
         P[T_HUP + k] = (h_e - s * h_sp) / (1.0 - s)
         P[T_DHUP + k] = P[T_HUP + k] - h_sp
+        # protection: attemperator outlet >= Tsat + margin; none above the critical pressure
+        if p < P_CRIT_PA - 0.5e6:
+            P[T_HMIN + k] = h_pT(p, float(Tsat_p(p)) + params.attemp_margin_K)
     # Valve coefficient: fully open passes spray_max_fraction of rated flow at rated load.
     h_sp, rho_sp, dp = _spray_water_exact(P, 1.0, 0.0)
     P[I_CV] = params.spray_max_fraction * W / math.sqrt(rho_sp * dp)
@@ -463,9 +557,18 @@ def _pack(params: FSHParams) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
     P[I_RATEV] = params.valve_rate_per_s
     P[I_TC1] = params.tau_tc1_s
     P[I_TC2] = params.tau_tc2_s
-    n_x = S_CHAIN + 2 * n
+    P[I_TAUM] = params.tau_mill_s
+    P[I_MIS] = params.fwr_mismatch
+    P[I_BUP] = params.bias_upstream_share
+    P[I_NL] = params.n_line
+    P[I_TAUL] = params.tau_line_s
+    P[I_SPD] = params.spray_design_fraction
+    n_x = S_CHAIN + 2 * n + 1 + params.n_line
     _calibrate(params, P, n_x)
     pat = chain_pattern(S_CHAIN, n, INLET_COLS, S_LW)
+    assert len(pat) == 4 * n + 1  # rhs writes the line's entries from here on
+    sl = S_CHAIN + 2 * n + 1
+    pat += [(sl, S_CHAIN + 2 * n - 1)] + [(sl + k, sl + k - 1) for k in range(1, params.n_line)]
     jrow, jcol = pattern_arrays(pat)
     P.setflags(write=False)
     return P, jrow, jcol, n_x
@@ -496,8 +599,14 @@ class SupercriticalFSH(Plant):
         Signal("firing_rate", "1", 0.75, 0.3, description="fuel flow, fraction of rated"),
         Signal("heat_absorption_MW", "MW", 100.0, 50.0, observed=False, description="hidden"),
         Signal("metal_temp_max_C", "C", 620.0, 40.0, observed=False),
+        Signal("design_spray_kg_s", "kg/s", 14.0, 14.0, observed=False,
+               description="spray the FWR schedule is designed for: design fraction x flow"),
+        Signal("fsh_outlet_temp_C", "C", 593.0, 20.0, observed=False,
+               description="FSH outlet, ahead of the outlet header and main-steam line"),
+        Signal("mill_output", "1", 0.75, 0.3, observed=False, description="coal to burners"),
     )
     setpoint_C = 593.0
+    design_spray = "design_spray_kg_s"
     extra_info = ("attemp_out_temp_C", "heat_absorption_MW", "pressure_MPa", "steam_flow_kg_s")
 
     pack = staticmethod(_pack)

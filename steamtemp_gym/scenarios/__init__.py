@@ -15,8 +15,22 @@ channel                    unit      meaning
 ``spray_water_temp_offset_C`` K      spray-water temperature offset
 ========================== ========= ==========================================
 
-plus the scalar ``noise_std_C`` (standard deviation of the white noise on the
-measured temperatures). Every plant maps this vocabulary onto its own inputs.
+plus three scalars:
+
+- ``noise_std_C`` (K): standard deviation of the white noise on the measured
+  temperatures (thermocouples of real units: 0.2-0.3 K);
+- ``heat_absorption_noise_std`` (fraction) and ``heat_absorption_noise_tau_s`` (s):
+  a coloured heat-absorption disturbance (slagging, coal quality, soot blowing,
+  mill changes), an Ornstein-Uhlenbeck process with that stationary standard
+  deviation and correlation time, added by the env to ``heat_absorption_bias``
+  (exact discretization at the control interval, counter-based random numbers,
+  started from its stationary distribution so that a reset is a steady state).
+
+A field left out of a scenario means none of that disturbance (a file without
+``noise_std_C`` is noise-free, so deterministic step tests stay possible). The
+named scenarios (``library.py``) have sensor noise and the coloured heat-absorption
+disturbance on (:data:`NAMED_DISTURBANCES`). Every plant maps this vocabulary onto
+its own inputs.
 
 Scenarios are deterministic; ``"random"`` is the seeded training distribution
 drawn afresh at every reset (:func:`random_scenario`). Named scenarios live in
@@ -48,6 +62,7 @@ __all__ = [
     "random_scenario",
     "pack",
     "RANDOM",
+    "NAMED_DISTURBANCES",
 ]
 
 #: Schedule channels in the order the compiled kernels read them.
@@ -75,7 +90,32 @@ _LIMITS = {
 }
 RANDOM = "random"
 
+#: Scalar fields with their inclusive ranges (units: K, fraction, s).
+_SCALAR_LIMITS = {
+    "noise_std_C": (0.0, 10.0),
+    "heat_absorption_noise_std": (0.0, 0.2),
+    "heat_absorption_noise_tau_s": (1.0, 86400.0),
+}
+#: Disturbances on in every named scenario: thermocouple noise 0.25 K (real units:
+#: 0.2-0.3 K) and a coloured heat-absorption disturbance of 2 % std with a 5 min
+#: correlation time (slagging, coal quality and mill changes; plausible default, unverified).
+NAMED_DISTURBANCES = {
+    "noise_std_C": 0.25,
+    "heat_absorption_noise_std": 0.02,
+    "heat_absorption_noise_tau_s": 300.0,
+}
 Schedule = tuple[tuple[float, float], ...]
+
+
+def _as_scalar(name: str, value: Any, lo: float, hi: float) -> float:
+    """Validate a scalar scenario field (finite, inside [lo, hi])."""
+    try:
+        v = float(value)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"scenario {name!r} must be a number, got {value!r}") from exc
+    if isinstance(value, bool) or not (math.isfinite(v) and lo <= v <= hi):
+        raise ValueError(f"scenario {name!r} must be in [{lo}, {hi}], got {value!r}")
+    return v
 
 
 def _as_schedule(name: str, value: Any) -> Schedule:
@@ -129,6 +169,9 @@ class Scenario:
         fouling: Gas-side heat-transfer multiplier breakpoints.
         spray_water_temp_offset_C: Spray-water temperature offset breakpoints in K.
         noise_std_C: Standard deviation of measured-temperature noise in K.
+        heat_absorption_noise_std: Stationary standard deviation (fraction) of the coloured
+            heat-absorption disturbance added to ``heat_absorption_bias``.
+        heat_absorption_noise_tau_s: Its correlation time in s.
         description: One line for humans.
     """
 
@@ -140,6 +183,8 @@ class Scenario:
     fouling: Schedule = ((0.0, 1.0),)
     spray_water_temp_offset_C: Schedule = ((0.0, 0.0),)
     noise_std_C: float = 0.0
+    heat_absorption_noise_std: float = 0.0
+    heat_absorption_noise_tau_s: float = 600.0
     description: str = field(default="", compare=False)
 
     def __post_init__(self) -> None:
@@ -158,17 +203,8 @@ class Scenario:
         object.__setattr__(self, "duration_s", duration)
         for ch in CHANNELS:
             object.__setattr__(self, ch, _as_schedule(ch, getattr(self, ch)))
-        try:
-            noise = float(self.noise_std_C)
-        except (TypeError, ValueError) as exc:
-            raise ValueError(
-                f"scenario 'noise_std_C' must be a number, got {self.noise_std_C!r}"
-            ) from exc
-        if not (math.isfinite(noise) and 0.0 <= noise <= 10.0):
-            raise ValueError(
-                f"scenario 'noise_std_C' must be in [0, 10] K, got {self.noise_std_C!r}"
-            )
-        object.__setattr__(self, "noise_std_C", noise)
+        for name, (lo, hi) in _SCALAR_LIMITS.items():
+            object.__setattr__(self, name, _as_scalar(name, getattr(self, name), lo, hi))
 
     def value(self, channel: str, t: float) -> float:
         """Value of one channel at time ``t`` (linear interpolation, held at the ends)."""
@@ -180,7 +216,8 @@ class Scenario:
         out: dict[str, Any] = {"name": self.name, "duration_s": self.duration_s}
         for ch in CHANNELS:
             out[ch] = [list(p) for p in getattr(self, ch)]
-        out["noise_std_C"] = self.noise_std_C
+        for name in _SCALAR_LIMITS:
+            out[name] = getattr(self, name)
         if self.description:
             out["description"] = self.description
         return out
@@ -289,7 +326,9 @@ RANDOM_DISTRIBUTION = {
     "heat_bias_step": (-0.08, 0.08),
     "fouling": (0.85, 1.15),
     "spray_water_temp_offset_C": (-15.0, 15.0),
-    "noise_std_C": (0.0, 0.5),
+    "noise_std_C": (0.2, 0.3),
+    "heat_absorption_noise_std": (0.0, 0.04),
+    "heat_absorption_noise_tau_s": (120.0, 900.0),
 }
 
 
@@ -301,7 +340,8 @@ def random_scenario(rng: np.random.Generator, duration_s: float | None = None) -
     to a new target in 50-100 %. With probability 0.3 a setpoint step of
     +-10 K at a random time; with probability 0.5 a heat-absorption bias step of
     +-8 %; a constant fouling factor 0.85-1.15; a constant spray-water
-    temperature offset of +-15 K; measurement noise 0-0.5 K.
+    temperature offset of +-15 K; thermocouple noise 0.2-0.3 K; a coloured
+    heat-absorption disturbance of 0-4 % std with a 2-15 min correlation time.
     """
     dist = RANDOM_DISTRIBUTION
     duration = float(duration_s if duration_s is not None else dist["duration_s"])
@@ -333,6 +373,8 @@ def random_scenario(rng: np.random.Generator, duration_s: float | None = None) -
         fouling=((0.0, u(*dist["fouling"])),),
         spray_water_temp_offset_C=((0.0, u(*dist["spray_water_temp_offset_C"])),),
         noise_std_C=u(*dist["noise_std_C"]),
+        heat_absorption_noise_std=u(*dist["heat_absorption_noise_std"]),
+        heat_absorption_noise_tau_s=u(*dist["heat_absorption_noise_tau_s"]),
     )
 
 

@@ -10,15 +10,27 @@
 - ``heat_imbalance_step``: +8 % heat-absorption step (over 60 s) at 5 min, rated load.
 - ``load_following``: AGC-like ramps of 1-2 %/min between 50 and 100 % (a fixed
   draw, seed 2026), holds of 3-8 min, 60 min.
+
+Every named scenario carries the disturbances of real operation
+(``NAMED_DISTURBANCES``: thermocouple noise and the coloured heat-absorption
+disturbance), so each seed of a named scenario is a different realization of them.
 """
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 
-from steamtemp_gym.scenarios import Scenario, register
+from steamtemp_gym.scenarios import NAMED_DISTURBANCES, Scenario
+from steamtemp_gym.scenarios import register as _register
 
 MIN = 60.0
+
+
+def register(scenario: Scenario, plants=None) -> Scenario:
+    """Register a named scenario with the disturbances of real operation switched on."""
+    return _register(dataclasses.replace(scenario, **NAMED_DISTURBANCES), plants)
 
 
 def _load_following() -> Scenario:
@@ -34,7 +46,6 @@ def _load_following() -> Scenario:
         name="load_following",
         duration_s=3600.0,
         load=tuple(pts),
-        noise_std_C=0.2,
         description="AGC-like ramps of 1-2 %/min within 50-100 % load",
     )
 
