@@ -3,25 +3,42 @@
 Every actuator gets the loop its plant declares in ``Plant.control_loops``
 (inner, outer):
 
-- cascade (inner and outer): an outer PI on the outer temperature (MAIN: the
-  main-steam error against the setpoint) sets the setpoint of the inner
-  (attemperator-outlet) temperature, an inner PI on that temperature moves the
-  spray valve: the standard two-loop arrangement of spray attemperation (e.g.
-  the cascade of 004_d5464191c442fd5a.txt, whose inner loop is a P controller);
-- inner only: a PI holds the inner temperature at its value at the episode start
-  (a first-stage spray holding the temperature ahead of the next stage);
-- outer only: a PI on the outer signal moves the actuator directly (a gas
-  recirculation damper holding the reheat temperature).
+- cascade (inner and outer MAIN or another signal): an outer PI on the outer
+  temperature (MAIN: the main-steam error against the setpoint) sets the setpoint
+  of the inner (attemperator-outlet) temperature, an inner PI on that temperature
+  moves the spray valve: the standard two-loop arrangement of spray attemperation
+  (e.g. the cascade of 004_d5464191c442fd5a.txt, whose inner loop is a P controller);
+- scheduled (inner, SCHEDULED): a PI holds the inner temperature at a setpoint
+  scheduled on the load demand, as first-stage sprays are run: the function
+  generator is set at commissioning from the plant's steady states at 40-110 % load
+  (:func:`inner_schedule`), so the first stage does not integrate the main-steam
+  error a second time;
+- inner only (outer None): a PI holds the inner temperature at its start value;
+- outer only (inner None): a PI on the outer signal moves the actuator directly (a
+  gas recirculation damper holding the reheat temperature).
 
 Actuators without a loop stay where the episode started. Loops are tuned by the
 SIMC rules (Skogestad 2003, tau_c = theta) on first-order-plus-dead-time models
 read from open-loop step tests of each actuator at rated load
-(baselines/identification.py): the inner loop on actuator -> inner
-temperature, the outer loop of a cascade on inner -> outer temperature (gain
-K_out/K_in, dead time and balance time of the outer response less those of the
-inner one), a single loop on actuator -> its temperature. Where k loops share the
-main-steam error (two spray stages), each outer gain is divided by k so that
-their sum has the SIMC loop gain.
+(baselines/identification.py): the inner loop on actuator -> inner temperature,
+the outer loop of a cascade on inner -> outer temperature (gain K_out/K_in, dead
+time and balance time of the outer response less those of the inner one), a
+single loop on actuator -> its temperature. The measurement filter's lag is added
+to each loop's dead time. Where k loops share the main-steam error, each outer
+gain is divided by k so that their sum has the SIMC loop gain.
+
+Measurement filter: every temperature the loops read goes through a first-order
+filter of ``FILTER_S`` = 5 s (the input filter a DCS puts on thermocouples), so
+sensor noise does not chatter the valves.
+
+Optional load feed-forward (``load_feedforward=True``, used by
+benchmarks/difficulty.py to show the benchmark's headroom; not the plain baseline):
+each MAIN cascade adds r_ff = a (L - L_0) + b dL_f/dt to its inner (attemperator-
+outlet) setpoint, with L the load demand (observed), L_f its first-order filter
+(time constant: the outer loops' integral time). a and b are identified by least
+squares from the inner-setpoint trend of the plain cascade during a commissioning
+ramp (100 -> 60 -> 100 % at 3 %/min, no noise; not an evaluation scenario), the way
+a feed-forward is set from a ramp test in auto.
 
 Discrete PI in position form at the plant's control interval, bumpless start
 (integrators initialized from the measured actuator positions and
@@ -38,23 +55,34 @@ from typing import Any
 import numpy as np
 
 from baselines.identification import FOPDT, simc_pi, step_test
-from steamtemp_gym.plants.base import MAIN
+from steamtemp_gym.plants.base import MAIN, SCHEDULED
+from steamtemp_gym.scenarios import Scenario
 
 NO_LOOP = (0.0, np.inf, 0.0, np.inf)
+#: Measurement filter time constant (s): a DCS input filter on thermocouples.
+FILTER_S = 5.0
+#: Loads (fraction) at which the first-stage schedules are read off the steady states.
+SCHEDULE_LOADS = np.round(np.arange(0.4, 1.101, 0.1), 2)
+
+
+def _env(env_id: str, params_json: str, scenario: Any = "load_ramp_100_50"):
+    import gymnasium as gym
+
+    return gym.make(env_id, scenario=scenario, params=json.loads(params_json))
 
 
 @functools.lru_cache(maxsize=16)
 def _tuning(env_id: str, params_json: str) -> tuple[tuple[float, float, float, float], ...]:
     """(Kc_outer, Ti_outer, Kc_inner, Ti_inner) per action from step tests at rated load."""
-    import gymnasium as gym
-
     params = json.loads(params_json)
-    plant = gym.make(env_id, params=params).unwrapped.plant
+    plant = _env(env_id, params_json).unwrapped.plant
     out = []
     n_main = sum(outer == MAIN for _, outer in plant.control_loops)
     for j, (inner, outer) in enumerate(plant.control_loops):
-        outer_sig = plant.outlet_measured if outer == MAIN else outer
+        outer_sig = None if outer == SCHEDULED else (
+            plant.outlet_measured if outer == MAIN else outer)  # fmt: skip
         m = step_test(env_id, j, [s for s in (inner, outer_sig) if s], params=params)
+        m = {k: FOPDT(f.K, f.tau_s, f.theta_s + FILTER_S) for k, f in m.items()}
         kc_o, ti_o, kc_i, ti_i = NO_LOOP
         if inner:
             kc_i, ti_i = simc_pi(m[inner])
@@ -73,36 +101,111 @@ def _tuning(env_id: str, params_json: str) -> tuple[tuple[float, float, float, f
     return tuple(out)
 
 
+@functools.lru_cache(maxsize=16)
+def inner_schedule(env_id: str, params_json: str, signal: str) -> tuple[np.ndarray, np.ndarray]:
+    """(loads, measured ``signal``) of the undisturbed steady states at SCHEDULE_LOADS."""
+    temps = []
+    for load in SCHEDULE_LOADS:
+        sc = Scenario(name="schedule", duration_s=60.0, load=float(load))
+        env = _env(env_id, params_json, sc)
+        obs, _ = env.reset(seed=0)
+        temps.append(float(env.unwrapped.signals.decode(obs)[signal]))
+    return SCHEDULE_LOADS.copy(), np.array(temps)
+
+
+#: The commissioning ramp the feed-forward is fitted on (not an evaluation scenario).
+FF_RAMP = Scenario(
+    name="feedforward_commissioning",
+    duration_s=3600.0,
+    load=((0.0, 1.0), (300.0, 1.0), (1100.0, 0.6), (1900.0, 0.6), (2700.0, 1.0)),
+)
+
+
+@functools.lru_cache(maxsize=16)
+def _feedforward(env_id: str, params_json: str) -> tuple[np.ndarray, float]:
+    """((a, b) per action, zeros for non-MAIN loops; tau_f): r_ff = a (L - L0) + b dL_f/dt."""
+    env = _env(env_id, params_json, FF_RAMP)
+    pol = CascadePI(env)
+    plant = env.unwrapped.plant
+    obs, info = env.reset(seed=0)
+    main = [j for j, (_, o) in enumerate(plant.control_loops) if o == MAIN]
+    tau_f = max([pol.gains[j][1] for j in main if np.isfinite(pol.gains[j][1])] + [plant.dt_s])
+    L, V = [], []
+    while True:
+        a, _ = pol.predict(obs)
+        obs, _, term, trunc, info = env.step(a)
+        L.append(info["load"])
+        V.append(pol.inner_setpoint[0].copy())
+        if term or trunc:
+            break
+    L, V = np.array(L), np.array(V)
+    out = np.zeros((len(plant.control_loops), 2))
+    A = np.column_stack([L - L[0], _filtered_rate(L, plant.dt_s, tau_f)])
+    for j in main:
+        out[j], *_ = np.linalg.lstsq(A, V[:, j] - V[0, j], rcond=None)
+    return out, tau_f
+
+
+def _filtered_rate(L: np.ndarray, dt: float, tau: float) -> np.ndarray:
+    """dL_f/dt of the first-order filter L_f (time constant tau) of a sampled load."""
+    a = np.exp(-dt / tau)
+    lf, out = L[0], np.empty_like(L)
+    for k, x in enumerate(L):
+        lf = a * lf + (1.0 - a) * x
+        out[k] = (x - lf) / tau
+    return out
+
+
 class CascadePI:
     """Conventional loops for every actuator of a plant (see module docstring).
 
     Args:
         env: The env (or vector env) the policy will act on; used for its signals and plant.
         tuning: Optional ((Kc_o, Ti_o, Kc_i, Ti_i), ...) per loop, overriding the step tests.
+        load_feedforward: Add the identified load feed-forward to the MAIN loops.
     """
 
-    def __init__(self, env: Any, tuning: Any = None) -> None:
+    def __init__(self, env: Any, tuning: Any = None, load_feedforward: bool = False) -> None:
         u = env.unwrapped
         plant = u.plant
         names = [s.name for s in u.signals.observation]
         self._scale = np.array([s.scale for s in u.signals.observation])
         self._center = np.array([s.center for s in u.signals.observation])
         self.i_err = names.index("error_K")
+        self.i_load = names.index("load_demand")
         self.i_valve = [names.index(n) for n in plant.valves]
-        self.loops = []  # (inner idx | None, outer: "main" | idx | None)
-        for inner, outer in plant.control_loops:
+        params = json.dumps(getattr(u, "_params_overrides", {}) or {}, sort_keys=True)
+        self.loops = []  # (inner idx | None, outer: MAIN | SCHEDULED | idx | None)
+        self.schedules: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+        for j, (inner, outer) in enumerate(plant.control_loops):
             i_in = names.index(inner) if inner else None
-            i_out = MAIN if outer == MAIN else (names.index(outer) if outer else None)
+            if outer in (MAIN, SCHEDULED):
+                i_out = outer
+            else:
+                i_out = names.index(outer) if outer else None
+            if outer == SCHEDULED:
+                self.schedules[j] = inner_schedule(plant.id, params, inner)
             self.loops.append((i_in, i_out))
         self.dt = plant.dt_s
-        params = json.dumps(getattr(u, "_params_overrides", {}) or {}, sort_keys=True)
+        self.a_filter = float(np.exp(-self.dt / FILTER_S))
         self.gains = np.array(
             tuning if tuning is not None else _tuning(plant.id, params), dtype=float
         )
+        self.ff, self.ff_tau = _feedforward(plant.id, params) if load_feedforward else (None, 1.0)
         self._st: dict[str, np.ndarray] | None = None
+        self.inner_setpoint = np.zeros((1, len(self.loops)))  # last r per row and loop
 
     def reset(self) -> None:
         self._st = None
+
+    def _restart(self, st: dict[str, np.ndarray], rows: np.ndarray, y: np.ndarray) -> None:
+        st["y0"][rows], st["v0"][rows] = y[rows], y[rows][:, self.i_valve]
+        st["yf"][rows], st["L0"][rows], st["Lf"][rows] = y[rows], y[rows, self.i_load], \
+            y[rows, self.i_load]  # fmt: skip
+        st["io"][rows], st["ii"][rows] = 0.0, 0.0
+        for j, (loads, temps) in self.schedules.items():  # bumpless: no kick at the start
+            r = np.interp(y[rows, self.i_load], loads, temps)
+            st["ii"][rows, j] = y[rows, self.loops[j][0]] - r
 
     def predict(self, observation, state=None, episode_start=None, deterministic=True):
         obs = np.atleast_2d(np.asarray(observation, dtype=np.float64))
@@ -111,33 +214,48 @@ class CascadePI:
         n = obs.shape[0]
         st = self._st
         if st is None or st["y0"].shape != y.shape:
-            st = self._st = {"y0": y.copy(), "v0": valve.copy(), "r0": np.zeros_like(valve),
-                             "io": np.zeros_like(valve), "ii": np.zeros_like(valve)}  # fmt: skip
+            z = np.zeros_like(valve)
+            st = self._st = {"y0": y.copy(), "v0": valve.copy(), "yf": y.copy(),
+                             "L0": np.zeros(n), "Lf": np.zeros(n), "io": z,
+                             "ii": z.copy()}  # fmt: skip
             restart = np.ones(n, dtype=bool)
         elif episode_start is not None:
             restart = np.broadcast_to(np.asarray(episode_start, dtype=bool), (n,))
         else:
             restart = np.zeros(n, dtype=bool)
         if restart.any():
-            st["y0"][restart], st["v0"][restart] = y[restart], valve[restart]
-            st["io"][restart], st["ii"][restart] = 0.0, 0.0
-        e_main = obs[:, self.i_err] * self._scale[self.i_err]  # setpoint - measured outlet
+            self._restart(st, restart, y)
+        yf = st["yf"]
+        yf[:] = self.a_filter * yf + (1.0 - self.a_filter) * y  # measurement filter
+        yf[restart] = y[restart]
+        load = y[:, self.i_load]
+        st["Lf"] += (1.0 - np.exp(-self.dt / self.ff_tau)) * (load - st["Lf"])
+        e_main = yf[:, self.i_err]  # setpoint - measured outlet (filtered)
         v = st["v0"].copy()
+        self.inner_setpoint = np.full_like(v, np.nan)
         for j, (inner, outer) in enumerate(self.loops):
             kc_o, ti_o, kc_i, ti_i = self.gains[j]
-            if outer is None:
+            if outer is None or outer == SCHEDULED:
                 e_o = np.zeros(n)
             else:
-                e_o = e_main if outer == MAIN else st["y0"][:, outer] - y[:, outer]
+                e_o = e_main if outer == MAIN else st["y0"][:, outer] - yf[:, outer]
             if inner is None:  # single loop on the outer signal
                 push, v[:, j] = kc_o * e_o, st["v0"][:, j] + kc_o * (e_o + st["io"][:, j])
             else:
-                r = st["y0"][:, inner] + kc_o * (e_o + st["io"][:, j])  # inner setpoint
-                e_i = r - y[:, inner]
+                if outer == SCHEDULED:
+                    r = np.interp(load, *self.schedules[j])
+                else:
+                    r = st["y0"][:, inner] + kc_o * (e_o + st["io"][:, j])  # inner setpoint
+                    if self.ff is not None and outer == MAIN:
+                        a, b = self.ff[j]
+                        r = r + a * (load - st["L0"]) + b * (load - st["Lf"]) / self.ff_tau
+                self.inner_setpoint[:, j] = r
+                e_i = r - yf[:, inner]
                 push, v[:, j] = kc_i * e_i, st["v0"][:, j] + kc_i * (e_i + st["ii"][:, j])
                 ok_i = ~(((v[:, j] >= 1.0) & (push > 0)) | ((v[:, j] <= 0.0) & (push < 0)))
                 st["ii"][:, j] += np.where(ok_i, self.dt / ti_i * e_i, 0.0)
             ok = ~(((v[:, j] >= 1.0) & (push > 0)) | ((v[:, j] <= 0.0) & (push < 0)))
-            st["io"][:, j] += np.where(ok, self.dt / ti_o * e_o, 0.0)
+            if np.isfinite(ti_o):
+                st["io"][:, j] += np.where(ok, self.dt / ti_o * e_o, 0.0)
         action = (2.0 * np.clip(v, 0.0, 1.0) - 1.0).astype(np.float32)
         return (action[0] if np.ndim(observation) == 1 else action), None

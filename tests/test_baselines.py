@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 
 import gymnasium as gym
@@ -12,6 +13,7 @@ import baselines
 import steamtemp_gym
 from agents.evaluation import run_episode
 from baselines.policy import Policy
+from steamtemp_gym import scenarios
 
 IDS = steamtemp_gym.ENV_IDS
 
@@ -52,12 +54,13 @@ def test_baseline_is_a_policy_and_beats_open_loop(env_id, name):
 
 
 @pytest.mark.parametrize("env_id", IDS)
-def test_cascade_pi_holds_the_load_ramp_within_the_once_through_band(env_id):
-    """REFERENCE_DATA.md: +-10 K allowed in load-change tests of once-through units, +-8 K drum."""
-    env = gym.make(env_id, scenario="load_ramp_100_50")
-    res = run_episode(env, baselines.make("cascade_pi", env), seed=0)
-    assert res["metrics"]["max_abs_dev_K"] < 8.0
-    sp = gym.make(env_id, scenario="setpoint_step")
+def test_cascade_pi_tracks_a_setpoint_step(env_id):
+    """Without noise (settling is read in a 1 K band); ramp peaks against the field bands are
+    in tests/test_difficulty.py."""
+    quiet = dataclasses.replace(scenarios.get("setpoint_step"), noise_std_C=0.0,
+                                heat_absorption_noise_std=0.0)  # fmt: skip
+    params = {"omega_halfwidth_K": 0.0, "omega2_scale_kg_s": 0.0} if "Cascade" in env_id else {}
+    sp = gym.make(env_id, scenario=quiet, params=params)
     m = run_episode(sp, baselines.make("cascade_pi", sp), seed=0)["metrics"]
     assert m["overshoot_pct"] < 20.0 and m["settling_time_s"] < 900.0
 

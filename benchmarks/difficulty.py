@@ -1,0 +1,155 @@
+"""How hard is each plant? Reference policies on every named scenario (3 seeds, means).
+
+    python benchmarks/difficulty.py [--envs ID,...] [--seeds 3] [--update-readme]
+
+Prints, per env and named scenario, for a frozen valve, random actions, cascade PI,
+cascade PI with doubled outer gain and cascade PI with the load feed-forward: peak
+|e|, IAE, time outside +-5 K, spray used, valve travel, return and trips; then the
+headroom (peak |e| of the feed-forward cascade against plain cascade PI on the
+5 %/min ramps) and the spray step-response characteristics of every plant (gain,
+Tu, Tg of the true and measured outlet at 100 % and 50 % load). With
+``--update-readme`` it rewrites the README's difficulty section (between the
+``difficulty:start`` / ``difficulty:end`` markers) from these numbers.
+Targets: agents/difficulty.py (TARGETS).
+"""
+
+from __future__ import annotations
+
+import argparse
+import re
+import time
+from pathlib import Path
+
+import numpy as np
+
+import steamtemp_gym
+from agents.difficulty import RAMPS, REFERENCE_POLICIES, difficulty_table
+from baselines.identification import step_test
+
+README = Path(__file__).resolve().parents[1] / "README.md"
+SHORT = {"max_abs_dev_K": "peak K", "iae_K_s": "IAE K s", "time_outside_5K_s": "t>5K s",
+         "spray_used_kg": "spray t", "valve_travel": "travel", "return": "return",
+         "tripped": "trips"}  # fmt: skip
+
+
+def _fmt(key: str, v: float) -> str:
+    if not np.isfinite(v):
+        return "-"
+    if key == "spray_used_kg":
+        return f"{v / 1000:.1f}"
+    if key == "tripped":
+        return f"{v:.2f}".rstrip("0").rstrip(".") if v else "0"
+    if key in ("iae_K_s", "time_outside_5K_s", "return"):
+        return f"{v:.0f}"
+    return f"{v:.2f}"
+
+
+def difficulty_markdown(rows: list[dict]) -> str:
+    cols = list(SHORT)
+    lines = ["| env | scenario | policy | " + " | ".join(SHORT[c] for c in cols) + " |",
+             "|---|---|---|" + "---|" * len(cols)]  # fmt: skip
+    for r in rows:
+        env = r["env"].split("/")[1].removesuffix("-v0")
+        lines.append(f"| {env} | {r['scenario']} | {r['policy']} | "
+                     + " | ".join(_fmt(c, r[c]) for c in cols) + " |")  # fmt: skip
+    return "\n".join(lines)
+
+
+def headroom_markdown(rows: list[dict]) -> str:
+    by = {(r["env"], r["scenario"], r["policy"]): r for r in rows}
+    envs = sorted({r["env"] for r in rows}, key=list(steamtemp_gym.ENV_IDS).index)
+    lines = ["| env | frozen, 100->50 % | PI 100->50 % | PI 50->100 % | PI+FF 100->50 % "
+             "| PI+FF 50->100 % | PI 2x gain 100->50 % |", "|---|---|---|---|---|---|---|"]
+    for env in envs:
+        def g(sc, pol):
+            r = by.get((env, sc, pol))
+            return r["max_abs_dev_K"] if r else np.nan
+        pi = [g(sc, "cascade_pi") for sc in RAMPS]
+        ff = [g(sc, "cascade_pi_ff") for sc in RAMPS]
+        cut = [f"{b:.1f} K ({100 * (1 - b / a):+.0f} %)".replace("+-", "-") for a, b in
+               zip(pi, ff, strict=True)]  # fmt: skip
+        lines.append(f"| {env.split('/')[1].removesuffix('-v0')} | "
+                     f"{g(RAMPS[0], 'frozen'):.1f} K | {pi[0]:.1f} K | {pi[1]:.1f} K | "
+                     f"{cut[0]} | {cut[1]} | {g(RAMPS[0], 'cascade_pi_2x'):.1f} K |")  # fmt: skip
+    return "\n".join(lines)
+
+
+def step_markdown(env_ids: list[str]) -> str:
+    lines = ["| env | load | gain, K per unit valve | Tg true s | Tu/Tg true "
+             "| Tu/Tg measured |", "|---|---|---|---|---|---|"]
+    import gymnasium as gym
+
+    for env_id in env_ids:
+        plant = gym.make(env_id).unwrapped.plant
+        for load in (1.0, 0.5):
+            m = step_test(env_id, 0, [plant.outlet_measured], load=load)[plant.outlet_measured]
+            t = _true_step(env_id, load)
+            lines.append(f"| {env_id.split('/')[1].removesuffix('-v0')} | {load:.0%} | "
+                         f"{t.K:.1f} | {t.tau_s:.0f} | {t.theta_s / t.tau_s:.2f} | "
+                         f"{m.theta_s / m.tau_s:.2f} |")  # fmt: skip
+    return "\n".join(lines)
+
+
+def _true_step(env_id: str, load: float):
+    """FOPDT of the true outlet for a +5 % step of the first valve (info, not observation)."""
+    import gymnasium as gym
+
+    from baselines.identification import FOPDT
+    from steamtemp_gym.metrics import step_response_metrics
+    from steamtemp_gym.scenarios import Scenario
+
+    sc = Scenario(name="step_test", duration_s=2400.0, load=((0.0, load),))
+    env = gym.make(env_id, scenario=sc)
+    ys = []
+    for dv in (0.0, 0.05):
+        _, info = env.reset(seed=0)
+        a = 2.0 * np.atleast_1d(info["spray_valve"]).astype(float) - 1.0
+        a[0] += 2.0 * dv
+        t, y = [0.0], [info["outlet_temp_C"]]
+        while True:
+            _, _, term, trunc, info = env.step(a.astype(np.float32))
+            t.append(info["time_s"])
+            y.append(info["outlet_temp_C"])
+            if term or trunc:
+                break
+        ys.append(np.array(y))
+    m = step_response_metrics(np.array(t), ys[1] - ys[0])
+    return FOPDT(K=m["gain"] / 0.05, tau_s=m["Tg_s"], theta_s=m["Tu_s"])
+
+
+def main(argv: list[str] | None = None) -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--envs", default=",".join(steamtemp_gym.ENV_IDS))
+    ap.add_argument("--seeds", type=int, default=3)
+    ap.add_argument("--policies", default=",".join(REFERENCE_POLICIES))
+    ap.add_argument("--update-readme", action="store_true")
+    args = ap.parse_args(argv)
+    envs = [e if "/" in e else f"steamtemp/{e}-v0" for e in args.envs.split(",")]
+    unknown = [e for e in envs if e not in steamtemp_gym.ENV_IDS]
+    if unknown:
+        raise SystemExit(f"unknown env ids {unknown}; valid: {list(steamtemp_gym.ENV_IDS)}")
+    if args.seeds < 1:
+        raise SystemExit("--seeds must be >= 1")
+    t0 = time.perf_counter()
+    rows = difficulty_table(envs, tuple(args.policies.split(",")), args.seeds)
+    diff, head, steps = difficulty_markdown(rows), headroom_markdown(rows), step_markdown(envs)
+    print(diff, "\n\nHeadroom (peak |e|, means over seeds):\n", head, "\n\nSpray steps:\n", steps)
+    print(f"\n({time.perf_counter() - t0:.0f} s)")
+    if args.update_readme:
+        text = README.read_text()
+        block = (f"<!-- difficulty:start (generated by benchmarks/difficulty.py) -->\n"
+                 f"Spray step responses (first valve, +5 %; Tu/Tg of the true outlet and of "
+                 f"the thermocouple reading):\n\n{steps}\n\nHeadroom on the 5 %/min ramps "
+                 f"(peak \\|e\\|, means over {args.seeds} seeds):\n\n{head}\n\n"
+                 f"<details><summary>Every named scenario</summary>\n\n{diff}\n\n</details>\n"
+                 f"<!-- difficulty:end -->")  # fmt: skip
+        new, n = re.subn(r"<!-- difficulty:start.*?<!-- difficulty:end -->", block, text,
+                         flags=re.S)  # fmt: skip
+        if n != 1:
+            raise SystemExit("README.md has no difficulty:start/end markers")
+        README.write_text(new)
+        print("README.md updated")
+
+
+if __name__ == "__main__":
+    main()

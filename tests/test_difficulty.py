@@ -1,0 +1,53 @@
+"""The benchmark has headroom: difficulty targets over every id (agents/difficulty.py).
+
+Means over 3 seeds of the named scenarios (sensor noise and the coloured heat-absorption
+disturbance on). Targets from the issue tracker's "benchmark with headroom" and the
+field tolerances of REFERENCE_DATA.md (+-10 K once-through, +-8 K drum in load changes).
+"""
+
+from __future__ import annotations
+
+import pytest
+
+import steamtemp_gym
+from agents.difficulty import KIND, RAMPS, TARGETS, evaluate
+from steamtemp_gym import scenarios
+
+IDS = steamtemp_gym.ENV_IDS
+
+
+@pytest.mark.parametrize("env_id", IDS)
+def test_frozen_valve_drifts_far_on_the_load_ramp(env_id):
+    m = evaluate(env_id, "frozen", "load_ramp_100_50")
+    assert m["max_abs_dev_K"] >= TARGETS["frozen_ramp_peak_min_K"]
+
+
+@pytest.mark.parametrize("env_id", [i for i in IDS if i in KIND])
+def test_cascade_pi_peak_on_the_ramps_is_in_the_field_band(env_id):
+    lo, hi = TARGETS["pi_ramp_peak_K"][KIND[env_id]]
+    for sc in RAMPS:
+        m = evaluate(env_id, "cascade_pi", sc)
+        assert lo <= m["max_abs_dev_K"] <= hi, (sc, m["max_abs_dev_K"])
+
+
+@pytest.mark.parametrize("env_id", [i for i in IDS if i in KIND])
+def test_load_feedforward_shows_headroom_over_cascade_pi(env_id):
+    """A better-informed controller (the load demand is observed) beats plain PI clearly."""
+    for sc in RAMPS:
+        pi = evaluate(env_id, "cascade_pi", sc)["max_abs_dev_K"]
+        ff = evaluate(env_id, "cascade_pi_ff", sc)["max_abs_dev_K"]
+        assert ff <= (1.0 - TARGETS["ff_peak_reduction_min"]) * pi, (sc, pi, ff)
+
+
+@pytest.mark.parametrize("env_id", IDS)
+def test_cascade_pi_never_trips_on_a_named_scenario(env_id):
+    for sc in scenarios.names(env_id):
+        if sc != scenarios.RANDOM:
+            assert evaluate(env_id, "cascade_pi", sc)["tripped"] == 0.0, sc
+
+
+def test_cascade300_pi_error_std_is_of_the_papers_order():
+    """004 Section 5 reports a tracking-error std of 1.7 K for its improved controller."""
+    m = evaluate("steamtemp/Cascade300MW-v0", "cascade_pi", "setpoint_step_535_545")
+    lo, hi = TARGETS["cascade300_pi_std_K"]
+    assert lo <= m["late_error_std_K"] <= hi
