@@ -283,3 +283,24 @@ def test_long_random_run_stays_physical(env_id):
             (np.asarray(info["spray_valve"]) >= 0) & (np.asarray(info["spray_valve"]) <= 1)
         )
         assert np.all(info["spray_flow_kg_s"] >= 0.0)
+
+
+@pytest.mark.parametrize("env_id", IDS)
+def test_holding_the_setpoint_with_design_spray_scores_about_zero(env_id):
+    """The reward's spray term charges only spray above the plant's design spray."""
+    env = gym.make(env_id, scenario=Scenario(name="rated", duration_s=200.0, load=1.0),
+                   params={"omega_halfwidth_K": 0.0, "omega2_scale_kg_s": 0.0}
+                   if "Cascade" in env_id else {})  # fmt: skip
+    plant = env.unwrapped.plant
+    assert plant.design_spray in plant.index, "every plant declares its design spray output"
+    _, info = env.reset(seed=0)
+    hold = (2.0 * np.atleast_1d(info["spray_valve"]) - 1.0).astype(np.float32)
+    rewards = [env.step(hold)[1] for _ in range(20)]
+    assert -0.05 < np.mean(rewards) <= 0.0
+    more = np.clip(hold + 0.4, -1, 1)
+    *_, info = env.step(more)
+    r_more = np.mean([env.step(more)[1] for _ in range(5)])
+    core = env.unwrapped.core
+    spray = info["spray_flow_kg_s"]
+    assert spray > core.Z[0, plant.index[plant.design_spray]]
+    assert r_more < np.mean(rewards)  # more spray than designed costs

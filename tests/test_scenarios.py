@@ -25,7 +25,8 @@ def test_random_scenarios_respect_the_documented_distribution(seed):
     dt, dl = np.diff(pts[:, 0]), np.abs(np.diff(pts[:, 1]))
     rates = dl[dt > 0] / dt[dt > 0] * 60.0
     assert np.all(rates <= DIST["ramp_rate_per_min"][1] + 1e-12)
-    assert 0.0 <= s.noise_std_C <= DIST["noise_std_C"][1]
+    for name in ("noise_std_C", "heat_absorption_noise_std", "heat_absorption_noise_tau_s"):
+        assert DIST[name][0] <= getattr(s, name) <= DIST[name][1]
     assert DIST["fouling"][0] <= s.value("fouling", 0.0) <= DIST["fouling"][1]
 
 
@@ -46,14 +47,14 @@ def test_kernel_schedule_matches_python_interpolation():
     )
     bp_t, bp_v, bp_n = np.zeros((1, 5, 8)), np.zeros((1, 5, 8)), np.ones((1, 5), np.int64)
     scenarios.pack(s, bp_t[0], bp_v[0], bp_n[0])
-    D, sp = np.zeros((1, 5)), np.zeros(1)
+    D, sp, ou = np.zeros((1, 5)), np.zeros(1), np.zeros(1)
     for t in (0.0, 5.0, 20.0, 29.9, 30.0, 45.0, 50.0, 80.0, 200.0):
-        eval_schedules(0, t, bp_t, bp_v, bp_n, 500.0, D, sp)
+        eval_schedules(0, t, bp_t, bp_v, bp_n, 500.0, ou, D, sp)
         if t != 30.0:
             assert D[0, 0] == pytest.approx(s.value("load", t))
         assert D[0, 3] == pytest.approx(s.value("fouling", t))
         assert sp[0] == pytest.approx(500.0 + (5.0 if t >= 50 else 0.0))
-    eval_schedules(0, 20.0, bp_t, bp_v, bp_n, 500.0, D, sp)
+    eval_schedules(0, 20.0, bp_t, bp_v, bp_n, 500.0, ou, D, sp)
     assert D[0, 1] == pytest.approx(-0.4 / 20.0)  # load slope (1/s) for the plants' feed-forward
 
 
@@ -64,5 +65,48 @@ def test_invalid_scenarios_raise():
         Scenario(name="x", duration_s=10.0, fouling=((0, -1.0),))
     with pytest.raises(ValueError, match="noise"):
         Scenario(name="x", duration_s=10.0, noise_std_C=float("nan"))
+    with pytest.raises(ValueError, match="heat_absorption_noise_std"):
+        Scenario(name="x", duration_s=10.0, heat_absorption_noise_std=0.5)
+    with pytest.raises(ValueError, match="heat_absorption_noise_tau_s"):
+        Scenario(name="x", duration_s=10.0, heat_absorption_noise_tau_s=0.0)
+    with pytest.raises(ValueError, match="noise_std_C"):
+        Scenario.from_dict({"name": "x", "duration_s": 10, "load": 1.0, "noise_std_C": "a"})
     with pytest.raises(ValueError, match="reserved"):
         scenarios.register(Scenario(name="random", duration_s=10.0))
+
+
+def test_named_scenarios_carry_the_disturbances_of_real_operation():
+    for name in scenarios.names():
+        if name != scenarios.RANDOM:
+            s = scenarios.get(name)
+            for field, value in scenarios.NAMED_DISTURBANCES.items():
+                assert getattr(s, field) == value, (name, field)
+    s = Scenario(name="x", duration_s=10.0)  # left out: none of that disturbance
+    assert s.noise_std_C == 0.0 and s.heat_absorption_noise_std == 0.0
+    again = Scenario.from_dict({k: v for k, v in scenarios.get("load_cycle").to_dict().items()})
+    assert again == scenarios.get("load_cycle")  # the YAML form keeps the new fields
+
+
+def test_coloured_heat_absorption_is_an_ornstein_uhlenbeck_process():
+    """Stationary std and autocorrelation exp(-lag dt / tau) of what the plant receives."""
+    import gymnasium as gym
+
+    std, tau = 0.03, 60.0
+    sc = Scenario(name="ou", duration_s=4000.0, load=1.0, heat_absorption_bias=0.01,
+                  heat_absorption_noise_std=std, heat_absorption_noise_tau_s=tau)  # fmt: skip
+    venv = gym.make_vec("steamtemp/Cascade300MW-v0", num_envs=64,
+                        vectorization_mode="vector_entry_point", scenario=sc)  # fmt: skip
+    venv.reset(seed=0)
+    core = venv.unwrapped.core
+    a = np.zeros((64, 1), np.float32)
+    x = [core.D[:, 2].copy()]
+    for _ in range(3000):
+        venv.step(a)
+        x.append(core.D[:, 2].copy())
+    x = np.array(x) - 0.01  # the scheduled bias plus the coloured part
+    assert np.mean(x) == pytest.approx(0.0, abs=0.004)
+    assert np.std(x) == pytest.approx(std, rel=0.05)  # stationary from the reset on
+    assert np.std(x[0]) == pytest.approx(std, rel=0.3)
+    for lag in (1, 60, 120):
+        acf = np.mean(x[:-lag] * x[lag:]) / std**2
+        assert acf == pytest.approx(np.exp(-lag / tau), abs=0.06)
