@@ -124,7 +124,9 @@ def evaluate(env_id: str, policy: str, scenario: str, seeds: int = 3) -> dict[st
 
 
 def difficulty_table(
-    env_ids: list[str], policies: tuple[str, ...] = REFERENCE_POLICIES, seeds: int = 3,
+    env_ids: list[str],
+    policies: tuple[str, ...] = REFERENCE_POLICIES,
+    seeds: int = 3,
     scenario_names: list[str] | None = None,
 ) -> list[dict[str, Any]]:
     """One row per (env, scenario, policy) with the means of :func:`evaluate`."""

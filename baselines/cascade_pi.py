@@ -33,12 +33,15 @@ sensor noise does not chatter the valves.
 
 Optional load feed-forward (``load_feedforward=True``, used by
 benchmarks/difficulty.py to show the benchmark's headroom; not the plain baseline):
-each MAIN cascade adds r_ff = a (L - L_0) + b dL_f/dt to its inner (attemperator-
-outlet) setpoint, with L the load demand (observed), L_f its first-order filter
-(time constant: the outer loops' integral time). a and b are identified by least
+each MAIN cascade adds r_ff = a (L - L_0) + b dL_f/dt + c (F - L) to its inner
+(attemperator-outlet) setpoint, with L the load demand (observed), L_f its first-order
+filter (time constant: the outer loops' integral time) and, where the plant measures
+it, F the firing rate (the boiler-input feed-forward of drum units, whose pressure
+loop makes firing overshoot the demand after a ramp). a, b and c are identified by least
 squares from the inner-setpoint trend of the plain cascade during a commissioning
 ramp (100 -> 60 -> 100 % at 3 %/min, no noise; not an evaluation scenario), the way
-a feed-forward is set from a ramp test in auto.
+a feed-forward is set from a ramp test in auto; the firing term is kept only if the
+cascade with it has the smaller peak deviation on that ramp (c = 0 otherwise).
 
 Discrete PI in position form at the plant's control interval, bumpless start
 (integrators initialized from the measured actuator positions and
@@ -121,29 +124,42 @@ FF_RAMP = Scenario(
 )
 
 
-@functools.lru_cache(maxsize=16)
-def _feedforward(env_id: str, params_json: str) -> tuple[np.ndarray, float]:
-    """((a, b) per action, zeros for non-MAIN loops; tau_f): r_ff = a (L - L0) + b dL_f/dt."""
-    env = _env(env_id, params_json, FF_RAMP)
-    pol = CascadePI(env)
-    plant = env.unwrapped.plant
+def _ramp_run(env: Any, pol: CascadePI) -> tuple[np.ndarray, ...]:
+    """Load, inner setpoints, firing minus load and |e| of one commissioning-ramp episode."""
     obs, info = env.reset(seed=0)
-    main = [j for j, (_, o) in enumerate(plant.control_loops) if o == MAIN]
-    tau_f = max([pol.gains[j][1] for j in main if np.isfinite(pol.gains[j][1])] + [plant.dt_s])
-    L, V = [], []
+    L, V, F, E = [], [], [], []
     while True:
         a, _ = pol.predict(obs)
         obs, _, term, trunc, info = env.step(a)
         L.append(info["load"])
         V.append(pol.inner_setpoint[0].copy())
+        F.append(pol.firing(obs)[0] - info["load"] if pol.i_fire is not None else 0.0)
+        E.append(abs(info["outlet_temp_C"] - info["setpoint_C"]))
         if term or trunc:
-            break
-    L, V = np.array(L), np.array(V)
-    out = np.zeros((len(plant.control_loops), 2))
-    A = np.column_stack([L - L[0], _filtered_rate(L, plant.dt_s, tau_f)])
-    for j in main:
-        out[j], *_ = np.linalg.lstsq(A, V[:, j] - V[0, j], rcond=None)
-    return out, tau_f
+            return np.array(L), np.array(V), np.array(F), np.array(E)
+
+
+@functools.lru_cache(maxsize=16)
+def _feedforward(env_id: str, params_json: str) -> tuple[np.ndarray, float]:
+    """((a, b, c) per action, zeros for non-MAIN loops; tau_f):
+    r_ff = a (L - L0) + b dL_f/dt + c (F - L)."""
+    env = _env(env_id, params_json, FF_RAMP)
+    pol = CascadePI(env)
+    plant = env.unwrapped.plant
+    main = [j for j, (_, o) in enumerate(plant.control_loops) if o == MAIN]
+    tau_f = max([pol.gains[j][1] for j in main if np.isfinite(pol.gains[j][1])] + [plant.dt_s])
+    L, V, F, _ = _ramp_run(env, pol)
+    best, best_peak = None, np.inf
+    for cols in ((0, 1), (0, 1, 2)) if pol.i_fire is not None else ((0, 1),):
+        A = np.column_stack([L - L[0], _filtered_rate(L, plant.dt_s, tau_f), F])[:, cols]
+        coef = np.zeros((len(plant.control_loops), 3))
+        for j in main:
+            coef[j, list(cols)], *_ = np.linalg.lstsq(A, V[:, j] - V[0, j], rcond=None)
+        trial = CascadePI(env, feedforward=(coef, tau_f))
+        peak = _ramp_run(env, trial)[3].max()
+        if peak < best_peak:
+            best, best_peak = coef, peak
+    return best, tau_f
 
 
 def _filtered_rate(L: np.ndarray, dt: float, tau: float) -> np.ndarray:
@@ -163,9 +179,13 @@ class CascadePI:
         env: The env (or vector env) the policy will act on; used for its signals and plant.
         tuning: Optional ((Kc_o, Ti_o, Kc_i, Ti_i), ...) per loop, overriding the step tests.
         load_feedforward: Add the identified load feed-forward to the MAIN loops.
+        feedforward: Explicit (coefficients (a, b, c) per loop, tau_f) instead of identified.
     """
 
-    def __init__(self, env: Any, tuning: Any = None, load_feedforward: bool = False) -> None:
+    def __init__(
+        self, env: Any, tuning: Any = None, load_feedforward: bool = False,
+        feedforward: tuple[np.ndarray, float] | None = None,
+    ) -> None:  # fmt: skip
         u = env.unwrapped
         plant = u.plant
         names = [s.name for s in u.signals.observation]
@@ -173,6 +193,7 @@ class CascadePI:
         self._center = np.array([s.center for s in u.signals.observation])
         self.i_err = names.index("error_K")
         self.i_load = names.index("load_demand")
+        self.i_fire = names.index("firing_rate") if "firing_rate" in names else None
         self.i_valve = [names.index(n) for n in plant.valves]
         params = json.dumps(getattr(u, "_params_overrides", {}) or {}, sort_keys=True)
         self.loops = []  # (inner idx | None, outer: MAIN | SCHEDULED | idx | None)
@@ -191,12 +212,19 @@ class CascadePI:
         self.gains = np.array(
             tuning if tuning is not None else _tuning(plant.id, params), dtype=float
         )
-        self.ff, self.ff_tau = _feedforward(plant.id, params) if load_feedforward else (None, 1.0)
+        if feedforward is None and load_feedforward:
+            feedforward = _feedforward(plant.id, params)
+        self.ff, self.ff_tau = feedforward if feedforward is not None else (None, 1.0)
         self._st: dict[str, np.ndarray] | None = None
         self.inner_setpoint = np.zeros((1, len(self.loops)))  # last r per row and loop
 
     def reset(self) -> None:
         self._st = None
+
+    def firing(self, observation: np.ndarray) -> np.ndarray:
+        """Measured firing rate (fraction of rated) of each row."""
+        obs = np.atleast_2d(observation)
+        return obs[:, self.i_fire] * self._scale[self.i_fire] + self._center[self.i_fire]
 
     def _restart(self, st: dict[str, np.ndarray], rows: np.ndarray, y: np.ndarray) -> None:
         st["y0"][rows], st["v0"][rows] = y[rows], y[rows][:, self.i_valve]
@@ -247,8 +275,10 @@ class CascadePI:
                 else:
                     r = st["y0"][:, inner] + kc_o * (e_o + st["io"][:, j])  # inner setpoint
                     if self.ff is not None and outer == MAIN:
-                        a, b = self.ff[j]
+                        a, b, c = self.ff[j]
                         r = r + a * (load - st["L0"]) + b * (load - st["Lf"]) / self.ff_tau
+                        if self.i_fire is not None:
+                            r = r + c * (y[:, self.i_fire] - load)
                 self.inner_setpoint[:, j] = r
                 e_i = r - yf[:, inner]
                 push, v[:, j] = kc_i * e_i, st["v0"][:, j] + kc_i * (e_i + st["ii"][:, j])

@@ -58,12 +58,17 @@ def difficulty_markdown(rows: list[dict]) -> str:
 def headroom_markdown(rows: list[dict]) -> str:
     by = {(r["env"], r["scenario"], r["policy"]): r for r in rows}
     envs = sorted({r["env"] for r in rows}, key=list(steamtemp_gym.ENV_IDS).index)
-    lines = ["| env | frozen, 100->50 % | PI 100->50 % | PI 50->100 % | PI+FF 100->50 % "
-             "| PI+FF 50->100 % | PI 2x gain 100->50 % |", "|---|---|---|---|---|---|---|"]
+    lines = [
+        "| env | frozen, 100->50 % | PI 100->50 % | PI 50->100 % | PI+FF 100->50 % "
+        "| PI+FF 50->100 % | PI 2x gain 100->50 % |",
+        "|---|---|---|---|---|---|---|",
+    ]
     for env in envs:
-        def g(sc, pol):
+
+        def g(sc, pol, env=env):
             r = by.get((env, sc, pol))
             return r["max_abs_dev_K"] if r else np.nan
+
         pi = [g(sc, "cascade_pi") for sc in RAMPS]
         ff = [g(sc, "cascade_pi_ff") for sc in RAMPS]
         cut = [f"{b:.1f} K ({100 * (1 - b / a):+.0f} %)".replace("+-", "-") for a, b in
@@ -75,8 +80,10 @@ def headroom_markdown(rows: list[dict]) -> str:
 
 
 def step_markdown(env_ids: list[str]) -> str:
-    lines = ["| env | load | gain, K per unit valve | Tg true s | Tu/Tg true "
-             "| Tu/Tg measured |", "|---|---|---|---|---|---|"]
+    lines = [
+        "| env | load | gain, K per unit valve | Tg true s | Tu/Tg true | Tu/Tg measured |",
+        "|---|---|---|---|---|---|",
+    ]
     import gymnasium as gym
 
     for env_id in env_ids:

@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 from gymnasium.utils.env_checker import check_env
 
+import baselines
 import steamtemp_gym
 from steamtemp_gym import scenarios
 from steamtemp_gym.scenarios import Scenario
@@ -27,15 +28,6 @@ def short_scenario(env_id: str, steps: int = 12) -> Scenario:
         heat_absorption_bias=((0.0, 0.0), (3 * dt, 0.03)),
         noise_std_C=0.5,
     )
-
-
-def pi_action(obs: np.ndarray, env, integral: list[float]) -> np.ndarray:
-    """A crude PI on the error signal for every valve (test driver only, not a baseline)."""
-    names = [s.name for s in env.unwrapped.signals.observation]
-    e = obs[names.index("error_K")]
-    integral[0] = float(np.clip(integral[0] - 0.02 * e, -1.0, 1.0))
-    a = np.clip(integral[0] - 1.0 * e, -1.0, 1.0)
-    return np.full(env.action_space.shape, a, dtype=np.float32)
 
 
 @pytest.mark.parametrize("env_id", IDS)
@@ -146,10 +138,10 @@ def test_every_named_scenario_runs_to_its_end(env_id):
             continue
         env = gym.make(env_id, scenario=name)
         obs, info = env.reset(seed=0)
-        integral = [0.0]
+        policy = baselines.make("cascade_pi", env)
         steps = 0
         while True:
-            obs, r, term, trunc, info = env.step(pi_action(obs, env, integral))
+            obs, r, term, trunc, info = env.step(policy.predict(obs)[0])
             steps += 1
             assert np.all(np.isfinite(obs)) and np.isfinite(r)
             assert not term, f"{name}: tripped at t = {info['time_s']} s"

@@ -247,14 +247,26 @@ class Core:
             self.bp_n[:] = old[2]
         sc.pack(scenario, self.bp_t[b], self.bp_v[b], self.bp_n[b])
         self.scenario[b] = scenario
-        self.ep[b] = (0.0, scenario.duration_s, scenario.noise_std_C,
-                      scenario.heat_absorption_noise_std, scenario.heat_absorption_noise_tau_s)
+        self.ep[b] = (
+            0.0,
+            scenario.duration_s,
+            scenario.noise_std_C,
+            scenario.heat_absorption_noise_std,
+            scenario.heat_absorption_noise_tau_s,
+        )
         self.ou[b] = scenario.heat_absorption_noise_std * gauss(np.uint64(key), 0, OU_CHANNEL)
         self.key[b] = np.uint64(key)
         self.counter[b] = 0
         self.out[b] = 0.0
         eval_schedules(
-            b, 0.0, self.bp_t, self.bp_v, self.bp_n, self.plant.setpoint_C, self.ou, self.D,
+            b,
+            0.0,
+            self.bp_t,
+            self.bp_v,
+            self.bp_n,
+            self.plant.setpoint_C,
+            self.ou,
+            self.D,
             self.sp,
         )
         self.plant.seed_rows(self.X[b : b + 1], self.key[b : b + 1])
@@ -276,8 +288,9 @@ class Core:
             raise ValueError(f"action contains NaN or infinite values: {A.tolist()!r}")
         self.plant.step(self.X, self.U, self.D, self.Z)
         advance(
-            self.Z, self.U, self.U_prev, self.bp_t, self.bp_v, self.bp_n, self.ep, self.ou, self.key,
-            self.counter, self.ints, self.cfg, self.obs_cs, self.D, self.sp, self.obs, self.out,
+            self.Z, self.U, self.U_prev, self.bp_t, self.bp_v, self.bp_n, self.ep, self.ou,
+            self.key, self.counter, self.ints, self.cfg, self.obs_cs, self.D, self.sp, self.obs,
+            self.out,
         )  # fmt: skip
 
     def info_row(self, b: int) -> dict[str, float | np.ndarray]:

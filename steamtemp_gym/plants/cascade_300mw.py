@@ -156,9 +156,9 @@ from numba import njit
 from scipy.linalg import expm
 
 from steamtemp_gym import scenarios as sc
-from steamtemp_gym.scenarios.library import register as register_named
 from steamtemp_gym.plants.base import MAIN, Plant, Signal, validate_params
 from steamtemp_gym.rng import gauss, splitmix64, uniform
+from steamtemp_gym.scenarios.library import register as register_named
 from steamtemp_gym.steam import cp_pT, h_pT
 
 K0 = 273.15
@@ -508,8 +508,14 @@ class Cascade300MW(Plant):
             observed=False,
             description="heat-absorption input q at the inertia section (hidden)",
         ),
-        Signal("design_spray_kg_s", "kg/s", 4.0, 4.0, observed=False,
-               description="spray holding 535 C undisturbed at this load"),
+        Signal(
+            "design_spray_kg_s",
+            "kg/s",
+            4.0,
+            4.0,
+            observed=False,
+            description="spray holding 535 C undisturbed at this load",
+        ),
     )
     setpoint_C = 535.0
     control_loops = (("intermediate_temp_C", MAIN),)
