@@ -1,6 +1,7 @@
 """The ROS2 integrator at the control interval against a fine Radau solution of the same rhs.
 
-Issue 2: over the 100 -> 50 % ramp (000_*.txt's test), max outlet temperature error <= 0.05 K.
+Issue 2: over the 100 -> 50 % ramp (000_*.txt's test), max outlet temperature error <= 0.05 K,
+both at the FSH outlet and at the turbine inlet after the main-steam line (issue 6).
 The inputs are the same zero-order-hold sequences for both: disturbances from the scenario at
 the start of each interval, a valve command that moves every interval.
 """
@@ -35,7 +36,9 @@ def radau_reference(plant, x0, commands, D_of_k):
         assert sol.success
         x_ref = sol.y[:, -1]
         p = fsh._pressure(P, x_ref[fsh.S_LW])
-        out.append(T_ph(p, x_ref[fsh.S_CHAIN + 2 * n - 1]) - 273.15)
+        # (FSH outlet, turbine inlet after the main-steam line) in C
+        out.append((T_ph(p, x_ref[fsh.S_CHAIN + 2 * n - 1]) - 273.15,
+                    x_ref[fsh.s_line(n) + int(P[fsh.I_NL]) - 1] - 273.15))  # fmt: skip
     return np.array(out)
 
 
@@ -44,7 +47,7 @@ def run_kernel(plant, X, commands, D_of_k):
     out = []
     for k, cmd in enumerate(commands):
         plant.step(X, np.array([[cmd]]), D_of_k(k)[None, :], Z)
-        out.append(Z[0, fsh.Z_TOUT])
+        out.append((Z[0, fsh.Z_TFSH], Z[0, fsh.Z_TOUT]))
     return np.array(out)
 
 
@@ -58,7 +61,7 @@ def test_ros2_matches_radau_over_the_load_ramp():
 
     def D_of_k(k):
         D, sp = np.zeros((1, 5)), np.zeros(1)
-        eval_schedules(0, t0 + k * dt, bp_t, bp_v, bp_n, 593.0, D, sp)
+        eval_schedules(0, t0 + k * dt, bp_t, bp_v, bp_n, 593.0, np.zeros(1), D, sp)
         return D[0]
 
     X = np.zeros((1, plant.n_x))
@@ -68,9 +71,12 @@ def test_ros2_matches_radau_over_the_load_ramp():
     commands = v0 + 0.04 * np.sin(2 * np.pi * (t0 + dt * np.arange(steps)) / 300.0)
     ref = radau_reference(plant, X[0], commands, D_of_k)
     got = run_kernel(plant, X, commands, D_of_k)
-    err = np.max(np.abs(got - ref))
-    assert err <= 0.05, f"max outlet error {err:.4f} K"
-    print(f"ROS2 dt={dt} s, {plant.n_sub} substeps: max outlet error {err * 1e3:.2f} mK")
+    err_fsh, err = np.max(np.abs(got - ref), axis=0)
+    assert err <= 0.05 and err_fsh <= 0.05, f"max outlet error {err:.4f} K (FSH {err_fsh:.4f} K)"
+    print(
+        f"ROS2 dt={dt} s, {plant.n_sub} substeps: max outlet error {err * 1e3:.2f} mK "
+        f"(FSH outlet {err_fsh * 1e3:.2f} mK)"
+    )
 
 
 def test_random_valve_steps_are_integrated_accurately():
@@ -84,9 +90,9 @@ def test_random_valve_steps_are_integrated_accurately():
     commands = np.clip(X[0, fsh.S_V] + rng.uniform(-0.3, 0.3, size=150), 0.0, 1.0)
     ref = radau_reference(plant, X[0], commands, lambda k: D)
     got = run_kernel(plant, X, commands, lambda k: D)
-    err = np.max(np.abs(got - ref))
-    assert err <= 0.1, f"max outlet error {err:.4f} K"
-    print(f"random valve steps: max outlet error {err * 1e3:.1f} mK")
+    err_fsh, err = np.max(np.abs(got - ref), axis=0)
+    assert err <= 0.1 and err_fsh <= 0.1, f"max outlet error {err:.4f} K (FSH {err_fsh:.4f} K)"
+    print(f"random valve steps: max outlet error {err * 1e3:.1f} mK (FSH {err_fsh * 1e3:.1f} mK)")
 
 
 def test_ros2_is_second_order_for_any_matrix():

@@ -16,9 +16,21 @@ Plant (states in SI; the env acts on the spray valve only):
   L_d W_nom through a first-order lag tau_steam (valve and load loop); drum pressure
   is held by the boiler (below), so the valve never needs to compensate pressure.
 - drum pressure PI on firing (boiler master): firing demand
-  u_f = L_d + K_p (p_sp - p)/p_sp + I_p, dI_p/dt = K_p/T_i (p_sp - p)/p_sp; the
-  firing rate L_f follows u_f through the mill/furnace lag tau_firing; heat to the
-  risers Q = L_f Q_nom (Q_nom: Astrom-Bell's rated 85 MW).
+  u_f = L_d + T_bir dL_d/dt + K_p (p_sp - p)/p_sp + I_p, dI_p/dt = K_p/T_i (p_sp - p)/p_sp
+  (load feed-forward with a boiler-input-rate lead; the feed-forward L_d is not the
+  steady firing need Q(L)/Q_nom, which is larger per unit at low load: the imperfect
+  static feed-forward of real units, removed by the integrator). Coal firing: u_f
+  reaches the burners through the coal mill (grinding and pulverized-coal inventory,
+  lag tau_mill) and heat through the furnace (lag tau_firing), two lags in series,
+  dL_m/dt = (u_f - L_m)/tau_mill, dL_f/dt = (L_m - L_f)/tau_firing (fuel systems of
+  pulverized-coal units: dead time of tens of seconds and time constants of minutes,
+  IEEE Working Group on Prime Mover and Energy Supply Models, "Dynamic models for
+  fossil fueled steam units in power system studies", IEEE Trans. Power Systems 6(2),
+  753-761, 1991; G. Zhou, J. Si, C.W. Taft, "Modeling and simulation of C-E deep bowl
+  pulverizer", IEEE Trans. Energy Conversion 15(3), 312-322, 2000). The BIR lead (45 s)
+  compensates part of the 120 s of lags: during ramps the firing lags the steam flow,
+  the main driver of the steam-temperature excursion. Heat to the risers
+  Q = L_f Q_nom (Q_nom: Astrom-Bell's rated 85 MW).
 - three-element level control: feedwater demand q_s + K_l (0 - l) + I_l,
   dI_l/dt = -K_l/T_l l, feedwater flow lags the demand by tau_fw (pump and valve).
 - drum (drum.py) fed with q_s = W - w_sp (spray water bypasses the drum) and
@@ -29,13 +41,27 @@ Plant (states in SI; the env acts on the spray valve only):
 - spray attemperator (attemperator.py): feedwater taken at drum-feed temperature
   (242 C at rated load, Astrom-Bell) plus the scenario's spray-water offset, linear
   valve w_sp = v C_v sqrt(rho dp_spray) across a constant pump-head margin dp_spray;
-  mass and energy mixing.
+  mass and energy mixing. Built-in interlock (attemperator.protected_spray_out): the
+  spray is capped so that the attemperator outlet stays >= Tsat(p_1) + 12 K (no water
+  reaches the final SH; plants keep 10-15 K), whatever the valve; at 50 % load the
+  fully open valve would pass ~18 % of the steam flow, the cap holds it to ~Tsat + 12 K.
+  The heat-absorption bias (D[2]) multiplies both SH gas sides, so it reaches the
+  primary SH outlet (upstream of the spray) as well as the final SH.
 - final SH: N segments at main-steam flow W, gas side as the primary's at a hotter
   gas temperature (platen / pendant section). Steam pressures along the SH:
   p_1 = p - 0.4 dp_SH (W/W_nom)^2 (primary), p_2 = p - dp_SH (W/W_nom)^2 (main steam).
+- outlet header and main-steam line to the turbine: n_line = 3 lags in series,
+  dT_k/dt = (T_{k-1} - T_k)/tau_k, tau_k = (tau_line/n_line)(W_nom/W)^0.8, tau_line
+  24 s at rated flow (header and pipe metal storage behind the steam-side conductance;
+  plausible default, unverified, set so that the true outlet's Tu/Tg for a spray step
+  is ~0.3 as in field step tests, REFERENCE_DATA.md). outlet_temp_C is the turbine-
+  inlet temperature after it; the final SH's own outlet is sh2_outlet_temp_C.
+- design spray (output design_spray_kg_s): the commissioning function generator,
+  linear between the undisturbed steady sprays at 40/60/80/100 % load (exact there,
+  within ~3 % between them; extrapolated linearly below 40 %).
 - actuator and sensors: spray valve lag, rate limit and saturation (valve.py);
-  thermocouples in thermowells on the main steam and attemperator outlet
-  (sensors.py).
+  thermocouples in thermowells on the main steam (turbine inlet) and attemperator
+  outlet (sensors.py).
 
 Parameters and their sources:
 
@@ -48,7 +74,7 @@ Parameters and their sources:
   range (usual for drum units; the thesis's operating points instead let pressure rise
   with load).
 - superheaters: plausible defaults, unverified, for a unit of this size. Rated main
-  steam 53.2 kg/s (191 t/h: 50 kg/s from the drum plus 6 % spray), 8.1 MPa / 505 C at
+  steam 52.6 kg/s (189 t/h: 50 kg/s from the drum plus 5 % spray), 8.1 MPa / 505 C at
   the SH outlet (the usual 500-510 C of ~9 MPa non-reheat units; 0.4 MPa drum-to-outlet
   pressure drop at rated flow). Heat to the steam at rated load: 85 MW in the risers
   plus 41 MW in the superheaters (~126 MW, a ~40-45 MWe non-reheat unit; the issue's
@@ -56,24 +82,28 @@ Parameters and their sources:
   designed to deliver 440 C; final SH 72 tubes 32/42 mm x 60 m; steel 7800 kg/m3,
   550 J/(kg K); steam-side coefficient 3500 W/(m2 K) at rated flow, exponent 0.8
   (REFERENCE_DATA.md); 5 segments each. The gas-side conductances UA_g1, UA_g2 are
-  calibrated so that the rated design holds: 440 C after the primary SH, 6 % spray
-  (valve 0.43 of its 14 % capacity, 1.5 MPa across it), 392 C after the attemperator,
-  505 C out. Gas temperatures 750 C / 1050 C at the two SH at rated firing, falling
-  200 / 300 K per unit of firing: the spray need falls with load (valve 0.43, 0.32,
-  0.22 at 100, 75, 50 %) and stays inside the valve range for fouling 0.85-1.15.
-- controls: tau_steam 10 s, tau_firing 60 s (mills and furnace), pressure PI K_p 3
-  (firing per relative pressure error), T_i 300 s; level PI 200 kg/s per m, T_i 200 s;
-  tau_fw 5 s; valve 2 s lag and 10 %/s rate; thermocouple lags 5 s and 20 s (as the FSH
-  plant). Plausible defaults, unverified, tuned on the linearized drum with its loops
-  (slowest closed-loop mode ~200 s, damping >= 0.5).
+  calibrated so that the rated design holds: 440 C after the primary SH, 5 % spray
+  (valve 0.50 of its 10 % capacity, 1.5 MPa across it; attemperator capacities of
+  8-10 % of rated steam flow are usual), 400 C after the attemperator, 505 C out. Gas
+  temperatures 750 C / 1050 C at the two SH at rated firing, falling 200 / 300 K per
+  unit of firing: the spray need falls with load (valve 0.50, 0.37, 0.26 at 100, 75,
+  50 %) and stays inside the valve range for fouling 0.85-1.15 (0.07-0.85).
+- controls: tau_steam 10 s, tau_mill 60 s, tau_firing 60 s, T_bir 45 s, pressure PI
+  K_p 1.5 (firing per relative pressure error), T_i 500 s (retuned for the two-lag
+  firing: with K_p 3, T_i 300 s the pressure loop's damping fell to 0.14); level PI
+  200 kg/s per m, T_i 200 s; tau_fw 5 s; valve 2 s lag and 10 %/s rate; thermocouple
+  lags 5 s and 20 s (as the FSH plant). Plausible defaults, unverified, tuned on the
+  linearized drum with its loops (slowest closed-loop mode ~400 s, damping >= 0.5).
 
 Integration: ROS2 (integrator.py), one step per 2 s control interval. The matrix A
 holds the stiff superheater couplings (chain_pattern, plus the firing column of every
 metal row), the feedwater lag on steam flow and level integrator, the drum rows on the
 states their inputs come from (exact sensitivities of the descriptor form by q_s, q_f,
 Q and h_f) and the thermowells on what they measure (they come last in the state
-vector so that these couplings are lower). Without the drum and firing columns the
-outlet error against Radau over the 100 -> 50 % ramp was 0.22 K; with them 0.03 K.
+vector so that these couplings are lower), the mill on the pressure loop, the line
+lags on the final SH's outlet. Without the drum and firing columns the outlet error
+against Radau over the 100 -> 50 % ramp was 0.22 K; with them 0.03 K (0.045 K with the
+mill and line).
 
 Validation (tests/test_drum_boiler.py): the rated steady state against Astrom-Bell's
 (p 8.5 MPa, q_s 50 kg/s, Q 85.2 vs ~86 MW, q_dc 1190 vs ~1195 kg/s, alpha_r 0.0507 vs
@@ -88,8 +118,11 @@ linear model follows the nonlinear drum (thesis Fig. 9). The open-loop drum with
 imposed has one slightly unstable pressure mode (+1e-4 to +2e-4 1/s: h_s falls with p
 at 8.5 MPa, so less energy leaves with the same steam mass as pressure rises) next to
 the zero of the mass balance; the pressure loop removes both. Spray step: more spray
-lowers the outlet (-16.5 K per kg/s, t63 108 s at 100 % load; -30.7 K per kg/s, t63
-180 s at 50 %). ROS2 against Radau as above; every state at rest in the steady states.
+lowers the outlet (-17.0 K per kg/s, t63 146 s at 100 % load; -32.4 K per kg/s, t63
+252 s at 50 %; Tu/Tg of the true outlet 0.27/0.29, thermocouple 0.36/0.37); the
+design spray inside the valve range at 35-100 % load and fouling 0.85-1.15; the
+protection holding the attemperator outlet at Tsat + 12 K with the valve fully open.
+ROS2 against Radau as above; every state at rest in the steady states.
 """
 
 from __future__ import annotations
@@ -102,12 +135,18 @@ import numpy as np
 from numba import njit
 
 from steamtemp_gym.plants import drum as dr
-from steamtemp_gym.plants.attemperator import mix, spray_flow
+from steamtemp_gym.plants.attemperator import mix, protected_spray_out, spray_flow
 from steamtemp_gym.plants.base import Plant, Signal, validate_params
 from steamtemp_gym.plants.integrator import pattern_arrays
 from steamtemp_gym.plants.sensors import thermowell_rhs
-from steamtemp_gym.plants.superheater import chain_pattern, chain_rhs, chain_steady, steam_side_kA
-from steamtemp_gym.steam import T_dTdh_ph, h_pT, rho_ph, sat_p
+from steamtemp_gym.plants.superheater import (
+    HTC_EXPONENT,
+    chain_pattern,
+    chain_rhs,
+    chain_steady,
+    steam_side_kA,
+)
+from steamtemp_gym.steam import T_dTdh_ph, Tsat_p, h_pT, rho_ph, sat_p
 
 K0 = 273.15
 
@@ -139,8 +178,9 @@ class DrumBoilerParams:
     p_fw_MPa: float = 9.5  # feedwater pressure for its properties
     T_out_C: float = 505.0  # main steam temperature setpoint
     T_primary_out_C: float = 440.0  # primary SH outlet at the rated design point
-    spray_design_fraction: float = 0.06  # spray / main-steam flow at the rated design
-    spray_max_fraction: float = 0.14  # spray / rated main-steam flow, valve fully open
+    spray_design_fraction: float = 0.05  # spray / main-steam flow at the rated design
+    spray_max_fraction: float = 0.10  # spray / rated main-steam flow, valve fully open
+    attemp_margin_K: float = 12.0  # protection: attemperator outlet >= Tsat(p_1) + margin
     dp_spray_MPa: float = 1.5  # pressure drop across the spray valve
     dp_sh_nom_MPa: float = 0.4  # drum to SH outlet at rated flow
     # superheaters
@@ -163,9 +203,13 @@ class DrumBoilerParams:
     gas_flow_exponent: float = 0.6
     # controls and actuators
     tau_steam_s: float = 10.0
-    tau_firing_s: float = 60.0
-    Kp_pressure: float = 3.0  # firing fraction per relative pressure error
-    Ti_pressure_s: float = 300.0
+    tau_mill_s: float = 60.0  # coal mill: grinding and pulverized-coal inventory lag
+    tau_firing_s: float = 60.0  # furnace heat release behind the mills
+    T_bir_s: float = 45.0  # boiler-input-rate feed-forward lead of the boiler master
+    n_line: int = 3  # lags in series of the outlet header and main-steam line
+    tau_line_s: float = 24.0  # their total time constant at rated flow (~ 1/flow^0.8)
+    Kp_pressure: float = 1.5  # firing fraction per relative pressure error
+    Ti_pressure_s: float = 500.0
     Kp_level_kg_s_m: float = 200.0
     Ti_level_s: float = 200.0
     tau_fw_s: float = 5.0
@@ -179,7 +223,9 @@ class DrumBoilerParams:
     def __post_init__(self) -> None:
         validate_params(
             self,
-            positive=tuple(n for n in self.__dataclass_fields__ if n not in ("dT_fw_dload_K",)),
+            positive=tuple(
+                n for n in self.__dataclass_fields__ if n not in ("dT_fw_dload_K", "T_bir_s")
+            ),
             bounds={
                 "n_segments": (1, 40),
                 "p_drum_MPa": (2.0, 16.0),
@@ -191,6 +237,12 @@ class DrumBoilerParams:
                 "spray_design_fraction": (0.005, 0.2),
                 "spray_max_fraction": (0.01, 0.3),
                 "gas_flow_exponent": (0.0, 1.0),
+                "attemp_margin_K": (1.0, 50.0),
+                "tau_mill_s": (1.0, 600.0),
+                "tau_firing_s": (1.0, 900.0),
+                "T_bir_s": (0.0, 600.0),
+                "n_line": (1, 8),
+                "tau_line_s": (1.0, 600.0),
             },
         )
         for i in (1, 2):
@@ -228,7 +280,10 @@ class DrumBoilerParams:
  I_KA2, I_V2, I_CM2, I_UAG2, I_TG2, I_DTG2, I_GEXP,
  I_TAUW, I_TAUF, I_KPP, I_TIP, I_KPL, I_TIL, I_TAUFW,
  I_TAUV, I_RATEV, I_TC1, I_TC2, I_QSN) = range(34)  # fmt: skip
-I_DRUM = 34  # drum parameter block (drum.drum_block)
+I_TAUM, I_TBIR, I_NL, I_TAUL, I_MARG = 34, 35, 36, 37, 38
+I_DSP = 39  # design-spray function generator: spray (kg/s) at DSP_LOADS
+DSP_LOADS = (0.4, 0.6, 0.8, 1.0)
+I_DRUM = I_DSP + len(DSP_LOADS)  # drum parameter block (drum.drum_block)
 I_FW = I_DRUM + dr.N_DRUM_P  # feedwater tables h(T), rho(T) at p_fw
 FW_T0_K, FW_DT_K, N_FW = 273.15 + 80.0, 1.0, 261  # 80 .. 340 C
 N_P = I_FW + 2 * N_FW
@@ -239,8 +294,9 @@ S_W, S_LF, S_IP, S_IL, S_QF, S_V = 0, 1, 2, 3, 4, 5
 S_DRUM = 6  # V_wt, p, alpha_r, V_sd
 S_P = S_DRUM + dr.PD
 S_CHAIN1 = 10  # primary SH (2n states), then the final SH (2n states)
-# thermowells after the chains (their inputs are then lower couplings): offsets from
-# sensors(n): main-steam thermocouple lags 1, 2, attemperator-outlet lags 1, 2
+# then the coal mill (1), the outlet header / main-steam line (n_line lags), and the
+# thermowells (their inputs are then lower couplings): offsets from
+# sensors(n, n_line): main-steam thermocouple lags 1, 2, attemperator-outlet lags 1, 2
 T_TC1, T_TC2, T_TA1, T_TA2 = 0, 1, 2, 3
 DRUM_INPUT_COLS = (S_W, S_LF, S_QF, S_V)  # states the drum's inputs q_s, q_f, Q depend on
 # Offsets in jl (order of pattern())
@@ -250,14 +306,26 @@ J_CHAIN1 = J_DRUM + 4 * len(DRUM_INPUT_COLS)
 
 
 @njit(cache=True)
-def sensors(n):
-    """Index of the first thermowell state for n segments per superheater."""
+def s_mill(n):
+    """State index of the coal-mill output (fraction of rated fuel) for n segments per SH."""
     return S_CHAIN1 + 4 * n
+
+
+@njit(cache=True)
+def s_line(n):
+    """State index of the first outlet-header / main-steam-line lag (K)."""
+    return S_CHAIN1 + 4 * n + 1
+
+
+@njit(cache=True)
+def sensors(n, nl):
+    """Index of the first thermowell state for n segments per SH and nl line lags."""
+    return S_CHAIN1 + 4 * n + 1 + nl
 
 
 # Output indices (order of DrumBoilerSH.outputs)
 (Z_TOUT, Z_TOUTM, Z_TATT, Z_TATTM, Z_TPRI, Z_W, Z_PD, Z_LEVEL, Z_QF, Z_LF, Z_V, Z_WSP,
- Z_PMS, Z_QS, Z_QSH, Z_QEV, Z_TMMAX, Z_AR, Z_QDC) = range(19)  # fmt: skip
+ Z_PMS, Z_QS, Z_QSH, Z_QEV, Z_TMMAX, Z_AR, Z_QDC, Z_DSP, Z_TSH2, Z_MILL) = range(22)  # fmt: skip
 
 
 @njit(cache=True)
@@ -288,13 +356,16 @@ def _boundary(x, d, P):
     h_sp, rho_sp, _ = _fw(P, T_fw + d[4])
     v = min(max(x[S_V], 0.0), 1.0)
     cap = spray_flow(1.0, P[I_CV], rho_sp, P[I_DPSP])
-    w_sp = min(v * cap, 0.5 * W)
-    dw_dv = cap if v * cap < 0.5 * W else 0.0
-    q_s = W - w_sp
     dpsh = P[I_DPSH] * lw * lw
     p = x[S_P]
     p1 = p - SHARE_1 * dpsh
     p2 = p - dpsh
+    # attemperator protection (built-in interlock): outlet >= Tsat(p_1) + margin
+    h_min = h_pT(p1, Tsat_p(p1) + P[I_MARG])
+    w_max = protected_spray_out(0.5 * W, W, x[S_CHAIN1 + 2 * int(P[I_N]) - 1], h_sp, h_min)
+    w_sp = min(v * cap, w_max)
+    dw_dv = cap if v * cap < w_max else 0.0
+    q_s = W - w_sp
     ddp = 2.0 * P[I_DPSH] * lw / Wn * dWok
     L_f = min(max(x[S_LF], 0.02), 1.3)
     mult = max(d[3] * (1.0 + d[2]), 0.0) * L_f ** P[I_GEXP]
@@ -303,10 +374,33 @@ def _boundary(x, d, P):
 
 
 @njit(cache=True)
+def _line_tau(P, W):
+    """Time constant (s) of each outlet-header / main-steam-line lag at steam flow W (kg/s).
+
+    tau_line/n_line at rated flow, growing as (W_nom/W)^0.8 (metal storage behind the
+    steam-side conductance of Dittus-Boelter, superheater.py), floored at 10 % flow.
+    """
+    r = max(W / P[I_WNOM], 0.1)
+    return P[I_TAUL] / P[I_NL] * r**-HTC_EXPONENT
+
+
+@njit(cache=True)
+def _design_spray(P, lw):
+    """Scheduled design spray (kg/s) at steam-flow fraction lw: the commissioning function
+    generator, linear between the undisturbed steady sprays at DSP_LOADS (extrapolated
+    linearly outside them, never below zero)."""
+    k = 0
+    while k < len(DSP_LOADS) - 2 and lw > DSP_LOADS[k + 1]:
+        k += 1
+    a = (lw - DSP_LOADS[k]) / (DSP_LOADS[k + 1] - DSP_LOADS[k])
+    return max((1.0 - a) * P[I_DSP + k] + a * P[I_DSP + k + 1], 0.0)
+
+
+@njit(cache=True)
 def _firing_demand(x, d, P):
     """Boiler-master firing demand (fraction) and the pressure error (relative)."""
     e = (P[I_PSP] - x[S_P]) / P[I_PSP]
-    return min(max(d[0] + P[I_KPP] * e + x[S_IP], 0.02), 1.3), e
+    return min(max(d[0] + P[I_TBIR] * d[1] + P[I_KPP] * e + x[S_IP], 0.02), 1.3), e
 
 
 @njit(cache=True)
@@ -346,23 +440,29 @@ def fired_pattern(off: int, n: int, inlet_cols: tuple[int, ...]) -> list[tuple[i
     return out
 
 
-def pattern(n: int) -> list[tuple[int, int]]:
+def pattern(n: int, nl: int) -> list[tuple[int, int]]:
     """Strictly-lower Jacobian pattern (row, col), sorted by row, in the order rhs fills jl.
 
     Feedwater on steam flow and the level integrator; the drum rows on the inputs' states
     (W, L_f, q_f, spray valve); the primary SH (inlet h_v(p): drum pressure) and the final
     SH (inlet from W, the valve and the primary outlet), each with the flow column W and
-    the firing column L_f on the metal rows; the thermowells on the temperatures they
-    measure (main-steam enthalpy; W, valve and primary outlet for the attemperator).
+    the firing column L_f on the metal rows; the mill on the boiler master's integrator
+    and the drum pressure; the line lags on the final SH's outlet enthalpy and on each
+    other; the thermowells on the temperatures they measure (the main-steam line's outlet;
+    W, valve and primary outlet for the attemperator).
     """
     c2 = S_CHAIN1 + 2 * n
-    st = S_CHAIN1 + 4 * n
+    sl = S_CHAIN1 + 4 * n + 1
+    st = sl + nl
     return (
         [(S_QF, S_W), (S_QF, S_IL)]
         + dr.input_pattern(S_DRUM, DRUM_INPUT_COLS)
         + fired_pattern(S_CHAIN1, n, (S_P,))
         + fired_pattern(c2, n, (S_W, S_V, c2 - 1))
-        + [(st, c2 + 2 * n - 1), (st + 1, st), (st + 2, S_W), (st + 2, S_V), (st + 2, c2 - 1)]
+        + [(sl - 1, S_IP), (sl - 1, S_P)]
+        + [(sl, c2 + 2 * n - 1)]
+        + [(sl + k, sl + k - 1) for k in range(1, nl)]
+        + [(st, st - 1), (st + 1, st), (st + 2, S_W), (st + 2, S_V), (st + 2, c2 - 1)]
         + [(st + 3, st + 2)]
     )
 
@@ -376,7 +476,9 @@ def rhs(x, u, d, P, f, jd, ju, jl, want_jac):
     # turbine load controller, boiler master, feedwater
     f[S_W] = (min(max(d[0], 0.0), 1.3) * P[I_WNOM] - x[S_W]) / P[I_TAUW]
     u_f, e_p = _firing_demand(x, d, P)
-    f[S_LF] = (u_f - x[S_LF]) / P[I_TAUF]
+    sm = s_mill(n)
+    f[sm] = (u_f - x[sm]) / P[I_TAUM]
+    f[S_LF] = (x[sm] - x[S_LF]) / P[I_TAUF]
     f[S_IP] = P[I_KPP] / P[I_TIP] * e_p
     dLf = 1.0 if 0.02 < x[S_LF] < 1.3 else 0.0
     Qn = P[I_QNOM]
@@ -416,13 +518,22 @@ def rhs(x, u, d, P, f, jd, ju, jl, want_jac):
         dh_att = f[0:3]
     UAg2 = P[I_UAG2] * mult
     Tg2 = P[I_TG2] - P[I_DTG2] * (1.0 - L_f)
-    T_out = _chain_fired(
+    T_sh2 = _chain_fired(
         x, c2, n, 3, h_att, dh_att, W, dWok, p2, dp2, steam_side_kA(P[I_KA2], W, P[I_WNOM]),
         UAg2, Tg2, gex * UAg2, P[I_DTG2] * dLf, P[I_CM2], P[I_V2], f, jd, ju, jl,
         J_CHAIN1 + 5 * n, want_jac,
     )  # fmt: skip
+    # outlet header and main-steam line: n_line lags in series (module docstring)
+    nl = int(P[I_NL])
+    sl = s_line(n)
+    tau = _line_tau(P, W)
+    T_prev = T_sh2
+    for k in range(nl):
+        f[sl + k] = (T_prev - x[sl + k]) / tau
+        T_prev = x[sl + k]
+    T_out = T_prev
     T_att, dT_att = T_dTdh_ph(p1, h_att)
-    st = sensors(n)
+    st = sensors(n, nl)
     tc1, tc2 = P[I_TC1], P[I_TC2]
     f[st], f[st + 1], j1, j2 = thermowell_rhs(T_out, x[st], x[st + 1], tc1, tc2)
     f[st + 2], f[st + 3], j3, j4 = thermowell_rhs(T_att, x[st + 2], x[st + 3], tc1, tc2)
@@ -434,9 +545,22 @@ def rhs(x, u, d, P, f, jd, ju, jl, want_jac):
         jd[S_QF] = -1.0 / P[I_TAUFW]
         jd[S_V] = jv
         jd[st], jd[st + 1], jd[st + 2], jd[st + 3] = j1, j2, j3, j4
-        # thermowells on the main-steam enthalpy and on the attemperator's inputs
+        jd[sm] = -1.0 / P[I_TAUM]
+        # the mill on the boiler master's pressure integrator and pressure
         j = J_CHAIN1 + 10 * n + 2
-        jl[j] = T_dTdh_ph(p2, x[c2 + 2 * n - 1])[1] / tc1
+        ok = 1.0 if 0.02 < u_f < 1.3 else 0.0
+        jl[j] = ok / P[I_TAUM]
+        jl[j + 1] = -ok * P[I_KPP] / P[I_PSP] / P[I_TAUM]
+        # line lags on the final SH's outlet enthalpy and on each other
+        j += 2
+        jl[j] = T_dTdh_ph(p2, x[c2 + 2 * n - 1])[1] / tau
+        for k in range(nl):
+            jd[sl + k] = -1.0 / tau
+            if k > 0:
+                jl[j + k] = 1.0 / tau
+        # thermowells on the main-steam line outlet and on the attemperator's inputs
+        j += nl
+        jl[j] = 1.0 / tc1
         jl[j + 1] = 1.0 / tc2
         for k in range(3):
             jl[j + 2 + k] = dT_att * dh_att[k] / tc1
@@ -454,7 +578,9 @@ def outputs(x, u, d, P, z):
     W, lw, dWok, q_s, w_sp, dw_dv, h_f, dhf, h_sp, p1, p2, dp1, dp2, L_f, mult = _boundary(x, d, P)
     h1 = x[c2 - 1]
     _, h_att = mix(q_s, h1, w_sp, h_sp)
-    T_out, _ = T_dTdh_ph(p2, x[c2 + 2 * n - 1])
+    nl = int(P[I_NL])
+    T_sh2, _ = T_dTdh_ph(p2, x[c2 + 2 * n - 1])
+    T_out = x[s_line(n) + nl - 1]
     T_att, _ = T_dTdh_ph(p1, h_att)
     T_pri, _ = T_dTdh_ph(p1, h1)
     UAg1 = P[I_UAG1] * mult
@@ -471,9 +597,9 @@ def outputs(x, u, d, P, z):
     Ts, rw, rs, hw, hs, dTs, drw, drs, dhw, dhs = sat_p(x[S_P])
     av, _, _ = dr.void_fraction(rw, rs, drw, drs, x[S_DRUM + dr.AR])
     z[Z_TOUT] = T_out - K0
-    z[Z_TOUTM] = x[sensors(n) + T_TC2] - K0
+    z[Z_TOUTM] = x[sensors(n, nl) + T_TC2] - K0
     z[Z_TATT] = T_att - K0
-    z[Z_TATTM] = x[sensors(n) + T_TA2] - K0
+    z[Z_TATTM] = x[sensors(n, nl) + T_TA2] - K0
     z[Z_TPRI] = T_pri - K0
     z[Z_W] = W
     z[Z_PD] = x[S_P] * 1e-6
@@ -489,6 +615,9 @@ def outputs(x, u, d, P, z):
     z[Z_TMMAX] = tm_max - K0
     z[Z_AR] = x[S_DRUM + dr.AR]
     z[Z_QDC] = dr.circulation(rw, rs, av, P, I_DRUM)
+    z[Z_DSP] = _design_spray(P, lw)
+    z[Z_TSH2] = T_sh2 - K0
+    z[Z_MILL] = x[s_mill(n)]
 
 
 @njit(cache=True)
@@ -498,6 +627,9 @@ def project(x, P):
     Wn = P[I_WNOM]
     x[S_W] = min(max(x[S_W], 0.0), 1.3 * Wn)
     x[S_LF] = min(max(x[S_LF], 0.02), 1.3)
+    x[s_mill(n)] = min(max(x[s_mill(n)], 0.02), 1.3)
+    for k in range(int(P[I_NL])):
+        x[s_line(n) + k] = min(max(x[s_line(n) + k], 400.0), 1300.0)
     x[S_IP] = min(max(x[S_IP], -0.6), 0.6)
     x[S_IL] = min(max(x[S_IL], -0.5 * Wn), 0.5 * Wn)
     x[S_QF] = min(max(x[S_QF], 0.0), 2.0 * Wn)
@@ -524,22 +656,34 @@ def _steady_at(x, v, d, P):
     n = int(P[I_N])
     c2 = S_CHAIN1 + 2 * n
     x[S_V] = v
-    W, lw, dWok, q_s, w_sp, dw_dv, h_f, dhf, h_sp, p1, p2, dp1, dp2, L_f, mult = _boundary(x, d, P)
-    Q, _ = dr.drum_steady(P[I_PSP], q_s, h_f, 0.0, P, I_DRUM, x, S_DRUM)
-    L_f = Q / P[I_QNOM]
-    x[S_LF] = L_f
-    x[S_QF] = q_s
-    x[S_IL] = 0.0
-    x[S_IP] = L_f - min(max(d[0], 0.0), 1.3)
-    W, lw, dWok, q_s, w_sp, dw_dv, h_f, dhf, h_sp, p1, p2, dp1, dp2, L_f, mult = _boundary(x, d, P)
-    h_s = sat_p(P[I_PSP])[4]
-    kA1 = steam_side_kA(P[I_KA1], q_s, P[I_QSN])[0]
-    Tg1 = P[I_TG1] - P[I_DTG1] * (1.0 - L_f)
-    h1 = chain_steady(x, S_CHAIN1, n, h_s, q_s, p1, kA1, P[I_UAG1] * mult, Tg1, 0.0)
-    _, h_att = mix(q_s, h1, w_sp, h_sp)
-    kA2 = steam_side_kA(P[I_KA2], W, P[I_WNOM])[0]
-    Tg2 = P[I_TG2] - P[I_DTG2] * (1.0 - L_f)
-    return chain_steady(x, c2, n, h_att, W, p2, kA2, P[I_UAG2] * mult, Tg2, 0.0)
+    w_prev = -1.0
+    h_out = 0.0
+    # fixed point on the spray: the protection cap depends on the primary SH outlet
+    for _ in range(30):
+        bd = _boundary(x, d, P)
+        q_s, h_f = bd[3], bd[6]
+        Q, _ = dr.drum_steady(P[I_PSP], q_s, h_f, 0.0, P, I_DRUM, x, S_DRUM)
+        L_f = Q / P[I_QNOM]
+        x[S_LF] = L_f
+        x[s_mill(n)] = L_f
+        x[S_QF] = q_s
+        x[S_IL] = 0.0
+        x[S_IP] = L_f - min(max(d[0], 0.0), 1.3) - P[I_TBIR] * d[1]
+        W, lw, dWok, q_s, w_sp, dw_dv, h_f, dhf, h_sp, p1, p2, dp1, dp2, L_f, mult = _boundary(
+            x, d, P
+        )
+        h_s = sat_p(P[I_PSP])[4]
+        kA1 = steam_side_kA(P[I_KA1], q_s, P[I_QSN])[0]
+        Tg1 = P[I_TG1] - P[I_DTG1] * (1.0 - L_f)
+        h1 = chain_steady(x, S_CHAIN1, n, h_s, q_s, p1, kA1, P[I_UAG1] * mult, Tg1, 0.0)
+        _, h_att = mix(q_s, h1, w_sp, h_sp)
+        kA2 = steam_side_kA(P[I_KA2], W, P[I_WNOM])[0]
+        Tg2 = P[I_TG2] - P[I_DTG2] * (1.0 - L_f)
+        h_out = chain_steady(x, c2, n, h_att, W, p2, kA2, P[I_UAG2] * mult, Tg2, 0.0)
+        if abs(w_sp - w_prev) < 1e-9:
+            break
+        w_prev = w_sp
+    return h_out
 
 
 @njit(cache=True)
@@ -573,7 +717,9 @@ def steady(D, sp_K, P, X):
         _, h_att = mix(q_s, x[S_CHAIN1 + 2 * int(P[I_N]) - 1], w_sp, h_sp)
         T_out, _ = T_dTdh_ph(p2, h_out)
         T_att, _ = T_dTdh_ph(p1, h_att)
-        st = sensors(int(P[I_N]))
+        st = sensors(int(P[I_N]), int(P[I_NL]))
+        for k in range(int(P[I_NL])):
+            x[s_line(int(P[I_N])) + k] = T_out
         x[st + T_TC1] = T_out
         x[st + T_TC2] = T_out
         x[st + T_TA1] = T_att
@@ -672,6 +818,11 @@ def _pack(params: DrumBoilerParams) -> tuple[np.ndarray, np.ndarray, np.ndarray,
     P[I_RATEV] = params.valve_rate_per_s
     P[I_TC1] = params.tau_tc1_s
     P[I_TC2] = params.tau_tc2_s
+    P[I_TAUM] = params.tau_mill_s
+    P[I_TBIR] = params.T_bir_s
+    P[I_NL] = params.n_line
+    P[I_TAUL] = params.tau_line_s
+    P[I_MARG] = params.attemp_margin_K
     P[I_DRUM : I_DRUM + dr.N_DRUM_P] = dr.drum_block(
         params.V_d_m3, params.V_r_m3, params.V_dc_m3, params.m_t_kg, params.m_r_kg,
         params.m_d_kg, params.C_p_J_kgK, params.A_d_m2, params.A_dc_m2, params.k_friction,
@@ -682,9 +833,16 @@ def _pack(params: DrumBoilerParams) -> tuple[np.ndarray, np.ndarray, np.ndarray,
         h = h_pT(p_fw, FW_T0_K + FW_DT_K * k)
         P[I_FW + k] = h
         P[I_FW + N_FW + k] = rho_ph(p_fw, h)
-    n_x = S_CHAIN1 + 4 * n + 4
+    n_x = S_CHAIN1 + 4 * n + 1 + params.n_line + 4
     _calibrate(params, P, n_x)
-    pat = pattern(n)
+    # design-spray function generator: the undisturbed steady sprays at DSP_LOADS
+    D = np.zeros((len(DSP_LOADS), 5))
+    D[:, 0], D[:, 3] = DSP_LOADS, 1.0
+    X = np.zeros((len(DSP_LOADS), n_x))
+    steady(D, np.full(len(DSP_LOADS), params.T_out_C + K0), P, X)
+    for k in range(len(DSP_LOADS)):
+        P[I_DSP + k] = _boundary(X[k], D[k], P)[4]
+    pat = pattern(n, params.n_line)
     jrow, jcol = pattern_arrays(pat)
     P.setflags(write=False)
     return P, jrow, jcol, n_x
@@ -722,7 +880,25 @@ class DrumBoilerSH(Plant):
         Signal("metal_temp_max_C", "C", 540.0, 40.0, observed=False),
         Signal("riser_exit_quality", "1", 0.05, 0.02, observed=False),
         Signal("downcomer_flow_kg_s", "kg/s", 1150.0, 100.0, observed=False),
+        Signal(
+            "design_spray_kg_s",
+            "kg/s",
+            2.0,
+            2.0,
+            observed=False,
+            description="scheduled design spray (function generator over load)",
+        ),
+        Signal(
+            "sh2_outlet_temp_C",
+            "C",
+            505.0,
+            20.0,
+            observed=False,
+            description="final SH outlet, ahead of the outlet header and main-steam line",
+        ),
+        Signal("mill_output", "1", 0.75, 0.3, observed=False, description="coal to burners"),
     )
+    design_spray = "design_spray_kg_s"
     setpoint_C = 505.0
     extra_info = (
         "attemp_out_temp_C", "heat_absorption_MW", "drum_pressure_MPa", "drum_level_m",

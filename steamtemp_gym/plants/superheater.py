@@ -164,3 +164,70 @@ def chain_steady(x, off, n, h0, W, p, kA, UAg, Tg, Qrad):
         x[off + 2 * i + 1] = h
         h_prev = h
     return h_prev
+
+
+# ------------------------------------------------------------------ unheated steam line
+# Outlet header and main-steam line between the last superheater and the turbine (added for
+# the transport delay of the main steam). Thick-walled pipe whose wall is taken in thermal
+# equilibrium with the steam (the high-NTU limit of the fluid/metal segment above: the
+# metal-to-steam conductance is much larger than W c_p per segment). Per segment k = 1..n:
+#
+#     (rho(p, h_k) V_k + C_m,k dT/dh(p, h_k)) dh_k/dt = W (h_{k-1} - h_k)
+#
+# a thermal front that travels at the speed W c_p / (c_m m'_m + rho A c_p) and disperses
+# over the n mixing cells (tanks in series). Heat loss to the surroundings is neglected.
+# A real line with a finite conductance passes part of a change sooner, so the metal mass
+# of a plant is an effective value (see the plants' docstrings).
+
+
+def pipe_pattern(off: int, n: int, inlet_cols: tuple[int, ...] = (),
+                 flow_col: int = -1) -> list[tuple[int, int]]:  # fmt: skip
+    """Strictly-lower Jacobian couplings of an n-cell pipe at ``off`` (one h state per cell)."""
+    pat = []
+    for i in range(n):
+        row = off + i
+        if i == 0:
+            pat += [(row, c) for c in inlet_cols]
+        if flow_col >= 0:
+            pat.append((row, flow_col))
+        if i > 0:
+            pat.append((row, row - 1))
+    return pat
+
+
+@njit(cache=True, error_model="numpy")
+def pipe_rhs(x, off, n, h0, dh0, W, dW, p, V, Cm, f, jd, jl, joff, want_jac, flow):
+    """Right-hand side of the n-cell pipe (see above); returns its outlet temperature (K).
+
+    Args: as chain_rhs; V steam volume (m3) and Cm metal heat capacity (J/K) per cell;
+    dW the derivative of W by the flow state (pattern column ``flow_col`` if ``flow``).
+    """
+    h_prev = h0
+    T = 0.0
+    for i in range(n):
+        h = x[off + i]
+        T, dTdh, rho, _ = T_rho_ph(p, h)
+        M = rho * V + Cm * dTdh
+        f[off + i] = W * (h_prev - h) / M
+        if want_jac:
+            if i == 0:
+                for dh in dh0:
+                    jl[joff] = W * dh / M
+                    joff += 1
+            if flow:
+                jl[joff] = dW * (h_prev - h) / M
+                joff += 1
+            if i > 0:
+                jl[joff] = W / M
+                joff += 1
+            jd[off + i] = -W / M
+        h_prev = h
+    return T
+
+
+@njit(cache=True, error_model="numpy")
+def pipe_steady(x, off, n, h0):
+    """Steady state of the pipe (no heat loss): every cell at the inlet enthalpy h0."""
+    for i in range(n):
+        x[off + i] = h0
+    return h0
