@@ -22,6 +22,7 @@ from steamtemp_gym.envs.core import eval_schedules
 from steamtemp_gym.metrics import step_response_metrics
 from steamtemp_gym.plants import boiler_turbine_mimo as bt
 
+NO_OU = np.zeros(2)  # no coloured heat-absorption disturbance in these tests
 PLANT = bt.BoilerTurbineMIMO()
 ENV_ID = "steamtemp/BoilerTurbineMIMO-v0"
 ACT = [bt.S_V1, bt.S_V2, bt.S_G]
@@ -45,8 +46,6 @@ def section_jacobian(x, u, d):
     P = PLANT.P
     o_pl = bt._offsets(P)[1]
     idx, eps = [o_pl, o_pl + 1], [1e-2, 10.0]  # K, J/kg
-    f = np.zeros(PLANT.n_x)
-    jd, ju, jl = np.zeros(PLANT.n_x), np.zeros(PLANT.n_x), np.zeros(len(PLANT.jrow))
     J = np.zeros((2, 2))
     for j, (i, e) in enumerate(zip(idx, eps, strict=True)):
         cols = []
@@ -159,7 +158,8 @@ def test_reheat_temperature_is_observed_and_reported():
     assert "reheat_temp_meas_C" in names and "reheat_temp_C" not in names
     assert info["reheat_temp_C"] == pytest.approx(566.0, abs=0.01)
     decoded = env.unwrapped.signals.decode(obs)
-    assert decoded["reheat_temp_meas_C"] == pytest.approx(566.0, abs=0.01)
+    # the named scenarios add thermocouple noise (0.25 K std): six sigma
+    assert decoded["reheat_temp_meas_C"] == pytest.approx(566.0, abs=1.5)
 
 
 def test_ros2_at_the_control_interval_matches_16_substeps():
@@ -170,13 +170,13 @@ def test_ros2_at_the_control_interval_matches_16_substeps():
     bp_n = np.ones((1, 5), np.int64)
     scenarios.pack(sc, bp_t[0], bp_v[0], bp_n[0])
     D, sp = np.zeros((2, 5)), np.zeros(2)
-    eval_schedules(0, 1000.0, bp_t, bp_v, bp_n, 538.0, D, sp)
+    eval_schedules(0, 1000.0, bp_t, bp_v, bp_n, 538.0, NO_OU, D, sp)
     D[1] = D[0]
     X, _, Z, U0 = steady([D[0, 0]] * 2)
     err = np.zeros(2)
     for k in range(int(1800.0 / PLANT.dt_s)):
         t = 1000.0 + k * PLANT.dt_s
-        eval_schedules(0, t, bp_t, bp_v, bp_n, 538.0, D, sp)
+        eval_schedules(0, t, bp_t, bp_v, bp_n, 538.0, NO_OU, D, sp)
         D[1] = D[0]
         U = U0 + 0.05 * np.sin(2 * np.pi * t / np.array([300.0, 420.0, 600.0]))
         PLANT.step(X[:1], U[:1], D[:1], Z[:1])
@@ -184,3 +184,73 @@ def test_ros2_at_the_control_interval_matches_16_substeps():
         err = np.maximum(err, np.abs(Z[0, [bt.Z_STE, bt.Z_RTE]] - Z[1, [bt.Z_STE, bt.Z_RTE]]))
     print(f"\nROS2 dt = {PLANT.dt_s} s vs 16 substeps: max STE {err[0]:.3f} K, RTE {err[1]:.3f} K")
     assert np.all(err < 0.1), err
+
+
+# ------------------------------------------------------------------ load-change physics
+@pytest.mark.parametrize("load", [1.0, 0.5])
+def test_main_steam_line_gives_field_dead_time(load):
+    """SP2 (last stage) step: Tu/Tg of the true turbine-inlet STE in the field range
+    0.2-0.4 (REFERENCE_DATA.md, ~0.3), the thermocouple a bit above (0.02 without the
+    header/main-steam line: the final SH alone responds almost as one lag)."""
+    X, D, Z, U = steady(load)
+    PLANT.step(X, U, D, Z)
+    U[0, 1] += 0.05
+    yt, ym = [Z[0, bt.Z_STE]], [Z[0, bt.Z_STEM]]
+    for _ in range(1500):
+        PLANT.step(X, U, D, Z)
+        yt.append(Z[0, bt.Z_STE])
+        ym.append(Z[0, bt.Z_STEM])
+    t = np.arange(1501) * PLANT.dt_s
+    true, meas = step_response_metrics(t, np.array(yt)), step_response_metrics(t, np.array(ym))
+    r_true, r_meas = true["Tu_s"] / true["Tg_s"], meas["Tu_s"] / meas["Tg_s"]
+    print(f"\n{load:.0%}: Tu/Tg true {r_true:.3f} (Tu {true['Tu_s']:.0f} s, Tg "
+          f"{true['Tg_s']:.0f} s), thermocouple {r_meas:.3f}")
+    assert 0.2 <= r_true <= 0.4
+    assert r_true < r_meas <= 0.55
+
+
+def test_heat_absorption_bias_reaches_the_evaporator_outlet():
+    """The bias shifts the evaporator outlet enthalpy by the uncorrected share of its
+    heat/flow ratio error: fwr_coupling * bias_upstream_share * bias * (h_up - h_fw)."""
+    q = PLANT.params
+    for load in (1.0, 0.5):
+        X0, *_ = steady(load)
+        X1, *_ = steady(load, bias=0.05)
+        rise = bt._tab(PLANT.P, bt.T_RISE, load)
+        expected = q.fwr_coupling * q.bias_upstream_share * 0.05 * rise
+        assert X1[0, bt.S_HUP] - X0[0, bt.S_HUP] == pytest.approx(expected, rel=1e-6)
+        assert expected > 10e3  # J/kg
+
+
+def test_mill_and_furnace_lags_delay_the_firing():
+    """Fuel-demand step through the mill and furnace lags (two lags in series): the heat
+    release reaches 63 % after about tau_mill + tau_firing, not at once."""
+    plant = bt.BoilerTurbineMIMO(fuel_bias_action=True)
+    X, D, Z, U = steady([0.9], plant=plant)
+    U[0, 3] += 0.125
+    q = plant.params
+    lf0, n = X[0, bt.S_LF], int(round((q.tau_mill_s + q.tau_firing_s) / plant.dt_s))
+    for _ in range(n):
+        plant.step(X, U, D, Z)
+    frac = (X[0, bt.S_LF] - lf0) / 0.025
+    # two lags in series at t = T1 + T2 (T1 = 100 s, T2 = 15 s): 0.60
+    t, a, b = q.tau_mill_s + q.tau_firing_s, q.tau_mill_s, q.tau_firing_s
+    expected = 1.0 - (a * np.exp(-t / a) - b * np.exp(-t / b)) / (a - b)
+    assert frac == pytest.approx(expected, abs=0.03)
+
+
+def test_design_spray_and_the_schedule_error():
+    """design_spray_kg_s is the steady spray of the undisturbed plant at rated load (where
+    the schedule error is zero); at half load the FWR schedule's commissioning error
+    (fwr_schedule_error_kJ_kg) moves the steady spray away from design."""
+    X, D, Z, U = steady([1.0, 0.5])
+    w = Z[:, bt.Z_W1] + Z[:, bt.Z_W2]
+    assert Z[0, bt.Z_WDES] == pytest.approx(w[0], rel=0.01)
+    q = PLANT.params
+    assert Z[0, bt.Z_WDES] == pytest.approx(
+        (q.sp1_design_fraction + q.sp2_design_fraction) * q.W_nom_kg_s, rel=1e-6)
+    print(f"\n50 %: design spray {Z[1, bt.Z_WDES]:.1f} kg/s, steady {w[1]:.1f} kg/s")
+    assert abs(w[1] - Z[1, bt.Z_WDES]) > 0.1 * Z[1, bt.Z_WDES]  # the documented mismatch
+    exact = bt.BoilerTurbineMIMO(fwr_schedule_error_kJ_kg=0.0)
+    X, D, Z, U = steady([0.5], plant=exact)
+    assert Z[0, bt.Z_W1] + Z[0, bt.Z_W2] == pytest.approx(Z[0, bt.Z_WDES], rel=0.02)
