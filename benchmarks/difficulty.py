@@ -71,7 +71,7 @@ def headroom_markdown(rows: list[dict]) -> str:
 
         pi = [g(sc, "cascade_pi") for sc in RAMPS]
         ff = [g(sc, "cascade_pi_ff") for sc in RAMPS]
-        cut = [f"{b:.1f} K ({100 * (1 - b / a):+.0f} %)".replace("+-", "-") for a, b in
+        cut = [f"{b:.1f} K ({100 * (b / a - 1):+.0f} %)" for a, b in
                zip(pi, ff, strict=True)]  # fmt: skip
         lines.append(f"| {env.split('/')[1].removesuffix('-v0')} | "
                      f"{g(RAMPS[0], 'frozen'):.1f} K | {pi[0]:.1f} K | {pi[1]:.1f} K | "
