@@ -37,7 +37,7 @@ N_CH = len(sc.CHANNELS)
 C_LOAD, C_SP, C_BIAS, C_FOUL, C_SPRAYT = 0, 1, 2, 3, 4
 MIN_BREAKPOINTS = 64
 #: per-row episode values in Core.ep
-E_TIME, E_DUR, E_NOISE, E_OU_STD, E_OU_TAU = 0, 1, 2, 3, 4
+E_TIME, E_DUR, E_NOISE, E_OU_A, E_OU_B = 0, 1, 2, 3, 4
 #: length of the header of Core.ints (before the index lists)
 N_HEAD = 7
 #: counter-based random channel of the coloured heat-absorption disturbance (observation
@@ -93,13 +93,10 @@ def observe(b, Z, obs_idx, obs_cs, i_meas, key, counter, noise, sp, D, obs):
         obs[b, n + j] = min(max(extra[j], -OBS_LIMIT), OBS_LIMIT)
 
 
-@njit(cache=True, error_model="numpy")
-def ou_step(x, std, tau, dt, key, counter):
-    """One exact step of the Ornstein-Uhlenbeck process (stationary std, correlation tau)."""
-    if std <= 0.0:
-        return 0.0
-    a = np.exp(-dt / tau)
-    return a * x + std * np.sqrt(1.0 - a * a) * gauss(key, counter, OU_CHANNEL)
+def ou_coefficients(std: float, tau_s: float, dt: float) -> tuple[float, float]:
+    """(a, b) of the exact OU step x_k+1 = a x_k + b n_k (stationary std, correlation tau)."""
+    a = float(np.exp(-dt / tau_s))
+    return a, std * float(np.sqrt(1.0 - a * a))
 
 
 @njit(cache=True, error_model="numpy")
@@ -108,8 +105,8 @@ def advance(Z, U, U_prev, bp_t, bp_v, bp_n, ep, ou, key, counter, ints, cfg, obs
     """Everything after the plant step, for every row (see module docstring).
 
     Args:
-        ep: (B, 5) per-row [time_s, duration_s, noise_std_C, ou_std, ou_tau_s]; time advanced
-            in place.
+        ep: (B, 5) per-row [time_s, duration_s, noise_std_C, ou_a, ou_b] (ou_coefficients);
+            time advanced in place.
         ou: (B,) coloured heat-absorption disturbance, advanced in place.
         ints: [i_outlet, i_measured, n_obs_plant, n_valves, n_sprays, n_secondary, i_design,
             obs idx..., valve idx..., spray idx..., secondary idx...] (output indices;
@@ -131,7 +128,8 @@ def advance(Z, U, U_prev, bp_t, bp_v, bp_n, ep, ou, key, counter, ints, cfg, obs
     for b in range(Z.shape[0]):
         ep[b, E_TIME] += dt
         counter[b] += 1
-        ou[b] = ou_step(ou[b], ep[b, E_OU_STD], ep[b, E_OU_TAU], dt, key[b], counter[b])
+        if ep[b, E_OU_B] > 0.0:
+            ou[b] = ep[b, E_OU_A] * ou[b] + ep[b, E_OU_B] * gauss(key[b], counter[b], OU_CHANNEL)
         eval_schedules(b, ep[b, E_TIME], bp_t, bp_v, bp_n, sp_nom, ou, D, sp)
         observe(b, Z, obs_idx, obs_cs, i_meas, key, counter, noise, sp, D, obs)
         e = sp[b] - Z[b, i_out]
@@ -247,13 +245,12 @@ class Core:
             self.bp_n[:] = old[2]
         sc.pack(scenario, self.bp_t[b], self.bp_v[b], self.bp_n[b])
         self.scenario[b] = scenario
-        self.ep[b] = (
-            0.0,
-            scenario.duration_s,
-            scenario.noise_std_C,
+        ou_ab = ou_coefficients(
             scenario.heat_absorption_noise_std,
             scenario.heat_absorption_noise_tau_s,
+            self.plant.dt_s,
         )
+        self.ep[b] = (0.0, scenario.duration_s, scenario.noise_std_C, *ou_ab)
         self.ou[b] = scenario.heat_absorption_noise_std * gauss(np.uint64(key), 0, OU_CHANNEL)
         self.key[b] = np.uint64(key)
         self.counter[b] = 0

@@ -35,27 +35,15 @@ def spray_flow(opening, Cv, rho_w, dp):
 
 
 @njit(cache=True, error_model="numpy")
-def protected_spray(w_valve, W_in, h_in, h_sp, h_min):
+def protected_spray_out(w_valve, W_out, h_in, h_sp, h_min):
     """Spray flow (kg/s) after the attemperator protection: at most the flow whose mix
     reaches ``h_min`` (J/kg; the enthalpy a margin above saturation), never below zero.
 
     Plants limit spray so that the attemperator outlet stays well above saturation
-    (10-15 K: no water droplets reach the next stage's tubes). The cap solves the
-    energy balance W_in h_in + w h_sp = (W_in + w) h_min for w.
-    """
-    if h_in <= h_min or h_min <= h_sp:
-        return 0.0
-    return min(w_valve, W_in * (h_in - h_min) / (h_min - h_sp))
-
-
-@njit(cache=True, error_model="numpy")
-def protected_spray_out(w_valve, W_out, h_in, h_sp, h_min):
-    """:func:`protected_spray` for an attemperator whose OUTLET flow W_out (kg/s) is given.
-
-    Where the downstream flow is set (turbine, load controller) and the spray replaces
-    steam upstream (W_in = W_out - w), the energy balance
-    (W_out - w) h_in + w h_sp = W_out h_min gives the cap w = W_out (h_in - h_min)/(h_in - h_sp);
-    the same limit as protected_spray with W_in = W_out - w.
+    (10-15 K: no water droplets reach the next stage's tubes). The downstream flow W_out
+    (kg/s) is set (turbine, load controller) and the spray replaces steam upstream
+    (W_in = W_out - w): (W_out - w) h_in + w h_sp = W_out h_min gives the cap
+    w = W_out (h_in - h_min) / (h_in - h_sp).
     """
     if h_in <= h_min or h_min <= h_sp:
         return 0.0

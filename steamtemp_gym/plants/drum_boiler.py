@@ -140,10 +140,10 @@ from steamtemp_gym.plants.base import Plant, Signal, validate_params
 from steamtemp_gym.plants.integrator import pattern_arrays
 from steamtemp_gym.plants.sensors import thermowell_rhs
 from steamtemp_gym.plants.superheater import (
-    HTC_EXPONENT,
     chain_pattern,
     chain_rhs,
     chain_steady,
+    line_lag_tau,
     steam_side_kA,
 )
 from steamtemp_gym.steam import T_dTdh_ph, Tsat_p, h_pT, rho_ph, sat_p
@@ -374,17 +374,6 @@ def _boundary(x, d, P):
 
 
 @njit(cache=True)
-def _line_tau(P, W):
-    """Time constant (s) of each outlet-header / main-steam-line lag at steam flow W (kg/s).
-
-    tau_line/n_line at rated flow, growing as (W_nom/W)^0.8 (metal storage behind the
-    steam-side conductance of Dittus-Boelter, superheater.py), floored at 10 % flow.
-    """
-    r = max(W / P[I_WNOM], 0.1)
-    return P[I_TAUL] / P[I_NL] * r**-HTC_EXPONENT
-
-
-@njit(cache=True)
 def _design_spray(P, lw):
     """Scheduled design spray (kg/s) at steam-flow fraction lw: the commissioning function
     generator, linear between the undisturbed steady sprays at DSP_LOADS (extrapolated
@@ -526,7 +515,7 @@ def rhs(x, u, d, P, f, jd, ju, jl, want_jac):
     # outlet header and main-steam line: n_line lags in series (module docstring)
     nl = int(P[I_NL])
     sl = s_line(n)
-    tau = _line_tau(P, W)
+    tau = line_lag_tau(P[I_TAUL], P[I_NL], W, P[I_WNOM])
     T_prev = T_sh2
     for k in range(nl):
         f[sl + k] = (T_prev - x[sl + k]) / tau

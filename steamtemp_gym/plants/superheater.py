@@ -166,6 +166,16 @@ def chain_steady(x, off, n, h0, W, p, kA, UAg, Tg, Qrad):
     return h_prev
 
 
+@njit(cache=True, error_model="numpy")
+def line_lag_tau(tau_line_s, n_line, W, W_nom):
+    """Time constant (s) of each of the n_line lags of an outlet header / main-steam line
+    (lag chain form) at steam flow W (kg/s): tau_line/n_line at rated flow, growing as
+    (W_nom/W)^0.8 (metal storage behind the Dittus-Boelter steam-side conductance),
+    floored at HTC_FLOW_FLOOR of rated flow."""
+    r = max(W / W_nom, HTC_FLOW_FLOOR)
+    return tau_line_s / n_line * r**-HTC_EXPONENT
+
+
 # ------------------------------------------------------------------ unheated steam line
 # Outlet header and main-steam line between the last superheater and the turbine (added for
 # the transport delay of the main steam). Thick-walled pipe whose wall is taken in thermal
