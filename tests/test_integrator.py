@@ -38,7 +38,7 @@ def radau_reference(plant, x0, commands, D_of_k):
         p = fsh._pressure(P, x_ref[fsh.S_LW])
         # (FSH outlet, turbine inlet after the main-steam line) in C
         out.append((T_ph(p, x_ref[fsh.S_CHAIN + 2 * n - 1]) - 273.15,
-                    x_ref[fsh.s_line(n) + int(P[fsh.I_NL]) - 1] - 273.15))  # fmt: skip
+                    T_ph(p, x_ref[fsh.s_line(n) + int(P[fsh.I_NL]) - 1]) - 273.15))  # fmt: skip
     return np.array(out)
 
 

@@ -560,7 +560,7 @@ def rhs(x, u, d, P, f, jd, ju, jl, want_jac):
                          f, jd, ju, jl, want_jac)  # fmt: skip
     # outlet header and main-steam line to the turbine (superheater.pipe_rhs)
     loff, nl = int(P[I_LOFF]), int(P[I_NL])
-    T_ms = pipe_rhs(x, loff, nl, _last_h(x, P, SH4), one, W4, 0.0, p, P[I_LV], P[I_LCM],
+    T_ms, _ = pipe_rhs(x, loff, nl, _last_h(x, P, SH4), one, W4, 0.0, p, P[I_LV], P[I_LCM],
                     f, jd, jl, int(P[I_JLINE]), want_jac, False)  # fmt: skip
     # turbine and reheater (eq. 14)
     W_t, W_rh, p_rh, p_crh, dWt = _reheat(P, p, L)

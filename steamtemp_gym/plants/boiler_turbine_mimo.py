@@ -564,7 +564,7 @@ def rhs(x, u, d, P, f, jd, ju, jl, want_jac):
               True)  # fmt: skip
     # SH outlet header and main-steam line to the turbine (superheater.pipe_rhs)
     o_l, o_rl = _line_offsets(P)
-    T_ms = pipe_rhs(x, o_l, int(P[I_NL]), x[o_r - 1], dh0, W, dW, p, P[I_LV], P[I_LCM], f, jd,
+    T_ms, _ = pipe_rhs(x, o_l, int(P[I_NL]), x[o_r - 1], dh0, W, dW, p, P[I_LV], P[I_LCM], f, jd,
                     jl, int(P[I_JOFF_L]), want_jac, True)  # fmt: skip
     # HP turbine exhaust and reheater
     f[S_CRH] = (_h_crh_target(P, T_ms, lw) - x[S_CRH]) / P[I_TAUHP]
@@ -574,7 +574,7 @@ def rhs(x, u, d, P, f, jd, ju, jl, want_jac):
     chain_rhs(x, o_r, n4, x[S_CRH], dh0, Wr, P[I_FRH] * dW, prh, dprh, kA / n4, dkA / n4,
               P[I_V_R] / n4, P[I_CM_R] / n4, uag_r / n4, tg_r, 0.0, f, jd, ju, jl,
               int(P[I_JOFF_R]), want_jac, True)  # fmt: skip
-    T_rh = pipe_rhs(x, o_rl, int(P[I_NRL]), x[o_l - 1], dh0, Wr, P[I_FRH] * dW, prh, P[I_RLV],
+    T_rh, _ = pipe_rhs(x, o_rl, int(P[I_NRL]), x[o_l - 1], dh0, Wr, P[I_FRH] * dW, prh, P[I_RLV],
                     P[I_RLCM], f, jd, jl, int(P[I_JOFF_RL]), want_jac, True)  # fmt: skip
     # thermowells: STE, RTE, SP1 outlet, SP2 outlet
     T1, _ = T_dTdh_ph(p, h_pli)

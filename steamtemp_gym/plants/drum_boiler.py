@@ -50,12 +50,13 @@ Plant (states in SI; the env acts on the spray valve only):
 - final SH: N segments at main-steam flow W, gas side as the primary's at a hotter
   gas temperature (platen / pendant section). Steam pressures along the SH:
   p_1 = p - 0.4 dp_SH (W/W_nom)^2 (primary), p_2 = p - dp_SH (W/W_nom)^2 (main steam).
-- outlet header and main-steam line to the turbine: n_line = 3 lags in series,
-  dT_k/dt = (T_{k-1} - T_k)/tau_k, tau_k = (tau_line/n_line)(W_nom/W)^0.8, tau_line
-  24 s at rated flow (header and pipe metal storage behind the steam-side conductance;
-  plausible default, unverified, set so that the true outlet's Tu/Tg for a spray step
-  is ~0.3 as in field step tests, REFERENCE_DATA.md). outlet_temp_C is the turbine-
-  inlet temperature after it; the final SH's own outlet is sh2_outlet_temp_C.
+- outlet header and main-steam line to the turbine: the shared unheated steam line of
+  superheater.py (pipe_rhs: n_line = 3 mixing cells of steam plus wall metal at the
+  steam temperature), 2 m3 of steam and 5.5 t of effective metal: about 24 s of storage
+  at rated flow, growing as 1/flow (plausible defaults, unverified, set so that the true
+  outlet's Tu/Tg for a spray step is ~0.3 as in field step tests, REFERENCE_DATA.md).
+  outlet_temp_C is the turbine-inlet temperature after it; the final SH's own outlet is
+  sh2_outlet_temp_C.
 - design spray (output design_spray_kg_s): the commissioning function generator,
   linear between the undisturbed steady sprays at 40/60/80/100 % load (exact there,
   within ~3 % between them; extrapolated linearly below 40 %).
@@ -143,7 +144,9 @@ from steamtemp_gym.plants.superheater import (
     chain_pattern,
     chain_rhs,
     chain_steady,
-    line_lag_tau,
+    pipe_pattern,
+    pipe_rhs,
+    pipe_steady,
     steam_side_kA,
 )
 from steamtemp_gym.steam import T_dTdh_ph, Tsat_p, h_pT, rho_ph, sat_p
@@ -206,8 +209,9 @@ class DrumBoilerParams:
     tau_mill_s: float = 60.0  # coal mill: grinding and pulverized-coal inventory lag
     tau_firing_s: float = 60.0  # furnace heat release behind the mills
     T_bir_s: float = 45.0  # boiler-input-rate feed-forward lead of the boiler master
-    n_line: int = 3  # lags in series of the outlet header and main-steam line
-    tau_line_s: float = 24.0  # their total time constant at rated flow (~ 1/flow^0.8)
+    n_line: int = 3  # mixing cells of the outlet header and main-steam line
+    line_volume_m3: float = 2.0  # their steam volume
+    line_metal_t: float = 5.5  # their effective metal at steam temperature
     Kp_pressure: float = 1.5  # firing fraction per relative pressure error
     Ti_pressure_s: float = 500.0
     Kp_level_kg_s_m: float = 200.0
@@ -242,7 +246,8 @@ class DrumBoilerParams:
                 "tau_firing_s": (1.0, 900.0),
                 "T_bir_s": (0.0, 600.0),
                 "n_line": (1, 8),
-                "tau_line_s": (1.0, 600.0),
+                "line_volume_m3": (0.01, 50.0),
+                "line_metal_t": (0.01, 100.0),
             },
         )
         for i in (1, 2):
@@ -280,8 +285,8 @@ class DrumBoilerParams:
  I_KA2, I_V2, I_CM2, I_UAG2, I_TG2, I_DTG2, I_GEXP,
  I_TAUW, I_TAUF, I_KPP, I_TIP, I_KPL, I_TIL, I_TAUFW,
  I_TAUV, I_RATEV, I_TC1, I_TC2, I_QSN) = range(34)  # fmt: skip
-I_TAUM, I_TBIR, I_NL, I_TAUL, I_MARG = 34, 35, 36, 37, 38
-I_DSP = 39  # design-spray function generator: spray (kg/s) at DSP_LOADS
+I_TAUM, I_TBIR, I_NL, I_LV, I_MARG, I_LCM = 34, 35, 36, 37, 38, 39
+I_DSP = 40  # design-spray function generator: spray (kg/s) at DSP_LOADS
 DSP_LOADS = (0.4, 0.6, 0.8, 1.0)
 I_DRUM = I_DSP + len(DSP_LOADS)  # drum parameter block (drum.drum_block)
 I_FW = I_DRUM + dr.N_DRUM_P  # feedwater tables h(T), rho(T) at p_fw
@@ -294,7 +299,7 @@ S_W, S_LF, S_IP, S_IL, S_QF, S_V = 0, 1, 2, 3, 4, 5
 S_DRUM = 6  # V_wt, p, alpha_r, V_sd
 S_P = S_DRUM + dr.PD
 S_CHAIN1 = 10  # primary SH (2n states), then the final SH (2n states)
-# then the coal mill (1), the outlet header / main-steam line (n_line lags), and the
+# then the coal mill (1), the outlet header / main-steam line (n_line cells), and the
 # thermowells (their inputs are then lower couplings): offsets from
 # sensors(n, n_line): main-steam thermocouple lags 1, 2, attemperator-outlet lags 1, 2
 T_TC1, T_TC2, T_TA1, T_TA2 = 0, 1, 2, 3
@@ -313,7 +318,7 @@ def s_mill(n):
 
 @njit(cache=True)
 def s_line(n):
-    """State index of the first outlet-header / main-steam-line lag (K)."""
+    """State index of the first outlet-header / main-steam-line cell (enthalpy, J/kg)."""
     return S_CHAIN1 + 4 * n + 1
 
 
@@ -449,8 +454,7 @@ def pattern(n: int, nl: int) -> list[tuple[int, int]]:
         + fired_pattern(S_CHAIN1, n, (S_P,))
         + fired_pattern(c2, n, (S_W, S_V, c2 - 1))
         + [(sl - 1, S_IP), (sl - 1, S_P)]
-        + [(sl, c2 + 2 * n - 1)]
-        + [(sl + k, sl + k - 1) for k in range(1, nl)]
+        + pipe_pattern(sl, nl, (c2 + 2 * n - 1,))
         + [(st, st - 1), (st + 1, st), (st + 2, S_W), (st + 2, S_V), (st + 2, c2 - 1)]
         + [(st + 3, st + 2)]
     )
@@ -507,20 +511,16 @@ def rhs(x, u, d, P, f, jd, ju, jl, want_jac):
         dh_att = f[0:3]
     UAg2 = P[I_UAG2] * mult
     Tg2 = P[I_TG2] - P[I_DTG2] * (1.0 - L_f)
-    T_sh2 = _chain_fired(
+    _chain_fired(
         x, c2, n, 3, h_att, dh_att, W, dWok, p2, dp2, steam_side_kA(P[I_KA2], W, P[I_WNOM]),
         UAg2, Tg2, gex * UAg2, P[I_DTG2] * dLf, P[I_CM2], P[I_V2], f, jd, ju, jl,
         J_CHAIN1 + 5 * n, want_jac,
     )  # fmt: skip
-    # outlet header and main-steam line: n_line lags in series (module docstring)
+    # outlet header and main-steam line (superheater.pipe_rhs; module docstring)
     nl = int(P[I_NL])
-    sl = s_line(n)
-    tau = line_lag_tau(P[I_TAUL], P[I_NL], W, P[I_WNOM])
-    T_prev = T_sh2
-    for k in range(nl):
-        f[sl + k] = (T_prev - x[sl + k]) / tau
-        T_prev = x[sl + k]
-    T_out = T_prev
+    j_line = J_CHAIN1 + 10 * n + 4  # after the mill's two entries
+    T_out, dT_out = pipe_rhs(x, s_line(n), nl, x[c2 + 2 * n - 1], (1.0,), W, 0.0, p2, P[I_LV],
+                             P[I_LCM], f, jd, jl, j_line, want_jac, False)  # fmt: skip
     T_att, dT_att = T_dTdh_ph(p1, h_att)
     st = sensors(n, nl)
     tc1, tc2 = P[I_TC1], P[I_TC2]
@@ -540,16 +540,9 @@ def rhs(x, u, d, P, f, jd, ju, jl, want_jac):
         ok = 1.0 if 0.02 < u_f < 1.3 else 0.0
         jl[j] = ok / P[I_TAUM]
         jl[j + 1] = -ok * P[I_KPP] / P[I_PSP] / P[I_TAUM]
-        # line lags on the final SH's outlet enthalpy and on each other
-        j += 2
-        jl[j] = T_dTdh_ph(p2, x[c2 + 2 * n - 1])[1] / tau
-        for k in range(nl):
-            jd[sl + k] = -1.0 / tau
-            if k > 0:
-                jl[j + k] = 1.0 / tau
         # thermowells on the main-steam line outlet and on the attemperator's inputs
-        j += nl
-        jl[j] = 1.0 / tc1
+        j = j_line + nl
+        jl[j] = dT_out / tc1
         jl[j + 1] = 1.0 / tc2
         for k in range(3):
             jl[j + 2 + k] = dT_att * dh_att[k] / tc1
@@ -569,7 +562,7 @@ def outputs(x, u, d, P, z):
     _, h_att = mix(q_s, h1, w_sp, h_sp)
     nl = int(P[I_NL])
     T_sh2, _ = T_dTdh_ph(p2, x[c2 + 2 * n - 1])
-    T_out = x[s_line(n) + nl - 1]
+    T_out, _ = T_dTdh_ph(p2, x[s_line(n) + nl - 1])
     T_att, _ = T_dTdh_ph(p1, h_att)
     T_pri, _ = T_dTdh_ph(p1, h1)
     UAg1 = P[I_UAG1] * mult
@@ -618,7 +611,7 @@ def project(x, P):
     x[S_LF] = min(max(x[S_LF], 0.02), 1.3)
     x[s_mill(n)] = min(max(x[s_mill(n)], 0.02), 1.3)
     for k in range(int(P[I_NL])):
-        x[s_line(n) + k] = min(max(x[s_line(n) + k], 400.0), 1300.0)
+        x[s_line(n) + k] = min(max(x[s_line(n) + k], 1.5e6), 4.2e6)
     x[S_IP] = min(max(x[S_IP], -0.6), 0.6)
     x[S_IL] = min(max(x[S_IL], -0.5 * Wn), 0.5 * Wn)
     x[S_QF] = min(max(x[S_QF], 0.0), 2.0 * Wn)
@@ -707,8 +700,7 @@ def steady(D, sp_K, P, X):
         T_out, _ = T_dTdh_ph(p2, h_out)
         T_att, _ = T_dTdh_ph(p1, h_att)
         st = sensors(int(P[I_N]), int(P[I_NL]))
-        for k in range(int(P[I_NL])):
-            x[s_line(int(P[I_N])) + k] = T_out
+        pipe_steady(x, s_line(int(P[I_N])), int(P[I_NL]), h_out)
         x[st + T_TC1] = T_out
         x[st + T_TC2] = T_out
         x[st + T_TA1] = T_att
@@ -810,7 +802,8 @@ def _pack(params: DrumBoilerParams) -> tuple[np.ndarray, np.ndarray, np.ndarray,
     P[I_TAUM] = params.tau_mill_s
     P[I_TBIR] = params.T_bir_s
     P[I_NL] = params.n_line
-    P[I_TAUL] = params.tau_line_s
+    P[I_LV] = params.line_volume_m3 / params.n_line
+    P[I_LCM] = params.line_metal_t * 1e3 * params.c_metal_J_kgK / params.n_line
     P[I_MARG] = params.attemp_margin_K
     P[I_DRUM : I_DRUM + dr.N_DRUM_P] = dr.drum_block(
         params.V_d_m3, params.V_r_m3, params.V_dc_m3, params.m_t_kg, params.m_r_kg,

@@ -63,14 +63,14 @@ Model (states in SI):
   where the sliding pressure is subcritical (p < 21.56 MPa, below ~83 % load) and
   there far from binding (the full valve cools by < 100 K at ~500 C): kept for
   random actions at low load.
-- outlet header and main-steam line to the turbine: n_line = 3 lags in series,
-  dT_k/dt = (T_{k-1} - T_k)/tau_k, tau_k = (tau_line/n_line) (W_nom/W)^0.8,
-  tau_line = 24 s at rated flow (thick-walled header and pipe metal storage behind
-  the steam-side conductance, Dittus-Boelter as the FSH; a tanks-in-series
-  approximation of storage plus transport). The true outlet temperature
-  outlet_temp_C is the turbine-inlet temperature after it (the FSH's own outlet is
-  fsh_outlet_temp_C). tau_line is a plausible default, unverified, set so that the
-  true outlet's Tu/Tg for a spray step is about 0.3 (field step tests, REFERENCE_DATA.md).
+- outlet header and main-steam line to the turbine: the shared unheated steam line of
+  superheater.py (pipe_rhs: n_line = 3 mixing cells of steam plus wall metal at the
+  steam temperature, (rho V + C_m dT/dh) dh_k/dt = W (h_k-1 - h_k)), 20 m3 of steam and
+  75 t of effective header/pipe/valve-chest metal: about 24 s of storage at rated flow,
+  growing as 1/flow. The true outlet temperature outlet_temp_C is the turbine-inlet
+  temperature after it (the FSH's own outlet is fsh_outlet_temp_C). Volume and metal are
+  plausible defaults, unverified, set so that the true outlet's Tu/Tg for a spray step
+  is about 0.3 (field step tests, REFERENCE_DATA.md).
 - actuator: valve lag, rate limit and saturation (valve.py); thermocouples in
   thermowells, two lags each, on the turbine-inlet main steam and the attemperator
   outlet (sensors.py).
@@ -116,7 +116,9 @@ from steamtemp_gym.plants.superheater import (
     chain_pattern,
     chain_rhs,
     chain_steady,
-    line_lag_tau,
+    pipe_pattern,
+    pipe_rhs,
+    pipe_steady,
     steam_side_kA,
 )
 from steamtemp_gym.steam import T_dTdh_ph, Tsat_p, h_pT, rho_ph
@@ -160,8 +162,9 @@ class FSHParams:
     fwr_coupling: float = 0.3  # share of a firing/flow ratio error reaching the FSH inlet
     fwr_mismatch: float = 0.008  # FWR schedule error: relative enthalpy-rise error at 50 % load
     bias_upstream_share: float = 0.3  # share of a heat-absorption bias reaching h_up
-    n_line: int = 3  # lags in series of the outlet header and main-steam line
-    tau_line_s: float = 24.0  # their total time constant at rated flow (~ 1/flow^0.8)
+    n_line: int = 3  # mixing cells of the outlet header and main-steam line
+    line_volume_m3: float = 20.0  # their steam volume
+    line_metal_t: float = 75.0  # their effective metal at steam temperature
     attemp_margin_K: float = 12.0  # protection: attemperator outlet >= Tsat + margin
     tau_valve_s: float = 2.0
     valve_rate_per_s: float = 0.1  # full stroke in 10 s
@@ -197,7 +200,8 @@ class FSHParams:
                 "fwr_mismatch": (-0.05, 0.05),
                 "bias_upstream_share": (0.0, 1.0),
                 "n_line": (1, 8),
-                "tau_line_s": (1.0, 600.0),
+                "line_volume_m3": (0.1, 200.0),
+                "line_metal_t": (0.1, 500.0),
                 "tau_mill_s": (1.0, 600.0),
                 "tau_firing_s": (1.0, 900.0),
                 "attemp_margin_K": (1.0, 50.0),
@@ -228,13 +232,13 @@ I_KA, I_V, I_CM, I_UAG, I_TGN, I_DTG, I_GEXP = 6, 7, 8, 9, 10, 11, 12
 I_CV, I_DPB, I_TFW, I_DTFW = 13, 14, 15, 16
 I_TAUF, I_TBIR, I_TAUW, I_TAUUP, I_FWR = 17, 18, 19, 20, 21
 I_TAUV, I_RATEV, I_TC1, I_TC2 = 22, 23, 24, 25
-I_TAUM, I_MIS, I_BUP, I_NL, I_TAUL, I_SPD, I_MARG = 26, 27, 28, 29, 30, 31, 32
-I_TAB = 33  # start of the load tables: h_up, dh_up, h_fw, cp_fw, dcp_fw, rho_fw
+I_TAUM, I_MIS, I_BUP, I_NL, I_LV, I_SPD, I_MARG, I_LCM = 26, 27, 28, 29, 30, 31, 32, 33
+I_TAB = 34  # start of the load tables: h_up, dh_up, h_fw, cp_fw, dcp_fw, rho_fw
 TAB_LOADS = np.linspace(0.2, 1.2, 21)
 N_TAB = TAB_LOADS.shape[0]
 T_HUP, T_DHUP, T_HFW, T_CPFW, T_DCPFW, T_RHOFW = (I_TAB + k * N_TAB for k in range(6))
 N_P = I_TAB + 6 * N_TAB
-# State indices; after the chain (2 n states): the coal mill, then the n_line line lags
+# State indices; after the chain (2 n states): the coal mill, then the n_line line cells
 S_LF, S_LW, S_HUP, S_V, S_TC1, S_TC2, S_TA1, S_TA2 = 0, 1, 2, 3, 4, 5, 6, 7
 S_CHAIN = 8
 INLET_COLS = (S_HUP, S_V)  # states the FSH inlet enthalpy depends on
@@ -251,7 +255,7 @@ def s_mill(n):
 
 @njit(cache=True)
 def s_line(n):
-    """State index of the first outlet-header / main-steam-line lag (K)."""
+    """State index of the first outlet-header / main-steam-line cell (enthalpy, J/kg)."""
     return S_CHAIN + 2 * n + 1
 
 
@@ -363,19 +367,13 @@ def rhs(x, u, d, P, f, jd, ju, jl, want_jac):
         dh0 = (dh0[0], 0.0)
     dW = P[I_WNOM] if 0.05 < x[S_LW] < 1.3 else 0.0
     dp = _dpressure(P, x[S_LW])
-    _, T_fsh, _ = chain_rhs(
+    _, _, _ = chain_rhs(
         x, S_CHAIN, n, h0, dh0, W, dW, p, dp, kA[0], kA[1], P[I_V], P[I_CM], UAg, Tg, 0.0,
         f, jd, ju, jl, 0, want_jac, True,
     )  # fmt: skip
-    # outlet header and main-steam line: n_line lags in series (module docstring)
-    sl = s_line(n)
-    nl = int(P[I_NL])
-    tau = line_lag_tau(P[I_TAUL], P[I_NL], W, P[I_WNOM])
-    T_prev = T_fsh
-    for k in range(nl):
-        f[sl + k] = (T_prev - x[sl + k]) / tau
-        T_prev = x[sl + k]
-    T_out = T_prev
+    # outlet header and main-steam line (superheater.pipe_rhs; module docstring)
+    T_out, _ = pipe_rhs(x, s_line(n), int(P[I_NL]), x[S_CHAIN + 2 * n - 1], (1.0,), W, 0.0, p,
+                     P[I_LV], P[I_LCM], f, jd, jl, 4 * n + 1, want_jac, False)  # fmt: skip
     T_att, _ = T_dTdh_ph(p, h0)
     f[S_TC1], f[S_TC2], j1, j2 = thermowell_rhs(T_out, x[S_TC1], x[S_TC2], P[I_TC1], P[I_TC2])
     f[S_TA1], f[S_TA2], j3, j4 = thermowell_rhs(T_att, x[S_TA1], x[S_TA2], P[I_TC1], P[I_TC2])
@@ -386,12 +384,6 @@ def rhs(x, u, d, P, f, jd, ju, jl, want_jac):
         jd[S_V] = 0.0
         jd[S_TC1], jd[S_TC2], jd[S_TA1], jd[S_TA2] = j1, j2, j3, j4
         jd[sm] = -1.0 / P[I_TAUM]
-        j = 4 * n + 1  # after chain_pattern's entries
-        jl[j] = T_dTdh_ph(p, x[S_CHAIN + 2 * n - 1])[1] / tau
-        for k in range(nl):
-            jd[sl + k] = -1.0 / tau
-            if k > 0:
-                jl[j + k] = 1.0 / tau
 
 
 @njit(cache=True, error_model="numpy")
@@ -400,7 +392,7 @@ def outputs(x, u, d, P, z):
     n = int(P[I_N])
     W, p, w_sp, h0, h_sp, kA, UAg, Tg, capped = _boundary(x, u, d, P)
     T_fsh, _ = T_dTdh_ph(p, x[S_CHAIN + 2 * n - 1])
-    T_out = x[s_line(n) + int(P[I_NL]) - 1]
+    T_out, _ = T_dTdh_ph(p, x[s_line(n) + int(P[I_NL]) - 1])
     T_att, _ = T_dTdh_ph(p, h0)
     T_up, _ = T_dTdh_ph(p, x[S_HUP])
     q = 0.0
@@ -436,7 +428,7 @@ def project(x, P):
     x[S_HUP] = min(max(x[S_HUP], 2.0e6), 4.0e6)
     x[s_mill(n)] = min(max(x[s_mill(n)], 0.05), 1.3)
     for k in range(int(P[I_NL])):
-        x[s_line(n) + k] = min(max(x[s_line(n) + k], 400.0), 1300.0)
+        x[s_line(n) + k] = min(max(x[s_line(n) + k], 1.5e6), 4.2e6)
     for i in range(n):
         x[S_CHAIN + 2 * i] = min(max(x[S_CHAIN + 2 * i], 400.0), 1300.0)
         x[S_CHAIN + 2 * i + 1] = min(max(x[S_CHAIN + 2 * i + 1], 1.5e6), 4.2e6)
@@ -486,8 +478,7 @@ def steady(D, sp_K, P, X):
         T_att, _ = T_dTdh_ph(p, h0)
         x[S_TC1] = T_out
         x[S_TC2] = T_out
-        for k in range(int(P[I_NL])):
-            x[s_line(n) + k] = T_out
+        pipe_steady(x, s_line(n), int(P[I_NL]), h_out)
         x[S_TA1] = T_att
         x[S_TA2] = T_att
 
@@ -601,7 +592,8 @@ def _pack(params: FSHParams) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
     P[I_MIS] = params.fwr_mismatch
     P[I_BUP] = params.bias_upstream_share
     P[I_NL] = params.n_line
-    P[I_TAUL] = params.tau_line_s
+    P[I_LV] = params.line_volume_m3 / params.n_line
+    P[I_LCM] = params.line_metal_t * 1e3 * params.c_metal_J_kgK / params.n_line
     P[I_SPD] = params.spray_design_fraction
     P[I_MARG] = params.attemp_margin_K
     n_x = S_CHAIN + 2 * n + 1 + params.n_line
@@ -609,7 +601,7 @@ def _pack(params: FSHParams) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
     pat = chain_pattern(S_CHAIN, n, INLET_COLS, S_LW)
     assert len(pat) == 4 * n + 1  # rhs writes the line's entries from here on
     sl = S_CHAIN + 2 * n + 1
-    pat += [(sl, S_CHAIN + 2 * n - 1)] + [(sl + k, sl + k - 1) for k in range(1, params.n_line)]
+    pat += pipe_pattern(sl, params.n_line, (S_CHAIN + 2 * n - 1,))
     jrow, jcol = pattern_arrays(pat)
     P.setflags(write=False)
     return P, jrow, jcol, n_x

@@ -166,16 +166,6 @@ def chain_steady(x, off, n, h0, W, p, kA, UAg, Tg, Qrad):
     return h_prev
 
 
-@njit(cache=True, error_model="numpy")
-def line_lag_tau(tau_line_s, n_line, W, W_nom):
-    """Time constant (s) of each of the n_line lags of an outlet header / main-steam line
-    (lag chain form) at steam flow W (kg/s): tau_line/n_line at rated flow, growing as
-    (W_nom/W)^0.8 (metal storage behind the Dittus-Boelter steam-side conductance),
-    floored at HTC_FLOW_FLOOR of rated flow."""
-    r = max(W / W_nom, HTC_FLOW_FLOOR)
-    return tau_line_s / n_line * r**-HTC_EXPONENT
-
-
 # ------------------------------------------------------------------ unheated steam line
 # Outlet header and main-steam line between the last superheater and the turbine (added for
 # the transport delay of the main steam). Thick-walled pipe whose wall is taken in thermal
@@ -207,13 +197,14 @@ def pipe_pattern(off: int, n: int, inlet_cols: tuple[int, ...] = (),
 
 @njit(cache=True, error_model="numpy")
 def pipe_rhs(x, off, n, h0, dh0, W, dW, p, V, Cm, f, jd, jl, joff, want_jac, flow):
-    """Right-hand side of the n-cell pipe (see above); returns its outlet temperature (K).
+    """Right-hand side of the n-cell pipe (see above); returns its outlet temperature (K)
+    and dT/dh there (K kg/J).
 
     Args: as chain_rhs; V steam volume (m3) and Cm metal heat capacity (J/K) per cell;
     dW the derivative of W by the flow state (pattern column ``flow_col`` if ``flow``).
     """
     h_prev = h0
-    T = 0.0
+    T = dTdh = 0.0
     for i in range(n):
         h = x[off + i]
         T, dTdh, rho, _ = T_rho_ph(p, h)
@@ -232,7 +223,7 @@ def pipe_rhs(x, off, n, h0, dh0, W, dW, p, V, Cm, f, jd, jl, joff, want_jac, flo
                 joff += 1
             jd[off + i] = -W / M
         h_prev = h
-    return T
+    return T, dTdh
 
 
 @njit(cache=True, error_model="numpy")
