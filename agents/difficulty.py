@@ -27,7 +27,9 @@ import numpy as np
 
 from agents.evaluation import run_episode
 from baselines.cascade_pi import CascadePI
+from baselines.identification import step_test
 from steamtemp_gym import scenarios
+from steamtemp_gym.plants.base import MAIN
 
 REFERENCE_POLICIES = ("frozen", "random", "cascade_pi", "cascade_pi_2x", "cascade_pi_ff")
 COLUMNS = ("max_abs_dev_K", "iae_K_s", "time_outside_5K_s", "spray_used_kg", "valve_travel",
@@ -48,6 +50,23 @@ KIND = {
     "steamtemp/DrumBoilerSH-v0": "drum",
 }
 RAMPS = ("load_ramp_100_50", "load_ramp_50_100")
+#: Field range of Tu/Tg of the true outlet after a last-stage spray step (REFERENCE_DATA.md:
+#: field step tests about 0.3), and the largest the thermocouple reading may show.
+TU_TG_TRUE = (0.2, 0.4)
+TU_TG_MEASURED_MAX = 0.55
+
+
+def last_spray_stage(plant: Any) -> int:
+    """Index of the action whose loop holds the main steam (the last spray stage)."""
+    return max(j for j, (_, outer) in enumerate(plant.control_loops) if outer == MAIN)
+
+
+def spray_step_dead_time(env_id: str, load: float) -> tuple[Any, Any]:
+    """FOPDT of the true and of the measured outlet for a +5 % last-stage spray step."""
+    plant = gym.make(env_id).unwrapped.plant
+    m = step_test(env_id, last_spray_stage(plant), [plant.outlet, plant.outlet_measured],
+                  load=load)  # fmt: skip
+    return m[plant.outlet], m[plant.outlet_measured]
 
 
 class FrozenValves:

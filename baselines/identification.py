@@ -25,13 +25,14 @@ class FOPDT:
 
 
 def _record(env, a: np.ndarray) -> tuple[np.ndarray, list[dict]]:
+    """Time and, per sample, the decoded observation merged with info (observation wins)."""
     obs, info = env.reset(seed=0)
     sig = env.unwrapped.signals
-    t, rec = [0.0], [sig.decode(obs)]
+    t, rec = [0.0], [{**info, **sig.decode(obs)}]
     while True:
         obs, _, term, trunc, info = env.step(a.astype(np.float32))
         t.append(info["time_s"])
-        rec.append(sig.decode(obs))
+        rec.append({**info, **sig.decode(obs)})
         if term or trunc:
             return np.array(t), rec
 
@@ -48,6 +49,9 @@ def step_test(
 ) -> dict[str, FOPDT]:
     """Step valve ``valve`` by ``dv`` (opening) at constant ``load``; FOPDT of each signal.
 
+    Signals are observed names (what a commissioning engineer records) or, for analysis,
+    info keys such as the true ``outlet_temp_C``.
+
     The test is run twice with the same seed, with and without the step, and the
     response is their difference: the plant's own random disturbances (same seed,
     same sequence) cancel, as a commissioning engineer would wish they did.
@@ -58,7 +62,6 @@ def step_test(
     sc = Scenario(name="step_test", duration_s=duration_s, load=((0.0, load),))
     env = gym.make(env_id, scenario=sc, params=params or {})
     _, info = env.reset(seed=0)
-    names = [s.name for s in env.unwrapped.signals.observation]
     hold = 2.0 * np.atleast_1d(info["spray_valve"]).astype(float) - 1.0
     stepped = hold.copy()
     stepped[valve] += 2.0 * dv
@@ -66,8 +69,8 @@ def step_test(
     _, rec = _record(env, stepped)
     out = {}
     for name in signals:
-        if name not in names:
-            raise ValueError(f"{env_id} does not observe {name!r}; observed: {names}")
+        if name not in base[0]:
+            raise ValueError(f"{env_id} has no signal {name!r}; known: {sorted(base[0])}")
         y = np.array([r[name] - r0[name] for r, r0 in zip(rec, base, strict=True)])
         m = step_response_metrics(t, y)
         out[name] = FOPDT(K=m["gain"] / dv, tau_s=m["Tg_s"], theta_s=m["Tu_s"])

@@ -11,21 +11,12 @@ import pytest
 
 import baselines
 import steamtemp_gym
+from agents.difficulty import FrozenValves
 from agents.evaluation import run_episode
 from baselines.policy import Policy
 from steamtemp_gym import scenarios
 
 IDS = steamtemp_gym.ENV_IDS
-
-
-class HoldValves:
-    """Open-loop reference for the tests: keep every valve where the steady state put it."""
-
-    def reset(self):
-        self.a = None
-
-    def predict(self, obs, state=None, episode_start=None, deterministic=True):
-        return self.a, None
 
 
 @pytest.mark.parametrize("env_id", IDS)
@@ -36,12 +27,7 @@ def test_baseline_is_a_policy_and_beats_open_loop(env_id, name):
     assert isinstance(policy, Policy)
     res = run_episode(env, policy, seed=0)
     assert res["metrics"]["tripped"] == 0.0
-    _, info = env.reset(seed=0)
-    hold = HoldValves()
-    hold.reset()
-    hold.a = (2.0 * np.atleast_1d(info["spray_valve"]) - 1.0).astype(np.float32)
-    hold.reset = lambda: None
-    ref = run_episode(env, hold, seed=0)
+    ref = run_episode(env, FrozenValves(env), seed=0)
     assert res["metrics"]["iae_K_s"] < 0.5 * ref["metrics"]["iae_K_s"]
     # batched observations give the same actions as single ones
     obs = np.stack([env.reset(seed=s)[0] for s in range(3)])

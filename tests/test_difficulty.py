@@ -10,7 +10,15 @@ from __future__ import annotations
 import pytest
 
 import steamtemp_gym
-from agents.difficulty import KIND, RAMPS, TARGETS, evaluate
+from agents.difficulty import (
+    KIND,
+    RAMPS,
+    TARGETS,
+    TU_TG_MEASURED_MAX,
+    TU_TG_TRUE,
+    evaluate,
+    spray_step_dead_time,
+)
 from steamtemp_gym import scenarios
 
 IDS = steamtemp_gym.ENV_IDS
@@ -62,3 +70,14 @@ def test_cascade300_pi_error_std_is_of_the_papers_order():
     m = evaluate("steamtemp/Cascade300MW-v0", "cascade_pi", "setpoint_step_535_545")
     lo, hi = TARGETS["cascade300_pi_std_K"]
     assert lo <= m["late_error_std_K"] <= hi
+
+
+@pytest.mark.parametrize("load", [1.0, 0.5])
+@pytest.mark.parametrize("env_id", [i for i in IDS if i in KIND])
+def test_spray_step_has_the_field_dead_time(env_id, load):
+    """Last-stage spray step: Tu/Tg of the true turbine-inlet temperature in the field range
+    (the main-steam line; without it 0.02-0.06), the thermocouple reading a bit above."""
+    true, meas = spray_step_dead_time(env_id, load)
+    r_true, r_meas = true.theta_s / true.tau_s, meas.theta_s / meas.tau_s
+    assert TU_TG_TRUE[0] <= r_true <= TU_TG_TRUE[1]
+    assert r_true < r_meas <= TU_TG_MEASURED_MAX
