@@ -58,6 +58,7 @@ from typing import Any
 import numpy as np
 
 from baselines.identification import FOPDT, simc_pi, step_test
+from steamtemp_gym import plants
 from steamtemp_gym.plants.base import MAIN, SCHEDULED
 from steamtemp_gym.scenarios import Scenario
 
@@ -68,7 +69,7 @@ FILTER_S = 5.0
 SCHEDULE_LOADS = np.round(np.arange(0.4, 1.101, 0.1), 2)
 
 
-def _env(env_id: str, params_json: str, scenario: Any = "load_ramp_100_50"):
+def _env(env_id: str, params_json: str, scenario: Any):
     import gymnasium as gym
 
     return gym.make(env_id, scenario=scenario, params=json.loads(params_json))
@@ -78,7 +79,7 @@ def _env(env_id: str, params_json: str, scenario: Any = "load_ramp_100_50"):
 def _tuning(env_id: str, params_json: str) -> tuple[tuple[float, float, float, float], ...]:
     """(Kc_outer, Ti_outer, Kc_inner, Ti_inner) per action from step tests at rated load."""
     params = json.loads(params_json)
-    plant = _env(env_id, params_json).unwrapped.plant
+    plant = plants.make(env_id, **params)
     out = []
     n_main = sum(outer == MAIN for _, outer in plant.control_loops)
     for j, (inner, outer) in enumerate(plant.control_loops):
@@ -215,6 +216,7 @@ class CascadePI:
         if feedforward is None and load_feedforward:
             feedforward = _feedforward(plant.id, params)
         self.ff, self.ff_tau = feedforward if feedforward is not None else (None, 1.0)
+        self.a_ff = float(np.exp(-self.dt / self.ff_tau))  # load filter of the feed-forward
         self._st: dict[str, np.ndarray] | None = None
         self.inner_setpoint = np.zeros((1, len(self.loops)))  # last r per row and loop
 
@@ -257,7 +259,7 @@ class CascadePI:
         yf[:] = self.a_filter * yf + (1.0 - self.a_filter) * y  # measurement filter
         yf[restart] = y[restart]
         load = y[:, self.i_load]
-        st["Lf"] += (1.0 - np.exp(-self.dt / self.ff_tau)) * (load - st["Lf"])
+        st["Lf"] += (1.0 - self.a_ff) * (load - st["Lf"])
         e_main = yf[:, self.i_err]  # setpoint - measured outlet (filtered)
         v = st["v0"].copy()
         self.inner_setpoint = np.full_like(v, np.nan)
