@@ -66,7 +66,7 @@ Model (states in SI):
 - outlet header and main-steam line to the turbine: the shared unheated steam line of
   superheater.py (pipe_rhs: n_line = 3 mixing cells of steam plus wall metal at the
   steam temperature, (rho V + C_m dT/dh) dh_k/dt = W (h_k-1 - h_k)), 20 m3 of steam and
-  75 t of effective header/pipe/valve-chest metal: about 24 s of storage at rated flow,
+  55 t of effective header/pipe/valve-chest metal: about 18 s of storage at rated flow,
   growing as 1/flow. The true outlet temperature outlet_temp_C is the turbine-inlet
   temperature after it (the FSH's own outlet is fsh_outlet_temp_C). Volume and metal are
   plausible defaults, unverified, set so that the true outlet's Tu/Tg for a spray step
@@ -164,7 +164,7 @@ class FSHParams:
     bias_upstream_share: float = 0.3  # share of a heat-absorption bias reaching h_up
     n_line: int = 3  # mixing cells of the outlet header and main-steam line
     line_volume_m3: float = 20.0  # their steam volume
-    line_metal_t: float = 75.0  # their effective metal at steam temperature
+    line_metal_t: float = 55.0  # their effective metal at steam temperature
     attemp_margin_K: float = 12.0  # protection: attemperator outlet >= Tsat + margin
     tau_valve_s: float = 2.0
     valve_rate_per_s: float = 0.1  # full stroke in 10 s
