@@ -38,6 +38,12 @@ from dataclasses import asdict, dataclass, fields
 import numpy as np
 from numba import njit
 
+#: Largest weight accepted (every weight is >= 0): with the trip band and these ranges every
+#: per-step reward is finite (|e| is bounded by the steam tables' range, about 800 K).
+MAX_WEIGHT = 1e4
+#: Ranges of the options that are not weights (K; the trip penalty, a one-off cost).
+RANGES = {"T0_K": (0.1, 1000.0), "band_K": (0.0, 500.0), "trip_penalty": (0.0, 1e6)}
+
 
 @dataclass(frozen=True)
 class RewardConfig:
@@ -56,12 +62,11 @@ class RewardConfig:
     def __post_init__(self) -> None:
         for f in fields(self):
             v = getattr(self, f.name)
-            if not isinstance(v, (int, float)) or not np.isfinite(v) or v < 0:
-                raise ValueError(
-                    f"reward option {f.name!r} must be a finite number >= 0, got {v!r}"
-                )
-        if self.T0_K <= 0:
-            raise ValueError("reward option 'T0_K' must be > 0")
+            lo, hi = RANGES.get(f.name, (0.0, MAX_WEIGHT))
+            if isinstance(v, (bool, np.bool_)) or not isinstance(v, (int, float, np.number)):
+                raise ValueError(f"reward option {f.name!r} must be a number, got {v!r}")
+            if not (np.isfinite(v) and lo <= v <= hi):
+                raise ValueError(f"reward option {f.name!r} must be in [{lo:g}, {hi:g}], got {v!r}")
 
     @classmethod
     def from_options(cls, options: dict | RewardConfig | None) -> RewardConfig:

@@ -23,6 +23,8 @@ batch size. Plants with internal random disturbances get the same key through
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 from numba import njit
 
@@ -40,6 +42,16 @@ MIN_BREAKPOINTS = 64
 E_TIME, E_DUR, E_NOISE, E_OU_A, E_OU_B = 0, 1, 2, 3, 4
 #: length of the header of Core.ints (before the index lists)
 N_HEAD = 7
+#: Why an episode terminated (``info["trip_reason"]``; Core.out[:, 1] holds the index): the
+#: true outlet above or below the plant's trip band, or the plant left its valid region (a
+#: non-finite state or output; its observation is then 0 and its reward that of a trip at
+#: the lower band edge).
+TRIP_REASONS = ("", "outlet_above_trip_band", "outlet_below_trip_band", "non_finite_state")
+TRIP_ABOVE, TRIP_BELOW, TRIP_NON_FINITE = 1, 2, 3
+#: A scenario must start within this many K of its setpoint in steady state (the +-5 K band
+#: plant engineers read): further away the valves are saturated at t = 0 and the episode
+#: starts as a disturbance nobody can correct.
+START_BAND_K = 5.0
 #: counter-based random channel of the coloured heat-absorption disturbance (observation
 #: noise uses channels 0 .. n_obs - 1)
 OU_CHANNEL = 31
@@ -64,20 +76,32 @@ def _interp(bt, bv, n, t):
 
 
 @njit(cache=True, error_model="numpy")
-def eval_schedules(b, t, bp_t, bp_v, bp_n, sp_nom, ou, D, sp):
-    """Disturbances D[b] and setpoint sp[b] of row b at time t (ou: coloured bias, added)."""
-    load, rate = _interp(bp_t[b, C_LOAD], bp_v[b, C_LOAD], bp_n[b, C_LOAD], t)
+def schedules(b, s, t, bp_t, bp_v, bp_n, sp_nom, ou, D, sp):
+    """Disturbances D[b] and setpoint sp[b] of row b at time t from schedule table slot s
+    (ou: coloured heat-absorption bias, added)."""
+    load, rate = _interp(bp_t[s, C_LOAD], bp_v[s, C_LOAD], bp_n[s, C_LOAD], t)
     D[b, 0] = load
     D[b, 1] = rate
-    D[b, 2] = _interp(bp_t[b, C_BIAS], bp_v[b, C_BIAS], bp_n[b, C_BIAS], t)[0] + ou[b]
-    D[b, 3] = _interp(bp_t[b, C_FOUL], bp_v[b, C_FOUL], bp_n[b, C_FOUL], t)[0]
-    D[b, 4] = _interp(bp_t[b, C_SPRAYT], bp_v[b, C_SPRAYT], bp_n[b, C_SPRAYT], t)[0]
-    sp[b] = sp_nom + _interp(bp_t[b, C_SP], bp_v[b, C_SP], bp_n[b, C_SP], t)[0]
+    D[b, 2] = _interp(bp_t[s, C_BIAS], bp_v[s, C_BIAS], bp_n[s, C_BIAS], t)[0] + ou[b]
+    D[b, 3] = _interp(bp_t[s, C_FOUL], bp_v[s, C_FOUL], bp_n[s, C_FOUL], t)[0]
+    D[b, 4] = _interp(bp_t[s, C_SPRAYT], bp_v[s, C_SPRAYT], bp_n[s, C_SPRAYT], t)[0]
+    sp[b] = sp_nom + _interp(bp_t[s, C_SP], bp_v[s, C_SP], bp_n[s, C_SP], t)[0]
 
 
 @njit(cache=True, error_model="numpy")
-def observe(b, Z, obs_idx, obs_cs, i_meas, key, counter, noise, sp, D, obs):
-    """Write the normalized observation of row b (noisy measurements, setpoint, error, load)."""
+def eval_schedules(b, t, bp_t, bp_v, bp_n, sp_nom, ou, D, sp):
+    """:func:`schedules` of row b from its own table row b (tables with one row per row)."""
+    schedules(b, b, t, bp_t, bp_v, bp_n, sp_nom, ou, D, sp)
+
+
+@njit(cache=True, error_model="numpy")
+def observe(b, Z, obs_idx, obs_cs, i_meas, key, counter, noise, sp, D, obs, meas_out):
+    """Write the normalized observation of row b (noisy measurements, setpoint, error, load).
+
+    ``meas_out[b]`` receives what the outlet thermocouple reported (noise included). A
+    non-finite value (a plant that left its valid region; the step then trips) is observed
+    as 0 (the signal's centre), so no NaN ever reaches an agent.
+    """
     n = obs_idx.shape[0]
     meas = 0.0
     for j in range(n):
@@ -86,11 +110,20 @@ def observe(b, Z, obs_idx, obs_cs, i_meas, key, counter, noise, sp, D, obs):
             v += noise[b] * gauss(key[b], counter[b], j)
         if obs_idx[j] == i_meas:
             meas = v
-        o = (v - obs_cs[j, 0]) / obs_cs[j, 1]
-        obs[b, j] = min(max(o, -OBS_LIMIT), OBS_LIMIT)
-    extra = ((sp[b] - obs_cs[n, 0]) / obs_cs[n, 1], (sp[b] - meas) / T0_K, (D[b, 0] - 0.75) / 0.25)
-    for j in range(3):
-        obs[b, n + j] = min(max(extra[j], -OBS_LIMIT), OBS_LIMIT)
+        obs[b, j] = _normalized(v, obs_cs[j, 0], obs_cs[j, 1])
+    meas_out[b] = meas
+    obs[b, n] = _normalized(sp[b], obs_cs[n, 0], obs_cs[n, 1])
+    obs[b, n + 1] = _normalized(sp[b] - meas, 0.0, T0_K)
+    obs[b, n + 2] = _normalized(D[b, 0], 0.75, 0.25)
+
+
+@njit(cache=True, error_model="numpy")
+def _normalized(v, center, scale):
+    """(v - center) / scale clipped to the transmitter range; 0 for a non-finite v."""
+    o = (v - center) / scale
+    if not np.isfinite(o):
+        return 0.0
+    return min(max(o, -OBS_LIMIT), OBS_LIMIT)
 
 
 def ou_coefficients(std: float, tau_s: float, dt: float) -> tuple[float, float]:
@@ -100,11 +133,12 @@ def ou_coefficients(std: float, tau_s: float, dt: float) -> tuple[float, float]:
 
 
 @njit(cache=True, error_model="numpy")
-def advance(Z, U, U_prev, bp_t, bp_v, bp_n, ep, ou, key, counter, ints, cfg, obs_cs, D, sp, obs,
-            out):  # fmt: skip
+def advance(X, Z, U, U_prev, slot, bp_t, bp_v, bp_n, ep, ou, key, counter, ints, cfg, obs_cs, D,
+            sp, obs, meas, out):  # fmt: skip
     """Everything after the plant step, for every row (see module docstring).
 
     Args:
+        slot: (B,) schedule-table slot of each row (rows running the same scenario share one).
         ep: (B, 5) per-row [time_s, duration_s, noise_std_C, ou_a, ou_b] (ou_coefficients);
             time advanced in place.
         ou: (B,) coloured heat-absorption disturbance, advanced in place.
@@ -113,7 +147,8 @@ def advance(Z, U, U_prev, bp_t, bp_v, bp_n, ep, ou, key, counter, ints, cfg, obs
             i_design < 0: the plant declares no design spray).
         cfg: [dt, sp_nom, trip_below_K, trip_above_K, spray_scale, reward weights...,
             secondary setpoints...].
-        out: (B, 3) written: [reward, terminated, truncated].
+        meas: (B,) written: the outlet thermocouple's reading (noise included).
+        out: (B, 3) written: [reward, trip code (TRIP_REASONS index; 0: running), truncated].
     """
     i_out, i_meas, n_obs, n_v, n_s, n_sec = ints[0], ints[1], ints[2], ints[3], ints[4], ints[5]
     i_design = ints[6]
@@ -126,14 +161,24 @@ def advance(Z, U, U_prev, bp_t, bp_v, bp_n, ep, ou, key, counter, ints, cfg, obs
     sec_sp = cfg[5 + N_WEIGHTS :]
     noise = ep[:, E_NOISE]
     for b in range(Z.shape[0]):
-        ep[b, E_TIME] += dt
         counter[b] += 1
+        ep[b, E_TIME] = counter[b] * dt  # counted, not summed: no drift over long episodes
         if ep[b, E_OU_B] > 0.0:
             ou[b] = ep[b, E_OU_A] * ou[b] + ep[b, E_OU_B] * gauss(key[b], counter[b], OU_CHANNEL)
-        eval_schedules(b, ep[b, E_TIME], bp_t, bp_v, bp_n, sp_nom, ou, D, sp)
-        observe(b, Z, obs_idx, obs_cs, i_meas, key, counter, noise, sp, D, obs)
+        schedules(b, slot[b], ep[b, E_TIME], bp_t, bp_v, bp_n, sp_nom, ou, D, sp)
+        observe(b, Z, obs_idx, obs_cs, i_meas, key, counter, noise, sp, D, obs, meas)
         e = sp[b] - Z[b, i_out]
-        term = not (-trip_hi <= e <= trip_lo)  # also catches NaN
+        code = TRIP_ABOVE if e < -trip_hi else (TRIP_BELOW if e > trip_lo else 0)
+        if not (_finite(X, b) and _finite(Z, b)):
+            code = TRIP_NON_FINITE
+        term = code != 0
+        out[b, 1] = code
+        out[b, 2] = 1.0 if ep[b, E_TIME] >= ep[b, E_DUR] - 1e-9 else 0.0
+        if code == TRIP_NON_FINITE:  # charged as a trip at the band edge
+            out[b, 0] = reward(trip_lo, 0.0, 0.0, 0.0, True, w)
+            for j in range(U.shape[1]):
+                U_prev[b, j] = U[b, j]
+            continue
         spray = 0.0
         for j in range(n_s):
             spray += Z[b, s_idx[j]]
@@ -148,8 +193,15 @@ def advance(Z, U, U_prev, bp_t, bp_v, bp_n, ep, ou, key, counter, ints, cfg, obs
         for j in range(n_sec):
             sec += temperature_cost(sec_sp[j] - Z[b, sec_idx[j]], w)
         out[b, 0] = reward(e, sec, spray, move, term, w)
-        out[b, 1] = 1.0 if term else 0.0
-        out[b, 2] = 1.0 if ep[b, E_TIME] >= ep[b, E_DUR] - 1e-9 else 0.0
+
+
+@njit(cache=True, error_model="numpy")
+def _finite(A, b):
+    """True if every entry of row b of A is finite."""
+    for i in range(A.shape[1]):
+        if not np.isfinite(A[b, i]):
+            return False
+    return True
 
 
 @njit(cache=True, error_model="numpy")
@@ -166,6 +218,12 @@ def to_commands(A, U):
         for j in range(A.shape[1]):
             U[b, j] = 0.5 * (min(max(A[b, j], -1.0), 1.0) + 1.0)
     return True
+
+
+def _value_at(scenario: sc.Scenario, channel: str, t: float) -> float:
+    """Value of one schedule of ``scenario`` at time t (the kernels' interpolation)."""
+    pts = np.asarray(getattr(scenario, channel), dtype=np.float64).reshape(-1, 2)
+    return float(_interp(pts[:, 0].copy(), pts[:, 1].copy(), pts.shape[0], t)[0])
 
 
 class Core:
@@ -193,7 +251,13 @@ class Core:
         self.key = np.zeros(B, dtype=np.uint64)
         self.counter = np.zeros(B, dtype=np.int64)
         self.out = np.zeros((B, 3))
-        self._alloc_schedules(MIN_BREAKPOINTS)
+        self.meas = np.zeros(B)
+        # schedule tables: one slot per distinct scenario in use (rows share identical ones)
+        self.slot = np.zeros(B, dtype=np.int64)
+        self._slots: dict[sc.Scenario, list[int]] = {}  # scenario -> [slot, rows using it]
+        self._free: list[int] = []
+        self._feasible: set[sc.Scenario] = set()  # scenarios whose start check passed
+        self._alloc_schedules(min(B, 4), MIN_BREAKPOINTS)
         observed = [i for i, s in enumerate(plant.outputs) if s.observed]
         if len(observed) >= OU_CHANNEL:
             raise ValueError(f"{plant.id}: at most {OU_CHANNEL - 1} observed outputs")
@@ -224,26 +288,116 @@ class Core:
         )  # fmt: skip
         self.scenario: list[sc.Scenario | None] = [None] * B
         self._info_idx = [("outlet_temp_C", self.i_out),
-                          ("measured_temp_C", idx[plant.outlet_measured]),
+                          ("measured_temp_noise_free_C", idx[plant.outlet_measured]),
                           ("spray_valve", self.valve_idx[0])]  # fmt: skip
         self._info_idx += [(name, idx[name]) for name in plant.extra_info]
         self._valves = self.valve_idx if len(self.valve_idx) > 1 else None
 
-    def _alloc_schedules(self, k: int) -> None:
-        self.bp_t = np.zeros((self.B, N_CH, k))
-        self.bp_v = np.zeros((self.B, N_CH, k))
-        self.bp_n = np.ones((self.B, N_CH), dtype=np.int64)
+    def _alloc_schedules(self, n_slots: int, k: int) -> None:
+        """(Re)allocate the schedule tables for n_slots scenarios of k breakpoints, keeping
+        the slots in use."""
+        old = getattr(self, "bp_t", None)
+        bp_t, bp_v = np.zeros((n_slots, N_CH, k)), np.zeros((n_slots, N_CH, k))
+        bp_n = np.ones((n_slots, N_CH), dtype=np.int64)
+        if old is not None:
+            n0, k0 = old.shape[0], old.shape[2]
+            bp_t[:n0, :, :k0], bp_v[:n0, :, :k0], bp_n[:n0] = old, self.bp_v, self.bp_n
+            self._free += list(range(n0, n_slots))
+        else:
+            self._free = list(range(n_slots))
+        self.bp_t, self.bp_v, self.bp_n = bp_t, bp_v, bp_n
+
+    def _assign_slot(self, b: int, scenario: sc.Scenario) -> None:
+        """Point row b at the table slot of ``scenario``, packing it if no row uses it yet."""
+        prev = self.scenario[b]
+        if prev is not None:
+            entry = self._slots[prev]
+            entry[1] -= 1
+            if entry[1] == 0:
+                del self._slots[prev]
+                self._free.append(entry[0])
+        entry = self._slots.get(scenario)
+        if entry is None:
+            need = sc.max_breakpoints([scenario])
+            if not self._free or need > self.bp_t.shape[2]:
+                n_slots = self.bp_t.shape[0]
+                grow = n_slots if self._free else min(2 * n_slots, self.B)
+                self._alloc_schedules(max(grow, n_slots), max(need, self.bp_t.shape[2]))
+            entry = self._slots[scenario] = [min(self._free), 0]
+            self._free.remove(entry[0])
+            sc.pack(scenario, self.bp_t[entry[0]], self.bp_v[entry[0]], self.bp_n[entry[0]])
+        entry[1] += 1
+        self.slot[b] = entry[0]
+
+    def _steady(self, d: np.ndarray, sp: float) -> np.ndarray:
+        """Outputs Z of the plant's steady state at disturbances d holding setpoint sp."""
+        X, Z = np.zeros((1, self.plant.n_x)), np.zeros((1, self.plant.n_z))
+        D = np.array([d], dtype=np.float64)
+        self.plant.seed_rows(X, np.zeros(1, dtype=np.uint64))
+        self.plant.steady_state(D, np.array([sp]), X)
+        self.plant.step(X, np.zeros((1, self.plant.n_u)), D, Z, dt=0.0)
+        return Z[0]
+
+    def _start_error(self, d: np.ndarray, sp: float) -> float:
+        """Setpoint minus the steady outlet at (d, sp); NaN if the steady state is not finite."""
+        z = self._steady(d, sp)
+        e = sp - z[self.i_out]
+        return e if np.all(np.isfinite(z)) else float("nan")
+
+    def check_start(self, scenario: sc.Scenario) -> None:
+        """Raise ValueError unless the plant can hold ``scenario``'s start in steady state.
+
+        The steady state at t = 0 (the coloured heat-absorption disturbance at its mean)
+        must bring the true outlet within :data:`START_BAND_K` of the setpoint with the
+        valves inside their range. The error names the initial values that make it
+        impossible (those whose return to nominal alone would make it possible).
+        """
+        if scenario in self._feasible:
+            return
+        t0 = {ch: _value_at(scenario, ch, 0.0) for ch in sc.CHANNELS}
+        sp_nom = self.plant.setpoint_C
+        d = np.array([t0["load"], 0.0, t0["heat_absorption_bias"], t0["fouling"],
+                      t0["spray_water_temp_offset_C"]])  # fmt: skip
+        sp = sp_nom + t0["setpoint_offset_C"]
+        e = self._start_error(d, sp)
+        if abs(e) <= START_BAND_K:
+            self._feasible.add(scenario)
+            return
+        culprits = []
+        for j, ch in ((2, "heat_absorption_bias"), (3, "fouling"),
+                      (4, "spray_water_temp_offset_C"), (0, "load"), (-1, "setpoint_offset_C")):
+            nominal = 1.0 if ch in ("fouling", "load") else 0.0
+            if t0[ch] == nominal:
+                continue
+            d1 = d.copy()
+            if j >= 0:
+                d1[j] = nominal
+            if abs(self._start_error(d1, sp_nom if j < 0 else sp)) <= START_BAND_K:
+                culprits.append(f"{ch} = {t0[ch]:g}")
+        z = self._steady(d, sp)
+        openings = ", ".join(f"{v:.2f}" for v in z[self.valve_idx])
+        state = "no finite steady state" if not np.isfinite(e) else (
+            f"the steady outlet is {abs(e):.1f} K {'below' if e > 0 else 'above'} the setpoint "
+            f"{sp:.1f} C with the valve openings at [{openings}]")  # fmt: skip
+        why = (f"; it could with {' or '.join('nominal ' + c.split(' =')[0] for c in culprits)} "
+               f"(here {', '.join(culprits)})") if culprits else ""  # fmt: skip
+        raise ValueError(
+            f"scenario {scenario.name!r} cannot start in a steady state {self.plant.id} can "
+            f"hold (within {START_BAND_K:g} K of the setpoint): at t = 0 (load {t0['load']:g}, "
+            f"heat_absorption_bias {t0['heat_absorption_bias']:g}, fouling {t0['fouling']:g}, "
+            f"spray_water_temp_offset_C {t0['spray_water_temp_offset_C']:g}, "
+            f"setpoint_offset_C {t0['setpoint_offset_C']:g}) {state}{why}"
+        )
 
     def reset_row(self, b: int, scenario: sc.Scenario, key: int) -> None:
-        """Start row b at t = 0 of ``scenario`` in steady state, with noise key ``key``."""
-        need = sc.max_breakpoints([scenario])
-        if need > self.bp_t.shape[2]:
-            old = (self.bp_t, self.bp_v, self.bp_n)
-            self._alloc_schedules(need)
-            self.bp_t[:, :, : old[0].shape[2]] = old[0]
-            self.bp_v[:, :, : old[1].shape[2]] = old[1]
-            self.bp_n[:] = old[2]
-        sc.pack(scenario, self.bp_t[b], self.bp_v[b], self.bp_n[b])
+        """Start row b at t = 0 of ``scenario`` in steady state, with noise key ``key``.
+
+        Raises:
+            ValueError: the plant cannot hold the scenario's start (:meth:`check_start`);
+                row b is left as it was.
+        """
+        self.check_start(scenario)
+        self._assign_slot(b, scenario)
         self.scenario[b] = scenario
         ou_ab = ou_coefficients(
             scenario.heat_absorption_noise_std,
@@ -255,8 +409,9 @@ class Core:
         self.key[b] = np.uint64(key)
         self.counter[b] = 0
         self.out[b] = 0.0
-        eval_schedules(
+        schedules(
             b,
+            self.slot[b],
             0.0,
             self.bp_t,
             self.bp_v,
@@ -273,7 +428,8 @@ class Core:
         self.U[b] = self.Z[b, self.valve_idx]
         self.U_prev[b] = self.U[b]
         observe(b, self.Z, self.ints[N_HEAD : N_HEAD + self.ints[2]], self.obs_cs, self.ints[1],
-                self.key, self.counter, self.ep[:, E_NOISE], self.sp, self.D, self.obs)  # fmt: skip
+                self.key, self.counter, self.ep[:, E_NOISE], self.sp, self.D, self.obs,
+                self.meas)  # fmt: skip
 
     def step(self, A: np.ndarray) -> None:
         """Advance every row by one control interval with actions A (shape checked) in [-1, 1].
@@ -285,17 +441,24 @@ class Core:
             raise ValueError(f"action contains NaN or infinite values: {A.tolist()!r}")
         self.plant.step(self.X, self.U, self.D, self.Z)
         advance(
-            self.Z, self.U, self.U_prev, self.bp_t, self.bp_v, self.bp_n, self.ep, self.ou,
-            self.key, self.counter, self.ints, self.cfg, self.obs_cs, self.D, self.sp, self.obs,
-            self.out,
+            self.X, self.Z, self.U, self.U_prev, self.slot, self.bp_t, self.bp_v, self.bp_n,
+            self.ep, self.ou, self.key, self.counter, self.ints, self.cfg, self.obs_cs, self.D,
+            self.sp, self.obs, self.meas, self.out,
         )  # fmt: skip
 
     def info_row(self, b: int) -> dict[str, float | np.ndarray]:
-        """Physical values of row b in engineering units (floats; an array for several valves)."""
+        """Physical values of row b in engineering units (floats; an array for several valves).
+
+        ``measured_temp_C`` is what the outlet thermocouple reported (noise included, as in
+        the observation), ``measured_temp_noise_free_C`` the thermocouple's own temperature
+        (its lag, without the noise); ``trip_reason`` is "" or one of :data:`TRIP_REASONS`.
+        """
         z = self.Z[b].tolist()
         info = {name: z[i] for name, i in self._info_idx}
+        info["measured_temp_C"] = float(self.meas[b])
         info["time_s"] = float(self.ep[b, 0])
         info["setpoint_C"] = float(self.sp[b])
+        info["trip_reason"] = TRIP_REASONS[int(self.out[b, 1])]
         info["load"] = float(self.D[b, 0])
         spray = 0.0
         for i in self.spray_idx:
@@ -309,8 +472,10 @@ class Core:
         """Physical values of every row, in engineering units (arrays of shape (B,) or (B, k))."""
         Z = self.Z
         info = {name: Z[:, i].copy() for name, i in self._info_idx}  # same keys as info_row
+        info["measured_temp_C"] = self.meas.copy()
         info["time_s"] = self.ep[:, 0].copy()
         info["setpoint_C"] = self.sp.copy()
+        info["trip_reason"] = np.array(TRIP_REASONS)[self.out[:, 1].astype(np.int64)]
         info["load"] = self.D[:, 0].copy()
         info["spray_flow_kg_s"] = Z[:, self.spray_idx].sum(axis=1)
         if self._valves is not None:
@@ -318,23 +483,30 @@ class Core:
         return info
 
 
-def check_action(action, shape: tuple[int, ...]) -> np.ndarray:
-    """Check an action batch's shape; return it as a float array of ``shape``.
+def check_action(action: Any, shape: tuple[int, ...]) -> np.ndarray:
+    """An action batch of exactly ``shape`` (n_rows, n_actuators) as a float64 array.
 
-    Finiteness is checked by :meth:`Core.step` (compiled, before anything changes).
+    Accepted: any array-like of real numbers (every float dtype, integers; not bool,
+    complex, strings or objects) of shape ``shape``; for the single env (one row) also of
+    shape (n_actuators,) or, with one actuator, a scalar. Finiteness is checked by
+    :meth:`Core.step` (compiled, before anything changes).
+
+    Raises:
+        ValueError: anything else, naming the expected shape.
     """
-    a = np.asarray(action)
-    if a.dtype.kind != "f":
-        try:
-            a = a.astype(np.float64)
-        except (TypeError, ValueError) as exc:
-            raise ValueError(f"action must be numeric, got {action!r}") from exc
+    single = shape[0] == 1
+    expected = f"({shape[1]},)" if single else str(shape)
+    try:
+        a = np.asarray(action)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"action must be an array of shape {expected}: {exc}") from None
+    if a.dtype.kind not in "fiu":
+        raise ValueError(
+            f"action must hold real numbers (float or integer), got dtype {a.dtype} "
+            f"({str(action)[:80]})"
+        )
     if a.shape != shape:
-        if a.ndim <= len(shape) and a.size == shape[0] * shape[1]:
-            a = a.reshape(shape)
-        else:
-            raise ValueError(
-                f"action has shape {np.shape(action)}, "
-                f"expected {shape[1:] if shape[0] == 1 else shape}"
-            )
-    return a
+        if not (single and (a.shape == shape[1:] or (a.shape == () and shape[1] == 1))):
+            raise ValueError(f"action has shape {a.shape}, expected {expected}")
+        a = a.reshape(shape)
+    return np.ascontiguousarray(a, dtype=np.float64)

@@ -85,8 +85,8 @@ class SteamTempEnv(gym.Env):
         if self._needs_reset:
             raise RuntimeError("call reset() before step() (and after the episode ends)")
         self.core.step(check_action(action, self._shape))
-        r, term, trunc = self.core.out[0].tolist()
-        terminated, truncated = term > 0.5, trunc > 0.5
+        r, code, trunc = self.core.out[0].tolist()
+        terminated, truncated = code > 0.5, trunc > 0.5
         self._needs_reset = terminated or truncated
         info = self._info()
         if self.render_mode:

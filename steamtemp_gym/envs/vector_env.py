@@ -53,27 +53,64 @@ class SteamTempVectorEnv(VectorEnv):
             )
             self.core.reset_row(int(b), scenario, key)
 
-    def reset(self, *, seed: int | list[int] | None = None, options: dict | None = None):
+    def reset(self, *, seed: int | list[int | None] | None = None, options: dict | None = None):
+        """Reset every sub-env, or those of ``options={"reset_mask": mask}`` (Gymnasium's
+        partial reset: a bool array of shape (num_envs,); the others keep their state, and
+        ``info`` masks are False for them).
+
+        ``seed``: None, an integer (sub-env i gets seed + i) or a list of num_envs integers
+        or None entries (the sub-envs not reset ignore theirs).
+        """
+        options = dict(options or {})
+        mask = options.pop("reset_mask", None)
         if options:
-            raise ValueError(f"reset() takes no options, got {sorted(options)}")
-        if seed is not None:
-            seeds = (
-                [seed + i for i in range(self.num_envs)] if isinstance(seed, int) else list(seed)
+            raise ValueError(f"unknown reset option(s) {sorted(options)}; valid: ['reset_mask']")
+        if mask is None:
+            mask = np.ones(self.num_envs, dtype=bool)
+        elif not (isinstance(mask, np.ndarray) and mask.dtype == np.bool_
+                  and mask.shape == (self.num_envs,)):  # fmt: skip
+            raise ValueError(
+                f"options['reset_mask'] must be a numpy bool array of shape ({self.num_envs},), "
+                f"got {type(mask).__name__} {getattr(mask, 'dtype', '')} {np.shape(mask)}"
             )
+        elif not self._started and not mask.all():
+            raise ValueError("the first reset() must reset every sub-env (no reset_mask)")
+        rows = np.flatnonzero(mask)
+        for b, s in zip(rows, self._seeds(seed)[rows], strict=True):
+            if s is not None:
+                self._rngs[b] = seeding.np_random(int(s))[0]
+        self._reset_rows(rows)
+        self._autoreset[rows] = False
+        self._started = True
+        return self.core.obs.copy(), self._info(mask)
+
+    def _seeds(self, seed: Any) -> np.ndarray:
+        """Per-sub-env seeds (object array of int or None) of a reset() ``seed`` argument."""
+        def valid(s: Any) -> bool:
+            return s is None or (isinstance(s, (int, np.integer)) and not isinstance(s, bool)
+                                 and s >= 0)  # fmt: skip
+
+        if seed is None or valid(seed):
+            seeds = [None if seed is None else int(seed) + i for i in range(self.num_envs)]
+        elif isinstance(seed, (list, tuple, np.ndarray)) and all(valid(s) for s in seed):
+            seeds = [None if s is None else int(s) for s in seed]
             if len(seeds) != self.num_envs:
                 raise ValueError(f"expected {self.num_envs} seeds, got {len(seeds)}")
-            self._rngs = [seeding.np_random(s)[0] for s in seeds]
-        self._reset_rows(range(self.num_envs))
-        self._autoreset[:] = False
-        self._started = True
-        return self.core.obs.copy(), self._info()
+        else:
+            raise ValueError(
+                "seed must be None, a non-negative integer or a list of num_envs of them, "
+                f"got {str(seed)[:100]!r}"
+            )
+        out = np.empty(self.num_envs, dtype=object)
+        out[:] = seeds
+        return out
 
     def step(self, actions):
         if not self._started:
             raise RuntimeError("call reset() before step()")
         self.core.step(check_action(actions, self._shape))
         rewards = self.core.out[:, 0].copy()
-        terminated = self.core.out[:, 1] > 0.5
+        terminated = self.core.out[:, 1] > 0.5  # a trip code
         truncated = self.core.out[:, 2] > 0.5
         done_before = np.flatnonzero(self._autoreset)
         if done_before.size:
@@ -84,11 +121,11 @@ class SteamTempVectorEnv(VectorEnv):
         self._autoreset = terminated | truncated
         return self.core.obs.copy(), rewards, terminated, truncated, self._info()
 
-    def _info(self) -> dict[str, Any]:
+    def _info(self, mask: np.ndarray | None = None) -> dict[str, Any]:
+        """Info columns, each with its own ``_key`` mask array (True where the row reports)."""
         info = self.core.info_columns()
-        mask = np.ones(self.num_envs, dtype=bool)
         for k in list(info):
-            info["_" + k] = mask
+            info["_" + k] = np.ones(self.num_envs, dtype=bool) if mask is None else mask.copy()
         return info
 
     def close_extras(self, **kwargs: Any) -> None:

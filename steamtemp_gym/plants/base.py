@@ -11,6 +11,7 @@ inputs. U holds actuator commands in [0, 1] (the env maps actions in [-1, 1]).
 from __future__ import annotations
 
 import dataclasses
+import typing
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any, ClassVar
@@ -56,24 +57,75 @@ class Signal:
     description: str = ""
 
 
+#: Control interval and integrator sub-steps every plant accepts (s; count): beyond them a
+#: step either loses the plant's dynamics or costs seconds.
+DT_RANGE_S = (0.01, 60.0)
+SUBSTEP_RANGE = (1, 50)
+#: A parameter without a physical range of its own must stay within this factor of its
+#: default (calibrated plants are not valid orders of magnitude away from their design).
+DEFAULT_SPAN = 1e3
+
+
+def _check_type(cls_name: str, name: str, kind: Any, v: Any) -> None:
+    """Raise ValueError unless v is a value of the declared field type (bool, int or float)."""
+    is_bool = isinstance(v, (bool, np.bool_))
+    if kind is bool:
+        ok = is_bool
+    elif kind is int:
+        ok = isinstance(v, (int, np.integer)) and not is_bool
+    elif kind is float:
+        ok = isinstance(v, (int, float, np.integer, np.floating)) and not is_bool
+    else:
+        return
+    if not ok:
+        raise ValueError(
+            f"{cls_name}.{name} must be of type {kind.__name__}, got {type(v).__name__} "
+            f"{str(v)[:50]!r}"
+        )
+
+
 def validate_params(
     params: Any, positive: tuple[str, ...] = (), bounds: dict | None = None
 ) -> None:
-    """Raise ValueError naming the field for non-finite, non-positive or out-of-bound values."""
+    """Raise ValueError naming the field for a value of the wrong type, non-finite,
+    non-positive (``positive``) or outside its range.
+
+    Ranges: ``bounds`` (physical ranges), :data:`DT_RANGE_S` and :data:`SUBSTEP_RANGE` for
+    ``dt_s`` and ``n_substeps``, and for every other number a factor :data:`DEFAULT_SPAN`
+    either side of its default (a default of 0: |value| <= DEFAULT_SPAN).
+    """
+    cls = type(params)
+    name_cls = cls.__name__
+    hints = typing.get_type_hints(cls)
+    bounds = dict(bounds or {})
+    bounds.setdefault("dt_s", DT_RANGE_S)
+    bounds.setdefault("n_substeps", SUBSTEP_RANGE)
     for f in dataclasses.fields(params):
         v = getattr(params, f.name)
-        if isinstance(v, (int, float)) and not isinstance(v, bool):
-            if not np.isfinite(v):
-                raise ValueError(f"{type(params).__name__}.{f.name} must be finite, got {v!r}")
+        _check_type(name_cls, f.name, hints.get(f.name), v)
+        if isinstance(v, (bool, np.bool_)) or not isinstance(v, (int, float, np.number)):
+            continue
+        if not np.isfinite(v):
+            raise ValueError(f"{name_cls}.{f.name} must be finite, got {v!r}")
+        if f.name not in bounds and isinstance(f.default, (int, float)):
+            d = abs(float(f.default))
+            lo, hi = (d / DEFAULT_SPAN, d * DEFAULT_SPAN) if d > 0 else (0.0, DEFAULT_SPAN)
+            if not lo <= abs(v) <= hi:
+                raise ValueError(
+                    f"{name_cls}.{f.name} = {v!r} is more than a factor {DEFAULT_SPAN:g} away "
+                    f"from its default {f.default!r} (allowed |value| in [{lo:g}, {hi:g}])"
+                )
     for name in positive:
         v = getattr(params, name)
         if not v > 0:
-            raise ValueError(f"{type(params).__name__}.{name} must be > 0, got {v!r}")
+            raise ValueError(f"{name_cls}.{name} must be > 0, got {v!r}")
     for name, (lo, hi) in bounds.items():
+        if not hasattr(params, name):
+            continue
         v = getattr(params, name)
         if not lo <= v <= hi:
             raise ValueError(
-                f"{type(params).__name__}.{name} = {v!r} is outside the physical range [{lo}, {hi}]"
+                f"{name_cls}.{name} = {v!r} is outside the physical range [{lo}, {hi}]"
             )
 
 

@@ -515,12 +515,21 @@ def fuel_demand(x, d, P):
 def cold_reheat(P, L, p_crh, T_crh):
     """Enthalpy (J/kg) of the HP exhaust at (p_crh, T_crh) and dT/dh there.
 
-    Two Newton steps on T(p, h) from the rated-trajectory table value (cheaper than h_pT).
+    Eq. (14)'s temperature ratio holds for a superheated exhaust. At low load with a cold
+    main steam it can fall to or below the saturation temperature at p_crh, where the real
+    exhaust is wet steam of dryness just under 1: the exhaust is then taken as dry saturated
+    steam (h = h_v(p_crh), its few per cent of moisture neglected), never as water. Above
+    saturation: Newton on T(p, h) from the rated-trajectory table value (cheaper than h_pT;
+    T(h) is convex in the superheated region, so the iterates stay above saturation).
     """
-    h = _table(P, TB_HCRH, L)
+    sat = sat_p(p_crh)
+    h_v = sat[4]
+    if T_crh <= sat[0] + 0.01:
+        return h_v, T_dTdh_ph(p_crh, h_v + 10.0)[1]
+    h = max(_table(P, TB_HCRH, L), h_v + 10.0)
     T, dTdh = T_dTdh_ph(p_crh, h)
-    for _ in range(2):
-        h += (T_crh - T) / dTdh
+    for _ in range(3):
+        h = max(h + (T_crh - T) / dTdh, h_v)
         T, dTdh = T_dTdh_ph(p_crh, h)
     return h, dTdh
 
@@ -834,7 +843,7 @@ def steady(D, sp_K, P, X):
         x[S_F] = lf
         W_t, W_rh, p_rh, p_crh, _ = _reheat(P, p, L)
         T_ms = T_ph(p, h_ms)
-        h_crh = h_pT(p_crh, T_ms * (p_crh / p) ** P[I_KE])
+        h_crh = cold_reheat(P, L, p_crh, T_ms * (p_crh / p) ** P[I_KE])[0]
         _section_steady(x, P, RH, h_crh, W_rh, p_rh, lf, d)
         L_ff = min(max(L + P[I_TBIR] * d[1], 0.05), 1.3)
         x[int(P[I_STRIM])] = lf / _table(P, TB_FUEL, L_ff) - 1.0

@@ -225,9 +225,6 @@ class CascadeParams:
                 "n_substeps": (1, 1),
             },
         )
-        for name in ("lead_order", "inertia_order", "n_substeps"):
-            if int(getattr(self, name)) != getattr(self, name):
-                raise ValueError(f"CascadeParams.{name} must be an integer")
         for name in ("spray_rated_kg_s", "spray_half_load_kg_s"):
             if not getattr(self, name) < self.spray_max_kg_s:
                 raise ValueError(f"CascadeParams.{name} must be below spray_max_kg_s")
