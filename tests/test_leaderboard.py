@@ -1,0 +1,369 @@
+"""The leaderboard CLI (agents/leaderboard.py): flags checked before anything runs, the
+per-episode record, --resume after a crash, failed episodes, strict JSON.
+
+Tiny scenarios (60 s) on Cascade300MW (the cheapest plant to build) with a frozen-valve
+policy keep these in seconds; one test runs the real baseline on the README's scenario.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import baselines
+import steamtemp_gym
+from agents import leaderboard as lb
+from agents.difficulty import FrozenValves
+
+IDS = steamtemp_gym.ENV_IDS
+ENV = "steamtemp/Cascade300MW-v0"
+ENV2 = "steamtemp/DrumBoilerSH-v0"
+TINY = """name: tiny
+duration_s: 60
+load: [[0, 1.0], [30, 0.95]]
+"""
+
+
+class Scripted(FrozenValves):
+    """Frozen valves that raise ``FAIL[(name, seed)]`` at the first step of that episode."""
+
+    FAIL: dict[tuple[str, int], BaseException] = {}
+
+    def __init__(self, env, name: str) -> None:
+        super().__init__(env)
+        self.env, self.name = env, name
+
+    def predict(self, observation, state=None, episode_start=None, deterministic=True):
+        exc = self.FAIL.get((self.name, self.env.unwrapped.np_random_seed))
+        if exc is not None:
+            raise exc
+        return super().predict(observation, state, episode_start, deterministic)
+
+
+@pytest.fixture
+def fake_policies(monkeypatch):
+    """Policies ``frozen`` and ``flaky`` (Scripted) next to the baselines."""
+    monkeypatch.setattr(baselines, "NAMES", (*baselines.NAMES, "frozen", "flaky"))
+    real = lb._make_policy
+
+    def make(name, env_id, env):
+        return Scripted(env, name) if name in ("frozen", "flaky") else real(name, env_id, env)
+
+    monkeypatch.setattr(lb, "_make_policy", make)
+    monkeypatch.setattr(Scripted, "FAIL", {})
+    return Scripted.FAIL
+
+
+@pytest.fixture
+def tiny(tmp_path) -> Path:
+    path = tmp_path / "tiny.yaml"
+    path.write_text(TINY)
+    return path
+
+
+def _args(tiny: Path, out: Path, **flags: str) -> list[str]:
+    base = {"--envs": ENV, "--policies": "frozen", "--scenarios": str(tiny), "--seeds": "0",
+            "--out": str(out)}  # fmt: skip
+    base.update(flags)
+    return [f"{k}={v}" for k, v in base.items()]
+
+
+def _strict_load(path: Path):
+    def reject(token):
+        raise AssertionError(f"non-strict JSON token {token} in {path}")
+
+    return json.loads(path.read_text(), parse_constant=reject)
+
+
+def _jsonl(path: Path) -> list[dict]:
+    text = path.read_text()
+    assert text.endswith("\n")
+    return [_strict_load_line(line) for line in text.splitlines()]
+
+
+def _strict_load_line(line: str) -> dict:
+    def reject(token):
+        raise AssertionError(f"non-strict JSON token {token}")
+
+    return json.loads(line, parse_constant=reject)
+
+
+# --------------------------------------------------------------------------- bad flags
+BAD_FLAGS = [
+    ({"--envs": "steamtemp/Nope-v0"}, ["--envs", "Nope-v0", "Cascade300MW-v0"]),
+    ({"--envs": ""}, ["--envs", "empty"]),
+    ({"--envs": " , "}, ["--envs", "empty"]),
+    ({"--envs": f"{ENV},nope"}, ["--envs", "nope"]),
+    ({"--policies": "nope"}, ["--policies", "nope", "cascade_pi"]),
+    ({"--policies": ""}, ["--policies", "empty"]),
+    ({"--policies": "frozen,sb3:nope"}, ["--policies", "sb3:nope"]),
+    ({"--scenarios": "nope"}, ["--scenarios", "nope", "setpoint_step"]),
+    ({"--scenarios": ""}, ["--scenarios", "empty"]),
+    ({"--scenarios": "setpoint_step,nope"}, ["--scenarios", "nope"]),
+    ({"--scenarios": "missing.yaml"}, ["--scenarios", "missing.yaml"]),
+    ({"--seeds": ""}, ["--seeds", "empty"]),
+    ({"--seeds": ","}, ["--seeds", "empty"]),
+    ({"--seeds": "a,b"}, ["--seeds", "'a'"]),
+    ({"--seeds": "-1"}, ["--seeds", "'-1'", ">= 0"]),
+    ({"--seeds": "0,-1"}, ["--seeds", "'-1'"]),
+    ({"--seeds": "1.5"}, ["--seeds", "'1.5'"]),
+    ({"--seeds": "1 2"}, ["--seeds", "'1 2'"]),
+    ({"--seeds": "0x10"}, ["--seeds", "'0x10'"]),
+    ({"--seeds": "4-2"}, ["--seeds", "4-2"]),
+    ({"--seeds": "0-99999999"}, ["--seeds", "10000"]),
+    ({"--seeds": "9" * 30}, ["--seeds", "larger than"]),
+    ({"--out": ""}, ["--out", "empty"]),
+    ({"--out": " "}, ["--out", "empty"]),
+]
+
+
+@pytest.mark.parametrize(("flags", "words"), BAD_FLAGS, ids=[repr(f) for f, _ in BAD_FLAGS])
+def test_bad_flag_is_an_argparse_error_and_writes_nothing(
+    flags, words, tiny, tmp_path, fake_policies, capsys
+):
+    out = tmp_path / "out"
+    with pytest.raises(SystemExit) as exc:
+        lb.main(_args(tiny, out, **flags))
+    assert exc.value.code == 2
+    err = capsys.readouterr().err
+    assert err.startswith("usage: steamtemp-leaderboard")
+    assert "Traceback" not in err
+    for w in words:
+        assert w in err, (w, err)
+    assert not out.exists()
+
+
+def test_bad_scenario_files_name_the_file_and_field(tiny, tmp_path, fake_policies, capsys):
+    """Unreadable or invalid YAML, after a good scenario: exit 2, nothing written."""
+    cases = {
+        "neg.yaml": ("name: n\nduration_s: -1\nload: 1.0\n", "duration_s"),
+        "range.yaml": ("name: r\nduration_s: 60\nload: [[0, 3.0]]\n", "load"),
+        "bad.yaml": ("name: [unclosed\n", "bad.yaml"),
+        "field.yaml": ("name: f\nduration_s: 60\nload: 1.0\nloud: 2\n", "loud"),
+    }
+    out = tmp_path / "out"
+    for fname, (text, word) in cases.items():
+        path = tmp_path / fname
+        path.write_text(text)
+        with pytest.raises(SystemExit) as exc:
+            lb.main(_args(tiny, out, **{"--scenarios": f"{tiny},{path}"}))
+        assert exc.value.code == 2
+        err = capsys.readouterr().err
+        assert "--scenarios" in err and fname in err and word in err, err
+        assert "Traceback" not in err
+        assert not out.exists()
+
+
+def test_bad_out_is_an_argparse_error(tiny, tmp_path, fake_policies, capsys):
+    afile = tmp_path / "afile"
+    afile.write_text("x")
+    record_dir = tmp_path / "recdir"
+    (record_dir / lb.EPISODES).mkdir(parents=True)
+    cases = [
+        (afile, "not a directory"),
+        (afile / "sub", "not a directory"),
+        (Path("/proc/steamtemp_leaderboard_test/out"), "--out"),  # unwritable even for root
+        (record_dir, "is not a file"),
+    ]
+    for out, word in cases:
+        with pytest.raises(SystemExit) as exc:
+            lb.main(_args(tiny, out))
+        assert exc.value.code == 2
+        err = capsys.readouterr().err
+        assert "--out" in err and word in err and "Traceback" not in err, err
+    assert afile.read_text() == "x"
+    assert not Path("/proc/steamtemp_leaderboard_test").exists()
+
+
+def test_existing_record_needs_resume(tiny, tmp_path, fake_policies, capsys):
+    out = tmp_path / "out"
+    lb.main(_args(tiny, out))
+    before = (out / lb.EPISODES).read_text()
+    with pytest.raises(SystemExit) as exc:
+        lb.main(_args(tiny, out))
+    assert exc.value.code == 2
+    err = capsys.readouterr().err
+    assert "--resume" in err and "--out" in err
+    assert (out / lb.EPISODES).read_text() == before
+
+
+def test_corrupt_record_line_is_an_error_on_resume(tiny, tmp_path, fake_policies, capsys):
+    out = tmp_path / "out"
+    lb.main(_args(tiny, out, **{"--seeds": "0,1"}))
+    lines = (out / lb.EPISODES).read_text().splitlines()
+    (out / lb.EPISODES).write_text("\n".join(["{not json", *lines]) + "\n")
+    with pytest.raises(SystemExit) as exc:
+        lb.main([*_args(tiny, out, **{"--seeds": "0,1"}), "--resume"])
+    assert exc.value.code == 2
+    err = capsys.readouterr().err
+    assert "line 1" in err and "--resume" in err and "Traceback" not in err
+
+
+def test_duplicates_are_dropped_in_order(tiny, tmp_path, fake_policies, capsys):
+    ap = lb.make_parser()
+    flags = {
+        "--envs": f"{ENV}, {ENV}",
+        "--policies": "frozen,frozen, flaky",
+        "--scenarios": f"{tiny},{tiny.parent}/./tiny.yaml",
+        "--seeds": " 3, 0-2,1,,2 ",
+    }
+    args = ap.parse_args(_args(tiny, tmp_path / "out", **flags))
+    plan = lb.build_plan(ap, args)
+    assert plan.envs == [ENV]
+    assert plan.policies == {ENV: ["frozen", "flaky"]}
+    assert plan.scenarios == [str(tiny)]
+    assert plan.seeds == [3, 0, 1, 2]
+    assert "duplicates dropped" in capsys.readouterr().err
+    assert not (tmp_path / "out").exists()
+
+
+def test_default_run_is_valid_without_running(monkeypatch, tmp_path):
+    """The README's main job: every default env, policy, scenario and seed resolves."""
+    monkeypatch.chdir(tmp_path)
+    ap = lb.make_parser()
+    plan = lb.build_plan(ap, ap.parse_args([]))
+    assert plan.envs == list(IDS) and plan.seeds == [0, 1, 2]
+    assert plan.scenarios == list(lb.DEFAULT_SCENARIOS)
+    n_policies = len(baselines.NAMES)
+    assert len(list(plan.grid())) == len(IDS) * len(lb.DEFAULT_SCENARIOS) * 3 * n_policies
+    assert not (tmp_path / "leaderboard_out").exists()
+
+
+def test_help_documents_failures_and_resume(capsys):
+    with pytest.raises(SystemExit) as exc:
+        lb.main(["--help"])
+    assert exc.value.code == 0
+    text = capsys.readouterr().out
+    for word in ("--resume", "episodes.jsonl", "exit code is 1", "0-4", "duplicates"):
+        assert word in text
+
+
+# --------------------------------------------------------------------------- running
+def test_resume_after_a_crash_completes_without_duplicates(tiny, tmp_path, fake_policies):
+    """Killed in the 4th of 8 episodes, plus a half-written line: --resume runs the rest."""
+    out = tmp_path / "out"
+    argv = _args(tiny, out, **{"--envs": f"{ENV},{ENV2}", "--seeds": "0,1",
+                               "--policies": "frozen,flaky"})  # fmt: skip
+    fake_policies[("flaky", 1)] = KeyboardInterrupt()  # ENV: frozen 0, 1, flaky 0, [flaky 1]
+    with pytest.raises(SystemExit) as exc:
+        lb.main(argv)
+    assert exc.value.code == 130
+    rows = _jsonl(out / lb.EPISODES)
+    assert [(r["env"], r["policy"], r["seed"]) for r in rows] == [
+        (ENV, "frozen", 0), (ENV, "frozen", 1), (ENV, "flaky", 0)]  # fmt: skip
+    assert len(_strict_load(out / "leaderboard.json")) == 3  # what finished, rebuilt
+    with (out / lb.EPISODES).open("a") as f:  # a crash in the middle of a write
+        f.write(json.dumps(rows[-1])[:25])
+    fake_policies.clear()
+    lb.main([*argv, "--resume"])
+    rows = _jsonl(out / lb.EPISODES)
+    keys = [(r["env"], r["scenario"], r["policy"], r["seed"]) for r in rows]
+    assert len(keys) == len(set(keys)) == 8
+    board = _strict_load(out / "leaderboard.json")
+    assert [(r["env"], r["policy"], r["seed"]) for r in board] == [
+        (e, p, s) for e in (ENV, ENV2) for p in ("frozen", "flaky") for s in (0, 1)]  # fmt: skip
+    assert all(r["metrics"] is not None and "error" not in r for r in board)
+    assert {p.name for p in (out / "plots").glob("*.png")} == {
+        "Cascade300MW-v0__tiny.png", "DrumBoilerSH-v0__tiny.png"}  # fmt: skip
+    # a finished run resumed again runs nothing and rebuilds the same board
+    lb.main([*argv, "--resume"])
+    assert len(_jsonl(out / lb.EPISODES)) == 8
+    assert _strict_load(out / "leaderboard.json") == board
+
+
+def test_failed_episode_is_recorded_and_the_run_goes_on(tiny, tmp_path, fake_policies, capsys):
+    out = tmp_path / "out"
+    argv = _args(tiny, out, **{"--seeds": "0,1", "--policies": "frozen,flaky"})
+    fake_policies[("flaky", 0)] = RuntimeError("controller diverged")
+    with pytest.raises(SystemExit) as exc:
+        lb.main(argv)
+    assert exc.value.code == 1
+    err = capsys.readouterr().err
+    assert "1 of 4 episodes failed" in err and "controller diverged" in err and "--resume" in err
+    rows = _jsonl(out / lb.EPISODES)
+    assert len(rows) == 4
+    (bad,) = [r for r in rows if "error" in r]
+    assert (bad["policy"], bad["seed"], bad["metrics"]) == ("flaky", 0, None)
+    assert "RuntimeError: controller diverged" in bad["error"] and "Traceback" in bad["traceback"]
+    board = _strict_load(out / "leaderboard.json")
+    assert len(board) == 4 and sum("error" in r for r in board) == 1
+    assert all("traceback" not in r for r in board)
+    md = (out / "leaderboard.md").read_text()
+    assert "Failed episodes" in md and "controller diverged" in md and "| flaky |" in md
+    # the cause fixed, --resume runs only the failed episode
+    fake_policies.clear()
+    lb.main([*argv, "--resume"])
+    rows = _jsonl(out / lb.EPISODES)
+    assert len(rows) == 5 and (rows[-1]["policy"], rows[-1]["seed"]) == ("flaky", 0)
+    board = _strict_load(out / "leaderboard.json")
+    assert len(board) == 4 and not any("error" in r for r in board)
+    assert "Failed episodes" not in (out / "leaderboard.md").read_text()
+
+
+def test_policy_that_cannot_be_built_fails_its_episodes_only(
+    tiny, tmp_path, fake_policies, monkeypatch
+):
+    make = lb._make_policy
+
+    def broken(name, env_id, env):
+        if name == "flaky":
+            raise ValueError("no such tuning")
+        return make(name, env_id, env)
+
+    monkeypatch.setattr(lb, "_make_policy", broken)
+    out = tmp_path / "out"
+    with pytest.raises(SystemExit) as exc:
+        lb.main(_args(tiny, out, **{"--seeds": "0,1", "--policies": "flaky,frozen"}))
+    assert exc.value.code == 1
+    board = _strict_load(out / "leaderboard.json")
+    assert [("error" in r, r["policy"]) for r in board] == [
+        (True, "flaky"), (True, "flaky"), (False, "frozen"), (False, "frozen")]  # fmt: skip
+    assert list((out / "plots").glob("*.png"))
+
+
+def test_changed_scenario_runs_again_on_resume(tiny, tmp_path, fake_policies):
+    out = tmp_path / "out"
+    argv = _args(tiny, out)
+    lb.main(argv)
+    (fp,) = {r["fingerprint"] for r in _jsonl(out / lb.EPISODES)}
+    tiny.write_text(TINY.replace("0.95", "0.9"))
+    lb.main([*argv, "--resume"])
+    rows = _jsonl(out / lb.EPISODES)
+    assert len(rows) == 2 and rows[1]["fingerprint"] != fp
+    (row,) = _strict_load(out / "leaderboard.json")
+    assert row["fingerprint"] == rows[1]["fingerprint"]
+
+
+def test_outputs_are_strict_json(tiny, tmp_path, fake_policies):
+    """Metrics that do not apply (no setpoint step: no settling time) are null, not NaN."""
+    out = tmp_path / "out"
+    lb.main(_args(tiny, out, **{"--seeds": "0-1"}))
+    board = _strict_load(out / "leaderboard.json")
+    assert len(board) == 2
+    for r in board:
+        assert r["metrics"]["settling_time_s"] is None
+        assert set(r) == {"env", "scenario", "policy", "seed", "fingerprint", "metrics"}
+        assert all(v is None or np.isfinite(v) for v in r["metrics"].values())
+    assert _jsonl(out / lb.EPISODES) == board
+    assert "nan" in (out / "leaderboard.md").read_text()  # the table shows what is missing
+    assert lb.dumps({"a": float("inf"), "b": np.float32("nan"), "c": [np.int64(3)]}) == (
+        '{"a": null, "b": null, "c": [3]}'
+    )
+
+
+def test_leaderboard_cli_with_the_baseline(tmp_path):
+    """The real baseline on a named scenario (moved from tests/test_baselines.py)."""
+    lb.main(["--envs", IDS[0], "--scenarios", "setpoint_step", "--seeds", "0,1", "--out",
+             str(tmp_path)])  # fmt: skip
+    rows = _strict_load(tmp_path / "leaderboard.json")
+    assert len(rows) == 2 * len(baselines.NAMES)
+    assert {r["seed"] for r in rows} == {0, 1}
+    assert all(np.isfinite(r["metrics"]["iae_K_s"]) for r in rows)
+    md = (tmp_path / "leaderboard.md").read_text()
+    assert "cascade_pi" in md and "setpoint_step" in md
+    assert list((tmp_path / "plots").glob("*.png"))
+    with pytest.raises(SystemExit):
+        lb.main(["--envs", "steamtemp/Nope-v0", "--out", str(tmp_path / "x")])
