@@ -13,6 +13,8 @@ from baselines.policy import Policy
 
 _REGISTRY: dict[str, str] = {
     "cascade_pi": "baselines.cascade_pi:CascadePI",
+    "fao_sf": "baselines.fao:FaoSF",
+    "fao_fac": "baselines.fao:FaoFAC",
 }
 NAMES: tuple[str, ...] = tuple(_REGISTRY)
 
