@@ -13,6 +13,7 @@ from baselines.policy import Policy
 
 _REGISTRY: dict[str, str] = {
     "cascade_pi": "baselines.cascade_pi:CascadePI",
+    "fuzzy_p2id": "baselines.fuzzy_p2id:FuzzyP2ID",
 }
 NAMES: tuple[str, ...] = tuple(_REGISTRY)
 
