@@ -15,6 +15,7 @@ _REGISTRY: dict[str, str] = {
     "cascade_pi": "baselines.cascade_pi:CascadePI",
     "fao_sf": "baselines.fao:FaoSF",
     "fao_fac": "baselines.fao:FaoFAC",
+    "fuzzy_p2id": "baselines.fuzzy_p2id:FuzzyP2ID",
 }
 NAMES: tuple[str, ...] = tuple(_REGISTRY)
 
