@@ -13,6 +13,8 @@ from baselines.policy import Policy
 
 _REGISTRY: dict[str, str] = {
     "cascade_pi": "baselines.cascade_pi:CascadePI",
+    "neuro_pid_mee": "baselines.neuro_pid:NeuroPIDMEE",
+    "neuro_pid_mse": "baselines.neuro_pid:NeuroPIDMSE",
 }
 NAMES: tuple[str, ...] = tuple(_REGISTRY)
 
