@@ -125,7 +125,7 @@ def test_initial_net_gives_the_commissioning_gains():
     assert np.all(scale >= 1.0) and k0[3] == 1.0
     # SIMC PI on the identified outer process (inner P loop closed): K ~ 2.09 * 16/17
     m = npid.outer_models(ID, "{}")[0]
-    assert m.K == pytest.approx(2.09 * 16.08 / 17.08, rel=0.03)
+    assert m.K == pytest.approx(2.09 * 16.08 / 17.08, rel=0.01)
     w2, _ = npid.initial_weights(k0[:3])
     np.testing.assert_array_equal(w, w2)  # reproducible
 
@@ -180,25 +180,26 @@ def ci95(x: np.ndarray) -> tuple[float, float, float]:
 
 def _check_claim(seeds: int, tol: float) -> None:
     """What we measure (20 seeds, 95 % CI; whole episode mean / std, K):
-    MEE 1.465 [1.328, 1.602] / 2.845 [2.699, 2.991], MSE 1.438 [1.304, 1.572] / 2.846
-    [2.700, 2.992], cascade_pi 0.575 / 3.033; after 800 s std MEE 1.775 [1.605, 1.945],
-    MSE 1.778 [1.607, 1.949], cascade_pi 2.233 [2.028, 2.437]. Paper: MEE 0.4452 / 1.7049,
-    MSE 0.5093 / 1.7153. Paired MEE - MSE (same seeds, same disturbances): std -0.0007
-    [-0.0027, 0.0013] K (p = 0.45), late std -0.0033 [-0.0071, 0.0005]: no measurable
-    entropy/variance benefit of MEE; mean +0.027 [0.022, 0.031] K (MEE slightly worse).
+    MEE 1.449 [1.315, 1.583] / 2.757 [2.619, 2.896], MSE 1.421 [1.289, 1.553] / 2.759
+    [2.620, 2.897], cascade_pi 0.575 / 3.033; after 800 s std MEE 1.702 [1.537, 1.868],
+    MSE 1.709 [1.542, 1.875], cascade_pi 2.233 [2.028, 2.437]. Paper: MEE 0.4452 / 1.7049,
+    MSE 0.5093 / 1.7153. Paired MEE - MSE (same seeds, same disturbances): std -0.0013
+    [-0.0037, 0.0010] K (p = 0.25), late std -0.0063 [-0.0109, -0.0016] K (p = 0.01),
+    mean +0.028 [0.024, 0.032] K: no practical benefit of MEE (the paper: -0.0104 K std).
     ``tol`` covers the seed-to-seed spread of the smaller default sample."""
     r = claim_stats(seeds)
     mee, mse, pi = r["neuro_pid_mee"], r["neuro_pid_mse"], r["cascade_pi"]
     # the step is tracked and the late error std is of the paper's order (1.7 K)
     for x in (mee, mse):
-        assert ci95(x[:, 3])[0] == pytest.approx(1.78, abs=tol)
+        assert ci95(x[:, 3])[0] == pytest.approx(1.70, abs=tol)
         assert abs(ci95(x[:, 2])[0]) < 1.5
-        assert ci95(x[:, 1])[0] == pytest.approx(2.85, abs=tol)
-    # the claim (MEE narrows the error distribution vs MSE) does not reproduce: the two
-    # criteria give the same dispersion to within 0.01 K on the same seeds
+        assert ci95(x[:, 1])[0] == pytest.approx(2.76, abs=tol)
+    # the claim (MEE narrows the error distribution vs MSE) reproduces at most as a
+    # difference of no engineering weight: within 0.01 K (whole) and 0.02 K (late)
     d = mee - mse
-    assert abs(ci95(d[:, 1])[0]) < 0.01 and abs(ci95(d[:, 3])[0]) < 0.01
-    assert ci95(d[:, 1])[1] < 0.0 < ci95(d[:, 1])[2] or abs(ci95(d[:, 1])[0]) < 0.003
+    assert abs(ci95(d[:, 1])[0]) < 0.01 and abs(ci95(d[:, 3])[0]) < 0.02
+    if seeds >= 20:  # as measured: late std MEE below MSE, mean error MEE above MSE
+        assert -0.02 < ci95(d[:, 3])[2] < 0.0 and ci95(d[:, 0])[1] > 0.0
     # the neuro-PID cascade (paper's P inner loop) holds the outlet tighter than cascade_pi
     # after the step, but tracks the step more slowly (larger whole-episode mean error)
     assert ci95(mee[:, 3] - pi[:, 3])[2] < 0.0
