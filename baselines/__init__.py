@@ -16,6 +16,8 @@ _REGISTRY: dict[str, str] = {
     "fao_sf": "baselines.fao:FaoSF",
     "fao_fac": "baselines.fao:FaoFAC",
     "fuzzy_p2id": "baselines.fuzzy_p2id:FuzzyP2ID",
+    "neuro_pid_mee": "baselines.neuro_pid:NeuroPIDMEE",
+    "neuro_pid_mse": "baselines.neuro_pid:NeuroPIDMSE",
 }
 NAMES: tuple[str, ...] = tuple(_REGISTRY)
 
