@@ -257,7 +257,7 @@ class Core:
         self._slots: dict[sc.Scenario, list[int]] = {}  # scenario -> [slot, rows using it]
         self._free: list[int] = []
         self._feasible: set[sc.Scenario] = set()  # scenarios whose start check passed
-        self._alloc_schedules(min(B, 4), MIN_BREAKPOINTS)
+        self._alloc_schedules(1, MIN_BREAKPOINTS)
         observed = [i for i, s in enumerate(plant.outputs) if s.observed]
         if len(observed) >= OU_CHANNEL:
             raise ValueError(f"{plant.id}: at most {OU_CHANNEL - 1} observed outputs")
@@ -483,18 +483,17 @@ class Core:
         return info
 
 
-def check_action(action: Any, shape: tuple[int, ...]) -> np.ndarray:
-    """An action batch of exactly ``shape`` (n_rows, n_actuators) as a float64 array.
+def check_action(action: Any, shape: tuple[int, ...], single: bool = False) -> np.ndarray:
+    """An action batch of ``shape`` (n_rows, n_actuators) as a float64 array.
 
     Accepted: any array-like of real numbers (every float dtype, integers; not bool,
-    complex, strings or objects) of shape ``shape``; for the single env (one row) also of
-    shape (n_actuators,) or, with one actuator, a scalar. Finiteness is checked by
+    complex, strings or objects) of exactly ``shape`` (vector env) or, for the single env
+    (``single``, one row), of shape (n_actuators,) or, with one actuator, a scalar. Finiteness is checked by
     :meth:`Core.step` (compiled, before anything changes).
 
     Raises:
         ValueError: anything else, naming the expected shape.
     """
-    single = shape[0] == 1
     expected = f"({shape[1]},)" if single else str(shape)
     try:
         a = np.asarray(action)
@@ -505,8 +504,9 @@ def check_action(action: Any, shape: tuple[int, ...]) -> np.ndarray:
             f"action must hold real numbers (float or integer), got dtype {a.dtype} "
             f"({str(action)[:80]})"
         )
-    if a.shape != shape:
-        if not (single and (a.shape == shape[1:] or (a.shape == () and shape[1] == 1))):
-            raise ValueError(f"action has shape {a.shape}, expected {expected}")
-        a = a.reshape(shape)
+    ok = (a.shape == shape[1:] or (a.shape == () and shape[1] == 1)) if single else (
+        a.shape == shape)  # fmt: skip
+    if not ok:
+        raise ValueError(f"action has shape {a.shape}, expected {expected}")
+    a = a.reshape(shape)
     return np.ascontiguousarray(a, dtype=np.float64)

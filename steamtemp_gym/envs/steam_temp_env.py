@@ -84,7 +84,7 @@ class SteamTempEnv(gym.Env):
     def step(self, action):
         if self._needs_reset:
             raise RuntimeError("call reset() before step() (and after the episode ends)")
-        self.core.step(check_action(action, self._shape))
+        self.core.step(check_action(action, self._shape, single=True))
         r, code, trunc = self.core.out[0].tolist()
         terminated, truncated = code > 0.5, trunc > 0.5
         self._needs_reset = terminated or truncated
