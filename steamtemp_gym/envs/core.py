@@ -488,8 +488,8 @@ def check_action(action: Any, shape: tuple[int, ...], single: bool = False) -> n
 
     Accepted: any array-like of real numbers (every float dtype, integers; not bool,
     complex, strings or objects) of exactly ``shape`` (vector env) or, for the single env
-    (``single``, one row), of shape (n_actuators,) or, with one actuator, a scalar. Finiteness is checked by
-    :meth:`Core.step` (compiled, before anything changes).
+    (``single``, one row), of shape (n_actuators,) or, with one actuator, a scalar.
+    Finiteness is checked by :meth:`Core.step` (compiled, before anything changes).
 
     Raises:
         ValueError: anything else, naming the expected shape.
