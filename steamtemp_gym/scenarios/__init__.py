@@ -80,12 +80,17 @@ _DEFAULTS = {
     "fouling": 1.0,
     "spray_water_temp_offset_C": 0.0,
 }
-#: Physically meaningful ranges of each channel (inclusive).
+#: Ranges of each channel (inclusive) accepted by every plant: loads from minimum stable
+#: firing to 110 % overload; setpoint offsets of sliding-temperature operation; heat-absorption
+#: errors and gas-side fouling factors beyond those of coal switching and heavy slagging
+#: (plausible, unverified); spray water from HP heaters out of service to their overshoot.
+#: Within them a plant may still be unable to hold a combination at t = 0: such a scenario is
+#: rejected at reset with the values that make it impossible (envs/core.py:Core.check_start).
 _LIMITS = {
     "load": (0.2, 1.1),
-    "setpoint_offset_C": (-40.0, 40.0),
-    "heat_absorption_bias": (-0.4, 0.4),
-    "fouling": (0.3, 2.0),
+    "setpoint_offset_C": (-30.0, 30.0),
+    "heat_absorption_bias": (-0.25, 0.25),
+    "fouling": (0.6, 1.6),
     "spray_water_temp_offset_C": (-60.0, 60.0),
 }
 RANDOM = "random"
