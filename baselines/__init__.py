@@ -18,6 +18,7 @@ _REGISTRY: dict[str, str] = {
     "fuzzy_p2id": "baselines.fuzzy_p2id:FuzzyP2ID",
     "neuro_pid_mee": "baselines.neuro_pid:NeuroPIDMEE",
     "neuro_pid_mse": "baselines.neuro_pid:NeuroPIDMSE",
+    "lqi": "baselines.lqi:LQI",
 }
 NAMES: tuple[str, ...] = tuple(_REGISTRY)
 

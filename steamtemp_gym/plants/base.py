@@ -261,3 +261,74 @@ class Plant:
         """
         dt = self.dt_s if dt is None else dt
         self.kernel()(X, U, D, self.P, self.jrow, self.jcol, dt, self.n_sub, Z)
+
+    def linearize(
+        self,
+        load: float,
+        *,
+        setpoint_C: float | None = None,
+        rel_step: float = 1e-6,
+        du: float = 1e-4,
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """Discrete-time linear model (A, B, C, D) at the control interval around the
+        steady state at ``load``.
+
+        The operating point is the plant's own steady state (:meth:`seed_rows` with key 0,
+        then :meth:`steady_state`) at the nominal disturbances (``load``, no load rate,
+        heat-absorption bias 0, fouling 1, spray-water offset 0) holding ``setpoint_C``
+        (default: the plant's setpoint); the commands u0 are the steady valve openings (the
+        outputs :attr:`valves`, as the env sets them at a reset). In deviations from it::
+
+            x_{k+1} = A x_k + B u_k,    y_k = C x_k + D u_k
+
+        x: the plant's full state vector (its own units: SI enthalpies, pressures, ...);
+        u: the actions as valve openings in [0, 1] (action a gives opening (a + 1) / 2);
+        y: the OBSERVED outputs (``Signal.observed``, in :attr:`outputs` order) in their
+        physical units (C, kg/s, MPa, ...). A and B are central finite differences of
+        one control interval of the compiled step (:meth:`step`, the kernel the env runs),
+        C and D of its output evaluation (``dt = 0``): x_i is perturbed by ``rel_step``
+        max(|x_i|, 1), u_j by ``du`` (one-sided, inward, at a closed valve or a fully open
+        one). The env's observation after a step is the outputs of the new state with the
+        command just held, so y_{k+1} = C x_{k+1} + D u_k there (D is zero for plants whose
+        outputs read the valve states only). Plant-internal random disturbances (seeded by
+        key 0) are the same in every evaluation and cancel in the differences; their
+        generator states appear as uncontrollable modes.
+
+        Generic: no per-plant code. Checked against the env's finite-difference step
+        responses for every id in tests/test_linearize.py.
+        """
+        d = np.zeros((1, N_DIST))
+        d[0, 0] = load
+        d[0, 3] = 1.0
+        sp = np.array([self.setpoint_C if setpoint_C is None else setpoint_C], dtype=np.float64)
+        x0 = np.zeros((1, self.n_x))
+        self.seed_rows(x0, np.zeros(1, dtype=np.uint64))
+        self.steady_state(d, sp, x0)
+        z = np.zeros((1, self.n_z))
+        u_zero = np.zeros((1, self.n_u))
+        self.step(x0.copy(), u_zero, d, z, dt=0.0)
+        u0 = z[0, [self.index[v] for v in self.valves]].reshape(1, self.n_u)
+        obs = np.array([i for i, s in enumerate(self.outputs) if s.observed])
+
+        def run(x: np.ndarray, u: np.ndarray, dt: float | None) -> tuple[np.ndarray, np.ndarray]:
+            X, Z = x.copy(), np.zeros((1, self.n_z))
+            self.step(X, u, d, Z, dt=dt)
+            return X[0], Z[0, obs]
+
+        n, m, p = self.n_x, self.n_u, len(obs)
+        A, B = np.zeros((n, n)), np.zeros((n, m))
+        C, D = np.zeros((p, n)), np.zeros((p, m))
+        for i in range(n):
+            h = rel_step * max(abs(float(x0[0, i])), 1.0)
+            xp, xm = x0.copy(), x0.copy()
+            xp[0, i] += h
+            xm[0, i] -= h
+            A[:, i] = (run(xp, u0, None)[0] - run(xm, u0, None)[0]) / (2.0 * h)
+            C[:, i] = (run(xp, u0, 0.0)[1] - run(xm, u0, 0.0)[1]) / (2.0 * h)
+        for j in range(m):
+            lo, hi = max(u0[0, j] - du, 0.0), min(u0[0, j] + du, 1.0)
+            up, um = u0.copy(), u0.copy()
+            up[0, j], um[0, j] = hi, lo
+            B[:, j] = (run(x0, up, None)[0] - run(x0, um, None)[0]) / (hi - lo)
+            D[:, j] = (run(x0, up, 0.0)[1] - run(x0, um, 0.0)[1]) / (hi - lo)
+        return A, B, C, D
