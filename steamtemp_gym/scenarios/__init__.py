@@ -2,7 +2,8 @@
 
 A :class:`Scenario` is a set of piecewise-linear schedules over time (breakpoint
 lists ``[[t_s, value], ...]``, linear interpolation, held constant after the
-last breakpoint) in the common vocabulary of ``../shared/DESIGN.md``:
+last breakpoint; two breakpoints at the same time are a step) in the common
+vocabulary of the suite (``docs/architecture.md``):
 
 ========================== ========= ==========================================
 channel                    unit      meaning
@@ -35,14 +36,39 @@ its own inputs.
 Scenarios are deterministic; ``"random"`` is the seeded training distribution
 drawn afresh at every reset (:func:`random_scenario`). Named scenarios live in
 a registry (:func:`get`, :func:`names`); plants may register their own.
-The load-ramp test ``load_ramp_100_50`` is the test of 000_f43a9a359eb2e47e.txt
-(100 -> 50 % at 5 %/min from minute 20 to 30); the operating-practice figures
-used for the random distribution are from ../shared/REFERENCE_DATA.md.
+The load-ramp test ``load_ramp_100_50`` (100 -> 50 % at 5 %/min from minute 20 to
+30) is the test of Sagara et al., JSME International Journal, Series C, 1998
+(``docs/references.md``, key 000).
+
+Validation and limits (every violation is a ValueError naming the field or file and
+quoting at most a short excerpt of the input):
+
+- a scenario file is UTF-8 YAML of at most :data:`MAX_FILE_BYTES` (1 MiB) holding one
+  mapping of the fields below; anchors and aliases (``&a`` / ``*a``, hence merge keys
+  ``<<``), duplicate keys and unknown fields are rejected;
+- ``name``: a printable string of 1-:data:`MAX_NAME_CHARS` (200) characters;
+  ``description``: a string of at most :data:`MAX_DESCRIPTION_CHARS` (2000);
+- ``duration_s``: a number in [1 s, 7 days] (:data:`DURATION_LIMITS_S`);
+- a channel: a number (a constant) or a list of 1-:data:`MAX_BREAKPOINTS_PER_CHANNEL`
+  (10,000) ``[t_s, value]`` pairs, times finite in [0, 30 days] and non-decreasing,
+  values finite and inside the channel's physical range;
+- numbers are int or float, numpy integer and floating scalars included; bool, strings,
+  complex numbers and containers are not numbers (in a file, ``1e3`` and ``3.6e3`` are
+  numbers, as in YAML 1.2; a quoted ``"60"`` is a string).
+
+``resolve`` takes a name, ``"random"``, a :class:`Scenario` or a file: any
+``os.PathLike`` is a file (it must end in ``.yaml`` or ``.yml``), and so is a ``str``
+ending in ``.yaml`` / ``.yml``.
 """
 
 from __future__ import annotations
 
 import math
+import numbers
+import os
+import re
+import reprlib
+import stat
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field, fields
 from pathlib import Path
@@ -63,6 +89,11 @@ __all__ = [
     "pack",
     "RANDOM",
     "NAMED_DISTURBANCES",
+    "MAX_FILE_BYTES",
+    "MAX_BREAKPOINTS_PER_CHANNEL",
+    "MAX_NAME_CHARS",
+    "MAX_DESCRIPTION_CHARS",
+    "DURATION_LIMITS_S",
 ]
 
 #: Schedule channels in the order the compiled kernels read them.
@@ -101,6 +132,20 @@ _SCALAR_LIMITS = {
     "heat_absorption_noise_std": (0.0, 0.2),
     "heat_absorption_noise_tau_s": (1.0, 86400.0),
 }
+#: Largest scenario file read, in bytes.
+MAX_FILE_BYTES = 1 << 20
+#: Most breakpoints one channel may have (the env's tables grow with it).
+MAX_BREAKPOINTS_PER_CHANNEL = 10_000
+#: Longest scenario name and description, in characters.
+MAX_NAME_CHARS = 200
+MAX_DESCRIPTION_CHARS = 2000
+#: Inclusive range of an episode's length, s (1 s to 7 days).
+DURATION_LIMITS_S = (1.0, 7 * 86400.0)
+#: Inclusive range of breakpoint times, s (up to 30 days: a schedule may run past the end).
+_TIME_LIMITS_S = (0.0, 30 * 86400.0)
+#: Most YAML nodes in one file (five full channels of pairs, with room to spare).
+_MAX_YAML_NODES = 4 * len(CHANNELS) * MAX_BREAKPOINTS_PER_CHANNEL
+
 #: Disturbances on in every named scenario: thermocouple noise 0.25 K (real units:
 #: 0.2-0.3 K) and a coloured heat-absorption disturbance of 2 % std with a 5 min
 #: correlation time (slagging, coal quality and mill changes; plausible default, unverified).
@@ -111,63 +156,137 @@ NAMED_DISTURBANCES = {
 }
 Schedule = tuple[tuple[float, float], ...]
 
+# --------------------------------------------------------------------------- checks
+_REPR = reprlib.Repr()
+_REPR.maxlevel, _REPR.maxlist, _REPR.maxtuple, _REPR.maxdict = 2, 4, 4, 4
+_REPR.maxstring, _REPR.maxother, _REPR.maxlong = 60, 60, 40
 
-def _as_scalar(name: str, value: Any, lo: float, hi: float) -> float:
-    """Validate a scalar scenario field (finite, inside [lo, hi])."""
+
+def _excerpt(value: Any, limit: int = 120) -> str:
+    """A short, bounded repr of a (possibly huge) user input for error messages."""
+    try:
+        text = _REPR.repr(value)
+    except Exception:  # noqa: BLE001  (a broken __repr__ must not hide the real error)
+        text = f"<{type(value).__name__}>"
+    return text if len(text) <= limit else text[: limit - 3] + "..."
+
+
+def _clip(text: str, limit: int = 300) -> str:
+    """``text`` cut to ``limit`` characters (its end kept: the file name of a path)."""
+    return text if len(text) <= limit else "..." + text[-(limit - 3) :]
+
+
+def _describe(value: Any) -> str:
+    """``type excerpt`` of a bad value, e.g. ``bool True`` or ``str '60'``."""
+    return f"{type(value).__name__} {_excerpt(value)}"
+
+
+def _is_number(value: Any) -> bool:
+    """Real numbers (Python and numpy ints and floats), not bool."""
+    return isinstance(value, numbers.Real) and not isinstance(value, (bool, np.bool_))
+
+
+def _as_float(name: str, value: Any) -> float:
+    """A finite float from a number (bool, str, containers and complex rejected)."""
+    if not _is_number(value):
+        raise ValueError(f"scenario {name!r} must be a number, got {_describe(value)}")
     try:
         v = float(value)
-    except (TypeError, ValueError) as exc:
-        raise ValueError(f"scenario {name!r} must be a number, got {value!r}") from exc
-    if isinstance(value, bool) or not (math.isfinite(v) and lo <= v <= hi):
-        raise ValueError(f"scenario {name!r} must be in [{lo}, {hi}], got {value!r}")
+    except (OverflowError, ValueError, TypeError):
+        v = math.inf
+    if not math.isfinite(v):
+        raise ValueError(f"scenario {name!r} must be finite, got {_excerpt(value)}")
     return v
+
+
+def _as_scalar(name: str, value: Any, lo: float, hi: float) -> float:
+    """Validate a scalar scenario field (a finite number inside [lo, hi])."""
+    v = _as_float(name, value)
+    if not lo <= v <= hi:
+        raise ValueError(f"scenario {name!r} must be in [{lo}, {hi}], got {_excerpt(value)}")
+    return v
+
+
+def _as_string(name: str, value: Any, min_len: int, max_len: int, printable: bool) -> str:
+    """Validate a string field (type, length, optionally printable characters)."""
+    if not isinstance(value, str):
+        raise ValueError(f"scenario {name!r} must be a string, got {_describe(value)}")
+    if not min_len <= len(value) <= max_len:
+        raise ValueError(
+            f"scenario {name!r} must have {min_len} to {max_len} characters, "
+            f"got {len(value)}: {_excerpt(value)}"
+        )
+    if printable and not value.isprintable():
+        raise ValueError(
+            f"scenario {name!r} must be printable (no newlines or control characters), "
+            f"got {_excerpt(value)}"
+        )
+    return value
 
 
 def _as_schedule(name: str, value: Any) -> Schedule:
     """Validate and normalize a breakpoint list (or a constant) into a tuple of pairs."""
-    if isinstance(value, (int, float)) and not isinstance(value, bool):
-        value = [[0.0, float(value)]]
+    if isinstance(value, np.ndarray):  # a 0-d array gives its number, a 2-d one its rows
+        value = value.tolist() if value.size <= 2 * MAX_BREAKPOINTS_PER_CHANNEL else list(value)
+    if _is_number(value):
+        value = [[0.0, value]]
     if not isinstance(value, (list, tuple)) or len(value) == 0:
         raise ValueError(
             f"scenario field {name!r} must be a number or a non-empty list of [t_s, value] "
-            f"breakpoints, got {value!r}"
+            f"breakpoints, got {_describe(value)}"
         )
-    pts = []
-    for item in value:
+    if len(value) > MAX_BREAKPOINTS_PER_CHANNEL:
+        raise ValueError(
+            f"scenario field {name!r} has {len(value)} breakpoints, more than the "
+            f"{MAX_BREAKPOINTS_PER_CHANNEL} allowed"
+        )
+    lo, hi = _LIMITS[name]
+    t_lo, t_hi = _TIME_LIMITS_S
+    pts: list[tuple[float, float]] = []
+    for k, item in enumerate(value):
+        where = f"scenario field {name!r}: breakpoint {k} ({_excerpt(item)})"
         if not isinstance(item, (list, tuple)) or len(item) != 2:
-            raise ValueError(
-                f"scenario field {name!r}: breakpoint {item!r} is not a [t_s, value] pair"
-            )
+            raise ValueError(f"{where} is not a [t_s, value] pair")
+        if not (_is_number(item[0]) and _is_number(item[1])):
+            raise ValueError(f"{where}: t_s and value must each be a number")
         try:
             t, v = float(item[0]), float(item[1])
-        except (TypeError, ValueError) as exc:
-            raise ValueError(
-                f"scenario field {name!r}: breakpoint {item!r} is not numeric"
-            ) from exc
+        except (OverflowError, ValueError, TypeError):
+            t = v = math.inf
         if not (math.isfinite(t) and math.isfinite(v)):
-            raise ValueError(f"scenario field {name!r}: breakpoint {item!r} is not finite")
-        pts.append((t, v))
-    times = [p[0] for p in pts]
-    if times[0] < 0.0:
-        raise ValueError(f"scenario field {name!r}: breakpoint times must be >= 0, got {times[0]}")
-    if any(b < a for a, b in zip(times[:-1], times[1:], strict=True)):
-        raise ValueError(f"scenario field {name!r}: breakpoint times must be non-decreasing")
-    lo, hi = _LIMITS[name]
-    for _, v in pts:
+            raise ValueError(f"{where} is not finite")
+        if not t_lo <= t:
+            raise ValueError(f"{where}: breakpoint times must be >= 0")
+        if not t <= t_hi:
+            raise ValueError(f"{where}: breakpoint time must be <= {t_hi} s (30 days)")
+        if pts and t < pts[-1][0]:
+            raise ValueError(
+                f"{where}: breakpoint times must be non-decreasing (equal times are a step), "
+                f"previous {pts[-1][0]}"
+            )
         if not lo <= v <= hi:
             raise ValueError(
                 f"scenario field {name!r}: value {v} is outside the physical range [{lo}, {hi}]"
             )
+        pts.append((t, v))
     return tuple(pts)
+
+
+def _as_duration(value: Any) -> float:
+    """Validate an episode length (a number in DURATION_LIMITS_S)."""
+    return _as_scalar("duration_s", value, *DURATION_LIMITS_S)
 
 
 @dataclass(frozen=True)
 class Scenario:
     """Schedules of the disturbances and setpoint over one episode.
 
+    Every field is validated on construction (limits in the module docstring); numbers
+    are stored as Python floats and schedules as tuples of ``(t_s, value)`` pairs.
+
     Attributes:
-        name: Identifier shown in tables and plots.
-        duration_s: Episode length in seconds (``truncated`` after it).
+        name: Identifier shown in tables and plots (printable, 1-200 characters).
+        duration_s: Episode length in seconds (``truncated`` after it), 1 s to 7 days.
         load: Load demand breakpoints ``((t_s, fraction), ...)``.
         setpoint_offset_C: Setpoint offset breakpoints in K.
         heat_absorption_bias: Heat-absorption relative bias breakpoints.
@@ -177,7 +296,7 @@ class Scenario:
         heat_absorption_noise_std: Stationary standard deviation (fraction) of the coloured
             heat-absorption disturbance added to ``heat_absorption_bias``.
         heat_absorption_noise_tau_s: Its correlation time in s.
-        description: One line for humans.
+        description: For humans (at most 2000 characters).
     """
 
     name: str
@@ -193,19 +312,9 @@ class Scenario:
     description: str = field(default="", compare=False)
 
     def __post_init__(self) -> None:
-        if not isinstance(self.name, str) or not self.name:
-            raise ValueError("scenario 'name' must be a non-empty string")
-        try:
-            duration = float(self.duration_s)
-        except (TypeError, ValueError) as exc:
-            raise ValueError(
-                f"scenario 'duration_s' must be a number, got {self.duration_s!r}"
-            ) from exc
-        if not (math.isfinite(duration) and duration > 0.0):
-            raise ValueError(
-                f"scenario 'duration_s' must be finite and > 0, got {self.duration_s!r}"
-            )
-        object.__setattr__(self, "duration_s", duration)
+        _as_string("name", self.name, 1, MAX_NAME_CHARS, printable=True)
+        _as_string("description", self.description, 0, MAX_DESCRIPTION_CHARS, printable=False)
+        object.__setattr__(self, "duration_s", _as_duration(self.duration_s))
         for ch in CHANNELS:
             object.__setattr__(self, ch, _as_schedule(ch, getattr(self, ch)))
         for name, (lo, hi) in _SCALAR_LIMITS.items():
@@ -213,6 +322,8 @@ class Scenario:
 
     def value(self, channel: str, t: float) -> float:
         """Value of one channel at time ``t`` (linear interpolation, held at the ends)."""
+        if channel not in CHANNELS:
+            raise ValueError(f"unknown channel {_excerpt(channel)}; valid: {list(CHANNELS)}")
         pts = np.asarray(getattr(self, channel))
         return float(np.interp(t, pts[:, 0], pts[:, 1]))
 
@@ -229,35 +340,171 @@ class Scenario:
 
     @classmethod
     def from_dict(cls, data: Mapping[str, Any], source: str = "scenario") -> Scenario:
-        """Build from a mapping (as read from YAML), rejecting unknown keys."""
+        """Build from a mapping (as read from YAML), rejecting unknown keys.
+
+        Every error message starts with ``source`` (the file, for a YAML file).
+        """
         if not isinstance(data, Mapping):
             raise ValueError(
                 f"{source}: expected a mapping of scenario fields, got {type(data).__name__}"
             )
-        valid = {f.name for f in fields(cls)}
-        unknown = sorted(set(data) - valid)
+        valid = [f.name for f in fields(cls)]
+        bad_keys = [k for k in data if not isinstance(k, str)]
+        if bad_keys:
+            raise ValueError(
+                f"{source}: scenario field names must be strings, got {_describe(bad_keys[0])}"
+            )
+        unknown = sorted(set(data) - set(valid))
         if unknown:
             raise ValueError(
-                f"{source}: unknown scenario field(s) {unknown}; valid fields: {sorted(valid)}"
+                f"{source}: unknown scenario field(s) {_excerpt(unknown, 200)}; "
+                f"valid fields: {valid}"
             )
         for key in ("name", "duration_s", "load"):
             if key not in data:
                 raise ValueError(f"{source}: missing required field {key!r}")
-        return cls(**dict(data))
+        try:
+            return cls(**dict(data))
+        except ValueError as exc:
+            raise ValueError(f"{source}: {exc}") from None
 
 
-def load_yaml(path: str | Path) -> Scenario:
-    """Read a scenario YAML file (format in ../shared/DESIGN.md)."""
-    path = Path(path)
+# --------------------------------------------------------------------------- YAML
+_YamlLoader: type = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
+_MERGE_TAG = "tag:yaml.org,2002:merge"
+
+
+class _ScenarioLoader(_YamlLoader):  # type: ignore[misc,valid-type]
+    """Safe YAML loader that refuses duplicate mapping keys (PyYAML keeps the last)."""
+
+    def construct_mapping(self, node: yaml.Node, deep: bool = False) -> dict[Any, Any]:
+        if isinstance(node, yaml.MappingNode):
+            seen: set[Any] = set()
+            for key_node, _ in node.value:
+                key = self.construct_object(key_node, deep=True)
+                try:
+                    duplicate = key in seen
+                    seen.add(key)
+                except TypeError:  # unhashable: the base class reports it
+                    continue
+                if duplicate:
+                    raise yaml.constructor.ConstructorError(
+                        None, None, f"duplicate key {_excerpt(key)}", key_node.start_mark
+                    )
+        return super().construct_mapping(node, deep)
+
+
+# YAML 1.1 reads 1e3 or 3.6e3 (no dot or no exponent sign) as strings; 1.2 and users: floats.
+_ScenarioLoader.add_implicit_resolver(
+    "tag:yaml.org,2002:float",
+    re.compile(r"^[-+]?[0-9][0-9_]*(?:\.[0-9_]*)?[eE][-+]?[0-9]+$"),
+    list("-+0123456789"),
+)
+
+
+def _check_nodes(root: yaml.Node) -> None:
+    """Reject aliases, merge keys and too many nodes before anything is constructed.
+
+    An alias makes one node appear twice in the composed graph, so a node seen twice
+    is an alias: the graph of a billion-laughs file is small, its expansion is not.
+    """
+    seen: set[int] = set()
+    stack: list[yaml.Node] = [root]
+    while stack:
+        node = stack.pop()
+        if id(node) in seen:
+            raise ValueError(
+                f"YAML anchors and aliases (&name / *name) are not supported (line "
+                f"{node.start_mark.line + 1}): write each value out"
+            )
+        seen.add(id(node))
+        if len(seen) > _MAX_YAML_NODES:
+            raise ValueError(f"more than {_MAX_YAML_NODES} YAML nodes")
+        if isinstance(node, yaml.SequenceNode):
+            stack.extend(node.value)
+        elif isinstance(node, yaml.MappingNode):
+            for key, val in node.value:
+                if key.tag == _MERGE_TAG:
+                    raise ValueError(
+                        f"YAML merge keys (<<) are not supported (line {key.start_mark.line + 1})"
+                    )
+                stack.extend((key, val))
+
+
+def _parse_yaml(text: str) -> Any:
+    """Parse one YAML document safely (see ``_ScenarioLoader`` and ``_check_nodes``).
+
+    Raises:
+        ValueError: aliases, merge keys, too many nodes (message without
+            the file name); yaml.YAMLError: malformed YAML, duplicate keys.
+    """
+    loader = _ScenarioLoader(text)
     try:
-        text = path.read_text()
+        node = loader.get_single_node()
+        if node is None:
+            return None
+        _check_nodes(node)
+        return loader.construct_document(node)
+    finally:
+        loader.dispose()
+
+
+def _as_path(spec: Any) -> Path:
+    """A Path from a str or os.PathLike (bytes paths decoded with the file-system codec)."""
+    try:
+        return Path(os.fsdecode(os.fspath(spec)))
+    except TypeError as exc:
+        raise ValueError(
+            f"a scenario file must be a str or os.PathLike, got {_describe(spec)}"
+        ) from exc
+
+
+def load_yaml(path: str | os.PathLike[str]) -> Scenario:
+    """Read a scenario YAML file (format and limits in the module docstring).
+
+    Raises:
+        ValueError: naming the file: missing, a directory or not a regular file,
+            unreadable, larger than MAX_FILE_BYTES, not UTF-8, malformed YAML, or an
+            invalid scenario (the message then also names the field).
+    """
+    p = _as_path(path)
+    shown = repr(_clip(str(p), 200))
+    try:
+        st = p.stat()
     except OSError as exc:
-        raise ValueError(f"cannot read scenario file {str(path)!r}: {exc}") from exc
+        raise ValueError(f"cannot read scenario file {shown}: {exc.strerror or exc}") from None
+    if stat.S_ISDIR(st.st_mode):
+        raise ValueError(f"cannot read scenario file {shown}: it is a directory")
+    if not stat.S_ISREG(st.st_mode):
+        raise ValueError(f"cannot read scenario file {shown}: not a regular file")
+    if st.st_size > MAX_FILE_BYTES:
+        raise ValueError(
+            f"scenario file {shown} has {st.st_size} bytes, more than the {MAX_FILE_BYTES} allowed"
+        )
     try:
-        data = yaml.safe_load(text)
+        with open(p, "rb") as f:
+            raw = f.read(MAX_FILE_BYTES + 1)
+    except OSError as exc:
+        raise ValueError(f"cannot read scenario file {shown}: {exc.strerror or exc}") from None
+    if len(raw) > MAX_FILE_BYTES:  # grew since stat
+        raise ValueError(f"scenario file {shown} has more than the {MAX_FILE_BYTES} bytes allowed")
+    try:
+        text = raw.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        bad = raw[exc.start : exc.start + 1]
+        raise ValueError(
+            f"scenario file {shown} is not valid UTF-8 (byte {exc.start}: {bad!r})"
+        ) from None
+    try:
+        data = _parse_yaml(text)
     except yaml.YAMLError as exc:
-        raise ValueError(f"malformed scenario YAML {str(path)!r}: {exc}") from exc
-    return Scenario.from_dict(data, source=str(path))
+        where = str(exc).replace('in "<unicode string>", ', "at ")
+        raise ValueError(f"malformed scenario YAML {shown}: {_clip(where)}") from None
+    except RecursionError:
+        raise ValueError(f"malformed scenario YAML {shown}: nested too deeply") from None
+    except ValueError as exc:
+        raise ValueError(f"scenario file {shown}: {exc}") from None
+    return Scenario.from_dict(data, source=f"scenario file {shown}")
 
 
 # --------------------------------------------------------------------------- registry
@@ -266,6 +513,16 @@ _REGISTRY: dict[str, tuple[Scenario, tuple[str, ...] | None]] = {}
 
 def register(scenario: Scenario, plants: Sequence[str] | None = None) -> Scenario:
     """Register a named scenario, for every plant or only for the given plant ids."""
+    if not isinstance(scenario, Scenario):
+        raise ValueError(f"register() needs a Scenario, got {_describe(scenario)}")
+    if plants is not None and (
+        isinstance(plants, str)
+        or not isinstance(plants, Sequence)
+        or not all(isinstance(p, str) for p in plants)
+    ):
+        raise ValueError(
+            f"register() 'plants' must be a list of plant ids, got {_describe(plants)}"
+        )
     if scenario.name == RANDOM:
         raise ValueError(f"{RANDOM!r} is reserved for the seeded training distribution")
     _REGISTRY[scenario.name] = (scenario, tuple(plants) if plants is not None else None)
@@ -292,28 +549,54 @@ def names(plant_id: str | None = None) -> list[str]:
 def get(name: str, plant_id: str | None = None) -> Scenario:
     """A registered scenario by name; ValueError listing the valid names otherwise."""
     _load_plant(plant_id)
-    entry = _REGISTRY.get(name)
+    entry = _REGISTRY.get(name) if isinstance(name, str) else None
     if entry is None or (
         plant_id is not None and entry[1] is not None and plant_id not in entry[1]
     ):
         raise ValueError(
-            f"unknown scenario {name!r}; valid names: {names(plant_id)} or a YAML path"
+            f"unknown scenario {_excerpt(name)}; valid names: {names(plant_id)} "
+            "or a YAML file (a path ending in .yaml or .yml)"
         )
     return entry[0]
 
 
-def resolve(spec: str | Path | Scenario, plant_id: str | None = None) -> Scenario | str:
-    """Turn a scenario argument (name, YAML path or Scenario) into a Scenario or ``"random"``."""
+def resolve(spec: str | os.PathLike[str] | Scenario, plant_id: str | None = None) -> Scenario | str:
+    """Turn a scenario argument into a Scenario or ``"random"``.
+
+    ``spec`` is a Scenario; a file (any ``os.PathLike``, or a ``str`` ending in ``.yaml`` or
+    ``.yml``, suffix case ignored), which must end in ``.yaml`` / ``.yml``; ``"random"``; or
+    the name of a registered scenario valid for ``plant_id``.
+
+    Raises:
+        ValueError: naming the file or listing the valid names.
+    """
     if isinstance(spec, Scenario):
         return spec
-    if isinstance(spec, Path) or (isinstance(spec, str) and spec.endswith((".yaml", ".yml"))):
-        return load_yaml(spec)
+    if isinstance(spec, os.PathLike):
+        path = _as_path(spec)
+        if path.suffix.lower() not in (".yaml", ".yml"):
+            raise ValueError(
+                f"scenario file {_clip(str(path), 200)!r} must end in .yaml or .yml "
+                "(a path is always read as a file, never as a scenario name)"
+            )
+        return load_yaml(path)
     if isinstance(spec, str):
+        if spec.lower().endswith((".yaml", ".yml")):
+            return load_yaml(spec)
         if spec == RANDOM:
             return RANDOM
-        return get(spec, plant_id)
+        try:
+            return get(spec, plant_id)
+        except ValueError as exc:
+            if len(spec) < 4096 and os.path.isfile(spec):
+                raise ValueError(
+                    f"{exc} (a file {_clip(spec, 200)!r} exists, but scenario files must end "
+                    "in .yaml or .yml)"
+                ) from None
+            raise
     raise ValueError(
-        f"scenario must be a name, a YAML path or a Scenario, got {type(spec).__name__}"
+        "scenario must be a name, 'random', a YAML file (str or os.PathLike) or a Scenario, "
+        f"got {_describe(spec)}"
     )
 
 
@@ -341,7 +624,7 @@ def random_scenario(rng: np.random.Generator, duration_s: float | None = None) -
     """Draw one scenario from the training distribution ``RANDOM_DISTRIBUTION``.
 
     Load: start uniform in 50-100 %, then alternate holds (2-15 min) and ramps at
-    1-5 %/min (REFERENCE_DATA.md: 1.5 %/min typical, 4-6 %/min state of the art)
+    1-5 %/min (coal units: about 1.5 %/min typical, 4-6 %/min state of the art)
     to a new target in 50-100 %. With probability 0.3 a setpoint step of
     +-10 K at a random time; with probability 0.5 a heat-absorption bias step of
     +-8 %; a constant fouling factor 0.85-1.15; a constant spray-water
@@ -349,7 +632,7 @@ def random_scenario(rng: np.random.Generator, duration_s: float | None = None) -
     heat-absorption disturbance of 0-4 % std with a 2-15 min correlation time.
     """
     dist = RANDOM_DISTRIBUTION
-    duration = float(duration_s if duration_s is not None else dist["duration_s"])
+    duration = _as_duration(duration_s if duration_s is not None else dist["duration_s"])
     u = rng.uniform
     load = u(*dist["initial_load"])
     t = 0.0

@@ -1,12 +1,13 @@
-"""Named scenarios shared by every plant (common vocabulary of DESIGN.md).
+"""Named scenarios shared by every plant (common vocabulary of ``docs/architecture.md``).
 
-- ``load_ramp_100_50``: the test of 000_f43a9a359eb2e47e.txt: load 100 -> 50 % at
+- ``load_ramp_100_50``: the load-ramp test of Sagara et al., JSME International
+  Journal, Series C, 1998 (``docs/references.md``, key 000): load 100 -> 50 % at
   5 %/min from minute 20 to minute 30, then held to minute 60.
 - ``load_ramp_50_100``: the same ramp upward.
-- ``load_cycle``: the IDAES 320 MW dynamic example (REFERENCE_DATA.md): 100 -> 50 %
+- ``load_cycle``: the IDAES 320 MW dynamic example (``docs/references.md``): 100 -> 50 %
   at 5 %/min, hold 30 min, back to 100 % at 5 %/min, hold 20 min.
-- ``setpoint_step``: +10 K setpoint step at 5 min, rated load (REFERENCE_DATA.md:
-  5-10 K step tests).
+- ``setpoint_step``: +10 K setpoint step at 5 min, rated load (field step tests are
+  5-10 K).
 - ``heat_imbalance_step``: +8 % heat-absorption step (over 60 s) at 5 min, rated load.
 - ``load_following``: AGC-like ramps of 1-2 %/min between 50 and 100 % (a fixed
   draw, seed 2026), holds of 3-8 min, 60 min.
@@ -19,6 +20,7 @@ disturbance), so each seed of a named scenario is a different realization of the
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Sequence
 
 import numpy as np
 
@@ -28,12 +30,13 @@ from steamtemp_gym.scenarios import register as _register
 MIN = 60.0
 
 
-def register(scenario: Scenario, plants=None) -> Scenario:
+def register(scenario: Scenario, plants: Sequence[str] | None = None) -> Scenario:
     """Register a named scenario with the disturbances of real operation switched on."""
     return _register(dataclasses.replace(scenario, **NAMED_DISTURBANCES), plants)
 
 
 def _load_following() -> Scenario:
+    """The fixed AGC-like draw of ``load_following`` (seed 2026)."""
     rng = np.random.default_rng(2026)
     t, load, pts = 0.0, 0.9, [(0.0, 0.9)]
     while t < 3600.0:
@@ -55,7 +58,7 @@ register(
         name="load_ramp_100_50",
         duration_s=60 * MIN,
         load=((0.0, 1.0), (20 * MIN, 1.0), (30 * MIN, 0.5)),
-        description="load 100 -> 50 % at 5 %/min from minute 20 to 30 (000_*.txt, Fig. 4 and 7)",
+        description="load 100 -> 50 % at 5 %/min, minutes 20-30 (Sagara et al. 1998, Fig. 4, 7)",
     )
 )
 register(
