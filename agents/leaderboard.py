@@ -111,6 +111,11 @@ def _excerpt(text: str, n: int = _EXCERPT) -> str:
     return text if len(text) <= n else text[: n - 3] + "..."
 
 
+def _tail(text: str, n: int) -> str:
+    """The end of a long text (a path's file name matters most)."""
+    return text if len(text) <= n else "..." + text[-(n - 3):]
+
+
 def _items(ap: argparse.ArgumentParser, flag: str, text: str, key=None) -> list[str]:
     """Comma list: stripped, empty items ignored, duplicates dropped (first kept)."""
     items = [s.strip() for s in text.split(",")]
@@ -257,7 +262,7 @@ def build_plan(ap: argparse.ArgumentParser, args: argparse.Namespace) -> Plan:
                 resolved[env_id, sc] = scenarios.resolve(sc, env_id)
             except Exception as exc:  # noqa: BLE001 - any failure is a bad --scenarios value
                 ap.error(
-                    f"argument --scenarios: {_excerpt(sc, 80)!r} for {env_id}: {_excerpt(str(exc))}"
+                    f"argument --scenarios: {_tail(sc, 80)!r} for {env_id}: {_excerpt(str(exc))}"
                 )
     plan = Plan(envs=envs, scenarios=scs, seeds=seeds, policies=pols)
     source = _source_digest()
@@ -267,7 +272,7 @@ def build_plan(ap: argparse.ArgumentParser, args: argparse.Namespace) -> Plan:
                 plan.envs_made[env_id, sc] = gym.make(env_id, scenario=resolved[env_id, sc])
             except Exception as exc:  # noqa: BLE001
                 ap.error(
-                    f"argument --scenarios: {_excerpt(sc, 80)!r} for {env_id}: "
+                    f"argument --scenarios: {_tail(sc, 80)!r} for {env_id}: "
                     f"{type(exc).__name__}: {_excerpt(str(exc))}"
                 )
             for name in pols[env_id]:

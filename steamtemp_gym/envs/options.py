@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-from pathlib import Path
 from typing import Any
 
 from steamtemp_gym import plants, scenarios
@@ -32,8 +31,6 @@ def build(plant_id: str, options: dict[str, Any]) -> tuple[Plant, Any, RewardCon
         raise ValueError(f"params must be a dict of plant parameters, got {type(params).__name__}")
     plant = plants.make(plant_id, **params)
     spec = options.get("scenario", scenarios.RANDOM)
-    if isinstance(spec, Path):
-        spec = str(spec)
     scenario = scenarios.resolve(spec, plant_id)
     reward = RewardConfig.from_options(options.get("reward"))
     return plant, scenario, reward, render_mode
