@@ -58,6 +58,7 @@ from typing import Any
 import numpy as np
 
 from baselines.identification import FOPDT, simc_pi, step_test
+from baselines.loops import input_filter, pi_position, restart_rows
 from steamtemp_gym import plants
 from steamtemp_gym.plants.base import MAIN, SCHEDULED
 from steamtemp_gym.scenarios import Scenario
@@ -243,21 +244,17 @@ class CascadePI:
         valve = y[:, self.i_valve]
         n = obs.shape[0]
         st = self._st
-        if st is None or st["y0"].shape != y.shape:
+        fresh = st is None or st["y0"].shape != y.shape
+        if fresh:
             z = np.zeros_like(valve)
             st = self._st = {"y0": y.copy(), "v0": valve.copy(), "yf": y.copy(),
                              "L0": np.zeros(n), "Lf": np.zeros(n), "io": z,
                              "ii": z.copy()}  # fmt: skip
-            restart = np.ones(n, dtype=bool)
-        elif episode_start is not None:
-            restart = np.broadcast_to(np.asarray(episode_start, dtype=bool), (n,))
-        else:
-            restart = np.zeros(n, dtype=bool)
+        restart = restart_rows(fresh, n, episode_start)
         if restart.any():
             self._restart(st, restart, y)
         yf = st["yf"]
-        yf[:] = self.a_filter * yf + (1.0 - self.a_filter) * y  # measurement filter
-        yf[restart] = y[restart]
+        input_filter(yf, y, self.a_filter, restart)  # measurement filter
         load = y[:, self.i_load]
         st["Lf"] += (1.0 - self.a_ff) * (load - st["Lf"])
         e_main = yf[:, self.i_err]  # setpoint - measured outlet (filtered)
@@ -270,24 +267,21 @@ class CascadePI:
             else:
                 e_o = e_main if outer == MAIN else st["y0"][:, outer] - yf[:, outer]
             if inner is None:  # single loop on the outer signal
-                push, v[:, j] = kc_o * e_o, st["v0"][:, j] + kc_o * (e_o + st["io"][:, j])
+                v[:, j], _ = pi_position(st["v0"][:, j], kc_o, e_o, st["io"][:, j], self.dt, ti_o)
+                continue
+            if outer == SCHEDULED:
+                r = np.interp(load, *self.schedules[j])
             else:
-                if outer == SCHEDULED:
-                    r = np.interp(load, *self.schedules[j])
-                else:
-                    r = st["y0"][:, inner] + kc_o * (e_o + st["io"][:, j])  # inner setpoint
-                    if self.ff is not None and outer == MAIN:
-                        a, b, c = self.ff[j]
-                        r = r + a * (load - st["L0"]) + b * (load - st["Lf"]) / self.ff_tau
-                        if self.i_fire is not None:
-                            r = r + c * (y[:, self.i_fire] - load)
-                self.inner_setpoint[:, j] = r
-                e_i = r - yf[:, inner]
-                push, v[:, j] = kc_i * e_i, st["v0"][:, j] + kc_i * (e_i + st["ii"][:, j])
-                ok_i = ~(((v[:, j] >= 1.0) & (push > 0)) | ((v[:, j] <= 0.0) & (push < 0)))
-                st["ii"][:, j] += np.where(ok_i, self.dt / ti_i * e_i, 0.0)
-            ok = ~(((v[:, j] >= 1.0) & (push > 0)) | ((v[:, j] <= 0.0) & (push < 0)))
-            if np.isfinite(ti_o):
-                st["io"][:, j] += np.where(ok, self.dt / ti_o * e_o, 0.0)
+                r = st["y0"][:, inner] + kc_o * (e_o + st["io"][:, j])  # inner setpoint
+                if self.ff is not None and outer == MAIN:
+                    a, b, c = self.ff[j]
+                    r = r + a * (load - st["L0"]) + b * (load - st["Lf"]) / self.ff_tau
+                    if self.i_fire is not None:
+                        r = r + c * (y[:, self.i_fire] - load)
+            self.inner_setpoint[:, j] = r
+            v[:, j], stopped = pi_position(st["v0"][:, j], kc_i, r - yf[:, inner],
+                                           st["ii"][:, j], self.dt, ti_i)  # fmt: skip
+            if np.isfinite(ti_o):  # the outer loop integrates only while the inner can act
+                st["io"][:, j] += np.where(stopped, 0.0, self.dt / ti_o * e_o)
         action = (2.0 * np.clip(v, 0.0, 1.0) - 1.0).astype(np.float32)
         return (action[0] if np.ndim(observation) == 1 else action), None

@@ -131,6 +131,7 @@ from scipy.linalg import expm
 
 from baselines.cascade_pi import FILTER_S, CascadePI, inner_schedule
 from baselines.identification import FOPDT, simc_pi, step_test
+from baselines.loops import input_filter, restart_rows
 from steamtemp_gym import plants
 from steamtemp_gym.metrics import step_response_metrics
 from steamtemp_gym.plants.base import MAIN
@@ -508,15 +509,11 @@ class FaoCompensated:
         obs = np.atleast_2d(np.asarray(observation, dtype=np.float64))
         n = obs.shape[0]
         y = obs * self._scale + self._center
-        if self._ef is None or self._ef.shape[0] != n:
-            restart = np.ones(n, dtype=bool)
+        fresh = self._ef is None or self._ef.shape[0] != n
+        if fresh:
             self._ef = y[:, self.i_err].copy()
-        elif episode_start is not None:
-            restart = np.broadcast_to(np.asarray(episode_start, dtype=bool), (n,)).copy()
-        else:
-            restart = np.zeros(n, dtype=bool)
-        self._ef = self.a_f * self._ef + (1.0 - self.a_f) * y[:, self.i_err]
-        self._ef[restart] = y[restart, self.i_err]
+        restart = restart_rows(fresh, n, episode_start)
+        input_filter(self._ef, y[:, self.i_err], self.a_f, restart)
         dta = -self._ef / T0_K  # (T_a - T_set) / T0
         out = obs.copy()
         self.bias = np.zeros((n, len(self.comp)))

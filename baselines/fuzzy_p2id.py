@@ -102,7 +102,8 @@ from typing import Any
 
 import numpy as np
 
-from baselines.cascade_pi import FILTER_S, _tuning, inner_schedule
+from baselines.cascade_pi import CascadePI
+from baselines.loops import input_filter, pi_position, restart_rows
 from steamtemp_gym.plants.base import MAIN, SCHEDULED
 from steamtemp_gym.scenarios import NAMED_DISTURBANCES, Scenario
 
@@ -256,25 +257,18 @@ class FuzzyP2ID:
         self.i_err = names.index("error_K")
         self.i_load = names.index("load_demand")
         self.i_valve = [names.index(n) for n in plant.valves]
-        params = json.dumps(getattr(u, "_params_overrides", {}) or {}, sort_keys=True)
-        self.loops: list[tuple[int | None, Any]] = []
-        self.schedules: dict[int, tuple[np.ndarray, np.ndarray]] = {}
-        for j, (inner, outer) in enumerate(plant.control_loops):
-            i_in = names.index(inner) if inner else None
-            i_out = outer if outer in (MAIN, SCHEDULED) else (names.index(outer) if outer else None)
-            if outer == SCHEDULED:
-                self.schedules[j] = inner_schedule(plant.id, params, inner)
-            self.loops.append((i_in, i_out))
+        self.pi = CascadePI(env)  # the loops without a spray stage, and the loop structure
+        self.loops, self.schedules = self.pi.loops, self.pi.schedules
         self.fuzzy = fuzzy_loops(plant.control_loops)
+        self.conventional = [j for j in range(len(self.loops)) if j not in self.fuzzy]
         self.dt = plant.dt_s
-        self.a_filter = float(np.exp(-self.dt / FILTER_S))
-        self.pi = np.array(_tuning(plant.id, params), dtype=float)  # (Kc_o, Ti_o, Kc_i, Ti_i)
+        self.a_filter = self.pi.a_filter
         self.f, s0 = surface()
         # per action: Kc, T0 of the loop the P²ID replaces (outer of a cascade, else inner)
         self.kc = np.zeros(len(self.loops))
         self.t0 = np.ones(len(self.loops))
         for j in self.fuzzy:
-            kc_o, ti_o, kc_i, ti_i = self.pi[j]
+            kc_o, ti_o, kc_i, ti_i = self.pi.gains[j]
             cascade = self.loops[j][1] not in (None, SCHEDULED)
             self.kc[j], self.t0[j] = (kc_o, ti_o) if cascade else (kc_i, ti_i)
         self.u0 = self.kc * E0_K / s0
@@ -285,26 +279,24 @@ class FuzzyP2ID:
 
     def reset(self) -> None:
         self._st = None
+        self.pi.reset()
 
     def _restart(self, st: dict[str, np.ndarray], rows: np.ndarray, y: np.ndarray) -> None:
         st["y0"][rows], st["v0"][rows], st["yf"][rows] = y[rows], y[rows][:, self.i_valve], \
             y[rows]  # fmt: skip
-        st["io"][rows], st["ii"][rows] = 0.0, 0.0
-        st["ie"][rows], st["fpd"][rows] = 0.0, 0.0
+        st["ii"][rows], st["ie"][rows], st["fpd"][rows] = 0.0, 0.0, 0.0
         st["e1"][rows] = np.nan  # no rate on the first step
-        for j in range(len(self.loops)):
+        for j in self.fuzzy:
             inner, outer = self.loops[j]
-            if outer == SCHEDULED:  # conventional fallback uses it; the P²ID starts at v0
-                r = np.interp(y[rows, self.i_load], *self.schedules[j])
-                st["ii"][rows, j] = y[rows, inner] - r
             # integrated FPI part of the P²ID output: inner setpoint (cascade) or valve
-            st["u"][rows, j] = y[rows, inner] if outer not in (None, SCHEDULED) and inner \
-                is not None else y[rows, self.i_valve[j]]  # fmt: skip
+            st["u"][rows, j] = y[rows, inner] if outer not in (None, SCHEDULED) else \
+                y[rows, self.i_valve[j]]  # fmt: skip
 
     def _errors(self, st: dict[str, np.ndarray], yf: np.ndarray, load: np.ndarray, n: int):
-        """Error per loop that the P²ID (or the outer PI) acts on, (n, n_act)."""
+        """Error per fuzzy loop that the P²ID acts on, (n, n_act) (0 for the others)."""
         e = np.zeros((n, len(self.loops)))
-        for j, (inner, outer) in enumerate(self.loops):
+        for j in self.fuzzy:
+            inner, outer = self.loops[j]
             if outer == MAIN:
                 e[:, j] = yf[:, self.i_err]
             elif outer == SCHEDULED:
@@ -320,73 +312,52 @@ class FuzzyP2ID:
         y = obs * self._scale + self._center
         n, m = obs.shape[0], len(self.loops)
         st = self._st
-        if st is None or st["y0"].shape != y.shape:
+        fresh = st is None or st["y0"].shape != y.shape
+        if fresh:
             z = np.zeros((n, m))
             st = self._st = {"y0": y.copy(), "v0": y[:, self.i_valve].copy(), "yf": y.copy(),
-                             "io": z, "ii": z.copy(), "ie": z.copy(), "fpd": z.copy(),
-                             "e1": z.copy(), "u": z.copy()}  # fmt: skip
-            restart = np.ones(n, dtype=bool)
-        elif episode_start is not None:
-            restart = np.broadcast_to(np.asarray(episode_start, dtype=bool), (n,))
-        else:
-            restart = np.zeros(n, dtype=bool)
+                             "ii": z, "ie": z.copy(), "fpd": z.copy(), "e1": z.copy(),
+                             "u": z.copy()}  # fmt: skip
+        restart = restart_rows(fresh, n, episode_start)
         if restart.any():
             self._restart(st, restart, y)
         yf = st["yf"]
-        yf[:] = self.a_filter * yf + (1.0 - self.a_filter) * y
-        yf[restart] = y[restart]
+        input_filter(yf, y, self.a_filter, restart)
         load = y[:, self.i_load]
         e = self._errors(st, yf, load, n)
         w = tsk_weights(load)  # (n, n_rules)
         v = st["v0"].copy()
+        if self.conventional:  # e.g. a reheat damper: cascade_pi's loop
+            a_pi, _ = self.pi.predict(obs, episode_start=restart)
+            v[:, self.conventional] = 0.5 * (a_pi[:, self.conventional].astype(float) + 1.0)
         self.inner_setpoint = np.full((n, m), np.nan)
         dt = self.dt
-        for j, (inner, outer) in enumerate(self.loops):
-            kc_o, ti_o, kc_i, ti_i = self.pi[j]
-            cascade = inner is not None and outer not in (None, SCHEDULED)
-            if j in self.fuzzy:
-                kp, ki, kd = (w @ self.gains[j]).T  # TSK-scheduled gains per row
-                t0, ej = self.t0[j], e[:, j]
-                e1 = np.where(np.isnan(st["e1"][:, j]), ej, st["e1"][:, j])
-                rate = (ej - e1) / dt
-                lim = E0_K * t0 / np.maximum(kp, 1e-9)  # integral input held at saturation
-                st["ie"][:, j] = np.clip(st["ie"][:, j] + ej * dt, -lim, lim)
-                f_pi = evaluate_surface(self.f, ki * ej / E0_K, kp * t0 * rate / E0_K)
-                f_pd = evaluate_surface(self.f, kd * ej / E0_K, kp * st["ie"][:, j] / (E0_K * t0))
-                d_pd = np.where(restart, 0.0, f_pd - st["fpd"][:, j])
-                st["fpd"][:, j], st["e1"][:, j] = f_pd, ej
-                du_i = self.u0[j] * dt / t0 * f_pi  # FPI output, integrated (increment)
-                u_d = self.u0[j] * t0 / dt * d_pd  # FPD output, differentiated (position)
-                if cascade:  # P²ID sets the inner setpoint; conventional inner PI
-                    r = st["u"][:, j] + du_i + u_d
-                    self.inner_setpoint[:, j] = r
-                    e_i = r - yf[:, inner]
-                    push = kc_i * e_i
-                    v[:, j] = st["v0"][:, j] + kc_i * (e_i + st["ii"][:, j])
-                    sat = ((v[:, j] >= 1.0) & (push > 0)) | ((v[:, j] <= 0.0) & (push < 0))
-                    st["ii"][:, j] += np.where(sat, 0.0, dt / ti_i * e_i)
-                    # anti-windup: drop the FPI increment that pushes further into saturation
-                    windup = sat & (np.sign(kc_i * du_i) == np.sign(push))
-                    st["u"][:, j] += np.where(windup, 0.0, du_i)
-                else:  # P²ID moves the valve; the integrated FPI part is kept inside [0, 1]
-                    st["u"][:, j] = np.clip(st["u"][:, j] + du_i, -u_d, 1.0 - u_d)
-                    v[:, j] = st["u"][:, j] + u_d
-                continue
-            # conventional loop (cascade_pi's position-form PI), e.g. a reheat damper
-            e_o = e[:, j] if outer not in (None, SCHEDULED) else np.zeros(n)
-            if inner is None:
-                push, v[:, j] = kc_o * e_o, st["v0"][:, j] + kc_o * (e_o + st["io"][:, j])
-            else:
-                r = (np.interp(load, *self.schedules[j]) if outer == SCHEDULED
-                     else st["y0"][:, inner] + kc_o * (e_o + st["io"][:, j]))  # fmt: skip
+        for j in self.fuzzy:
+            inner, outer = self.loops[j]
+            _, _, kc_i, ti_i = self.pi.gains[j]
+            kp, ki, kd = (w @ self.gains[j]).T  # TSK-scheduled gains per row
+            t0, ej = self.t0[j], e[:, j]
+            e1 = np.where(np.isnan(st["e1"][:, j]), ej, st["e1"][:, j])
+            rate = (ej - e1) / dt
+            lim = E0_K * t0 / np.maximum(kp, 1e-9)  # integral input held at saturation
+            st["ie"][:, j] = np.clip(st["ie"][:, j] + ej * dt, -lim, lim)
+            f_pi = evaluate_surface(self.f, ki * ej / E0_K, kp * t0 * rate / E0_K)
+            f_pd = evaluate_surface(self.f, kd * ej / E0_K, kp * st["ie"][:, j] / (E0_K * t0))
+            d_pd = np.where(restart, 0.0, f_pd - st["fpd"][:, j])
+            st["fpd"][:, j], st["e1"][:, j] = f_pd, ej
+            du_i = self.u0[j] * dt / t0 * f_pi  # FPI output, integrated (increment)
+            u_d = self.u0[j] * t0 / dt * d_pd  # FPD output, differentiated (position)
+            if outer not in (None, SCHEDULED):  # P²ID sets the inner setpoint; inner PI
+                r = st["u"][:, j] + du_i + u_d
                 self.inner_setpoint[:, j] = r
                 e_i = r - yf[:, inner]
-                push, v[:, j] = kc_i * e_i, st["v0"][:, j] + kc_i * (e_i + st["ii"][:, j])
-                ok_i = ~(((v[:, j] >= 1.0) & (push > 0)) | ((v[:, j] <= 0.0) & (push < 0)))
-                st["ii"][:, j] += np.where(ok_i, dt / ti_i * e_i, 0.0)
-            ok = ~(((v[:, j] >= 1.0) & (push > 0)) | ((v[:, j] <= 0.0) & (push < 0)))
-            if np.isfinite(ti_o):
-                st["io"][:, j] += np.where(ok, dt / ti_o * e_o, 0.0)
+                v[:, j], sat = pi_position(st["v0"][:, j], kc_i, e_i, st["ii"][:, j], dt, ti_i)
+                # anti-windup: drop the FPI increment that pushes further into saturation
+                windup = sat & (np.sign(kc_i * du_i) == np.sign(kc_i * e_i))
+                st["u"][:, j] += np.where(windup, 0.0, du_i)
+            else:  # P²ID moves the valve; the integrated FPI part is kept inside [0, 1]
+                st["u"][:, j] = np.clip(st["u"][:, j] + du_i, -u_d, 1.0 - u_d)
+                v[:, j] = st["u"][:, j] + u_d
         action = (2.0 * np.clip(v, 0.0, 1.0) - 1.0).astype(np.float32)
         return (action[0] if np.ndim(observation) == 1 else action), None
 

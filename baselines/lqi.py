@@ -84,6 +84,7 @@ import numpy as np
 from scipy.linalg import solve_discrete_are
 
 from baselines.cascade_pi import CascadePI
+from baselines.loops import into_stop, restart_rows
 from steamtemp_gym import plants
 from steamtemp_gym.plants.base import MAIN, N_DIST
 
@@ -258,15 +259,12 @@ class LQI:
         valve = y[:, self.i_valve]
         x_op, u_op, y_op = self._op(L)
         st = self._st
-        if st is None or st["xh"].shape[0] != n:
+        fresh = st is None or st["xh"].shape[0] != n
+        if fresh:
             st = self._st = {"xh": np.zeros((n, self._A.shape[1])), "z": np.zeros(n),
                              "xop": x_op.copy(), "ub": np.zeros_like(valve),
                              "yb": np.zeros((n, self.n_y)), "u": valve.copy()}  # fmt: skip
-            restart = np.ones(n, dtype=bool)
-        elif episode_start is not None:
-            restart = np.broadcast_to(np.asarray(episode_start, dtype=bool), (n,))
-        else:
-            restart = np.zeros(n, dtype=bool)
+        restart = restart_rows(fresh, n, episode_start)
         if restart.any():
             st["xh"][restart], st["z"][restart] = 0.0, 0.0
             st["xop"][restart] = x_op[restart]
@@ -290,7 +288,7 @@ class LQI:
         u_main = np.clip(cmd, 0.0, 1.0)
         e = y[:, self.i_err]
         push = -Kz * e[:, None]  # direction integration would move the valves
-        held = ((u_main >= 1.0) & (push > 0)) | ((u_main <= 0.0) & (push < 0))
+        held = into_stop(u_main, push)
         st["z"] = z + np.where(held.any(axis=1) | restart, 0.0, self.dt * e)
         u_all = valve.copy()
         u_all[:, m] = u_main

@@ -137,6 +137,7 @@ from numba import njit
 
 from baselines.cascade_pi import FILTER_S, CascadePI, simc_pi
 from baselines.identification import FOPDT
+from baselines.loops import input_filter, into_stop, pi_position, restart_rows
 from steamtemp_gym.metrics import step_response_metrics
 from steamtemp_gym.plants.base import MAIN
 from steamtemp_gym.scenarios import Scenario
@@ -454,18 +455,14 @@ class NeuroPID:
         y = obs * self._scale + self._center
         n = obs.shape[0]
         st = self._st
-        if st is None or st["y0"].shape != y.shape:
+        fresh = st is None or st["y0"].shape != y.shape
+        if fresh:
             st = self._st = self._new_state(n)
-            restart = np.ones(n, dtype=bool)
-        elif episode_start is not None:
-            restart = np.broadcast_to(np.asarray(episode_start, dtype=bool), (n,))
-        else:
-            restart = np.zeros(n, dtype=bool)
+        restart = restart_rows(fresh, n, episode_start)
         if restart.any():
             self._restart(st, restart, y)
         yf = st["yf"]
-        yf[:] = self.a_filter * yf + (1.0 - self.a_filter) * y  # DCS input filter
-        yf[restart] = y[restart]
+        input_filter(yf, y, self.a_filter, restart)  # DCS input filter
         st["Lf"] += (1.0 - self.a_load) * (y[:, self.i_load] - st["Lf"])
         nm = len(self.main)
         if nm == 0:
@@ -507,12 +504,9 @@ class NeuroPID:
             else:  # cascade_pi's inner PI on the filtered inner temperature
                 _, _, kc_i, ti_i = self.pi.gains[j]
                 e_i = u_new[:, c] - (yf[:, i_in] - st["y0"][:, i_in])
-                v = vj + kc_i * (e_i + st["ii"][:, c])
-                p_i = kc_i * e_i
-                ok_i = ~(((v >= 1.0) & (p_i > 0)) | ((v <= 0.0) & (p_i < 0)))
-                st["ii"][:, c] += np.where(ok_i, self.dt / ti_i * e_i, 0.0)
+                v, _ = pi_position(vj, kc_i, e_i, st["ii"][:, c], self.dt, ti_i)
                 push = kc_i * (u_new[:, c] - st["u"][:, c])
-            sat = ((v >= 1.0) & (push > 0)) | ((v <= 0.0) & (push < 0))
+            sat = into_stop(v, push)
             st["u"][:, c] = np.where(sat, st["u"][:, c], u_new[:, c])  # anti-windup
             action[:, j] = 2.0 * np.clip(v, 0.0, 1.0) - 1.0
         return (action[0] if np.ndim(observation) == 1 else action), None
