@@ -21,7 +21,7 @@ from scipy.integrate import solve_ivp
 from scipy.optimize import least_squares
 
 from steamtemp_gym import scenarios
-from steamtemp_gym.envs.core import eval_schedules
+from steamtemp_gym.envs.core import schedules
 from steamtemp_gym.plants import benson_subcritical as bs
 from steamtemp_gym.steam import cp_pT
 
@@ -231,7 +231,7 @@ def _ramp_setup(t0):
     bp_t, bp_v, bp_n = np.zeros((1, 5, 8)), np.zeros((1, 5, 8)), np.ones((1, 5), np.int64)
     scenarios.pack(sc, bp_t[0], bp_v[0], bp_n[0])
     D, sp = np.zeros((1, 5)), np.zeros(1)
-    eval_schedules(0, t0, bp_t, bp_v, bp_n, 535.0, NO_OU, D, sp)
+    schedules(0, 0, t0, bp_t, bp_v, bp_n, 535.0, NO_OU, D, sp)
     X = np.zeros((1, PLANT.n_x))
     PLANT.steady_state(D, sp, X)
     return (bp_t, bp_v, bp_n), D, sp, X
@@ -254,7 +254,7 @@ def test_ros2_at_5s_matches_a_fine_solution_over_the_load_ramp():
     err = {"smooth": np.zeros(3), "steps": np.zeros(3)}
     for k in range(int((t1 - t0) / PLANT.dt_s)):
         t = t0 + k * PLANT.dt_s
-        eval_schedules(0, t, *bp, 535.0, NO_OU, D, sp)
+        schedules(0, 0, t, *bp, 535.0, NO_OU, D, sp)
         smooth = t < 1900.0
         if smooth:
             U = (v0 + 0.04 * np.sin(2 * np.pi * t / 300.0) * np.array([1.0, -1.0]))[None, :]

@@ -18,7 +18,7 @@ import pytest
 
 import steamtemp_gym  # noqa: F401  (registers the ids)
 from steamtemp_gym import scenarios
-from steamtemp_gym.envs.core import eval_schedules
+from steamtemp_gym.envs.core import schedules
 from steamtemp_gym.metrics import step_response_metrics
 from steamtemp_gym.plants import boiler_turbine_mimo as bt
 
@@ -170,13 +170,13 @@ def test_ros2_at_the_control_interval_matches_16_substeps():
     bp_n = np.ones((1, 5), np.int64)
     scenarios.pack(sc, bp_t[0], bp_v[0], bp_n[0])
     D, sp = np.zeros((2, 5)), np.zeros(2)
-    eval_schedules(0, 1000.0, bp_t, bp_v, bp_n, 538.0, NO_OU, D, sp)
+    schedules(0, 0, 1000.0, bp_t, bp_v, bp_n, 538.0, NO_OU, D, sp)
     D[1] = D[0]
     X, _, Z, U0 = steady([D[0, 0]] * 2)
     err = np.zeros(2)
     for k in range(int(1800.0 / PLANT.dt_s)):
         t = 1000.0 + k * PLANT.dt_s
-        eval_schedules(0, t, bp_t, bp_v, bp_n, 538.0, NO_OU, D, sp)
+        schedules(0, 0, t, bp_t, bp_v, bp_n, 538.0, NO_OU, D, sp)
         D[1] = D[0]
         U = U0 + 0.05 * np.sin(2 * np.pi * t / np.array([300.0, 420.0, 600.0]))
         PLANT.step(X[:1], U[:1], D[:1], Z[:1])

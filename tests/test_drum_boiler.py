@@ -24,7 +24,7 @@ from scipy.integrate import solve_ivp
 
 import steamtemp_gym  # noqa: F401  (registers the ids)
 from steamtemp_gym import scenarios
-from steamtemp_gym.envs.core import eval_schedules
+from steamtemp_gym.envs.core import schedules
 from steamtemp_gym.plants import drum as dr
 from steamtemp_gym.plants import drum_boiler as db
 from steamtemp_gym.scenarios import Scenario
@@ -376,7 +376,7 @@ def test_ros2_matches_radau_over_the_load_ramp(plant):
     scenarios.pack(sc, bp_t[0], bp_v[0], bp_n[0])
     D, sp = np.zeros((1, 5)), np.zeros(1)
     t0, t1 = 1100.0, 2600.0  # the ramp (1200-1800 s) and the recovery after it
-    eval_schedules(0, t0, bp_t, bp_v, bp_n, plant.setpoint_C, np.zeros(1), D, sp)
+    schedules(0, 0, t0, bp_t, bp_v, bp_n, plant.setpoint_C, np.zeros(1), D, sp)
     X = np.zeros((1, plant.n_x))
     plant.steady_state(D, sp, X)
     v0, x_ref = X[0, db.S_V], X[0].copy()
@@ -384,7 +384,7 @@ def test_ros2_matches_radau_over_the_load_ramp(plant):
     errs = []
     for k in range(int((t1 - t0) / dt)):
         t = t0 + k * dt
-        eval_schedules(0, t, bp_t, bp_v, bp_n, plant.setpoint_C, np.zeros(1), D, sp)
+        schedules(0, 0, t, bp_t, bp_v, bp_n, plant.setpoint_C, np.zeros(1), D, sp)
         U = np.array([[v0 + 0.1 * np.sin(2 * np.pi * (t - t0) / 300.0)]])
         plant.step(X, U, D, Z)
         F = rhs_of(plant, U[0], D[0].copy())

@@ -10,7 +10,7 @@ import numpy as np
 from scipy.integrate import solve_ivp
 
 from steamtemp_gym import scenarios
-from steamtemp_gym.envs.core import eval_schedules
+from steamtemp_gym.envs.core import schedules
 from steamtemp_gym.plants import supercritical_fsh as fsh
 from steamtemp_gym.plants.valve import valve_rhs
 from steamtemp_gym.steam import T_ph
@@ -61,7 +61,7 @@ def test_ros2_matches_radau_over_the_load_ramp():
 
     def D_of_k(k):
         D, sp = np.zeros((1, 5)), np.zeros(1)
-        eval_schedules(0, t0 + k * dt, bp_t, bp_v, bp_n, 593.0, np.zeros(1), D, sp)
+        schedules(0, 0, t0 + k * dt, bp_t, bp_v, bp_n, 593.0, np.zeros(1), D, sp)
         return D[0]
 
     X = np.zeros((1, plant.n_x))

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from steamtemp_gym import scenarios
-from steamtemp_gym.envs.core import eval_schedules
+from steamtemp_gym.envs.core import schedules
 from steamtemp_gym.scenarios import RANDOM_DISTRIBUTION as DIST
 from steamtemp_gym.scenarios import Scenario
 
@@ -49,12 +49,12 @@ def test_kernel_schedule_matches_python_interpolation():
     scenarios.pack(s, bp_t[0], bp_v[0], bp_n[0])
     D, sp, ou = np.zeros((1, 5)), np.zeros(1), np.zeros(1)
     for t in (0.0, 5.0, 20.0, 29.9, 30.0, 45.0, 50.0, 80.0, 200.0):
-        eval_schedules(0, t, bp_t, bp_v, bp_n, 500.0, ou, D, sp)
+        schedules(0, 0, t, bp_t, bp_v, bp_n, 500.0, ou, D, sp)
         if t != 30.0:
             assert D[0, 0] == pytest.approx(s.value("load", t))
         assert D[0, 3] == pytest.approx(s.value("fouling", t))
         assert sp[0] == pytest.approx(500.0 + (5.0 if t >= 50 else 0.0))
-    eval_schedules(0, 20.0, bp_t, bp_v, bp_n, 500.0, ou, D, sp)
+    schedules(0, 0, 20.0, bp_t, bp_v, bp_n, 500.0, ou, D, sp)
     assert D[0, 1] == pytest.approx(-0.4 / 20.0)  # load slope (1/s) for the plants' feed-forward
 
 

@@ -23,6 +23,7 @@ batch size. Plants with internal random disturbances get the same key through
 
 from __future__ import annotations
 
+import dataclasses
 from typing import Any
 
 import numpy as np
@@ -48,6 +49,7 @@ N_HEAD = 7
 #: the lower band edge).
 TRIP_REASONS = ("", "outlet_above_trip_band", "outlet_below_trip_band", "non_finite_state")
 TRIP_ABOVE, TRIP_BELOW, TRIP_NON_FINITE = 1, 2, 3
+_TRIP_NAMES = np.array(TRIP_REASONS)
 #: A scenario must start within this many K of its setpoint in steady state (the +-5 K band
 #: plant engineers read): further away the valves are saturated at t = 0 and the episode
 #: starts as a disturbance nobody can correct.
@@ -86,12 +88,6 @@ def schedules(b, s, t, bp_t, bp_v, bp_n, sp_nom, ou, D, sp):
     D[b, 3] = _interp(bp_t[s, C_FOUL], bp_v[s, C_FOUL], bp_n[s, C_FOUL], t)[0]
     D[b, 4] = _interp(bp_t[s, C_SPRAYT], bp_v[s, C_SPRAYT], bp_n[s, C_SPRAYT], t)[0]
     sp[b] = sp_nom + _interp(bp_t[s, C_SP], bp_v[s, C_SP], bp_n[s, C_SP], t)[0]
-
-
-@njit(cache=True, error_model="numpy")
-def eval_schedules(b, t, bp_t, bp_v, bp_n, sp_nom, ou, D, sp):
-    """:func:`schedules` of row b from its own table row b (tables with one row per row)."""
-    schedules(b, b, t, bp_t, bp_v, bp_n, sp_nom, ou, D, sp)
 
 
 @njit(cache=True, error_model="numpy")
@@ -220,12 +216,6 @@ def to_commands(A, U):
     return True
 
 
-def _value_at(scenario: sc.Scenario, channel: str, t: float) -> float:
-    """Value of one schedule of ``scenario`` at time t (the kernels' interpolation)."""
-    pts = np.asarray(getattr(scenario, channel), dtype=np.float64).reshape(-1, 2)
-    return float(_interp(pts[:, 0].copy(), pts[:, 1].copy(), pts.shape[0], t)[0])
-
-
 class Core:
     """Batched state of B copies of one plant under per-row scenarios.
 
@@ -329,64 +319,60 @@ class Core:
         entry[1] += 1
         self.slot[b] = entry[0]
 
-    def _steady(self, d: np.ndarray, sp: float) -> np.ndarray:
-        """Outputs Z of the plant's steady state at disturbances d holding setpoint sp."""
-        X, Z = np.zeros((1, self.plant.n_x)), np.zeros((1, self.plant.n_z))
-        D = np.array([d], dtype=np.float64)
-        self.plant.seed_rows(X, np.zeros(1, dtype=np.uint64))
-        self.plant.steady_state(D, np.array([sp]), X)
-        self.plant.step(X, np.zeros((1, self.plant.n_u)), D, Z, dt=0.0)
-        return Z[0]
+    def _settle(self, s, tables, ou, key, X, U, D, sp, Z) -> None:
+        """The steady start (t = 0) of the scenario in table slot s of ``tables`` (bp_t, bp_v,
+        bp_n) for the one row of the (1, ...) views given: D and sp from its schedules, X
+        seeded and settled holding sp, Z its outputs (a zero-length step)."""
+        schedules(0, s, 0.0, *tables, self.plant.setpoint_C, ou, D, sp)
+        self.plant.seed_rows(X, key)
+        self.plant.steady_state(D, sp, X)
+        self.plant.step(X, U, D, Z, dt=0.0)
 
-    def _start_error(self, d: np.ndarray, sp: float) -> float:
-        """Setpoint minus the steady outlet at (d, sp); NaN if the steady state is not finite."""
-        z = self._steady(d, sp)
-        e = sp - z[self.i_out]
-        return e if np.all(np.isfinite(z)) else float("nan")
+    def _start_error(self, scenario: sc.Scenario) -> tuple[float, np.ndarray, np.ndarray, float]:
+        """(setpoint - outlet, Z, D, setpoint) of ``scenario``'s steady start with its coloured
+        disturbance at the mean; the error is NaN if the steady state is not finite."""
+        k = sc.max_breakpoints([scenario])
+        tables = (np.zeros((1, N_CH, k)), np.zeros((1, N_CH, k)), np.ones((1, N_CH), np.int64))
+        sc.pack(scenario, tables[0][0], tables[1][0], tables[2][0])
+        p = self.plant
+        X, Z, D, sp = np.zeros((1, p.n_x)), np.zeros((1, p.n_z)), np.zeros((1, N_DIST)), np.zeros(1)
+        self._settle(0, tables, np.zeros(1), np.zeros(1, np.uint64), X, np.zeros((1, p.n_u)), D,
+                     sp, Z)  # fmt: skip
+        e = sp[0] - Z[0, self.i_out] if np.all(np.isfinite(Z)) else float("nan")
+        return e, Z[0], D[0], float(sp[0])
 
     def check_start(self, scenario: sc.Scenario) -> None:
         """Raise ValueError unless the plant can hold ``scenario``'s start in steady state.
 
         The steady state at t = 0 (the coloured heat-absorption disturbance at its mean)
-        must bring the true outlet within :data:`START_BAND_K` of the setpoint with the
-        valves inside their range. The error names the initial values that make it
-        impossible (those whose return to nominal alone would make it possible).
+        must bring the true outlet within :data:`START_BAND_K` of the setpoint. The error
+        names the initial values that make it impossible (those whose return to their
+        default alone would make it possible).
         """
         if scenario in self._feasible:
             return
-        t0 = {ch: _value_at(scenario, ch, 0.0) for ch in sc.CHANNELS}
-        sp_nom = self.plant.setpoint_C
-        d = np.array([t0["load"], 0.0, t0["heat_absorption_bias"], t0["fouling"],
-                      t0["spray_water_temp_offset_C"]])  # fmt: skip
-        sp = sp_nom + t0["setpoint_offset_C"]
-        e = self._start_error(d, sp)
+        e, z, d, sp = self._start_error(scenario)
         if abs(e) <= START_BAND_K:
             self._feasible.add(scenario)
             return
+        at0 = {ch: scenario.value(ch, 0.0) for ch in sc.CHANNELS}
         culprits = []
-        for j, ch in ((2, "heat_absorption_bias"), (3, "fouling"),
-                      (4, "spray_water_temp_offset_C"), (0, "load"), (-1, "setpoint_offset_C")):
-            nominal = 1.0 if ch in ("fouling", "load") else 0.0
-            if t0[ch] == nominal:
-                continue
-            d1 = d.copy()
-            if j >= 0:
-                d1[j] = nominal
-            if abs(self._start_error(d1, sp_nom if j < 0 else sp)) <= START_BAND_K:
-                culprits.append(f"{ch} = {t0[ch]:g}")
-        z = self._steady(d, sp)
+        for ch in sc.CHANNELS:
+            default = sc.Scenario.__dataclass_fields__[ch].default
+            if at0[ch] != default[0][1]:
+                nominal = dataclasses.replace(scenario, **{ch: default})
+                if abs(self._start_error(nominal)[0]) <= START_BAND_K:
+                    culprits.append(f"{ch} = {at0[ch]:g}")
         openings = ", ".join(f"{v:.2f}" for v in z[self.valve_idx])
         state = "no finite steady state" if not np.isfinite(e) else (
             f"the steady outlet is {abs(e):.1f} K {'below' if e > 0 else 'above'} the setpoint "
             f"{sp:.1f} C with the valve openings at [{openings}]")  # fmt: skip
         why = (f"; it could with {' or '.join('nominal ' + c.split(' =')[0] for c in culprits)} "
                f"(here {', '.join(culprits)})") if culprits else ""  # fmt: skip
+        values = ", ".join(f"{ch} {v:g}" for ch, v in at0.items())
         raise ValueError(
             f"scenario {scenario.name!r} cannot start in a steady state {self.plant.id} can "
-            f"hold (within {START_BAND_K:g} K of the setpoint): at t = 0 (load {t0['load']:g}, "
-            f"heat_absorption_bias {t0['heat_absorption_bias']:g}, fouling {t0['fouling']:g}, "
-            f"spray_water_temp_offset_C {t0['spray_water_temp_offset_C']:g}, "
-            f"setpoint_offset_C {t0['setpoint_offset_C']:g}) {state}{why}"
+            f"hold (within {START_BAND_K:g} K of the setpoint): at t = 0 ({values}) {state}{why}"
         )
 
     def reset_row(self, b: int, scenario: sc.Scenario, key: int) -> None:
@@ -409,22 +395,9 @@ class Core:
         self.key[b] = np.uint64(key)
         self.counter[b] = 0
         self.out[b] = 0.0
-        schedules(
-            b,
-            self.slot[b],
-            0.0,
-            self.bp_t,
-            self.bp_v,
-            self.bp_n,
-            self.plant.setpoint_C,
-            self.ou,
-            self.D,
-            self.sp,
-        )
-        self.plant.seed_rows(self.X[b : b + 1], self.key[b : b + 1])
-        self.plant.steady_state(self.D[b : b + 1], self.sp[b : b + 1], self.X[b : b + 1])
-        rows = slice(b, b + 1)  # outputs of the steady state: a zero-length step fills Z
-        self.plant.step(self.X[rows], self.U[rows], self.D[rows], self.Z[rows], dt=0.0)
+        r = slice(b, b + 1)
+        self._settle(self.slot[b], (self.bp_t, self.bp_v, self.bp_n), self.ou[r], self.key[r],
+                     self.X[r], self.U[r], self.D[r], self.sp[r], self.Z[r])  # fmt: skip
         self.U[b] = self.Z[b, self.valve_idx]
         self.U_prev[b] = self.U[b]
         observe(b, self.Z, self.ints[N_HEAD : N_HEAD + self.ints[2]], self.obs_cs, self.ints[1],
@@ -475,7 +448,7 @@ class Core:
         info["measured_temp_C"] = self.meas.copy()
         info["time_s"] = self.ep[:, 0].copy()
         info["setpoint_C"] = self.sp.copy()
-        info["trip_reason"] = np.array(TRIP_REASONS)[self.out[:, 1].astype(np.int64)]
+        info["trip_reason"] = _TRIP_NAMES[self.out[:, 1].astype(np.int64)]
         info["load"] = self.D[:, 0].copy()
         info["spray_flow_kg_s"] = Z[:, self.spray_idx].sum(axis=1)
         if self._valves is not None:

@@ -104,20 +104,13 @@ CHANNELS: tuple[str, ...] = (
     "fouling",
     "spray_water_temp_offset_C",
 )
-_DEFAULTS = {
-    "load": 1.0,
-    "setpoint_offset_C": 0.0,
-    "heat_absorption_bias": 0.0,
-    "fouling": 1.0,
-    "spray_water_temp_offset_C": 0.0,
-}
 #: Ranges of each channel (inclusive) accepted by every plant: loads from minimum stable
 #: firing to 110 % overload; setpoint offsets of sliding-temperature operation; heat-absorption
 #: errors and gas-side fouling factors beyond those of coal switching and heavy slagging
 #: (plausible, unverified); spray water from HP heaters out of service to their overshoot.
 #: Within them a plant may still be unable to hold a combination at t = 0: such a scenario is
 #: rejected at reset with the values that make it impossible (envs/core.py:Core.check_start).
-_LIMITS = {
+LIMITS = {
     "load": (0.2, 1.1),
     "setpoint_offset_C": (-30.0, 30.0),
     "heat_absorption_bias": (-0.25, 0.25),
@@ -240,7 +233,7 @@ def _as_schedule(name: str, value: Any) -> Schedule:
             f"scenario field {name!r} has {len(value)} breakpoints, more than the "
             f"{MAX_BREAKPOINTS_PER_CHANNEL} allowed"
         )
-    lo, hi = _LIMITS[name]
+    lo, hi = LIMITS[name]
     t_lo, t_hi = _TIME_LIMITS_S
     pts: list[tuple[float, float]] = []
     for k, item in enumerate(value):

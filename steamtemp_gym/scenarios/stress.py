@@ -1,7 +1,7 @@
 """Corner-biased scenarios: the stress distribution of the hardening tests and fuzzing.
 
 Not a training distribution (that is ``random``): every channel is drawn at or near the
-ends of its documented range (``scenarios._LIMITS``) with high probability, loads jump or
+ends of its documented range (``scenarios.LIMITS``) with high probability, loads jump or
 ramp fast between the ends of the load range, and steps come early. Used by
 tests/test_hardening.py and benchmarks/fuzz_corners.py to check that no accepted scenario
 makes a plant produce a non-finite observation or reward, whatever the actions.
@@ -33,7 +33,7 @@ def corner_scenario(rng: np.random.Generator, duration_s: float = 1800.0) -> sc.
     once to another corner value at a random time. Noise and the coloured disturbance at
     the top of their ranges with probability 0.5.
     """
-    lim = sc._LIMITS  # noqa: SLF001 (the documented ranges)
+    lim = sc.LIMITS
     t, load = 0.0, _corner_value(rng, *lim["load"])
     pts = [(0.0, load)]
     for _ in range(int(rng.integers(1, 5))):
