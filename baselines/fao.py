@@ -134,9 +134,10 @@ from baselines.identification import FOPDT, simc_pi, step_test
 from baselines.loops import input_filter, restart_rows
 from steamtemp_gym import plants
 from steamtemp_gym.metrics import step_response_metrics
+from steamtemp_gym.plants.attemperator import mix
 from steamtemp_gym.plants.base import MAIN
 from steamtemp_gym.plants.ndivision import feedback_gains, state_space
-from steamtemp_gym.plants.supercritical_fsh import SupercriticalFSH
+from steamtemp_gym.plants.supercritical_fsh import SupercriticalFSH, spray_water
 from steamtemp_gym.steam import T_dTdh_ph, T_ph, h_pT, rho_ph
 
 K0 = 273.15
@@ -189,17 +190,16 @@ def fac_output(dta: np.ndarray, dratio: np.ndarray) -> np.ndarray:
 
 # ------------------------------------------------------------------- FSH observer (eq. 9)
 @njit(cache=True, error_model="numpy")
-def _fsh_inlet(T_up_C, w_sp, W, p, par):
-    """FSH inlet enthalpy (J/kg) from the attemperator's mass and energy balance, per row."""
+def _fsh_inlet(T_up_C, w_sp, W, p, W_nom, P):
+    """FSH inlet enthalpy (J/kg) per row: the plant's attemperator balance (``mix``) of the
+    measured upstream steam and spray with the plant's spray water at the measured flow
+    (``spray_water`` of the FSH plant, P its packed parameters; no offset known)."""
     n = W.shape[0]
     h0 = np.empty(n)
     for b in range(n):
-        lw = min(max(W[b] / par[2], 0.05), 1.3)
-        T_fw = par[9] - par[10] * (1.0 - lw)
-        h_sp = h_pT(p[b] + par[8] * lw * lw, T_fw)
-        h_up = h_pT(p[b], T_up_C[b] + K0)
+        h_sp = spray_water(P, min(max(W[b] / W_nom, 0.05), 1.3), 0.0)[0]
         ws = min(max(w_sp[b], 0.0), 0.5 * W[b])
-        h0[b] = ((W[b] - ws) * h_up + ws * h_sp) / W[b]
+        h0[b] = mix(W[b] - ws, h_pT(p[b], T_up_C[b] + K0), ws, h_sp)[1]
     return h0
 
 
@@ -227,8 +227,8 @@ def _fsh_observer_step(S, h0, W, p, Q, par, dt, n_sub, first):
 
     S per row: T_m,1..3 (K), h_1..3 (J/kg), line cell enthalpies, thermocouple T1, T2 (K).
     par: (C_m per division J/K, kA_0 per division W/K, M_0 kg/s, line V per cell m3,
-    line C_m per cell J/K, tau_tc1 s, tau_tc2 s, n_line, dp_boiler Pa, T_fw_nom K,
-    dT_fw per unit load K). ``first`` rows get their metal at the steady value for Q.
+    line C_m per cell J/K, tau_tc1 s, tau_tc2 s, n_line). ``first`` rows get their metal
+    at the steady value for Q.
     """
     nl = int(par[7])
     h_sub = dt / n_sub
@@ -275,7 +275,7 @@ def _fsh_par(plant: SupercriticalFSH) -> np.ndarray:
     return np.array([
         Cm / N_DIV, kA / N_DIV, pp.W_nom_kg_s, pp.line_volume_m3 / pp.n_line,
         pp.line_metal_t * 1e3 * pp.c_metal_J_kgK / pp.n_line, pp.tau_tc1_s, pp.tau_tc2_s,
-        float(pp.n_line), pp.dp_boiler_nom_MPa * 1e6, pp.T_fw_nom_C + K0, pp.dT_fw_dload_K,
+        float(pp.n_line),
     ])  # fmt: skip
 
 
@@ -289,7 +289,7 @@ def _fsh_nominal(env_id: str, params_json: str) -> tuple[np.ndarray, np.ndarray,
     par = _fsh_par(plant)
     p = sig["pressure_MPa"] * 1e6
     h0 = _fsh_inlet(sig["attemp_in_temp_C"], sig["spray_flow_kg_s"], sig["steam_flow_kg_s"],
-                    p, par)  # fmt: skip
+                    p, par[2], plant.P)  # fmt: skip
     ha = np.array([h_pT(pi, T + K0) for pi, T in zip(p, sig["outlet_temp_meas_C"], strict=True)])
     return sig["steam_flow_kg_s"] / par[2], h0, ha
 
@@ -335,6 +335,7 @@ class _FSHObserver:
     def __init__(self, env: Any, names: list[str], params_json: str) -> None:
         plant = env.unwrapped.plant
         self.par = _fsh_par(plant)
+        self.P = plant.P
         self.nl = int(self.par[7])
         self.dt = plant.dt_s
         self.ix = [names.index(s) for s in (
@@ -353,7 +354,7 @@ class _FSHObserver:
         T_up, w_sp, W, p_MPa, T_meas = (y[:, i] for i in self.ix)
         p = p_MPa * 1e6
         W = np.maximum(W, 1e-3 * self.par[2])
-        h0 = _fsh_inlet(T_up, w_sp, W, p, self.par)
+        h0 = _fsh_inlet(T_up, w_sp, W, p, self.par[2], self.P)
         n = y.shape[0]
         if self.S.shape[0] != n:
             self.S = np.zeros((n, 8 + self.nl))

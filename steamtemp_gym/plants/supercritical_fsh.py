@@ -286,7 +286,7 @@ def _spray_water_exact(P: np.ndarray, lw: float, dT: float) -> tuple[float, floa
 
 
 @njit(cache=True, error_model="numpy")
-def _spray_water(P, lw, dT):
+def spray_water(P, lw, dT):
     """Spray water (h J/kg, rho kg/m3, valve dp Pa) at steam-flow fraction lw and offset dT (K).
 
     Feed-pump discharge water, tabulated over load from IF97 at pack time; the
@@ -310,7 +310,7 @@ def _boundary(x, u, d, P):
     lf = min(max(x[S_LF], 0.05), 1.3)
     W = lw * P[I_WNOM]
     p = _pressure(P, lw)
-    h_sp, rho_sp, dp = _spray_water(P, lw, d[4])
+    h_sp, rho_sp, dp = spray_water(P, lw, d[4])
     w_valve = spray_flow(x[S_V], P[I_CV], rho_sp, dp)
     w_sp = min(w_valve, 0.5 * W)
     if p < P_CRIT_PA - 0.5e6:  # subcritical: the attemperator protection (module docstring)
