@@ -86,7 +86,7 @@ from scipy.linalg import solve_discrete_are
 from baselines.cascade_pi import CascadePI
 from baselines.loops import into_stop, restart_rows
 from steamtemp_gym import plants
-from steamtemp_gym.plants.base import MAIN, N_DIST
+from steamtemp_gym.plants.base import MAIN, nominal_disturbances
 
 #: Operating points of the three linear models (fraction of rated load).
 GRID_LOADS = (0.5, 0.75, 1.0)
@@ -104,16 +104,9 @@ V_REL = 0.01
 
 def _steady(plant: Any, load: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(x, u, y_observed) of the undisturbed steady state at ``load`` (what linearize uses)."""
-    d = np.zeros((1, N_DIST))
-    d[0, 0], d[0, 3] = load, 1.0
-    x = np.zeros((1, plant.n_x))
-    plant.seed_rows(x, np.zeros(1, dtype=np.uint64))
-    plant.steady_state(d, np.array([plant.setpoint_C]), x)
-    z = np.zeros((1, plant.n_z))
-    plant.step(x.copy(), np.zeros((1, plant.n_u)), d, z, dt=0.0)
+    x, z = plant.steady_outputs(nominal_disturbances(load)[0])
     obs = [i for i, s in enumerate(plant.outputs) if s.observed]
-    u = z[0, [plant.index[v] for v in plant.valves]]
-    return x[0], u, z[0, obs]
+    return x, z[[plant.index[v] for v in plant.valves]], z[obs]
 
 
 def _reachable(A: np.ndarray, B: np.ndarray) -> np.ndarray:

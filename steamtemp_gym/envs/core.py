@@ -319,27 +319,17 @@ class Core:
         entry[1] += 1
         self.slot[b] = entry[0]
 
-    def _settle(self, s, tables, ou, key, X, U, D, sp, Z) -> None:
-        """The steady start (t = 0) of the scenario in table slot s of ``tables`` (bp_t, bp_v,
-        bp_n) for the one row of the (1, ...) views given: D and sp from its schedules, X
-        seeded and settled holding sp, Z its outputs (a zero-length step)."""
-        schedules(0, s, 0.0, *tables, self.plant.setpoint_C, ou, D, sp)
-        self.plant.seed_rows(X, key)
-        self.plant.steady_state(D, sp, X)
-        self.plant.step(X, U, D, Z, dt=0.0)
-
-    def _start_error(self, scenario: sc.Scenario) -> tuple[float, np.ndarray, np.ndarray, float]:
-        """(setpoint - outlet, Z, D, setpoint) of ``scenario``'s steady start with its coloured
+    def _start_error(self, scenario: sc.Scenario) -> tuple[float, np.ndarray, float]:
+        """(setpoint - outlet, Z, setpoint) of ``scenario``'s steady start with its coloured
         disturbance at the mean; the error is NaN if the steady state is not finite."""
         k = sc.max_breakpoints([scenario])
         tables = (np.zeros((1, N_CH, k)), np.zeros((1, N_CH, k)), np.ones((1, N_CH), np.int64))
         sc.pack(scenario, tables[0][0], tables[1][0], tables[2][0])
-        p = self.plant
-        X, Z, D, sp = np.zeros((1, p.n_x)), np.zeros((1, p.n_z)), np.zeros((1, N_DIST)), np.zeros(1)
-        self._settle(0, tables, np.zeros(1), np.zeros(1, np.uint64), X, np.zeros((1, p.n_u)), D,
-                     sp, Z)  # fmt: skip
-        e = sp[0] - Z[0, self.i_out] if np.all(np.isfinite(Z)) else float("nan")
-        return e, Z[0], D[0], float(sp[0])
+        D, sp = np.zeros((1, N_DIST)), np.zeros(1)
+        schedules(0, 0, 0.0, *tables, self.plant.setpoint_C, np.zeros(1), D, sp)
+        _, z = self.plant.steady_outputs(D[0], sp[0])
+        e = sp[0] - z[self.i_out] if np.all(np.isfinite(z)) else float("nan")
+        return e, z, float(sp[0])
 
     def check_start(self, scenario: sc.Scenario) -> None:
         """Raise ValueError unless the plant can hold ``scenario``'s start in steady state.
@@ -351,7 +341,7 @@ class Core:
         """
         if scenario in self._feasible:
             return
-        e, z, d, sp = self._start_error(scenario)
+        e, z, sp = self._start_error(scenario)
         if abs(e) <= START_BAND_K:
             self._feasible.add(scenario)
             return
@@ -395,9 +385,12 @@ class Core:
         self.key[b] = np.uint64(key)
         self.counter[b] = 0
         self.out[b] = 0.0
+        schedules(b, self.slot[b], 0.0, self.bp_t, self.bp_v, self.bp_n, self.plant.setpoint_C,
+                  self.ou, self.D, self.sp)  # fmt: skip
         r = slice(b, b + 1)
-        self._settle(self.slot[b], (self.bp_t, self.bp_v, self.bp_n), self.ou[r], self.key[r],
-                     self.X[r], self.U[r], self.D[r], self.sp[r], self.Z[r])  # fmt: skip
+        self.plant.seed_rows(self.X[r], self.key[r])
+        self.plant.steady_state(self.D[r], self.sp[r], self.X[r])
+        self.plant.step(self.X[r], self.U[r], self.D[r], self.Z[r], dt=0.0)  # outputs of it
         self.U[b] = self.Z[b, self.valve_idx]
         self.U_prev[b] = self.U[b]
         observe(b, self.Z, self.ints[N_HEAD : N_HEAD + self.ints[2]], self.obs_cs, self.ints[1],

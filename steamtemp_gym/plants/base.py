@@ -129,6 +129,14 @@ def validate_params(
             )
 
 
+def nominal_disturbances(load: float) -> np.ndarray:
+    """(1, N_DIST) disturbances of the undisturbed plant at ``load``: no load rate, no
+    heat-absorption bias, clean (fouling 1), spray water at its design temperature."""
+    d = np.zeros((1, N_DIST))
+    d[0, 0], d[0, 3] = load, 1.0
+    return d
+
+
 class Plant:
     """Base class of the plants; subclasses fill the class attributes and the kernels.
 
@@ -262,6 +270,20 @@ class Plant:
         dt = self.dt_s if dt is None else dt
         self.kernel()(X, U, D, self.P, self.jrow, self.jcol, dt, self.n_sub, Z)
 
+    def steady_outputs(
+        self, d: np.ndarray, setpoint_C: float | None = None
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """(x, z): the steady state at disturbances ``d`` (:data:`DIST` order) holding
+        ``setpoint_C`` (default: the plant's setpoint), with the plant's own random inputs
+        seeded by key 0, and its outputs (a zero-length step)."""
+        D = np.asarray(d, dtype=np.float64).reshape(1, N_DIST)
+        sp = np.array([self.setpoint_C if setpoint_C is None else setpoint_C], dtype=np.float64)
+        X, Z = np.zeros((1, self.n_x)), np.zeros((1, self.n_z))
+        self.seed_rows(X, np.zeros(1, dtype=np.uint64))
+        self.steady_state(D, sp, X)
+        self.step(X.copy(), np.zeros((1, self.n_u)), D, Z, dt=0.0)
+        return X[0], Z[0]
+
     def linearize(
         self,
         load: float,
@@ -297,17 +319,10 @@ class Plant:
         Generic: no per-plant code. Checked against the env's finite-difference step
         responses for every id in tests/test_linearize.py.
         """
-        d = np.zeros((1, N_DIST))
-        d[0, 0] = load
-        d[0, 3] = 1.0
-        sp = np.array([self.setpoint_C if setpoint_C is None else setpoint_C], dtype=np.float64)
-        x0 = np.zeros((1, self.n_x))
-        self.seed_rows(x0, np.zeros(1, dtype=np.uint64))
-        self.steady_state(d, sp, x0)
-        z = np.zeros((1, self.n_z))
-        u_zero = np.zeros((1, self.n_u))
-        self.step(x0.copy(), u_zero, d, z, dt=0.0)
-        u0 = z[0, [self.index[v] for v in self.valves]].reshape(1, self.n_u)
+        d = nominal_disturbances(load)
+        x, z = self.steady_outputs(d[0], setpoint_C)
+        x0 = x[None, :]
+        u0 = z[[self.index[v] for v in self.valves]].reshape(1, self.n_u)
         obs = np.array([i for i, s in enumerate(self.outputs) if s.observed])
 
         def run(x: np.ndarray, u: np.ndarray, dt: float | None) -> tuple[np.ndarray, np.ndarray]:
