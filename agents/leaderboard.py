@@ -69,6 +69,7 @@ import baselines
 import steamtemp_gym
 from agents.evaluation import run_episode
 from steamtemp_gym import scenarios
+from steamtemp_gym.checks import head, tail
 
 DEFAULT_SCENARIOS = ("load_ramp_100_50", "load_ramp_50_100", "setpoint_step",
                      "heat_imbalance_step", "load_following")  # fmt: skip
@@ -107,15 +108,6 @@ class Plan:
                         yield env_id, sc, name, seed
 
 
-def _excerpt(text: str, n: int = _EXCERPT) -> str:
-    return text if len(text) <= n else text[: n - 3] + "..."
-
-
-def _tail(text: str, n: int) -> str:
-    """The end of a long text (a path's file name matters most)."""
-    return text if len(text) <= n else "..." + text[-(n - 3):]
-
-
 def _items(ap: argparse.ArgumentParser, flag: str, text: str, key=None) -> list[str]:
     """Comma list: stripped, empty items ignored, duplicates dropped (first kept)."""
     items = [s.strip() for s in text.split(",")]
@@ -142,7 +134,7 @@ def parse_seeds(ap: argparse.ArgumentParser, text: str) -> list[int]:
         m = _SEED_ITEM.match(item)
         if not m:
             ap.error(
-                f"argument --seeds: invalid seed {_excerpt(item, 40)!r}: seeds are integers >= 0 "
+                f"argument --seeds: invalid seed {head(item, 40)!r}: seeds are integers >= 0 "
                 "or inclusive ranges a-b, comma separated (e.g. '0,1,2' or '0-4')"
             )
         lo = int(m.group(1))
@@ -174,7 +166,7 @@ def _policies(ap: argparse.ArgumentParser, envs: list[str], text: str | None) ->
     unknown = [n for n in names if n not in everywhere]
     if unknown:
         ap.error(
-            f"argument --policies: unknown {[_excerpt(n, 60) for n in unknown]} for envs "
+            f"argument --policies: unknown {[head(n, 60) for n in unknown]} for envs "
             f"{envs}; valid choices: {everywhere}"
         )
     out = {e: [n for n in names if n in _available(e)] for e in envs}
@@ -246,7 +238,7 @@ def build_plan(ap: argparse.ArgumentParser, args: argparse.Namespace) -> Plan:
     unknown = [e for e in envs if e not in steamtemp_gym.ENV_IDS]
     if unknown:
         ap.error(
-            f"argument --envs: unknown {[_excerpt(e, 60) for e in unknown]}; "
+            f"argument --envs: unknown {[head(e, 60) for e in unknown]}; "
             f"valid choices: {list(steamtemp_gym.ENV_IDS)}"
         )
     seeds = parse_seeds(ap, args.seeds)
@@ -262,7 +254,8 @@ def build_plan(ap: argparse.ArgumentParser, args: argparse.Namespace) -> Plan:
                 resolved[env_id, sc] = scenarios.resolve(sc, env_id)
             except Exception as exc:  # noqa: BLE001 - any failure is a bad --scenarios value
                 ap.error(
-                    f"argument --scenarios: {_tail(sc, 80)!r} for {env_id}: {_excerpt(str(exc))}"
+                    f"argument --scenarios: {tail(sc, 80)!r} for {env_id}: "
+                    f"{head(str(exc), _EXCERPT)}"
                 )
     plan = Plan(envs=envs, scenarios=scs, seeds=seeds, policies=pols)
     source = _source_digest()
@@ -272,8 +265,8 @@ def build_plan(ap: argparse.ArgumentParser, args: argparse.Namespace) -> Plan:
                 plan.envs_made[env_id, sc] = gym.make(env_id, scenario=resolved[env_id, sc])
             except Exception as exc:  # noqa: BLE001
                 ap.error(
-                    f"argument --scenarios: {_tail(sc, 80)!r} for {env_id}: "
-                    f"{type(exc).__name__}: {_excerpt(str(exc))}"
+                    f"argument --scenarios: {tail(sc, 80)!r} for {env_id}: "
+                    f"{type(exc).__name__}: {head(str(exc), _EXCERPT)}"
                 )
             for name in pols[env_id]:
                 plan.fingerprints[env_id, sc, name] = fingerprint(
@@ -326,8 +319,8 @@ def read_record(path: Path) -> list[dict]:
         except ValueError as exc:
             if i < len(lines) - 1:  # followed by a newline: not a crash mid-write
                 raise ValueError(
-                    f"{path} line {i + 1} is not an episode row ({_excerpt(str(exc), 80)}): "
-                    f"{_excerpt(line.decode(errors='replace'), 80)!r}; fix or move the file"
+                    f"{path} line {i + 1} is not an episode row ({head(str(exc), 80)}): "
+                    f"{head(line.decode(errors='replace'), 80)!r}; fix or move the file"
                 ) from None
             with path.open("r+b") as f:
                 f.truncate(len(data) - len(line))
@@ -467,7 +460,7 @@ def _markdown(rows: list[dict]) -> str:
         lines += ["## Failed episodes", "", "| env | scenario | policy | seed | error |",
                   "|---|---|---|---|---|"]  # fmt: skip
         for r in failed:
-            err = _excerpt(str(r["error"]), 160).replace("|", "\\|").replace("\n", " ")
+            err = head(str(r["error"]), 160).replace("|", "\\|").replace("\n", " ")
             lines.append(f"| {r['env']} | {r['scenario']} | {r['policy']} | {r['seed']} | {err} |")
         lines.append("")
     return "\n".join(lines)
@@ -493,7 +486,7 @@ def _error_row(key: Key, fp: str, exc: BaseException) -> dict:
     print(f"FAILED {env_id} {sc} {name} seed {seed}: {type(exc).__name__}: {exc}",
           file=sys.stderr)  # fmt: skip
     return {"env": env_id, "scenario": sc, "policy": name, "seed": seed, "fingerprint": fp,
-            "metrics": None, "error": _excerpt(f"{type(exc).__name__}: {exc}", 1000),
+            "metrics": None, "error": head(f"{type(exc).__name__}: {exc}", 1000),
             "traceback": tb[-4000:]}  # fmt: skip
 
 
@@ -601,7 +594,7 @@ def main(argv: list[str] | None = None) -> None:
     try:
         done = _latest(read_record(out / EPISODES)) if args.resume else {}
     except (OSError, ValueError) as exc:
-        ap.error(f"argument --resume: {_excerpt(str(exc))}")
+        ap.error(f"argument --resume: {head(str(exc), _EXCERPT)}")
     try:
         out.mkdir(parents=True, exist_ok=True)
         record = Record(out / EPISODES)

@@ -38,6 +38,8 @@ from dataclasses import asdict, dataclass, fields
 import numpy as np
 from numba import njit
 
+from steamtemp_gym.checks import is_real
+
 #: Largest weight accepted (every weight is >= 0): with the trip band and these ranges every
 #: per-step reward is finite (|e| is bounded by the steam tables' range, about 800 K).
 MAX_WEIGHT = 1e4
@@ -63,7 +65,7 @@ class RewardConfig:
         for f in fields(self):
             v = getattr(self, f.name)
             lo, hi = RANGES.get(f.name, (0.0, MAX_WEIGHT))
-            if isinstance(v, (bool, np.bool_)) or not isinstance(v, (int, float, np.number)):
+            if not is_real(v):
                 raise ValueError(f"reward option {f.name!r} must be a number, got {v!r}")
             if not (np.isfinite(v) and lo <= v <= hi):
                 raise ValueError(f"reward option {f.name!r} must be in [{lo:g}, {hi:g}], got {v!r}")

@@ -17,6 +17,7 @@ from gymnasium.utils import seeding
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
+from steamtemp_gym.checks import is_integer
 from steamtemp_gym.envs import options as opts
 from steamtemp_gym.envs.core import Core, check_action
 from steamtemp_gym.envs.steam_temp_env import draw_episode, spaces
@@ -87,8 +88,7 @@ class SteamTempVectorEnv(VectorEnv):
     def _seeds(self, seed: Any) -> np.ndarray:
         """Per-sub-env seeds (object array of int or None) of a reset() ``seed`` argument."""
         def valid(s: Any) -> bool:
-            return s is None or (isinstance(s, (int, np.integer)) and not isinstance(s, bool)
-                                 and s >= 0)  # fmt: skip
+            return s is None or (is_integer(s) and s >= 0)
 
         if seed is None or valid(seed):
             seeds = [None if seed is None else int(seed) + i for i in range(self.num_envs)]

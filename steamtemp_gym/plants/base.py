@@ -18,6 +18,8 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+from steamtemp_gym.checks import is_integer, is_real
+
 #: Disturbance vector entries handed to every plant kernel, in order.
 DIST: tuple[str, ...] = (
     "load",  # load demand, fraction of rated
@@ -68,13 +70,12 @@ DEFAULT_SPAN = 1e3
 
 def _check_type(cls_name: str, name: str, kind: Any, v: Any) -> None:
     """Raise ValueError unless v is a value of the declared field type (bool, int or float)."""
-    is_bool = isinstance(v, (bool, np.bool_))
     if kind is bool:
-        ok = is_bool
+        ok = isinstance(v, (bool, np.bool_))
     elif kind is int:
-        ok = isinstance(v, (int, np.integer)) and not is_bool
+        ok = is_integer(v)
     elif kind is float:
-        ok = isinstance(v, (int, float, np.integer, np.floating)) and not is_bool
+        ok = is_real(v)
     else:
         return
     if not ok:

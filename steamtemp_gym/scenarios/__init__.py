@@ -64,7 +64,6 @@ ending in ``.yaml`` / ``.yml``.
 from __future__ import annotations
 
 import math
-import numbers
 import os
 import re
 import reprlib
@@ -76,6 +75,8 @@ from typing import Any
 
 import numpy as np
 import yaml
+
+from steamtemp_gym.checks import head, is_real, tail
 
 __all__ = [
     "CHANNELS",
@@ -161,12 +162,12 @@ def _excerpt(value: Any, limit: int = 120) -> str:
         text = _REPR.repr(value)
     except Exception:  # noqa: BLE001  (a broken __repr__ must not hide the real error)
         text = f"<{type(value).__name__}>"
-    return text if len(text) <= limit else text[: limit - 3] + "..."
+    return head(text, limit)
 
 
 def _clip(text: str, limit: int = 300) -> str:
     """``text`` cut to ``limit`` characters (its end kept: the file name of a path)."""
-    return text if len(text) <= limit else "..." + text[-(limit - 3) :]
+    return tail(text, limit)
 
 
 def _describe(value: Any) -> str:
@@ -174,14 +175,9 @@ def _describe(value: Any) -> str:
     return f"{type(value).__name__} {_excerpt(value)}"
 
 
-def _is_number(value: Any) -> bool:
-    """Real numbers (Python and numpy ints and floats), not bool."""
-    return isinstance(value, numbers.Real) and not isinstance(value, (bool, np.bool_))
-
-
 def _as_float(name: str, value: Any) -> float:
     """A finite float from a number (bool, str, containers and complex rejected)."""
-    if not _is_number(value):
+    if not is_real(value):
         raise ValueError(f"scenario {name!r} must be a number, got {_describe(value)}")
     try:
         v = float(value)
@@ -221,7 +217,7 @@ def _as_schedule(name: str, value: Any) -> Schedule:
     """Validate and normalize a breakpoint list (or a constant) into a tuple of pairs."""
     if isinstance(value, np.ndarray):  # a 0-d array gives its number, a 2-d one its rows
         value = value.tolist() if value.size <= 2 * MAX_BREAKPOINTS_PER_CHANNEL else list(value)
-    if _is_number(value):
+    if is_real(value):
         value = [[0.0, value]]
     if not isinstance(value, (list, tuple)) or len(value) == 0:
         raise ValueError(
@@ -240,7 +236,7 @@ def _as_schedule(name: str, value: Any) -> Schedule:
         where = f"scenario field {name!r}: breakpoint {k} ({_excerpt(item)})"
         if not isinstance(item, (list, tuple)) or len(item) != 2:
             raise ValueError(f"{where} is not a [t_s, value] pair")
-        if not (_is_number(item[0]) and _is_number(item[1])):
+        if not (is_real(item[0]) and is_real(item[1])):
             raise ValueError(f"{where}: t_s and value must each be a number")
         try:
             t, v = float(item[0]), float(item[1])
