@@ -17,20 +17,10 @@ import time
 
 import gymnasium as gym
 import numpy as np
+from step_throughput import single_rate  # benchmarks/ (the script's folder)
 
 import baselines
 import steamtemp_gym
-
-
-def cartpole_step_us(calls: int) -> float:
-    env = gym.make("CartPole-v1")
-    env.reset(seed=0)
-    t0 = time.perf_counter()
-    for _ in range(calls):
-        _, _, term, trunc, _ = env.step(env.action_space.sample())
-        if term or trunc:
-            env.reset()
-    return (time.perf_counter() - t0) / calls * 1e6
 
 
 def latency_us(env_id: str, name: str, batch: int, calls: int) -> tuple[float, float]:
@@ -81,7 +71,7 @@ def main(argv: list[str] | None = None) -> None:
             ap.error(f"unknown policy {p!r}; valid: {list(baselines.NAMES)}")
     if args.batch < 1 or args.calls < 1:
         ap.error("--batch and --calls must be positive")
-    ref = cartpole_step_us(20_000)
+    ref = 1e6 / single_rate("CartPole-v1", 1.0)  # us per step, the same run's reference
     print(f"reference: CartPole-v1 step {ref:.1f} us\n")
     print(f"| plant | baseline | single env, us/call | x CartPole step | batch {args.batch}, "
           f"us/env |\n|---|---|---|---|---|")  # fmt: skip
