@@ -58,7 +58,7 @@ from typing import Any
 import numpy as np
 
 from baselines.identification import FOPDT, simc_pi, step_test
-from baselines.loops import input_filter, pi_position, restart_rows
+from baselines.loops import input_filter, observation_layout, pi_position, restart_rows
 from steamtemp_gym import plants
 from steamtemp_gym.plants.base import MAIN, SCHEDULED
 from steamtemp_gym.scenarios import Scenario
@@ -190,9 +190,7 @@ class CascadePI:
     ) -> None:  # fmt: skip
         u = env.unwrapped
         plant = u.plant
-        names = [s.name for s in u.signals.observation]
-        self._scale = np.array([s.scale for s in u.signals.observation])
-        self._center = np.array([s.center for s in u.signals.observation])
+        names, self._scale, self._center = observation_layout(env)
         self.i_err = names.index("error_K")
         self.i_load = names.index("load_demand")
         self.i_fire = names.index("firing_rate") if "firing_rate" in names else None

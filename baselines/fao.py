@@ -131,7 +131,7 @@ from scipy.linalg import expm
 
 from baselines.cascade_pi import FILTER_S, CascadePI, inner_schedule
 from baselines.identification import FOPDT, simc_pi, step_test
-from baselines.loops import input_filter, restart_rows
+from baselines.loops import input_filter, observation_layout, restart_rows
 from steamtemp_gym import plants
 from steamtemp_gym.metrics import step_response_metrics
 from steamtemp_gym.plants.attemperator import mix
@@ -482,9 +482,7 @@ class FaoCompensated:
             self.fuzzy = fuzzy
         self.sf = sf
         self.pi = CascadePI(env)
-        names = [s.name for s in u.signals.observation]
-        self._scale = np.array([s.scale for s in u.signals.observation])
-        self._center = np.array([s.center for s in u.signals.observation])
+        names, self._scale, self._center = observation_layout(env)
         self.i_err = names.index("error_K")
         params = json.dumps(getattr(u, "_params_overrides", {}) or {}, sort_keys=True)
         self.comp = []  # (observation index of the inner signal, observer, Delta T_0 in K)

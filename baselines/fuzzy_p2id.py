@@ -103,7 +103,7 @@ from typing import Any
 import numpy as np
 
 from baselines.cascade_pi import CascadePI
-from baselines.loops import input_filter, pi_position, restart_rows
+from baselines.loops import input_filter, observation_layout, pi_position, restart_rows
 from steamtemp_gym.plants.base import MAIN, SCHEDULED
 from steamtemp_gym.scenarios import NAMED_DISTURBANCES, Scenario
 
@@ -251,9 +251,7 @@ class FuzzyP2ID:
     def __init__(self, env: Any, gains: Any = None) -> None:
         u = env.unwrapped
         plant = u.plant
-        names = [s.name for s in u.signals.observation]
-        self._scale = np.array([s.scale for s in u.signals.observation])
-        self._center = np.array([s.center for s in u.signals.observation])
+        names, self._scale, self._center = observation_layout(env)
         self.i_err = names.index("error_K")
         self.i_load = names.index("load_demand")
         self.i_valve = [names.index(n) for n in plant.valves]

@@ -84,7 +84,7 @@ import numpy as np
 from scipy.linalg import solve_discrete_are
 
 from baselines.cascade_pi import CascadePI
-from baselines.loops import into_stop, restart_rows
+from baselines.loops import into_stop, observation_layout, restart_rows
 from steamtemp_gym import plants
 from steamtemp_gym.plants.base import MAIN, nominal_disturbances
 
@@ -206,9 +206,7 @@ class LQI:
         plant = u.plant
         params = json.dumps(getattr(u, "_params_overrides", {}) or {}, sort_keys=True)
         self.d = design(plant.id, params)
-        names = [s.name for s in u.signals.observation]
-        self._scale = np.array([s.scale for s in u.signals.observation])
-        self._center = np.array([s.center for s in u.signals.observation])
+        names, self._scale, self._center = observation_layout(env)
         self.n_y = sum(s.observed for s in plant.outputs)
         self.i_err = names.index("error_K")
         self.i_load = names.index("load_demand")

@@ -137,7 +137,7 @@ from numba import njit
 
 from baselines.cascade_pi import FILTER_S, CascadePI, simc_pi
 from baselines.identification import FOPDT
-from baselines.loops import input_filter, into_stop, pi_position, restart_rows
+from baselines.loops import input_filter, into_stop, observation_layout, pi_position, restart_rows
 from steamtemp_gym.metrics import step_response_metrics
 from steamtemp_gym.plants.base import MAIN
 from steamtemp_gym.scenarios import Scenario
@@ -369,9 +369,7 @@ class NeuroPID:
         self.eta = float(eta)
         self.force_u = force_u
         self.pi = CascadePI(env)  # the non-MAIN loops, and the inner PI tuning
-        names = [s.name for s in u.signals.observation]
-        self._scale = np.array([s.scale for s in u.signals.observation])
-        self._center = np.array([s.center for s in u.signals.observation])
+        names, self._scale, self._center = observation_layout(env)
         self.i_err, self.i_load = names.index("error_K"), names.index("load_demand")
         self.i_fire = names.index("firing_rate") if "firing_rate" in names else None
         self.i_valve = [names.index(n) for n in plant.valves]
