@@ -450,7 +450,7 @@ class Core:
 
 
 def check_action(action: Any, shape: tuple[int, ...], single: bool = False) -> np.ndarray:
-    """An action batch of ``shape`` (n_rows, n_actuators) as a float64 array.
+    """An action batch of ``shape`` (n_rows, n_actuators) as a float32 or float64 array.
 
     Accepted: any array-like of real numbers (every float dtype, integers; not bool,
     complex, strings or objects) of exactly ``shape`` (vector env) or, for the single env
@@ -474,5 +474,6 @@ def check_action(action: Any, shape: tuple[int, ...], single: bool = False) -> n
         a.shape == shape)  # fmt: skip
     if not ok:
         raise ValueError(f"action has shape {a.shape}, expected {expected}")
-    a = a.reshape(shape)
-    return np.ascontiguousarray(a, dtype=np.float64)
+    if a.dtype != np.float64 and a.dtype != np.float32:  # the dtypes the kernels take
+        a = a.astype(np.float64)
+    return a.reshape(shape)
