@@ -3,42 +3,30 @@
 ``import steamtemp_gym`` registers one id per plant in the ``steamtemp``
 namespace (see :data:`ENV_IDS`); ``gym.make(id, scenario=..., ...)`` builds a
 SteamTempEnv, ``gym.make_vec(id, num_envs=N, vectorization_mode="vector_entry_point")``
-the native batched env. See README.md and ../shared/DESIGN.md.
+the native batched env. See README.md and docs/architecture.md.
+
+Kernels compile on first use and are cached on disk (``CACHE_DIR``, set by
+``$STEAMTEMP_GYM_CACHE_DIR``; steamtemp_gym/_cache.py).
 """
 
 from __future__ import annotations
 
-import hashlib
-import os
 from importlib.metadata import PackageNotFoundError, version
-from pathlib import Path
 
 import gymnasium as gym
-import numba
 
-
-def _numba_cache_dir() -> str:
-    """A numba cache directory keyed by a hash of this package's sources.
-
-    Numba invalidates a cached kernel only when its own file changes, not when a
-    function it calls (in another module) does; keying the cache on every source
-    file makes stale kernels impossible after an edit or upgrade.
-    """
-    digest = hashlib.sha256()
-    for f in sorted(Path(__file__).parent.rglob("*.py")):
-        digest.update(f.read_bytes())
-    base = os.environ.get("NUMBA_CACHE_DIR") or str(Path.home() / ".cache" / "steamtemp_gym")
-    return str(Path(base) / f"numba-{digest.hexdigest()[:16]}")
-
-
-numba.config.CACHE_DIR = _numba_cache_dir()
-
-from steamtemp_gym.plants import PLANTS  # noqa: E402
+from steamtemp_gym import _cache
 
 try:
     __version__ = version("steamtemp-gym")
 except PackageNotFoundError:  # running from a source tree
     __version__ = "0.0.0+src"
+
+#: the folder of this code version's compiled kernels (steamtemp_gym/_cache.py)
+CACHE_DIR = _cache.configure(__version__)
+_cache.announce_compiles(CACHE_DIR)
+
+from steamtemp_gym.plants import PLANTS  # noqa: E402
 
 #: Every registered env id, in the order of the reference documents.
 ENV_IDS: tuple[str, ...] = tuple(PLANTS)

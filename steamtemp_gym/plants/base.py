@@ -219,15 +219,17 @@ class Plant:
     def kernel(self) -> Callable:
         """The compiled batched step ``step(X, U, D, P, jrow, jcol, dt, n_sub, Z)``.
 
-        Built from :attr:`kernels` by the shared ROS2 integrator once per class and
-        process (numba cannot cache kernels built around function arguments).
+        Built from :attr:`kernels` by the shared ROS2 integrator (one cached kernel per
+        class, plants/specialize.py).
         """
         cls = type(self)
         step = Plant._compiled.get(cls)
         if step is None:
             from steamtemp_gym.plants.integrator import make_batched_step
 
-            step = Plant._compiled[cls] = make_batched_step(*cls.kernels, cls.actuators or None)
+            step = Plant._compiled[cls] = make_batched_step(
+                cls.__name__, *cls.kernels, cls.actuators or None
+            )
         return step
 
     def steady_state(self, D: np.ndarray, setpoint_C: np.ndarray, X: np.ndarray) -> None:

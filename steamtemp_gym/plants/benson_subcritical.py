@@ -114,7 +114,7 @@ Integration: the shared ROS2 kernel at the 5 s interval (one step); states order
 that the stiff couplings (pressure into every segment, upstream enthalpies, measured
 enthalpies into the thermowells, evaporator outlet into the fuel/water-ratio trim) are
 in the Jacobian pattern. Valve travel and the furnace lag are solved exactly over the
-interval outside ROS2 (see _make_kernel).
+interval outside ROS2 (see step).
 
 Parameter sources: 18.1 MPa, 535 C, 4.35 MPa, 530 C, 28 MPa, 80 K, 5 s, eta_th ranges,
 440 MW: the paper. Rated flow 375 kg/s (1350 t/h): heat balance of a 440 MW reheat unit
@@ -540,7 +540,7 @@ def rhs(x, u, d, P, f, jd, ju, jl, want_jac):
     L, r2, W_eco, w1, w2, h_fw, h_sp, p_a1, p_a2 = _boundary_v(x, d, P, u[0], u[1])
     p = x[S_P]
     # furnace heat release: given as the interval mean u[2] by the step kernel (exact lag,
-    # see _make_kernel), else the state S_F with its ODE (reference integrators, tests)
+    # see step), else the state S_F with its ODE (reference integrators, tests)
     held = u.shape[0] > 2
     lf = u[2] if held else firing(x, d, P)
     dpb = P[I_DPB] * r2
@@ -583,7 +583,7 @@ def rhs(x, u, d, P, f, jd, ju, jl, want_jac):
     f[S_P] = P[I_CSTOR] * (W_eco + w1 + w2 - W_t)
     # fuel/water-ratio trim (integral part; see fuel_demand)
     f[int(P[I_STRIM])] = -P[I_KI] * (h_ev - h_ev_setpoint(P, L)) * 1e-5
-    f[S_V1] = 0.0  # valve travel is exact in the kernel (see _make_kernel)
+    f[S_V1] = 0.0  # valve travel is exact in the kernel (see step)
     f[S_V2] = 0.0
     # furnace: heat release follows the fuel demand
     f[S_F] = 0.0 if held else (fuel_demand(x, d, P) - x[S_F]) / P[I_TAUF]
@@ -1116,10 +1116,11 @@ def _pack(pr: BensonParams) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
     return P, jrow, jcol, n_x
 
 
-_KERNEL = None
+_ROS2 = make_batched_step("BensonSubcritical", rhs, outputs, project)
 
 
-def _make_kernel(ros2):
+@njit(cache=True)
+def step(X, U, D, P, jrow, jcol, dt, n_sub, Z):  # noqa: N803
     """The batched step: exact valve travel, then the shared ROS2 kernel for the rest.
 
     The valves (lag plus rate limit, valve.py) are independent of the other states, so
@@ -1132,26 +1133,21 @@ def _make_kernel(ros2):
     at 5 s, the step of the boiler-input-rate lead at a ramp start gave 0.4 K main-steam
     error against 40 substeps.
     """
-
-    @njit
-    def step(X, U, D, P, jrow, jcol, dt, n_sub, Z):  # noqa: N803
-        Um = np.empty((U.shape[0], 3))
-        lf_end = np.empty(X.shape[0])
-        a = math.exp(-dt / P[I_TAUF])
-        m = P[I_TAUF] / dt * (1.0 - a) if dt > 0.0 else 1.0
-        for b in range(X.shape[0]):
-            X[b, S_V1], Um[b, 0] = valve_travel(X[b, S_V1], U[b, 0], P[I_TAUV], P[I_RATEV], dt)
-            X[b, S_V2], Um[b, 1] = valve_travel(X[b, S_V2], U[b, 1], P[I_TAUV], P[I_RATEV], dt)
-            fd = fuel_demand(X[b], D[b], P)  # held over the interval (the trim is slow)
-            e0 = X[b, S_F] - fd
-            lf_end[b] = fd + e0 * a
-            Um[b, 2] = fd + e0 * m
-        ros2(X, Um, D, P, jrow, jcol, dt, n_sub, Z)
-        for b in range(X.shape[0]):
-            X[b, S_F] = lf_end[b]
-            outputs(X[b], U[b], D[b], P, Z[b])
-
-    return step
+    Um = np.empty((U.shape[0], 3))
+    lf_end = np.empty(X.shape[0])
+    a = math.exp(-dt / P[I_TAUF])
+    m = P[I_TAUF] / dt * (1.0 - a) if dt > 0.0 else 1.0
+    for b in range(X.shape[0]):
+        X[b, S_V1], Um[b, 0] = valve_travel(X[b, S_V1], U[b, 0], P[I_TAUV], P[I_RATEV], dt)
+        X[b, S_V2], Um[b, 1] = valve_travel(X[b, S_V2], U[b, 1], P[I_TAUV], P[I_RATEV], dt)
+        fd = fuel_demand(X[b], D[b], P)  # held over the interval (the trim is slow)
+        e0 = X[b, S_F] - fd
+        lf_end[b] = fd + e0 * a
+        Um[b, 2] = fd + e0 * m
+    _ROS2(X, Um, D, P, jrow, jcol, dt, n_sub, Z)
+    for b in range(X.shape[0]):
+        X[b, S_F] = lf_end[b]
+        outputs(X[b], U[b], D[b], P, Z[b])
 
 
 def _temp(name: str, center: float, scale: float, what: str) -> Signal:
@@ -1213,10 +1209,7 @@ class BensonSubcritical(Plant):
     design_spray = "design_spray_kg_s"
 
     def kernel(self):
-        global _KERNEL
-        if _KERNEL is None:
-            _KERNEL = _make_kernel(make_batched_step(rhs, outputs, project))
-        return _KERNEL
+        return step
 
     def steady_state(self, D: np.ndarray, setpoint_C: np.ndarray, X: np.ndarray) -> None:
         steady(D, setpoint_C + K0, self.P, X)

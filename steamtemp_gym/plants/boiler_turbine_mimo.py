@@ -123,7 +123,7 @@ Validation (tests/test_boiler_turbine_mimo.py):
   The time constants (Tu + Tg) are 2.4 to 5.2 times longer at 25 %. The gains per valve
   stroke change by at most 1.43x; the FF gain changes 3.8x.
 - ROS2 at dt = 2 s against 16 substeps over a load ramp: 0.05 K (STE), 0.02 K (RTE); the
-  mill and furnace lags are solved exactly over the interval outside ROS2 (_make_kernel).
+  mill and furnace lags are solved exactly over the interval outside ROS2 (step).
 """
 
 from __future__ import annotations
@@ -478,7 +478,7 @@ def _offsets(P):
 
 
 #: Length of the command vector the step kernel hands to rhs: SP1, SP2, RGD, FF bias and the
-#: interval-mean heat release (see _make_kernel).
+#: interval-mean heat release (see step).
 N_U_HELD = 5
 
 
@@ -511,7 +511,7 @@ def rhs(x, u, d, P, f, jd, ju, jl, want_jac):
     o_p, o_pl, o_f, o_r = _offsets(P)
     # coordinated control: MWD -> steam flow, firing (BIR lead + FF bias) through the mills
     # and the furnace, evaporator outlet. The step kernel passes the interval-mean heat
-    # release as u[N_U_HELD - 1] (exact two-lag solution, see _make_kernel); without it
+    # release as u[N_U_HELD - 1] (exact two-lag solution, see step); without it
     # (reference integrators, tests) the mill and furnace states follow their ODEs.
     held = u.shape[0] >= N_U_HELD
     if held:
@@ -1004,11 +1004,12 @@ _FUEL_BIAS_ACTION = Signal(
 #: ``outputs`` names the Signal tuple)
 KERNELS = (rhs, outputs, project)
 
+ACTUATORS = ((S_V1, I_TAUV, I_RATEV), (S_V2, I_TAUV, I_RATEV), (S_G, I_TAUD, I_RATED))
+_ROS2 = make_batched_step("BoilerTurbineMIMO", *KERNELS, ACTUATORS)
 
-_KERNEL = None
 
-
-def _make_kernel(ros2):
+@njit(cache=True)
+def step(X, U, D, P, jrow, jcol, dt, n_sub, Z):  # noqa: N803
     """The batched step: exact mill and furnace lags, then the shared ROS2 kernel.
 
     The fuel demand at the interval start is held (the FF bias state moves within 1 s, a
@@ -1017,24 +1018,19 @@ def _make_kernel(ros2):
     release. Inside ROS2 at 2 s the 15 s furnace lag, whose coupling into the tube metal
     is not in the Jacobian pattern, gave 0.18 K (STE) against 16 substeps on the ramp.
     """
-
-    @njit
-    def step(X, U, D, P, jrow, jcol, dt, n_sub, Z):  # noqa: N803
-        nb = X.shape[0]
-        Uh = np.empty((nb, N_U_HELD))
-        ends = np.empty((nb, 2))
-        for b in range(nb):
-            for j in range(N_U_HELD - 1):
-                Uh[b, j] = U[b, j] if j < U.shape[1] else 0.5
-            m, lf, mean = firing_travel(X[b, S_MILL], X[b, S_LF], fuel_demand(X[b], D[b], P),
-                                        P[I_TAUM], P[I_TAUF], dt)  # fmt: skip
-            ends[b, 0], ends[b, 1], Uh[b, N_U_HELD - 1] = m, lf, mean
-        ros2(X, Uh, D, P, jrow, jcol, dt, n_sub, Z)
-        for b in range(nb):
-            X[b, S_MILL], X[b, S_LF] = ends[b, 0], ends[b, 1]
-            outputs(X[b], U[b], D[b], P, Z[b])
-
-    return step
+    nb = X.shape[0]
+    Uh = np.empty((nb, N_U_HELD))
+    ends = np.empty((nb, 2))
+    for b in range(nb):
+        for j in range(N_U_HELD - 1):
+            Uh[b, j] = U[b, j] if j < U.shape[1] else 0.5
+        m, lf, mean = firing_travel(X[b, S_MILL], X[b, S_LF], fuel_demand(X[b], D[b], P),
+                                    P[I_TAUM], P[I_TAUF], dt)  # fmt: skip
+        ends[b, 0], ends[b, 1], Uh[b, N_U_HELD - 1] = m, lf, mean
+    _ROS2(X, Uh, D, P, jrow, jcol, dt, n_sub, Z)
+    for b in range(nb):
+        X[b, S_MILL], X[b, S_LF] = ends[b, 0], ends[b, 1]
+        outputs(X[b], U[b], D[b], P, Z[b])
 
 
 class BoilerTurbineMIMO(Plant):
@@ -1120,7 +1116,7 @@ class BoilerTurbineMIMO(Plant):
 
     pack = staticmethod(_pack)
     kernels = KERNELS
-    actuators = ((S_V1, I_TAUV, I_RATEV), (S_V2, I_TAUV, I_RATEV), (S_G, I_TAUD, I_RATED))
+    actuators = ACTUATORS
     setpoint_param = "T_ms_C"
 
     def __init__(self, **overrides) -> None:
@@ -1138,10 +1134,7 @@ class BoilerTurbineMIMO(Plant):
             self.n_u = len(self.actions)
 
     def kernel(self):
-        global _KERNEL
-        if _KERNEL is None:
-            _KERNEL = _make_kernel(make_batched_step(*KERNELS, self.actuators))
-        return _KERNEL
+        return step
 
     def steady_state(self, D: np.ndarray, setpoint_C: np.ndarray, X: np.ndarray) -> None:
         steady(D, setpoint_C + K0, self.P, X)

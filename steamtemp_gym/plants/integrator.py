@@ -36,8 +36,8 @@ A plant supplies two compiled functions:
 :func:`make_batched_step` returns the batched kernel
 ``step(X, U, D, P, jrow, jcol, dt, n_sub, Z)`` that advances every row of X
 by ``dt`` in ``n_sub`` ROS2 steps with the inputs held (zero-order hold) and
-fills Z. Numba cannot cache a kernel built around function arguments, so each
-plant's kernel is compiled once per process.
+fills Z. It is a copy of one template per plant, compiled and cached on disk like
+any kernel (plants/specialize.py).
 """
 
 from __future__ import annotations
@@ -47,6 +47,7 @@ from collections.abc import Callable
 import numpy as np
 from numba import njit
 
+from steamtemp_gym.plants.specialize import specialize
 from steamtemp_gym.plants.valve import valve_travel
 
 GAMMA = 1.0 + 1.0 / np.sqrt(2.0)
@@ -100,12 +101,61 @@ def pattern_arrays(pattern: list[tuple[int, int]]) -> tuple[np.ndarray, np.ndarr
     return jrow, jcol
 
 
+# Bound per plant by make_batched_step (plants/specialize.py); never compiled as they are.
+rhs = outputs = project = None
+ACTUATORS = np.zeros((0, 3), dtype=np.int64)
+
+
+def _batched_step(X, U, D, P, jrow, jcol, dt, n_sub, Z):  # noqa: N803
+    """Template of ``step``: see :func:`make_batched_step`."""
+    n = X.shape[1]
+    nc = jrow.shape[0]
+    f = np.empty(n)
+    jd = np.empty(n)
+    ju = np.zeros(n)
+    jl = np.empty(max(nc, 1))
+    k1 = np.empty(n)
+    k2 = np.empty(n)
+    x2 = np.empty(n)
+    h = dt / n_sub
+    gh = GAMMA * h
+    uc = np.empty(U.shape[1])
+    for b in range(X.shape[0]):
+        x = X[b]
+        u = U[b]
+        d = D[b]
+        for _ in range(n_sub):
+            for j in range(U.shape[1]):
+                uc[j] = u[j]
+            for j in range(ACTUATORS.shape[0]):
+                iv = ACTUATORS[j, 0]
+                v_end = valve_travel(x[iv], u[j], P[ACTUATORS[j, 1]], P[ACTUATORS[j, 2]], h)[0]
+                uc[j] = (v_end - x[iv]) / h if h > 0.0 else 0.0
+            rhs(x, uc, d, P, f, jd, ju, jl, True)
+            block_solve(gh, jd, ju, jl, jrow, jcol, f, k1)
+            for i in range(n):
+                x2[i] = x[i] + h * k1[i]
+            rhs(x2, uc, d, P, f, jd, ju, jl, False)
+            for i in range(n):
+                f[i] -= 2.0 * k1[i]
+            block_solve(gh, jd, ju, jl, jrow, jcol, f, k2)
+            for i in range(n):
+                x[i] += 1.5 * h * k1[i] + 0.5 * h * k2[i]
+            project(x, P)
+        outputs(x, u, d, P, Z[b])
+
+
 def make_batched_step(
-    rhs: Callable, outputs: Callable, project: Callable, actuators: np.ndarray | None = None
+    name: str,
+    rhs: Callable,
+    outputs: Callable,
+    project: Callable,
+    actuators: np.ndarray | None = None,
 ) -> Callable:
-    """Build the compiled batched ROS2 step of a plant.
+    """Build the compiled batched ROS2 step of a plant (cached on disk).
 
     Args:
+        name: The plant's name, unique per set of functions (it names the cache entry).
         rhs: Compiled right-hand side (see module docstring).
         outputs: Compiled output map.
         project: Compiled ``project(x, p)`` that clips states to their physical
@@ -123,46 +173,6 @@ def make_batched_step(
     Returns:
         ``step(X, U, D, P, jrow, jcol, dt, n_sub, Z)``, in place on X and Z.
     """
-
     act = np.zeros((0, 3), dtype=np.int64) if actuators is None else np.asarray(actuators, np.int64)
-    n_act = act.shape[0]
-
-    @njit(error_model="numpy")
-    def step(X, U, D, P, jrow, jcol, dt, n_sub, Z):  # noqa: N803
-        n = X.shape[1]
-        nc = jrow.shape[0]
-        f = np.empty(n)
-        jd = np.empty(n)
-        ju = np.zeros(n)
-        jl = np.empty(max(nc, 1))
-        k1 = np.empty(n)
-        k2 = np.empty(n)
-        x2 = np.empty(n)
-        h = dt / n_sub
-        gh = GAMMA * h
-        uc = np.empty(U.shape[1])
-        for b in range(X.shape[0]):
-            x = X[b]
-            u = U[b]
-            d = D[b]
-            for _ in range(n_sub):
-                for j in range(U.shape[1]):
-                    uc[j] = u[j]
-                for j in range(n_act):
-                    iv = act[j, 0]
-                    v_end = valve_travel(x[iv], u[j], P[act[j, 1]], P[act[j, 2]], h)[0]
-                    uc[j] = (v_end - x[iv]) / h if h > 0.0 else 0.0
-                rhs(x, uc, d, P, f, jd, ju, jl, True)
-                block_solve(gh, jd, ju, jl, jrow, jcol, f, k1)
-                for i in range(n):
-                    x2[i] = x[i] + h * k1[i]
-                rhs(x2, uc, d, P, f, jd, ju, jl, False)
-                for i in range(n):
-                    f[i] -= 2.0 * k1[i]
-                block_solve(gh, jd, ju, jl, jrow, jcol, f, k2)
-                for i in range(n):
-                    x[i] += 1.5 * h * k1[i] + 0.5 * h * k2[i]
-                project(x, P)
-            outputs(x, u, d, P, Z[b])
-
-    return step
+    return specialize(_batched_step, name, rhs=rhs, outputs=outputs, project=project,
+                      ACTUATORS=act.reshape(-1, 3))  # fmt: skip

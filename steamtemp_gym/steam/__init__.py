@@ -73,8 +73,11 @@ import hashlib
 import math
 from pathlib import Path
 
+import llvmlite.binding as _llvm
 import numpy as np
-from numba import njit, types
+from llvmlite import ir as _ir
+from numba import carray, njit, types
+from numba.extending import intrinsic
 
 __all__ = [
     "T_ph",
@@ -208,9 +211,46 @@ _FHINV = 1.0 / _FDH
 _FT = _unit_cell(_D["fast_T"], _FDP, _FDH)  # (p node, h node, 4)
 _FR = _unit_cell(_D["fast_rho"], _FDP, _FDH)
 _FG = _unit_cell(_D["fast_h"], _FDP, 1.0 / _FNG)  # h(p, tau): start values for h_pT
-if max(a.nbytes for a in (_CDAT, _TDAT, _RDAT, _FT, _FR, _FG)) > 10**6:
-    raise ImportError(f"{_TABLES_PATH.name}: a table exceeds 1 MB (numba would not cache it)")
 del _D
+
+
+# The large tables are not frozen into the compiled code (numba would copy ~2 MB of
+# constants into every cached kernel that calls a lookup: 4 MB per cache file, 360 MB
+# per cache). Each is registered once per process as a named external symbol and read
+# through a pointer to it; the cached machine code refers to the symbol by name, and the
+# JIT linker resolves it to this process's copy when the kernel is loaded. The symbol
+# names carry the table hash, so code compiled against other tables cannot bind to
+# these. The arrays are module globals: they live as long as the process.
+def _external_table(name: str, arr: np.ndarray):
+    """Register ``arr`` as a read-only external symbol; return an intrinsic giving its
+    address as a float64 pointer (use with ``numba.carray`` and the array's shape)."""
+    symbol = f"steamtemp_gym_if97_{_TABLES_SHA256[:16]}_{name}"
+    _llvm.add_symbol(symbol, arr.ctypes.data)
+
+    @intrinsic
+    def address(typingctx):
+        def codegen(context, builder, signature, args):
+            module = builder.module
+            try:
+                g = module.get_global(symbol)
+            except KeyError:
+                g = _ir.GlobalVariable(module, _ir.IntType(8), symbol)
+                g.linkage = "external"
+                g.global_constant = True
+            return builder.bitcast(g, _ir.DoubleType().as_pointer())
+
+        return types.CPointer(types.float64)(), codegen
+
+    return address
+
+
+_CDAT_PTR = _external_table("curves", _CDAT)
+_TDAT_PTR = _external_table("T", _TDAT)
+_RDAT_PTR = _external_table("rho", _RDAT)
+_FT_PTR = _external_table("fast_T", _FT)
+_FR_PTR = _external_table("fast_rho", _FR)
+_FG_PTR = _external_table("fast_h", _FG)
+_NCDAT, _NTDAT, _FT_SHAPE, _FG_SHAPE = _CDAT.size, _TDAT.size, _FT.shape, _FG.shape
 
 P_MIN = _PMIN * 1e6  # Pa, lower table edge
 P_MAX = _PMAX * 1e6  # Pa, upper table edge
@@ -237,8 +277,8 @@ _B23_N5 = 0.13918839778870e2
 # signature numba would compile one specialisation per literal combination.
 _I8 = types.int64
 _F8 = types.float64
-_ROARR = types.Array(types.float64, 1, "C", readonly=True)
-_ROARR3 = types.Array(types.float64, 3, "C", readonly=True)
+_ARR = types.Array(types.float64, 1, "C")
+_ARR3 = types.Array(types.float64, 3, "C")
 
 
 @njit(types.Tuple((_I8, _F8, _F8))(_I8, _F8), cache=True, error_model="numpy")
@@ -293,10 +333,11 @@ def _curve(seg: int, i: int, c: int, a0: float, a1: float, a2: float, a3: float)
     nc = _NCURVE[seg]
     k = _COFF[seg] + (i * nc + c) * 2
     k1 = k + nc * 2
-    return (a0 * _CDAT[k] + a1 * _CDAT[k + 1]) + (a2 * _CDAT[k1] + a3 * _CDAT[k1 + 1])
+    cdat = carray(_CDAT_PTR(), _NCDAT)
+    return (a0 * cdat[k] + a1 * cdat[k + 1]) + (a2 * cdat[k1] + a3 * cdat[k1 + 1])
 
 
-@njit(types.UniTuple(_F8, 2)(_ROARR, _I8, _I8, _I8, _F8, _F8, _F8, _F8), cache=True,
+@njit(types.UniTuple(_F8, 2)(_ARR, _I8, _I8, _I8, _F8, _F8, _F8, _F8), cache=True,
       error_model="numpy")
 def _column(dat: np.ndarray, b: int, i: int, j: int, a0: float, a1: float, a2: float,
             a3: float) -> tuple[float, float]:
@@ -382,7 +423,7 @@ def _hermite(t: float) -> tuple[float, float, float, float]:
     return 2.0 * t3 - 3.0 * t2 + 1.0, t3 - 2.0 * t2 + t, 3.0 * t2 - 2.0 * t3, t3 - t2
 
 
-@njit(types.UniTuple(_F8, 2)(_ROARR3, _I8, _I8, _F8, _F8, _F8, _F8), cache=True,
+@njit(types.UniTuple(_F8, 2)(_ARR3, _I8, _I8, _F8, _F8, _F8, _F8), cache=True,
       error_model="numpy")
 def _fcol(tab: np.ndarray, i: int, j: int, a0: float, a1: float, a2: float,
           a3: float) -> tuple[float, float]:
@@ -398,6 +439,8 @@ def _fast(pm: float, hk: float, want: int) -> tuple[float, float, float, float]:
 
     The caller ensures _FP0 <= pm <= _FP1 and _FH0 <= hk <= _FH1.
     """
+    ft = carray(_FT_PTR(), _FT_SHAPE)
+    fr = carray(_FR_PTR(), _FT_SHAPE)
     i, t = _ucell((pm - _FP0) * _FPINV, _FNP)
     j, u = _ucell((hk - _FH0) * _FHINV, _FNH)
     a0, a1, a2, a3 = _hermite(t)
@@ -411,13 +454,13 @@ def _fast(pm: float, hk: float, want: int) -> tuple[float, float, float, float]:
     rho = 0.0
     drho = 0.0
     if want != 1:
-        g0, gu0 = _fcol(_FT, i, j, a0, a1, a2, a3)
-        g1, gu1 = _fcol(_FT, i, j + 1, a0, a1, a2, a3)
+        g0, gu0 = _fcol(ft, i, j, a0, a1, a2, a3)
+        g1, gu1 = _fcol(ft, i, j + 1, a0, a1, a2, a3)
         T = (b0 * g0 + b1 * gu0) + (b2 * g1 + b3 * gu1)
         dT = e0 * (g0 - g1) + (e1 * gu0 + e3 * gu1)
     if want != 0:
-        g0, gu0 = _fcol(_FR, i, j, a0, a1, a2, a3)
-        g1, gu1 = _fcol(_FR, i, j + 1, a0, a1, a2, a3)
+        g0, gu0 = _fcol(fr, i, j, a0, a1, a2, a3)
+        g1, gu1 = _fcol(fr, i, j + 1, a0, a1, a2, a3)
         rho = (b0 * g0 + b1 * gu0) + (b2 * g1 + b3 * gu1)
         drho = e0 * (g0 - g1) + (e1 * gu0 + e3 * gu1)
     return T, dT, rho, drho
@@ -468,35 +511,39 @@ def _fast_h_of_T(pm: float, T: float) -> float:
     node temperatures bracket T and a safeguarded Halley solve of its cubic. The caller
     ensures _FP0 <= pm <= _FP1.
     """
+    ft = carray(_FT_PTR(), _FT_SHAPE)
+    fg = carray(_FG_PTR(), _FG_SHAPE)
     i, t = _ucell((pm - _FP0) * _FPINV, _FNP)
     a0, a1, a2, a3 = _hermite(t)
-    t_lo = _fcol(_FT, i, 0, a0, a1, a2, a3)[0]
-    t_hi = _fcol(_FT, i, _FNH, a0, a1, a2, a3)[0]
+    t_lo = _fcol(ft, i, 0, a0, a1, a2, a3)[0]
+    t_hi = _fcol(ft, i, _FNH, a0, a1, a2, a3)[0]
     if not t_lo <= T <= t_hi:
         return math.nan
     k, w = _ucell((T - t_lo) / (t_hi - t_lo) * _FNG, _FNG)
-    g0, gw0 = _fcol(_FG, i, k, a0, a1, a2, a3)
-    g1, gw1 = _fcol(_FG, i, k + 1, a0, a1, a2, a3)
+    g0, gw0 = _fcol(fg, i, k, a0, a1, a2, a3)
+    g1, gw1 = _fcol(fg, i, k + 1, a0, a1, a2, a3)
     c0, c1, c2, c3 = _hermite(w)
     j, u = _ucell(((c0 * g0 + c1 * gw0) + (c2 * g1 + c3 * gw1) - _FH0) * _FHINV, _FNH)
-    g0, gu0 = _fcol(_FT, i, j, a0, a1, a2, a3)
-    g1, gu1 = _fcol(_FT, i, j + 1, a0, a1, a2, a3)
+    g0, gu0 = _fcol(ft, i, j, a0, a1, a2, a3)
+    g1, gu1 = _fcol(ft, i, j + 1, a0, a1, a2, a3)
     while T < g0 and j > 0:  # rarely taken: the start value is within ~0.01 kJ/kg
         j -= 1
         u = 1.0
         g1, gu1 = g0, gu0
-        g0, gu0 = _fcol(_FT, i, j, a0, a1, a2, a3)
+        g0, gu0 = _fcol(ft, i, j, a0, a1, a2, a3)
     while T > g1 and j < _FNH - 1:
         j += 1
         u = 0.0
         g0, gu0 = g1, gu1
-        g1, gu1 = _fcol(_FT, i, j + 1, a0, a1, a2, a3)
+        g1, gu1 = _fcol(ft, i, j + 1, a0, a1, a2, a3)
     return _FH0 + (j + _cell_root(g0 - T, g1 - T, gu0, gu1, u)) * _FDH
 
 
 @njit(types.UniTuple(_F8, 4)(_F8, _F8, _I8), cache=True, error_model="numpy")
 def _patch_lookup(pm: float, hk: float, want: int) -> tuple[float, float, float, float]:
     """``_lookup`` on the patch tables (any (p, h); clamped to the table domain)."""
+    tdat = carray(_TDAT_PTR(), _NTDAT)
+    rdat = carray(_RDAT_PTR(), _NTDAT)
     if hk != hk:  # NaN enthalpy: lower table edge
         hk = -math.inf
     seg, i, a0, a1, a2, a3, b, lo, hi = _where(pm, hk)
@@ -527,13 +574,13 @@ def _patch_lookup(pm: float, hk: float, want: int) -> tuple[float, float, float,
     e1 = (3.0 * u2 - 4.0 * u + 1.0) * iw
     e3 = (3.0 * u2 - 2.0 * u) * iw
     if want != 1:
-        g0, gx0 = _column(_TDAT, b, i, j, a0, a1, a2, a3)
-        g1, gx1 = _column(_TDAT, b, i, j + 1, a0, a1, a2, a3)
+        g0, gx0 = _column(tdat, b, i, j, a0, a1, a2, a3)
+        g1, gx1 = _column(tdat, b, i, j + 1, a0, a1, a2, a3)
         T = (b0 * g0 + b1 * gx0) + (b2 * g1 + b3 * gx1)
         dT = e0 * (g0 - g1) + (e1 * gx0 + e3 * gx1)
     if want != 0:
-        g0, gx0 = _column(_RDAT, b, i, j, a0, a1, a2, a3)
-        g1, gx1 = _column(_RDAT, b, i, j + 1, a0, a1, a2, a3)
+        g0, gx0 = _column(rdat, b, i, j, a0, a1, a2, a3)
+        g1, gx1 = _column(rdat, b, i, j + 1, a0, a1, a2, a3)
         rho = (b0 * g0 + b1 * gx0) + (b2 * g1 + b3 * gx1)
         drho = e0 * (g0 - g1) + (e1 * gx0 + e3 * gx1)
     return T, dT, rho, drho
@@ -595,19 +642,20 @@ def _patch_h_of_T(pm: float, T: float) -> float:
     xi), then a safeguarded Halley solve of that cell's Hermite cubic. T outside the
     patch range is clamped to its edge.
     """
+    tdat = carray(_TDAT_PTR(), _NTDAT)
     _, i, a0, a1, a2, a3, b, lo, hi = _select_T(pm, T)
     nxi = _NXI[b]
-    g_lo, gx_lo = _column(_TDAT, b, i, 0, a0, a1, a2, a3)
+    g_lo, gx_lo = _column(tdat, b, i, 0, a0, a1, a2, a3)
     if not T > g_lo:
         return lo
-    g_hi, gx_hi = _column(_TDAT, b, i, nxi - 1, a0, a1, a2, a3)
+    g_hi, gx_hi = _column(tdat, b, i, nxi - 1, a0, a1, a2, a3)
     if T >= g_hi:
         return hi
     jl = 0
     jh = nxi - 1
     while jh - jl > 1:
         jm = (jl + jh) >> 1
-        g, gx = _column(_TDAT, b, i, jm, a0, a1, a2, a3)
+        g, gx = _column(tdat, b, i, jm, a0, a1, a2, a3)
         if g <= T:
             jl, g_lo, gx_lo = jm, g, gx
         else:
