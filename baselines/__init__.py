@@ -19,6 +19,8 @@ _REGISTRY: dict[str, str] = {
     "neuro_pid_mee": "baselines.neuro_pid:NeuroPIDMEE",
     "neuro_pid_mse": "baselines.neuro_pid:NeuroPIDMSE",
     "lqi": "baselines.lqi:LQI",
+    "mpc_evarx": "baselines.mpc_evarx:MPCEVARX",
+    "mpc_arx": "baselines.mpc_evarx:MPCARX",
 }
 NAMES: tuple[str, ...] = tuple(_REGISTRY)
 
