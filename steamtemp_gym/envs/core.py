@@ -30,7 +30,15 @@ import numpy as np
 from numba import njit
 
 from steamtemp_gym import scenarios as sc
-from steamtemp_gym.plants.base import N_DIST, Plant
+from steamtemp_gym.plants.base import (
+    D_FOULING,
+    D_HEAT_BIAS,
+    D_LOAD,
+    D_LOAD_RATE,
+    D_SPRAY_T,
+    N_DIST,
+    Plant,
+)
 from steamtemp_gym.rewards import N_WEIGHTS, RewardConfig, reward, temperature_cost
 from steamtemp_gym.rng import gauss
 from steamtemp_gym.signals import OBS_LIMIT, T0_K, for_plant
@@ -82,11 +90,11 @@ def schedules(b, s, t, bp_t, bp_v, bp_n, sp_nom, ou, D, sp):
     """Disturbances D[b] and setpoint sp[b] of row b at time t from schedule table slot s
     (ou: coloured heat-absorption bias, added)."""
     load, rate = _interp(bp_t[s, C_LOAD], bp_v[s, C_LOAD], bp_n[s, C_LOAD], t)
-    D[b, 0] = load
-    D[b, 1] = rate
-    D[b, 2] = _interp(bp_t[s, C_BIAS], bp_v[s, C_BIAS], bp_n[s, C_BIAS], t)[0] + ou[b]
-    D[b, 3] = _interp(bp_t[s, C_FOUL], bp_v[s, C_FOUL], bp_n[s, C_FOUL], t)[0]
-    D[b, 4] = _interp(bp_t[s, C_SPRAYT], bp_v[s, C_SPRAYT], bp_n[s, C_SPRAYT], t)[0]
+    D[b, D_LOAD] = load
+    D[b, D_LOAD_RATE] = rate
+    D[b, D_HEAT_BIAS] = _interp(bp_t[s, C_BIAS], bp_v[s, C_BIAS], bp_n[s, C_BIAS], t)[0] + ou[b]
+    D[b, D_FOULING] = _interp(bp_t[s, C_FOUL], bp_v[s, C_FOUL], bp_n[s, C_FOUL], t)[0]
+    D[b, D_SPRAY_T] = _interp(bp_t[s, C_SPRAYT], bp_v[s, C_SPRAYT], bp_n[s, C_SPRAYT], t)[0]
     sp[b] = sp_nom + _interp(bp_t[s, C_SP], bp_v[s, C_SP], bp_n[s, C_SP], t)[0]
 
 
@@ -110,7 +118,7 @@ def observe(b, Z, obs_idx, obs_cs, i_meas, key, counter, noise, sp, D, obs, meas
     meas_out[b] = meas
     obs[b, n] = _normalized(sp[b], obs_cs[n, 0], obs_cs[n, 1])
     obs[b, n + 1] = _normalized(sp[b] - meas, 0.0, T0_K)
-    obs[b, n + 2] = _normalized(D[b, 0], 0.75, 0.25)
+    obs[b, n + 2] = _normalized(D[b, D_LOAD], 0.75, 0.25)
 
 
 @njit(cache=True, error_model="numpy")
@@ -425,7 +433,7 @@ class Core:
         info["time_s"] = float(self.ep[b, 0])
         info["setpoint_C"] = float(self.sp[b])
         info["trip_reason"] = TRIP_REASONS[int(self.out[b, 1])]
-        info["load"] = float(self.D[b, 0])
+        info["load"] = float(self.D[b, D_LOAD])
         spray = 0.0
         for i in self.spray_idx:
             spray += z[i]
@@ -442,7 +450,7 @@ class Core:
         info["time_s"] = self.ep[:, 0].copy()
         info["setpoint_C"] = self.sp.copy()
         info["trip_reason"] = _TRIP_NAMES[self.out[:, 1].astype(np.int64)]
-        info["load"] = self.D[:, 0].copy()
+        info["load"] = self.D[:, D_LOAD].copy()
         info["spray_flow_kg_s"] = Z[:, self.spray_idx].sum(axis=1)
         if self._valves is not None:
             info["spray_valve"] = Z[:, self._valves]

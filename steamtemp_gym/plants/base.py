@@ -29,6 +29,8 @@ DIST: tuple[str, ...] = (
     "spray_water_temp_offset_C",  # K
 )
 N_DIST = len(DIST)
+#: Index of each disturbance channel in a kernel's ``d`` (and column of the env's ``D``).
+D_LOAD, D_LOAD_RATE, D_HEAT_BIAS, D_FOULING, D_SPRAY_T = range(N_DIST)
 #: ``outer`` entry of Plant.control_loops meaning the main-steam temperature against its setpoint.
 MAIN = "main"
 #: ``outer`` entry of Plant.control_loops meaning: hold the inner temperature at a setpoint
@@ -134,7 +136,7 @@ def nominal_disturbances(load: float) -> np.ndarray:
     """(1, N_DIST) disturbances of the undisturbed plant at ``load``: no load rate, no
     heat-absorption bias, clean (fouling 1), spray water at its design temperature."""
     d = np.zeros((1, N_DIST))
-    d[0, 0], d[0, 3] = load, 1.0
+    d[0, D_LOAD], d[0, D_FOULING] = load, 1.0
     return d
 
 

@@ -159,7 +159,18 @@ import numpy as np
 from numba import njit
 
 from steamtemp_gym.plants.attemperator import mix, spray_flow
-from steamtemp_gym.plants.base import MAIN, SCHEDULED, Plant, Signal, validate_params
+from steamtemp_gym.plants.base import (
+    D_FOULING,
+    D_HEAT_BIAS,
+    D_LOAD,
+    D_LOAD_RATE,
+    D_SPRAY_T,
+    MAIN,
+    SCHEDULED,
+    Plant,
+    Signal,
+    validate_params,
+)
 from steamtemp_gym.plants.integrator import make_batched_step, pattern_arrays
 from steamtemp_gym.plants.sensors import thermowell_rhs
 from steamtemp_gym.plants.superheater import (
@@ -417,9 +428,10 @@ def p_setpoint(P, load):
 @njit(cache=True)
 def _gas(P, k, lf, d):
     """(UA_g, T_g, Q_rad) per segment of section k at firing fraction lf, disturbances d."""
-    mult = 1.0 + d[2] if k >= SH1 else (1.0 + P[I_BEV] * d[2] if k == EV else 1.0)
+    bias = d[D_HEAT_BIAS]
+    mult = 1.0 + bias if k >= SH1 else (1.0 + P[I_BEV] * bias if k == EV else 1.0)
     mult = max(mult, 0.0)
-    UAg = _s(P, k, F_UAG) * lf ** P[I_GEXP] * max(d[3], 0.0) * mult
+    UAg = _s(P, k, F_UAG) * lf ** P[I_GEXP] * max(d[D_FOULING], 0.0) * mult
     Tg = _s(P, k, F_TGN) * (1.0 - P[I_GCOEF] * (1.0 - lf))
     Qrad = _s(P, k, F_QRAD) * lf ** P[I_REXP] * mult
     return UAg, Tg, Qrad
@@ -431,11 +443,11 @@ def _boundary_v(x, d, P, v1, v2):
 
     Returns (L, r2, W_eco, w1, w2, h_fw, h_sp, p_att1, p_att2).
     """
-    L = min(max(d[0], 0.05), 1.3)
+    L = min(max(d[D_LOAD], 0.05), 1.3)
     r2 = L * L
     W_eco = P[I_WECO] * L
-    h_fw = _table(P, TB_HFW, L) + _table(P, TB_CPFW, L) * d[4]
-    h_sp = _table(P, TB_HSP, L) + _table(P, TB_CPSP, L) * d[4]
+    h_fw = _table(P, TB_HFW, L) + _table(P, TB_CPFW, L) * d[D_SPRAY_T]
+    h_sp = _table(P, TB_HSP, L) + _table(P, TB_CPSP, L) * d[D_SPRAY_T]
     rho_sp = _table(P, TB_RHOSP, L)
     w1 = spray_flow(v1, P[I_CV1], rho_sp, (P[I_DPPUMP] - P_SHARE[SH2] * P[I_DPB]) * r2)
     w2 = spray_flow(v2, P[I_CV2], rho_sp, (P[I_DPPUMP] - P_SHARE[SH3] * P[I_DPB]) * r2)
@@ -505,9 +517,9 @@ def fuel_demand(x, d, P):
     within seconds; the heat release follows the fuel flow through the furnace lag
     tau_furnace (state S_F).
     """
-    L = min(max(d[0], 0.05), 1.3)
+    L = min(max(d[D_LOAD], 0.05), 1.3)
     e = (_last_h(x, P, EV) - h_ev_setpoint(P, L)) * 1e-5
-    L_ff = min(max(L + P[I_TBIR] * d[1], 0.05), 1.3)
+    L_ff = min(max(L + P[I_TBIR] * d[D_LOAD_RATE], 0.05), 1.3)
     return min(max(_table(P, TB_FUEL, L_ff) * (1.0 + x[int(P[I_STRIM])] - P[I_KP] * e), 0.02), 1.5)
 
 
@@ -823,7 +835,7 @@ def steady(D, sp_K, P, X):
     for b in range(X.shape[0]):
         x = X[b]
         d = D[b]
-        L = min(max(d[0], 0.05), 1.3)
+        L = min(max(d[D_LOAD], 0.05), 1.3)
         p = p_setpoint(P, L)
         lf = _table(P, TB_FUEL, L)
         x[S_V1] = P[I_V1D]
@@ -845,7 +857,7 @@ def steady(D, sp_K, P, X):
         T_ms = T_ph(p, h_ms)
         h_crh = cold_reheat(P, L, p_crh, T_ms * (p_crh / p) ** P[I_KE])[0]
         _section_steady(x, P, RH, h_crh, W_rh, p_rh, lf, d)
-        L_ff = min(max(L + P[I_TBIR] * d[1], 0.05), 1.3)
+        L_ff = min(max(L + P[I_TBIR] * d[D_LOAD_RATE], 0.05), 1.3)
         x[int(P[I_STRIM])] = lf / _table(P, TB_FUEL, L_ff) - 1.0
         temps = section_temperatures(x, d, P)
         s0 = int(P[I_S0])

@@ -136,7 +136,18 @@ import numpy as np
 from numba import njit
 
 from steamtemp_gym.plants.attemperator import spray_flow
-from steamtemp_gym.plants.base import MAIN, SCHEDULED, Plant, Signal, validate_params
+from steamtemp_gym.plants.base import (
+    D_FOULING,
+    D_HEAT_BIAS,
+    D_LOAD,
+    D_LOAD_RATE,
+    D_SPRAY_T,
+    MAIN,
+    SCHEDULED,
+    Plant,
+    Signal,
+    validate_params,
+)
 from steamtemp_gym.plants.integrator import make_batched_step, pattern_arrays
 from steamtemp_gym.plants.sensors import thermowell_rhs
 from steamtemp_gym.plants.superheater import (
@@ -403,8 +414,8 @@ def _gas(P, lf, g, d):
     lf = min(max(lf, 0.05), 1.3)
     r = P[I_RMAX] * min(max(g, 0.0), 1.0)
     flow = lf * (1.0 + r) / (1.0 + P[I_RNOM])
-    heat = max(1.0 + d[2], 0.0)  # heat-absorption bias (the evaporator's: _h_up_target)
-    conv = flow ** P[I_GEXP] * max(d[3], 0.0) * heat
+    heat = max(1.0 + d[D_HEAT_BIAS], 0.0)  # heat-absorption bias (the evaporator's: _h_up_target)
+    conv = flow ** P[I_GEXP] * max(d[D_FOULING], 0.0) * heat
     dT = P[I_DTG] * (1.0 - lf)
     dTr = P[I_DTGR] * (1.0 - lf)
     q_pl = P[I_Q_PL] * lf ** P[I_REXP] * heat * max(1.0 - P[I_PLGR] * (r - P[I_RNOM]), 0.0)
@@ -415,7 +426,7 @@ def _gas(P, lf, g, d):
 @njit(cache=True)
 def _sprays(P, x, d, lw):
     """(h_sp, w1, w2, dw1/dv1, dw2/dv2) at steam-flow fraction lw (valves linear)."""
-    h_sp = _tab(P, T_HSP, lw) + _tab(P, T_CPSP, lw) * d[4]
+    h_sp = _tab(P, T_HSP, lw) + _tab(P, T_CPSP, lw) * d[D_SPRAY_T]
     dp = P[I_DPB] * lw * lw
     s = math.sqrt(_tab(P, T_RHOSP, lw) * max(dp, 0.0))
     W = lw * P[I_WNOM]
@@ -485,7 +496,7 @@ N_U_HELD = 5
 @njit(cache=True)
 def fuel_demand(x, d, P):
     """Boiler master fuel demand: MWD plus the boiler-input-rate lead plus the FF bias."""
-    fd = d[0] + P[I_TBIR] * d[1] + P[I_FBMAX] * (2.0 * x[S_FB] - 1.0)
+    fd = d[D_LOAD] + P[I_TBIR] * d[D_LOAD_RATE] + P[I_FBMAX] * (2.0 * x[S_FB] - 1.0)
     return min(max(fd, 0.05), 1.3)
 
 
@@ -522,8 +533,8 @@ def rhs(x, u, d, P, f, jd, ju, jl, want_jac):
         lf = x[S_LF]
         f[S_MILL] = (fuel_demand(x, d, P) - x[S_MILL]) / P[I_TAUM]  # mills
         f[S_LF] = (x[S_MILL] - x[S_LF]) / P[I_TAUF]  # furnace heat release
-    f[S_LW] = (d[0] - x[S_LW]) / P[I_TAUW]
-    f[S_HUP] = (_h_up_target(P, lf, x[S_LW], d[2]) - x[S_HUP]) / P[I_TAUUP]
+    f[S_LW] = (d[D_LOAD] - x[S_LW]) / P[I_TAUW]
+    f[S_HUP] = (_h_up_target(P, lf, x[S_LW], d[D_HEAT_BIAS]) - x[S_HUP]) / P[I_TAUUP]
     # SP1, SP2, RGD: exact chord velocities from the shared kernel (plants/integrator.py)
     f[S_V1], jv1 = u[0], 0.0
     f[S_V2], jv2 = u[1], 0.0
@@ -749,12 +760,12 @@ def steady(D, sp_K, P, X):
     for b in range(X.shape[0]):
         x = X[b]
         d = D[b]
-        L = min(max(d[0], 0.05), 1.3)
+        L = min(max(d[D_LOAD], 0.05), 1.3)
         x[S_LF] = L
         x[S_MILL] = L
         x[S_LW] = L
         x[S_FB] = 0.5
-        x[S_HUP] = _h_up_target(P, L, L, d[2])
+        x[S_HUP] = _h_up_target(P, L, L, d[D_HEAT_BIAS])
         x[S_CRH] = _h_crh_target(P, sp_K[b], L)
         x[S_G] = _bisect_rgd(x, d, P, P[I_TRH])
         _rh_steady(x, x[S_G], d, P)
@@ -871,7 +882,7 @@ def _calibrate(params: BoilerTurbineParams, P: np.ndarray, n_x: int) -> None:
           P[I_TG_R], h_pT(prh, P[I_TRH]), "the reheater gas side")  # fmt: skip
     # evaporator-outlet schedule: design sprays hold T_ms where RGD holds T_rh
     for k, L in enumerate(TAB_LOADS):
-        d[0] = L
+        d[D_LOAD] = L
         x[S_LF] = x[S_LW] = L
         x[S_FB] = 0.5
         x[S_CRH] = _h_crh_target(P, T_ms, L)

@@ -156,7 +156,16 @@ from numba import njit
 from scipy.linalg import expm
 
 from steamtemp_gym import scenarios as sc
-from steamtemp_gym.plants.base import MAIN, Plant, Signal, validate_params
+from steamtemp_gym.plants.base import (
+    D_FOULING,
+    D_HEAT_BIAS,
+    D_LOAD,
+    D_SPRAY_T,
+    MAIN,
+    Plant,
+    Signal,
+    validate_params,
+)
 from steamtemp_gym.rng import gauss, splitmix64, uniform
 from steamtemp_gym.scenarios.library import register as register_named
 from steamtemp_gym.steam import cp_pT, h_pT
@@ -375,8 +384,8 @@ def _spray_demand(P, load):
 @njit(cache=True)
 def _inputs(v, d, P, om, om2):
     """Inner input u_in (kg/s) and outer input q (K) for valve v and disturbances d."""
-    u_in = v * P[I_WMAX] * (1.0 - P[I_CSW] * d[4]) - _spray_demand(P, d[0]) + om2
-    q = P[I_CQ] * (d[3] * (1.0 + d[2]) - 1.0) + om
+    u_in = v * P[I_WMAX] * (1.0 - P[I_CSW] * d[D_SPRAY_T]) - _spray_demand(P, d[D_LOAD]) + om2
+    q = P[I_CQ] * (d[D_FOULING] * (1.0 + d[D_HEAT_BIAS]) - 1.0) + om
     return u_in, q
 
 
@@ -391,8 +400,8 @@ def _outputs(x, d, P, z):
     z[Z_WSP] = x[S_V] * P[I_WMAX]
     z[Z_OM] = x[S_OM]
     z[Z_OM2] = x[S_OM2]
-    z[Z_Q] = P[I_CQ] * (d[3] * (1.0 + d[2]) - 1.0) + x[S_OM]
-    z[Z_WDES] = _spray_demand(P, d[0])
+    z[Z_Q] = P[I_CQ] * (d[D_FOULING] * (1.0 + d[D_HEAT_BIAS]) - 1.0) + x[S_OM]
+    z[Z_WDES] = _spray_demand(P, d[D_LOAD])
 
 
 @njit(cache=True)
@@ -411,7 +420,7 @@ def step(X, U, D, P, jrow, jcol, dt, n_sub, Z):  # noqa: N803
             v = min(max(U[b, 0], 0.0), 1.0)
             x[S_V] = v
             u_in, q = _inputs(v, d, P, x[S_OM], x[S_OM2])
-            _coeffs(P, d[0], c)
+            _coeffs(P, d[D_LOAD], c)
             # lower-triangular update in place, last row first (rows read older states only)
             m = tri
             for i in range(n - 1, -1, -1):
@@ -450,13 +459,13 @@ def steady(D, sp_C, P, X):
         x[S_CNT] = 0.0
         _draw(x, P)
         om, om2 = x[S_OM], x[S_OM2]
-        _coeffs(P, d[0], c)
+        _coeffs(P, d[D_LOAD], c)
         _, q = _inputs(0.0, d, P, om, om2)
         _equilibrium(c, n, 1.0, 0.0, x, S_X)
         g_u = x[S_X + n - 1]
         _equilibrium(c, n, 0.0, q, x, S_X)
         u_req = (sp_C[b] - P[I_TOUT] - x[S_X + n - 1]) / g_u
-        w = (u_req + _spray_demand(P, d[0]) - om2) / (1.0 - P[I_CSW] * d[4])
+        w = (u_req + _spray_demand(P, d[D_LOAD]) - om2) / (1.0 - P[I_CSW] * d[D_SPRAY_T])
         v = min(max(w / P[I_WMAX], 0.0), 1.0)
         x[S_V] = v
         u_in, q = _inputs(v, d, P, om, om2)

@@ -137,7 +137,16 @@ from numba import njit
 
 from steamtemp_gym.plants import drum as dr
 from steamtemp_gym.plants.attemperator import mix, protected_spray_out, spray_flow
-from steamtemp_gym.plants.base import Plant, Signal, validate_params
+from steamtemp_gym.plants.base import (
+    D_FOULING,
+    D_HEAT_BIAS,
+    D_LOAD,
+    D_LOAD_RATE,
+    D_SPRAY_T,
+    Plant,
+    Signal,
+    validate_params,
+)
 from steamtemp_gym.plants.integrator import pattern_arrays
 from steamtemp_gym.plants.sensors import thermowell_rhs
 from steamtemp_gym.plants.superheater import (
@@ -358,7 +367,7 @@ def _boundary(x, d, P):
     lw = W / Wn
     T_fw = P[I_TFW] - P[I_DTFW] * (1.0 - lw)
     h_f, _, cp_f = _fw(P, T_fw)
-    h_sp, rho_sp, _ = _fw(P, T_fw + d[4])
+    h_sp, rho_sp, _ = _fw(P, T_fw + d[D_SPRAY_T])
     v = min(max(x[S_V], 0.0), 1.0)
     cap = spray_flow(1.0, P[I_CV], rho_sp, P[I_DPSP])
     dpsh = P[I_DPSH] * lw * lw
@@ -373,7 +382,7 @@ def _boundary(x, d, P):
     q_s = W - w_sp
     ddp = 2.0 * P[I_DPSH] * lw / Wn * dWok
     L_f = min(max(x[S_LF], 0.02), 1.3)
-    mult = max(d[3] * (1.0 + d[2]), 0.0) * L_f ** P[I_GEXP]
+    mult = max(d[D_FOULING] * (1.0 + d[D_HEAT_BIAS]), 0.0) * L_f ** P[I_GEXP]
     dhf = cp_f * P[I_DTFW] / Wn * dWok
     return W, lw, dWok, q_s, w_sp, dw_dv, h_f, dhf, h_sp, p1, p2, -SHARE_1 * ddp, -ddp, L_f, mult
 
@@ -394,7 +403,7 @@ def _design_spray(P, lw):
 def _firing_demand(x, d, P):
     """Boiler-master firing demand (fraction) and the pressure error (relative)."""
     e = (P[I_PSP] - x[S_P]) / P[I_PSP]
-    return min(max(d[0] + P[I_TBIR] * d[1] + P[I_KPP] * e + x[S_IP], 0.02), 1.3), e
+    return min(max(d[D_LOAD] + P[I_TBIR] * d[D_LOAD_RATE] + P[I_KPP] * e + x[S_IP], 0.02), 1.3), e
 
 
 @njit(cache=True)
@@ -467,7 +476,7 @@ def rhs(x, u, d, P, f, jd, ju, jl, want_jac):
     c2 = S_CHAIN1 + 2 * n
     W, lw, dWok, q_s, w_sp, dw_dv, h_f, dhf, h_sp, p1, p2, dp1, dp2, L_f, mult = _boundary(x, d, P)
     # turbine load controller, boiler master, feedwater
-    f[S_W] = (min(max(d[0], 0.0), 1.3) * P[I_WNOM] - x[S_W]) / P[I_TAUW]
+    f[S_W] = (min(max(d[D_LOAD], 0.0), 1.3) * P[I_WNOM] - x[S_W]) / P[I_TAUW]
     u_f, e_p = _firing_demand(x, d, P)
     sm = s_mill(n)
     f[sm] = (u_f - x[sm]) / P[I_TAUM]
@@ -650,7 +659,7 @@ def _steady_at(x, v, d, P):
         x[s_mill(n)] = L_f
         x[S_QF] = q_s
         x[S_IL] = 0.0
-        x[S_IP] = L_f - min(max(d[0], 0.0), 1.3) - P[I_TBIR] * d[1]
+        x[S_IP] = L_f - min(max(d[D_LOAD], 0.0), 1.3) - P[I_TBIR] * d[D_LOAD_RATE]
         W, lw, dWok, q_s, w_sp, dw_dv, h_f, dhf, h_sp, p1, p2, dp1, dp2, L_f, mult = _boundary(
             x, d, P
         )
@@ -674,7 +683,7 @@ def steady(D, sp_K, P, X):
     for b in range(X.shape[0]):
         x = X[b]
         d = D[b]
-        x[S_W] = min(max(d[0], 0.05), 1.3) * P[I_WNOM]
+        x[S_W] = min(max(d[D_LOAD], 0.05), 1.3) * P[I_WNOM]
         x[S_P] = P[I_PSP]
         p2 = P[I_PSP] - P[I_DPSH] * (x[S_W] / P[I_WNOM]) ** 2
         T_lo, _ = T_dTdh_ph(p2, _steady_at(x, 0.0, d, P))
@@ -819,7 +828,7 @@ def _pack(params: DrumBoilerParams) -> tuple[np.ndarray, np.ndarray, np.ndarray,
     _calibrate(params, P, n_x)
     # design-spray function generator: the undisturbed steady sprays at DSP_LOADS
     D = np.zeros((len(DSP_LOADS), 5))
-    D[:, 0], D[:, 3] = DSP_LOADS, 1.0
+    D[:, D_LOAD], D[:, D_FOULING] = DSP_LOADS, 1.0
     X = np.zeros((len(DSP_LOADS), n_x))
     steady(D, np.full(len(DSP_LOADS), params.T_out_C + K0), P, X)
     for k in range(len(DSP_LOADS)):

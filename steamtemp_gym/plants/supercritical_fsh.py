@@ -109,7 +109,16 @@ import numpy as np
 from numba import njit
 
 from steamtemp_gym.plants.attemperator import mix, protected_spray_out, spray_flow
-from steamtemp_gym.plants.base import Plant, Signal, validate_params
+from steamtemp_gym.plants.base import (
+    D_FOULING,
+    D_HEAT_BIAS,
+    D_LOAD,
+    D_LOAD_RATE,
+    D_SPRAY_T,
+    Plant,
+    Signal,
+    validate_params,
+)
 from steamtemp_gym.plants.integrator import pattern_arrays
 from steamtemp_gym.plants.sensors import thermowell_rhs
 from steamtemp_gym.plants.superheater import (
@@ -310,7 +319,7 @@ def _boundary(x, u, d, P):
     lf = min(max(x[S_LF], 0.05), 1.3)
     W = lw * P[I_WNOM]
     p = _pressure(P, lw)
-    h_sp, rho_sp, dp = spray_water(P, lw, d[4])
+    h_sp, rho_sp, dp = spray_water(P, lw, d[D_SPRAY_T])
     w_valve = spray_flow(x[S_V], P[I_CV], rho_sp, dp)
     w_sp = min(w_valve, 0.5 * W)
     if p < P_CRIT_PA - 0.5e6:  # subcritical: the attemperator protection (module docstring)
@@ -319,7 +328,7 @@ def _boundary(x, u, d, P):
     capped = w_sp < w_valve
     _, h0 = mix(W - w_sp, x[S_HUP], w_sp, h_sp)
     kA = steam_side_kA(P[I_KA], W, P[I_WNOM])
-    gas = max(d[3] * (1.0 + d[2]), 0.0)
+    gas = max(d[D_FOULING] * (1.0 + d[D_HEAT_BIAS]), 0.0)
     UAg = P[I_UAG] * lf ** P[I_GEXP] * gas
     Tg = P[I_TGN] - P[I_DTG] * (1.0 - lf)
     return W, p, w_sp, h0, h_sp, kA, UAg, Tg, capped
@@ -353,11 +362,11 @@ def rhs(x, u, d, P, f, jd, ju, jl, want_jac):
     """dx/dt of the FSH plant (see module docstring); Jacobian pattern from FSHPlant.pack."""
     n = int(P[I_N])
     sm = s_mill(n)
-    fd = min(max(d[0] + P[I_TBIR] * d[1], 0.05), 1.3)
+    fd = min(max(d[D_LOAD] + P[I_TBIR] * d[D_LOAD_RATE], 0.05), 1.3)
     f[sm] = (fd - x[sm]) / P[I_TAUM]
     f[S_LF] = (x[sm] - x[S_LF]) / P[I_TAUF]
-    f[S_LW] = (d[0] - x[S_LW]) / P[I_TAUW]
-    f[S_HUP] = (_h_up_target(P, x[S_LF], x[S_LW], d[2]) - x[S_HUP]) / P[I_TAUUP]
+    f[S_LW] = (d[D_LOAD] - x[S_LW]) / P[I_TAUW]
+    f[S_HUP] = (_h_up_target(P, x[S_LF], x[S_LW], d[D_HEAT_BIAS]) - x[S_HUP]) / P[I_TAUUP]
     f[S_V] = u[0]  # exact chord velocity of the valve (plants/integrator.py)
     W, p, w_sp, h0, h_sp, kA, UAg, Tg, capped = _boundary(x, u, d, P)
     # dh0/d(h_up) and dh0/dv (attemperator balance, linear valve), order of INLET_COLS
@@ -449,12 +458,12 @@ def steady(D, sp_K, P, X):
     for b in range(X.shape[0]):
         x = X[b]
         d = D[b]
-        L = min(max(d[0], 0.05), 1.3)
+        L = min(max(d[D_LOAD], 0.05), 1.3)
         n = int(P[I_N])
         x[S_LF] = L
         x[s_mill(n)] = L
         x[S_LW] = L
-        x[S_HUP] = _h_up_target(P, L, L, d[2])
+        x[S_HUP] = _h_up_target(P, L, L, d[D_HEAT_BIAS])
         p = _pressure(P, L)
         lo, hi = 0.0, 1.0
         T_lo, _ = T_dTdh_ph(p, _outlet_steady(x, lo, d, P, L))
