@@ -182,7 +182,7 @@ from steamtemp_gym.plants.superheater import (
     pipe_steady,
     steam_side_kA,
 )
-from steamtemp_gym.plants.valve import valve_travel
+from steamtemp_gym.plants.valve import steady_opening, valve_travel
 from steamtemp_gym.steam import T_dTdh_ph, T_ph, cp_pT, h_pT, rho_ph, sat_p
 
 K0 = 273.15
@@ -805,22 +805,21 @@ def _fuel_for_evap(x, d, P, p, h_target, lf0):
 
 
 @njit(cache=True)
-def _bisect_valve(x, d, P, lf, p, s_v, upto, target):
+def _outlet_h(x, v, d, P, aux):  # noqa: N803
+    """Steady SH3 (upto=3) or SH4 outlet enthalpy with valve state s_v at opening v;
+    aux = (firing fraction, pressure Pa, s_v, upto)."""
+    lf, p, s_v, upto = aux
+    x[s_v] = v
+    return _sh_steady(x, d, P, lf, p, upto)
+
+
+_opening_for = steady_opening("BensonSubcritical", _outlet_h)
+
+
+@njit(cache=True)
+def _bisect_valve(x, d, P, lf, p, s_v, upto, target):  # noqa: N803
     """Valve opening (state s_v) that brings the SH3 (upto=3) or SH4 outlet enthalpy to target."""
-    lo, hi = 0.0, 1.0
-    x[s_v] = lo
-    if _sh_steady(x, d, P, lf, p, upto) <= target:
-        return lo
-    x[s_v] = hi
-    if _sh_steady(x, d, P, lf, p, upto) >= target:
-        return hi
-    for _ in range(45):
-        x[s_v] = 0.5 * (lo + hi)
-        if _sh_steady(x, d, P, lf, p, upto) > target:
-            lo = x[s_v]
-        else:
-            hi = x[s_v]
-    return 0.5 * (lo + hi)
+    return _opening_for(x, d, P, (lf, p, s_v, upto), target)
 
 
 @njit(cache=True)

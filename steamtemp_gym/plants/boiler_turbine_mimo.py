@@ -159,7 +159,7 @@ from steamtemp_gym.plants.superheater import (
     pipe_steady,
     steam_side_kA,
 )
-from steamtemp_gym.plants.valve import valve_rhs
+from steamtemp_gym.plants.valve import steady_opening, valve_rhs
 from steamtemp_gym.steam import T_dTdh_ph, T_ph, cp_pT, h_pT, rho_ph
 
 K0 = 273.15
@@ -715,39 +715,33 @@ def _sh_steady(x, v, d, P):
 
 
 @njit(cache=True)
-def _bisect_rgd(x, d, P, T_target):
-    """RGD opening holding the reheat outlet at T_target (K), clipped to [0, 1]."""
-    prh, _ = _reheat_pressure(P, min(max(x[S_LW], 0.05), 1.3))
-    lo, hi = 0.0, 1.0
-    if T_ph(prh, _rh_steady(x, lo, d, P)) >= T_target:
-        return lo
-    if T_ph(prh, _rh_steady(x, hi, d, P)) <= T_target:
-        return hi
-    for _ in range(50):
-        g = 0.5 * (lo + hi)
-        if T_ph(prh, _rh_steady(x, g, d, P)) < T_target:
-            lo = g
-        else:
-            hi = g
-    return 0.5 * (lo + hi)
+def _neg_reheat_T(x, g, d, P, prh):  # noqa: N803
+    """Minus the steady reheat outlet temperature (K) at RGD opening g (it rises with g)."""
+    return -T_ph(prh, _rh_steady(x, g, d, P))
 
 
 @njit(cache=True)
-def _bisect_spray(x, d, P, T_target):
+def _main_steam_T(x, v, d, P, p):  # noqa: N803
+    """Steady STE (K) at common spray opening v."""
+    return T_ph(p, _sh_steady(x, v, d, P))
+
+
+_rgd_for = steady_opening("BoilerTurbineMIMO.rgd", _neg_reheat_T)
+_spray_for = steady_opening("BoilerTurbineMIMO.spray", _main_steam_T)
+
+
+@njit(cache=True)
+def _bisect_rgd(x, d, P, T_target):  # noqa: N803
+    """RGD opening holding the reheat outlet at T_target (K), clipped to [0, 1]."""
+    prh, _ = _reheat_pressure(P, min(max(x[S_LW], 0.05), 1.3))
+    return _rgd_for(x, d, P, prh, -T_target)
+
+
+@njit(cache=True)
+def _bisect_spray(x, d, P, T_target):  # noqa: N803
     """Common spray opening holding STE at T_target (K), clipped to [0, 1]."""
     p, _ = _pressure(P, min(max(x[S_LW], 0.05), 1.3))
-    lo, hi = 0.0, 1.0
-    if T_ph(p, _sh_steady(x, lo, d, P)) <= T_target:
-        return lo
-    if T_ph(p, _sh_steady(x, hi, d, P)) >= T_target:
-        return hi
-    for _ in range(50):
-        v = 0.5 * (lo + hi)
-        if T_ph(p, _sh_steady(x, v, d, P)) > T_target:
-            lo = v
-        else:
-            hi = v
-    return 0.5 * (lo + hi)
+    return _spray_for(x, d, P, p, T_target)
 
 
 @njit(cache=True)

@@ -158,6 +158,7 @@ from steamtemp_gym.plants.superheater import (
     pipe_steady,
     steam_side_kA,
 )
+from steamtemp_gym.plants.valve import steady_opening
 from steamtemp_gym.steam import T_dTdh_ph, Tsat_p, h_pT, rho_ph, sat_p
 
 K0 = 273.15
@@ -678,6 +679,15 @@ def _steady_at(x, v, d, P):
 
 
 @njit(cache=True)
+def _outlet_T(x, v, d, P, p2):  # noqa: N803
+    """Steady outlet temperature (K) at spray opening v and outlet pressure p2 (Pa)."""
+    return T_dTdh_ph(p2, _steady_at(x, v, d, P))[0]
+
+
+_opening_for = steady_opening("DrumBoilerSH", _outlet_T)
+
+
+@njit(cache=True)
 def steady(D, sp_K, P, X):
     """Steady state at each row's disturbances; spray valve set by bisection to hold sp_K."""
     for b in range(X.shape[0]):
@@ -686,22 +696,7 @@ def steady(D, sp_K, P, X):
         x[S_W] = min(max(d[D_LOAD], 0.05), 1.3) * P[I_WNOM]
         x[S_P] = P[I_PSP]
         p2 = P[I_PSP] - P[I_DPSH] * (x[S_W] / P[I_WNOM]) ** 2
-        T_lo, _ = T_dTdh_ph(p2, _steady_at(x, 0.0, d, P))
-        T_hi, _ = T_dTdh_ph(p2, _steady_at(x, 1.0, d, P))
-        if T_lo <= sp_K[b]:
-            v = 0.0
-        elif T_hi >= sp_K[b]:
-            v = 1.0
-        else:
-            lo, hi = 0.0, 1.0
-            for _ in range(60):
-                v = 0.5 * (lo + hi)
-                T, _ = T_dTdh_ph(p2, _steady_at(x, v, d, P))
-                if T > sp_K[b]:
-                    lo = v
-                else:
-                    hi = v
-            v = 0.5 * (lo + hi)
+        v = _opening_for(x, d, P, p2, sp_K[b])
         h_out = _steady_at(x, v, d, P)
         bd = _boundary(x, d, P)
         q_s, w_sp, h_sp, p1, p2 = bd[3], bd[4], bd[8], bd[9], bd[10]

@@ -130,6 +130,7 @@ from steamtemp_gym.plants.superheater import (
     pipe_steady,
     steam_side_kA,
 )
+from steamtemp_gym.plants.valve import steady_opening
 from steamtemp_gym.steam import T_dTdh_ph, Tsat_p, h_pT, rho_ph
 
 K0 = 273.15
@@ -453,6 +454,15 @@ def _outlet_steady(x, v, d, P, lw):
 
 
 @njit(cache=True, error_model="numpy")
+def _outlet_T(x, v, d, P, aux):  # noqa: N803
+    """Steady outlet temperature (K) at opening v; aux = (pressure Pa, load)."""
+    return T_dTdh_ph(aux[0], _outlet_steady(x, v, d, P, aux[1]))[0]
+
+
+_opening_for = steady_opening("SupercriticalFSH", _outlet_T)
+
+
+@njit(cache=True, error_model="numpy")
 def steady(D, sp_K, P, X):
     """Steady state at each row's disturbances, valve set by bisection to hold sp_K."""
     for b in range(X.shape[0]):
@@ -465,22 +475,7 @@ def steady(D, sp_K, P, X):
         x[S_LW] = L
         x[S_HUP] = _h_up_target(P, L, L, d[D_HEAT_BIAS])
         p = _pressure(P, L)
-        lo, hi = 0.0, 1.0
-        T_lo, _ = T_dTdh_ph(p, _outlet_steady(x, lo, d, P, L))
-        T_hi, _ = T_dTdh_ph(p, _outlet_steady(x, hi, d, P, L))
-        if T_lo <= sp_K[b]:
-            v = lo
-        elif T_hi >= sp_K[b]:
-            v = hi
-        else:
-            for _ in range(60):
-                v = 0.5 * (lo + hi)
-                T, _ = T_dTdh_ph(p, _outlet_steady(x, v, d, P, L))
-                if T > sp_K[b]:
-                    lo = v
-                else:
-                    hi = v
-            v = 0.5 * (lo + hi)
+        v = _opening_for(x, d, P, (p, L), sp_K[b])
         h_out = _outlet_steady(x, v, d, P, L)
         W, p, w_sp, h0, h_sp, kA, UAg, Tg, capped = _boundary(x, x[S_V : S_V + 1], d, P)
         T_out, _ = T_dTdh_ph(p, h_out)

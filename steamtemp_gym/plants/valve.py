@@ -11,8 +11,11 @@ commands (an RL agent's) are integrated exactly (plants/integrator.py).
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 from numba import njit
+
+from steamtemp_gym.plants.specialize import specialize
 
 
 @njit(cache=True, error_model="numpy")
@@ -47,3 +50,38 @@ def valve_travel(v, u, tau, rate, h):
     a = math.exp(-t2 / tau)
     integral = v * t1 + 0.5 * s * rate * t1 * t1 + u * t2 - e1 * tau * (1.0 - a)
     return u - e1 * a, integral / h
+
+
+# The plant's steady outlet as a function of the opening, bound per plant by
+# steady_opening (plants/specialize.py); the template is never compiled as it is.
+outlet = None
+
+
+def _steady_opening(x, d, P, aux, target):  # noqa: N803
+    """Template of the solver returned by :func:`steady_opening`."""
+    lo, hi = 0.0, 1.0
+    if outlet(x, lo, d, P, aux) <= target:
+        return lo
+    if outlet(x, hi, d, P, aux) >= target:
+        return hi
+    for _ in range(60):
+        v = 0.5 * (lo + hi)
+        if outlet(x, v, d, P, aux) > target:
+            lo = v
+        else:
+            hi = v
+    return 0.5 * (lo + hi)
+
+
+def steady_opening(name: str, outlet: Callable) -> Callable:
+    """Compiled ``solve(x, d, P, aux, target)``: the opening in [0, 1] at which the
+    plant's steady ``outlet(x, v, d, P, aux)`` equals ``target``, by bisection (60 halvings,
+    below round-off).
+
+    ``outlet`` must fall as the opening rises (more spray: colder steam; a quantity that
+    rises, e.g. a damper's reheat temperature, is passed negated with a negated target).
+    Where the target is out of reach the opening is clipped to 0 or 1. ``aux`` carries
+    the plant's other arguments (any numba type, e.g. a tuple). One cached kernel per
+    ``name`` (plants/specialize.py): every plant's steady state uses this one solver.
+    """
+    return specialize(_steady_opening, name, outlet=outlet)
