@@ -118,7 +118,10 @@ def test_stored_gains_have_the_search_format_and_reproduce_its_objective():
     assert g.shape == (2, len(fp.RULE_LOADS), 3) and (g > 0)[:, :, :2].all()
     np.testing.assert_array_equal(fp.stored_gains(BENSON), g)
     r = fp.RULE_LOADS.index(1.0)
-    assert fp._Trainer(BENSON, 1.0)(g) == pytest.approx(data["objective"][r], rel=1e-9)
+    # rel 1e-7, not bit-equal: the search ran before the plants' steady-state valve solver
+    # became one shared bisection (60 halvings where Benson had 45), which moves the start
+    # by 4e-14 and this closed-loop objective by 2e-9; a stale or wrong file moves it by %.
+    assert fp._Trainer(BENSON, 1.0)(g) == pytest.approx(data["objective"][r], rel=1e-7)
     # the search improved on the SIMC-equivalent start on the training scenarios
     assert data["objective"][r] < fp._Trainer(BENSON, 1.0)(np.tile(fp.GAINS_PI, (2, 3, 1)))
 
