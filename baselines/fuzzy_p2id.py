@@ -30,7 +30,7 @@ block diagram, and Fig. 5, the membership functions and rule base):
 - Normalization (section VI): every input is mapped to (0, 1) by x -> (1 + sat(x)) / 2
   (0.5 = zero error) and the output lives in (0, 20) (10 = no action). E0 = 10 K
   (``E0_K``: the error at which a unit-gain input saturates; the +-10 K field tolerance
-  of once-through units in load changes, ../shared/REFERENCE_DATA.md); T0 and Kc are the
+  of once-through units in load changes; operating practice, unverified); T0 and Kc are the
   SIMC integral time and gain of the loop the P²ID replaces (baselines/cascade_pi.py's
   step-test tuning), U0 = Kc E0 / s0. The integral input is held inside its saturation
   (int e clipped to |K_p int e / (E0 T0)| <= 1) so that it does not wind up.

@@ -2,8 +2,8 @@
 
     W_out = W_in + w_sp,   h_out = (W_in h_in + w_sp h_sp) / W_out
 
-(../shared/REFERENCE_DATA.md; 001_458073198cb84e92.txt eq. (17)-(20) in
-steady form). Spray flow through the valve follows the incompressible valve
+(the mass and energy balance of a mixing point with negligible storage; document
+001 eq. (17)-(20) in steady form, docs/references.md). Spray flow through the valve follows the incompressible valve
 equation w_sp = v C_v sqrt(rho_w dp) with a linear characteristic.
 """
 

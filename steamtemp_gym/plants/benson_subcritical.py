@@ -6,7 +6,7 @@ Plant data from its section IV: subcritical once-through Benson boiler, two-pass
 reheat, one furnace; evaporator, four superheater units, reheater; main steam 18.1 MPa /
 535 C, reheat 4.35 MPa / 530 C; feed pump discharge 28 MPa, HP heaters raise the
 feedwater temperature by about 80 C; data sampled every 5 s (our control interval);
-load ramps between 50 and 100 %. Superheater physics from ../shared/REFERENCE_DATA.md.
+load ramps between 50 and 100 %. Segment physics: plants/superheater.py.
 
 Model (SI inside the kernels):
 

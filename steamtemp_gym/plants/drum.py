@@ -1,7 +1,7 @@
 """Natural-circulation drum, downcomers and risers: the Astrom-Bell four-state model.
 
 Source: K.J. Astrom and R.D. Bell, "Drum-boiler dynamics", Automatica 36 (2000)
-363-378, as summarized in ../shared/REFERENCE_DATA.md ("Drum boiler"), and the
+363-378, and the
 water-tube boiler thesis in 003_6ab8c34c4d0cb71f.txt (Inha Univ.), whose eq. (1)-(8)
 and (16)-(22) are the same balances without the steam volume under the level. The
 thesis's numbers lost digits in extraction, so all parameters are Astrom-Bell's.

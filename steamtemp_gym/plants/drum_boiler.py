@@ -6,7 +6,7 @@ water-tube drum boiler in the Astrom-Bell form, inputs steam flow q_s, feedwater
 q_f and riser heat Q_r (its Fig. 2), balances eq. (1)-(8), descriptor form eq. (21),
 steady state eq. (22), step responses Fig. 6-8 and linearization at three operating
 points eq. (23)-(31). Digits were lost in the extraction, so the drum parameters are
-Astrom and Bell's (Automatica 36, 2000, 363-378; ../shared/REFERENCE_DATA.md); the drum
+Astrom and Bell's (Automatica 36, 2000, 363-378; docs/references.md); the drum
 model itself (four states V_wt, p, alpha_r, V_sd) is in drum.py.
 
 Plant (states in SI; the env acts on the spray valve only):

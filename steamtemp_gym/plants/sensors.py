@@ -2,8 +2,9 @@
 
     dT_1/dt = (T - T_1)/tau_1,   dT_2/dt = (T_1 - T_2)/tau_2,   measured = T_2
 
-One lag of a few seconds and one of tens of seconds (Maffezzoni, cited in
-../shared/REFERENCE_DATA.md). Returns derivatives and diagonal Jacobian entries.
+One lag of a few seconds and one of tens of seconds (the thermowell dynamics
+described by C. Maffezzoni, "Boiler-turbine dynamics in power-plant control",
+Control Engineering Practice 5 (1997); the values are plausible defaults). Returns derivatives and diagonal Jacobian entries.
 """
 
 from __future__ import annotations

@@ -5,7 +5,7 @@ and (9): an n-division distributed heating surface with flow-dependent heat
 transfer (Nusselt exponent m = 0.8), a spray attemperator at the FSH inlet fed
 by the outlet of the superheater one step upstream, heat absorption Q and steam
 flow M as disturbances whose *ratio* is disturbed by load changes (its Fig. 4),
-heat absorption not measured. Physics from ../shared/REFERENCE_DATA.md.
+heat absorption not measured. Segment physics: plants/superheater.py.
 
 Model (states in SI):
 

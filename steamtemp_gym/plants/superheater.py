@@ -1,7 +1,8 @@
 """Distributed superheater: a chain of N heated segments (fluid + tube metal).
 
 Per segment i = 1..N, with steam enthalpy h_i and metal temperature T_m,i as
-states (../shared/REFERENCE_DATA.md, "Superheater physics"; the n-division model
+states (the lumped segment model of the superheater literature, steam-side heat
+transfer scaled as Dittus-Boelter, Nu = 0.023 Re^0.8 Pr^0.4; the n-division model
 of 000_f43a9a359eb2e47e.txt, eq. (1)):
 
     M_f,i dh_i/dt      = W (h_{i-1} - h_i) + kA_i (T_m,i - T(p, h_i))

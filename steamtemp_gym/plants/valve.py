@@ -2,8 +2,8 @@
 
     dv/dt = clip((u - v) / tau, -r, r),   u, v in [0, 1]
 
-(../shared/REFERENCE_DATA.md: "Valve: first-order lag plus rate limit plus
-saturation"). With the command held over an interval the motion has a closed
+(the usual actuator model of plant simulators: first-order lag plus rate limit
+plus saturation). With the command held over an interval the motion has a closed
 form (:func:`valve_travel`); the shared integrator uses it so that jumpy
 commands (an RL agent's) are integrated exactly (plants/integrator.py).
 """
