@@ -3,8 +3,9 @@
     W_out = W_in + w_sp,   h_out = (W_in h_in + w_sp h_sp) / W_out
 
 (the mass and energy balance of a mixing point with negligible storage; document
-001 eq. (17)-(20) in steady form, docs/references.md). Spray flow through the valve follows the incompressible valve
-equation w_sp = v C_v sqrt(rho_w dp) with a linear characteristic.
+001 eq. (17)-(20) in steady form, docs/references.md). Spray flow through the
+valve follows the incompressible valve equation w_sp = v C_v sqrt(rho_w dp) with a
+linear characteristic.
 """
 
 from __future__ import annotations

@@ -4,7 +4,8 @@
 
 One lag of a few seconds and one of tens of seconds (the thermowell dynamics
 described by C. Maffezzoni, "Boiler-turbine dynamics in power-plant control",
-Control Engineering Practice 5 (1997); the values are plausible defaults). Returns derivatives and diagonal Jacobian entries.
+Control Engineering Practice 5 (1997); the values are plausible defaults). Returns
+derivatives and diagonal Jacobian entries.
 """
 
 from __future__ import annotations
