@@ -4,8 +4,8 @@ Steam storage in a superheater segment is small next to the tube metal (an
 IDAES 320 MW platen holds ~0.9 t of steam, 3.5 s residence, against 85.7 t of
 metal, in the IDAES subcritical power plant model; docs/references.md), so the
 enthalpy states are fast and the system is stiff at the control interval. We use the
-two-stage, second-order, L-stable Rosenbrock W-method ROS2 of Verwer, Spee, Blom and Hundsdorfer (SIAM
-J. Sci. Comput. 20, 1999), gamma = 1 + 1/sqrt(2)::
+two-stage, second-order, L-stable Rosenbrock W-method ROS2 of Verwer, Spee, Blom and
+Hundsdorfer (SIAM J. Sci. Comput. 20, 1999), gamma = 1 + 1/sqrt(2)::
 
     (I - gamma h A) k1 = F(x_n)
     (I - gamma h A) k2 = F(x_n + h k1) - 2 k1
