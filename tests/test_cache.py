@@ -87,40 +87,34 @@ def test_steam_tables_are_not_frozen_into_cached_kernels():
     assert max(f.stat().st_size for f in files) < 300_000
 
 
-def test_compile_notice_is_logged_once_per_burst(caplog):
-    def kernel(x):
-        return x * 2.0
-
-    kernel.__module__ = "steamtemp_gym.fake_module"
-    notice = _cache._CompileNotice(Path("/cache/here"))
+def _notices(caplog, module: str, n_compiles: int) -> list[str]:
+    """Lines the compile notice logs while ``n_compiles`` fresh kernels of ``module``
+    compile back to back."""
     from numba.core import event
 
+    notice = _cache._CompileNotice(Path("/cache/here"))
     event.register("numba:compile", notice)
     try:
         with caplog.at_level(logging.WARNING, logger="steamtemp_gym"):
-            njit(kernel)(np.float64(1.0))
-            njit(kernel)(np.float64(2.0))  # right after: same burst, no second line
+            for k in range(n_compiles):
+
+                def kernel(x, k=float(k)):
+                    return x * 2.0 + k
+
+                kernel.__module__ = module
+                njit(kernel)(np.float64(1.0))
     finally:
         event.unregister("numba:compile", notice)
-    lines = [r.getMessage() for r in caplog.records if r.name == "steamtemp_gym"]
+    return [r.getMessage() for r in caplog.records if r.name == "steamtemp_gym"]
+
+
+def test_compile_notice_is_logged_once_per_burst(caplog):
+    lines = _notices(caplog, "steamtemp_gym.fake_module", 2)
     assert len(lines) == 1 and "compiling kernels" in lines[0] and "/cache/here" in lines[0]
 
 
 def test_compile_notice_ignores_other_packages(caplog):
-    def kernel(x):
-        return x - 1.0
-
-    kernel.__module__ = "someone_else"
-    notice = _cache._CompileNotice(Path("/cache/here"))
-    from numba.core import event
-
-    event.register("numba:compile", notice)
-    try:
-        with caplog.at_level(logging.WARNING, logger="steamtemp_gym"):
-            njit(kernel)(np.float64(1.0))
-    finally:
-        event.unregister("numba:compile", notice)
-    assert not [r for r in caplog.records if r.name == "steamtemp_gym"]
+    assert _notices(caplog, "someone_else", 1) == []
 
 
 def test_configure_with_unusable_folder_still_imports(monkeypatch, tmp_path):
