@@ -105,12 +105,13 @@ def _notices(caplog, module: str, n_compiles: int) -> list[str]:
                 njit(kernel)(np.float64(1.0))
     finally:
         event.unregister("numba:compile", notice)
-    return [r.getMessage() for r in caplog.records if r.name == "steamtemp_gym"]
+    # (the package's own notice, installed at import, may log too: it names another folder)
+    return [r.getMessage() for r in caplog.records if "/cache/here" in r.getMessage()]
 
 
 def test_compile_notice_is_logged_once_per_burst(caplog):
     lines = _notices(caplog, "steamtemp_gym.fake_module", 2)
-    assert len(lines) == 1 and "compiling kernels" in lines[0] and "/cache/here" in lines[0]
+    assert len(lines) == 1 and "compiling kernels" in lines[0]
 
 
 def test_compile_notice_ignores_other_packages(caplog):
