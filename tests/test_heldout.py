@@ -43,9 +43,7 @@ def test_support_check_names_each_feature():
     sc = heldout.load("mill_trip")
     reasons = " ".join(heldout.outside_training(sc))
     assert "heat_absorption_bias" in reasons and "10 s" in reasons and "-0.12" in reasons
-    assert "noise_std_C 1 outside" in " ".join(
-        heldout.outside_training(heldout.load("high_noise"))
-    )
+    assert "noise_std_C 1 outside" in " ".join(heldout.outside_training(heldout.load("high_noise")))
 
 
 def test_unknown_name_lists_the_valid_ones():

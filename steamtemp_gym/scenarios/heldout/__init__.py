@@ -60,7 +60,7 @@ def is_heldout(spec: object) -> bool:
 
 def path(name: str) -> Path:
     """The YAML file of held-out scenario ``name`` (with or without the prefix)."""
-    bare = name[len(PREFIX):] if is_heldout(name) else name
+    bare = name[len(PREFIX) :] if is_heldout(name) else name
     if bare not in NAMES:
         raise ValueError(
             f"unknown held-out scenario {name!r}; valid names: {[PREFIX + n for n in NAMES]}"
@@ -75,7 +75,7 @@ def load(name: str) -> Scenario:
 
 def _pieces(points) -> list[tuple[float, float, float, float]]:
     """Consecutive breakpoint pairs (t0, v0, t1, v1)."""
-    return [(*a, *b) for a, b in zip(points, points[1:])]
+    return [(*a, *b) for a, b in zip(points[:-1], points[1:], strict=True)]
 
 
 def _load_violations(points) -> list[str]:
