@@ -179,7 +179,7 @@ def _policies(ap: argparse.ArgumentParser, envs: list[str], text: str | None) ->
     """Policies per env; every requested name must be available for at least one env.
     The frozen-valve reference is added to every env (the 0 of the normalized score)."""
     if text is None:
-        return {e: _available(e) + [REFERENCE] for e in envs}
+        return {e: _available(e) for e in envs}
     names = _items(ap, "--policies", text)
     everywhere = sorted({p for e in envs for p in _available(e)})
     unknown = [n for n in names if n not in everywhere]
