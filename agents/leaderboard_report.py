@@ -220,10 +220,10 @@ def markdown(summary: dict[str, Any], rows: list[dict]) -> str:
         lines += [f"## {env_id}", "", f"Ranking: statistics over scenario × seed ({n} seeds), "
                   "95 % stratified-bootstrap CIs; P(> cascade_pi): probability that an "
                   "episode of the policy has a higher return than one of cascade_pi on the "
-                  "same scenario, averaged over scenarios. IAE, max|dev| and time outside "
+                  "same scenario, averaged over scenarios. IAE, max\\|dev\\| and time outside "
                   "±5 K: mean over scenario × seed where they apply.", ""]  # fmt: skip
         header = ["rank", "policy", "IQM norm. score", "mean norm. score", "IQM return",
-                  f"P(> {VERSUS})", "IAE [K s]", "max|dev| [K]", "t>5K [s]", "trips",
+                  f"P(> {VERSUS})", "IAE [K s]", "max\\|dev\\| [K]", "t>5K [s]", "trips",
                   "failed"]  # fmt: skip
         body = []
         for k in order:
