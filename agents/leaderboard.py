@@ -49,6 +49,7 @@ from __future__ import annotations
 import argparse
 import hashlib
 import json
+import logging
 import math
 import os
 import re
@@ -67,16 +68,24 @@ import numpy as np
 import agents
 import baselines
 import steamtemp_gym
-from agents.evaluation import run_episode
+from agents import leaderboard_plots as plots
+from agents import leaderboard_report as report
+from agents import stats
+from agents.difficulty import FrozenValves
+from agents.evaluation import run_batch, run_episode
 from steamtemp_gym import scenarios
 from steamtemp_gym.checks import head, tail
+from steamtemp_gym.scenarios import heldout
 
-DEFAULT_SCENARIOS = ("load_ramp_100_50", "load_ramp_50_100", "setpoint_step",
-                     "heat_imbalance_step", "load_following")  # fmt: skip
-TABLE_METRICS = ("iae_K_s", "max_abs_dev_K", "time_outside_5K_s", "settling_time_s",
-                 "spray_used_kg", "valve_travel", "valve_reversals", "return")  # fmt: skip
-#: Version of the row format of episodes.jsonl and leaderboard.json (part of the fingerprint).
-SCHEMA = 1
+#: The named scenarios every plant has, then the held-out set (steamtemp_gym/scenarios/heldout).
+NAMED_SCENARIOS = ("load_ramp_100_50", "load_ramp_50_100", "load_cycle", "setpoint_step",
+                   "heat_imbalance_step", "load_following")  # fmt: skip
+DEFAULT_SCENARIOS = NAMED_SCENARIOS + tuple(heldout.PREFIX + n for n in heldout.NAMES)
+DEFAULT_SEEDS = "0-4"
+#: The reference policy run on every plant (0 of the normalized score; agents/difficulty.py).
+REFERENCE = report.REFERENCE
+#: Version of the row format of episodes.jsonl (part of the fingerprint).
+SCHEMA = 2
 EPISODES = "episodes.jsonl"
 #: Upper bound on the number of seeds (a range such as ``0-1000000000`` is a typo).
 MAX_SEEDS = 10_000
@@ -97,6 +106,7 @@ class Plan:
     seeds: list[int]
     policies: dict[str, list[str]]  # env -> policy names available for it
     envs_made: dict[tuple[str, str], Any] = field(default_factory=dict)  # (env, scenario) -> env
+    resolved: dict[tuple[str, str], Any] = field(default_factory=dict)  # -> Scenario
     fingerprints: dict[tuple[str, str, str], str] = field(default_factory=dict)
 
     def grid(self) -> Iterable[Key]:
@@ -154,11 +164,20 @@ def parse_seeds(ap: argparse.ArgumentParser, text: str) -> list[int]:
 
 
 def _available(env_id: str) -> list[str]:
-    return list(baselines.NAMES) + [f"sb3:{a}" for e, a in agents.shipped() if e == env_id]
+    return (list(baselines.NAMES) + [f"sb3:{a}" for e, a in agents.shipped() if e == env_id]
+            + [REFERENCE])  # fmt: skip
+
+
+def _resolve(spec: str, env_id: str) -> Any:
+    """A scenario name, ``heldout:<name>`` or a YAML file as a Scenario."""
+    if heldout.is_heldout(spec):
+        return heldout.load(spec)
+    return scenarios.resolve(spec, env_id)
 
 
 def _policies(ap: argparse.ArgumentParser, envs: list[str], text: str | None) -> dict:
-    """Policies per env; every requested name must be available for at least one env."""
+    """Policies per env; every requested name must be available for at least one env.
+    The frozen-valve reference is added to every env (the 0 of the normalized score)."""
     if text is None:
         return {e: _available(e) for e in envs}
     names = _items(ap, "--policies", text)
@@ -174,6 +193,8 @@ def _policies(ap: argparse.ArgumentParser, envs: list[str], text: str | None) ->
         missing = [n for n in names if n not in pols]
         if missing:
             print(f"note: {missing} not available for {e}; skipped there", file=sys.stderr)
+        if REFERENCE not in pols:
+            pols.append(REFERENCE)
     return out
 
 
@@ -210,7 +231,7 @@ def _source_digest() -> str:
     h = hashlib.sha256()
     roots = [Path(steamtemp_gym.__file__).parent, Path(baselines.__file__).parent]
     files = [f for r in roots for f in sorted(r.rglob("*.py"))]
-    files.append(Path(__file__).with_name("evaluation.py"))
+    files += [Path(__file__).with_name("evaluation.py"), Path(__file__).with_name("difficulty.py")]
     for f in files:
         h.update(f.read_bytes())
     return h.hexdigest()
@@ -251,13 +272,13 @@ def build_plan(ap: argparse.ArgumentParser, args: argparse.Namespace) -> Plan:
     for env_id in envs:  # cheap pass first: names and YAML files
         for sc in scs:
             try:
-                resolved[env_id, sc] = scenarios.resolve(sc, env_id)
+                resolved[env_id, sc] = _resolve(sc, env_id)
             except Exception as exc:  # noqa: BLE001 - any failure is a bad --scenarios value
                 ap.error(
                     f"argument --scenarios: {tail(sc, 80)!r} for {env_id}: "
                     f"{head(str(exc), _EXCERPT)}"
                 )
-    plan = Plan(envs=envs, scenarios=scs, seeds=seeds, policies=pols)
+    plan = Plan(envs=envs, scenarios=scs, seeds=seeds, policies=pols, resolved=resolved)
     source = _source_digest()
     for env_id in envs:
         for sc in scs:
@@ -370,185 +391,249 @@ def _latest(rows: list[dict]) -> dict[tuple[Key, str], dict]:
     return out
 
 
-# --------------------------------------------------------------------------- outputs
+# --------------------------------------------------------------------------- episodes
 def _make_policy(name: str, env_id: str, env):
     if name.startswith("sb3:"):
         return agents.load(env_id, name[4:])
+    if name == REFERENCE:
+        return FrozenValves(env)
     return baselines.make(name, env)
 
 
+@dataclass
+class Unit:
+    """One policy on one env and scenario for several seeds: one batch of the vector env."""
+
+    env_id: str
+    spec: str  # the scenario as given (row label)
+    scenario: Any  # the resolved Scenario
+    policy: str
+    seeds: list[int]
+    fingerprint: str
+    trace_seed: int | None  # the seed whose trace is kept for the plot
+
+
+def _ok_row(u: Unit, seed: int, metrics: dict) -> dict:
+    return {"env": u.env_id, "scenario": u.spec, "policy": u.policy, "seed": seed,
+            "fingerprint": u.fingerprint, "metrics": metrics}  # fmt: skip
+
+
+def run_unit(u: Unit) -> tuple[list[dict], dict | None]:
+    """Rows of a unit (one per seed, in order) and the trace of ``u.trace_seed``.
+
+    The seeds run side by side in the native vector env (:func:`run_batch`); if anything
+    raises there, each seed runs alone (:func:`run_episode`, identical results) so that
+    only the episodes that fail are recorded as failed.
+    """
+    trace = None
+    try:
+        venv = gym.make_vec(u.env_id, num_envs=len(u.seeds), scenario=u.scenario,
+                            vectorization_mode="vector_entry_point")  # fmt: skip
+        results = run_batch(venv, _make_policy(u.policy, u.env_id, venv), u.seeds)
+    except Exception:  # noqa: BLE001 - isolate the failing seeds below
+        results = None
+    if results is not None:
+        rows = [_ok_row(u, s, r["metrics"]) for s, r in zip(u.seeds, results, strict=True)]
+        if u.trace_seed is not None:
+            trace = results[u.seeds.index(u.trace_seed)]["trace"]
+        return rows, trace
+    env = gym.make(u.env_id, scenario=u.scenario)
+    try:
+        policy = _make_policy(u.policy, u.env_id, env)
+    except Exception as exc:  # noqa: BLE001 - every seed of it fails alike
+        policy = exc
+    rows = []
+    for seed in u.seeds:
+        try:
+            if isinstance(policy, Exception):
+                raise policy
+            res = run_episode(env, policy, seed)
+        except Exception as exc:  # noqa: BLE001 - recorded; the run goes on
+            rows.append(_error_row((u.env_id, u.spec, u.policy, seed), u.fingerprint, exc))
+            continue
+        rows.append(_ok_row(u, seed, res["metrics"]))
+        if seed == u.trace_seed:
+            trace = res["trace"]
+    return rows, trace
+
+
+def _error_row(key: Key, fp: str, exc: BaseException) -> dict:
+    env_id, sc, name, seed = key
+    tb = "".join(traceback.format_exception(type(exc), exc, exc.__traceback__))
+    return {"env": env_id, "scenario": sc, "policy": name, "seed": seed, "fingerprint": fp,
+            "metrics": None, "error": head(f"{type(exc).__name__}: {exc}", 1000),
+            "traceback": tb[-4000:]}  # fmt: skip
+
+
+class Progress:
+    """A progress bar with ETA over episodes on stderr (a line per 10 % when not a tty)."""
+
+    def __init__(self, total: int, stream=sys.stderr) -> None:
+        self.total, self.done, self.stream = total, 0, stream
+        self.t0 = time.time()
+        self.tty = stream.isatty()
+        self.last_pct = -10
+
+    def update(self, n: int) -> None:
+        self.done += n
+        el = time.time() - self.t0
+        eta = el / self.done * (self.total - self.done) if self.done else 0.0
+        pct = 100 * self.done / max(self.total, 1)
+        bar = "#" * int(pct / 4) + "." * (25 - int(pct / 4))
+        text = (f"[{bar}] {self.done}/{self.total} episodes {pct:3.0f} %  "
+                f"elapsed {_mmss(el)}  ETA {_mmss(eta)}")  # fmt: skip
+        if self.tty:
+            end = "\n" if self.done >= self.total else ""
+            print("\r" + text, end=end, file=self.stream, flush=True)
+        elif pct >= self.last_pct + 10 or self.done >= self.total:
+            self.last_pct = pct
+            print(text, file=self.stream, flush=True)
+
+
+def _mmss(s: float) -> str:
+    return f"{int(s // 60)}:{int(s % 60):02d}"
+
+
+def _units(plan: Plan, done: dict) -> list[Unit]:
+    """What is left to run, one unit per env, scenario and policy."""
+    out = []
+    for env_id in plan.envs:
+        for sc in plan.scenarios:
+            for name in plan.policies[env_id]:
+                fp = plan.fingerprints[env_id, sc, name]
+                todo = [s for s in plan.seeds
+                        if not _finished(done.get(((env_id, sc, name, s), fp)))]  # fmt: skip
+                if todo:
+                    keep = plan.seeds[0] if plan.seeds[0] in todo else None
+                    out.append(Unit(env_id, sc, plan.resolved[env_id, sc], name, todo, fp, keep))
+    return out
+
+
+def _finished(row: dict | None) -> bool:
+    return row is not None and not row.get("error")
+
+
+def _pool(jobs: int):
+    """A process pool (fork where available: workers start with the compiled kernels)."""
+    import multiprocessing as mp
+    from concurrent.futures import ProcessPoolExecutor
+
+    methods = mp.get_all_start_methods()
+    ctx = mp.get_context("fork" if "fork" in methods else "spawn")
+    return ProcessPoolExecutor(max_workers=jobs, mp_context=ctx)
+
+
+def _execute(plan: Plan, units: list[Unit], jobs: int, record: Record, on_trace) -> int:
+    """Run the units (in ``jobs`` processes), appending rows as they finish. Failed count."""
+    progress = Progress(sum(len(u.seeds) for u in units))
+    failed = 0
+
+    def finish(u: Unit, rows: list[dict], trace: dict | None) -> None:
+        nonlocal failed
+        for row in rows:
+            record.write(row)
+            if row.get("error"):
+                failed += 1
+                print(f"\nFAILED {u.env_id} {u.spec} {u.policy} seed {row['seed']}: "
+                      f"{row['error']}", file=sys.stderr)  # fmt: skip
+        on_trace(u, trace)
+        progress.update(len(rows))
+
+    if jobs <= 1 or len(units) <= 1:
+        for u in units:
+            finish(u, *run_unit(u))
+        return failed
+    from concurrent.futures import as_completed
+
+    with _pool(jobs) as pool:
+        futures = {pool.submit(run_unit, u): u for u in units}
+        try:
+            for fut in as_completed(futures):
+                finish(futures[fut], *fut.result())
+        except BaseException:
+            for f in futures:
+                f.cancel()
+            raise
+    return failed
+
+
+# --------------------------------------------------------------------------- outputs
 def _plot_path(out: Path, env_id: str, scenario: str) -> Path:
-    return out / "plots" / f"{env_id.split('/')[-1]}__{Path(scenario).stem}.png"
+    stem = Path(scenario).stem if _is_file(scenario) else scenario.replace(":", "_")
+    return out / "plots" / f"{env_id.split('/')[-1]}__{stem}.png"
 
 
-def _plot(
-    out: Path, env_id: str, scenario: str, traces: dict[str, dict], secondary: tuple = ()
-) -> Path:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    n = 2 + len(secondary)
-    fig, axes = plt.subplots(n, 1, figsize=(9, 3 + 1.5 * n), sharex=True,
-                             gridspec_kw={"height_ratios": [2] + [1] * (n - 1)})  # fmt: skip
-    ax1, ax2 = axes[0], axes[-1]
-    for ax, (name, sp2) in zip(axes[1:-1], secondary, strict=True):
-        for band, alpha in ((5, 0.2), (8, 0.1)):
-            ax.axhspan(sp2 - band, sp2 + band, color="tab:green", alpha=alpha, lw=0)
-        ax.axhline(sp2, color="k", ls="--", lw=1)
-        for pname, tr in traces.items():
-            ax.plot(tr["time_s"] / 60, tr[name], lw=1.2, label=pname)
-        ax.set_ylabel(name.replace("_C", " [C]"))
-        ax.grid(alpha=0.3)
-    first = next(iter(traces.values()))
-    t = first["time_s"] / 60
-    sp = first["setpoint_C"]
-    for band, alpha in ((5, 0.2), (8, 0.1)):
-        ax1.fill_between(t, sp - band, sp + band, color="tab:green", alpha=alpha, lw=0)
-    ax1.plot(t, sp, "k--", lw=1, label="setpoint")
-    for name, tr in traces.items():
-        ax1.plot(tr["time_s"] / 60, tr["outlet_temp_C"], lw=1.2, label=name)
-        ax2.plot(
-            tr["time_s"] / 60, 100 * np.atleast_2d(tr["spray_valve"].T).T[:, 0], lw=1, label=name
-        )
-    ax1.set_ylabel("main steam [C]")
-    ax1.legend(fontsize=7)
-    ax1.grid(alpha=0.3)
-    ax1.set_title(f"{env_id} - {scenario}", fontsize=9)
-    ax2b = ax2.twinx()
-    ax2b.plot(t, 100 * first["load"], "tab:gray", lw=0.8)
-    ax2b.set_ylabel("load [%]", color="tab:gray")
-    ax2.set_ylabel("spray valve 1 [%]")
-    ax2.set_xlabel("time [min]")
-    ax2.grid(alpha=0.3)
-    fig.tight_layout()
-    path = _plot_path(out, env_id, scenario)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=80)
-    plt.close(fig)
-    return path
+def _is_file(spec: str) -> bool:
+    return spec.lower().endswith((".yaml", ".yml"))
 
 
-def _mean(values: list[float | None]) -> float:
-    """Mean over the finite values (None/NaN where a metric does not apply)."""
-    v = np.asarray([np.nan if x is None else x for x in values], dtype=float)
-    v = v[np.isfinite(v)]
-    return float(v.mean()) if v.size else float("nan")
+class Plots:
+    """Trend plots per env and scenario, drawn as soon as every policy of it has finished."""
+
+    def __init__(self, out: Path, plan: Plan, units: list[Unit]) -> None:
+        self.out, self.plan = out, plan
+        self.pending = Counter((u.env_id, u.spec) for u in units)
+        self.traces: dict[tuple[str, str], dict[str, dict]] = {}
+
+    def add(self, u: Unit, trace: dict | None) -> None:
+        key = (u.env_id, u.spec)
+        if trace is not None:
+            self.traces.setdefault(key, {})[u.policy] = trace
+        self.pending[key] -= 1
+        if self.pending[key] == 0:
+            self.draw(*key)
+
+    def draw(self, env_id: str, sc: str) -> None:
+        """The trend plot of one env and scenario (traces missing after a resume re-run)."""
+        traces = self.traces.pop((env_id, sc), {})
+        seed = self.plan.seeds[0]
+        env = self.plan.envs_made[env_id, sc]
+        for name in self.plan.policies[env_id]:
+            if name not in traces:
+                try:
+                    pol = _make_policy(name, env_id, env)
+                    traces[name] = run_episode(env, pol, seed)["trace"]
+                except Exception as exc:  # noqa: BLE001 - that episode is in the record
+                    print(f"note: no trace of {name} seed {seed} for the plot: {exc}",
+                          file=sys.stderr)  # fmt: skip
+        order = [n for n in self.plan.policies[env_id] if n in traces]
+        if order:
+            plots.trend(_plot_path(self.out, env_id, sc), env, env_id, sc,
+                        {n: traces[n] for n in order}, seed)  # fmt: skip
+
+    def missing(self) -> list[tuple[str, str]]:
+        """Groups without a plot file (after a resume with nothing left to run)."""
+        groups = [(e, s) for e in self.plan.envs for s in self.plan.scenarios]
+        return [g for g in groups
+                if g not in self.pending and not _plot_path(self.out, *g).exists()]  # fmt: skip
 
 
-def _markdown(rows: list[dict]) -> str:
-    lines = ["# steamtemp_gym leaderboard", "",
-             "Means over seeds. IAE in K s, deviations in K, times in s, spray in kg; "
-             "return is the "
-             "default reward summed over the episode (higher is better).", ""]  # fmt: skip
-    ok = [r for r in rows if not r.get("error")]
-    keys = sorted({(r["env"], r["scenario"]) for r in ok})
-    for env_id, sc in keys:
-        lines += [f"## {env_id} - {sc}", "",
-                  "| policy | " + " | ".join(TABLE_METRICS) + " | trips |",
-                  "|---|" + "---|" * (len(TABLE_METRICS) + 1)]  # fmt: skip
-        pols = sorted({r["policy"] for r in ok if r["env"] == env_id and r["scenario"] == sc})
-        for p in pols:
-            sel = [r for r in ok if (r["env"], r["scenario"], r["policy"]) == (env_id, sc, p)]
-            vals = [_mean([r["metrics"].get(m) for r in sel]) for m in TABLE_METRICS]
-            trips = int(sum(r["metrics"].get("tripped") or 0 for r in sel))
-            lines.append(f"| {p} | " + " | ".join(f"{v:.4g}" for v in vals) + f" | {trips} |")
-        lines.append("")
-    failed = [r for r in rows if r.get("error")]
-    if failed:
-        lines += ["## Failed episodes", "", "| env | scenario | policy | seed | error |",
-                  "|---|---|---|---|---|"]  # fmt: skip
-        for r in failed:
-            err = head(str(r["error"]), 160).replace("|", "\\|").replace("\n", " ")
-            lines.append(f"| {r['env']} | {r['scenario']} | {r['policy']} | {r['seed']} | {err} |")
-        lines.append("")
-    return "\n".join(lines)
-
-
-def _rebuild(out: Path, plan: Plan) -> list[dict]:
-    """leaderboard.json and leaderboard.md from episodes.jsonl (this run's grid)."""
+def _rebuild(out: Path, plan: Plan, figures: bool = True) -> tuple[list[dict], dict | None]:
+    """leaderboard.json, leaderboard.md and the summary figures from episodes.jsonl."""
     latest = _latest(read_record(out / EPISODES))
     rows = []
     for key in plan.grid():
         r = latest.get((key, plan.fingerprints[key[:3]]))
         if r is not None:
             rows.append({k: v for k, v in r.items() if k != "traceback"})
-    (out / "leaderboard.json").write_text(dumps(rows, indent=1) + "\n")
-    (out / "leaderboard.md").write_text(_markdown(rows))
-    return rows
-
-
-# --------------------------------------------------------------------------- run
-def _error_row(key: Key, fp: str, exc: BaseException) -> dict:
-    env_id, sc, name, seed = key
-    tb = "".join(traceback.format_exception(type(exc), exc, exc.__traceback__))
-    print(f"FAILED {env_id} {sc} {name} seed {seed}: {type(exc).__name__}: {exc}",
-          file=sys.stderr)  # fmt: skip
-    return {"env": env_id, "scenario": sc, "policy": name, "seed": seed, "fingerprint": fp,
-            "metrics": None, "error": head(f"{type(exc).__name__}: {exc}", 1000),
-            "traceback": tb[-4000:]}  # fmt: skip
-
-
-def _run_group(
-    out: Path, plan: Plan, env_id: str, sc: str, record: Record, done: dict
-) -> tuple[int, int]:
-    """All policies and seeds of one env and scenario, then its plot. (ran, failed)."""
-    env = plan.envs_made[env_id, sc]
-    ran = failed = 0
-    traces: dict[str, dict] = {}
-    made: dict[str, Any] = {}
-    first_ok: dict[str, int] = {}
-    for name in plan.policies[env_id]:
-        fp = plan.fingerprints[env_id, sc, name]
-        last = None
-        for seed in plan.seeds:
-            prev = done.get(((env_id, sc, name, seed), fp))
-            if prev is not None and not prev.get("error"):
-                first_ok.setdefault(name, seed)
-                continue
-            try:
-                if name not in made:
-                    try:
-                        made[name] = _make_policy(name, env_id, env)
-                    except Exception as exc:  # noqa: BLE001 - every seed of it fails alike
-                        made[name] = exc
-                if isinstance(made[name], Exception):
-                    raise made[name]
-                res = run_episode(env, made[name], seed)
-            except Exception as exc:  # noqa: BLE001 - recorded; the run goes on
-                last = _error_row((env_id, sc, name, seed), fp, exc)
-                failed += 1
-            else:
-                last = {"env": env_id, "scenario": sc, "policy": name, "seed": seed,
-                        "fingerprint": fp, "metrics": res["metrics"]}  # fmt: skip
-                if name not in first_ok:
-                    first_ok[name] = seed
-                    traces[name] = res["trace"]
-            record.write(last)
-            ran += 1
-        if last is not None and last["metrics"] is not None:
-            m = last["metrics"]
-            print(
-                f"{env_id:32s} {sc:22s} {name:14s} IAE {m['iae_K_s']:9.1f} K s  "
-                f"max|dev| {m['max_abs_dev_K']:6.2f} K  return {m['return']:9.2f}",
-                flush=True,
-            )
-        elif last is None:
-            print(f"{env_id:32s} {sc:22s} {name:14s} done before (--resume)", flush=True)
-    if not first_ok or (ran == 0 and _plot_path(out, env_id, sc).exists()):
-        return ran, failed
-    for name in plan.policies[env_id]:  # traces of episodes finished before a resume
-        if name in first_ok and name not in traces:
-            try:
-                pol = made[name] if name in made else _make_policy(name, env_id, env)
-                traces[name] = run_episode(env, pol, first_ok[name])["trace"]
-            except Exception as exc:  # noqa: BLE001
-                print(f"note: no trace of {name} for the plot: {exc}", file=sys.stderr)
-    order = [n for n in plan.policies[env_id] if n in traces]
-    if order:
-        _plot(out, env_id, sc, {n: traces[n] for n in order}, env.unwrapped.plant.secondary)
-    return ran, failed
+    run = {"envs": plan.envs, "scenarios": plan.scenarios, "policies": plan.policies,
+           "seeds": plan.seeds, "steamtemp_gym_version": steamtemp_gym.__version__,
+           "n_bootstrap": stats.N_BOOTSTRAP, "confidence": stats.CONFIDENCE,
+           "reference": report.REFERENCE, "versus": report.VERSUS}  # fmt: skip
+    summary, norm = (None, {})
+    if any(not r.get("error") for r in rows):
+        summary, norm = report.summarize(rows, run)
+    doc = dict(summary or {"schema_version": report.SCHEMA_VERSION, "run": run, "plants": {},
+                           "ranking": []})  # fmt: skip
+    doc["episodes"] = rows
+    (out / "leaderboard.json").write_text(dumps(doc, indent=1) + "\n")
+    (out / "leaderboard.md").write_text(report.markdown(doc, rows))
+    if figures and summary is not None:
+        (out / "plots").mkdir(parents=True, exist_ok=True)
+        plots.bars(out / "plots" / "scores.png", summary)
+        if any(norm.values()):
+            plots.profiles(out / "plots" / "profiles.png", norm, len(plan.seeds))
+    return rows, summary
 
 
 def make_parser() -> argparse.ArgumentParser:
@@ -560,35 +645,45 @@ def make_parser() -> argparse.ArgumentParser:
         epilog=doc.split("\n", 2)[2],
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    ap.add_argument(
-        "--envs",
-        default=",".join(steamtemp_gym.ENV_IDS),
-        help="comma list of env ids (default: all)",
-    )
-    ap.add_argument("--policies", default=None, help="comma list (default: all available)")
-    ap.add_argument(
-        "--scenarios",
-        default=",".join(DEFAULT_SCENARIOS),
-        help="comma list of scenario names or YAML paths (default: %(default)s)",
-    )
-    ap.add_argument(
-        "--seeds", default="0,1,2", help="integers >= 0 or ranges a-b (default: %(default)s)"
-    )
-    ap.add_argument(
-        "--out", default="leaderboard_out", help="output directory (default: %(default)s)"
-    )
-    ap.add_argument(
-        "--resume",
-        action="store_true",
-        help="continue in --out: skip the episodes already in its episodes.jsonl",
-    )
+    ap.add_argument("--envs", default=",".join(steamtemp_gym.ENV_IDS),
+                    help="comma list of env ids (default: all: %(default)s)")  # fmt: skip
+    ap.add_argument("--policies", default=None,
+                    help="comma list (default: every baseline of baselines.NAMES and every "
+                    "shipped agent sb3:<algo> of agents.shipped(); frozen_valve is always "
+                    "added as the reference)")  # fmt: skip
+    ap.add_argument("--scenarios", default=",".join(DEFAULT_SCENARIOS),
+                    help="comma list of scenario names, heldout:<name> or YAML paths "
+                    "(default: %(default)s)")  # fmt: skip
+    ap.add_argument("--seeds", default=DEFAULT_SEEDS,
+                    help="integers >= 0 or ranges a-b (default: %(default)s)")  # fmt: skip
+    ap.add_argument("--out", default="leaderboard_out",
+                    help="output directory (default: %(default)s)")  # fmt: skip
+    ap.add_argument("--resume", action="store_true",
+                    help="continue in --out: skip the episodes already in its episodes.jsonl "
+                    "(default: off)")  # fmt: skip
+    ap.add_argument("--jobs", type=int, default=os.cpu_count() or 1,
+                    help="worker processes; 1 runs in this process (default: the number of "
+                    "CPUs, %(default)s)")  # fmt: skip
     return ap
+
+
+def _show_library_log() -> None:
+    """steamtemp_gym's INFO lines (e.g. the notice while kernels compile) on stderr."""
+    log = logging.getLogger("steamtemp_gym")
+    if not log.handlers:
+        handler = logging.StreamHandler(sys.stderr)
+        handler.setFormatter(logging.Formatter("%(name)s: %(message)s"))
+        log.addHandler(handler)
+    log.setLevel(logging.INFO)
 
 
 def main(argv: list[str] | None = None) -> None:
     """Run the leaderboard (see the module docstring)."""
+    _show_library_log()
     ap = make_parser()
     args = ap.parse_args(argv)
+    if args.jobs < 1:
+        ap.error(f"argument --jobs: must be >= 1, got {args.jobs}")
     plan = build_plan(ap, args)
     out = Path(args.out)
     try:
@@ -601,25 +696,26 @@ def main(argv: list[str] | None = None) -> None:
     except OSError as exc:
         ap.error(f"argument --out: cannot write {str(out)!r}: {exc.strerror or exc}")
     t0 = time.time()
-    ran = failed = 0
+    units = _units(plan, done)
+    figures = Plots(out, plan, units)
     try:
-        for env_id in plan.envs:
-            for sc in plan.scenarios:
-                r, f = _run_group(out, plan, env_id, sc, record, done)
-                ran, failed = ran + r, failed + f
+        _execute(plan, units, args.jobs, record, figures.add)
+        for key in figures.missing():
+            figures.draw(*key)
     except KeyboardInterrupt:
         record.close()
-        _rebuild(out, plan)
+        _rebuild(out, plan, figures=False)
         print(f"\ninterrupted: finished episodes are in {out / EPISODES}; "
               "run the same command with --resume to continue", file=sys.stderr)  # fmt: skip
         raise SystemExit(130) from None
     record.close()
-    rows = _rebuild(out, plan)
+    rows, summary = _rebuild(out, plan)
+    if summary is not None:
+        print(report.console(summary))
     bad = [r for r in rows if r.get("error")]
-    print(
-        f"wrote {out / 'leaderboard.json'}, {out / 'leaderboard.md'} and plots/ "
-        f"({len(rows)} episodes, {ran} run now, {time.time() - t0:.0f} s)"
-    )
+    n_run = sum(len(u.seeds) for u in units)
+    print(f"wrote {out / 'leaderboard.json'}, {out / 'leaderboard.md'} and plots/ "
+          f"({len(rows)} episodes, {n_run} run now, {time.time() - t0:.0f} s)")  # fmt: skip
     if bad:
         print(f"{len(bad)} of {len(rows)} episodes failed:", file=sys.stderr)
         for r in bad[:10]:

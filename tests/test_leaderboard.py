@@ -1,5 +1,6 @@
 """The leaderboard CLI (agents/leaderboard.py): flags checked before anything runs, the
-per-episode record, --resume after a crash, failed episodes, strict JSON.
+per-episode record, --resume after a crash, failed episodes, strict JSON that follows
+docs/leaderboard_schema.json, batched and parallel runs identical to serial ones.
 
 Tiny scenarios (60 s) on Cascade300MW (the cheapest plant to build) with a frozen-valve
 policy keep these in seconds; one test runs the real baseline on the README's scenario.
@@ -10,13 +11,18 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+import gymnasium as gym
 import numpy as np
 import pytest
 
+import agents
 import baselines
 import steamtemp_gym
 from agents import leaderboard as lb
 from agents.difficulty import FrozenValves
+from agents.evaluation import run_batch, run_episode
+
+SCHEMA = Path(__file__).parents[1] / "docs" / "leaderboard_schema.json"
 
 IDS = steamtemp_gym.ENV_IDS
 ENV = "steamtemp/Cascade300MW-v0"
@@ -28,7 +34,11 @@ load: [[0, 1.0], [30, 0.95]]
 
 
 class Scripted(FrozenValves):
-    """Frozen valves that raise ``FAIL[(name, seed)]`` at the first step of that episode."""
+    """Frozen valves that raise ``FAIL[(name, seed)]`` at the first step of that episode.
+
+    In a vector env (a batch of seeds, whose seeds it cannot see) it raises the first
+    exception listed for its name: the leaderboard then runs each seed alone.
+    """
 
     FAIL: dict[tuple[str, int], BaseException] = {}
 
@@ -37,7 +47,10 @@ class Scripted(FrozenValves):
         self.env, self.name = env, name
 
     def predict(self, observation, state=None, episode_start=None, deterministic=True):
-        exc = self.FAIL.get((self.name, self.env.unwrapped.np_random_seed))
+        if hasattr(self.env, "num_envs"):
+            exc = next((e for (n, _), e in self.FAIL.items() if n == self.name), None)
+        else:
+            exc = self.FAIL.get((self.name, self.env.unwrapped.np_random_seed))
         if exc is not None:
             raise exc
         return super().predict(observation, state, episode_start, deterministic)
@@ -66,7 +79,7 @@ def tiny(tmp_path) -> Path:
 
 def _args(tiny: Path, out: Path, **flags: str) -> list[str]:
     base = {"--envs": ENV, "--policies": "frozen", "--scenarios": str(tiny), "--seeds": "0",
-            "--out": str(out)}  # fmt: skip
+            "--out": str(out), "--jobs": "1"}  # fmt: skip
     base.update(flags)
     return [f"{k}={v}" for k, v in base.items()]
 
@@ -213,7 +226,7 @@ def test_duplicates_are_dropped_in_order(tiny, tmp_path, fake_policies, capsys):
     args = ap.parse_args(_args(tiny, tmp_path / "out", **flags))
     plan = lb.build_plan(ap, args)
     assert plan.envs == [ENV]
-    assert plan.policies == {ENV: ["frozen", "flaky"]}
+    assert plan.policies == {ENV: ["frozen", "flaky", lb.REFERENCE]}
     assert plan.scenarios == [str(tiny)]
     assert plan.seeds == [3, 0, 1, 2]
     assert "duplicates dropped" in capsys.readouterr().err
@@ -225,10 +238,14 @@ def test_default_run_is_valid_without_running(monkeypatch, tmp_path):
     monkeypatch.chdir(tmp_path)
     ap = lb.make_parser()
     plan = lb.build_plan(ap, ap.parse_args([]))
-    assert plan.envs == list(IDS) and plan.seeds == [0, 1, 2]
+    assert plan.envs == list(IDS) and plan.seeds == [0, 1, 2, 3, 4]
     assert plan.scenarios == list(lb.DEFAULT_SCENARIOS)
-    n_policies = len(baselines.NAMES)
-    assert len(list(plan.grid())) == len(IDS) * len(lb.DEFAULT_SCENARIOS) * 3 * n_policies
+    assert {f"heldout:{n}" for n in steamtemp_gym.scenarios.heldout.NAMES} <= set(plan.scenarios)
+    for env_id in IDS:  # every baseline, every shipped agent, the reference
+        shipped = [f"sb3:{a}" for e, a in agents.shipped() if e == env_id]
+        assert plan.policies[env_id] == [*baselines.NAMES, *shipped, lb.REFERENCE]
+    n = sum(len(p) for p in plan.policies.values())
+    assert len(list(plan.grid())) == n * len(lb.DEFAULT_SCENARIOS) * 5
     assert not (tmp_path / "leaderboard_out").exists()
 
 
@@ -237,44 +254,51 @@ def test_help_documents_failures_and_resume(capsys):
         lb.main(["--help"])
     assert exc.value.code == 0
     text = capsys.readouterr().out
-    for word in ("--resume", "episodes.jsonl", "exit code is 1", "0-4", "duplicates"):
+    for word in ("--resume", "episodes.jsonl", "exit code is 1", "0-4", "duplicates", "--jobs",
+                 "heldout:", "frozen_valve", "default:"):
         assert word in text
 
 
 # --------------------------------------------------------------------------- running
+def _board(out: Path) -> list[dict]:
+    return _strict_load(out / "leaderboard.json")["episodes"]
+
+
 def test_resume_after_a_crash_completes_without_duplicates(tiny, tmp_path, fake_policies):
-    """Killed in the 4th of 8 episodes, plus a half-written line: --resume runs the rest."""
+    """Killed in the 2nd of 6 batches, plus a half-written line: --resume runs the rest."""
     out = tmp_path / "out"
     argv = _args(tiny, out, **{"--envs": f"{ENV},{ENV2}", "--seeds": "0,1",
                                "--policies": "frozen,flaky"})  # fmt: skip
-    fake_policies[("flaky", 1)] = KeyboardInterrupt()  # ENV: frozen 0, 1, flaky 0, [flaky 1]
+    fake_policies[("flaky", 1)] = KeyboardInterrupt()  # ENV: frozen 0, 1, [flaky 0, 1]
     with pytest.raises(SystemExit) as exc:
         lb.main(argv)
     assert exc.value.code == 130
     rows = _jsonl(out / lb.EPISODES)
     assert [(r["env"], r["policy"], r["seed"]) for r in rows] == [
-        (ENV, "frozen", 0), (ENV, "frozen", 1), (ENV, "flaky", 0)]  # fmt: skip
-    assert len(_strict_load(out / "leaderboard.json")) == 3  # what finished, rebuilt
+        (ENV, "frozen", 0), (ENV, "frozen", 1)]  # fmt: skip
+    assert len(_board(out)) == 2  # what finished, rebuilt
     with (out / lb.EPISODES).open("a") as f:  # a crash in the middle of a write
         f.write(json.dumps(rows[-1])[:25])
     fake_policies.clear()
     lb.main([*argv, "--resume"])
     rows = _jsonl(out / lb.EPISODES)
     keys = [(r["env"], r["scenario"], r["policy"], r["seed"]) for r in rows]
-    assert len(keys) == len(set(keys)) == 8
-    board = _strict_load(out / "leaderboard.json")
+    assert len(keys) == len(set(keys)) == 12
+    board = _board(out)
     assert [(r["env"], r["policy"], r["seed"]) for r in board] == [
-        (e, p, s) for e in (ENV, ENV2) for p in ("frozen", "flaky") for s in (0, 1)]  # fmt: skip
+        (e, p, s) for e in (ENV, ENV2) for p in ("frozen", "flaky", lb.REFERENCE)
+        for s in (0, 1)]  # fmt: skip
     assert all(r["metrics"] is not None and "error" not in r for r in board)
-    assert {p.name for p in (out / "plots").glob("*.png")} == {
+    assert {p.name for p in (out / "plots").glob("*__*.png")} == {
         "Cascade300MW-v0__tiny.png", "DrumBoilerSH-v0__tiny.png"}  # fmt: skip
     # a finished run resumed again runs nothing and rebuilds the same board
     lb.main([*argv, "--resume"])
-    assert len(_jsonl(out / lb.EPISODES)) == 8
-    assert _strict_load(out / "leaderboard.json") == board
+    assert len(_jsonl(out / lb.EPISODES)) == 12
+    assert _board(out) == board
 
 
 def test_failed_episode_is_recorded_and_the_run_goes_on(tiny, tmp_path, fake_policies, capsys):
+    """A batch that raises runs its seeds alone: only the failing seed is a failed row."""
     out = tmp_path / "out"
     argv = _args(tiny, out, **{"--seeds": "0,1", "--policies": "frozen,flaky"})
     fake_policies[("flaky", 0)] = RuntimeError("controller diverged")
@@ -282,14 +306,14 @@ def test_failed_episode_is_recorded_and_the_run_goes_on(tiny, tmp_path, fake_pol
         lb.main(argv)
     assert exc.value.code == 1
     err = capsys.readouterr().err
-    assert "1 of 4 episodes failed" in err and "controller diverged" in err and "--resume" in err
+    assert "1 of 6 episodes failed" in err and "controller diverged" in err and "--resume" in err
     rows = _jsonl(out / lb.EPISODES)
-    assert len(rows) == 4
+    assert len(rows) == 6
     (bad,) = [r for r in rows if "error" in r]
     assert (bad["policy"], bad["seed"], bad["metrics"]) == ("flaky", 0, None)
     assert "RuntimeError: controller diverged" in bad["error"] and "Traceback" in bad["traceback"]
-    board = _strict_load(out / "leaderboard.json")
-    assert len(board) == 4 and sum("error" in r for r in board) == 1
+    board = _board(out)
+    assert len(board) == 6 and sum("error" in r for r in board) == 1
     assert all("traceback" not in r for r in board)
     md = (out / "leaderboard.md").read_text()
     assert "Failed episodes" in md and "controller diverged" in md and "| flaky |" in md
@@ -297,9 +321,9 @@ def test_failed_episode_is_recorded_and_the_run_goes_on(tiny, tmp_path, fake_pol
     fake_policies.clear()
     lb.main([*argv, "--resume"])
     rows = _jsonl(out / lb.EPISODES)
-    assert len(rows) == 5 and (rows[-1]["policy"], rows[-1]["seed"]) == ("flaky", 0)
-    board = _strict_load(out / "leaderboard.json")
-    assert len(board) == 4 and not any("error" in r for r in board)
+    assert len(rows) == 7 and (rows[-1]["policy"], rows[-1]["seed"]) == ("flaky", 0)
+    board = _board(out)
+    assert len(board) == 6 and not any("error" in r for r in board)
     assert "Failed episodes" not in (out / "leaderboard.md").read_text()
 
 
@@ -318,9 +342,10 @@ def test_policy_that_cannot_be_built_fails_its_episodes_only(
     with pytest.raises(SystemExit) as exc:
         lb.main(_args(tiny, out, **{"--seeds": "0,1", "--policies": "flaky,frozen"}))
     assert exc.value.code == 1
-    board = _strict_load(out / "leaderboard.json")
+    board = _board(out)
     assert [("error" in r, r["policy"]) for r in board] == [
-        (True, "flaky"), (True, "flaky"), (False, "frozen"), (False, "frozen")]  # fmt: skip
+        (True, "flaky"), (True, "flaky"), (False, "frozen"), (False, "frozen"),
+        (False, lb.REFERENCE), (False, lb.REFERENCE)]  # fmt: skip
     assert list((out / "plots").glob("*.png"))
 
 
@@ -328,42 +353,91 @@ def test_changed_scenario_runs_again_on_resume(tiny, tmp_path, fake_policies):
     out = tmp_path / "out"
     argv = _args(tiny, out)
     lb.main(argv)
-    (fp,) = {r["fingerprint"] for r in _jsonl(out / lb.EPISODES)}
+    fps = {r["fingerprint"] for r in _jsonl(out / lb.EPISODES)}
     tiny.write_text(TINY.replace("0.95", "0.9"))
     lb.main([*argv, "--resume"])
     rows = _jsonl(out / lb.EPISODES)
-    assert len(rows) == 2 and rows[1]["fingerprint"] != fp
-    (row,) = _strict_load(out / "leaderboard.json")
-    assert row["fingerprint"] == rows[1]["fingerprint"]
+    assert len(rows) == 4 and not {r["fingerprint"] for r in rows[2:]} & fps
+    assert [r["fingerprint"] for r in _board(out)] == [r["fingerprint"] for r in rows[2:]]
 
 
-def test_outputs_are_strict_json(tiny, tmp_path, fake_policies):
-    """Metrics that do not apply (no setpoint step: no settling time) are null, not NaN."""
+def test_outputs_are_strict_json_that_follows_the_schema(tiny, tmp_path, fake_policies):
+    """Metrics that do not apply (no setpoint step: no settling time) are null in the rows
+    and left out of the summary and the markdown (never NaN)."""
+    jsonschema = pytest.importorskip("jsonschema")
     out = tmp_path / "out"
     lb.main(_args(tiny, out, **{"--seeds": "0-1"}))
-    board = _strict_load(out / "leaderboard.json")
-    assert len(board) == 2
+    doc = _strict_load(out / "leaderboard.json")
+    jsonschema.validate(doc, json.loads(SCHEMA.read_text()))
+    assert doc["schema_version"] == lb.report.SCHEMA_VERSION
+    board = doc["episodes"]
+    assert len(board) == 4
     for r in board:
         assert r["metrics"]["settling_time_s"] is None
         assert set(r) == {"env", "scenario", "policy", "seed", "fingerprint", "metrics"}
         assert all(v is None or np.isfinite(v) for v in r["metrics"].values())
     assert _jsonl(out / lb.EPISODES) == board
-    assert "nan" in (out / "leaderboard.md").read_text()  # the table shows what is missing
+    cells = doc["plants"][ENV]["scenarios"][str(tiny)]
+    assert all("settling_time_s" not in c for c in cells.values())
+    md = (out / "leaderboard.md").read_text()
+    assert "nan" not in md.lower().replace("tanh", "")
     assert lb.dumps({"a": float("inf"), "b": np.float32("nan"), "c": [np.int64(3)]}) == (
         '{"a": null, "b": null, "c": [3]}'
     )
+    with pytest.raises(jsonschema.ValidationError):  # the schema is not vacuous
+        bad = dict(doc, schema_version=1)
+        jsonschema.validate(bad, json.loads(SCHEMA.read_text()))
+
+
+def test_run_batch_is_identical_to_run_episode():
+    """Seeds side by side in the vector env give the single env's traces bit for bit, for
+    every baseline and the reference (a trip ends a row early: frozen valve, deep ramp)."""
+    sc = steamtemp_gym.scenarios.heldout.load("deep_fast_ramp")
+    env_id = "steamtemp/SupercriticalFSH-v0"
+    env = gym.make(env_id, scenario=sc)
+    venv = gym.make_vec(env_id, num_envs=2, vectorization_mode="vector_entry_point", scenario=sc)
+    for name in (*baselines.NAMES, lb.REFERENCE):
+        serial = [run_episode(env, lb._make_policy(name, env_id, env), s) for s in (3, 7)]
+        batch = run_batch(venv, lb._make_policy(name, env_id, venv), [3, 7])
+        for a, b in zip(serial, batch, strict=True):
+            assert a["metrics"] == b["metrics"], name
+            for k in a["trace"]:
+                np.testing.assert_array_equal(a["trace"][k], b["trace"][k], err_msg=name)
+    assert serial[0]["metrics"]["tripped"] == 1.0  # the frozen valve trips on it
+
+
+def test_parallel_rows_equal_in_process_rows(tiny, tmp_path):
+    """--jobs 2 (worker processes) writes the same rows as --jobs 1."""
+    flags = {"--policies": "cascade_pi,lqi", "--seeds": "0-2",
+             "--scenarios": f"{tiny},setpoint_step"}  # fmt: skip
+    lb.main(_args(tiny, tmp_path / "a", **flags))
+    lb.main(_args(tiny, tmp_path / "b", **flags, **{"--jobs": "2"}))
+    a = _strict_load(tmp_path / "a" / "leaderboard.json")
+    b = _strict_load(tmp_path / "b" / "leaderboard.json")
+    assert a["episodes"] == b["episodes"] and a["plants"] == b["plants"]
 
 
 def test_leaderboard_cli_with_the_baseline(tmp_path):
-    """The real baseline on a named scenario (moved from tests/test_baselines.py)."""
-    lb.main(["--envs", IDS[0], "--scenarios", "setpoint_step", "--seeds", "0,1", "--out",
-             str(tmp_path)])  # fmt: skip
-    rows = _strict_load(tmp_path / "leaderboard.json")
-    assert len(rows) == 2 * len(baselines.NAMES)
-    assert {r["seed"] for r in rows} == {0, 1}
+    """The real baselines on a named scenario: rows, summary, markdown and plots."""
+    lb.main(["--envs", IDS[0], "--scenarios", "setpoint_step,heldout:mill_trip", "--seeds",
+             "0,1", "--out", str(tmp_path)])  # fmt: skip
+    doc = _strict_load(tmp_path / "leaderboard.json")
+    rows = doc["episodes"]
+    assert len(rows) == 2 * 2 * (len(baselines.NAMES) + 1)
     assert all(np.isfinite(r["metrics"]["iae_K_s"]) for r in rows)
+    pols = doc["plants"][IDS[0]]["policies"]
+    ranks = sorted(e["rank"] for p, e in pols.items() if p != lb.REFERENCE)
+    assert ranks[0] == 1 and len(ranks) == len(baselines.NAMES)
+    assert "rank" not in pols[lb.REFERENCE]
+    assert "p_improvement_over_cascade_pi" not in pols["cascade_pi"]
+    assert all(0 <= e["p_improvement_over_cascade_pi"]["value"] <= 1
+               for p, e in pols.items() if p != "cascade_pi")  # fmt: skip
+    best = max(pols[p]["normalized_score"]["mean"]["value"] for p in baselines.NAMES)
+    assert best <= 1.0 + 1e-9  # 1 is the best baseline per scenario
     md = (tmp_path / "leaderboard.md").read_text()
-    assert "cascade_pi" in md and "setpoint_step" in md
-    assert list((tmp_path / "plots").glob("*.png"))
+    assert "cascade_pi" in md and "setpoint_step" in md and "## Headline" in md
+    assert "IQM of the normalized score over scenario × seed (2 seeds)" in md
+    names = {p.name for p in (tmp_path / "plots").glob("*.png")}
+    assert {"scores.png", "profiles.png", "SupercriticalFSH-v0__heldout_mill_trip.png"} <= names
     with pytest.raises(SystemExit):
         lb.main(["--envs", "steamtemp/Nope-v0", "--out", str(tmp_path / "x")])

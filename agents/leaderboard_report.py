@@ -1,0 +1,272 @@
+"""leaderboard.json's summary and leaderboard.md from the episode rows.
+
+The statistics (agents/stats.py) per plant and policy, over scenario x seed: the mean and
+IQM of the normalized score (0 frozen valve, 1 the best baseline of this run, per
+scenario) and of the return, with 95 % stratified-bootstrap CIs; the probability of
+improvement over ``cascade_pi``; the rank per plant (by the IQM of the normalized score)
+and overall (the mean of the per-plant ranks). The engineering metrics are means over
+scenario x seed of the episodes where they apply (a metric that does not apply, e.g.
+settling time without a setpoint step, is left out, never NaN; ``max_abs_dev_K`` is left
+out of an episode with a setpoint step, where it measures the step). The format is
+docs/leaderboard_schema.json, described in docs/leaderboard.md.
+"""
+
+from __future__ import annotations
+
+from collections import defaultdict
+from typing import Any
+
+import numpy as np
+
+import baselines
+from agents import stats
+from steamtemp_gym.checks import head
+
+#: Version of leaderboard.json's format (docs/leaderboard_schema.json).
+SCHEMA_VERSION = 2
+REFERENCE = "frozen_valve"
+VERSUS = "cascade_pi"
+TABLE_METRICS = ("iae_K_s", "max_abs_dev_K", "time_outside_5K_s", "overshoot_pct",
+                 "settling_time_s", "spray_used_kg", "valve_travel", "valve_reversals",
+                 "return")  # fmt: skip
+SUMMARY_METRICS = ("iae_K_s", "max_abs_dev_K", "time_outside_5K_s", "time_outside_8K_s",
+                   "spray_used_kg", "valve_travel", "return")  # fmt: skip
+
+
+def _applicable(m: dict[str, Any]) -> dict[str, float]:
+    """The metrics of one episode that apply to it (finite, not a step's own size)."""
+    out = {k: float(v) for k, v in m.items() if v is not None and np.isfinite(v)}
+    if "overshoot_pct" in out:
+        out.pop("max_abs_dev_K", None)
+    return out
+
+
+def _means(ms: list[dict[str, float]], keys) -> dict[str, float]:
+    out = {}
+    for k in keys:
+        v = [m[k] for m in ms if k in m]
+        if v:
+            out[k] = float(np.mean(v))
+    return out
+
+
+def _estimate(tasks: list[np.ndarray]) -> dict[str, Any]:
+    out: dict[str, Any] = {}
+    for name, f in stats.AGGREGATES.items():
+        point, lo, hi = stats.stratified_bootstrap_ci(tasks, f)
+        out[name] = {"value": point, "ci95": [lo, hi]}
+    out["tasks"] = len(tasks)
+    out["runs"] = int(sum(len(t) for t in tasks))
+    return out
+
+
+def summarize(rows: list[dict], run: dict[str, Any]) -> dict[str, Any]:
+    """The summary of leaderboard.json (rows: this run's grid, failed ones included)."""
+    by = defaultdict(lambda: defaultdict(lambda: defaultdict(list)))  # env, scenario, policy
+    failed = defaultdict(int)
+    for r in rows:
+        if r.get("error"):
+            failed[r["env"], r["policy"]] += 1
+        else:
+            by[r["env"]][r["scenario"]][r["policy"]].append(r["metrics"])
+    plants: dict[str, Any] = {}
+    norm_scores: dict[str, dict[str, list[np.ndarray]]] = {}
+    for env_id in run["envs"]:
+        scs = [s for s in run["scenarios"] if s in by[env_id]]
+        policies = [p for p in run["policies"][env_id] if any(p in by[env_id][s] for s in scs)]
+        refs, tasks_norm = {}, {}
+        for sc in scs:
+            ret = {p: np.array([m["return"] for m in by[env_id][sc][p]]) for p in by[env_id][sc]}
+            base = {p: float(v.mean()) for p, v in ret.items() if p in baselines.NAMES}
+            ref: dict[str, Any] = {}
+            if REFERENCE in ret:
+                ref["zero_return"] = float(ret[REFERENCE].mean())
+            if base:
+                best = max(base, key=base.get)
+                ref.update(one_policy=best, one_return=base[best])
+            ref["normalized"] = False
+            if "zero_return" in ref and "one_return" in ref:
+                probe = stats.normalize(np.zeros(1), ref["zero_return"], ref["one_return"])
+                ref["normalized"] = probe is not None
+            if ref["normalized"]:
+                tasks_norm[sc] = {p: stats.normalize(v, ref["zero_return"], ref["one_return"])
+                                  for p, v in ret.items()}  # fmt: skip
+            refs[sc] = ref
+        pol_out: dict[str, Any] = {}
+        norm_scores[env_id] = {}
+        for p in policies:
+            ms = [m for s in scs for m in by[env_id][s].get(p, [])]
+            rets = [np.array([m["return"] for m in by[env_id][s][p]]) for s in scs
+                    if by[env_id][s].get(p)]  # fmt: skip
+            norm = [tasks_norm[s][p] for s in tasks_norm if p in tasks_norm[s]]
+            entry: dict[str, Any] = {
+                "episodes": len(ms),
+                "failed": failed[env_id, p],
+                "trips": int(sum(m["tripped"] for m in ms)),
+                "return": _estimate(rets),
+                "metrics": _means([_applicable(m) for m in ms], SUMMARY_METRICS),
+            }
+            if norm:
+                entry["normalized_score"] = _estimate(norm)
+                norm_scores[env_id][p] = norm
+            if p != VERSUS:
+                common = [s for s in scs if by[env_id][s].get(p) and by[env_id][s].get(VERSUS)]
+                if common:
+                    x = [np.array([m["return"] for m in by[env_id][s][p]]) for s in common]
+                    y = [np.array([m["return"] for m in by[env_id][s][VERSUS]]) for s in common]
+                    point, lo, hi = stats.probability_of_improvement(x, y)
+                    entry[f"p_improvement_over_{VERSUS}"] = {"value": point, "ci95": [lo, hi],
+                                                            "tasks": len(common)}  # fmt: skip
+            pol_out[p] = entry
+        ranked = {p: e["normalized_score"]["iqm"]["value"] for p, e in pol_out.items()
+                  if p != REFERENCE and "normalized_score" in e}  # fmt: skip
+        for p, k in stats.ranks(ranked).items():
+            pol_out[p]["rank"] = k
+        per_sc = {}
+        for sc in scs:
+            per_sc[sc] = {}
+            for p in policies:
+                ms = by[env_id][sc].get(p)
+                if not ms:
+                    continue
+                cell: dict[str, Any] = {"seeds": len(ms)}
+                cell.update(_means([_applicable(m) for m in ms], TABLE_METRICS))
+                cell["trips"] = int(sum(m["tripped"] for m in ms))
+                if sc in tasks_norm and p in tasks_norm[sc]:
+                    cell["normalized_score"] = float(np.mean(tasks_norm[sc][p]))
+                per_sc[sc][p] = cell
+        plants[env_id] = {"reference": refs, "policies": pol_out, "scenarios": per_sc}
+    return {"schema_version": SCHEMA_VERSION, "run": run, "plants": plants,
+            "ranking": _overall(plants)}, norm_scores  # fmt: skip
+
+
+def _overall(plants: dict[str, Any]) -> list[dict[str, Any]]:
+    """Mean per-plant rank of each policy; policies ranked on more plants first."""
+    ranks = defaultdict(list)
+    for p in plants.values():
+        for name, e in p["policies"].items():
+            if "rank" in e:
+                ranks[name].append(e["rank"])
+    out = [{"policy": n, "mean_rank": float(np.mean(r)), "plants": len(r)}
+           for n, r in ranks.items()]  # fmt: skip
+    out.sort(key=lambda e: (-e["plants"], e["mean_rank"]))
+    for i, e in enumerate(out):
+        e["position"] = i + 1
+    return out
+
+
+# --------------------------------------------------------------------------- markdown
+def _ci(est: dict[str, Any] | None, fmt: str = "{:.2f}") -> str:
+    if not est:
+        return "-"
+    lo, hi = est["ci95"]
+    return f"{fmt.format(est['value'])} [{fmt.format(lo)}, {fmt.format(hi)}]"
+
+
+def _fmt(v: float | None) -> str:
+    return "-" if v is None else f"{v:.4g}"
+
+
+def stat_label(n_seeds: int) -> str:
+    """How the headline statistic is labelled everywhere (console, markdown, plots)."""
+    return (f"IQM of the normalized score over scenario × seed ({n_seeds} seeds), "
+            "95 % stratified-bootstrap CI")  # fmt: skip
+
+
+def headline_rows(summary: dict[str, Any]) -> tuple[list[str], list[list[str]]]:
+    """Header and rows of the headline table (policy x plant)."""
+    plants = list(summary["plants"])
+    header = ["#", "policy", *[p.split("/")[-1] for p in plants], "mean rank"]
+    rows = []
+    for e in summary["ranking"]:
+        cells = []
+        for env_id in plants:
+            pe = summary["plants"][env_id]["policies"].get(e["policy"], {})
+            est = pe.get("normalized_score", {}).get("iqm")
+            cells.append(f"{_ci(est)} ({pe['rank']})" if est and "rank" in pe else "-")
+        rank = f"{e['mean_rank']:.1f}" + (f" ({e['plants']} plants)" if e["plants"] < len(
+            plants) else "")  # fmt: skip
+        rows.append([str(e["position"]), e["policy"], *cells, rank])
+    return header, rows
+
+
+def _table(header: list[str], rows: list[list[str]]) -> list[str]:
+    return ["| " + " | ".join(header) + " |", "|" + "---|" * len(header),
+            *["| " + " | ".join(r) + " |" for r in rows]]  # fmt: skip
+
+
+def headline_markdown(summary: dict[str, Any]) -> str:
+    """The headline table with its label (also in the README)."""
+    n = len(summary["run"]["seeds"])
+    lines = [f"{stat_label(n)}; 0 = frozen valve, 1 = best baseline per scenario; "
+             "(k) = rank on that plant.", ""]  # fmt: skip
+    lines += _table(*headline_rows(summary))
+    return "\n".join(lines) + "\n"
+
+
+def markdown(summary: dict[str, Any], rows: list[dict]) -> str:
+    """leaderboard.md."""
+    run = summary["run"]
+    n = len(run["seeds"])
+    lines = ["# steamtemp_gym leaderboard", "",
+             f"Seeds {run['seeds']}; scenarios: {', '.join(run['scenarios'])}. "
+             "Return: the default reward summed over an episode (higher is better). "
+             "Normalized score per scenario: 0 = the frozen valve (every actuator held at its "
+             "reset opening), 1 = the best baseline of this run on that scenario (both mean "
+             "returns over seeds).", "", "## Headline", "", headline_markdown(summary)]  # fmt: skip
+    for env_id, p in summary["plants"].items():
+        pols = p["policies"]
+        order = sorted(pols, key=lambda k: (pols[k].get("rank", 10**6), k))
+        lines += [f"## {env_id}", "", f"Ranking: statistics over scenario × seed ({n} seeds), "
+                  "95 % stratified-bootstrap CIs; P(> cascade_pi): probability that an "
+                  "episode of the policy has a higher return than one of cascade_pi on the "
+                  "same scenario, averaged over scenarios. IAE, max\\|dev\\| and time outside "
+                  "±5 K: mean over scenario × seed where they apply.", ""]  # fmt: skip
+        header = ["rank", "policy", "IQM norm. score", "mean norm. score", "IQM return",
+                  f"P(> {VERSUS})", "IAE [K s]", "max\\|dev\\| [K]", "t>5K [s]", "trips",
+                  "failed"]  # fmt: skip
+        body = []
+        for k in order:
+            e = pols[k]
+            ns = e.get("normalized_score", {})
+            met = e["metrics"]
+            body.append([str(e.get("rank", "ref." if k == REFERENCE else "-")), k,
+                         _ci(ns.get("iqm")), _ci(ns.get("mean")),
+                         _ci(e["return"]["iqm"], "{:.0f}"),
+                         _ci(e.get(f"p_improvement_over_{VERSUS}")),
+                         _fmt(met.get("iae_K_s")), _fmt(met.get("max_abs_dev_K")),
+                         _fmt(met.get("time_outside_5K_s")), str(e["trips"]),
+                         str(e["failed"])])  # fmt: skip
+        lines += _table(header, body) + [""]
+        lines += ["<details><summary>per scenario (mean over seeds)</summary>", ""]
+        for sc, cells in p["scenarios"].items():
+            ref = p["reference"][sc]
+            note = (f"0 = {REFERENCE} ({ref['zero_return']:.0f}), 1 = {ref['one_policy']} "
+                    f"({ref['one_return']:.0f})" if ref["normalized"] else
+                    "not normalized (no baseline beats the frozen valve)")  # fmt: skip
+            cols = [m for m in TABLE_METRICS if any(m in c for c in cells.values())]
+            lines += [f"### {env_id.split('/')[-1]} - {sc}", "", f"Normalized score: {note}.", ""]
+            header = ["policy", "seeds", "norm. score", *cols, "trips"]
+            body = [[k, str(c["seeds"]), _fmt(c.get("normalized_score")),
+                     *[_fmt(c.get(m)) for m in cols], str(c["trips"])]
+                    for k, c in cells.items()]  # fmt: skip
+            lines += _table(header, body) + [""]
+        lines += ["</details>", ""]
+    failed = [r for r in rows if r.get("error")]
+    if failed:
+        lines += ["## Failed episodes", ""]
+        body = [[r["env"], r["scenario"], r["policy"], str(r["seed"]),
+                 head(str(r["error"]), 160).replace("|", "\\|").replace("\n", " ")]
+                for r in failed]  # fmt: skip
+        lines += _table(["env", "scenario", "policy", "seed", "error"], body) + [""]
+    return "\n".join(lines)
+
+
+def console(summary: dict[str, Any]) -> str:
+    """The headline table as plain text for the terminal (same statistic and label)."""
+    header, rows = headline_rows(summary)
+    widths = [max(len(r[i]) for r in [header, *rows]) for i in range(len(header))]
+    fmt = "  ".join(f"{{:<{w}}}" for w in widths)
+    n = len(summary["run"]["seeds"])
+    return "\n".join([stat_label(n) + " (rank on the plant):", fmt.format(*header),
+                      *[fmt.format(*r) for r in rows]])  # fmt: skip

@@ -1,0 +1,166 @@
+"""Aggregate statistics of the leaderboard, as RL benchmarks report them.
+
+The method is that of Agarwal, Schwarzer, Castro, Courville and Bellemare, "Deep
+Reinforcement Learning at the Edge of the Statistical Precipice", NeurIPS 2021 (the
+``rliable`` library): a policy's score on a plant is a matrix of runs (seeds) by tasks
+(scenarios); it is summarized by the mean and the interquartile mean (IQM: the mean of
+the middle 50 % of all runs x tasks, :func:`iqm`) with 95 % confidence intervals from a
+*stratified* bootstrap (:func:`stratified_bootstrap_ci`: runs resampled with replacement
+within each task, the task set fixed, percentile interval); the probability of improvement
+``P(X > Y)`` (:func:`probability_of_improvement`: the Mann-Whitney statistic per task,
+averaged over tasks) and performance profiles (:func:`performance_profile`: the fraction
+of runs above a threshold, averaged over tasks).
+
+Tasks may have different run counts (a failed episode leaves its seed out), so scores
+are lists of 1-d arrays, one per task. ``rliable`` itself is not a dependency (it pulls
+pandas, statsmodels, arch and seaborn); tests/test_stats.py checks this implementation
+on hand-computable cases and against the plain (unstratified) percentile bootstrap.
+
+Normalized score (:func:`normalize`): per task (plant x scenario), 0 is the frozen valve
+(agents/difficulty.py ``FrozenValves``: every actuator held at its opening at reset) and
+1 the best baseline of ``baselines.NAMES`` on that task, both as the mean episode return
+over seeds. A task where no baseline beats the frozen valve cannot be normalized and is
+left out of normalized scores (reported in ``leaderboard.json``).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+
+import numpy as np
+from scipy.stats import trim_mean
+
+Scores = Sequence[np.ndarray]  # one 1-d array of run scores per task
+#: Bootstrap replicates (rliable's examples use 2,000 to 50,000; 2,000 keeps the percentile
+#: interval's Monte-Carlo error near 0.01 of its width).
+N_BOOTSTRAP = 2000
+CONFIDENCE = 0.95
+
+
+def iqm(x: np.ndarray, axis: int | None = None) -> np.ndarray | float:
+    """Interquartile mean: the mean after cutting the lowest and highest 25 % of values."""
+    return trim_mean(x, 0.25, axis=axis)
+
+
+def mean(x: np.ndarray, axis: int | None = None) -> np.ndarray | float:
+    """Plain mean (the same signature as :func:`iqm`)."""
+    return np.mean(x, axis=axis)
+
+
+AGGREGATES: dict[str, Callable] = {"mean": mean, "iqm": iqm}
+
+
+def _tasks(scores: Scores) -> list[np.ndarray]:
+    tasks = [np.asarray(s, dtype=float).ravel() for s in scores]
+    tasks = [t for t in tasks if t.size]
+    if not tasks:
+        raise ValueError("no scores: every task is empty")
+    if not all(np.isfinite(t).all() for t in tasks):
+        raise ValueError("scores must be finite")
+    return tasks
+
+
+def stratified_bootstrap_ci(
+    scores: Scores,
+    statistic: Callable = iqm,
+    n_boot: int = N_BOOTSTRAP,
+    confidence: float = CONFIDENCE,
+    seed: int = 0,
+) -> tuple[float, float, float]:
+    """Point estimate and percentile confidence interval of ``statistic`` over all runs.
+
+    Each replicate draws, for every task independently, as many runs as it has, with
+    replacement (the stratified bootstrap of rliable's ``StratifiedBootstrap``), and
+    applies ``statistic`` to all drawn runs together.
+
+    Returns:
+        ``(point, lower, upper)``.
+    """
+    tasks = _tasks(scores)
+    rng = np.random.default_rng(seed)
+    drawn = [t[rng.integers(0, t.size, (n_boot, t.size))] for t in tasks]
+    reps = statistic(np.concatenate(drawn, axis=1), axis=1)
+    q = 100 * (1 - confidence) / 2
+    lo, hi = np.percentile(reps, [q, 100 - q])
+    return float(statistic(np.concatenate(tasks))), float(lo), float(hi)
+
+
+def percentile_bootstrap_ci(
+    x: np.ndarray,
+    statistic: Callable = iqm,
+    n_boot: int = N_BOOTSTRAP,
+    confidence: float = CONFIDENCE,
+    seed: int = 0,
+) -> tuple[float, float, float]:
+    """The plain (unstratified) percentile bootstrap of all values pooled; a reference for
+    tests (with a single task it draws the same replicates as the stratified one)."""
+    return stratified_bootstrap_ci([np.ravel(x)], statistic, n_boot, confidence, seed)
+
+
+def _prob_greater(x: np.ndarray, y: np.ndarray) -> float:
+    """Mann-Whitney ``P(X > Y) + P(X = Y) / 2`` of two samples."""
+    d = x[:, None] - y[None, :]
+    return float(np.mean((d > 0) + 0.5 * (d == 0)))
+
+
+def probability_of_improvement(
+    x: Scores, y: Scores, n_boot: int = N_BOOTSTRAP, confidence: float = CONFIDENCE,
+    seed: int = 0,
+) -> tuple[float, float, float]:  # fmt: skip
+    """``P(X > Y)``: for each task the probability that a run of X scores higher than a run
+    of Y (ties count half), averaged over tasks; stratified-bootstrap percentile interval
+    (runs of X and of Y resampled within each task).
+
+    Args:
+        x, y: Per-task scores of the two policies, tasks in the same order.
+
+    Returns:
+        ``(point, lower, upper)``.
+    """
+    if len(x) != len(y):
+        raise ValueError(f"x has {len(x)} tasks, y has {len(y)}")
+    pairs = [
+        (np.asarray(a, float).ravel(), np.asarray(b, float).ravel())
+        for a, b in zip(x, y, strict=True)
+    ]
+    pairs = [(a, b) for a, b in pairs if a.size and b.size]
+    if not pairs:
+        raise ValueError("no task has runs of both policies")
+    point = float(np.mean([_prob_greater(a, b) for a, b in pairs]))
+    rng = np.random.default_rng(seed)
+    reps = np.zeros(n_boot)
+    for a, b in pairs:
+        ra = a[rng.integers(0, a.size, (n_boot, a.size))]
+        rb = b[rng.integers(0, b.size, (n_boot, b.size))]
+        d = ra[:, :, None] - rb[:, None, :]
+        reps += np.mean((d > 0) + 0.5 * (d == 0), axis=(1, 2))
+    reps /= len(pairs)
+    q = 100 * (1 - confidence) / 2
+    lo, hi = np.percentile(reps, [q, 100 - q])
+    return point, float(lo), float(hi)
+
+
+def performance_profile(scores: Scores, taus: np.ndarray) -> np.ndarray:
+    """Fraction of runs scoring above each ``tau``, averaged over tasks (rliable's
+    score distribution), shape ``taus.shape``."""
+    tasks = _tasks(scores)
+    taus = np.asarray(taus, dtype=float)
+    return np.mean([np.mean(t[:, None] > taus.ravel()[None, :], axis=0) for t in tasks],
+                   axis=0).reshape(taus.shape)  # fmt: skip
+
+
+def normalize(value: np.ndarray, zero: float, one: float) -> np.ndarray | None:
+    """``(value - zero) / (one - zero)``; None when ``one`` does not beat ``zero``."""
+    span = one - zero
+    if not (np.isfinite(span) and span > 1e-9 * max(1.0, abs(zero), abs(one))):
+        return None
+    return (np.asarray(value, dtype=float) - zero) / span
+
+
+def ranks(values: dict[str, float]) -> dict[str, int]:
+    """Competition ranks (1 = highest value; equal values share a rank)."""
+    order = sorted(values, key=lambda k: -values[k])
+    out: dict[str, int] = {}
+    for i, k in enumerate(order):
+        out[k] = out[order[i - 1]] if i and values[k] == values[order[i - 1]] else i + 1
+    return out
