@@ -672,7 +672,7 @@ def _show_library_log() -> None:
     log = logging.getLogger("steamtemp_gym")
     if not log.handlers:
         handler = logging.StreamHandler(sys.stderr)
-        handler.setFormatter(logging.Formatter("%(name)s: %(message)s"))
+        handler.setFormatter(logging.Formatter("%(message)s"))  # lines name steamtemp_gym
         log.addHandler(handler)
     log.setLevel(logging.INFO)
 

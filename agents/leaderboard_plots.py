@@ -173,7 +173,7 @@ def bars(path: Path, summary: dict[str, Any]) -> Path:
             ax.axvline(0, color="k", lw=0.8)
             ax.axvline(1, color="k", lw=0.8, ls="--")
             ax.set_title(_short(env_id))
-            ax.set_xlabel("IQM normalized score (0 frozen valve, 1 best baseline)")
+            ax.set_xlabel("IQM normalized score (0 = cascade_pi, 1 = zero cost)")
             ax.grid(axis="x", alpha=0.3)
         for ax in list(axes.flat)[len(plants):]:
             ax.axis("off")
@@ -222,7 +222,7 @@ def profiles(
         else:
             fig.legend(handles, labels, loc="center left", bbox_to_anchor=(1.0, 0.5))
         fig.suptitle(f"Performance profiles over scenario × seed ({n_seeds} seeds); "
-                     "0 frozen valve, 1 best baseline")  # fmt: skip
+                     "0 = cascade_pi, 1 = zero cost")  # fmt: skip
         fig.tight_layout()
         fig.savefig(path, dpi=DPI, bbox_inches="tight")
         plt.close(fig)

@@ -1,8 +1,8 @@
 """leaderboard.json's summary and leaderboard.md from the episode rows.
 
 The statistics (agents/stats.py) per plant and policy, over scenario x seed: the mean and
-IQM of the normalized score (0 frozen valve, 1 the best baseline of this run, per
-scenario) and of the return, with 95 % stratified-bootstrap CIs; the probability of
+IQM of the normalized score (0 = ``cascade_pi``'s mean return on that scenario, 1 = zero
+cost; agents/stats.py) and of the return, with 95 % stratified-bootstrap CIs; the probability of
 improvement over ``cascade_pi``; the rank per plant (by the IQM of the normalized score)
 and overall (the mean of the per-plant ranks). The engineering metrics are means over
 scenario x seed of the episodes where they apply (a metric that does not apply, e.g.
@@ -23,7 +23,7 @@ from agents import stats
 from steamtemp_gym.checks import head
 
 #: Version of leaderboard.json's format (docs/leaderboard_schema.json).
-SCHEMA_VERSION = 2
+SCHEMA_VERSION = 3
 REFERENCE = "frozen_valve"
 VERSUS = "cascade_pi"
 TABLE_METRICS = ("iae_K_s", "max_abs_dev_K", "time_outside_5K_s", "overshoot_pct",
@@ -79,11 +79,11 @@ def summarize(rows: list[dict], run: dict[str, Any]) -> dict[str, Any]:
             ret = {p: np.array([m["return"] for m in by[env_id][sc][p]]) for p in by[env_id][sc]}
             base = {p: float(v.mean()) for p, v in ret.items() if p in baselines.NAMES}
             ref: dict[str, Any] = {}
-            if REFERENCE in ret:
-                ref["zero_return"] = float(ret[REFERENCE].mean())
+            if VERSUS in ret:
+                ref.update(zero_policy=VERSUS, zero_return=float(ret[VERSUS].mean()))
+            ref["one_return"] = 0.0  # zero cost
             if base:
-                best = max(base, key=base.get)
-                ref.update(one_policy=best, one_return=base[best])
+                ref["best_baseline"] = max(base, key=base.get)
             ref["normalized"] = False
             if "zero_return" in ref and "one_return" in ref:
                 probe = stats.normalize(np.zeros(1), ref["zero_return"], ref["one_return"])
@@ -198,7 +198,7 @@ def _table(header: list[str], rows: list[list[str]]) -> list[str]:
 def headline_markdown(summary: dict[str, Any]) -> str:
     """The headline table with its label (also in the README)."""
     n = len(summary["run"]["seeds"])
-    lines = [f"{stat_label(n)}; 0 = frozen valve, 1 = best baseline per scenario; "
+    lines = [f"{stat_label(n)}; 0 = {VERSUS} on each scenario, 1 = zero cost; "
              "(k) = rank on that plant.", ""]  # fmt: skip
     lines += _table(*headline_rows(summary))
     return "\n".join(lines) + "\n"
@@ -211,9 +211,11 @@ def markdown(summary: dict[str, Any], rows: list[dict]) -> str:
     lines = ["# steamtemp_gym leaderboard", "",
              f"Seeds {run['seeds']}; scenarios: {', '.join(run['scenarios'])}. "
              "Return: the default reward summed over an episode (higher is better). "
-             "Normalized score per scenario: 0 = the frozen valve (every actuator held at its "
-             "reset opening), 1 = the best baseline of this run on that scenario (both mean "
-             "returns over seeds).", "", "## Headline", "", headline_markdown(summary)]  # fmt: skip
+             f"Normalized score per scenario: 1 - R / R_pi, the fraction of {VERSUS}'s cost "
+             f"a policy removes (0 = {VERSUS}'s mean return over seeds, 1 = zero cost, "
+             f"negative = costlier than {VERSUS}); {REFERENCE} (every actuator held at its "
+             "reset opening) is a reference.",
+             "", "## Headline", "", headline_markdown(summary)]  # fmt: skip
     for env_id, p in summary["plants"].items():
         pols = p["policies"]
         order = sorted(pols, key=lambda k: (pols[k].get("rank", 10**6), k))
@@ -241,9 +243,8 @@ def markdown(summary: dict[str, Any], rows: list[dict]) -> str:
         lines += ["<details><summary>per scenario (mean over seeds)</summary>", ""]
         for sc, cells in p["scenarios"].items():
             ref = p["reference"][sc]
-            note = (f"0 = {REFERENCE} ({ref['zero_return']:.0f}), 1 = {ref['one_policy']} "
-                    f"({ref['one_return']:.0f})" if ref["normalized"] else
-                    "not normalized (no baseline beats the frozen valve)")  # fmt: skip
+            note = (f"0 = {VERSUS} ({ref['zero_return']:.0f}), 1 = zero cost"
+                    if ref["normalized"] else f"not normalized ({VERSUS} not run)")  # fmt: skip
             cols = [m for m in TABLE_METRICS if any(m in c for c in cells.values())]
             lines += [f"### {env_id.split('/')[-1]} - {sc}", "", f"Normalized score: {note}.", ""]
             header = ["policy", "seeds", "norm. score", *cols, "trips"]

@@ -16,11 +16,13 @@ are lists of 1-d arrays, one per task. ``rliable`` itself is not a dependency (i
 pandas, statsmodels, arch and seaborn); tests/test_stats.py checks this implementation
 on hand-computable cases and against the plain (unstratified) percentile bootstrap.
 
-Normalized score (:func:`normalize`): per task (plant x scenario), 0 is the frozen valve
-(agents/difficulty.py ``FrozenValves``: every actuator held at its opening at reset) and
-1 the best baseline of ``baselines.NAMES`` on that task, both as the mean episode return
-over seeds. A task where no baseline beats the frozen valve cannot be normalized and is
-left out of normalized scores (reported in ``leaderboard.json``).
+Normalized score (:func:`normalize`): per task (plant x scenario), 0 is the mean episode
+return of ``cascade_pi`` (the conventional loop plants run today) over seeds and 1 is a
+return of 0, zero cost (no tracking error, no spray above the design spray, no valve
+travel, no trip). The score is ``1 - R / R_pi``: the fraction of the conventional loop's
+cost a policy removes; negative when it costs more. (The frozen valve as 0, as rliable's
+"random policy", is so much worse than any controller that every baseline scored 0.96-1.00
+on four of the five plants; it stays in the tables as a reference.)
 """
 
 from __future__ import annotations

@@ -215,7 +215,8 @@ def _frac_above(
     d = c - a
     flat = d == 0.0
     safe_d = np.where(flat, 1.0, d)
-    s = (level - a) / safe_d  # parameter in [0, 1] where the segment meets the level
+    with np.errstate(over="ignore"):  # a denormal slope gives +-inf: clipped below
+        s = (level - a) / safe_d  # parameter in [0, 1] where the segment meets the level
     rising = np.clip(1.0 - s, 0.0, 1.0)
     falling = np.clip(s, 0.0, 1.0)
     on_flat = (a >= level) if inclusive else (a > level)
