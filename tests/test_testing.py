@@ -241,15 +241,32 @@ def test_documented_example_command_line(tmp_path, monkeypatch, capsys):
     assert "17 passed, 0 failed, 1 skipped" in out  # the slow check, skipped by --quick
 
 
-@pytest.mark.slow
-def test_documented_example_pytest_form(tmp_path, pytester):
-    """The docs' pytest file, run by pytest (full checks, the slow one too)."""
+def _run_documented_pytest_file(tmp_path, pytester, *args, subprocess=False):
     _variant_files(tmp_path)
     for name in ("my_plants.py", "test_my_plants.py"):
         pytester.makepyfile(**{name[:-3]: (tmp_path / name).read_text()})
     pytester.syspathinsert()
+    args = ("-p", "no:xdist", "-p", "no:cacheprovider", *args)
+    if subprocess:  # a clean interpreter: an in-process run re-imports numba modules
+        return pytester.runpytest_subprocess(*args)
+    gym.make(FSH)  # its modules imported before the in-process run's sys.modules snapshot
     try:
-        result = pytester.runpytest_inprocess("-p", "no:xdist", "-p", "no:cacheprovider")
+        return pytester.runpytest_inprocess(*args)
     finally:
         _unregister()
+
+
+def test_documented_example_pytest_form_collects(tmp_path, pytester):
+    """The docs' pytest file collects one test per check, with the documented ids."""
+    result = _run_documented_pytest_file(tmp_path, pytester, "--collect-only", "-q")
+    result.stdout.fnmatch_lines(["*test_contract[[]FSH12Fouled-v0-check_determinism[]]",
+                                 "*FSH12Fouled-v0-cascade_pi-check_reset_clears_state*",
+                                 "18 tests collected*"])  # fmt: skip
+
+
+@pytest.mark.slow
+def test_documented_example_pytest_form(tmp_path, pytester, monkeypatch):
+    """The docs' pytest file, run by pytest: every check passes (the slow one too)."""
+    monkeypatch.setenv("PYTHONPATH", str(DOCS.parents[1]))  # this source tree
+    result = _run_documented_pytest_file(tmp_path, pytester, subprocess=True)
     result.assert_outcomes(passed=18)
