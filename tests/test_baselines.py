@@ -15,6 +15,7 @@ from agents.difficulty import FrozenValves
 from agents.evaluation import run_episode
 from baselines.policy import Policy
 from steamtemp_gym import scenarios
+from steamtemp_gym.testing import parametrize_with_checks
 
 IDS = steamtemp_gym.ENV_IDS
 
@@ -31,42 +32,33 @@ def test_baseline_is_a_policy_and_beats_open_loop(env_id, name):
     assert res["metrics"]["iae_K_s"] < 0.5 * ref["metrics"]["iae_K_s"]
 
 
-@pytest.mark.parametrize("env_id", IDS)
-@pytest.mark.parametrize("name", baselines.NAMES)
-def test_baseline_batched_equals_unbatched(env_id, name):
-    """One policy on the native vector env (3 rows) acts as 3 policies on single envs."""
-    n, steps = 3, 40
-    venv = gym.make_vec(env_id, num_envs=n, vectorization_mode="vector_entry_point",
-                        scenario="load_ramp_100_50")  # fmt: skip
-    batched = baselines.make(name, venv)
-    obs_b, _ = venv.reset(seed=0)
-    envs = [gym.make(env_id, scenario="load_ramp_100_50") for _ in range(n)]
-    singles = [baselines.make(name, e) for e in envs]
-    obs_s = [e.reset(seed=i)[0] for i, e in enumerate(envs)]
-    start = np.ones(n, dtype=bool)
-    for _ in range(steps):
-        a_b, _ = batched.predict(obs_b, episode_start=start, deterministic=True)
-        a_s = [p.predict(o, episode_start=start[:1], deterministic=True)[0]
-               for p, o in zip(singles, obs_s, strict=True)]  # fmt: skip
-        assert a_b.shape == (n, venv.single_action_space.shape[0])
-        np.testing.assert_allclose(a_b, np.stack(a_s), rtol=1e-9, atol=1e-9)
-        start[:] = False
-        obs_b, *_ = venv.step(a_b)
-        obs_s = [e.step(a)[0] for e, a in zip(envs, a_s, strict=True)]
+#: Contracts a shipped baseline breaks today (docs/checking.md): (env id, baseline, check).
+#: NaN actions for some observations inside the observation space (the IF97 observer
+#: leaves the steam tables); strict, so a fix shows up here.
+KNOWN_BREAKS = {
+    ("steamtemp/SupercriticalFSH-v0", name, "check_actions_in_bounds")
+    for name in ("fao_sf", "fao_fac")
+}
+
+
+def _run_contract(request, env_id, check):
+    if (env_id, check.policy_label, check.name) in KNOWN_BREAKS:
+        request.applymarker(pytest.mark.xfail(strict=True, reason="known break, see docs"))
+    check(env_id)
+
+
+@parametrize_with_checks(ids=IDS, policies=baselines.NAMES, env=False, quick=True)
+def test_policy_contract(request, env_id, check):
+    """The policy contracts of steamtemp_gym.testing, short runs (the slow check is in
+    test_policy_contract_full)."""
+    _run_contract(request, env_id, check)
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("env_id", IDS)
-@pytest.mark.parametrize("name", baselines.NAMES)
-def test_baseline_runs_every_named_scenario(env_id, name):
-    """Every named scenario, seeds 0-2: no exception, NaN action or trip."""
-    for sc in scenarios.names(env_id):
-        env = gym.make(env_id, scenario=sc)
-        policy = baselines.make(name, env)
-        for seed in range(3):
-            m = run_episode(env, policy, seed=seed)["metrics"]
-            assert m["tripped"] == 0.0, (sc, seed)
-            assert np.isfinite(m["iae_K_s"]), (sc, seed)
+@parametrize_with_checks(ids=IDS, policies=baselines.NAMES, env=False)
+def test_policy_contract_full(request, env_id, check):
+    """The same contracts with full-length runs, and every named scenario, seeds 0-2."""
+    _run_contract(request, env_id, check)
 
 
 @pytest.mark.parametrize("env_id", IDS)

@@ -1,0 +1,103 @@
+"""``steamtemp-check``: run the contract checks outside pytest and print a pass/fail table.
+
+    steamtemp-check                                  # every env check on every steamtemp id
+    steamtemp-check steamtemp/SupercriticalFSH-v0 --quick
+    steamtemp-check my/FSH12-v0 --import my_plants --policy cascade_pi --policy lqi
+    steamtemp-check steamtemp/Cascade300MW-v0 --check check_determinism
+
+Exit status 0 when every check passed or was skipped, 1 on any failure, 2 on bad arguments.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+import time
+from collections.abc import Sequence
+
+import gymnasium as gym
+
+from steamtemp_gym.testing.runner import CHECK_NAMES, Result, bound_checks, run
+from steamtemp_gym.testing.subjects import short_id, steamtemp_ids
+
+
+def _parser() -> argparse.ArgumentParser:
+    import baselines
+
+    p = argparse.ArgumentParser(
+        prog="steamtemp-check",
+        description="Check that env ids (plants, variants) and controllers honour every "
+        "contract of steamtemp_gym (docs/checking.md). Prints one row per check and the "
+        "message of each failure; exits 1 if any check fails.",
+    )
+    p.add_argument("ids", nargs="*", metavar="ID",
+                   help="env ids to check (default: every steamtemp id, steamtemp_gym.ENV_IDS)")
+    p.add_argument("--policy", action="append", default=[], metavar="NAME",
+                   help=f"also run the policy checks of this baseline on each id (repeatable; "
+                   f"one of {', '.join(baselines.NAMES)}, or 'all')")
+    p.add_argument("--quick", action="store_true",
+                   help="shorter runs, slow checks skipped (about 10-20 s per id from a warm "
+                   "kernel cache)")
+    p.add_argument("--check", action="append", default=None, metavar="NAME",
+                   help="run only this check (repeatable): one of " + ", ".join(CHECK_NAMES))
+    p.add_argument("--no-env-checks", action="store_true",
+                   help="only the policy checks of --policy")
+    p.add_argument("--import", dest="modules", action="append", default=[], metavar="MODULE",
+                   help="import this module first (one that registers your variants)")
+    return p
+
+
+def _table(results: list[Result]) -> str:
+    rows = [("env", "policy", "check", "result", "s")]
+    rows += [(short_id(r.env), r.policy or "-", r.check, r.status.upper(), f"{r.seconds:.1f}")
+             for r in results]  # fmt: skip
+    widths = [max(len(row[i]) for row in rows) for i in range(5)]
+    return "\n".join("  ".join(c.ljust(w) for c, w in zip(row, widths, strict=True)).rstrip()
+                     for row in rows)  # fmt: skip
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of ``steamtemp-check``; returns the exit status."""
+    import baselines
+
+    parser = _parser()
+    args = parser.parse_args(argv)
+    for module in args.modules:
+        try:
+            importlib.import_module(module)
+        except ImportError as exc:
+            parser.error(f"--import {module}: {exc}")
+    unknown = [i for i in args.ids if i not in gym.registry]
+    if unknown:
+        parser.error(f"unknown env id(s) {unknown}; valid ids: {', '.join(steamtemp_ids())} "
+                     "(register a variant and pass --import MODULE)")  # fmt: skip
+    policies = list(baselines.NAMES) if "all" in args.policy else args.policy
+    bad = [p for p in policies if p not in baselines.NAMES]
+    if bad:
+        parser.error(f"unknown policy {bad}; valid: {', '.join(baselines.NAMES)}, all")
+    bad = [c for c in args.check or () if c not in CHECK_NAMES]
+    if bad:
+        parser.error(f"unknown check {bad}; valid: {', '.join(CHECK_NAMES)}")
+    import steamtemp_gym
+
+    ids = args.ids or list(steamtemp_gym.ENV_IDS)
+    checks = bound_checks(policies, args.quick, env=not args.no_env_checks, only=args.check)
+    t0, results = time.perf_counter(), []
+    for env_id in ids:
+        for check in checks:
+            results.append(run(env_id, check, skip_slow=args.quick))
+            print(_table(results[-1:]).splitlines()[-1], file=sys.stderr, flush=True)
+    print(_table(results))
+    failed = [r for r in results if r.status == "fail"]
+    for r in failed:
+        print(f"\nFAIL {r.check} on {r.env}" + (f" / {r.policy}" if r.policy else ""))
+        print("  " + r.message.replace("\n", "\n  "))
+    counts = {s: sum(r.status == s for r in results) for s in ("pass", "fail", "skip")}
+    print(f"\n{counts['pass']} passed, {counts['fail']} failed, {counts['skip']} skipped "
+          f"in {time.perf_counter() - t0:.1f} s")  # fmt: skip
+    return 1 if failed else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

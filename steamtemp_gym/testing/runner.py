@@ -1,0 +1,157 @@
+"""The lists of checks, binding them to a policy and an env, running them, and the pytest
+decorator (scikit-learn's ``parametrize_with_checks`` is the model)."""
+
+from __future__ import annotations
+
+import time
+import unittest
+from collections.abc import Callable, Iterable, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+from steamtemp_gym.testing import env_checks as ec
+from steamtemp_gym.testing import policy_checks as pc
+from steamtemp_gym.testing.subjects import resolve_env, resolve_policy, short_id
+from steamtemp_gym.testing.vector_checks import check_vector_env_matches_single_env
+
+#: Every env contract, in the order they run.
+ENV_CHECKS: tuple[Callable[..., None], ...] = (
+    ec.check_gymnasium_env, ec.check_sb3_env, ec.check_spaces_match_signals,
+    ec.check_info_keys_and_units, ec.check_determinism, check_vector_env_matches_single_env,
+    ec.check_pickle_and_deepcopy, ec.check_named_scenarios_run_to_end,
+    ec.check_bad_inputs_rejected, ec.check_physical_under_random_and_corner_runs,
+    ec.check_render_frame,
+)  # fmt: skip
+#: Every policy contract, in the order they run.
+POLICY_CHECKS: tuple[Callable[..., None], ...] = (
+    pc.check_predict_signature, pc.check_batched_equals_unbatched, pc.check_policy_determinism,
+    pc.check_reset_clears_state, pc.check_actions_in_bounds, pc.check_completes_a_scenario,
+    pc.check_completes_every_scenario,
+)  # fmt: skip
+#: Checks too slow for the default test run and ``--quick`` (pytest marker ``slow``).
+SLOW_CHECKS = frozenset({pc.check_completes_every_scenario})
+CHECK_NAMES: tuple[str, ...] = tuple(c.__name__ for c in ENV_CHECKS + POLICY_CHECKS)
+
+
+@dataclass(frozen=True)
+class BoundCheck:
+    """A check bound to a policy (for policy checks) and a mode: ``bound(env)`` runs it."""
+
+    check: Callable[..., None]
+    policy: Any = None
+    quick: bool = False
+
+    @property
+    def name(self) -> str:
+        return self.check.__name__
+
+    @property
+    def slow(self) -> bool:
+        return self.check in SLOW_CHECKS
+
+    @property
+    def policy_label(self) -> str | None:
+        return None if self.policy is None else resolve_policy(self.policy).label
+
+    def __call__(self, env: Any) -> None:
+        kwargs = {"quick": True} if self.quick else {}
+        if self.policy is None:
+            self.check(env, **kwargs)
+        else:
+            self.check(self.policy, env, **kwargs)
+
+    def __repr__(self) -> str:
+        return self.name if self.policy is None else f"{self.policy_label}-{self.name}"
+
+
+def bound_checks(policies: Iterable[Any] = (), quick: bool = False, env: bool = True,
+                 only: Sequence[str] | None = None) -> list[BoundCheck]:  # fmt: skip
+    """The env checks (if ``env``) then each policy's checks; ``only``: these names."""
+    unknown = sorted(set(only or ()) - set(CHECK_NAMES))
+    if unknown:
+        raise ValueError(f"unknown check(s) {unknown}; valid names: {list(CHECK_NAMES)}")
+    out = [BoundCheck(c, None, quick) for c in ENV_CHECKS] if env else []
+    for p in policies:
+        resolve_policy(p)  # a bad name fails here, listing the valid ones
+        out += [BoundCheck(c, p, quick) for c in POLICY_CHECKS]
+    return [b for b in out if only is None or b.name in only]
+
+
+def parametrize_with_checks(ids: Iterable[Any] | None = None, policies: Iterable[Any] = (),
+                            env: bool = True, quick: bool = False):  # fmt: skip
+    """A pytest decorator parametrizing a test ``(env_id, check)`` over every contract.
+
+    ``ids``: env ids or factories (default :data:`steamtemp_gym.ENV_IDS`); ``policies``:
+    baseline names or policy factories whose checks run on each id; ``env=False`` leaves
+    out the env checks; ``quick=True`` shortens the runs and leaves out the slow checks.
+    Test ids read ``SupercriticalFSH-v0-check_determinism`` and
+    ``SupercriticalFSH-v0-cascade_pi-check_reset_clears_state``; slow checks carry the
+    ``slow`` marker. Use::
+
+        @parametrize_with_checks(ids=["my/FSH12-v0"], policies=["cascade_pi"])
+        def test_contract(env_id, check):
+            check(env_id)
+    """
+    import pytest
+
+    import steamtemp_gym
+
+    params = []
+    for env_id in steamtemp_gym.ENV_IDS if ids is None else ids:
+        label = short_id(resolve_env(env_id).label)
+        for b in bound_checks(policies, quick, env):
+            if quick and b.slow:
+                continue
+            marks = [pytest.mark.slow] if b.slow else []
+            params.append(pytest.param(env_id, b, id=f"{label}-{b!r}", marks=marks))
+    return pytest.mark.parametrize(("env_id", "check"), params)
+
+
+@dataclass(frozen=True)
+class Result:
+    """One check's outcome: ``status`` is "pass", "fail" or "skip"."""
+
+    env: str
+    policy: str | None
+    check: str
+    status: str
+    seconds: float
+    message: str = ""
+
+
+def run(env: Any, check: BoundCheck, skip_slow: bool = False) -> Result:
+    """Run one bound check on one env, catching its failure into a Result."""
+    label = resolve_env(env).label
+    if skip_slow and check.slow:
+        return Result(label, check.policy_label, check.name, "skip", 0.0,
+                      "slow; run without --quick")  # fmt: skip
+    t0 = time.perf_counter()
+    try:
+        check(env)
+        status, msg = "pass", ""
+    except unittest.SkipTest as exc:
+        status, msg = "skip", str(exc)
+    except AssertionError as exc:
+        status, msg = "fail", str(exc)
+    return Result(label, check.policy_label, check.name, status, time.perf_counter() - t0, msg)
+
+
+def _raise_failures(results: list[Result]) -> list[Result]:
+    failed = [r for r in results if r.status == "fail"]
+    if failed:
+        raise AssertionError(f"{len(failed)} of {len(results)} checks failed:\n"
+                             + "\n".join(r.message for r in failed))  # fmt: skip
+    return results
+
+
+def check_env_id(env: Any, quick: bool = False) -> list[Result]:
+    """Run every env check on ``env`` (an id or a factory); AssertionError listing every
+    failure, else the results (skips included)."""
+    return _raise_failures([run(env, b, skip_slow=quick) for b in bound_checks((), quick)])
+
+
+def check_policy(policy: Any, env: Any, quick: bool = False) -> list[Result]:
+    """Run every policy check of ``policy`` (a baseline name or a factory) on ``env``;
+    AssertionError listing every failure, else the results."""
+    checks = bound_checks([policy], quick, env=False)
+    return _raise_failures([run(env, b, skip_slow=quick) for b in checks])

@@ -1,0 +1,165 @@
+"""What a check runs on (a registered env id or an env factory; a baseline name or a policy
+factory) and how a failure is reported (what failed, where, and the line that reproduces it).
+"""
+
+from __future__ import annotations
+
+import functools
+import unittest
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import gymnasium as gym
+from gymnasium.vector import SyncVectorEnv
+
+
+class CheckSkipped(unittest.SkipTest):
+    """A check that cannot run here (a missing optional library, a factory without a native
+    vector env). pytest reports it as skipped; ``steamtemp-check`` as ``skip``."""
+
+
+def steamtemp_ids() -> list[str]:
+    """Every registered id built by SteamTempEnv: the suite's ids and registered variants."""
+    import steamtemp_gym
+
+    entry = gym.spec(steamtemp_gym.ENV_IDS[0]).entry_point
+    return [i for i, spec in gym.registry.items() if spec.entry_point == entry]
+
+
+def short_id(env_id: str) -> str:
+    """``SupercriticalFSH-v0`` for ``steamtemp/SupercriticalFSH-v0`` (readable test ids)."""
+    return env_id.split("/", 1)[-1]
+
+
+@dataclass(frozen=True)
+class EnvTarget:
+    """An env under check: a registered id, or a factory ``make(**options) -> Env`` taking
+    the options of ``gym.make`` (``scenario``, ``render_mode``, ``reward``, ``params``)."""
+
+    label: str
+    env_id: str | None
+    factory: Callable[..., gym.Env] | None
+
+    def make(self, **options: Any) -> gym.Env:
+        """A single env with ``options``."""
+        if self.env_id is not None:
+            return gym.make(self.env_id, **options)
+        return self.factory(**options)
+
+    @property
+    def has_native_vector_env(self) -> bool:
+        return self.env_id is not None and gym.spec(self.env_id).vector_entry_point is not None
+
+    def make_vec(self, num_envs: int, **options: Any) -> gym.vector.VectorEnv:
+        """The native vector env of an id; Gymnasium's SyncVectorEnv over a factory's envs."""
+        if self.has_native_vector_env:
+            return gym.make_vec(self.env_id, num_envs=num_envs,
+                                vectorization_mode="vector_entry_point", **options)  # fmt: skip
+        return SyncVectorEnv([functools.partial(self.make, **options)] * num_envs)
+
+    def repro(self) -> str:
+        """How to name this env in a reproducing call."""
+        return repr(self.env_id) if self.env_id is not None else "<your env factory>"
+
+
+def resolve_env(env: str | Callable[..., gym.Env] | EnvTarget) -> EnvTarget:
+    """An EnvTarget of an id or a factory; ValueError listing the registered ids otherwise."""
+    if isinstance(env, EnvTarget):
+        return env
+    if isinstance(env, str):
+        if env not in gym.registry:
+            raise ValueError(f"unknown env id {env!r}; valid ids: {steamtemp_ids()}")
+        return EnvTarget(env, env, None)
+    if callable(env):
+        return EnvTarget(getattr(env, "__name__", repr(env)), None, env)
+    raise ValueError(f"env must be a registered id or an env factory, got {env!r}")
+
+
+@dataclass(frozen=True)
+class PolicyTarget:
+    """A policy under check: a baseline name (``baselines.make(name, env)``) or a factory
+    ``make(env) -> Policy`` (env: a single or a vector env)."""
+
+    label: str
+    name: str | None
+    factory: Callable[[Any], Any]
+
+    def make(self, env: Any) -> Any:
+        return self.factory(env)
+
+    def repro(self) -> str:
+        return repr(self.name) if self.name is not None else "<your policy factory>"
+
+
+def resolve_policy(policy: str | Callable[[Any], Any] | PolicyTarget) -> PolicyTarget:
+    """A PolicyTarget of a baseline name (ValueError listing the names otherwise) or a
+    factory. Names are looked up in ``baselines`` (shipped in the same distribution; imported
+    only here, so the environments do not depend on it)."""
+    if isinstance(policy, PolicyTarget):
+        return policy
+    if isinstance(policy, str):
+        import baselines
+
+        if policy not in baselines.NAMES:
+            raise ValueError(f"unknown baseline {policy!r}; valid names: {list(baselines.NAMES)}")
+        return PolicyTarget(policy, policy, functools.partial(_make_baseline, policy))
+    if callable(policy):
+        return PolicyTarget(getattr(policy, "__name__", repr(policy)), None, policy)
+    raise ValueError(f"policy must be a baseline name or a policy factory, got {policy!r}")
+
+
+def _make_baseline(name: str, env: Any) -> Any:
+    import baselines
+
+    return baselines.make(name, env)
+
+
+def _failure(check: str, subject: str, call: str, exc: BaseException) -> AssertionError:
+    what = str(exc) if isinstance(exc, AssertionError) else f"{type(exc).__name__}: {exc}"
+    return AssertionError(
+        f"{check} failed on {subject}: {what}\n"
+        f"  reproduce: from steamtemp_gym.testing import {check}; {check}({call})"
+    )
+
+
+def _quick_arg(kwargs: dict[str, Any]) -> str:
+    return ", quick=True" if kwargs.get("quick") else ""
+
+
+def env_check(fn: Callable[..., None]) -> Callable[..., None]:
+    """Make ``fn(target: EnvTarget, quick=False)`` an env check taking an id or a factory
+    whose AssertionError names the check, the env and the call that reproduces it."""
+
+    @functools.wraps(fn)
+    def check(env: str | Callable[..., gym.Env] | EnvTarget, **kwargs: Any) -> None:
+        target = resolve_env(env)
+        try:
+            fn(target, **kwargs)
+        except unittest.SkipTest:
+            raise
+        except Exception as exc:  # an error inside a check is a failed contract
+            call = target.repro() + _quick_arg(kwargs)
+            raise _failure(fn.__name__, target.label, call, exc) from exc
+
+    check.kind = "env"
+    return check
+
+
+def policy_check(fn: Callable[..., None]) -> Callable[..., None]:
+    """Make ``fn(policy: PolicyTarget, env: EnvTarget, quick=False)`` a policy check taking
+    (name or factory, id or factory), reporting failures as :func:`env_check` does."""
+
+    @functools.wraps(fn)
+    def check(policy: Any, env: Any, **kwargs: Any) -> None:
+        p, target = resolve_policy(policy), resolve_env(env)
+        try:
+            fn(p, target, **kwargs)
+        except unittest.SkipTest:
+            raise
+        except Exception as exc:
+            call = f"{p.repro()}, {target.repro()}{_quick_arg(kwargs)}"
+            raise _failure(fn.__name__, f"{p.label} on {target.label}", call, exc) from exc
+
+    check.kind = "policy"
+    return check
