@@ -7,9 +7,9 @@ compiling for 10-30 s.
 Location: ``$STEAMTEMP_GYM_CACHE_DIR`` if set, else ``$NUMBA_CACHE_DIR``, else
 ``$XDG_CACHE_HOME/steamtemp_gym`` (default ``~/.cache/steamtemp_gym``). Inside it,
 one folder per version of the code, ``numba-<package version>-<key>``. The key
-hashes numba's version and the *code* of every module of the package: their syntax
-trees without docstrings, so editing a comment or a docstring keeps the cache, while
-any change of code makes a new one (numba itself checks only the file of each
+hashes numba's version and the *code* of every module of the package but its
+``testing`` checks: their syntax trees without docstrings, so editing a comment or a
+docstring keeps the cache, while any change of code makes a new one (numba itself checks only the file of each
 kernel, not the functions it calls in other files). At import, folders of other
 versions are removed once unused for :data:`GRACE_S` and not among the
 :data:`KEEP` most recently used, which bounds the cache to a few versions (about
@@ -44,6 +44,8 @@ KEEP = 2
 #: a folder used within this many seconds is never removed (another process may use it)
 GRACE_S = 3600.0
 _PACKAGES = ("steamtemp_gym", "baselines")
+#: subpackages without kernels, left out of the key (editing them keeps the cache)
+_NO_KERNELS = ("testing",)
 _STAMP = "last_used"
 _MEMO_SIZE = 32
 
@@ -63,7 +65,12 @@ def _code_digest(roots: list[Path], memo: Path) -> str:
     Parsing takes ~0.5 s, so the result is memoized in the file ``memo`` under a key of
     the files' paths, sizes and modification times (an installed package never moves).
     """
-    files = sorted(f for root in roots for f in root.rglob("*.py"))
+    files = sorted(
+        f
+        for root in roots
+        for f in root.rglob("*.py")
+        if not set(f.relative_to(root).parts[:-1]) & set(_NO_KERNELS)
+    )
     stats = hashlib.sha256(numba.__version__.encode())
     for f in files:
         st = f.stat()
@@ -121,8 +128,7 @@ def _prune(base: Path, current: Path) -> None:
 
 def configure(version: str) -> Path:
     """Point numba's cache at this code version's folder, stamp it used, prune others."""
-    here = Path(__file__).parent
-    roots = [r for r in (here.parent / p for p in _PACKAGES) if r.is_dir()]
+    roots = [Path(__file__).parent]  # baselines' kernels call no other baselines module's
     base = base_dir()
     current = base / f"numba-{version}-{_code_digest(roots, base / 'code_keys.json')}"
     numba.config.CACHE_DIR = str(current)
