@@ -9,11 +9,11 @@ Location: ``$STEAMTEMP_GYM_CACHE_DIR`` if set, else ``$NUMBA_CACHE_DIR``, else
 one folder per version of the code, ``numba-<package version>-<key>``. The key
 hashes numba's version and the *code* of every module of the package but its
 ``testing`` checks: their syntax trees without docstrings, so editing a comment or a
-docstring keeps the cache, while any change of code makes a new one (numba itself checks only the file of each
-kernel, not the functions it calls in other files). At import, folders of other
-versions are removed once unused for :data:`GRACE_S` and not among the
-:data:`KEEP` most recently used, which bounds the cache to a few versions (about
-15 MB each) while several checkouts are in use.
+docstring keeps the cache, while any change of code makes a new one (numba itself
+checks only the file of each kernel, not the functions it calls in other files). At
+import, folders of other versions are removed once unused for :data:`GRACE_S` and not
+among the :data:`KEEP` most recently used, which bounds the cache to a few versions
+(about 23 MB each) while several checkouts are in use.
 
 The steam tables are not part of the cached code (steamtemp_gym/steam), which keeps
 each folder small.
