@@ -134,11 +134,11 @@ from baselines.identification import FOPDT, simc_pi, step_test
 from baselines.loops import input_filter, observation_layout, restart_rows
 from steamtemp_gym import plants
 from steamtemp_gym.metrics import step_response_metrics
-from steamtemp_gym.plants.attemperator import mix
+from steamtemp_gym.plants.attemperator import mix, protected_spray_out
 from steamtemp_gym.plants.base import MAIN
 from steamtemp_gym.plants.ndivision import feedback_gains, state_space
-from steamtemp_gym.plants.supercritical_fsh import SupercriticalFSH, spray_water
-from steamtemp_gym.steam import T_dTdh_ph, T_ph, h_pT, rho_ph
+from steamtemp_gym.plants.supercritical_fsh import I_MARG, SupercriticalFSH, spray_water
+from steamtemp_gym.steam import P_MAX, P_MIN, T_MAX, T_MIN, T_dTdh_ph, T_ph, Tsat_p, h_pT, rho_ph
 
 K0 = 273.15
 #: Divisions of the observer model and the SF pole factor (section 5, item 1).
@@ -198,8 +198,12 @@ def _fsh_inlet(T_up_C, w_sp, W, p, W_nom, P):
     h0 = np.empty(n)
     for b in range(n):
         h_sp = spray_water(P, min(max(W[b] / W_nom, 0.05), 1.3), 0.0)[0]
-        ws = min(max(w_sp[b], 0.0), 0.5 * W[b])
-        h0[b] = mix(W[b] - ws, h_pT(p[b], T_up_C[b] + K0), ws, h_sp)[1]
+        h_up = h_pT(p[b], T_up_C[b] + K0)
+        # the plant's attemperator protection: a measured spray flow that would wet the
+        # steam (only from a faulty signal) is capped as the interlock caps the real one
+        h_min = h_pT(p[b], Tsat_p(p[b]) + P[I_MARG])
+        ws = protected_spray_out(min(max(w_sp[b], 0.0), 0.5 * W[b]), W[b], h_up, h_sp, h_min)
+        h0[b] = mix(W[b] - ws, h_up, ws, h_sp)[1]
     return h0
 
 
@@ -352,8 +356,12 @@ class _FSHObserver:
     def __call__(self, y: np.ndarray, restart: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(theta_i deviations (n, 3), Delta(U2/U3) (n,)) after the measurement y (physical)."""
         T_up, w_sp, W, p_MPa, T_meas = (y[:, i] for i in self.ix)
-        p = p_MPa * 1e6
-        W = np.maximum(W, 1e-3 * self.par[2])
+        # signal validation, as a DCS does before a model uses a measurement: flow within
+        # the plant's load range, pressure and temperatures within the steam tables
+        p = np.clip(p_MPa * 1e6, P_MIN, P_MAX)
+        W = np.clip(W, 0.05 * self.par[2], 1.3 * self.par[2])
+        T_up = np.clip(T_up, T_MIN - K0, T_MAX - K0)
+        T_meas = np.clip(T_meas, T_MIN - K0, T_MAX - K0)
         h0 = _fsh_inlet(T_up, w_sp, W, p, self.par[2], self.P)
         n = y.shape[0]
         if self.S.shape[0] != n:

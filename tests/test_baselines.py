@@ -32,13 +32,9 @@ def test_baseline_is_a_policy_and_beats_open_loop(env_id, name):
     assert res["metrics"]["iae_K_s"] < 0.5 * ref["metrics"]["iae_K_s"]
 
 
-#: Contracts a shipped baseline breaks today (docs/checking.md): (env id, baseline, check).
-#: NaN actions for some observations inside the observation space (the IF97 observer
-#: leaves the steam tables); strict, so a fix shows up here.
-KNOWN_BREAKS = {
-    ("steamtemp/SupercriticalFSH-v0", name, "check_actions_in_bounds")
-    for name in ("fao_sf", "fao_fac")
-}
+#: Contracts a shipped baseline breaks today (docs/checking.md): (env id, baseline, check);
+#: strict xfail, so a fix shows up here. None at present.
+KNOWN_BREAKS: set[tuple[str, str, str]] = set()
 
 
 def _run_contract(request, env_id, check):
