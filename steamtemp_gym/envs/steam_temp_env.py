@@ -60,7 +60,7 @@ class SteamTempEnv(gym.Env):
         self.signals = self.core.signals
         self.observation_space, self.action_space = spaces(self.core)
         self._shape = (1, plant.n_u)
-        self._history: list[dict[str, Any]] = []
+        self._display = None  # the trend display of render_mode="rgb_array" (envs/render.py)
         self._needs_reset = True
 
     @property
@@ -78,7 +78,13 @@ class SteamTempEnv(gym.Env):
         self.core.reset_row(0, scenario, key)
         self._needs_reset = False
         info = self._info()
-        self._history = [info] if self.render_mode else []
+        self._display = None
+        if self.render_mode:
+            from steamtemp_gym.envs.render import TrendDisplay, spray_range
+
+            title = f"{self.plant.id}  scenario: {getattr(scenario, 'name', '')}"
+            self._display = TrendDisplay(title, scenario.duration_s, info,
+                                         spray_range(self.plant), self.plant.valves)  # fmt: skip
         return self.core.obs[0].copy(), info
 
     def step(self, action):
@@ -89,8 +95,8 @@ class SteamTempEnv(gym.Env):
         terminated, truncated = code > 0.5, trunc > 0.5
         self._needs_reset = terminated or truncated
         info = self._info()
-        if self.render_mode:
-            self._history.append(info)
+        if self._display is not None:
+            self._display.add(info)
         return self.core.obs[0].copy(), r, terminated, truncated, info
 
     def _info(self) -> dict[str, Any]:
@@ -99,6 +105,6 @@ class SteamTempEnv(gym.Env):
     def render(self):
         if self.render_mode != "rgb_array":
             return None
-        from steamtemp_gym.envs.render import trend_image
-
-        return trend_image(self._history, self.plant, self.scenario)
+        if self._display is None:
+            raise RuntimeError("call reset() before render()")
+        return self._display.frame()
