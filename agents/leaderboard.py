@@ -7,6 +7,10 @@ env with ``gym.make``), seeds and the output directory. A bad value is an
 argparse error (usage, the flag, the valid choices; exit code 2) and nothing is
 written (no output directory is created).
 
+Where: ``--jobs`` local worker processes (default), or ``--backend ray``: one Ray task
+per env, scenario and policy, on a new local Ray with ``--jobs`` CPUs or on an existing
+cluster (``--ray-address``; the ``ray`` extra). The rows are the same either way.
+
 Lists (``--envs``, ``--policies``, ``--scenarios``, ``--seeds``) are comma
 separated; blanks around items and empty items are ignored; duplicates are dropped
 (first occurrence kept, a note on stderr). Seeds are integers >= 0, or inclusive
@@ -523,13 +527,55 @@ def _pool(jobs: int):
     return ProcessPoolExecutor(max_workers=jobs, mp_context=ctx)
 
 
-def _execute(plan: Plan, units: list[Unit], jobs: int, record: Record, on_trace) -> int:
-    """Run the units (in ``jobs`` processes), appending rows as they finish. Failed count."""
+def _local_results(units: list[Unit], jobs: int):
+    """(unit, run_unit's result) as they finish, in ``jobs`` local processes."""
+    if jobs <= 1 or len(units) <= 1:
+        for u in units:
+            yield u, run_unit(u)
+        return
+    from concurrent.futures import as_completed
+
+    with _pool(jobs) as pool:
+        futures = {pool.submit(run_unit, u): u for u in units}
+        try:
+            for fut in as_completed(futures):
+                yield futures[fut], fut.result()
+        except BaseException:
+            for f in futures:
+                f.cancel()
+            raise
+
+
+def _ray_results(units: list[Unit], jobs: int, address: str | None):
+    """(unit, run_unit's result) as they finish, each unit a Ray task (one CPU): on a new
+    local Ray with ``jobs`` CPUs, or on the cluster at ``address``."""
+    import ray
+
+    if not ray.is_initialized():
+        ray.init(address=address, num_cpus=None if address else jobs, include_dashboard=False,
+                 log_to_driver=False, configure_logging=False)  # fmt: skip
+    task = ray.remote(num_cpus=1)(run_unit)
+    pending = {task.remote(u): u for u in units}
+    try:
+        while pending:
+            done, _ = ray.wait(list(pending), num_returns=1)
+            for ref in done:
+                yield pending.pop(ref), ray.get(ref)
+    except BaseException:
+        for ref in pending:
+            ray.cancel(ref)
+        raise
+
+
+def _execute(plan: Plan, units: list[Unit], jobs: int, record: Record, on_trace,
+             backend: str = "local", address: str | None = None) -> int:  # fmt: skip
+    """Run the units (in ``jobs`` processes or as Ray tasks), appending rows as they
+    finish. Failed count."""
     progress = Progress(sum(len(u.seeds) for u in units))
     failed = 0
-
-    def finish(u: Unit, rows: list[dict], trace: dict | None) -> None:
-        nonlocal failed
+    results = (_ray_results(units, jobs, address) if backend == "ray"
+               else _local_results(units, jobs))  # fmt: skip
+    for u, (rows, trace) in results:
         for row in rows:
             record.write(row)
             if row.get("error"):
@@ -538,22 +584,6 @@ def _execute(plan: Plan, units: list[Unit], jobs: int, record: Record, on_trace)
                       f"{row['error']}", file=sys.stderr)  # fmt: skip
         on_trace(u, trace)
         progress.update(len(rows))
-
-    if jobs <= 1 or len(units) <= 1:
-        for u in units:
-            finish(u, *run_unit(u))
-        return failed
-    from concurrent.futures import as_completed
-
-    with _pool(jobs) as pool:
-        futures = {pool.submit(run_unit, u): u for u in units}
-        try:
-            for fut in as_completed(futures):
-                finish(futures[fut], *fut.result())
-        except BaseException:
-            for f in futures:
-                f.cancel()
-            raise
     return failed
 
 
@@ -662,8 +692,15 @@ def make_parser() -> argparse.ArgumentParser:
                     help="continue in --out: skip the episodes already in its episodes.jsonl "
                     "(default: off)")  # fmt: skip
     ap.add_argument("--jobs", type=int, default=os.cpu_count() or 1,
-                    help="worker processes; 1 runs in this process (default: the number of "
-                    "CPUs, %(default)s)")  # fmt: skip
+                    help="worker processes (CPUs of a new local Ray); 1 runs in this "
+                    "process (default: the number of CPUs, %(default)s)")  # fmt: skip
+    ap.add_argument("--backend", choices=("local", "ray"), default="local",
+                    help="local: a process pool; ray: one Ray task per env, scenario and "
+                    "policy (needs the ray extra: pip install 'steamtemp-gym[ray]'); rows "
+                    "are the same (default: %(default)s)")  # fmt: skip
+    ap.add_argument("--ray-address", default=None, metavar="ADDRESS",
+                    help="with --backend ray: an existing Ray cluster (e.g. ray://host:10001 "
+                    "or auto); default: start a local Ray with --jobs CPUs")  # fmt: skip
     return ap
 
 
@@ -684,6 +721,13 @@ def main(argv: list[str] | None = None) -> None:
     args = ap.parse_args(argv)
     if args.jobs < 1:
         ap.error(f"argument --jobs: must be >= 1, got {args.jobs}")
+    if args.ray_address is not None and args.backend != "ray":
+        ap.error("argument --ray-address: only with --backend ray")
+    if args.backend == "ray":
+        import importlib.util
+
+        if importlib.util.find_spec("ray") is None:
+            ap.error("argument --backend: ray is not installed; pip install 'steamtemp-gym[ray]'")
     plan = build_plan(ap, args)
     out = Path(args.out)
     try:
@@ -699,7 +743,7 @@ def main(argv: list[str] | None = None) -> None:
     units = _units(plan, done)
     figures = Plots(out, plan, units)
     try:
-        _execute(plan, units, args.jobs, record, figures.add)
+        _execute(plan, units, args.jobs, record, figures.add, args.backend, args.ray_address)
         for key in figures.missing():
             figures.draw(*key)
     except KeyboardInterrupt:

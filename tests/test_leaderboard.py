@@ -417,6 +417,31 @@ def test_parallel_rows_equal_in_process_rows(tiny, tmp_path):
     assert a["episodes"] == b["episodes"] and a["plants"] == b["plants"]
 
 
+def test_ray_backend_rows_equal_local_rows(tiny, tmp_path):
+    """--backend ray on a local 2-CPU Ray writes the same rows as the local backend."""
+    pytest.importorskip("ray")
+    import ray
+
+    flags = {"--policies": "cascade_pi,lqi", "--seeds": "0-1",
+             "--scenarios": f"{tiny},setpoint_step"}  # fmt: skip
+    lb.main(_args(tiny, tmp_path / "a", **flags))
+    try:
+        lb.main([*_args(tiny, tmp_path / "b", **flags, **{"--jobs": "2"}), "--backend=ray"])
+    finally:
+        ray.shutdown()
+    a = _strict_load(tmp_path / "a" / "leaderboard.json")
+    b = _strict_load(tmp_path / "b" / "leaderboard.json")
+    assert len(a["episodes"]) == 2 * 2 * 3  # scenarios x seeds x (2 policies + frozen_valve)
+    assert a["episodes"] == b["episodes"] and a["plants"] == b["plants"]
+
+
+def test_ray_flags_are_checked(tiny, tmp_path, capsys):
+    with pytest.raises(SystemExit) as exc:
+        lb.main([*_args(tiny, tmp_path / "c"), "--ray-address=auto"])
+    assert exc.value.code == 2 and "only with --backend ray" in capsys.readouterr().err
+    assert not (tmp_path / "c").exists()
+
+
 def test_leaderboard_cli_with_the_baseline(tmp_path):
     """The real baselines on a named scenario: rows, summary, markdown and plots."""
     lb.main(["--envs", IDS[0], "--scenarios", "setpoint_step,heldout:mill_trip", "--seeds",
