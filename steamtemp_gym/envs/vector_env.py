@@ -194,8 +194,10 @@ class SteamTempVectorEnv(VectorEnv):
     def _info(self, mask: np.ndarray | None = None) -> dict[str, Any]:
         """Info columns, each with its own ``_key`` mask array (True where the row reports)."""
         info = self.core.info_columns()
-        for k in list(info):
-            info["_" + k] = np.ones(self.num_envs, dtype=bool) if mask is None else mask.copy()
+        masks = np.empty((len(info), self.num_envs), dtype=bool)  # one allocation, a row each
+        masks[:] = True if mask is None else mask
+        for k, m in zip(list(info), masks, strict=True):
+            info["_" + k] = m
         return info
 
     def close_extras(self, **kwargs: Any) -> None:
