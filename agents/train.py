@@ -2,7 +2,8 @@
 
     steamtemp-train --env steamtemp/Cascade300MW-v0 --algo ppo [--timesteps N] [--seed 0]
         [--n-envs N] [--out DIR] [--hyperparams FILE] [--max-minutes M] [--tensorboard DIR]
-    python -m agents.train --zoo        # rebuild agents/zoo/ (every entry of the shipped YAML)
+    python -m agents.train --zoo [--env ID] [--algo A]   # rebuild agents/zoo/ (every entry
+                                                          # of the shipped YAML, or those)
 
 Hyperparameters: RL Zoo's YAML format (``agents/hyperparams/<algo>.yml``, keyed by env
 id; the same files work with ``python -m rl_zoo3.train --gym-packages steamtemp_gym
@@ -368,6 +369,8 @@ def main(argv: list[str] | None = None) -> None:
         if args.zoo:
             os.nice(10)
             for env_id, algo in zoo_entries():
+                if (args.env and env_id != args.env) or (args.algo and algo != args.algo):
+                    continue
                 meta = train(env_id, algo, seed=args.seed, out=ZOO,
                              max_minutes=args.max_minutes or 10.0)  # fmt: skip
                 print(_summary(meta), flush=True)

@@ -46,8 +46,8 @@ class MemoryConfig:
     integral: bool = True
     integral_time_s: float = 60.0
     integral_limit_K: float = 40.0
-    history: int = 0
-    history_stride: int = 1
+    history: int = 4
+    history_stride: int = 5
 
     def __post_init__(self) -> None:
         for name in ("integral_time_s", "integral_limit_K"):

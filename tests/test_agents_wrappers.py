@@ -35,7 +35,7 @@ def _obs_like(state: MemoryState, err_K: float, opening: float, n: int = 1) -> n
 
 def test_integral_integrates_clamps_and_holds_at_a_stop():
     env = gym.make(ENV_ID)
-    m = MemoryState(env, MemoryConfig(integral_time_s=20.0, integral_limit_K=3.0))
+    m = MemoryState(env, MemoryConfig(integral_time_s=20.0, integral_limit_K=3.0, history=0))
     dt = env.unwrapped.plant.dt_s
     out = m(_obs_like(m, 2.0, 0.5))
     assert out[0, -1] * m.e_scale == pytest.approx(2.0 * dt / 20.0)  # e dt / Ti, in K
