@@ -13,6 +13,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+import agents
 import baselines
 import steamtemp_gym
 from agents import leaderboard as lb
@@ -227,8 +228,8 @@ def test_default_run_is_valid_without_running(monkeypatch, tmp_path):
     plan = lb.build_plan(ap, ap.parse_args([]))
     assert plan.envs == list(IDS) and plan.seeds == [0, 1, 2]
     assert plan.scenarios == list(lb.DEFAULT_SCENARIOS)
-    n_policies = len(baselines.NAMES)
-    assert len(list(plan.grid())) == len(IDS) * len(lb.DEFAULT_SCENARIOS) * 3 * n_policies
+    n_policies = len(IDS) * len(baselines.NAMES) + len(agents.shipped())  # sb3:<algo> too
+    assert len(list(plan.grid())) == len(lb.DEFAULT_SCENARIOS) * 3 * n_policies
     assert not (tmp_path / "leaderboard_out").exists()
 
 
