@@ -3,9 +3,23 @@
 
 Sub-env i behaves exactly as a SteamTempEnv seeded with ``seed + i``: its own
 generator draws its scenarios and noise keys, the plant kernel and the reward
-are the same compiled code. Autoreset follows Gymnasium's default NEXT_STEP
-mode: the step after an episode ends resets that sub-env (reward 0, action
-ignored). ``info`` holds arrays of shape (num_envs,) with ``_key`` masks.
+are the same compiled code. ``info`` holds arrays of shape (num_envs,) with ``_key``
+masks.
+
+Autoreset follows Gymnasium's modes (``autoreset_mode=`` of the constructor, hence of
+``gym.make_vec(..., vectorization_mode="vector_entry_point", autoreset_mode=...)``;
+reported in ``metadata["autoreset_mode"]``), with the semantics of
+``gymnasium.vector.SyncVectorEnv`` (https://farama.org/Vector-Autoreset-Mode):
+
+- NEXT_STEP (default): the step after an episode ends resets that sub-env (reward 0,
+  not terminated or truncated, action ignored, the reset's info);
+- SAME_STEP: the step that ends an episode resets it at once: the observation is the
+  new episode's first, reward/terminated/truncated are the ending step's, and
+  ``info["final_obs"]`` (object array, None elsewhere) and ``info["final_info"]`` (info
+  columns with ``_key`` masks True for the ended sub-envs) hold what it ended with;
+- DISABLED: no autoreset; the caller resets ended sub-envs with
+  ``reset(options={"reset_mask": mask})`` before stepping them again (RuntimeError
+  otherwise).
 """
 
 from __future__ import annotations
@@ -22,15 +36,49 @@ from steamtemp_gym.envs import options as opts
 from steamtemp_gym.envs.core import Core, check_action
 from steamtemp_gym.envs.steam_temp_env import draw_episode, spaces
 
+#: The autoreset modes the native vector env implements (every one of Gymnasium's).
+AUTORESET_MODES: tuple[AutoresetMode, ...] = (
+    AutoresetMode.NEXT_STEP,
+    AutoresetMode.SAME_STEP,
+    AutoresetMode.DISABLED,
+)
+
+
+def _autoreset_mode(mode: Any) -> AutoresetMode:
+    """An AutoresetMode from itself or its value ("NextStep", "SameStep", "Disabled")."""
+    for m in AUTORESET_MODES:
+        if mode is m or (isinstance(mode, str) and mode == m.value):
+            return m
+    raise ValueError(
+        f"unknown autoreset_mode {mode!r}; valid: {[m.value for m in AUTORESET_MODES]} "
+        "or the gymnasium.vector.AutoresetMode members"
+    )
+
 
 class SteamTempVectorEnv(VectorEnv):
-    """B copies of one plant stepped by one compiled kernel call."""
+    """B copies of one plant stepped by one compiled kernel call.
+
+    Args:
+        plant_id: Registered id whose plant to simulate.
+        num_envs: Number of sub-envs.
+        autoreset_mode: A ``gymnasium.vector.AutoresetMode`` or its value (module
+            docstring); default NEXT_STEP.
+        **options: As for SteamTempEnv (``scenario``, ``reward``, ``params``; no rendering).
+    """
 
     metadata = {"autoreset_mode": AutoresetMode.NEXT_STEP, "render_modes": []}
 
-    def __init__(self, plant_id: str, num_envs: int = 1, **options: Any) -> None:
+    def __init__(
+        self,
+        plant_id: str,
+        num_envs: int = 1,
+        autoreset_mode: AutoresetMode | str = AutoresetMode.NEXT_STEP,
+        **options: Any,
+    ) -> None:
         if not isinstance(num_envs, (int, np.integer)) or num_envs < 1:
             raise ValueError(f"num_envs must be a positive integer, got {num_envs!r}")
+        self.autoreset_mode = _autoreset_mode(autoreset_mode)
+        self.metadata = {**self.metadata, "autoreset_mode": self.autoreset_mode}
         if options.get("render_mode") is not None:
             raise ValueError("the native vector env does not render; use SteamTempEnv")
         plant, self._scenario_spec, reward_cfg, _ = opts.build(plant_id, options)
@@ -108,24 +156,48 @@ class SteamTempVectorEnv(VectorEnv):
     def step(self, actions):
         if not self._started:
             raise RuntimeError("call reset() before step()")
+        done_before = np.flatnonzero(self._autoreset)
+        if done_before.size and self.autoreset_mode == AutoresetMode.DISABLED:
+            raise RuntimeError(
+                f"sub-env(s) {done_before.tolist()} ended their episode; with autoreset_mode "
+                "DISABLED reset them first: reset(options={'reset_mask': mask})"
+            )
         self.core.step(check_action(actions, self._shape))
         rewards = self.core.out[:, 0].copy()
         terminated = self.core.out[:, 1] > 0.5  # a trip code
         truncated = self.core.out[:, 2] > 0.5
-        done_before = np.flatnonzero(self._autoreset)
-        if done_before.size:
+        if done_before.size:  # NEXT_STEP: the rows that ended last step start afresh
             self._reset_rows(done_before)
             rewards[done_before] = 0.0
             terminated[done_before] = False
             truncated[done_before] = False
-        self._autoreset = terminated | truncated
-        return self.core.obs.copy(), rewards, terminated, truncated, self._info()
+        done = terminated | truncated
+        final = None
+        if self.autoreset_mode == AutoresetMode.SAME_STEP and done.any():
+            final = self._final(done)
+            self._reset_rows(np.flatnonzero(done))
+        else:
+            self._autoreset = done
+        info = self._info()
+        if final is not None:
+            info.update(final)
+        return self.core.obs.copy(), rewards, terminated, truncated, info
+
+    def _final(self, done: np.ndarray) -> dict[str, Any]:
+        """``final_obs`` and ``final_info`` (with masks) of the rows that just ended."""
+        final_obs = np.full(self.num_envs, None, dtype=object)
+        for b in np.flatnonzero(done):
+            final_obs[b] = self.core.obs[b].copy()
+        return {"final_obs": final_obs, "_final_obs": done.copy(),
+                "final_info": self._info(done), "_final_info": done.copy()}  # fmt: skip
 
     def _info(self, mask: np.ndarray | None = None) -> dict[str, Any]:
         """Info columns, each with its own ``_key`` mask array (True where the row reports)."""
         info = self.core.info_columns()
-        for k in list(info):
-            info["_" + k] = np.ones(self.num_envs, dtype=bool) if mask is None else mask.copy()
+        masks = np.empty((len(info), self.num_envs), dtype=bool)  # one allocation, a row each
+        masks[:] = True if mask is None else mask
+        for k, m in zip(list(info), masks, strict=True):
+            info["_" + k] = m
         return info
 
     def close_extras(self, **kwargs: Any) -> None:

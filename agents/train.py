@@ -1,0 +1,393 @@
+"""steamtemp-train: train a Stable-Baselines3 agent on one plant.
+
+    steamtemp-train --env steamtemp/Cascade300MW-v0 --algo ppo [--timesteps N] [--seed 0]
+        [--n-envs N] [--out DIR] [--hyperparams FILE] [--max-minutes M] [--tensorboard DIR]
+    python -m agents.train --zoo [--env ID] [--algo A]   # rebuild agents/zoo/ (every entry
+                                                          # of the shipped YAML, or those)
+
+Hyperparameters: RL Zoo's YAML format (``agents/hyperparams/<algo>.yml``, keyed by env
+id; the same files work with ``python -m rl_zoo3.train --gym-packages steamtemp_gym
+--conf-file agents/hyperparams/ppo.yml``). Keys with a meaning of their own:
+``n_timesteps``, ``n_envs``, ``policy``, ``normalize`` (bool, a dict or RL Zoo's
+"dict(...)" string of VecNormalize options), ``env_wrapper`` (RL Zoo's forms; here
+agents.wrappers.ControllerMemory), ``policy_kwargs`` (a dict or RL Zoo's "dict(...)"
+string), ``learning_rate`` (a number or "lin_<x>"), ``noise_type``/``noise_std``
+(SAC/TD3 action noise), ``residual_scale`` (our extension, not RL Zoo's: train a
+residual on cascade_pi; such entries are not for RL Zoo). Every other key must be an
+argument of the algorithm's constructor. All input is checked before training starts.
+
+Training runs on the ``random`` scenario distribution through the native vector env
+(agents.vec_env), with the controller memory and VecNormalize when configured. At 25,
+50, 75 and 100 % of the budget the current agent is evaluated (agents.evaluation) on
+``random`` validation episodes with seeds from :data:`VALIDATION_SEED` (training envs
+use ``--seed`` + i: never the same draws; never the leaderboard's scenarios); the best
+one is kept. Output in ``--out``: ``<env>__<algo>.zip`` (the best SB3 model) and
+``<env>__<algo>.json`` (env id, package version, git revision, hyperparameters, seed,
+timesteps, wall time, the validation curve and score, the normalization statistics and
+the wrapper config: everything ``agents.load`` needs).
+"""
+
+from __future__ import annotations
+
+import argparse
+import ast
+import json
+import os
+import subprocess
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import yaml
+
+import steamtemp_gym
+
+#: Algorithm names: SB3's PPO, SAC, TD3, and PPO as a residual on cascade_pi (its own
+#: YAML file, whose entries need ``residual_scale``).
+ALGOS = ("ppo", "sac", "td3", "ppo_residual")
+HYPERPARAMS = Path(__file__).with_name("hyperparams")
+ZOO = Path(__file__).with_name("zoo")
+#: Seeds of the validation episodes (``random`` scenario); training uses --seed + i.
+VALIDATION_SEED = 1_000_000
+N_VALIDATION = 3
+EVAL_FRACTIONS = (0.25, 0.5, 0.75, 1.0)
+MEMORY_WRAPPER = "agents.wrappers.ControllerMemory"
+#: RL Zoo keys with a meaning of their own (the rest go to the algorithm's constructor).
+SPECIAL = ("n_timesteps", "n_envs", "policy", "normalize", "env_wrapper", "policy_kwargs",
+           "noise_type", "noise_std", "residual_scale")  # fmt: skip
+
+
+class ConfigError(ValueError):
+    """Bad training input (env, algo, YAML, hyperparameter keys)."""
+
+
+def _algo_class(algo: str):
+    import stable_baselines3 as sb3
+
+    if algo not in ALGOS:
+        raise ConfigError(f"unknown algo {algo!r}; valid: {list(ALGOS)}")
+    return getattr(sb3, algo.split("_")[0].upper())
+
+
+def _literal(node: ast.AST) -> Any:
+    """A literal, or a ``dict(key=literal, ...)`` call of literals (nested)."""
+    if isinstance(node, ast.Call) and getattr(node.func, "id", None) == "dict" and not node.args:
+        return {kw.arg: _literal(kw.value) for kw in node.keywords}
+    return ast.literal_eval(node)
+
+
+def _dict_string(key: str, value: Any) -> dict:
+    """RL Zoo's "dict(a=1, b=dict(c=[2]))" strings (literals only; no code is run)."""
+    if isinstance(value, dict):
+        return dict(value)
+    try:
+        out = _literal(ast.parse(str(value), mode="eval").body)
+        if not isinstance(out, dict):
+            raise ValueError
+        return out
+    except (SyntaxError, ValueError):
+        raise ConfigError(
+            f"{key} must be a mapping or a 'dict(key=literal, ...)' string, got {value!r}"
+        ) from None
+
+
+def _memory_kwargs(value: Any) -> dict | None:
+    """The controller-memory options of an RL Zoo ``env_wrapper`` value: a class name, a
+    one-entry mapping {name: kwargs}, or a list of those."""
+    from agents.wrappers import MemoryConfig
+
+    out = None
+    for item in value if isinstance(value, list) else [value]:
+        if isinstance(item, dict) and len(item) == 1:
+            name, kwargs = next(iter(item.items()))
+        else:
+            name, kwargs = item, {}
+        if name != MEMORY_WRAPPER or not isinstance(kwargs, (dict, type(None))):
+            raise ConfigError(f"env_wrapper: only {MEMORY_WRAPPER} is supported, got {item!r}")
+        out = dict(kwargs or {})
+        try:
+            MemoryConfig.from_kwargs(out)  # checks the option names and values
+        except ValueError as exc:
+            raise ConfigError(f"env_wrapper: {exc}") from None
+    return out
+
+
+def read_hyperparams(path: Path, env_id: str, algo: str) -> dict[str, Any]:
+    """The checked hyperparameters of env_id in an RL-Zoo YAML file.
+
+    Raises:
+        ConfigError: unreadable or malformed YAML, no entry for env_id, unknown keys.
+    """
+    cls = _algo_class(algo)
+    try:
+        doc = yaml.safe_load(Path(path).read_text(encoding="utf-8"))
+    except (OSError, yaml.YAMLError) as exc:
+        raise ConfigError(f"--hyperparams {path}: cannot read it as YAML: {exc}") from None
+    if not isinstance(doc, dict):
+        raise ConfigError(f"--hyperparams {path}: expected a mapping of env ids")
+    if env_id not in doc:
+        raise ConfigError(f"--hyperparams {path}: no entry for {env_id}; has {sorted(doc)}")
+    hp = doc[env_id]
+    if not isinstance(hp, dict):
+        raise ConfigError(f"--hyperparams {path}: {env_id} must map to a mapping")
+    import inspect
+
+    ctor = set(inspect.signature(cls.__init__).parameters) - {"self", "env", "policy"}
+    unknown = sorted(set(hp) - set(SPECIAL) - ctor)
+    if unknown:
+        raise ConfigError(
+            f"--hyperparams {path}: unknown key(s) {unknown} for {algo}; valid: "
+            f"{sorted(ctor | set(SPECIAL))}"
+        )
+    if ("residual_scale" in hp) != algo.endswith("_residual"):
+        raise ConfigError(f"--hyperparams {path}: residual_scale is required for a *_residual "
+                          f"algo and only there (algo {algo!r})")  # fmt: skip
+    hp = dict(hp)
+    hp["policy_kwargs"] = _dict_string("policy_kwargs", hp.get("policy_kwargs", {}))
+    norm = hp.get("normalize", False)
+    hp["normalize"] = norm if isinstance(norm, bool) else _dict_string("normalize", norm)
+    hp["env_wrapper"] = _memory_kwargs(hp["env_wrapper"]) if "env_wrapper" in hp else None
+    if hp.get("noise_type") not in (None, "normal"):
+        raise ConfigError(f"noise_type: only 'normal' is supported, got {hp['noise_type']!r}")
+    return hp
+
+
+def _schedule(value: Any):
+    if isinstance(value, str) and value.startswith("lin_"):
+        v0 = float(value[4:])
+        return lambda progress_remaining: progress_remaining * v0
+    return value
+
+
+def _git_revision() -> str:
+    try:
+        done = subprocess.run(["git", "rev-parse", "HEAD"], cwd=Path(__file__).parent,
+                              capture_output=True, text=True, check=True)  # fmt: skip
+        return done.stdout.strip()
+    except (OSError, subprocess.CalledProcessError):
+        return "unknown"
+
+
+def make_training_env(env_id: str, n_envs: int, seed: int, hp: dict[str, Any]):
+    """(VecEnv for training, the native vector env under it)."""
+    from stable_baselines3.common.vec_env import VecMonitor, VecNormalize
+
+    from agents.vec_env import NativeVecEnv
+    from agents.wrappers import VecControllerMemory, VecResidual
+
+    base = NativeVecEnv(env_id, n_envs, scenario="random")
+    venv = base
+    if hp.get("residual_scale") is not None:
+        venv = VecResidual(venv, base.venv, hp["residual_scale"])
+    if hp["env_wrapper"] is not None:
+        venv = VecControllerMemory(venv, base.venv, **hp["env_wrapper"])
+    venv = VecMonitor(venv)
+    if hp["normalize"]:
+        kw = hp["normalize"] if isinstance(hp["normalize"], dict) else {}
+        venv = VecNormalize(venv, gamma=hp.get("gamma", 0.99), **kw)
+    venv.seed(seed)
+    return venv, base.venv
+
+
+def _obs_stats(venv) -> dict[str, Any] | None:
+    from stable_baselines3.common.vec_env import VecNormalize
+
+    if not isinstance(venv, VecNormalize) or not venv.norm_obs:
+        return None
+    return {"mean": venv.obs_rms.mean.tolist(), "var": venv.obs_rms.var.tolist(),
+            "epsilon": venv.epsilon, "clip_obs": venv.clip_obs}  # fmt: skip
+
+
+def validate(env_id: str, policy, n: int = N_VALIDATION) -> dict[str, float]:
+    """Mean return and IAE of ``policy`` over the validation episodes, run as one batch in
+    the native vector env (row k is ``gym.make(env_id, scenario="random")`` reset with
+    seed VALIDATION_SEED + k, bit for bit), IAE by steamtemp_gym.metrics."""
+    import gymnasium as gym
+
+    from steamtemp_gym.metrics import trajectory_metrics
+
+    venv = gym.make_vec(env_id, num_envs=n, vectorization_mode="vector_entry_point",
+                        autoreset_mode="Disabled", scenario="random")  # fmt: skip
+    obs, info = venv.reset(seed=[VALIDATION_SEED + k for k in range(n)])
+    policy.reset()
+    keys = ("time_s", "outlet_temp_C", "setpoint_C", "spray_valve", "spray_flow_kg_s")
+    traces = [{k: [info[k][b]] for k in keys} for b in range(n)]
+    ret, running, start = np.zeros(n), np.ones(n, dtype=bool), np.ones(n, dtype=bool)
+    while running.any():
+        action, _ = policy.predict(obs, episode_start=start, deterministic=True)
+        start[:] = False
+        obs, r, term, trunc, info = venv.step(action)
+        ret += np.where(running, r, 0.0)
+        for b in np.flatnonzero(running):
+            for k in keys:
+                traces[b][k].append(info[k][b])
+        ended = running & (term | trunc)
+        running &= ~ended
+        if ended.any():  # park the ended rows in a fresh episode; their data is not used
+            obs, _ = venv.reset(options={"reset_mask": ended})
+    iae = [trajectory_metrics(*(np.asarray(t[k]) for k in keys))["iae_K_s"] for t in traces]
+    venv.close()
+    return {"return": float(ret.mean()), "iae_K_s": float(np.mean(iae))}
+
+
+def stem(env_id: str, algo: str) -> str:
+    return f"{env_id.replace('/', '__')}__{algo}"
+
+
+def train(env_id: str, algo: str, hyperparams: Path | None = None, timesteps: int | None = None,
+          seed: int = 0, n_envs: int | None = None, out: Path = Path("trained"),
+          max_minutes: float | None = None, tensorboard: str | None = None,
+          quiet: bool = False) -> dict[str, Any]:  # fmt: skip
+    """Train one agent (module docstring); returns its metadata. Input is checked first."""
+    if env_id not in steamtemp_gym.ENV_IDS:
+        raise ConfigError(f"unknown env {env_id!r}; valid: {list(steamtemp_gym.ENV_IDS)}")
+    cls = _algo_class(algo)
+    path = Path(hyperparams) if hyperparams else HYPERPARAMS / f"{algo}.yml"
+    hp = read_hyperparams(path, env_id, algo)
+    total = int(timesteps if timesteps is not None else hp.get("n_timesteps", 100_000))
+    n_envs = int(n_envs if n_envs is not None else hp.get("n_envs", 1))
+    if total < 1 or n_envs < 1:
+        raise ConfigError(f"timesteps and n_envs must be >= 1, got {total} and {n_envs}")
+    if max_minutes is not None and max_minutes <= 0:
+        raise ConfigError(f"--max-minutes must be > 0, got {max_minutes}")
+    import torch
+    from stable_baselines3.common.callbacks import BaseCallback
+    from stable_baselines3.common.noise import NormalActionNoise
+
+    from agents.policy import AgentPolicy
+
+    torch.set_num_threads(1)  # one core per run (a shared machine; small networks)
+    venv, native = make_training_env(env_id, n_envs, seed, hp)
+    kwargs = {k: v for k, v in hp.items() if k not in SPECIAL}
+    kwargs["learning_rate"] = _schedule(kwargs.get("learning_rate", 3e-4))
+    if hp.get("noise_type") == "normal":
+        n_u = venv.action_space.shape[0]
+        kwargs["action_noise"] = NormalActionNoise(np.zeros(n_u), hp.get("noise_std", 0.1)
+                                                   * np.ones(n_u))  # fmt: skip
+    model = cls(hp.get("policy", "MlpPolicy"), venv, seed=seed, device="cpu", verbose=0,
+                policy_kwargs=hp["policy_kwargs"] or None, tensorboard_log=tensorboard,
+                **kwargs)  # fmt: skip
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    name = stem(env_id, algo)
+    t0 = time.monotonic()
+    curve: list[dict[str, Any]] = []
+    best: dict[str, Any] = {}
+
+    def snapshot_policy():
+        return AgentPolicy(model, native, memory=hp["env_wrapper"], obs_norm=_obs_stats(venv),
+                           residual_scale=hp.get("residual_scale"))  # fmt: skip
+
+    class Progress(BaseCallback):
+        def __init__(self) -> None:
+            super().__init__()
+            self.marks = [int(f * total) for f in EVAL_FRACTIONS]
+            self.last_line = 0.0
+
+        def _on_step(self) -> bool:
+            steps, wall = self.num_timesteps, time.monotonic() - t0
+            if self.marks and steps >= self.marks[0]:
+                self.marks.pop(0)
+                self._evaluate(steps, wall)
+            if not quiet and wall - self.last_line > 10.0:
+                self.last_line = wall
+                eta = wall / max(steps, 1) * (total - steps)
+                last = f", validation return {curve[-1]['return']:.1f}" if curve else ""
+                print(f"[{name}] {steps:,}/{total:,} steps ({100 * steps / total:.0f} %), "
+                      f"{steps / max(wall, 1e-9):,.0f} steps/s, ETA {eta / 60:.1f} min{last}",
+                      file=sys.stderr, flush=True)  # fmt: skip
+            if max_minutes is not None and wall > 60.0 * max_minutes:
+                self._evaluate(steps, wall)
+                return False
+            return True
+
+        def _evaluate(self, steps: int, wall: float) -> None:
+            score = validate(env_id, snapshot_policy())
+            curve.append({"timesteps": steps, "fraction": steps / total, "wall_s": wall, **score})
+            if not best or score["return"] > best["return"]:
+                best.update(score, timesteps=steps, obs_norm=_obs_stats(venv))
+                model.save(out / f"{name}.zip")
+
+    model.learn(total_timesteps=total, callback=Progress(), progress_bar=False)
+    if not curve:  # a budget below the first mark's granularity
+        Progress()._evaluate(model.num_timesteps, time.monotonic() - t0)
+    meta = {
+        "env_id": env_id, "algo": algo, "sb3_class": cls.__name__,
+        "package_version": steamtemp_gym.__version__, "git_revision": _git_revision(),
+        "hyperparams_file": str(path),
+        "hyperparameters": json.loads(json.dumps(hp, default=str)), "seed": seed,
+        "n_envs": n_envs, "timesteps_budget": total, "timesteps_trained": model.num_timesteps,
+        "timesteps_of_best": best["timesteps"], "wall_time_s": time.monotonic() - t0,
+        "validation": {"scenario": "random", "seeds": [VALIDATION_SEED + k
+                       for k in range(N_VALIDATION)], "best": {k: best[k] for k in
+                       ("return", "iae_K_s")}, "curve": curve},
+        "normalization": best["obs_norm"], "memory": hp["env_wrapper"],
+        "residual_scale": hp.get("residual_scale"),
+    }  # fmt: skip
+    (out / f"{name}.json").write_text(json.dumps(meta, indent=1), encoding="utf-8")
+    venv.close()
+    return meta
+
+
+def zoo_entries() -> list[tuple[str, str]]:
+    """(env id, algo) of every entry of the shipped hyperparameter files, PPO first."""
+    out = []
+    for algo in ALGOS:
+        f = HYPERPARAMS / f"{algo}.yml"
+        if f.exists():
+            doc = yaml.safe_load(f.read_text(encoding="utf-8")) or {}
+            out += [(env_id, algo) for env_id in steamtemp_gym.ENV_IDS if env_id in doc]
+    return out
+
+
+def make_parser() -> argparse.ArgumentParser:
+    doc = __doc__ or ""
+    ap = argparse.ArgumentParser(prog="steamtemp-train", description=doc.split("\n")[0],
+                                 epilog=doc.split("\n", 2)[2],
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)  # fmt: skip
+    ap.add_argument("--env", help=f"env id, one of {list(steamtemp_gym.ENV_IDS)}")
+    ap.add_argument("--algo", help=f"one of {list(ALGOS)}")
+    ap.add_argument("--timesteps", type=int, default=None, help="default: n_timesteps of the YAML")
+    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--n-envs", type=int, default=None, help="default: n_envs of the YAML")
+    ap.add_argument("--out", default="trained", help="output directory (default: %(default)s)")
+    ap.add_argument("--hyperparams", default=None, help="YAML file (default: the shipped one)")
+    ap.add_argument("--max-minutes", type=float, default=None, help="stop after this wall time")
+    ap.add_argument("--tensorboard", default=None, help="TensorBoard log directory")
+    ap.add_argument("--zoo", action="store_true",
+                    help="rebuild agents/zoo/: every entry of the shipped YAML files, one at a "
+                         "time, at nice 10 (--max-minutes each, default 10)")  # fmt: skip
+    return ap
+
+
+def main(argv: list[str] | None = None) -> None:
+    ap = make_parser()
+    args = ap.parse_args(argv)
+    try:
+        if args.zoo:
+            os.nice(10)
+            for env_id, algo in zoo_entries():
+                if (args.env and env_id != args.env) or (args.algo and algo != args.algo):
+                    continue
+                meta = train(env_id, algo, seed=args.seed, out=ZOO,
+                             max_minutes=args.max_minutes or 10.0)  # fmt: skip
+                print(_summary(meta), flush=True)
+            return
+        if not args.env or not args.algo:
+            ap.error("--env and --algo are required (or --zoo)")
+        meta = train(args.env, args.algo, args.hyperparams, args.timesteps, args.seed,
+                     args.n_envs, Path(args.out), args.max_minutes, args.tensorboard)  # fmt: skip
+    except ConfigError as exc:
+        ap.error(str(exc))
+    print(_summary(meta))
+
+
+def _summary(meta: dict[str, Any]) -> str:
+    keys = ("env_id", "algo", "timesteps_trained", "wall_time_s")
+    return json.dumps({k: meta[k] for k in keys} | {"validation": meta["validation"]["best"]})
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,227 @@
+"""Controller memory for agents: the error integral and short histories a memoryless
+policy needs to remove a steady offset and to see a dead time, as extra observation
+entries (the env's own observation is left as it is, first).
+
+A PI controller integrates the error; an MLP policy acting on one observation cannot,
+so under a persistent disturbance it keeps a steady offset (measured in issue 11:
+-1.36 K on SupercriticalFSH without an integral, 0.00 K with it). The memory adds:
+
+- the error integral ``I_k = clamp(I_{k-1} + e_k dt / T_i, -L, L)`` (K; ``T_i``:
+  ``integral_time_s``, ``L``: ``integral_limit_K``), with two anti-windups as a PI has
+  them (e.g. Astrom and Hagglund, Advanced PID Control, ISA, 2006, sec. 3.5): clamping at
+  +-L, and conditional integration: while every valve sits at a stop (opening <= 0.5 %
+  or >= 99.5 %) the integral may only shrink; it is observed as ``I / e_scale`` (the
+  error's own normalization, ``signals``);
+- the error and the valve openings ``history`` samples back, ``history_stride`` control
+  steps apart (oldest last), normalized as the env normalizes them.
+
+One batched implementation (:class:`MemoryState`) serves three front ends that give the
+same observations: :class:`ControllerMemory` (a ``gymnasium.Wrapper``, hence RL Zoo's
+``env_wrapper``), :class:`VecControllerMemory` (an SB3 ``VecEnvWrapper``, which also
+extends ``terminal_observation``) and the shipped agents' Policy (agents/policy.py). The
+state (integral, histories) lives in the wrapper; nothing of the plant is revealed.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+from stable_baselines3.common.vec_env.base_vec_env import VecEnv, VecEnvWrapper
+
+from baselines.loops import observation_layout
+from steamtemp_gym.signals import OBS_LIMIT
+
+#: Valve openings within this distance of 0 or 1 are at a stop (conditional integration).
+STOP_MARGIN = 0.005
+
+
+@dataclasses.dataclass(frozen=True)
+class MemoryConfig:
+    """What the memory adds (module docstring); the defaults are the measured choice
+    (README, "Training agents")."""
+
+    integral: bool = True
+    integral_time_s: float = 60.0
+    integral_limit_K: float = 40.0
+    history: int = 4
+    history_stride: int = 5
+
+    def __post_init__(self) -> None:
+        for name in ("integral_time_s", "integral_limit_K"):
+            v = getattr(self, name)
+            if not (isinstance(v, (int, float)) and not isinstance(v, bool) and v > 0):
+                raise ValueError(f"{name} must be a positive number, got {v!r}")
+        for name, lo in (("history", 0), ("history_stride", 1)):
+            v = getattr(self, name)
+            if not (isinstance(v, int) and not isinstance(v, bool) and v >= lo):
+                raise ValueError(f"{name} must be an integer >= {lo}, got {v!r}")
+        if not isinstance(self.integral, bool):
+            raise ValueError(f"integral must be true or false, got {self.integral!r}")
+
+    @classmethod
+    def from_kwargs(cls, kwargs: dict[str, Any] | None) -> MemoryConfig:
+        """A config from keyword arguments; ValueError naming unknown keys."""
+        kwargs = dict(kwargs or {})
+        valid = [f.name for f in dataclasses.fields(cls)]
+        unknown = sorted(set(kwargs) - set(valid))
+        if unknown:
+            raise ValueError(f"unknown controller-memory option(s) {unknown}; valid: {valid}")
+        return cls(**kwargs)
+
+    def n_extra(self, n_valves: int) -> int:
+        """How many entries the memory adds for a plant with n_valves actuators."""
+        return int(self.integral) + self.history * (1 + n_valves)
+
+
+class MemoryState:
+    """The memory of a batch of rows for one env's observation layout.
+
+    Args:
+        env: The env (single or vector) whose observations it extends.
+        config: What to add.
+    """
+
+    def __init__(self, env: Any, config: MemoryConfig) -> None:
+        names, scale, center = observation_layout(env)
+        plant = env.unwrapped.plant
+        self.config = config
+        self.i_err = names.index("error_K")
+        self.e_scale = float(scale[self.i_err])
+        self.i_valve = np.array([names.index(v) for v in plant.valves])
+        self.v_scale, self.v_center = scale[self.i_valve], center[self.i_valve]
+        self.dt = plant.dt_s
+        self.n_obs = len(names)
+        self.n_extra = config.n_extra(len(self.i_valve))
+        self._integral = np.zeros(0)
+        self._buf = np.zeros((0, 0, 0))  # (rows, samples kept, 1 + n_valves)
+
+    def extend_space(self, space: gym.spaces.Box) -> gym.spaces.Box:
+        """The observation space with the memory's entries appended (last axis)."""
+        shape = (*space.shape[:-1], space.shape[-1] + self.n_extra)
+        return gym.spaces.Box(-OBS_LIMIT, OBS_LIMIT, shape=shape, dtype=space.dtype)
+
+    def __call__(self, obs: np.ndarray, restart: np.ndarray | None = None) -> np.ndarray:
+        """The extended observations of a batch ``obs`` (rows, n_obs) after this step;
+        rows flagged in ``restart`` (and every row of a new batch size) start afresh."""
+        obs = np.asarray(obs)
+        n = obs.shape[0]
+        c = self.config
+        keep = c.history * c.history_stride + 1
+        if self._integral.shape[0] != n:
+            self._integral = np.zeros(n)
+            self._buf = np.zeros((n, keep, 1 + len(self.i_valve)))
+            restart = np.ones(n, dtype=bool)
+        elif restart is None:
+            restart = np.zeros(n, dtype=bool)
+        sample = np.concatenate([obs[:, [self.i_err]], obs[:, self.i_valve]], axis=1)
+        if restart.any():
+            self._integral[restart] = 0.0
+            self._buf[restart] = sample[restart, None, :]
+        if c.integral:
+            e_K = obs[:, self.i_err] * self.e_scale
+            step = e_K * (self.dt / c.integral_time_s)
+            opening = obs[:, self.i_valve] * self.v_scale + self.v_center
+            at_stop = ((opening <= STOP_MARGIN) | (opening >= 1.0 - STOP_MARGIN)).all(axis=1)
+            grows = np.abs(self._integral + step) > np.abs(self._integral)
+            step[at_stop & grows] = 0.0
+            self._integral = np.clip(self._integral + step, -c.integral_limit_K,
+                                     c.integral_limit_K)  # fmt: skip
+        parts = [obs]
+        if c.integral:
+            parts.append((self._integral / self.e_scale)[:, None])
+        if c.history:
+            self._buf = np.roll(self._buf, 1, axis=1)
+            self._buf[:, 0] = sample
+            past = self._buf[:, c.history_stride :: c.history_stride]  # (n, history, k)
+            parts.append(past.reshape(n, -1))
+        return np.concatenate(parts, axis=1).astype(obs.dtype, copy=False)
+
+    def state(self) -> tuple[np.ndarray, np.ndarray]:
+        """A copy of (integral, history buffer) (to extend a terminal observation)."""
+        return self._integral.copy(), self._buf.copy()
+
+    def set_state(self, state: tuple[np.ndarray, np.ndarray]) -> None:
+        self._integral, self._buf = state[0].copy(), state[1].copy()
+
+
+class ControllerMemory(gym.Wrapper):
+    """Gymnasium wrapper adding the controller memory to a single env's observation.
+
+    Usable from RL Zoo's YAML: ``env_wrapper: [{agents.wrappers.ControllerMemory:
+    {integral_time_s: 60}}]``. Keyword arguments: the fields of :class:`MemoryConfig`.
+    """
+
+    def __init__(self, env: gym.Env, **kwargs: Any) -> None:
+        super().__init__(env)
+        self.memory = MemoryState(env, MemoryConfig.from_kwargs(kwargs))
+        self.observation_space = self.memory.extend_space(env.observation_space)
+
+    def reset(self, **kwargs: Any):
+        obs, info = self.env.reset(**kwargs)
+        return self.memory(obs[None], np.ones(1, dtype=bool))[0], info
+
+    def step(self, action: Any):
+        obs, r, term, trunc, info = self.env.step(action)
+        return self.memory(obs[None])[0], r, term, trunc, info
+
+
+class VecControllerMemory(VecEnvWrapper):
+    """SB3 VecEnv wrapper adding the controller memory (same-step autoreset aware: an
+    ended sub-env's ``terminal_observation`` is extended with its final memory, and its
+    memory restarts on the new episode's first observation)."""
+
+    def __init__(self, venv: VecEnv, env: Any, **kwargs: Any) -> None:
+        self.memory = MemoryState(env, MemoryConfig.from_kwargs(kwargs))
+        super().__init__(venv, observation_space=self.memory.extend_space(venv.observation_space))
+
+    def reset(self) -> np.ndarray:
+        obs = self.venv.reset()
+        return self.memory(obs, np.ones(obs.shape[0], dtype=bool))
+
+    def step_wait(self):
+        obs, rew, dones, infos = self.venv.step_wait()
+        if dones.any():
+            before = self.memory.state()
+            final = obs.copy()
+            ended = np.flatnonzero(dones)
+            for b in ended:
+                final[b] = infos[b]["terminal_observation"]
+            extended = self.memory(final)
+            for b in ended:
+                infos[b]["terminal_observation"] = extended[b]
+            self.memory.set_state(before)
+        return self.memory(obs, dones), rew, dones, infos
+
+
+class VecResidual(VecEnvWrapper):
+    """SB3 VecEnv wrapper for a residual agent: the env receives cascade_pi's action plus
+    ``scale`` times the agent's, clipped to [-1, 1] (the arrangement industrial RL deploys:
+    the conventional loops stay in charge, the agent corrects them)."""
+
+    def __init__(self, venv: VecEnv, env: Any, scale: float) -> None:
+        import baselines
+
+        if not (isinstance(scale, (int, float)) and 0 < scale <= 2):
+            raise ValueError(f"residual_scale must be a number in (0, 2], got {scale!r}")
+        super().__init__(venv)
+        self.base = baselines.make("cascade_pi", env)
+        self.scale = float(scale)
+        self._obs = np.zeros((venv.num_envs, *venv.observation_space.shape))
+        self._start = np.ones(venv.num_envs, dtype=bool)
+
+    def reset(self) -> np.ndarray:
+        self._obs = self.venv.reset()
+        self._start = np.ones(self.num_envs, dtype=bool)
+        return self._obs
+
+    def step_async(self, actions: np.ndarray) -> None:
+        base, _ = self.base.predict(self._obs, episode_start=self._start)
+        self.venv.step_async(np.clip(base + self.scale * actions, -1.0, 1.0).astype(np.float32))
+
+    def step_wait(self):
+        self._obs, rew, dones, infos = self.venv.step_wait()
+        self._start = dones
+        return self._obs, rew, dones, infos

@@ -1,0 +1,145 @@
+"""steamtemp-train (agents/train.py) and agents.load: a smoke training run of each algo on
+one plant, the output files, the loaded Policy (raw observations in, memory state carried,
+reset and episode_start honoured, deterministic), and bad input refused before training."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import gymnasium as gym
+import numpy as np
+import pytest
+import yaml
+
+import agents
+from agents import train
+from agents.evaluation import run_episode
+
+ENV_ID = "steamtemp/BensonSubcritical-v0"  # 5 s control interval: short validation episodes
+SMALL = {
+    "ppo": {"n_steps": 128, "batch_size": 64, "n_epochs": 2},
+    "sac": {"learning_starts": 300, "batch_size": 64, "train_freq": 8, "gradient_steps": 1},
+    "td3": {"learning_starts": 300, "batch_size": 64, "train_freq": 8, "gradient_steps": 1,
+            "noise_type": "normal", "noise_std": 0.1},
+    "ppo_residual": {"n_steps": 128, "batch_size": 64, "n_epochs": 2, "residual_scale": 0.2},
+}  # fmt: skip
+STEPS = {"ppo": 2048, "sac": 1200, "td3": 1200, "ppo_residual": 1024}
+MEMORY = [{"agents.wrappers.ControllerMemory": {"integral_time_s": 60.0, "history": 1}}]
+
+
+def _yaml(tmp_path: Path, algo: str, **extra) -> Path:
+    hp = {"n_envs": 4, "policy": "MlpPolicy", "normalize": "dict(norm_obs=True)",
+          "env_wrapper": MEMORY, "policy_kwargs": "dict(net_arch=dict(pi=[16], vf=[16]))"
+          if algo.startswith("ppo") else "dict(net_arch=[16])", **SMALL[algo], **extra}  # fmt: skip
+    path = tmp_path / f"{algo}.yml"
+    path.write_text(yaml.safe_dump({ENV_ID: hp}))
+    return path
+
+
+@pytest.fixture(scope="module")
+def trained(tmp_path_factory) -> dict[str, Path]:
+    out = {}
+    for algo in ("ppo", "sac", "td3", "ppo_residual"):
+        d = tmp_path_factory.mktemp(algo)
+        train.train(ENV_ID, algo, _yaml(d, algo), timesteps=STEPS[algo], seed=1, out=d,
+                    quiet=True)  # fmt: skip
+        out[algo] = d
+    return out
+
+
+@pytest.mark.parametrize("algo", ["ppo", "sac", "td3", "ppo_residual"])
+def test_smoke_training_writes_model_and_metadata(trained, algo):
+    d = trained[algo]
+    stem = d / train.stem(ENV_ID, algo)
+    meta = json.loads(stem.with_suffix(".json").read_text())
+    assert stem.with_suffix(".zip").exists()
+    assert meta["env_id"] == ENV_ID and meta["algo"] == algo and meta["seed"] == 1
+    assert meta["timesteps_trained"] >= STEPS[algo]
+    assert [c["fraction"] for c in meta["validation"]["curve"]][-1] >= 1.0
+    assert len(meta["validation"]["curve"]) == len(train.EVAL_FRACTIONS)
+    assert meta["memory"] == MEMORY[0]["agents.wrappers.ControllerMemory"]
+    n_obs = gym.make(ENV_ID).observation_space.shape[0]
+    assert len(meta["normalization"]["mean"]) == n_obs + 1 + 3  # integral + 1 x (e, 2 valves)
+    assert meta["residual_scale"] == (0.2 if algo == "ppo_residual" else None)
+    assert meta["validation"]["best"]["return"] == max(
+        c["return"] for c in meta["validation"]["curve"])
+    assert meta["git_revision"] and meta["wall_time_s"] > 0
+
+
+@pytest.mark.parametrize("algo", ["ppo", "sac"])
+def test_loaded_policy_reproduces_validation_and_is_deterministic(trained, algo):
+    pol = agents.load(ENV_ID, algo, zoo=trained[algo])
+    meta = json.loads((trained[algo] / f"{train.stem(ENV_ID, algo)}.json").read_text())
+    env = gym.make(ENV_ID, scenario="random")
+    rets = [run_episode(env, pol, train.VALIDATION_SEED + k)["metrics"]["return"]
+            for k in range(train.N_VALIDATION)]  # fmt: skip
+    # validation ran the episodes as one batch: torch's batched matmuls round differently
+    assert np.mean(rets) == pytest.approx(meta["validation"]["best"]["return"], rel=1e-6)
+    again = run_episode(env, pol, train.VALIDATION_SEED)["metrics"]["return"]
+    assert again == rets[0]
+
+
+def test_loaded_policy_carries_memory_per_row(trained):
+    pol = agents.load(ENV_ID, "ppo", zoo=trained["ppo"])
+    venv = gym.make_vec(ENV_ID, num_envs=2, vectorization_mode="vector_entry_point")
+    obs, _ = venv.reset(seed=0)
+    first, _ = pol.predict(obs)
+    a = first
+    for _ in range(30):
+        obs, *_ = venv.step(a)
+        a, _ = pol.predict(obs)
+    moved, _ = pol.predict(obs)  # the memory moved on: same obs, another integral
+    restarted, _ = pol.predict(obs, episode_start=np.array([True, False]))
+    pol.reset()
+    fresh, _ = pol.predict(obs)
+    np.testing.assert_array_equal(restarted[0], fresh[0])  # row 0 restarted
+    assert not np.array_equal(restarted[1], fresh[1])  # row 1 kept its memory
+    assert not np.array_equal(moved, fresh)
+
+
+@pytest.mark.parametrize(
+    ("args", "match"),
+    [
+        (["--env", "steamtemp/Nope-v0", "--algo", "ppo"], "unknown env"),
+        (["--env", ENV_ID, "--algo", "a2c"], "unknown algo"),
+        (["--env", ENV_ID, "--algo", "ppo", "--hyperparams", "BAD"], "cannot read"),
+        (["--env", ENV_ID, "--algo", "ppo", "--hyperparams", "MALFORMED"], "cannot read"),
+        (["--env", ENV_ID, "--algo", "ppo", "--hyperparams", "UNKNOWN_KEY"], "n_stepz"),
+        (["--env", ENV_ID, "--algo", "ppo", "--hyperparams", "BAD_WRAPPER"], "integral_tme_s"),
+        (["--env", ENV_ID, "--algo", "ppo", "--hyperparams", "NO_ENTRY"], "no entry for"),
+        (["--env", ENV_ID, "--algo", "ppo", "--hyperparams", "RESIDUAL_KEY"], "residual_scale"),
+        (["--env", ENV_ID, "--algo", "ppo", "--hyperparams", "BAD_KWARGS"], "policy_kwargs"),
+        (["--env", ENV_ID, "--algo", "ppo", "--timesteps", "0"], "timesteps"),
+    ],
+)
+def test_bad_input_fails_before_training(tmp_path, capsys, args, match):
+    files = {
+        "BAD": tmp_path / "missing.yml",
+        "MALFORMED": tmp_path / "malformed.yml",
+        "UNKNOWN_KEY": _yaml(tmp_path, "ppo", n_stepz=3),
+        "BAD_WRAPPER": tmp_path / "wrapper.yml",
+        "NO_ENTRY": tmp_path / "other.yml",
+        "RESIDUAL_KEY": tmp_path / "residual.yml",
+        "BAD_KWARGS": tmp_path / "kwargs.yml",
+    }
+    files["MALFORMED"].write_text(f"{ENV_ID}: [unclosed\n")
+    files["BAD_WRAPPER"].write_text(yaml.safe_dump({ENV_ID: {"env_wrapper": [
+        {"agents.wrappers.ControllerMemory": {"integral_tme_s": 3}}]}}))  # fmt: skip
+    files["NO_ENTRY"].write_text(yaml.safe_dump({"steamtemp/Cascade300MW-v0": {}}))
+    files["RESIDUAL_KEY"].write_text(yaml.safe_dump({ENV_ID: {"residual_scale": 0.2}}))
+    files["BAD_KWARGS"].write_text(yaml.safe_dump({ENV_ID: {"policy_kwargs": "__import__('os')"}}))
+    args = [str(files.get(a, a)) for a in args] + ["--out", str(tmp_path / "out")]
+    with pytest.raises(SystemExit) as exc:
+        train.main(args)
+    assert exc.value.code == 2
+    assert match in capsys.readouterr().err
+    assert not (tmp_path / "out").exists()  # nothing started
+
+
+def test_shipped_hyperparams_are_valid_for_every_entry():
+    entries = train.zoo_entries()
+    assert {e for e, a in entries if a == "ppo"} == set(__import__("steamtemp_gym").ENV_IDS)
+    for env_id, algo in entries:
+        hp = train.read_hyperparams(train.HYPERPARAMS / f"{algo}.yml", env_id, algo)
+        assert hp["env_wrapper"] is not None and hp["normalize"]
