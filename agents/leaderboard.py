@@ -51,6 +51,7 @@ new directory is an ordinary run.
 from __future__ import annotations
 
 import argparse
+import functools
 import hashlib
 import json
 import logging
@@ -168,8 +169,21 @@ def parse_seeds(ap: argparse.ArgumentParser, text: str) -> list[int]:
 
 
 def _available(env_id: str) -> list[str]:
-    return (list(baselines.NAMES) + [f"sb3:{a}" for e, a in agents.shipped() if e == env_id]
-            + [REFERENCE])  # fmt: skip
+    trained = [f"sb3:{a}" for e, a in agents.shipped() if e == env_id] if _sb3() else []
+    return list(baselines.NAMES) + trained + [REFERENCE]
+
+
+@functools.lru_cache(maxsize=1)
+def _sb3() -> bool:
+    """Whether the trained agents can run (the agents extra); a note on stderr if not."""
+    import importlib.util
+
+    if importlib.util.find_spec("stable_baselines3") is not None:
+        return True
+    if agents.shipped():
+        print("note: the trained agents (sb3:*) are left out: they need the agents extra, "
+              "pip install 'steamtemp-gym[agents]'", file=sys.stderr)  # fmt: skip
+    return False
 
 
 def _resolve(spec: str, env_id: str) -> Any:

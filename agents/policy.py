@@ -35,6 +35,11 @@ class AgentPolicy:
         residual_scale: If set, the action is cascade_pi's plus this times the model's.
     """
 
+    #: Batched and unbatched actions agree to this, not bit for bit: torch's float32 matrix
+    #: products round differently with the batch size (measured: 1.5e-8 on the PPO zoo).
+    #: Read by steamtemp_gym.testing's check_batched_equals_unbatched.
+    batch_tolerance = 1e-6
+
     def __init__(
         self,
         model: Any,

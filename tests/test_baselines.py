@@ -9,6 +9,7 @@ import gymnasium as gym
 import numpy as np
 import pytest
 
+import agents
 import baselines
 import steamtemp_gym
 from agents.difficulty import FrozenValves
@@ -32,6 +33,9 @@ def test_baseline_is_a_policy_and_beats_open_loop(env_id, name):
     assert res["metrics"]["iae_K_s"] < 0.5 * ref["metrics"]["iae_K_s"]
 
 
+#: Every baseline and every shipped trained agent (sb3:<algo>, agents/zoo/).
+POLICIES = (*baselines.NAMES, *sorted({f"sb3:{algo}" for _, algo in agents.shipped()}))
+
 #: Contracts a shipped baseline breaks today (docs/checking.md): (env id, baseline, check);
 #: strict xfail, so a fix shows up here. None at present.
 KNOWN_BREAKS: set[tuple[str, str, str]] = set()
@@ -43,7 +47,7 @@ def _run_contract(request, env_id, check):
     check(env_id)
 
 
-@parametrize_with_checks(ids=IDS, policies=baselines.NAMES, env=False, quick=True)
+@parametrize_with_checks(ids=IDS, policies=POLICIES, env=False, quick=True)
 def test_policy_contract(request, env_id, check):
     """The policy contracts of steamtemp_gym.testing, short runs (the slow check is in
     test_policy_contract_full)."""
@@ -51,7 +55,7 @@ def test_policy_contract(request, env_id, check):
 
 
 @pytest.mark.slow
-@parametrize_with_checks(ids=IDS, policies=baselines.NAMES, env=False)
+@parametrize_with_checks(ids=IDS, policies=POLICIES, env=False)
 def test_policy_contract_full(request, env_id, check):
     """The same contracts with full-length runs, and every named scenario, seeds 0-2."""
     _run_contract(request, env_id, check)

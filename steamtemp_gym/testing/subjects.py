@@ -93,16 +93,22 @@ class PolicyTarget:
 
 
 def resolve_policy(policy: str | Callable[[Any], Any] | PolicyTarget) -> PolicyTarget:
-    """A PolicyTarget of a baseline name (ValueError listing the names otherwise) or a
-    factory. Names are looked up in ``baselines`` (shipped in the same distribution; imported
-    only here, so the environments do not depend on it)."""
+    """A PolicyTarget of a baseline name, a shipped trained agent ``sb3:<algo>`` (the
+    plant's own, agents.load) or a factory (ValueError listing the names otherwise). Names
+    are looked up in ``baselines`` and ``agents`` (shipped in the same distribution;
+    imported only here, so the environments do not depend on them)."""
     if isinstance(policy, PolicyTarget):
         return policy
     if isinstance(policy, str):
+        import agents
         import baselines
 
+        trained = sorted({f"sb3:{algo}" for _, algo in agents.shipped()})
+        if policy in trained:
+            return PolicyTarget(policy, policy, functools.partial(_make_agent, policy[4:]))
         if policy not in baselines.NAMES:
-            raise ValueError(f"unknown baseline {policy!r}; valid names: {list(baselines.NAMES)}")
+            raise ValueError(f"unknown policy {policy!r}; valid names: "
+                             f"{[*baselines.NAMES, *trained]}")  # fmt: skip
         return PolicyTarget(policy, policy, functools.partial(_make_baseline, policy))
     if callable(policy):
         return PolicyTarget(getattr(policy, "__name__", repr(policy)), None, policy)
@@ -113,6 +119,19 @@ def _make_baseline(name: str, env: Any) -> Any:
     import baselines
 
     return baselines.make(name, env)
+
+
+def _make_agent(algo: str, env: Any) -> Any:
+    """The shipped trained agent ``sb3:<algo>`` of the env's plant (needs the agents extra)."""
+    import agents
+
+    env_id = env.unwrapped.plant.id
+    if (env_id, algo) not in agents.shipped():
+        raise CheckSkipped(f"no sb3:{algo} agent shipped for {env_id}")
+    try:
+        return agents.load(env_id, algo)
+    except ImportError as exc:
+        raise CheckSkipped(f"sb3:{algo} needs the agents extra ({exc})") from exc
 
 
 def _failure(check: str, subject: str, call: str, exc: BaseException) -> AssertionError:
