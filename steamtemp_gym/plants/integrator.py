@@ -120,6 +120,10 @@ def _batched_step(X, U, D, P, jrow, jcol, dt, n_sub, Z):  # noqa: N803
     h = dt / n_sub
     gh = GAMMA * h
     uc = np.empty(U.shape[1])
+    # runtime flags, not literals: with literal True/False numba compiles rhs (and all it
+    # calls) twice, once per value
+    jac = n >= 0
+    no_jac = n < 0
     for b in range(X.shape[0]):
         x = X[b]
         u = U[b]
@@ -131,11 +135,11 @@ def _batched_step(X, U, D, P, jrow, jcol, dt, n_sub, Z):  # noqa: N803
                 iv = ACTUATORS[j, 0]
                 v_end = valve_travel(x[iv], u[j], P[ACTUATORS[j, 1]], P[ACTUATORS[j, 2]], h)[0]
                 uc[j] = (v_end - x[iv]) / h if h > 0.0 else 0.0
-            rhs(x, uc, d, P, f, jd, ju, jl, True)
+            rhs(x, uc, d, P, f, jd, ju, jl, jac)
             block_solve(gh, jd, ju, jl, jrow, jcol, f, k1)
             for i in range(n):
                 x2[i] = x[i] + h * k1[i]
-            rhs(x2, uc, d, P, f, jd, ju, jl, False)
+            rhs(x2, uc, d, P, f, jd, ju, jl, no_jac)
             for i in range(n):
                 f[i] -= 2.0 * k1[i]
             block_solve(gh, jd, ju, jl, jrow, jcol, f, k2)
