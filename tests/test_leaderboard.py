@@ -448,11 +448,12 @@ def test_leaderboard_cli_with_the_baseline(tmp_path):
              "0,1", "--out", str(tmp_path)])  # fmt: skip
     doc = _strict_load(tmp_path / "leaderboard.json")
     rows = doc["episodes"]
-    assert len(rows) == 2 * 2 * (len(baselines.NAMES) + 1)
+    trained = [f"sb3:{a}" for e, a in agents.shipped() if e == IDS[0]]  # shipped agents too
+    assert len(rows) == 2 * 2 * (len(baselines.NAMES) + len(trained) + 1)
     assert all(np.isfinite(r["metrics"]["iae_K_s"]) for r in rows)
     pols = doc["plants"][IDS[0]]["policies"]
     ranks = sorted(e["rank"] for p, e in pols.items() if p != lb.REFERENCE)
-    assert ranks[0] == 1 and len(ranks) == len(baselines.NAMES)
+    assert ranks[0] == 1 and len(ranks) == len(baselines.NAMES) + len(trained)
     assert "rank" not in pols[lb.REFERENCE]
     assert "p_improvement_over_cascade_pi" not in pols["cascade_pi"]
     assert all(0 <= e["p_improvement_over_cascade_pi"]["value"] <= 1
