@@ -532,13 +532,16 @@ def _finished(row: dict | None) -> bool:
 
 
 def _pool(jobs: int):
-    """A process pool (fork where available: workers start with the compiled kernels)."""
+    """A process pool: fork where available (workers start with the compiled kernels),
+    but spawn once torch is loaded here: a child forked after torch started its thread
+    pools deadlocks in its first torch operation (seen in the test suite, loading a PPO
+    agent in a worker). Spawned workers load the kernels from the disk cache."""
     import multiprocessing as mp
     from concurrent.futures import ProcessPoolExecutor
 
-    methods = mp.get_all_start_methods()
-    ctx = mp.get_context("fork" if "fork" in methods else "spawn")
-    return ProcessPoolExecutor(max_workers=jobs, mp_context=ctx)
+    fork = "fork" in mp.get_all_start_methods() and "torch" not in sys.modules
+    return ProcessPoolExecutor(max_workers=jobs, mp_context=mp.get_context(
+        "fork" if fork else "spawn"))  # fmt: skip
 
 
 def _local_results(units: list[Unit], jobs: int):
