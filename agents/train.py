@@ -202,34 +202,18 @@ def _obs_stats(venv) -> dict[str, Any] | None:
 
 def validate(env_id: str, policy, n: int = N_VALIDATION) -> dict[str, float]:
     """Mean return and IAE of ``policy`` over the validation episodes, run as one batch in
-    the native vector env (row k is ``gym.make(env_id, scenario="random")`` reset with
-    seed VALIDATION_SEED + k, bit for bit), IAE by steamtemp_gym.metrics."""
+    the native vector env by agents.evaluation.run_batch (row k is ``gym.make(env_id,
+    scenario="random")`` reset with seed VALIDATION_SEED + k, bit for bit)."""
     import gymnasium as gym
 
-    from steamtemp_gym.metrics import trajectory_metrics
+    from agents.evaluation import run_batch
 
     venv = gym.make_vec(env_id, num_envs=n, vectorization_mode="vector_entry_point",
-                        autoreset_mode="Disabled", scenario="random")  # fmt: skip
-    obs, info = venv.reset(seed=[VALIDATION_SEED + k for k in range(n)])
-    policy.reset()
-    keys = ("time_s", "outlet_temp_C", "setpoint_C", "spray_valve", "spray_flow_kg_s")
-    traces = [{k: [info[k][b]] for k in keys} for b in range(n)]
-    ret, running, start = np.zeros(n), np.ones(n, dtype=bool), np.ones(n, dtype=bool)
-    while running.any():
-        action, _ = policy.predict(obs, episode_start=start, deterministic=True)
-        start[:] = False
-        obs, r, term, trunc, info = venv.step(action)
-        ret += np.where(running, r, 0.0)
-        for b in np.flatnonzero(running):
-            for k in keys:
-                traces[b][k].append(info[k][b])
-        ended = running & (term | trunc)
-        running &= ~ended
-        if ended.any():  # park the ended rows in a fresh episode; their data is not used
-            obs, _ = venv.reset(options={"reset_mask": ended})
-    iae = [trajectory_metrics(*(np.asarray(t[k]) for k in keys))["iae_K_s"] for t in traces]
+                        scenario="random")  # fmt: skip
+    runs = run_batch(venv, policy, [VALIDATION_SEED + k for k in range(n)])
     venv.close()
-    return {"return": float(ret.mean()), "iae_K_s": float(np.mean(iae))}
+    return {key: float(np.mean([r["metrics"][key] for r in runs]))
+            for key in ("return", "iae_K_s")}  # fmt: skip
 
 
 def stem(env_id: str, algo: str) -> str:
