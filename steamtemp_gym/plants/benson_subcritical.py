@@ -813,13 +813,8 @@ def _outlet_h(x, v, d, P, aux):  # noqa: N803
     return _sh_steady(x, d, P, lf, p, upto)
 
 
+#: opening (state s_v) that brings the SH3 (upto=3) or SH4 outlet enthalpy to a target
 _opening_for = steady_opening("BensonSubcritical", _outlet_h)
-
-
-@njit(cache=True)
-def _bisect_valve(x, d, P, lf, p, s_v, upto, target):  # noqa: N803
-    """Valve opening (state s_v) that brings the SH3 (upto=3) or SH4 outlet enthalpy to target."""
-    return _opening_for(x, d, P, (lf, p, s_v, upto), target)
 
 
 @njit(cache=True)
@@ -843,8 +838,8 @@ def steady(D, sp_K, P, X):
             x[S_P] = p
             lf = _fuel_for_evap(x, d, P, p, h_ev_setpoint(P, L), lf)
             _upstream_steady(x, d, P, lf, p)
-            x[S_V1] = _bisect_valve(x, d, P, lf, p, S_V1, 3, _table(P, TB_H3, L))
-            x[S_V2] = _bisect_valve(x, d, P, lf, p, S_V2, 4, h_pT(p, sp_K[b]))
+            x[S_V1] = _opening_for(x, d, P, (lf, p, S_V1, 3), _table(P, TB_H3, L))
+            x[S_V2] = _opening_for(x, d, P, (lf, p, S_V2, 4), h_pT(p, sp_K[b]))
             _, _, W_eco, w1, w2, _, _, _, _ = _boundary(x, d, P)
             p = p_setpoint(P, L) * (W_eco + w1 + w2) / (P[I_WNOM] * L)
         x[S_P] = p
