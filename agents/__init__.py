@@ -29,7 +29,7 @@ def load(env_id: str, algo: str, zoo: Path | str | None = None):
 
     Args:
         env_id: Registered id.
-        algo: Algorithm name of the file (``ppo``, ``sac``, ``td3``, ``ppo_residual``...).
+        algo: Algorithm name of the file (``ppo``, ``sac``, ``td3``, ``ppo_residual``, ``recurrentppo``).
         zoo: Directory holding ``<env>__<algo>.zip`` and ``.json`` (default: the shipped zoo).
     """
     directory = Path(zoo) if zoo is not None else ZOO
@@ -39,12 +39,12 @@ def load(env_id: str, algo: str, zoo: Path | str | None = None):
     if not (stem.with_suffix(".zip").exists() and stem.with_suffix(".json").exists()):
         raise ValueError(f"no trained agent {stem}.zip/.json")
     import gymnasium as gym
-    import stable_baselines3 as sb3
 
     from agents.policy import AgentPolicy
+    from agents.train import model_class
 
     meta = json.loads(stem.with_suffix(".json").read_text(encoding="utf-8"))
-    model = getattr(sb3, meta["sb3_class"]).load(stem.with_suffix(".zip"), device="cpu")
+    model = model_class(meta["sb3_class"]).load(stem.with_suffix(".zip"), device="cpu")
     return AgentPolicy(
         model,
         gym.make(env_id),

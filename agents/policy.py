@@ -59,10 +59,14 @@ class AgentPolicy:
             import baselines
 
             self.base = baselines.make("cascade_pi", env)
+        #: The LSTM state of a recurrent model (sb3-contrib's RecurrentPPO), per row.
+        self.recurrent = hasattr(getattr(model, "policy", None), "lstm_actor")
+        self._lstm = None
         self._n: int | None = None
 
     def reset(self) -> None:
         self._n = None
+        self._lstm = None
         if self.base is not None:
             self.base.reset()
 
@@ -72,8 +76,13 @@ class AgentPolicy:
         restart = restart_rows(self._n != n, n, episode_start)
         self._n = n
         x = self.memory(obs, restart) if self.memory is not None else obs
-        action, _ = self.model.predict(normalize_obs(x, self.obs_norm),
-                                       deterministic=deterministic)  # fmt: skip
+        x = normalize_obs(x, self.obs_norm)
+        if self.recurrent:  # the model restarts the LSTM state of the restarted rows
+            action, self._lstm = self.model.predict(
+                x, state=None if restart.all() else self._lstm, episode_start=restart,
+                deterministic=deterministic)  # fmt: skip
+        else:
+            action, _ = self.model.predict(x, deterministic=deterministic)
         action = np.asarray(action, dtype=np.float32).reshape(n, -1)
         if self.base is not None:
             base, _ = self.base.predict(obs, episode_start=restart)

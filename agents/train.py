@@ -44,9 +44,10 @@ import yaml
 
 import steamtemp_gym
 
-#: Algorithm names: SB3's PPO, SAC, TD3, and PPO as a residual on cascade_pi (its own
-#: YAML file, whose entries need ``residual_scale``).
-ALGOS = ("ppo", "sac", "td3", "ppo_residual")
+#: Algorithm names: SB3's PPO, SAC, TD3, PPO as a residual on cascade_pi (its own YAML
+#: file, whose entries need ``residual_scale``) and sb3-contrib's RecurrentPPO (an LSTM
+#: policy: the memory is learned instead of given by agents.wrappers).
+ALGOS = ("ppo", "sac", "td3", "ppo_residual", "recurrentppo")
 HYPERPARAMS = Path(__file__).with_name("hyperparams")
 ZOO = Path(__file__).with_name("zoo")
 #: Seeds of the validation episodes (``random`` scenario); training uses --seed + i.
@@ -63,12 +64,26 @@ class ConfigError(ValueError):
     """Bad training input (env, algo, YAML, hyperparameter keys)."""
 
 
-def _algo_class(algo: str):
+def model_class(name: str):
+    """The SB3 or sb3-contrib class of a model class name (a zoo .json's ``sb3_class``)."""
     import stable_baselines3 as sb3
 
+    if hasattr(sb3, name):
+        return getattr(sb3, name)
+    try:
+        import sb3_contrib
+    except ImportError:
+        raise ConfigError(f"{name} needs sb3-contrib: pip install sb3-contrib (part of the "
+                          "project's [agents] extra)") from None  # fmt: skip
+    if not hasattr(sb3_contrib, name):
+        raise ConfigError(f"unknown model class {name!r}")
+    return getattr(sb3_contrib, name)
+
+
+def _algo_class(algo: str):
     if algo not in ALGOS:
         raise ConfigError(f"unknown algo {algo!r}; valid: {list(ALGOS)}")
-    return getattr(sb3, algo.split("_")[0].upper())
+    return model_class("RecurrentPPO" if algo == "recurrentppo" else algo.split("_")[0].upper())
 
 
 def _literal(node: ast.AST) -> Any:
@@ -315,15 +330,16 @@ def train(env_id: str, algo: str, hyperparams: Path | None = None, timesteps: in
     return meta
 
 
+def zoo_entries_of(algo: str) -> list[str]:
+    """Env ids with an entry in the shipped hyperparameter file of ``algo``."""
+    f = HYPERPARAMS / f"{algo}.yml"
+    doc = (yaml.safe_load(f.read_text(encoding="utf-8")) or {}) if f.exists() else {}
+    return [env_id for env_id in steamtemp_gym.ENV_IDS if env_id in doc]
+
+
 def zoo_entries() -> list[tuple[str, str]]:
     """(env id, algo) of every entry of the shipped hyperparameter files, PPO first."""
-    out = []
-    for algo in ALGOS:
-        f = HYPERPARAMS / f"{algo}.yml"
-        if f.exists():
-            doc = yaml.safe_load(f.read_text(encoding="utf-8")) or {}
-            out += [(env_id, algo) for env_id in steamtemp_gym.ENV_IDS if env_id in doc]
-    return out
+    return [(env_id, algo) for algo in ALGOS for env_id in zoo_entries_of(algo)]
 
 
 def make_parser() -> argparse.ArgumentParser:

@@ -23,8 +23,11 @@ SMALL = {
     "td3": {"learning_starts": 300, "batch_size": 64, "train_freq": 8, "gradient_steps": 1,
             "noise_type": "normal", "noise_std": 0.1},
     "ppo_residual": {"n_steps": 128, "batch_size": 64, "n_epochs": 2, "residual_scale": 0.2},
+    "recurrentppo": {"n_steps": 128, "batch_size": 64, "n_epochs": 2, "policy": "MlpLstmPolicy",
+                     "policy_kwargs": "dict(lstm_hidden_size=8, net_arch=dict(pi=[16], vf=[16]))"},
 }  # fmt: skip
-STEPS = {"ppo": 2048, "sac": 1200, "td3": 1200, "ppo_residual": 1024}
+STEPS = {"ppo": 2048, "sac": 1200, "td3": 1200, "ppo_residual": 1024, "recurrentppo": 1024}
+ALGOS = list(STEPS)
 MEMORY = [{"agents.wrappers.ControllerMemory": {"integral_time_s": 60.0, "history": 1}}]
 
 
@@ -32,6 +35,8 @@ def _yaml(tmp_path: Path, algo: str, **extra) -> Path:
     hp = {"n_envs": 4, "policy": "MlpPolicy", "normalize": "dict(norm_obs=True)",
           "env_wrapper": MEMORY, "policy_kwargs": "dict(net_arch=dict(pi=[16], vf=[16]))"
           if algo.startswith("ppo") else "dict(net_arch=[16])", **SMALL[algo], **extra}  # fmt: skip
+    if algo == "recurrentppo":  # the LSTM is its memory
+        del hp["env_wrapper"]
     path = tmp_path / f"{algo}.yml"
     path.write_text(yaml.safe_dump({ENV_ID: hp}))
     return path
@@ -40,7 +45,7 @@ def _yaml(tmp_path: Path, algo: str, **extra) -> Path:
 @pytest.fixture(scope="module")
 def trained(tmp_path_factory) -> dict[str, Path]:
     out = {}
-    for algo in ("ppo", "sac", "td3", "ppo_residual"):
+    for algo in ALGOS:
         d = tmp_path_factory.mktemp(algo)
         train.train(ENV_ID, algo, _yaml(d, algo), timesteps=STEPS[algo], seed=1, out=d,
                     quiet=True)  # fmt: skip
@@ -48,7 +53,7 @@ def trained(tmp_path_factory) -> dict[str, Path]:
     return out
 
 
-@pytest.mark.parametrize("algo", ["ppo", "sac", "td3", "ppo_residual"])
+@pytest.mark.parametrize("algo", ALGOS)
 def test_smoke_training_writes_model_and_metadata(trained, algo):
     d = trained[algo]
     stem = d / train.stem(ENV_ID, algo)
@@ -58,16 +63,20 @@ def test_smoke_training_writes_model_and_metadata(trained, algo):
     assert meta["timesteps_trained"] >= STEPS[algo]
     assert [c["fraction"] for c in meta["validation"]["curve"]][-1] >= 1.0
     assert len(meta["validation"]["curve"]) == len(train.EVAL_FRACTIONS)
-    assert meta["memory"] == MEMORY[0]["agents.wrappers.ControllerMemory"]
     n_obs = gym.make(ENV_ID).observation_space.shape[0]
-    assert len(meta["normalization"]["mean"]) == n_obs + 1 + 3  # integral + 1 x (e, 2 valves)
+    if algo == "recurrentppo":
+        assert meta["memory"] is None and meta["sb3_class"] == "RecurrentPPO"
+        assert len(meta["normalization"]["mean"]) == n_obs
+    else:
+        assert meta["memory"] == MEMORY[0]["agents.wrappers.ControllerMemory"]
+        assert len(meta["normalization"]["mean"]) == n_obs + 1 + 3  # integral + 1 x (e, 2 valves)
     assert meta["residual_scale"] == (0.2 if algo == "ppo_residual" else None)
     assert meta["validation"]["best"]["return"] == max(
         c["return"] for c in meta["validation"]["curve"])
     assert meta["git_revision"] and meta["wall_time_s"] > 0
 
 
-@pytest.mark.parametrize("algo", ["ppo", "sac"])
+@pytest.mark.parametrize("algo", ["ppo", "sac", "recurrentppo"])
 def test_loaded_policy_reproduces_validation_and_is_deterministic(trained, algo):
     pol = agents.load(ENV_ID, algo, zoo=trained[algo])
     meta = json.loads((trained[algo] / f"{train.stem(ENV_ID, algo)}.json").read_text())
@@ -80,8 +89,9 @@ def test_loaded_policy_reproduces_validation_and_is_deterministic(trained, algo)
     assert again == rets[0]
 
 
-def test_loaded_policy_carries_memory_per_row(trained):
-    pol = agents.load(ENV_ID, "ppo", zoo=trained["ppo"])
+@pytest.mark.parametrize("algo", ["ppo", "recurrentppo"])  # given memory, an LSTM state
+def test_loaded_policy_carries_memory_per_row(trained, algo):
+    pol = agents.load(ENV_ID, algo, zoo=trained[algo])
     venv = gym.make_vec(ENV_ID, num_envs=2, vectorization_mode="vector_entry_point")
     obs, _ = venv.reset(seed=0)
     first, _ = pol.predict(obs)
@@ -142,4 +152,6 @@ def test_shipped_hyperparams_are_valid_for_every_entry():
     assert {e for e, a in entries if a == "ppo"} == set(__import__("steamtemp_gym").ENV_IDS)
     for env_id, algo in entries:
         hp = train.read_hyperparams(train.HYPERPARAMS / f"{algo}.yml", env_id, algo)
-        assert hp["env_wrapper"] is not None and hp["normalize"]
+        assert hp["normalize"]
+        # the LSTM learns its memory; every other agent gets the controller memory
+        assert (hp["env_wrapper"] is None) == (algo == "recurrentppo")
