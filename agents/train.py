@@ -2,8 +2,8 @@
 
     steamtemp-train --env steamtemp/Cascade300MW-v0 --algo ppo [--timesteps N] [--seed 0]
         [--n-envs N] [--out DIR] [--hyperparams FILE] [--max-minutes M] [--tensorboard DIR]
-    python -m agents.train --zoo [--env ID] [--algo A]   # rebuild agents/zoo/ (every entry
-                                                          # of the shipped YAML, or those)
+    python -m agents.train --zoo [--env ID] [--algo A] [--out DIR]
+        # rebuild agents/zoo/ (or DIR): every entry of the shipped YAML, or those chosen
 
 Hyperparameters: RL Zoo's YAML format (``agents/hyperparams/<algo>.yml``, keyed by env
 id; the same files work with ``python -m rl_zoo3.train --gym-packages steamtemp_gym
@@ -206,6 +206,15 @@ def make_training_env(env_id: str, n_envs: int, seed: int, hp: dict[str, Any]):
     return venv, base.venv
 
 
+def _shown_path(path: Path) -> str:
+    """``path`` as recorded in the metadata: relative to the project for a shipped file (no
+    machine's directory in the zoo's metadata), as given otherwise."""
+    try:
+        return Path(path).resolve().relative_to(HYPERPARAMS.parent.parent).as_posix()
+    except ValueError:
+        return str(path)
+
+
 def _obs_stats(venv) -> dict[str, Any] | None:
     from stable_baselines3.common.vec_env import VecNormalize
 
@@ -315,7 +324,7 @@ def train(env_id: str, algo: str, hyperparams: Path | None = None, timesteps: in
     meta = {
         "env_id": env_id, "algo": algo, "sb3_class": cls.__name__,
         "package_version": steamtemp_gym.__version__, "git_revision": _git_revision(),
-        "hyperparams_file": str(path),
+        "hyperparams_file": _shown_path(path),
         "hyperparameters": json.loads(json.dumps(hp, default=str)), "seed": seed,
         "n_envs": n_envs, "timesteps_budget": total, "timesteps_trained": model.num_timesteps,
         "timesteps_of_best": best["timesteps"], "wall_time_s": time.monotonic() - t0,
@@ -352,7 +361,8 @@ def make_parser() -> argparse.ArgumentParser:
     ap.add_argument("--timesteps", type=int, default=None, help="default: n_timesteps of the YAML")
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--n-envs", type=int, default=None, help="default: n_envs of the YAML")
-    ap.add_argument("--out", default="trained", help="output directory (default: %(default)s)")
+    ap.add_argument("--out", default=None,
+                    help="output directory (default: trained; with --zoo: agents/zoo/)")
     ap.add_argument("--hyperparams", default=None, help="YAML file (default: the shipped one)")
     ap.add_argument("--max-minutes", type=float, default=None, help="stop after this wall time")
     ap.add_argument("--tensorboard", default=None, help="TensorBoard log directory")
@@ -371,14 +381,15 @@ def main(argv: list[str] | None = None) -> None:
             for env_id, algo in zoo_entries():
                 if (args.env and env_id != args.env) or (args.algo and algo != args.algo):
                     continue
-                meta = train(env_id, algo, seed=args.seed, out=ZOO,
+                meta = train(env_id, algo, seed=args.seed, out=Path(args.out or ZOO),
                              max_minutes=args.max_minutes or 10.0)  # fmt: skip
                 print(_summary(meta), flush=True)
             return
         if not args.env or not args.algo:
             ap.error("--env and --algo are required (or --zoo)")
+        out = Path(args.out or "trained")
         meta = train(args.env, args.algo, args.hyperparams, args.timesteps, args.seed,
-                     args.n_envs, Path(args.out), args.max_minutes, args.tensorboard)  # fmt: skip
+                     args.n_envs, out, args.max_minutes, args.tensorboard)  # fmt: skip
     except ConfigError as exc:
         ap.error(str(exc))
     print(_summary(meta))
