@@ -3,7 +3,8 @@
     steamtemp-train --env steamtemp/Cascade300MW-v0 --algo ppo [--timesteps N] [--seed 0]
         [--n-envs N] [--out DIR] [--hyperparams FILE] [--max-minutes M] [--tensorboard DIR]
     python -m agents.train --zoo [--env ID] [--algo A] [--out DIR]
-        # rebuild agents/zoo/ (or DIR): every entry of the shipped YAML, or those chosen
+        # rebuild agents/zoo/ (or DIR): every shipped agent from its shipped YAML entry;
+        # with --env/--algo, every YAML entry of that env/algo
 
 Hyperparameters: RL Zoo's YAML format (``agents/hyperparams/<algo>.yml``, keyed by env
 id; the same files work with ``python -m rl_zoo3.train --gym-packages steamtemp_gym
@@ -43,6 +44,7 @@ import numpy as np
 import yaml
 
 import steamtemp_gym
+from agents import shipped
 
 #: Algorithm names: SB3's PPO, SAC, TD3, PPO as a residual on cascade_pi (its own YAML
 #: file, whose entries need ``residual_scale``) and sb3-contrib's RecurrentPPO (an LSTM
@@ -367,8 +369,9 @@ def make_parser() -> argparse.ArgumentParser:
     ap.add_argument("--max-minutes", type=float, default=None, help="stop after this wall time")
     ap.add_argument("--tensorboard", default=None, help="TensorBoard log directory")
     ap.add_argument("--zoo", action="store_true",
-                    help="rebuild agents/zoo/: every entry of the shipped YAML files, one at a "
-                         "time, at nice 10 (--max-minutes each, default 10)")  # fmt: skip
+                    help="rebuild agents/zoo/ (or --out): every shipped agent from its YAML "
+                         "entry, or with --env/--algo every entry of those; one at a time, at "
+                         "nice 10 (--max-minutes each, default 10)")  # fmt: skip
     return ap
 
 
@@ -378,7 +381,10 @@ def main(argv: list[str] | None = None) -> None:
     try:
         if args.zoo:
             os.nice(10)
-            for env_id, algo in zoo_entries():
+            entries = zoo_entries()
+            if not (args.env or args.algo):  # rebuild what ships (a residual ships only
+                entries = [e for e in entries if e in set(shipped())]  # where it pays)
+            for env_id, algo in entries:
                 if (args.env and env_id != args.env) or (args.algo and algo != args.algo):
                     continue
                 meta = train(env_id, algo, seed=args.seed, out=Path(args.out or ZOO),

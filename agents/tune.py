@@ -105,8 +105,12 @@ def search(env_id: str, algo: str, trials: int, timesteps: int, max_minutes: flo
         records.append({"trial": trial.number, "params": params, **best,
                         "timesteps_trained": meta["timesteps_trained"],
                         "wall_time_s": meta["wall_time_s"]})  # fmt: skip
-        print(f"trial {trial.number}: return {best['return']:.1f}, IAE {best['iae_K_s']:.0f} "
-              f"K*s, {meta['wall_time_s']:.0f} s, {params}", file=sys.stderr, flush=True)
+        print(
+            f"trial {trial.number}: return {best['return']:.1f}, IAE {best['iae_K_s']:.0f} "
+            f"K*s, {meta['wall_time_s']:.0f} s, {params}",
+            file=sys.stderr,
+            flush=True,
+        )
         return best["return"]
 
     optuna.logging.set_verbosity(optuna.logging.WARNING)
