@@ -117,14 +117,14 @@ Validation (tests/test_boiler_turbine_mimo.py):
   mill and furnace lags are solved exactly over the interval outside ROS2 (step).
 
 The package, one task per module: ``params`` (BoilerTurbineParams, with the rated
-point), ``layout`` (indices into the packed parameters, states and outputs),
-``kernel`` (rhs, outputs, projection and the compiled step), ``steady_state``
-(steady state under the built-in controllers), ``calibration`` (packing
-BoilerTurbineParams and calibrating it against the rated point) and ``plant`` (the
-Plant class).
+point), ``layout`` (indices into the packed parameters, states and outputs, and the
+Jacobian pattern), ``kernel`` (rhs, outputs, projection and the compiled step),
+``steady_state`` (steady state under the built-in controllers), ``calibration``
+(packing BoilerTurbineParams and calibrating it against the rated point) and ``plant``
+(the Plant class).
 """
 
-from steamtemp_gym.plants.boiler_turbine_mimo.calibration import _pack, patterns
+from steamtemp_gym.plants.boiler_turbine_mimo.calibration import _pack
 from steamtemp_gym.plants.boiler_turbine_mimo.kernel import (
     ACTUATORS,
     KERNELS,
@@ -160,6 +160,7 @@ from steamtemp_gym.plants.boiler_turbine_mimo.layout import (
     Z_W1,
     Z_W2,
     Z_WDES,
+    patterns,
 )
 from steamtemp_gym.plants.boiler_turbine_mimo.params import K0, BoilerTurbineParams
 from steamtemp_gym.plants.boiler_turbine_mimo.plant import BoilerTurbineMIMO

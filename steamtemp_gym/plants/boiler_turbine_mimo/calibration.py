@@ -106,8 +106,6 @@ from steamtemp_gym.plants.boiler_turbine_mimo.layout import (
     S_HUP,
     S_LF,
     S_LW,
-    S_V1,
-    S_V2,
     T_CPCRH,
     T_CPSP,
     T_CRHR,
@@ -118,11 +116,12 @@ from steamtemp_gym.plants.boiler_turbine_mimo.layout import (
     T_RISE,
     T_TCRH,
     TAB_LOADS,
+    patterns,
 )
 from steamtemp_gym.plants.boiler_turbine_mimo.params import K0, BoilerTurbineParams
 from steamtemp_gym.plants.boiler_turbine_mimo.steady_state import _bisect_rgd, _sh_steady
 from steamtemp_gym.plants.integrator import pattern_arrays
-from steamtemp_gym.plants.superheater import chain_pattern, chain_steady, pipe_pattern
+from steamtemp_gym.plants.superheater import chain_steady
 from steamtemp_gym.steam import T_ph, cp_pT, h_pT, rho_ph
 
 
@@ -239,30 +238,6 @@ def _conductances(n_tubes: int, length: float, d_i: float, d_o: float, alpha: fl
     vol = math.pi / 4.0 * d_i**2 * length * n_tubes
     cm = math.pi / 4.0 * (d_o**2 - d_i**2) * length * n_tubes * rho_c
     return alpha * a_in, wall, vol, cm
-
-
-def patterns(params: BoilerTurbineParams) -> list[tuple[int, int]]:
-    """Strictly-lower Jacobian pattern of the unit (the four chains, in row order)."""
-    n1, n2, n3, n4 = (
-        params.n_seg_primary,
-        params.n_seg_platen,
-        params.n_seg_final,
-        params.n_seg_reheat,
-    )
-    o_p = S_CHAIN
-    o_pl = o_p + 2 * n1
-    o_f = o_pl + 2 * n2
-    o_r = o_f + 2 * n3
-    o_l = o_r + 2 * n4
-    o_rl = o_l + params.n_line
-    return (
-        chain_pattern(o_p, n1, (S_HUP,), S_LW)
-        + chain_pattern(o_pl, n2, (o_pl - 1, S_V1, S_V2), S_LW)
-        + chain_pattern(o_f, n3, (o_f - 1, S_V2), S_LW)
-        + chain_pattern(o_r, n4, (S_CRH,), S_LW)
-        + pipe_pattern(o_l, params.n_line, (o_r - 1,), S_LW)
-        + pipe_pattern(o_rl, params.n_rh_line, (o_l - 1,), S_LW)
-    )
 
 
 @functools.lru_cache(maxsize=32)

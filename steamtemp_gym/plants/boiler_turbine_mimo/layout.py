@@ -1,9 +1,13 @@
 """Packed parameters of the boiler-turbine unit: indices of the scalars and the load
-schedules in the flat vector P, of the states in x and of the outputs in z."""
+schedules in the flat vector P, of the states in x and of the outputs in z, and the
+Jacobian pattern the rhs fills."""
 
 from __future__ import annotations
 
 import numpy as np
+
+from steamtemp_gym.plants.boiler_turbine_mimo.params import BoilerTurbineParams
+from steamtemp_gym.plants.superheater import chain_pattern, pipe_pattern
 
 # Indices into P (module constants, frozen into the kernels).
 I_N1, I_N2, I_N3, I_N4 = 0, 1, 2, 3  # segments: primary, platen, final, reheater
@@ -36,3 +40,27 @@ S_CHAIN = 17  # then the chains, then the main-steam line and hot-reheat line ce
 # Output indices (order of BoilerTurbineMIMO.outputs)
 (Z_STE, Z_STEM, Z_RTE, Z_RTEM, Z_T1, Z_T1M, Z_T2, Z_T2M, Z_TCRH, Z_W, Z_P, Z_V1, Z_V2, Z_G,
  Z_FB, Z_W1, Z_W2, Z_LF, Z_Q, Z_QRH, Z_TMMAX, Z_WDES, Z_TFSH, Z_TRHO) = range(24)  # fmt: skip
+
+
+def patterns(params: BoilerTurbineParams) -> list[tuple[int, int]]:
+    """Strictly-lower Jacobian pattern of the unit (the four chains, in row order)."""
+    n1, n2, n3, n4 = (
+        params.n_seg_primary,
+        params.n_seg_platen,
+        params.n_seg_final,
+        params.n_seg_reheat,
+    )
+    o_p = S_CHAIN
+    o_pl = o_p + 2 * n1
+    o_f = o_pl + 2 * n2
+    o_r = o_f + 2 * n3
+    o_l = o_r + 2 * n4
+    o_rl = o_l + params.n_line
+    return (
+        chain_pattern(o_p, n1, (S_HUP,), S_LW)
+        + chain_pattern(o_pl, n2, (o_pl - 1, S_V1, S_V2), S_LW)
+        + chain_pattern(o_f, n3, (o_f - 1, S_V2), S_LW)
+        + chain_pattern(o_r, n4, (S_CRH,), S_LW)
+        + pipe_pattern(o_l, params.n_line, (o_r - 1,), S_LW)
+        + pipe_pattern(o_rl, params.n_rh_line, (o_l - 1,), S_LW)
+    )
