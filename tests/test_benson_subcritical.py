@@ -23,6 +23,7 @@ from scipy.optimize import least_squares
 from steamtemp_gym import scenarios
 from steamtemp_gym.envs.core import schedules
 from steamtemp_gym.plants import benson_subcritical as bs
+from steamtemp_gym.plants.valve import valve_travel
 from steamtemp_gym.steam import cp_pT
 
 NO_OU = np.zeros(2)  # no coloured heat-absorption disturbance in these tests
@@ -270,7 +271,7 @@ def test_ros2_at_5s_matches_a_fine_solution_over_the_load_ramp():
 
             def rhs(tau, x, v=v_start, u=u_cmd, d=d_now):
                 tv, rv = P[bs.I_TAUV], P[bs.I_RATEV]
-                ut = np.array([bs.valve_travel(v[j], u[j], tv, rv, tau)[0] for j in range(2)])
+                ut = np.array([valve_travel(v[j], u[j], tv, rv, tau)[0] for j in range(2)])
                 bs.derivatives(x, ut, d, P, f)
                 return f.copy()
 

@@ -1,7 +1,10 @@
-"""The plants, one module each; :data:`PLANTS` maps every env id to its plant class.
+"""The plants, one module or package each; :data:`PLANTS` maps every env id to its plant class.
 
 Adding a plant = one module here plus one entry in :data:`PLANTS` (the id is
-registered with Gymnasium by ``steamtemp_gym/__init__.py``).
+registered with Gymnasium by ``steamtemp_gym/__init__.py``). A large plant is a package
+with one task per module (``benson_subcritical/``, ``boiler_turbine_mimo/``,
+``drum_boiler/``: ``params``, ``layout``, ``kernel``, ``steady_state``, ``calibration``,
+``plant``), its ``__init__`` carrying the model's description and re-exporting its names.
 """
 
 from __future__ import annotations

@@ -1,0 +1,197 @@
+"""Packing and calibration of the drum boiler plant: DrumBoilerParams -> the flat vector
+P and the Jacobian pattern, with the gas-side conductances sized so that the rated
+design holds and the design-spray function generator from the steady sprays."""
+
+from __future__ import annotations
+
+import functools
+import math
+
+import numpy as np
+
+from steamtemp_gym.plants import drum as dr
+from steamtemp_gym.plants.attemperator import mix
+from steamtemp_gym.plants.base import D_FOULING, D_LOAD
+from steamtemp_gym.plants.drum_boiler.kernel import _boundary, _fw
+from steamtemp_gym.plants.drum_boiler.layout import (
+    DSP_LOADS,
+    FW_DT_K,
+    FW_T0_K,
+    I_CM1,
+    I_CM2,
+    I_CV,
+    I_DPSH,
+    I_DPSP,
+    I_DRUM,
+    I_DSP,
+    I_DTFW,
+    I_DTG1,
+    I_DTG2,
+    I_FW,
+    I_GEXP,
+    I_KA1,
+    I_KA2,
+    I_KPL,
+    I_KPP,
+    I_LCM,
+    I_LV,
+    I_MARG,
+    I_N,
+    I_NL,
+    I_PSP,
+    I_QNOM,
+    I_QSN,
+    I_RATEV,
+    I_TAUF,
+    I_TAUFW,
+    I_TAUM,
+    I_TAUV,
+    I_TAUW,
+    I_TBIR,
+    I_TC1,
+    I_TC2,
+    I_TFW,
+    I_TG1,
+    I_TG2,
+    I_TIL,
+    I_TIP,
+    I_UAG1,
+    I_UAG2,
+    I_V1,
+    I_V2,
+    I_WNOM,
+    N_FW,
+    N_P,
+    S_CHAIN1,
+    S_DRUM,
+    SHARE_1,
+    pattern,
+)
+from steamtemp_gym.plants.drum_boiler.params import K0, DrumBoilerParams
+from steamtemp_gym.plants.drum_boiler.steady_state import steady
+from steamtemp_gym.plants.integrator import pattern_arrays
+from steamtemp_gym.plants.superheater import chain_steady, steam_side_kA
+from steamtemp_gym.steam import h_pT, rho_ph, sat_p
+
+
+def _secant(fun, a: float, b: float, tol: float = 1e-6) -> float:
+    """Root of fun by the secant method from a, b."""
+    fa, fb = fun(a), fun(b)
+    for _ in range(80):
+        if fb == fa or abs(fb) < tol:
+            break
+        a, b, fa = b, b - fb * (b - a) / (fb - fa), fb
+        fb = fun(b)
+    return b
+
+
+def _calibrate(params: DrumBoilerParams, P: np.ndarray, n_x: int) -> None:
+    """Level reference, rated firing and SH gas-side conductances (writes P in place).
+
+    Rated design: drum steam q_s,nom at p_drum and T_fw,nom, spray fraction s of the
+    main steam W_nom = q_s,nom/(1 - s); UA_g1 gives T_primary_out after the primary SH,
+    UA_g2 then gives T_out at the outlet.
+    """
+    x = np.zeros(n_x)
+    n = params.n_segments
+    c2 = S_CHAIN1 + 2 * n
+    p = params.p_drum_MPa * 1e6
+    q_s = params.q_s_nom_kg_s
+    h_f, _, _ = _fw(P, P[I_TFW])
+    # level reference: l = 0 at V_wt = V_wt,nom in the rated steady state
+    P[I_DRUM + dr.D_L0] = 0.0
+    Q, _ = dr.drum_steady(p, q_s, h_f, 0.0, P, I_DRUM, x, S_DRUM)
+    P[I_QNOM] = Q
+    dV = params.V_wt_nom_m3 - x[S_DRUM + dr.VWT]
+    P[I_DRUM + dr.D_L0] = dV / params.A_d_m2
+    # gas side at rated firing
+    W = P[I_WNOM]
+    w_sp = W - q_s
+    dpsh = P[I_DPSH]
+    p1, p2 = p - SHARE_1 * dpsh, p - dpsh
+    h_s = float(sat_p(p)[4])
+    h1_target = h_pT(p1, params.T_primary_out_C + K0)
+    kA1 = steam_side_kA(P[I_KA1], q_s, q_s)[0]
+    kA2 = steam_side_kA(P[I_KA2], W, W)[0]
+    q1 = q_s * (h1_target - h_s) / n / 300.0
+    P[I_UAG1] = _secant(
+        lambda g: chain_steady(x, S_CHAIN1, n, h_s, q_s, p1, kA1, g, P[I_TG1], 0.0) - h1_target,
+        q1, 1.2 * q1,
+    )  # fmt: skip
+    h_sp, rho_sp, _ = _fw(P, P[I_TFW])
+    _, h_att = mix(q_s, h1_target, w_sp, h_sp)
+    h_out = h_pT(p2, params.T_out_C + K0)
+    q2 = W * (h_out - h_att) / n / 500.0
+    P[I_UAG2] = _secant(
+        lambda g: chain_steady(x, c2, n, h_att, W, p2, kA2, g, P[I_TG2], 0.0) - h_out,
+        q2, 1.2 * q2,
+    )  # fmt: skip
+    P[I_CV] = params.spray_max_fraction * W / math.sqrt(rho_sp * P[I_DPSP])
+
+
+@functools.lru_cache(maxsize=32)
+def _pack(params: DrumBoilerParams) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
+    n = params.n_segments
+    P = np.zeros(N_P)
+    P[I_N] = n
+    s = params.spray_design_fraction
+    P[I_WNOM] = params.q_s_nom_kg_s / (1.0 - s)
+    P[I_QSN] = params.q_s_nom_kg_s
+    P[I_PSP] = params.p_drum_MPa * 1e6
+    P[I_TFW] = params.T_fw_nom_C + K0
+    P[I_DTFW] = params.dT_fw_dload_K
+    P[I_DPSP] = params.dp_spray_MPa * 1e6
+    P[I_DPSH] = params.dp_sh_nom_MPa * 1e6
+    for i, (ika, iv, icm, itg, idtg) in enumerate(
+        ((I_KA1, I_V1, I_CM1, I_TG1, I_DTG1), (I_KA2, I_V2, I_CM2, I_TG2, I_DTG2)), start=1
+    ):
+        nt = getattr(params, f"n_tubes_{i}")
+        di, do = getattr(params, f"tube_id_{i}_m"), getattr(params, f"tube_od_{i}_m")
+        seg = getattr(params, f"tube_length_{i}_m") / n
+        P[ika] = params.alpha_nom_W_m2K * math.pi * di * seg * nt
+        P[iv] = math.pi / 4.0 * di**2 * seg * nt
+        P[icm] = (math.pi / 4.0 * (do**2 - di**2) * seg * nt * params.rho_metal_kg_m3
+                  * params.c_metal_J_kgK)  # fmt: skip
+        P[itg] = getattr(params, f"Tg{i}_nom_C") + K0
+        P[idtg] = getattr(params, f"dTg{i}_dload_K")
+    P[I_GEXP] = params.gas_flow_exponent
+    P[I_TAUW] = params.tau_steam_s
+    P[I_TAUF] = params.tau_firing_s
+    P[I_KPP] = params.Kp_pressure
+    P[I_TIP] = params.Ti_pressure_s
+    P[I_KPL] = params.Kp_level_kg_s_m
+    P[I_TIL] = params.Ti_level_s
+    P[I_TAUFW] = params.tau_fw_s
+    P[I_TAUV] = params.tau_valve_s
+    P[I_RATEV] = params.valve_rate_per_s
+    P[I_TC1] = params.tau_tc1_s
+    P[I_TC2] = params.tau_tc2_s
+    P[I_TAUM] = params.tau_mill_s
+    P[I_TBIR] = params.T_bir_s
+    P[I_NL] = params.n_line
+    P[I_LV] = params.line_volume_m3 / params.n_line
+    P[I_LCM] = params.line_metal_t * 1e3 * params.c_metal_J_kgK / params.n_line
+    P[I_MARG] = params.attemp_margin_K
+    P[I_DRUM : I_DRUM + dr.N_DRUM_P] = dr.drum_block(
+        params.V_d_m3, params.V_r_m3, params.V_dc_m3, params.m_t_kg, params.m_r_kg,
+        params.m_d_kg, params.C_p_J_kgK, params.A_d_m2, params.A_dc_m2, params.k_friction,
+        params.beta, params.T_d_s, params.V_sd0_m3,
+    )  # fmt: skip
+    p_fw = params.p_fw_MPa * 1e6
+    for k in range(N_FW):
+        h = h_pT(p_fw, FW_T0_K + FW_DT_K * k)
+        P[I_FW + k] = h
+        P[I_FW + N_FW + k] = rho_ph(p_fw, h)
+    n_x = S_CHAIN1 + 4 * n + 1 + params.n_line + 4
+    _calibrate(params, P, n_x)
+    # design-spray function generator: the undisturbed steady sprays at DSP_LOADS
+    D = np.zeros((len(DSP_LOADS), 5))
+    D[:, D_LOAD], D[:, D_FOULING] = DSP_LOADS, 1.0
+    X = np.zeros((len(DSP_LOADS), n_x))
+    steady(D, np.full(len(DSP_LOADS), params.T_out_C + K0), P, X)
+    for k in range(len(DSP_LOADS)):
+        P[I_DSP + k] = _boundary(X[k], D[k], P)[4]
+    pat = pattern(n, params.n_line)
+    jrow, jcol = pattern_arrays(pat)
+    P.setflags(write=False)
+    return P, jrow, jcol, n_x
