@@ -108,19 +108,13 @@ from steamtemp_gym.plants.benson_subcritical.steady_state import (
     _upstream_steady,
 )
 from steamtemp_gym.plants.integrator import pattern_arrays
+from steamtemp_gym.plants.roots import secant
 from steamtemp_gym.plants.superheater import chain_pattern, pipe_pattern
 from steamtemp_gym.steam import T_ph, cp_pT, h_pT, rho_ph
 
 
 def _secant(fun, a: float, b: float, what: str, tol: float = 1e-4) -> float:
-    fa, fb = fun(a), fun(b)
-    for _ in range(80):
-        if abs(fb) < tol:
-            return b
-        if fb == fa:
-            break
-        a, b, fa = b, max(b - fb * (b - a) / (fb - fa), 1e-3 * abs(b)), fb
-        fb = fun(b)
+    b, fb = secant(fun, a, b, tol, floor=1e-3)
     if abs(fb) < 1e3 * tol:
         return b
     raise ValueError(f"BensonParams: cannot calibrate {what} (residual {fb:.4g}); "

@@ -121,21 +121,15 @@ from steamtemp_gym.plants.boiler_turbine_mimo.layout import (
 from steamtemp_gym.plants.boiler_turbine_mimo.params import K0, BoilerTurbineParams
 from steamtemp_gym.plants.boiler_turbine_mimo.steady_state import _bisect_rgd, _sh_steady
 from steamtemp_gym.plants.integrator import pattern_arrays
+from steamtemp_gym.plants.roots import secant
 from steamtemp_gym.plants.superheater import chain_steady
 from steamtemp_gym.steam import T_ph, cp_pT, h_pT, rho_ph
 
 
 def _secant(fun, a: float, b: float, what: str, tol: float = 1e-4) -> float:
     """Root of fun by the secant method (ValueError naming ``what`` if it fails)."""
-    fa, fb = fun(a), fun(b)
-    for _ in range(80):
-        if abs(fb) < tol:
-            return b
-        if fb == fa:
-            break
-        a, b, fa = b, b - fb * (b - a) / (fb - fa), fb
-        fb = fun(b)
-    if abs(fb) < 1e-2 and math.isfinite(b) and b > 0:
+    b, fb = secant(fun, a, b, tol)
+    if abs(fb) < tol or (abs(fb) < 1e-2 and math.isfinite(b) and b > 0):
         return b
     raise ValueError(
         f"BoilerTurbineParams: cannot calibrate {what} (check the design temperatures)"

@@ -70,19 +70,14 @@ from steamtemp_gym.plants.drum_boiler.layout import (
 from steamtemp_gym.plants.drum_boiler.params import K0, DrumBoilerParams
 from steamtemp_gym.plants.drum_boiler.steady_state import steady
 from steamtemp_gym.plants.integrator import pattern_arrays
+from steamtemp_gym.plants.roots import secant
 from steamtemp_gym.plants.superheater import chain_steady, steam_side_kA
 from steamtemp_gym.steam import h_pT, rho_ph, sat_p
 
 
 def _secant(fun, a: float, b: float, tol: float = 1e-6) -> float:
     """Root of fun by the secant method from a, b."""
-    fa, fb = fun(a), fun(b)
-    for _ in range(80):
-        if fb == fa or abs(fb) < tol:
-            break
-        a, b, fa = b, b - fb * (b - a) / (fb - fa), fb
-        fb = fun(b)
-    return b
+    return secant(fun, a, b, tol)[0]
 
 
 def _calibrate(params: DrumBoilerParams, P: np.ndarray, n_x: int) -> None:
