@@ -18,8 +18,8 @@ residual on cascade_pi; such entries are not for RL Zoo). Every other key must b
 argument of the algorithm's constructor. All input is checked before training starts.
 
 Training runs on the ``random`` scenario distribution through the native vector env
-(agents.vec_env), with the controller memory and VecNormalize when configured. At 25,
-50, 75 and 100 % of the budget the current agent is evaluated (agents.evaluation) on
+(agents.vec_env), with the controller memory and VecNormalize when configured. At every
+eighth of the budget (and at a --max-minutes stop) the agent is evaluated (agents.evaluation) on
 ``random`` validation episodes with seeds from :data:`VALIDATION_SEED` (training envs
 use ``--seed`` + i: never the same draws; never the leaderboard's scenarios); the best
 one is kept. Output in ``--out``: ``<env>__<algo>.zip`` (the best SB3 model) and
@@ -55,7 +55,8 @@ ZOO = Path(__file__).with_name("zoo")
 #: Seeds of the validation episodes (``random`` scenario); training uses --seed + i.
 VALIDATION_SEED = 1_000_000
 N_VALIDATION = 3
-EVAL_FRACTIONS = (0.25, 0.5, 0.75, 1.0)
+#: Where in the budget the agent is validated (and the best kept): every eighth.
+EVAL_FRACTIONS = tuple(k / 8 for k in range(1, 9))
 MEMORY_WRAPPER = "agents.wrappers.ControllerMemory"
 #: RL Zoo keys with a meaning of their own (the rest go to the algorithm's constructor).
 SPECIAL = ("n_timesteps", "n_envs", "policy", "normalize", "env_wrapper", "policy_kwargs",
