@@ -4,7 +4,8 @@
 
 Prints steps/s of each id through ``gym.make`` (default wrappers, random
 actions, resets when episodes end) next to ``CartPole-v1``, and env-steps/s of
-the native vector env at several batch sizes (one process, one core). These
+the native vector env at several batch sizes on one thread, and at the largest batch on
+every thread (plants/threads.py). These
 machines are noisy: compare the ratios, not the absolute numbers. Each ratio
 uses the best of ``--repeats`` interleaved runs of CartPole and the env, so a
 slow spell of the host hits both. Goals (issue
@@ -21,6 +22,7 @@ import gymnasium as gym
 import numpy as np
 
 import steamtemp_gym
+from steamtemp_gym.plants import threads
 
 
 def single_rate(env_id: str, seconds: float, **kwargs) -> float:
@@ -66,17 +68,23 @@ def main() -> None:
     ap.add_argument("--repeats", type=int, default=3)
     args = ap.parse_args()
     batches = [int(b) for b in args.batches.split(",")]
+    n_thr = threads.n_threads()
     print(f"{'env id':36s} {'steps/s':>10s} {'CartPole':>10s} {'xCartPole':>9s} " + " ".join(
-        f"{'B=' + str(b):>12s}" for b in batches))  # fmt: skip
+        f"{'B=' + str(b):>12s}" for b in batches) + f" {'B=' + str(batches[-1]):>8s},"
+        f"{n_thr} thr")  # fmt: skip
     for env_id in args.envs.split(","):
         ref, r = 0.0, 0.0
         for _ in range(args.repeats):
             ref = max(ref, single_rate("CartPole-v1", args.seconds))
             r = max(r, single_rate(env_id, args.seconds, scenario="load_following"))
+        threads.set_threads(1)
         vec = [vector_rate(env_id, b, args.seconds) for b in batches]
+        threads.set_threads(n_thr)
+        vec.append(vector_rate(env_id, batches[-1], args.seconds))
         print(f"{env_id:36s} {r:10,.0f} {ref:10,.0f} {r / ref:9.2f} "
               + " ".join(f"{v:12,.0f}" for v in vec))  # fmt: skip
-    print("vector columns: env-steps/s of the native vector env at batch B (one core)")
+    print("vector columns: env-steps/s of the native vector env at batch B on one thread; "
+          f"the last on {n_thr} threads (plants/threads.py, STEAMTEMP_GYM_THREADS)")
 
 
 if __name__ == "__main__":

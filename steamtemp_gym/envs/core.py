@@ -39,6 +39,7 @@ from steamtemp_gym.plants.base import (
     N_DIST,
     Plant,
 )
+from steamtemp_gym.plants.threads import run_rows
 from steamtemp_gym.rewards import N_WEIGHTS, RewardConfig, reward, temperature_cost
 from steamtemp_gym.rng import gauss
 from steamtemp_gym.signals import OBS_LIMIT, T0_K, for_plant
@@ -65,6 +66,8 @@ START_BAND_K = 5.0
 #: counter-based random channel of the coloured heat-absorption disturbance (observation
 #: noise uses channels 0 .. n_obs - 1)
 OU_CHANNEL = 31
+#: Positions of advance's arguments whose first axis is the batch (the rest are shared).
+ADVANCE_ROWS = (0, 1, 2, 3, 4, 8, 9, 10, 11, 15, 16, 17, 18, 19)
 
 
 @njit(cache=True, error_model="numpy")
@@ -136,7 +139,7 @@ def ou_coefficients(std: float, tau_s: float, dt: float) -> tuple[float, float]:
     return a, std * float(np.sqrt(1.0 - a * a))
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", nogil=True)  # threads: plants/threads.py
 def advance(X, Z, U, U_prev, slot, bp_t, bp_v, bp_n, ep, ou, key, counter, ints, cfg, obs_cs, D,
             sp, obs, meas, out):  # fmt: skip
     """Everything after the plant step, for every row (see module docstring).
@@ -414,11 +417,10 @@ class Core:
         if not to_commands(A, self.U):
             raise ValueError(f"action contains NaN or infinite values: {A.tolist()!r}")
         self.plant.step(self.X, self.U, self.D, self.Z)
-        advance(
-            self.X, self.Z, self.U, self.U_prev, self.slot, self.bp_t, self.bp_v, self.bp_n,
-            self.ep, self.ou, self.key, self.counter, self.ints, self.cfg, self.obs_cs, self.D,
-            self.sp, self.obs, self.meas, self.out,
-        )  # fmt: skip
+        args = (self.X, self.Z, self.U, self.U_prev, self.slot, self.bp_t, self.bp_v, self.bp_n,
+                self.ep, self.ou, self.key, self.counter, self.ints, self.cfg, self.obs_cs,
+                self.D, self.sp, self.obs, self.meas, self.out)  # fmt: skip
+        run_rows(advance, args, per_row=ADVANCE_ROWS)
 
     def info_row(self, b: int) -> dict[str, float | np.ndarray]:
         """Physical values of row b in engineering units (floats; an array for several valves).

@@ -19,6 +19,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from steamtemp_gym.checks import is_integer, is_real
+from steamtemp_gym.plants.threads import run_rows
 
 #: Disturbance vector entries handed to every plant kernel, in order.
 DIST: tuple[str, ...] = (
@@ -273,7 +274,8 @@ class Plant:
         ``dt = 0`` only evaluates the outputs of the current state.
         """
         dt = self.dt_s if dt is None else dt
-        self.kernel()(X, U, D, self.P, self.jrow, self.jcol, dt, self.n_sub, Z)
+        args = (X, U, D, self.P, self.jrow, self.jcol, dt, self.n_sub, Z)
+        run_rows(self.kernel(), args, per_row=(0, 1, 2, 8))
 
     def steady_outputs(
         self, d: np.ndarray, setpoint_C: float | None = None

@@ -404,7 +404,7 @@ def _outputs(x, d, P, z):
     z[Z_WDES] = _spray_demand(P, d[D_LOAD])
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)  # threads run it on blocks of rows (plants/threads.py)
 def step(X, U, D, P, jrow, jcol, dt, n_sub, Z):  # noqa: N803
     """Advance every row by one sampling period (exact ZOH); dt = 0 only fills Z."""
     n = int(P[I_N1]) + int(P[I_N2])

@@ -39,4 +39,5 @@ def specialize(template: Callable, name: str, **bindings) -> Callable:
     copy.__qualname__ = f"{template.__qualname__}[{name}]"
     copy.__module__ = template.__module__
     copy.__doc__ = template.__doc__
-    return njit(cache=True, error_model="numpy")(copy)
+    # nogil: threads may run a copy on blocks of a batch at once (plants/threads.py)
+    return njit(cache=True, error_model="numpy", nogil=True)(copy)

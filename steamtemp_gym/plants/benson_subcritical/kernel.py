@@ -497,7 +497,7 @@ def project(x, P):
 _ROS2 = make_batched_step("BensonSubcritical", rhs, outputs, project)
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)  # threads run it on blocks of rows (plants/threads.py)
 def step(X, U, D, P, jrow, jcol, dt, n_sub, Z):  # noqa: N803
     """The batched step: exact valve travel, then the shared ROS2 kernel for the rest.
 

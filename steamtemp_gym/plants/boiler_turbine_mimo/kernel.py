@@ -465,7 +465,7 @@ ACTUATORS = ((S_V1, I_TAUV, I_RATEV), (S_V2, I_TAUV, I_RATEV), (S_G, I_TAUD, I_R
 _ROS2 = make_batched_step("BoilerTurbineMIMO", *KERNELS, ACTUATORS)
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)  # threads run it on blocks of rows (plants/threads.py)
 def step(X, U, D, P, jrow, jcol, dt, n_sub, Z):  # noqa: N803
     """The batched step: exact mill and furnace lags, then the shared ROS2 kernel.
 
