@@ -155,3 +155,20 @@ def test_shipped_hyperparams_are_valid_for_every_entry():
         assert hp["normalize"]
         # the LSTM learns its memory; every other agent gets the controller memory
         assert (hp["env_wrapper"] is None) == (algo == "recurrentppo")
+
+
+@pytest.mark.parametrize("algo", ALGOS)
+def test_numpy_actor_matches_sb3_predict(trained, algo):
+    """The float64 NumPy actor (agents.policy.MlpActor) gives SB3's deterministic action to
+    float32 precision; the LSTM policy has none and acts through SB3's predict."""
+    pol = agents.load(ENV_ID, algo, zoo=trained[algo])
+    if algo == "recurrentppo":
+        assert pol.actor is None and pol.batch_tolerance == 1e-6
+        return
+    assert pol.actor is not None and pol.batch_tolerance == 1e-9
+    rng = np.random.default_rng(0)
+    x = rng.normal(size=(50, pol.model.observation_space.shape[0])).astype(np.float32)
+    expected, _ = pol.model.predict(x, deterministic=True)
+    np.testing.assert_allclose(pol.actor(x), expected, atol=1e-5)
+    # batch size changes float64 rounding only (an ulp), not float32's (1e-7)
+    np.testing.assert_allclose(pol.actor(x[3:4]), pol.actor(x)[3:4], rtol=0, atol=1e-15)
