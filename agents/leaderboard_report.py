@@ -204,6 +204,41 @@ def headline_markdown(summary: dict[str, Any]) -> str:
     return "\n".join(lines) + "\n"
 
 
+def _iqm_score(entry: dict[str, Any]) -> float:
+    return entry.get("normalized_score", {}).get("iqm", {}).get("value", -np.inf)
+
+
+def agents_markdown(summary: dict[str, Any]) -> str:
+    """Per plant, each trained agent (``sb3:*``) against ``cascade_pi`` and the best other
+    baseline (by the IQM of the normalized score): IQM normalized score with its CI, mean
+    return and mean IAE over scenario × seed, trips. The README's zoo table."""
+    n = len(summary["run"]["seeds"])
+    lines = [f"{stat_label(n)}; return and IAE: means over scenario × seed. **Bold**: the "
+             "best of the plant's rows.", ""]  # fmt: skip
+    header = ["plant", "policy", "IQM norm. score", "mean return", "IAE [K s]", "trips"]
+    body = []
+    for env_id, p in summary["plants"].items():
+        pols = p["policies"]
+        others = [k for k in pols if k in baselines.NAMES and k != VERSUS]
+        best_base = max(others, key=lambda k: _iqm_score(pols[k])) if others else None
+        picks = [k for k in (VERSUS, best_base) if k in pols]
+        picks += sorted(k for k in pols if k.startswith("sb3:"))
+        top = max(picks, key=lambda k: _iqm_score(pols[k]))
+        best_ret = max(pols[k]["metrics"].get("return", -np.inf) for k in picks)
+        best_iae = min(pols[k]["metrics"].get("iae_K_s", np.inf) for k in picks)
+        for k in picks:
+            e, met = pols[k], pols[k]["metrics"]
+            score = _ci(e.get("normalized_score", {}).get("iqm"))
+            ret, iae = _fmt(met.get("return")), _fmt(met.get("iae_K_s"))
+            body.append([env_id.split("/")[-1],
+                         f"{k} (best baseline)" if k == best_base else k,
+                         f"**{score}**" if k == top else score,
+                         f"**{ret}**" if met.get("return") == best_ret else ret,
+                         f"**{iae}**" if met.get("iae_K_s") == best_iae else iae,
+                         str(e["trips"])])  # fmt: skip
+    return "\n".join(lines + _table(header, body)) + "\n"
+
+
 def markdown(summary: dict[str, Any], rows: list[dict]) -> str:
     """leaderboard.md."""
     run = summary["run"]
@@ -215,7 +250,8 @@ def markdown(summary: dict[str, Any], rows: list[dict]) -> str:
              f"a policy removes (0 = {VERSUS}'s mean return over seeds, 1 = zero cost, "
              f"negative = costlier than {VERSUS}); {REFERENCE} (every actuator held at its "
              "reset opening) is a reference.",
-             "", "## Headline", "", headline_markdown(summary)]  # fmt: skip
+             "", "## Headline", "", headline_markdown(summary),
+             "## Trained agents against the baselines", "", agents_markdown(summary)]  # fmt: skip
     for env_id, p in summary["plants"].items():
         pols = p["policies"]
         order = sorted(pols, key=lambda k: (pols[k].get("rank", 10**6), k))

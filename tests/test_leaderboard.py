@@ -464,6 +464,14 @@ def test_leaderboard_cli_with_the_baseline(tmp_path):
     md = (tmp_path / "leaderboard.md").read_text()
     assert "cascade_pi" in md and "setpoint_step" in md and "## Headline" in md
     assert "IQM of the normalized score over scenario × seed (2 seeds)" in md
+    # the agents table: cascade_pi, the best other baseline, every shipped agent, one bold IQM
+    part = md.split("## Trained agents against the baselines")[1].split("\n## ")[0]
+    table = [line for line in part.splitlines() if line.startswith("| SupercriticalFSH")]
+    others = [p for p in baselines.NAMES if p != "cascade_pi"]
+    best_base = max(others, key=lambda p: pols[p]["normalized_score"]["iqm"]["value"])
+    assert [r.split(" | ")[1] for r in table] == ["cascade_pi", f"{best_base} (best baseline)",
+                                                  *sorted(trained)]  # fmt: skip
+    assert sum(r.split(" | ")[2].startswith("**") for r in table) == 1
     names = {p.name for p in (tmp_path / "plots").glob("*.png")}
     assert {"scores.png", "profiles.png", "SupercriticalFSH-v0__heldout_mill_trip.png"} <= names
     with pytest.raises(SystemExit):
