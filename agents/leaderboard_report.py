@@ -223,6 +223,8 @@ def agents_markdown(summary: dict[str, Any]) -> str:
         best_base = max(others, key=lambda k: _iqm_score(pols[k])) if others else None
         picks = [k for k in (VERSUS, best_base) if k in pols]
         picks += sorted(k for k in pols if k.startswith("sb3:"))
+        if not picks:  # a run without cascade_pi, baselines or agents on this plant
+            continue
         top = max(picks, key=lambda k: _iqm_score(pols[k]))
         best_ret = max(pols[k]["metrics"].get("return", -np.inf) for k in picks)
         best_iae = min(pols[k]["metrics"].get("iae_K_s", np.inf) for k in picks)
