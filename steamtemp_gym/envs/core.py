@@ -39,7 +39,7 @@ from steamtemp_gym.plants.base import (
     N_DIST,
     Plant,
 )
-from steamtemp_gym.plants.threads import run_rows
+from steamtemp_gym.plants.threads import MIN_SPLIT_ROWS, run_rows
 from steamtemp_gym.rewards import N_WEIGHTS, RewardConfig, reward, temperature_cost
 from steamtemp_gym.rng import gauss
 from steamtemp_gym.signals import OBS_LIMIT, T0_K, for_plant
@@ -420,7 +420,10 @@ class Core:
         args = (self.X, self.Z, self.U, self.U_prev, self.slot, self.bp_t, self.bp_v, self.bp_n,
                 self.ep, self.ou, self.key, self.counter, self.ints, self.cfg, self.obs_cs,
                 self.D, self.sp, self.obs, self.meas, self.out)  # fmt: skip
-        run_rows(advance, args, per_row=ADVANCE_ROWS)
+        if self.B < MIN_SPLIT_ROWS:
+            advance(*args)
+        else:
+            run_rows(advance, args, per_row=ADVANCE_ROWS)
 
     def info_row(self, b: int) -> dict[str, float | np.ndarray]:
         """Physical values of row b in engineering units (floats; an array for several valves).

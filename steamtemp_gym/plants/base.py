@@ -19,7 +19,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from steamtemp_gym.checks import is_integer, is_real
-from steamtemp_gym.plants.threads import run_rows
+from steamtemp_gym.plants.threads import MIN_SPLIT_ROWS, run_rows
 
 #: Disturbance vector entries handed to every plant kernel, in order.
 DIST: tuple[str, ...] = (
@@ -275,7 +275,10 @@ class Plant:
         """
         dt = self.dt_s if dt is None else dt
         args = (X, U, D, self.P, self.jrow, self.jcol, dt, self.n_sub, Z)
-        run_rows(self.kernel(), args, per_row=(0, 1, 2, 8))
+        if X.shape[0] < MIN_SPLIT_ROWS:
+            self.kernel()(*args)
+        else:
+            run_rows(self.kernel(), args, per_row=(0, 1, 2, 8))
 
     def steady_outputs(
         self, d: np.ndarray, setpoint_C: float | None = None

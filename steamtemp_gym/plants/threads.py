@@ -20,6 +20,9 @@ import numpy as np
 
 #: Fewest rows per thread worth a hand-off (a physics row step takes 2-6 µs).
 MIN_ROWS_PER_THREAD = 64
+#: Smallest batch that may be split; callers skip run_rows below it (the single env's
+#: step pays no threading overhead).
+MIN_SPLIT_ROWS = 2 * MIN_ROWS_PER_THREAD
 
 _state: dict[str, object] = {"n": None, "pool": None, "pid": None}
 
