@@ -78,13 +78,18 @@ def trend(
             ax.fill_between(t, sp - band, sp + band, color="tab:green", alpha=alpha, lw=0,
                             label=f"setpoint ±{band:g} K band")  # fmt: skip
         ax.plot(t, sp, "k--", lw=1.2, label="setpoint")
+        # one distinct colour per policy: tab10 repeats after ten, tab20 holds twenty
+        n_pol = sum(name != reference for name in traces)
+        palette = plt.get_cmap("tab10" if n_pol <= 10 else "tab20").colors
         colors = {}
+        k = 0
         for name, tr in traces.items():
             ref = name == reference
-            (line,) = ax.plot(tr["time_s"] / 60, tr["outlet_temp_C"], lw=1.2 if ref else 1.4,
-                              color="0.45" if ref else None, ls=":" if ref else "-",
-                              label=f"{name}: true" + (" (reference)" if ref else ""))  # fmt: skip
-            colors[name] = line.get_color()
+            colors[name] = "0.45" if ref else palette[k % len(palette)]
+            k += 0 if ref else 1
+            ax.plot(tr["time_s"] / 60, tr["outlet_temp_C"], lw=1.2 if ref else 1.4,
+                    color=colors[name], ls=":" if ref else "-",
+                    label=f"{name}: true" + (" (reference)" if ref else ""))  # fmt: skip
         # y range: the controllers and the bands; the reference may leave the axes
         ctrl = [tr["outlet_temp_C"] - tr["setpoint_C"] for n, tr in traces.items()
                 if n != reference] or [first["outlet_temp_C"] - sp]  # fmt: skip
@@ -94,7 +99,9 @@ def trend(
         ax.plot(first["time_s"] / 60, first["measured_temp_C"], color=colors[name0], lw=0.6,
                 alpha=0.5, label=f"{name0}: measured (thermocouple)")  # fmt: skip
         ax.set_ylabel("main steam outlet [°C]")
-        ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0)
+        # outside the axes and out of tight_layout (a tall legend would spread the panels);
+        # savefig is told to keep it in the image
+        legends = [ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0)]
         ax.set_title(f"{_short(env_id)} - {scenario}: one episode per policy (seed {seed})")
         i = 1
         for (key, sp2), axk in zip(plant.secondary, axes[1:], strict=False):
@@ -134,14 +141,17 @@ def trend(
                 lab, scale, off = _DIST[k]
                 axv.plot(t, scale * (first[k] + off), lw=1.4, label=lab)
             axv.set_ylabel("disturbance")
-            axv.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0)
+            legends.append(axv.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0),
+                                      borderaxespad=0))  # fmt: skip
         for a in axes:
             a.grid(alpha=0.3)
         axes[-1].set_xlabel("time [min]")
         fig.align_ylabels(axes)
+        for leg in legends:
+            leg.set_in_layout(False)
         fig.tight_layout()
         path.parent.mkdir(parents=True, exist_ok=True)
-        fig.savefig(path, dpi=DPI, bbox_inches="tight")
+        fig.savefig(path, dpi=DPI, bbox_inches="tight", bbox_extra_artists=legends)
         plt.close(fig)
     return path
 
