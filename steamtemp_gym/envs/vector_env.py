@@ -36,6 +36,9 @@ from steamtemp_gym.envs import options as opts
 from steamtemp_gym.envs.core import Core, check_action
 from steamtemp_gym.envs.steam_temp_env import draw_episode, spaces
 
+#: No rows (the usual case of rows that ended last step).
+_NONE = np.zeros(0, dtype=np.int64)
+
 #: The autoreset modes the native vector env implements (every one of Gymnasium's).
 AUTORESET_MODES: tuple[AutoresetMode, ...] = (
     AutoresetMode.NEXT_STEP,
@@ -94,6 +97,7 @@ class SteamTempVectorEnv(VectorEnv):
         self._autoreset = np.zeros(self.num_envs, dtype=bool)
         self._shape = (self.num_envs, plant.n_u)
         self._started = False
+        self._all_rows: tuple[int, np.ndarray] | None = None  # (n info keys, all-True mask)
 
     def _reset_rows(self, rows) -> None:
         for b in rows:
@@ -156,7 +160,7 @@ class SteamTempVectorEnv(VectorEnv):
     def step(self, actions):
         if not self._started:
             raise RuntimeError("call reset() before step()")
-        done_before = np.flatnonzero(self._autoreset)
+        done_before = np.flatnonzero(self._autoreset) if self._autoreset.any() else _NONE
         if done_before.size and self.autoreset_mode == AutoresetMode.DISABLED:
             raise RuntimeError(
                 f"sub-env(s) {done_before.tolist()} ended their episode; with autoreset_mode "
@@ -194,8 +198,15 @@ class SteamTempVectorEnv(VectorEnv):
     def _info(self, mask: np.ndarray | None = None) -> dict[str, Any]:
         """Info columns, each with its own ``_key`` mask array (True where the row reports)."""
         info = self.core.info_columns()
-        masks = np.empty((len(info), self.num_envs), dtype=bool)  # one allocation, a row each
-        masks[:] = True if mask is None else mask
+        if mask is None:  # every row reports: one shared read-only mask (made once)
+            if self._all_rows is None or self._all_rows[0] != len(info):
+                every = np.ones(self.num_envs, dtype=bool)
+                every.flags.writeable = False
+                self._all_rows = (len(info), every)
+            masks = [self._all_rows[1]] * len(info)
+        else:
+            masks = np.empty((len(info), self.num_envs), dtype=bool)  # one allocation
+            masks[:] = mask
         for k, m in zip(list(info), masks, strict=True):
             info["_" + k] = m
         return info
