@@ -28,7 +28,15 @@ from typing import Any
 import yaml
 
 import steamtemp_gym
-from agents.train import ALGOS, HYPERPARAMS, ConfigError, read_hyperparams, stem, train
+from agents.train import (
+    ALGOS,
+    HYPERPARAMS,
+    ConfigError,
+    _dict_string,
+    read_hyperparams,
+    stem,
+    train,
+)
 
 #: The search space per algorithm: key -> categorical choices. ``train_ratio`` is SAC/TD3's
 #: (train_freq, gradient_steps) pair; ``log_std_init`` and ``net`` go to policy_kwargs.
@@ -58,7 +66,7 @@ SPACES["td3"]["noise_std"] = [0.05, 0.1, 0.2]
 def trial_entry(base: dict[str, Any], params: dict[str, Any]) -> dict[str, Any]:
     """The YAML entry of one trial: the shipped ``base`` entry with ``params`` applied."""
     entry = dict(base)
-    kwargs = dict(entry.get("policy_kwargs") or {})
+    kwargs = _dict_string("policy_kwargs", entry.get("policy_kwargs") or {})
     for key, value in params.items():
         if key == "train_ratio":
             entry["train_freq"], entry["gradient_steps"] = value
@@ -85,9 +93,8 @@ def search(env_id: str, algo: str, trials: int, timesteps: int, max_minutes: flo
         raise ConfigError("agents.tune needs optuna: pip install optuna "
                           "(or the project's [zoo] extra)") from None  # fmt: skip
     shipped = HYPERPARAMS / f"{algo}.yml"
-    base = read_hyperparams(shipped, env_id, algo)  # checked; raw entry below keeps its forms
+    read_hyperparams(shipped, env_id, algo)  # checked; the raw entry keeps its YAML forms
     raw = yaml.safe_load(shipped.read_text(encoding="utf-8"))[env_id]
-    raw["policy_kwargs"] = base["policy_kwargs"]
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     records: list[dict[str, Any]] = []

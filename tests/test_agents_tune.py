@@ -1,0 +1,55 @@
+"""The hyperparameter search (agents/tune.py): trial entries, bad input, and (with Optuna
+installed, the [zoo] extra) a two-trial search whose record names its best trial."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+import yaml
+
+from agents import train, tune
+
+ENV_ID = "steamtemp/Cascade300MW-v0"
+
+
+def test_trial_entry_maps_the_sampled_keys_onto_the_shipped_entry():
+    base = {"gamma": 0.9, "policy_kwargs": {"net_arch": [8]}, "n_envs": 4}
+    entry = tune.trial_entry(base, {"train_ratio": [1, 4], "log_std_init": -2.0,
+                                    "net": [64, 64], "gamma": 0.99})  # fmt: skip
+    assert entry["train_freq"] == 1 and entry["gradient_steps"] == 4 and entry["gamma"] == 0.99
+    assert entry["policy_kwargs"] == {"net_arch": [64, 64], "log_std_init": -2.0}
+    assert base == {"gamma": 0.9, "policy_kwargs": {"net_arch": [8]}, "n_envs": 4}  # untouched
+
+
+@pytest.mark.parametrize("algo", sorted(tune.SPACES))
+def test_every_space_key_is_a_valid_hyperparameter(algo, tmp_path):
+    """A trial built from the first choice of every key passes steamtemp-train's checks."""
+    raw = yaml.safe_load((train.HYPERPARAMS / f"{algo}.yml").read_text())[ENV_ID]
+    params = {k: v[0] for k, v in tune.SPACES[algo].items()}
+    path = tmp_path / f"{algo}.yml"
+    path.write_text(yaml.safe_dump({ENV_ID: tune.trial_entry(raw, params)}))
+    train.read_hyperparams(path, ENV_ID, algo)
+
+
+@pytest.mark.parametrize(("argv", "match"), [
+    (["--env", "steamtemp/Nope-v0", "--algo", "sac"], "--env must be one of"),
+    (["--env", ENV_ID, "--algo", "ppo_residual"], "no search space"),
+    (["--env", ENV_ID, "--algo", "sac", "--trials", "0"], "must be positive"),
+])  # fmt: skip
+def test_bad_input_is_an_argparse_error(argv, match, capsys, tmp_path):
+    with pytest.raises(SystemExit) as exc:
+        tune.main([*argv, "--out", str(tmp_path / "out")])
+    assert exc.value.code == 2 and match in capsys.readouterr().err
+    assert not (tmp_path / "out").exists()
+
+
+def test_a_short_search_records_every_trial_and_the_best(tmp_path):
+    pytest.importorskip("optuna")
+    record = tune.search(ENV_ID, "ppo", trials=2, timesteps=2048, max_minutes=1.0, seed=0,
+                         out=tmp_path)  # fmt: skip
+    saved = json.loads((tmp_path / f"{train.stem(ENV_ID, 'ppo')}__tuning.json").read_text())
+    assert saved == json.loads(json.dumps(record))
+    assert len(record["results"]) == 2
+    assert record["best"]["return"] == max(r["return"] for r in record["results"])
+    assert "| trial |" in tune.markdown(record)
