@@ -55,13 +55,18 @@ def set_threads(n: int) -> None:
     """Use ``n`` threads from now on (1: every kernel call runs in the calling thread)."""
     if not isinstance(n, (int, np.integer)) or isinstance(n, bool) or n < 1:
         raise ValueError(f"threads must be a positive integer, got {n!r}")
+    old = _state["pool"]
+    if old is not None and _state["pid"] == os.getpid():
+        old.shutdown(wait=False)  # type: ignore[attr-defined]
     _state["n"], _state["pool"] = int(n), None
 
 
-def _pool(n: int) -> ThreadPoolExecutor:
-    # a pool inherited through fork has no threads: make a new one in the child
+def _pool() -> ThreadPoolExecutor:
+    """The helper threads (n_threads() - 1: the caller runs a block too), made on first use;
+    a pool inherited through fork has no threads, so a child makes its own."""
     if _state["pool"] is None or _state["pid"] != os.getpid():
-        _state["pool"], _state["pid"] = ThreadPoolExecutor(max_workers=n - 1), os.getpid()
+        _state["pool"] = ThreadPoolExecutor(max_workers=max(n_threads() - 1, 1))
+        _state["pid"] = os.getpid()
     return _state["pool"]  # type: ignore[return-value]
 
 
@@ -80,7 +85,7 @@ def run_rows(kernel: Callable, args: tuple, per_row: tuple[int, ...]) -> None:
         s = slice(int(edges[k]), int(edges[k + 1]))
         kernel(*(a[s] if i in per_row else a for i, a in enumerate(args)))
 
-    futures = [_pool(n).submit(block, k) for k in range(1, n)]
+    futures = [_pool().submit(block, k) for k in range(1, n)]
     block(0)
     for f in futures:
         f.result()
