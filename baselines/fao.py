@@ -126,13 +126,13 @@ import json
 from typing import Any
 
 import numpy as np
-from numba import njit
 from scipy.linalg import expm
 
 from baselines.cascade_pi import FILTER_S, CascadePI, inner_schedule
 from baselines.identification import FOPDT, simc_pi, step_test
 from baselines.loops import input_filter, observation_layout, restart_rows
 from steamtemp_gym import plants
+from steamtemp_gym._jit import njit
 from steamtemp_gym.metrics import step_response_metrics
 from steamtemp_gym.plants.attemperator import mix, protected_spray_out
 from steamtemp_gym.plants.base import MAIN

@@ -133,11 +133,11 @@ import math
 from typing import Any
 
 import numpy as np
-from numba import njit
 
 from baselines.cascade_pi import FILTER_S, CascadePI, simc_pi
 from baselines.identification import FOPDT
 from baselines.loops import input_filter, into_stop, observation_layout, pi_position, restart_rows
+from steamtemp_gym._jit import njit
 from steamtemp_gym.metrics import step_response_metrics
 from steamtemp_gym.plants.base import MAIN
 from steamtemp_gym.scenarios import Scenario

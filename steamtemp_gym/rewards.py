@@ -36,8 +36,8 @@ from __future__ import annotations
 from dataclasses import asdict, dataclass, fields
 
 import numpy as np
-from numba import njit
 
+from steamtemp_gym._jit import njit
 from steamtemp_gym.checks import is_real
 
 #: Largest weight accepted (every weight is >= 0): with the trip band and these ranges every

@@ -5,7 +5,8 @@ vector env reproduces the single env bit for bit (splitmix64, Steele et al. 2014
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+
+from steamtemp_gym._jit import njit
 
 
 @njit(cache=True, error_model="numpy")

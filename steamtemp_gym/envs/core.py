@@ -27,9 +27,9 @@ import dataclasses
 from typing import Any
 
 import numpy as np
-from numba import njit
 
 from steamtemp_gym import scenarios as sc
+from steamtemp_gym._jit import njit
 from steamtemp_gym.plants.base import (
     D_FOULING,
     D_HEAT_BIAS,
@@ -105,6 +105,8 @@ def schedules(b, s, t, bp_t, bp_v, bp_n, sp_nom, ou, D, sp):
 def observe(b, Z, obs_idx, obs_cs, i_meas, key, counter, noise, sp, D, obs, meas_out):
     """Write the normalized observation of row b (noisy measurements, setpoint, error, load).
 
+    ``noise`` is row b's noise standard deviation (K).
+
     ``meas_out[b]`` receives what the outlet thermocouple reported (noise included). A
     non-finite value (a plant that left its valid region; the step then trips) is observed
     as 0 (the signal's centre), so no NaN ever reaches an agent.
@@ -113,8 +115,8 @@ def observe(b, Z, obs_idx, obs_cs, i_meas, key, counter, noise, sp, D, obs, meas
     meas = 0.0
     for j in range(n):
         v = Z[b, obs_idx[j]]
-        if obs_cs[j, 2] > 0.0 and noise[b] > 0.0:
-            v += noise[b] * gauss(key[b], counter[b], j)
+        if obs_cs[j, 2] > 0.0 and noise > 0.0:
+            v += noise * gauss(key[b], counter[b], j)
         if obs_idx[j] == i_meas:
             meas = v
         obs[b, j] = _normalized(v, obs_cs[j, 0], obs_cs[j, 1])
@@ -166,14 +168,13 @@ def advance(X, Z, U, U_prev, slot, bp_t, bp_v, bp_n, ep, ou, key, counter, ints,
     dt, sp_nom, trip_lo, trip_hi, s_scale = cfg[0], cfg[1], cfg[2], cfg[3], cfg[4]
     w = cfg[5 : 5 + N_WEIGHTS]
     sec_sp = cfg[5 + N_WEIGHTS :]
-    noise = ep[:, E_NOISE]
     for b in range(Z.shape[0]):
         counter[b] += 1
         ep[b, E_TIME] = counter[b] * dt  # counted, not summed: no drift over long episodes
         if ep[b, E_OU_B] > 0.0:
             ou[b] = ep[b, E_OU_A] * ou[b] + ep[b, E_OU_B] * gauss(key[b], counter[b], OU_CHANNEL)
         schedules(b, slot[b], ep[b, E_TIME], bp_t, bp_v, bp_n, sp_nom, ou, D, sp)
-        observe(b, Z, obs_idx, obs_cs, i_meas, key, counter, noise, sp, D, obs, meas)
+        observe(b, Z, obs_idx, obs_cs, i_meas, key, counter, ep[b, E_NOISE], sp, D, obs, meas)
         e = sp[b] - Z[b, i_out]
         code = TRIP_ABOVE if e < -trip_hi else (TRIP_BELOW if e > trip_lo else 0)
         if not (_finite(X, b) and _finite(Z, b)):
@@ -408,7 +409,7 @@ class Core:
         self.U[b] = self.Z[b, self.valve_idx]
         self.U_prev[b] = self.U[b]
         observe(b, self.Z, self.ints[N_HEAD : N_HEAD + self.ints[2]], self.obs_cs, self.ints[1],
-                self.key, self.counter, self.ep[:, E_NOISE], self.sp, self.D, self.obs,
+                self.key, self.counter, self.ep[b, E_NOISE], self.sp, self.D, self.obs,
                 self.meas)  # fmt: skip
 
     def step(self, A: np.ndarray) -> None:

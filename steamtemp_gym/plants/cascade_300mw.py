@@ -152,10 +152,10 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from numba import njit
 from scipy.linalg import expm
 
 from steamtemp_gym import scenarios as sc
+from steamtemp_gym._jit import njit
 from steamtemp_gym.plants.base import (
     D_FOULING,
     D_HEAT_BIAS,

@@ -79,8 +79,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 
+from steamtemp_gym._jit import njit
 from steamtemp_gym.steam import sat_p
 
 G = 9.81  # m/s2

@@ -45,8 +45,8 @@ from __future__ import annotations
 from collections.abc import Callable
 
 import numpy as np
-from numba import njit
 
+from steamtemp_gym._jit import njit
 from steamtemp_gym.plants.specialize import specialize
 from steamtemp_gym.plants.valve import valve_travel
 

@@ -10,7 +10,7 @@ derivatives and diagonal Jacobian entries.
 
 from __future__ import annotations
 
-from numba import njit
+from steamtemp_gym._jit import njit
 
 
 @njit(cache=True, error_model="numpy")

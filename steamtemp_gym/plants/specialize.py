@@ -21,7 +21,7 @@ from __future__ import annotations
 import types
 from collections.abc import Callable
 
-from numba import njit
+from steamtemp_gym._jit import njit
 
 
 def specialize(template: Callable, name: str, **bindings) -> Callable:

@@ -106,8 +106,8 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from numba import njit
 
+from steamtemp_gym._jit import njit, read_only
 from steamtemp_gym.plants.attemperator import mix, protected_spray_out, spray_flow
 from steamtemp_gym.plants.base import (
     D_FOULING,
@@ -521,6 +521,7 @@ def _calibrate(params: FSHParams, P: np.ndarray, n_x: int) -> None:
     design spray fraction to hold T_out at every load.
     """
     x = np.zeros(n_x)
+    Pk = read_only(P)  # what the kernels read (see steamtemp_gym._jit.read_only)
     p_nom = params.p_nom_MPa * 1e6
     h_a0 = h_pT(p_nom, params.T_out_C + K0)
     h_e0 = h_a0 - params.dh_fsh_nom_kJ_kg * 1e3
@@ -545,19 +546,19 @@ def _calibrate(params: FSHParams, P: np.ndarray, n_x: int) -> None:
     P[I_UAG] = b
     s = params.spray_design_fraction
     for k, L in enumerate(TAB_LOADS):
-        h_sp, rho_sp, _ = _spray_water_exact(P, L, 0.0)
-        h_p, _, _ = _spray_water_exact(P, L, 1.0)
-        h_m, _, _ = _spray_water_exact(P, L, -1.0)
+        h_sp, rho_sp, _ = _spray_water_exact(Pk, L, 0.0)
+        h_p, _, _ = _spray_water_exact(Pk, L, 1.0)
+        h_m, _, _ = _spray_water_exact(Pk, L, -1.0)
         P[T_HFW + k], P[T_RHOFW + k] = h_sp, rho_sp
         P[T_CPFW + k] = 0.5 * (h_p - h_m)
         P[T_DCPFW + k] = h_p - 2.0 * h_sp + h_m
-        p = _pressure(P, L)
+        p = _pressure(Pk, L)
         h_out = h_pT(p, params.T_out_C + K0)
-        h_e = _design_inlet(P, L, h_out, x)
+        h_e = _design_inlet(Pk, L, h_out, x)
         P[T_HUP + k] = (h_e - s * h_sp) / (1.0 - s)
         P[T_DHUP + k] = P[T_HUP + k] - h_sp
     # Valve coefficient: fully open passes spray_max_fraction of rated flow at rated load.
-    h_sp, rho_sp, dp = _spray_water_exact(P, 1.0, 0.0)
+    h_sp, rho_sp, dp = _spray_water_exact(Pk, 1.0, 0.0)
     P[I_CV] = params.spray_max_fraction * W / math.sqrt(rho_sp * dp)
 
 

@@ -25,8 +25,7 @@ lower (see integrator.py). :func:`chain_pattern` lists them in row order.
 
 from __future__ import annotations
 
-from numba import njit
-
+from steamtemp_gym._jit import njit
 from steamtemp_gym.steam import T_dTdh_ph, T_ph, T_rho_ph
 
 HTC_EXPONENT = 0.8  # m in 000_*.txt eq. (1); Dittus-Boelter Re exponent

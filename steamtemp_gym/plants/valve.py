@@ -13,8 +13,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 
-from numba import njit
-
+from steamtemp_gym._jit import njit
 from steamtemp_gym.plants.specialize import specialize
 
 

@@ -76,8 +76,10 @@ from pathlib import Path
 import llvmlite.binding as _llvm
 import numpy as np
 from llvmlite import ir as _ir
-from numba import carray, njit, types
+from numba import carray, types
 from numba.extending import intrinsic
+
+from steamtemp_gym._jit import njit
 
 __all__ = [
     "T_ph",
@@ -273,15 +275,7 @@ _B23_N5 = 0.13918839778870e2
 # Kernels (internal units: MPa, kJ/kg, K)
 # ---------------------------------------------------------------------------------------
 
-# Explicit signatures for the small helpers: call sites pass literal ints, and without a
-# signature numba would compile one specialisation per literal combination.
-_I8 = types.int64
-_F8 = types.float64
-_ARR = types.Array(types.float64, 1, "C")
-_ARR3 = types.Array(types.float64, 3, "C")
-
-
-@njit(types.Tuple((_I8, _F8, _F8))(_I8, _F8), cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _locate(ax: int, x: float) -> tuple[int, float, float]:
     """Cell index, local coordinate t in [0, 1] and cell width of x on axis ``ax``.
 
@@ -327,7 +321,7 @@ def _qcell(pm: float) -> tuple[int, int, float, float, float, float, float, floa
             (t3 - t2) * dq, t, dq)
 
 
-@njit(_F8(_I8, _I8, _I8, _F8, _F8, _F8, _F8), cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _curve(seg: int, i: int, c: int, a0: float, a1: float, a2: float, a3: float) -> float:
     """Curve c of segment seg in q-cell i (cubic Hermite; a1, a3 include the width)."""
     nc = _NCURVE[seg]
@@ -337,8 +331,7 @@ def _curve(seg: int, i: int, c: int, a0: float, a1: float, a2: float, a3: float)
     return (a0 * cdat[k] + a1 * cdat[k + 1]) + (a2 * cdat[k1] + a3 * cdat[k1 + 1])
 
 
-@njit(types.UniTuple(_F8, 2)(_ARR, _I8, _I8, _I8, _F8, _F8, _F8, _F8), cache=True,
-      error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _column(dat: np.ndarray, b: int, i: int, j: int, a0: float, a1: float, a2: float,
             a3: float) -> tuple[float, float]:
     """Value and d/dxi at xi-node j of patch b, Hermite-interpolated in q within q-cell i."""
@@ -399,7 +392,7 @@ def _where(pm: float, hk: float) -> tuple[int, int, float, float, float, float, 
 # ---------------------------------------------------------------------------------------
 
 
-@njit(types.Tuple((_I8, _F8))(_F8, _I8), cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _ucell(x: float, n: int) -> tuple[int, float]:
     """Cell index in [0, n - 1] and local coordinate of x (in cell units) on a uniform axis.
 
@@ -415,7 +408,7 @@ def _ucell(x: float, n: int) -> tuple[int, float]:
     return i, x - i
 
 
-@njit(types.UniTuple(_F8, 4)(_F8), cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _hermite(t: float) -> tuple[float, float, float, float]:
     """Cubic Hermite basis on a unit cell: weights of f(0), f'(0), f(1), f'(1)."""
     t2 = t * t
@@ -423,8 +416,7 @@ def _hermite(t: float) -> tuple[float, float, float, float]:
     return 2.0 * t3 - 3.0 * t2 + 1.0, t3 - 2.0 * t2 + t, 3.0 * t2 - 2.0 * t3, t3 - t2
 
 
-@njit(types.UniTuple(_F8, 2)(_ARR3, _I8, _I8, _F8, _F8, _F8, _F8), cache=True,
-      error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _fcol(tab: np.ndarray, i: int, j: int, a0: float, a1: float, a2: float,
           a3: float) -> tuple[float, float]:
     """Value and d/(cell coordinate) at node j of a fast table, Hermite in p in p-cell i."""
@@ -433,7 +425,7 @@ def _fcol(tab: np.ndarray, i: int, j: int, a0: float, a1: float, a2: float,
     return g, gu
 
 
-@njit(types.UniTuple(_F8, 4)(_F8, _F8, _I8), cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _fast(pm: float, hk: float, want: int) -> tuple[float, float, float, float]:
     """``_lookup`` on the fast rectangle: plain Hermite bicubic on the uniform (p, h) grid.
 
@@ -466,7 +458,7 @@ def _fast(pm: float, hk: float, want: int) -> tuple[float, float, float, float]:
     return T, dT, rho, drho
 
 
-@njit(_F8(_F8, _F8, _F8, _F8, _F8), cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _cell_root(f0: float, f1: float, c0: float, c1: float, u: float) -> float:
     """Root in [0, 1] of the cubic Hermite F with F(0) = f0 <= 0 <= F(1) = f1, F'(0) = c0,
     F'(1) = c1 (derivatives per unit cell): safeguarded Halley iteration from u.
@@ -502,7 +494,7 @@ def _cell_root(f0: float, f1: float, c0: float, c1: float, u: float) -> float:
     return u
 
 
-@njit(_F8(_F8, _F8), cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _fast_h_of_T(pm: float, T: float) -> float:
     """h (kJ/kg) inverting the fast T table at (MPa, K), NaN if T lies outside its range.
 
@@ -539,7 +531,7 @@ def _fast_h_of_T(pm: float, T: float) -> float:
     return _FH0 + (j + _cell_root(g0 - T, g1 - T, gu0, gu1, u)) * _FDH
 
 
-@njit(types.UniTuple(_F8, 4)(_F8, _F8, _I8), cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _patch_lookup(pm: float, hk: float, want: int) -> tuple[float, float, float, float]:
     """``_lookup`` on the patch tables (any (p, h); clamped to the table domain)."""
     tdat = carray(_TDAT_PTR(), _NTDAT)
@@ -586,7 +578,7 @@ def _patch_lookup(pm: float, hk: float, want: int) -> tuple[float, float, float,
     return T, dT, rho, drho
 
 
-@njit(types.UniTuple(_F8, 4)(_F8, _F8, _I8), cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _lookup(pm: float, hk: float, want: int) -> tuple[float, float, float, float]:
     """(T K, dT/dh K per kJ/kg, rho kg/m3, drho/dh) at (MPa, kJ/kg).
 
@@ -634,7 +626,7 @@ def _select_T(pm: float, T: float) -> tuple[int, int, float, float, float, float
     return seg, i, a0, a1, a2, a3, b, lo, hi
 
 
-@njit(_F8(_F8, _F8), cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _patch_h_of_T(pm: float, T: float) -> float:
     """h (kJ/kg) at (MPa, K): exact inverse of the T table on the patch holding (p, T).
 
@@ -674,7 +666,7 @@ def _patch_h_of_T(pm: float, T: float) -> float:
     return lo + (x0 + u * dxi) * (hi - lo)
 
 
-@njit(_F8(_F8, _F8), cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _h_of_T(pm: float, T: float) -> float:
     """h (kJ/kg) at (MPa, K): exact inverse of the T table that ``_lookup`` uses there.
 
@@ -690,7 +682,7 @@ def _h_of_T(pm: float, T: float) -> float:
     return _patch_h_of_T(pm, T)
 
 
-@njit(types.UniTuple(_F8, 10)(_F8), cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _sat(pm: float) -> tuple[float, float, float, float, float, float, float, float, float,
                              float]:
     """Tsat, rho_l, rho_v, h_l, h_v and their d/dp (MPa, kJ/kg units), pm in [PMIN, pc)."""

@@ -9,6 +9,7 @@ import math
 
 import numpy as np
 
+from steamtemp_gym._jit import read_only
 from steamtemp_gym.plants.attemperator import mix
 from steamtemp_gym.plants.benson_subcritical.kernel import _boundary, _reheat, _table, p_setpoint
 from steamtemp_gym.plants.benson_subcritical.layout import (
@@ -125,10 +126,11 @@ def _calibrate(pr: BensonParams, P: np.ndarray) -> None:
     """Size gas sides, radiant heats, valves, fuel and the load schedules (P in place)."""
     n_x = int(P[I_NX])
     x = np.zeros(n_x)
+    Pk = read_only(P)  # what the kernels read (see steamtemp_gym._jit.read_only)
     d = np.array([1.0, 0.0, 0.0, 1.0, 0.0])
     # feedwater / spray tables over load (sliding pressure at design sprays)
     for i, L in enumerate(TAB_LOADS):
-        p = p_setpoint(P, L)
+        p = p_setpoint(Pk, L)
         T_da = pr.T_deaerator_C - pr.dT_deaerator_dload_K * (1.0 - L) + K0
         T_fw = T_da + pr.dT_hp_heaters_K - pr.dT_hp_dload_K * (1.0 - L)
         p_eco = p + P_SHARE[ECO] * P[I_DPB] * L * L
@@ -154,7 +156,7 @@ def _calibrate(pr: BensonParams, P: np.ndarray) -> None:
 
         def resid(uag: float) -> float:
             setf(k, F_UAG, uag)
-            return (_section_steady(x, P, k, h0, W, pk, 1.0, d) - target) * 1e-3
+            return (_section_steady(x, Pk, k, h0, W, pk, 1.0, d) - target) * 1e-3
 
         Tg = P[sec + NF * k + F_TGN]
         T_mean = 0.5 * (T_out + K0 + T_ph(pk, h0))
@@ -167,17 +169,17 @@ def _calibrate(pr: BensonParams, P: np.ndarray) -> None:
         if target <= h0:
             raise ValueError(f"BensonParams: the {SECTIONS[k]} design outlet is below its inlet")
         setf(k, F_QRAD, W * (target - h0) / int(P[sec + NF * k + F_N]))
-        return _section_steady(x, P, k, h0, W, pk, 1.0, d)
+        return _section_steady(x, Pk, k, h0, W, pk, 1.0, d)
 
-    h_fw = _table(P, TB_HFW, 1.0)
+    h_fw = _table(Pk, TB_HFW, 1.0)
     h = conv(ECO, h_fw, W_eco, p + P_SHARE[ECO] * dpb, pr.T_eco_out_C)
     h = rad(EV, h, W_eco, p + P_SHARE[EV] * dpb, pr.T_evap_out_C)
     h_ev = h
     h = conv(SH1, h, W_eco, p + P_SHARE[SH1] * dpb, pr.T_sh1_out_C)
     h = rad(SH2, h, W_eco, p + P_SHARE[SH2] * dpb, pr.T_sh2_out_C)
     # spray valves: fully open passes spray*_max_fraction of W_nom at rated load
-    rho_sp = _table(P, TB_RHOSP, 1.0)
-    h_sp = _table(P, TB_HSP, 1.0)
+    rho_sp = _table(Pk, TB_RHOSP, 1.0)
+    h_sp = _table(Pk, TB_HSP, 1.0)
     for i_cv, share, smax in ((I_CV1, P_SHARE[SH2], pr.spray1_max_fraction),
                               (I_CV2, P_SHARE[SH3], pr.spray2_max_fraction)):  # fmt: skip
         P[i_cv] = smax * W_nom / math.sqrt(rho_sp * (P[I_DPPUMP] - share * dpb))
@@ -189,7 +191,7 @@ def _calibrate(pr: BensonParams, P: np.ndarray) -> None:
     h = conv(SH3, h, W3, p + P_SHARE[SH3] * dpb, pr.T_sh3_out_C)
     W4, h = mix(W3, h, w2, h_sp)
     h_ms = conv(SH4, h, W4, p, pr.T_ms_C)
-    W_t, W_rh, p_rh, p_crh, _ = _reheat(P, p, 1.0)
+    W_t, W_rh, p_rh, p_crh, _ = _reheat(Pk, p, 1.0)
     T_crh = (pr.T_ms_C + K0) * (p_crh / p) ** P[I_KE]
     h_crh = h_pT(p_crh, T_crh)
     h_rh = conv(RH, h_crh, W_rh, p_rh, pr.T_rh_C)
@@ -208,23 +210,23 @@ def _calibrate(pr: BensonParams, P: np.ndarray) -> None:
     for i, L in enumerate(TAB_LOADS):
         dL = np.array([L, 0.0, 0.0, 1.0, 0.0])
         xs[S_V1], xs[S_V2] = P[I_V1D], P[I_V2D]
-        _, _, W_e, w1, w2, *_ = _boundary(xs, dL, P)
-        pL = p_setpoint(P, L) * (W_e + w1 + w2) / (W_nom * L)
+        _, _, W_e, w1, w2, *_ = _boundary(xs, dL, Pk)
+        pL = p_setpoint(Pk, L) * (W_e + w1 + w2) / (W_nom * L)
         xs[S_P] = pL
         target = h_pT(pL, pr.T_ms_C + K0)
 
         def resid(lf: float, dL=dL, pL=pL, target=target) -> float:
-            _upstream_steady(xs, dL, P, lf, pL)
-            return (_sh_steady(xs, dL, P, lf, pL, 4) - target) * 1e-3
+            _upstream_steady(xs, dL, Pk, lf, pL)
+            return (_sh_steady(xs, dL, Pk, lf, pL, 4) - target) * 1e-3
 
         lf = _secant(resid, L, 1.02 * L, f"the firing schedule at {L:.2f} load")
         P[I_TAB + TB_FUEL * N_TAB + i] = lf
-        P[I_TAB + TB_HEV * N_TAB + i] = _upstream_steady(xs, dL, P, lf, pL)
-        P[I_TAB + TB_H3 * N_TAB + i] = _sh_steady(xs, dL, P, lf, pL, 3)
-        _, _, _, p_crh, _ = _reheat(P, pL, L)
+        P[I_TAB + TB_HEV * N_TAB + i] = _upstream_steady(xs, dL, Pk, lf, pL)
+        P[I_TAB + TB_H3 * N_TAB + i] = _sh_steady(xs, dL, Pk, lf, pL, 3)
+        _, _, _, p_crh, _ = _reheat(Pk, pL, L)
         T_crh = (pr.T_ms_C + K0) * (p_crh / pL) ** P[I_KE]
         P[I_TAB + TB_HCRH * N_TAB + i] = h_pT(p_crh, T_crh)
-    if abs(_table(P, TB_HEV, 1.0) - h_ev) > 1.0:  # the schedule must pass the design point
+    if abs(_table(Pk, TB_HEV, 1.0) - h_ev) > 1.0:  # the schedule must pass the design point
         raise ValueError("BensonParams: inconsistent calibration at rated load")
 
 

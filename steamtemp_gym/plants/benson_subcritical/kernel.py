@@ -13,8 +13,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 
+from steamtemp_gym._jit import njit
 from steamtemp_gym.plants.attemperator import mix, spray_flow
 from steamtemp_gym.plants.base import D_FOULING, D_HEAT_BIAS, D_LOAD, D_LOAD_RATE, D_SPRAY_T
 from steamtemp_gym.plants.benson_subcritical.layout import (

@@ -4,8 +4,8 @@ enthalpies and temperatures of a state."""
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 
+from steamtemp_gym._jit import njit
 from steamtemp_gym.plants.attemperator import mix
 from steamtemp_gym.plants.base import D_LOAD, D_LOAD_RATE
 from steamtemp_gym.plants.benson_subcritical.kernel import (

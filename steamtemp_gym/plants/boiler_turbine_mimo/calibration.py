@@ -9,6 +9,7 @@ import math
 
 import numpy as np
 
+from steamtemp_gym._jit import read_only
 from steamtemp_gym.plants.base import D_LOAD
 from steamtemp_gym.plants.boiler_turbine_mimo.kernel import (
     _h_crh_target,
@@ -146,7 +147,8 @@ def _calibrate(params: BoilerTurbineParams, P: np.ndarray, n_x: int) -> None:
     T_rh at load L.
     """
     x = np.zeros(n_x)
-    o_p, o_pl, o_f, o_r = _offsets(P)
+    Pk = read_only(P)  # what the kernels read (see steamtemp_gym._jit.read_only)
+    o_p, o_pl, o_f, o_r = _offsets(Pk)
     n1, n2, n3, n4 = (int(P[i]) for i in (I_N1, I_N2, I_N3, I_N4))
     W = params.W_nom_kg_s
     T_ms = params.T_ms_C + K0
@@ -155,22 +157,22 @@ def _calibrate(params: BoilerTurbineParams, P: np.ndarray, n_x: int) -> None:
         params.p_rh_nom_MPa / params.p_nom_MPa
     )
     for k, L in enumerate(TAB_LOADS):
-        p, _ = _pressure(P, L)
+        p, _ = _pressure(Pk, L)
         p_sp = p + P[I_DPB] * L * L
         T_fw = params.T_fw_nom_C + K0 - params.dT_fw_dload_K * (1.0 - L)
         h = h_pT(p_sp, T_fw)
         P[I_TAB + T_HSP * N_TAB + k] = h
         P[I_TAB + T_RHOSP * N_TAB + k] = rho_ph(p_sp, h)
         P[I_TAB + T_CPSP * N_TAB + k] = cp_pT(p_sp, T_fw)
-        prh, _ = _reheat_pressure(P, L)
+        prh, _ = _reheat_pressure(Pk, L)
         ratio = (prh / p) ** kappa
         P[I_TAB + T_CRHR * N_TAB + k] = ratio
         P[I_TAB + T_TCRH * N_TAB + k] = T_ms * ratio
         P[I_TAB + T_HCRH * N_TAB + k] = h_pT(prh, T_ms * ratio)
         P[I_TAB + T_CPCRH * N_TAB + k] = cp_pT(prh, T_ms * ratio)
     # spray valves: the design opening passes the design fraction at rated load
-    h_sp = _tab(P, T_HSP, 1.0)
-    s = math.sqrt(_tab(P, T_RHOSP, 1.0) * P[I_DPB])
+    h_sp = _tab(Pk, T_HSP, 1.0)
+    s = math.sqrt(_tab(Pk, T_RHOSP, 1.0) * P[I_DPB])
     P[I_CV1] = params.sp1_design_fraction * W / (params.valve_design_opening * s)
     P[I_CV2] = params.sp2_design_fraction * W / (params.valve_design_opening * s)
     # rated design balance
@@ -203,25 +205,25 @@ def _calibrate(params: BoilerTurbineParams, P: np.ndarray, n_x: int) -> None:
     stage(I_UAG_P, o_p, n1, h_up, Wp, p_nom, _kA(P[I_KAF_P], P[I_KAW_P], Wp, W)[0], P[I_TG_P],
           h_po, "the primary SH gas side")  # fmt: skip
     Wr = P[I_FRH] * W
-    prh, _ = _reheat_pressure(P, 1.0)
-    stage(I_UAG_R, o_r, n4, _tab(P, T_HCRH, 1.0), Wr, prh, _kA(P[I_KAF_R], P[I_KAW_R], Wr, Wr)[0],
+    prh, _ = _reheat_pressure(Pk, 1.0)
+    stage(I_UAG_R, o_r, n4, _tab(Pk, T_HCRH, 1.0), Wr, prh, _kA(P[I_KAF_R], P[I_KAW_R], Wr, Wr)[0],
           P[I_TG_R], h_pT(prh, P[I_TRH]), "the reheater gas side")  # fmt: skip
     # evaporator-outlet schedule: design sprays hold T_ms where RGD holds T_rh
     for k, L in enumerate(TAB_LOADS):
         d[D_LOAD] = L
         x[S_LF] = x[S_LW] = L
         x[S_FB] = 0.5
-        x[S_CRH] = _h_crh_target(P, T_ms, L)
-        x[S_G] = _bisect_rgd(x, d, P, P[I_TRH])
-        p, _ = _pressure(P, L)
+        x[S_CRH] = _h_crh_target(Pk, T_ms, L)
+        x[S_G] = _bisect_rgd(x, d, Pk, P[I_TRH])
+        p, _ = _pressure(Pk, L)
 
         def ste(h, L=L, p=p):
             x[S_HUP] = h
-            return T_ph(p, _sh_steady(x, P[I_VD], d, P)) - T_ms
+            return T_ph(p, _sh_steady(x, P[I_VD], d, Pk)) - T_ms
 
         h = _secant(ste, h_up, h_up + 50e3, f"the evaporator-outlet schedule at load {L:.2f}")
         P[I_TAB + T_HUP * N_TAB + k] = h
-        P[I_TAB + T_RISE * N_TAB + k] = h - _tab(P, T_HSP, L)
+        P[I_TAB + T_RISE * N_TAB + k] = h - _tab(Pk, T_HSP, L)
 
 
 def _conductances(n_tubes: int, length: float, d_i: float, d_o: float, alpha: float, k: float,

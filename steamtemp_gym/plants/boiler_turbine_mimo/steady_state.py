@@ -3,8 +3,7 @@ RGD hold their targets under the built-in controllers."""
 
 from __future__ import annotations
 
-from numba import njit
-
+from steamtemp_gym._jit import njit
 from steamtemp_gym.plants.base import D_HEAT_BIAS, D_LOAD
 from steamtemp_gym.plants.boiler_turbine_mimo.kernel import (
     _gas,

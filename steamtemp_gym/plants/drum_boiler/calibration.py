@@ -9,6 +9,7 @@ import math
 
 import numpy as np
 
+from steamtemp_gym._jit import read_only
 from steamtemp_gym.plants import drum as dr
 from steamtemp_gym.plants.attemperator import mix
 from steamtemp_gym.plants.base import D_FOULING, D_LOAD
@@ -88,14 +89,15 @@ def _calibrate(params: DrumBoilerParams, P: np.ndarray, n_x: int) -> None:
     UA_g2 then gives T_out at the outlet.
     """
     x = np.zeros(n_x)
+    Pk = read_only(P)  # what the kernels read (see steamtemp_gym._jit.read_only)
     n = params.n_segments
     c2 = S_CHAIN1 + 2 * n
     p = params.p_drum_MPa * 1e6
     q_s = params.q_s_nom_kg_s
-    h_f, _, _ = _fw(P, P[I_TFW])
+    h_f, _, _ = _fw(Pk, P[I_TFW])
     # level reference: l = 0 at V_wt = V_wt,nom in the rated steady state
     P[I_DRUM + dr.D_L0] = 0.0
-    Q, _ = dr.drum_steady(p, q_s, h_f, 0.0, P, I_DRUM, x, S_DRUM)
+    Q, _ = dr.drum_steady(p, q_s, h_f, 0.0, Pk, I_DRUM, x, S_DRUM)
     P[I_QNOM] = Q
     dV = params.V_wt_nom_m3 - x[S_DRUM + dr.VWT]
     P[I_DRUM + dr.D_L0] = dV / params.A_d_m2
@@ -113,7 +115,7 @@ def _calibrate(params: DrumBoilerParams, P: np.ndarray, n_x: int) -> None:
         lambda g: chain_steady(x, S_CHAIN1, n, h_s, q_s, p1, kA1, g, P[I_TG1], 0.0) - h1_target,
         q1, 1.2 * q1,
     )  # fmt: skip
-    h_sp, rho_sp, _ = _fw(P, P[I_TFW])
+    h_sp, rho_sp, _ = _fw(Pk, P[I_TFW])
     _, h_att = mix(q_s, h1_target, w_sp, h_sp)
     h_out = h_pT(p2, params.T_out_C + K0)
     q2 = W * (h_out - h_att) / n / 500.0
@@ -183,9 +185,10 @@ def _pack(params: DrumBoilerParams) -> tuple[np.ndarray, np.ndarray, np.ndarray,
     D = np.zeros((len(DSP_LOADS), 5))
     D[:, D_LOAD], D[:, D_FOULING] = DSP_LOADS, 1.0
     X = np.zeros((len(DSP_LOADS), n_x))
-    steady(D, np.full(len(DSP_LOADS), params.T_out_C + K0), P, X)
+    Pk = read_only(P)
+    steady(D, np.full(len(DSP_LOADS), params.T_out_C + K0), Pk, X)
     for k in range(len(DSP_LOADS)):
-        P[I_DSP + k] = _boundary(X[k], D[k], P)[4]
+        P[I_DSP + k] = _boundary(X[k], D[k], Pk)[4]
     pat = pattern(n, params.n_line)
     jrow, jcol = pattern_arrays(pat)
     P.setflags(write=False)

@@ -15,8 +15,8 @@ mill and line).
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 
+from steamtemp_gym._jit import njit
 from steamtemp_gym.plants import drum as dr
 from steamtemp_gym.plants.attemperator import mix, protected_spray_out, spray_flow
 from steamtemp_gym.plants.base import D_FOULING, D_HEAT_BIAS, D_LOAD, D_LOAD_RATE, D_SPRAY_T

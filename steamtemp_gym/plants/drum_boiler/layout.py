@@ -4,8 +4,7 @@ states in x and of the outputs in z, and the Jacobian pattern the rhs fills."""
 
 from __future__ import annotations
 
-from numba import njit
-
+from steamtemp_gym._jit import njit
 from steamtemp_gym.plants import drum as dr
 from steamtemp_gym.plants.superheater import chain_pattern, pipe_pattern
 

@@ -3,8 +3,7 @@ opening that holds the outlet setpoint."""
 
 from __future__ import annotations
 
-from numba import njit
-
+from steamtemp_gym._jit import njit
 from steamtemp_gym.plants import drum as dr
 from steamtemp_gym.plants.attemperator import mix
 from steamtemp_gym.plants.base import D_LOAD, D_LOAD_RATE
