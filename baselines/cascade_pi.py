@@ -7,7 +7,7 @@ Every actuator gets the loop its plant declares in ``Plant.control_loops``
   temperature (MAIN: the main-steam error against the setpoint) sets the setpoint
   of the inner (attemperator-outlet) temperature, an inner PI on that temperature
   moves the spray valve: the standard two-loop arrangement of spray attemperation
-  (e.g. the cascade of 004_d5464191c442fd5a.txt, whose inner loop is a P controller);
+  (e.g. the cascade of Zhang et al. 2012, whose inner loop is a P controller);
 - scheduled (inner, SCHEDULED): a PI holds the inner temperature at a setpoint
   scheduled on the load demand, as first-stage sprays are run: the function
   generator is set at commissioning from the plant's steady states at 40-110 % load

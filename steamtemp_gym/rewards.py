@@ -9,10 +9,10 @@ Per control interval (all temperatures in K, e = setpoint - true outlet temperat
         - trip_penalty  if the step terminates the episode (unit trip)
 
 e_k are the errors of the plant's secondary controlled temperatures
-(``Plant.secondary``, e.g. the reheat steam temperature of 002_*.txt, whose
+(``Plant.secondary``, e.g. the reheat steam temperature of Toyoda and Wada 1999, whose
 controller design scores STE and RTE together).
 
-T0 = 20 K is the normalizing temperature of 000_f43a9a359eb2e47e.txt (its
+T0 = 20 K is the normalizing temperature of Sagara et al. 1998 (its
 |Delta T_a| <= 20 K maps to [-1, 1]); band_K = 5 K is the inner band plant
 engineers read (REFERENCE_DATA.md: +-5 / +-8 K). The spray term charges spray
 water above the plant's design spray at the current operating point

@@ -16,7 +16,7 @@ import numpy as np
 from steamtemp_gym.plants.base import Plant, Signal
 
 OBS_LIMIT = 5.0
-T0_K = 20.0  # normalizing temperature of 000_f43a9a359eb2e47e.txt
+T0_K = 20.0  # normalizing temperature of Sagara et al. 1998
 
 
 @dataclass(frozen=True)

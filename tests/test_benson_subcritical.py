@@ -1,4 +1,4 @@
-"""Validation of steamtemp/BensonSubcritical-v0 against 001_458073198cb84e92.txt.
+"""Validation of steamtemp/BensonSubcritical-v0 against Ghaffari, Moosavian and Chaibakhsh.
 
 - rated steady state: 18.1 MPa / 535 C main steam, 4.35 MPa / 530 C reheat, feedwater
   80 K above the deaerator, eq. (16) power near the 440 MW rating, both sprays inside

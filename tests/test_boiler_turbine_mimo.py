@@ -1,4 +1,4 @@
-"""Validation of steamtemp/BoilerTurbineMIMO-v0 against 002_f625244f6c852ffd.txt.
+"""Validation of steamtemp/BoilerTurbineMIMO-v0 against Toyoda and Wada 1999.
 
 - Table 1: the heat-exchanger section of eq. (1)-(6) (the platen secondary SH, a fluid and a
   metal state) has Jacobian eigenvalues whose time constants are within 10 % of 6.5 s and

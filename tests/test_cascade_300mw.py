@@ -1,4 +1,4 @@
-"""Validation of steamtemp/Cascade300MW-v0 against 004_d5464191c442fd5a.txt and REFERENCE_DATA.md.
+"""Validation of steamtemp/Cascade300MW-v0 against Zhang et al. 2012 and REFERENCE_DATA.md.
 
 The plant is the paper's pair -2.01/(1+16 s)^2 (spray -> intermediate) and
 2.09/(1+22.3 s)^4 (intermediate -> outlet) at 1 s sampling. Analytic step

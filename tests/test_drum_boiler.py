@@ -1,4 +1,4 @@
-"""Validation of steamtemp/DrumBoilerSH-v0 (003_6ab8c34c4d0cb71f.txt with Astrom-Bell 2000).
+"""Validation of steamtemp/DrumBoilerSH-v0 (Kim (Inha Univ.) with Astrom-Bell 2000).
 
 - rated steady state against Astrom and Bell's nominal values (REFERENCE_DATA.md), within 3 %;
 - the drum's descriptor form against the balances it was derived from (mass and energy of the

@@ -1,4 +1,4 @@
-"""The linearized n-division model of 000_f43a9a359eb2e47e.txt reproduces its Table 1."""
+"""The linearized n-division model of Sagara et al. 1998 reproduces its Table 1."""
 
 import numpy as np
 import pytest

@@ -1,4 +1,4 @@
-"""Validation of steamtemp/SupercriticalFSH-v0 against 000_f43a9a359eb2e47e.txt and field trends.
+"""Validation of steamtemp/SupercriticalFSH-v0 against Sagara et al. 1998 and field trends.
 
 - rated balance across the FSH: h_a0 - h_e0 = 217.8 kJ/kg and T_a0 - T_e0 = 68.5 K (eq. 9);
 - steady state at 100/75/50 % load holds the setpoint with the spray valve inside its range;
@@ -161,7 +161,7 @@ def test_protection_keeps_the_attemperator_above_saturation_at_low_load():
 
 
 def test_heat_to_flow_ratio_is_disturbed_by_a_load_ramp():
-    """000_*.txt Fig. 4: Q/M departs from its steady value while the load ramps down.
+    """Sagara et al. 1998 Fig. 4: Q/M departs from its steady value while the load ramps down.
 
     The load of load_ramp_100_50 through the plant kernel with the valve frozen (no trip
     band: the frozen valve's excursion reaches the env's trip limit).

@@ -1,7 +1,7 @@
 """Superheated steam temperature of a 300 MW boiler as a two-section cascade plant.
 
-Source: 004_d5464191c442fd5a.txt (Zhang, Zhang, Ren, Hou, Fang, "Cascade control
-of superheated steam temperature with neuro-PID controller", ISA Trans. 2012),
+Source: Zhang, Zhang, Ren, Hou, Fang, "Cascade control of superheated steam
+temperature with neuro-PID controller", ISA Transactions 51, 2012,
 Section 2 (Fig. 2, Fig. 3) and Section 5. The paper's plant is two transfer
 functions in series, sampled every T_s = 1 s:
 
@@ -79,7 +79,7 @@ a heated tube bank does not grow at low flow), a_T = 1: REFERENCE_DATA.md,
 "Superheater physics": spray-to-outlet gain and time constants both grow
 roughly as 1/load (-3.5 K per kg/s and ~70 s at 100 % vs -11 K per kg/s and
 ~190 s at 37 %, i.e. gain ~ L^-1.15, time ~ L^-1.0). Toyoda and Wada's table
-(002_f625244f6c852ffd.txt, Table 1: 137 s at 2270 t/h, 217 s at 1135 t/h)
+(Toyoda and Wada 1999, Table 1: 137 s at 2270 t/h, 217 s at 1135 t/h)
 shows a milder L^-0.66 on the slow mode; set ``load_time_exponent`` to use it.
 With the defaults:
 
@@ -473,10 +473,10 @@ def steady(D, sp_C, P, X):
 
 
 class Cascade300MW(Plant):
-    """Plant of ``steamtemp/Cascade300MW-v0`` (004_d5464191c442fd5a.txt)."""
+    """Plant of ``steamtemp/Cascade300MW-v0`` (Zhang et al. 2012)."""
 
     id = PLANT_ID
-    source = "004_d5464191c442fd5a.txt"
+    source = "Zhang et al., ISA Transactions 51, 2012"
     Params = CascadeParams
     actions = (
         Signal("spray_valve_cmd", "1", 0.5, 0.5, description="secondary spray valve command"),
@@ -560,7 +560,7 @@ register_named(
         name="setpoint_step_535_545",
         duration_s=2000.0,
         setpoint_offset_C=((0.0, 0.0), (500.0, 0.0), (500.0, 10.0)),
-        description="setpoint 535 C, step to 545 C at 500 s, rated load (004_*.txt, Section 5)",
+        description="setpoint 535 C, step to 545 C at 500 s, rated load (Zhang et al. 2012)",
     ),
     plants=[PLANT_ID],
 )

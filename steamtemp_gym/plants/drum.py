@@ -2,7 +2,7 @@
 
 Source: K.J. Astrom and R.D. Bell, "Drum-boiler dynamics", Automatica 36 (2000)
 363-378, and the
-water-tube boiler thesis in 003_6ab8c34c4d0cb71f.txt (Inha Univ.), whose eq. (1)-(8)
+water-tube boiler thesis of Kim (Inha Univ.), whose eq. (1)-(8)
 and (16)-(22) are the same balances without the steam volume under the level. The
 thesis's numbers lost digits in extraction, so all parameters are Astrom-Bell's.
 

@@ -1,4 +1,4 @@
-"""Linearized n-division heating-surface model of 000_f43a9a359eb2e47e.txt, eq. (1)-(8).
+"""Linearized n-division heating-surface model of Sagara et al. 1998, eq. (1)-(8).
 
 All variables are normalized deviations (Table 2). With G = 1/(T s + 1) per
 division, T = T_s / n:
@@ -65,5 +65,5 @@ def gain_and_delay(n: int, nu: float, T: float = 1.0) -> dict[str, tuple[float, 
 
 
 def table1(n: int, nu: float, T: float = 1.0) -> dict[str, tuple[float, float]]:
-    """The closed forms of Table 1 of 000_*.txt: (P^0, D) for theta_n/u_1 and theta_n/w."""
+    """The closed forms of Table 1 of Sagara et al. 1998: (P^0, D) for theta_n/u_1 and theta_n/w."""
     return {"u1": (nu**n, nu * n * T), "w": (nu, ((n + 1) / 2.0 * nu - 1.0) * T)}

@@ -1,6 +1,6 @@
 """Final superheater (FSH) of a supercritical, sliding-pressure once-through boiler.
 
-Source: 000_f43a9a359eb2e47e.txt (Sagara et al., JSME 1998), Fig. 1 and eq. (1)
+Source: Sagara et al. (JSME Int. J. Ser. C, 1998), Fig. 1 and eq. (1)
 and (9): an n-division distributed heating surface with flow-dependent heat
 transfer (Nusselt exponent m = 0.8), a spray attemperator at the FSH inlet fed
 by the outlet of the superheater one step upstream, heat absorption Q and steam
@@ -26,7 +26,7 @@ Model (states in SI):
   Conversion 15(3), 312-322, 2000); 60 s + 90 s: plausible defaults in that range,
   unverified for this unit. The BIR lead (30 s) compensates only part of the
   150 s lag, as on real units: during ramps L_f/L_w departs from 1, the
-  disturbance of the ratio Q/M in 000_*.txt Fig. 4 and the main driver of the
+  disturbance of the ratio Q/M in Sagara et al. 1998 Fig. 4 and the main driver of the
   steam-temperature excursion (a feed-forward on the load demand and its rate can
   anticipate it).
 - pressure slides with steam flow: p = p_nom above 90 % load, linear down to
@@ -84,7 +84,7 @@ Nominal values: the paper gives h_a0 - h_e0 = 217.8 kJ/kg and T_a0 - T_e0 =
 hold together at 24.8 MPa and 593 C outlet (inlet 524.5 C): the FSH of a
 24.1 MPa / 593 C ultra-supercritical unit of the paper's era (turbine throttle
 24.1 MPa after the main-steam-line drop). Rated flow 2270 t/h (the rated flow of
-002_f625244f6c852ffd.txt Table 1, a unit of the same class). Tube geometry,
+Toyoda and Wada 1999 Table 1, a unit of the same class). Tube geometry,
 metal mass and gas-side figures are plausible defaults sized from the IDAES
 320 MW platen and ClaRa figures in REFERENCE_DATA.md (unverified for this unit);
 the gas-side conductance is sized so that the rated balance above holds.
@@ -141,14 +141,14 @@ P_CRIT_PA = 22.064e6  # critical pressure of water (IAPWS-IF97)
 class FSHParams:
     """Parameters of the supercritical FSH (units in the names; sources in the module doc)."""
 
-    n_segments: int = 8  # divisions along the tube (000_*.txt uses n = 3 in its observer)
+    n_segments: int = 8  # divisions along the tube (Sagara et al. 1998 uses n = 3 in its observer)
     W_nom_kg_s: float = 2270e3 / 3600.0  # rated main-steam flow, 2270 t/h
     p_nom_MPa: float = 24.8  # FSH outlet pressure at rated load
     p_min_MPa: float = 8.0  # sliding-pressure floor
     slide_high_load: float = 0.9  # constant pressure above this load
     slide_low_load: float = 0.3  # p_min at and below this load
     T_out_C: float = 593.0  # outlet temperature setpoint
-    dh_fsh_nom_kJ_kg: float = 217.8  # h_a0 - h_e0 at rated load (000_*.txt)
+    dh_fsh_nom_kJ_kg: float = 217.8  # h_a0 - h_e0 at rated load (Sagara et al. 1998)
     n_tubes: int = 480
     tube_length_m: float = 50.0
     tube_id_m: float = 0.036
@@ -516,7 +516,7 @@ def _calibrate(params: FSHParams, P: np.ndarray, n_x: int) -> None:
     """Size the gas side and the fuel/water-ratio schedule (writes P in place).
 
     UA_g is set so that, at rated load with inlet enthalpy h_a0 - 217.8 kJ/kg, the
-    steady FSH delivers h_a0 = h(p_nom, T_out) (000_*.txt's rated balance). The
+    steady FSH delivers h_a0 = h(p_nom, T_out) (Sagara et al. 1998's rated balance). The
     schedule h_up(L) is what the fuel/water-ratio control must deliver for the
     design spray fraction to hold T_out at every load.
     """
@@ -618,10 +618,10 @@ KERNELS = (rhs, outputs, project)
 
 
 class SupercriticalFSH(Plant):
-    """Plant of ``steamtemp/SupercriticalFSH-v0`` (000_f43a9a359eb2e47e.txt)."""
+    """Plant of ``steamtemp/SupercriticalFSH-v0`` (Sagara et al. 1998)."""
 
     id = "steamtemp/SupercriticalFSH-v0"
-    source = "000_f43a9a359eb2e47e.txt"
+    source = "Sagara et al., JSME Int. J. Ser. C, 1998"
     Params = FSHParams
     actions = (Signal("spray_valve_cmd", "1", 0.5, 0.5, description="spray valve command"),)
     outputs = (

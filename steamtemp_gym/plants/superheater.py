@@ -3,7 +3,7 @@
 Per segment i = 1..N, with steam enthalpy h_i and metal temperature T_m,i as
 states (the lumped segment model of the superheater literature, steam-side heat
 transfer scaled as Dittus-Boelter, Nu = 0.023 Re^0.8 Pr^0.4; the n-division model
-of 000_f43a9a359eb2e47e.txt, eq. (1)):
+of Sagara et al. 1998, eq. (1)):
 
     M_f,i dh_i/dt      = W (h_{i-1} - h_i) + kA_i (T_m,i - T(p, h_i))
     C_m,i dT_m,i/dt    = Q_g,i - kA_i (T_m,i - T(p, h_i))
@@ -11,7 +11,7 @@ of 000_f43a9a359eb2e47e.txt, eq. (1)):
     Q_g,i              = UA_g,i (T_g - T_m,i) + Q_rad,i
 
 Steam-side heat transfer follows Dittus-Boelter (Nu = 0.023 Re^0.8 Pr^0.4, the
-exponent m = 0.8 of 000_*.txt); below 10 % of nominal flow it stops falling
+exponent m = 0.8 of Sagara et al. 1998); below 10 % of nominal flow it stops falling
 (as ThermoPower does). The gas side is convective (UA_g, with the fouling
 multiplier folded into UA_g by the caller) plus an optional radiant flux.
 M_f,i = rho(p, h_i) V_i. T(p, h) is the IAPWS-IF97 table lookup of
@@ -28,7 +28,7 @@ from __future__ import annotations
 from steamtemp_gym._jit import njit
 from steamtemp_gym.steam import T_dTdh_ph, T_ph, T_rho_ph
 
-HTC_EXPONENT = 0.8  # m in 000_*.txt eq. (1); Dittus-Boelter Re exponent
+HTC_EXPONENT = 0.8  # m in Sagara et al. 1998 eq. (1); Dittus-Boelter Re exponent
 HTC_FLOW_FLOOR = 0.1  # fraction of nominal flow below which kA stops falling (ThermoPower)
 
 

@@ -1,6 +1,6 @@
 """Neka 440 MW subcritical once-through Benson boiler with two spray attemperators.
 
-Source: 001_458073198cb84e92.txt (Ghaffari, Moosavian and Chaibakhsh, experimental
+Source: Ghaffari, Moosavian and Chaibakhsh (experimental
 fuzzy modelling and control of a once-through boiler; unit 2 of the Neka power plant).
 Plant data from its section IV: subcritical once-through Benson boiler, two-pass, single
 reheat, one furnace; evaporator, four superheater units, reheater; main steam 18.1 MPa /

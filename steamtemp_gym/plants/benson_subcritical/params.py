@@ -33,7 +33,7 @@ P_SHARE = (0.85, 0.45, 0.32, 0.20, 0.08, 0.0, 0.0)
 class BensonParams:
     """Parameters of the Neka Benson boiler (units in the names; sources in the module doc)."""
 
-    # --- rating (001_*.txt section IV unless noted)
+    # --- rating (Ghaffari et al. section IV unless noted)
     W_nom_kg_s: float = 375.0  # main-steam flow at 440 MW (heat balance, unverified)
     p_nom_MPa: float = 18.1  # main steam pressure (paper)
     T_ms_C: float = 535.0  # main steam temperature (paper)
@@ -125,7 +125,7 @@ class BensonParams:
     line_volume_m3: float = 15.0  # steam volume of the header and the two main-steam lines
     tau_valve_s: float = 2.0
     valve_rate_per_s: float = 0.1  # full stroke in 10 s
-    tau_tc1_s: float = 5.0  # thermocouple ("a few seconds", 001_*.txt section II)
+    tau_tc1_s: float = 5.0  # thermocouple ("a few seconds", Ghaffari et al. section II)
     tau_tc2_s: float = 20.0  # thermowell ("some tens of seconds", idem)
     dt_s: float = 5.0  # control interval = the paper's sampling time
     n_substeps: int = 1  # ROS2 steps per control interval

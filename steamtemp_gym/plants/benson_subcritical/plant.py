@@ -16,10 +16,10 @@ def _temp(name: str, center: float, scale: float, what: str) -> Signal:
 
 
 class BensonSubcritical(Plant):
-    """Plant of ``steamtemp/BensonSubcritical-v0`` (001_458073198cb84e92.txt)."""
+    """Plant of ``steamtemp/BensonSubcritical-v0`` (Ghaffari et al.)."""
 
     id = "steamtemp/BensonSubcritical-v0"
-    source = "001_458073198cb84e92.txt"
+    source = "Ghaffari, Moosavian and Chaibakhsh, K. N. Toosi Univ. of Technology"
     Params = BensonParams
     actions = (
         Signal("spray_valve_1_cmd", "1", 0.5, 0.5, description="spray 1 (before SH3) command"),

@@ -1,6 +1,6 @@
 """Supercritical once-through boiler-turbine with its existing controllers (MIMO: STE and RTE).
 
-Source: 002_f625244f6c852ffd.txt (Toyoda and Wada, Kyushu Univ. 1999). Section 3, eq. (1)-(6):
+Source: Toyoda and Wada (Kyushu Univ. Research Reports, 1999). Section 3, eq. (1)-(6):
 a heat-exchanger section of fluid and tube metal whose eigenvalues move with steam flow
 (Table 1: time constants 6.5 s and 137 s at 2270 t/h, 8.3 s and 217 s at 1135 t/h; the
 extracted eigenvalue -0.046 lost a digit, 1/217 s = 0.0046 1/s). Section 6, Fig. 5-6: a

@@ -25,7 +25,7 @@ class BoilerTurbineParams:
     """Parameters of the boiler-turbine unit (units in the names; sources in the module doc).
 
     The platen (secondary SH) values are effective lumped values fitted to Table 1 of
-    002_*.txt; every other value is a plausible default, unverified.
+    Toyoda and Wada 1999; every other value is a plausible default, unverified.
     """
 
     # unit and operating program

@@ -20,7 +20,7 @@ _FUEL_BIAS_ACTION = Signal(
 
 
 class BoilerTurbineMIMO(Plant):
-    """Plant of ``steamtemp/BoilerTurbineMIMO-v0`` (002_f625244f6c852ffd.txt).
+    """Plant of ``steamtemp/BoilerTurbineMIMO-v0`` (Toyoda and Wada 1999).
 
     Actions: SP1, SP2 spray valves and the RGD damper (plus the FF bias with
     ``params={"fuel_bias_action": True}``). ``outlet`` is STE; RTE is observed (measured)
@@ -28,7 +28,7 @@ class BoilerTurbineMIMO(Plant):
     """
 
     id = "steamtemp/BoilerTurbineMIMO-v0"
-    source = "002_f625244f6c852ffd.txt"
+    source = "Toyoda and Wada, Kyushu Univ. Research Reports 4(2), 1999"
     Params = BoilerTurbineParams
     actions = (
         Signal("sp1_valve_cmd", "1", 0.5, 0.5, description="primary spray SP1 valve command"),

@@ -1,8 +1,7 @@
 """Natural-circulation drum boiler with primary superheater, spray attemperator and final SH.
 
-Source: 003_6ab8c34c4d0cb71f.txt (from "Transcription:" on: Kim, "A Study on
-Water-Tube Boiler Modeling", M.Sc. thesis, Inha Univ.): a natural-circulation
-water-tube drum boiler in the Astrom-Bell form, inputs steam flow q_s, feedwater
+Source: Kim, "A Study on Water-Tube Boiler Modeling", M.Eng. thesis, Inha Univ.: a
+natural-circulation water-tube drum boiler in the Astrom-Bell form, inputs steam flow q_s, feedwater
 q_f and riser heat Q_r (its Fig. 2), balances eq. (1)-(8), descriptor form eq. (21),
 steady state eq. (22), step responses Fig. 6-8 and linearization at three operating
 points eq. (23)-(31). Digits were lost in the extraction, so the drum parameters are

@@ -13,10 +13,10 @@ from steamtemp_gym.plants.drum_boiler.steady_state import steady
 
 
 class DrumBoilerSH(Plant):
-    """Plant of ``steamtemp/DrumBoilerSH-v0`` (003_6ab8c34c4d0cb71f.txt with Astrom-Bell 2000)."""
+    """Plant of ``steamtemp/DrumBoilerSH-v0`` (Kim (Inha Univ.) with Astrom-Bell 2000)."""
 
     id = "steamtemp/DrumBoilerSH-v0"
-    source = "003_6ab8c34c4d0cb71f.txt"
+    source = "Kim, M.Eng. thesis, Inha Univ.; Astrom and Bell, Automatica 2000"
     Params = DrumBoilerParams
     actions = (Signal("spray_valve_cmd", "1", 0.5, 0.5, description="spray valve command"),)
     outputs = (
