@@ -21,6 +21,12 @@ For each plant, on one thread, at B = 1 and B = ``--batch`` rows of the native v
 - **Python**: env step minus commands, plant step and ``advance``: what the interpreter
   spends around the kernels (argument passing, info, autoreset bookkeeping).
 
+``--asm`` also compiles each plant afresh in a subprocess (an empty cache folder: numba
+cannot disassemble code loaded from its cache) and counts, in the machine code of the
+plant step and of ``advance``, the double-precision arithmetic instructions that work on
+packed vectors (``...pd``) against scalar ones (``...sd``), and the instructions touching
+256-bit registers: whether LLVM put the vector units to work.
+
 Steam calls are counted in a subprocess that runs the plant's step as plain Python
 (numba's ``njit`` replaced by the identity for plant code, the steam kernels compiled and
 wrapped in counters), so the counts are those of the compiled step's code paths. Each
@@ -32,8 +38,10 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import subprocess
 import sys
+import tempfile
 import time
 from collections.abc import Callable
 
@@ -114,6 +122,34 @@ def steam_calls(env_id: str) -> tuple[dict[str, int], dict[str, np.ndarray]]:
                          check=True).stdout  # fmt: skip
     data = json.loads(out.strip().splitlines()[-1])
     return data["counts"], {k: np.array(v) for k, v in data["samples"].items()}
+
+
+ASM = r"""
+import json, re, sys
+import gymnasium as gym
+import steamtemp_gym
+from steamtemp_gym.envs.core import advance
+env = gym.make(sys.argv[1])
+env.reset(seed=0)
+env.step(env.action_space.sample())
+arith = re.compile(r"^\s+v?(?:add|sub|mul|div|sqrt|max|min|fn?m(?:add|sub)\d*)(pd|sd)\b", re.M)
+out = {}
+for name, f in (("plant step", env.unwrapped.core.plant.kernel()), ("advance", advance)):
+    asm = "\n".join(f.inspect_asm(sig) for sig in f.signatures)
+    kinds = arith.findall(asm)
+    out[name] = {"packed": kinds.count("pd"), "scalar": kinds.count("sd"),
+                 "ymm": len(re.findall(r"%ymm", asm)), "lines": asm.count("\n")}
+print(json.dumps(out))
+"""
+
+
+def vector_units(env_id: str) -> dict[str, dict[str, int]]:
+    """Packed and scalar double arithmetic in the plant step's and advance's machine code."""
+    with tempfile.TemporaryDirectory() as cache:
+        env = dict(os.environ, STEAMTEMP_GYM_CACHE_DIR=cache)
+        out = subprocess.run([sys.executable, "-c", ASM, env_id], capture_output=True,
+                             text=True, check=True, env=env).stdout  # fmt: skip
+    return json.loads(out.strip().splitlines()[-1])
 
 
 # ---------------------------------------------------------------- compiled timing loops
@@ -307,6 +343,8 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--envs", default=",".join(steamtemp_gym.ENV_IDS))
     ap.add_argument("--batch", type=int, default=4096)
     ap.add_argument("--seconds", type=float, default=0.5)
+    ap.add_argument("--asm", action="store_true",
+                    help="count packed vs scalar arithmetic in the machine code (compiles afresh)")
     args = ap.parse_args(argv)
     ids = args.envs.split(",")
     unknown = sorted(set(ids) - set(steamtemp_gym.ENV_IDS))
@@ -324,6 +362,16 @@ def main(argv: list[str] | None = None) -> None:
             cells = [f"{row[c]:,.0f}" if c in row else "-" for c in COLUMNS]
             print(f"| {env_id.split('/')[1]} | {batch} | " + " | ".join(cells)
                   + f" | {n_steam} |")  # fmt: skip
+    if args.asm:
+        print("\ndouble arithmetic in the machine code: packed (SIMD) / scalar instructions, "
+              "and instructions on 256-bit registers\n")
+        print("| id | kernel | packed | scalar | packed share | ymm |")
+        print("|---|---|---|---|---|---|")
+        for env_id in ids:
+            for name, c in vector_units(env_id).items():
+                share = c["packed"] / max(c["packed"] + c["scalar"], 1)
+                print(f"| {env_id.split('/')[1]} | {name} | {c['packed']} | {c['scalar']} | "
+                      f"{share:.1%} | {c['ymm']} |")
 
 
 if __name__ == "__main__":

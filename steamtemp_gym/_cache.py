@@ -2,7 +2,7 @@
 
 The plants' numba kernels are compiled on first use and cached on disk
 (``cache=True``), so that later processes load them in about a second instead of
-compiling for 10-30 s.
+compiling for 5-25 s per plant.
 
 Location: ``$STEAMTEMP_GYM_CACHE_DIR`` if set, else ``$NUMBA_CACHE_DIR``, else
 ``$XDG_CACHE_HOME/steamtemp_gym`` (default ``~/.cache/steamtemp_gym``). Inside it,
@@ -160,7 +160,7 @@ class _CompileNotice(event.Listener):
         self.last = time.monotonic()
         log.warning(
             "steamtemp_gym: compiling kernels on first use (once per code version, about "
-            "10-30 s per plant; cached in %s)",
+            "5-25 s per plant; cached in %s)",
             self.where,
         )
 

@@ -36,8 +36,8 @@ A plant supplies two compiled functions:
 :func:`make_batched_step` returns the batched kernel
 ``step(X, U, D, P, jrow, jcol, dt, n_sub, Z)`` that advances every row of X
 by ``dt`` in ``n_sub`` ROS2 steps with the inputs held (zero-order hold) and
-fills Z. It is a copy of one template per plant, compiled and cached on disk like
-any kernel (plants/specialize.py).
+fills Z (unless built without outputs). It is a copy of one template per plant,
+compiled and cached on disk like any kernel (plants/specialize.py).
 """
 
 from __future__ import annotations
@@ -149,10 +149,15 @@ def _batched_step(X, U, D, P, jrow, jcol, dt, n_sub, Z):  # noqa: N803
         outputs(x, u, d, P, Z[b])
 
 
+@njit(cache=True, error_model="numpy")
+def _no_outputs(x, u, d, p, z):
+    """Bound in place of ``outputs`` when the caller computes them itself."""
+
+
 def make_batched_step(
     name: str,
     rhs: Callable,
-    outputs: Callable,
+    outputs: Callable | None,
     project: Callable,
     actuators: np.ndarray | None = None,
 ) -> Callable:
@@ -161,7 +166,9 @@ def make_batched_step(
     Args:
         name: The plant's name, unique per set of functions (it names the cache entry).
         rhs: Compiled right-hand side (see module docstring).
-        outputs: Compiled output map.
+        outputs: Compiled output map, or None for a step that leaves Z alone: for plants
+            whose own step finishes the state after ROS2 (exact lags) and then computes the
+            outputs once.
         project: Compiled ``project(x, p)`` that clips states to their physical
             ranges after each step (valve opening in [0, 1], ...).
         actuators: int array (k, 3): for each of the first k actions, the state index of
@@ -178,5 +185,6 @@ def make_batched_step(
         ``step(X, U, D, P, jrow, jcol, dt, n_sub, Z)``, in place on X and Z.
     """
     act = np.zeros((0, 3), dtype=np.int64) if actuators is None else np.asarray(actuators, np.int64)
+    outputs = _no_outputs if outputs is None else outputs
     return specialize(_batched_step, name, rhs=rhs, outputs=outputs, project=project,
                       ACTUATORS=act.reshape(-1, 3))  # fmt: skip

@@ -494,7 +494,8 @@ def project(x, P):
         x[j] = min(max(x[j], 280.0), 1400.0)
 
 
-_ROS2 = make_batched_step("BensonSubcritical", rhs, outputs, project)
+# outputs None: step computes them once, after finishing the fuel state
+_ROS2 = make_batched_step("BensonSubcritical", rhs, None, project)
 
 
 @njit(cache=True, nogil=True)  # threads run it on blocks of rows (plants/threads.py)

@@ -462,7 +462,8 @@ def project(x, P):
 KERNELS = (rhs, outputs, project)
 
 ACTUATORS = ((S_V1, I_TAUV, I_RATEV), (S_V2, I_TAUV, I_RATEV), (S_G, I_TAUD, I_RATED))
-_ROS2 = make_batched_step("BoilerTurbineMIMO", *KERNELS, ACTUATORS)
+# outputs None: step computes them once, after finishing the mill and furnace states
+_ROS2 = make_batched_step("BoilerTurbineMIMO", rhs, None, project, ACTUATORS)
 
 
 @njit(cache=True, nogil=True)  # threads run it on blocks of rows (plants/threads.py)
