@@ -29,9 +29,12 @@ packed vectors (``...pd``) against scalar ones (``...sd``), and the instructions
 
 Steam calls are counted in a subprocess that runs the plant's step as plain Python
 (numba's ``njit`` replaced by the identity for plant code, the steam kernels compiled and
-wrapped in counters), so the counts are those of the compiled step's code paths. Each
-component is timed in a compiled loop over the rows (best of three), so the table gives
-compute per row; at B = 1 the difference to the env step is the per-call overhead.
+wrapped in counters), so the counts are those of the compiled step's code paths. The parts
+of the plant step and the schedules are timed in compiled loops over the rows (compute per
+row); env step, commands, plant step and ``advance`` are timed as called from Python, so at
+B = 1 they include the call overhead. Every component is timed in ``--rounds``
+interleaved rounds and the best kept; the derived columns (integrator rest, observation +
+reward, Python) are differences of such timings and carry their noise.
 """
 
 from __future__ import annotations
@@ -232,23 +235,33 @@ def _schedules_loop(slot, ep, bp_t, bp_v, bp_n, sp_nom, ou, D, sp, reps):
     return sp[0]
 
 
-def per_row_ns(fn: Callable[[int], object], rows: int, seconds: float) -> float:
-    """Best-of-three ns per row of ``fn(reps)``, with reps grown to fill ``seconds``."""
+def per_row_ns(fn: Callable[[int], object], rows: int, seconds: float) -> tuple[int, float]:
+    """(reps, ns per row) of ``fn(reps)``, with reps grown until one call takes ``seconds``."""
     fn(1)
     reps = 1
     while True:
         t0 = time.perf_counter()
         fn(reps)
         dt = time.perf_counter() - t0
-        if dt > seconds / 4 or reps > 1 << 24:
-            break
+        if dt > seconds or reps > 1 << 24:
+            return reps, dt / (reps * rows) * 1e9
         reps *= 4
-    best = dt
-    for _ in range(2):
-        t0 = time.perf_counter()
-        fn(reps)
-        best = min(best, time.perf_counter() - t0)
-    return best / (reps * rows) * 1e9
+
+
+def measure(timers: dict[str, tuple[Callable[[int], object], int]], seconds: float,
+            rounds: int) -> dict[str, float]:
+    """Best ns per row of each timer over ``rounds`` interleaved rounds (a slow spell of the
+    host then hits every component, not one)."""
+    reps = {}
+    best = {}
+    for name, (fn, rows) in timers.items():
+        reps[name], best[name] = per_row_ns(fn, rows, seconds)
+    for _ in range(rounds - 1):
+        for name, (fn, rows) in timers.items():
+            t0 = time.perf_counter()
+            fn(reps[name])
+            best[name] = min(best[name], (time.perf_counter() - t0) / (reps[name] * rows) * 1e9)
+    return best
 
 
 def _rhs_inputs(plant, X: np.ndarray, U: np.ndarray) -> np.ndarray:
@@ -260,7 +273,8 @@ def _rhs_inputs(plant, X: np.ndarray, U: np.ndarray) -> np.ndarray:
     return U
 
 
-def profile(env_id: str, batch: int, seconds: float, counts, samples) -> dict[str, float]:
+def profile(env_id: str, batch: int, seconds: float, rounds: int, counts, samples
+            ) -> dict[str, float]:  # fmt: skip
     venv = gym.make_vec(env_id, num_envs=batch, vectorization_mode="vector_entry_point",
                         scenario="load_following")  # fmt: skip
     venv.reset(seed=0)
@@ -269,67 +283,73 @@ def profile(env_id: str, batch: int, seconds: float, counts, samples) -> dict[st
         venv.step(a)
     core = venv.unwrapped.core
     plant = core.plant
+    X0 = core.X.copy()
+    X, Z = core.X.copy(), core.Z.copy()
 
     def env_step(reps: int) -> None:
         for _ in range(reps):
             venv.step(a)
 
-    row: dict[str, float] = {"env step": per_row_ns(env_step, batch, seconds)}
-    X0 = core.X.copy()
-    row["commands"] = per_row_ns(lambda r: [to_commands(a, core.U) for _ in range(r)], batch,
-                                 seconds)  # fmt: skip
-    X, Z = core.X.copy(), core.Z.copy()
-
     def plant_step(reps: int) -> None:  # forward from the rows' states (as the env does)
         for _ in range(reps):
             plant.step(X, core.U, core.D, Z)
 
-    row["plant step"] = per_row_ns(plant_step, batch, seconds)
+    sched_args = (core.slot, core.ep, core.bp_t, core.bp_v, core.bp_n, plant.setpoint_C,
+                  core.ou.copy(), core.D.copy(), core.sp.copy())  # fmt: skip
+    adv = (X0.copy(), Z.copy(), core.U.copy(), core.U_prev.copy(), core.slot, core.bp_t,
+           core.bp_v, core.bp_n, core.ep.copy(), core.ou.copy(), core.key, core.counter.copy(),
+           core.ints, core.cfg, core.obs_cs, core.D.copy(), core.sp.copy(), core.obs.copy(),
+           core.meas.copy(), core.out.copy())  # fmt: skip
+    timers = {
+        "env step": (env_step, batch),
+        "commands": (lambda r: [to_commands(a, core.U) for _ in range(r)], batch),
+        "plant step": (plant_step, batch),
+        "schedules": (lambda r: _schedules_loop(*sched_args, r), batch),
+        "advance": (lambda r: [advance(*adv) for _ in range(r)], batch),
+    }
     mod = sys.modules[plant.kernel().__module__]
     fns = getattr(type(plant), "kernels", None) or (getattr(mod, "rhs", None),
                                                    getattr(mod, "outputs", None), None)
+    steam: list[tuple[str, int, str]] = []  # (phase, calls per step, timer)
     if fns[0] is not None:
         name = f"{type(plant).__name__}.profile"
         rl = specialize(_rhs_loop, name, rhs=fns[0])
         ol = specialize(_outputs_loop, name, outputs=fns[1])
         Uc = _rhs_inputs(plant, X0, core.U)
         P, nc = plant.P, plant.jrow.shape[0]
-        t_jac = per_row_ns(lambda r: rl(X0, Uc, core.D, P, nc, r, r >= 0), batch, seconds)
-        t_nojac = per_row_ns(lambda r: rl(X0, Uc, core.D, P, nc, r, r < 0), batch, seconds)
-        n_sub = plant.n_sub
-        row["RHS"] = n_sub * (t_jac + t_nojac)
         n = X0.shape[1]
         jd, ju, jl = np.empty(n), np.zeros(n), np.empty(max(nc, 1))
         Xw = X0.copy()
         fns[0](Xw[0], Uc[0], core.D[0], P, np.empty(n), jd, ju, jl, True)
-        gh = (1.0 + 1.0 / np.sqrt(2.0)) * plant.dt_s / n_sub
-        row["W solve"] = 2 * n_sub * per_row_ns(
-            lambda r: _solve_loop(gh, Xw, jd, ju, jl, plant.jrow, plant.jcol, r), batch, seconds)
+        gh = (1.0 + 1.0 / np.sqrt(2.0)) * plant.dt_s / plant.n_sub
         Zc = Z.copy()
-        row["outputs"] = per_row_ns(lambda r: ol(X0, core.U, core.D, P, Zc, r), batch, seconds)
-        steam_ns = {"rhs": 0.0, "outputs": 0.0}
+        timers.update({
+            "rhs+jac": (lambda r: rl(X0, Uc, core.D, P, nc, r, r >= 0), batch),
+            "rhs": (lambda r: rl(X0, Uc, core.D, P, nc, r, r < 0), batch),
+            "solve": (lambda r: _solve_loop(gh, Xw, jd, ju, jl, plant.jrow, plant.jcol, r),
+                      batch),
+            "outputs": (lambda r: ol(X0, core.U, core.D, P, Zc, r), batch),
+        })  # fmt: skip
         for key, n_calls in counts.items():
             phase, fname = key.split(":")
-            if phase not in steam_ns or n_calls == 0:
+            if phase not in ("rhs", "outputs") or n_calls == 0:
                 continue
             f = getattr(steamtemp_gym.steam, fname)
             A = samples[fname]
             template = STEAM_LOOPS[A.shape[1], isinstance(f(*A[0]), tuple)]
             loop = specialize(template, f"profile.{fname}", steam_fn=f)
-            steam_ns[phase] += n_calls * per_row_ns(lambda r, loop=loop, A=A: loop(A, r),
-                                                    A.shape[0], seconds)
-        row["steam lookups"] = steam_ns["rhs"] + steam_ns["outputs"]
+            timers["steam " + fname] = (lambda r, loop=loop, A=A: loop(A, r), A.shape[0])
+            steam.append((phase, n_calls, "steam " + fname))
+    t = measure(timers, seconds, rounds)
+    row = {k: t[k] for k in ("env step", "commands", "plant step", "schedules")}
+    if fns[0] is not None:
+        row["RHS"] = plant.n_sub * (t["rhs+jac"] + t["rhs"])
+        row["W solve"] = 2 * plant.n_sub * t["solve"]
+        row["outputs"] = t["outputs"]
+        row["steam lookups"] = sum(n_calls * t[timer] for _, n_calls, timer in steam)
         row["integrator rest"] = row["plant step"] - row["RHS"] - row["W solve"] - row["outputs"]
-    sched_args = (core.slot, core.ep, core.bp_t, core.bp_v, core.bp_n, plant.setpoint_C,
-                  core.ou.copy(), core.D.copy(), core.sp.copy())  # fmt: skip
-    row["schedules"] = per_row_ns(lambda r: _schedules_loop(*sched_args, r), batch, seconds)
-    adv = (X0.copy(), Z.copy(), core.U.copy(), core.U_prev.copy(), core.slot, core.bp_t,
-           core.bp_v, core.bp_n, core.ep.copy(), core.ou.copy(), core.key, core.counter.copy(),
-           core.ints, core.cfg, core.obs_cs, core.D.copy(), core.sp.copy(), core.obs.copy(),
-           core.meas.copy(), core.out.copy())  # fmt: skip
-    t_adv = per_row_ns(lambda r: [advance(*adv) for _ in range(r)], batch, seconds)
-    row["observation + reward"] = t_adv - row["schedules"]
-    row["Python"] = row["env step"] - row["commands"] - row["plant step"] - t_adv
+    row["observation + reward"] = t["advance"] - row["schedules"]
+    row["Python"] = row["env step"] - row["commands"] - row["plant step"] - t["advance"]
     venv.close()
     return row
 
@@ -342,7 +362,9 @@ def main(argv: list[str] | None = None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--envs", default=",".join(steamtemp_gym.ENV_IDS))
     ap.add_argument("--batch", type=int, default=4096)
-    ap.add_argument("--seconds", type=float, default=0.5)
+    ap.add_argument("--seconds", type=float, default=0.25,
+                    help="length of one timed call of each component")
+    ap.add_argument("--rounds", type=int, default=5, help="interleaved rounds (best kept)")
     ap.add_argument("--asm", action="store_true",
                     help="count packed vs scalar arithmetic in the machine code (compiles afresh)")
     args = ap.parse_args(argv)
@@ -358,7 +380,7 @@ def main(argv: list[str] | None = None) -> None:
         counts, samples = steam_calls(env_id)
         n_steam = sum(v for k, v in counts.items() if not k.startswith("other:"))
         for batch in (1, args.batch):
-            row = profile(env_id, batch, args.seconds, counts, samples)
+            row = profile(env_id, batch, args.seconds, args.rounds, counts, samples)
             cells = [f"{row[c]:,.0f}" if c in row else "-" for c in COLUMNS]
             print(f"| {env_id.split('/')[1]} | {batch} | " + " | ".join(cells)
                   + f" | {n_steam} |")  # fmt: skip
