@@ -278,3 +278,27 @@ def test_schedule_tables_are_shared_across_rows():
     assert core.bp_t.shape[0] == 1 and core.bp_t.nbytes < 1_000_000
     venv.step(np.zeros(venv.action_space.shape))
     assert TRIP_REASONS[0] == ""
+
+
+def test_a_plant_class_with_its_own_step_is_stepped_through_it():
+    """Core calls the kernel directly with prebuilt arguments for few rows; a plant whose
+    class overrides ``step`` (e.g. a user's wrapper) must still be stepped through it."""
+    from steamtemp_gym.envs.core import Core
+    from steamtemp_gym.scenarios import get
+
+    base = plants.plant_class("steamtemp/Cascade300MW-v0")
+    calls = []
+
+    class Counted(base):
+        def step(self, X, U, D, Z, dt=None):
+            calls.append(X.shape[0])
+            super().step(X, U, D, Z, dt)
+
+    for cls, expected in ((Counted, 3), (base, 0)):
+        calls.clear()
+        core = Core(cls(), 1, RewardConfig())
+        core.reset_row(0, get("setpoint_step"), 7)
+        n_reset = len(calls)
+        for _ in range(3):
+            core.step(np.zeros((1, core.plant.n_u)))
+        assert len(calls) - n_reset == expected

@@ -273,12 +273,19 @@ class Plant:
 
         ``dt = 0`` only evaluates the outputs of the current state.
         """
-        dt = self.dt_s if dt is None else dt
-        args = (X, U, D, self.P, self.jrow, self.jcol, dt, self.n_sub, Z)
+        args = self.step_args(X, U, D, Z, dt)
         if X.shape[0] < MIN_SPLIT_ROWS:
             self.kernel()(*args)
         else:
             run_rows(self.kernel(), args, per_row=(0, 1, 2, 8))
+
+    def step_args(
+        self, X: np.ndarray, U: np.ndarray, D: np.ndarray, Z: np.ndarray, dt: float | None = None
+    ) -> tuple:
+        """The arguments of :meth:`kernel` for :meth:`step` (callers that step the same
+        arrays again and again may build them once)."""
+        dt = self.dt_s if dt is None else dt
+        return (X, U, D, self.P, self.jrow, self.jcol, dt, self.n_sub, Z)
 
     def steady_outputs(
         self, d: np.ndarray, setpoint_C: float | None = None
