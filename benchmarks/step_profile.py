@@ -85,8 +85,12 @@ sys.modules[S.__name__] = proxy
 
 import steamtemp_gym.plants.specialize as SP
 
+rhs_u = []  # the inputs the first RHS evaluation of the step receives
+
 def phased(key, fn):
     def run(*a):
+        if key == "rhs" and phase[0] != "other" and not rhs_u:
+            rhs_u.extend(float(v) for v in a[1])
         outer, phase[0] = phase[0], key
         try:
             return fn(*a)
@@ -114,17 +118,21 @@ X, D, Z = x[None].copy(), d[None].copy(), z[None].copy()
 U = np.full((1, plant.n_u), 0.5)
 counts.clear()
 samples.clear()
+phase[0] = "step"
 plant.step(X, U, D, Z)
-print(json.dumps({"counts": counts, "samples": samples}))
+phase[0] = "other"
+print(json.dumps({"counts": counts, "samples": samples, "rhs_u": rhs_u}))
 """
 
 
-def steam_calls(env_id: str) -> tuple[dict[str, int], dict[str, np.ndarray]]:
-    """Steam calls of one step of one row, as {"phase:function": n}, and their arguments."""
+def steam_calls(env_id: str) -> tuple[dict[str, int], dict[str, np.ndarray], np.ndarray]:
+    """Steam calls of one step of one row, as {"phase:function": n}, their arguments, and
+    the inputs the RHS receives (plants with exact lags pass interval means, not U)."""
     out = subprocess.run([sys.executable, "-c", COUNT, env_id], capture_output=True, text=True,
                          check=True).stdout  # fmt: skip
     data = json.loads(out.strip().splitlines()[-1])
-    return data["counts"], {k: np.array(v) for k, v in data["samples"].items()}
+    samples = {k: np.array(v) for k, v in data["samples"].items()}
+    return data["counts"], samples, np.array(data["rhs_u"])
 
 
 ASM = r"""
@@ -264,16 +272,7 @@ def measure(timers: dict[str, tuple[Callable[[int], object], int]], seconds: flo
     return best
 
 
-def _rhs_inputs(plant, X: np.ndarray, U: np.ndarray) -> np.ndarray:
-    """The inputs ``rhs`` sees: BensonSubcritical's step passes the valves' interval means and
-    the furnace's fuel (its exact lags, plants/benson_subcritical/kernel.py)."""
-    mod = sys.modules[plant.kernel().__module__]
-    if hasattr(mod, "S_F"):
-        return np.column_stack([U[:, 0], U[:, 1], X[:, mod.S_F]])
-    return U
-
-
-def profile(env_id: str, batch: int, seconds: float, rounds: int, counts, samples
+def profile(env_id: str, batch: int, seconds: float, rounds: int, counts, samples, rhs_u
             ) -> dict[str, float]:  # fmt: skip
     venv = gym.make_vec(env_id, num_envs=batch, vectorization_mode="vector_entry_point",
                         scenario="load_following")  # fmt: skip
@@ -315,7 +314,7 @@ def profile(env_id: str, batch: int, seconds: float, rounds: int, counts, sample
         name = f"{type(plant).__name__}.profile"
         rl = specialize(_rhs_loop, name, rhs=fns[0])
         ol = specialize(_outputs_loop, name, outputs=fns[1])
-        Uc = _rhs_inputs(plant, X0, core.U)
+        Uc = np.tile(rhs_u, (batch, 1))  # what the RHS saw in the counted step
         P, nc = plant.P, plant.jrow.shape[0]
         n = X0.shape[1]
         jd, ju, jl = np.empty(n), np.zeros(n), np.empty(max(nc, 1))
@@ -377,10 +376,10 @@ def main(argv: list[str] | None = None) -> None:
     print("| id | B | " + " | ".join(COLUMNS) + " | steam calls/step |")
     print("|---|---|" + "---|" * (len(COLUMNS) + 1))
     for env_id in ids:
-        counts, samples = steam_calls(env_id)
+        counts, samples, rhs_u = steam_calls(env_id)
         n_steam = sum(v for k, v in counts.items() if not k.startswith("other:"))
         for batch in (1, args.batch):
-            row = profile(env_id, batch, args.seconds, args.rounds, counts, samples)
+            row = profile(env_id, batch, args.seconds, args.rounds, counts, samples, rhs_u)
             cells = [f"{row[c]:,.0f}" if c in row else "-" for c in COLUMNS]
             print(f"| {env_id.split('/')[1]} | {batch} | " + " | ".join(cells)
                   + f" | {n_steam} |")  # fmt: skip
