@@ -427,17 +427,49 @@ class Core:
         self.key[b] = np.uint64(key)
         self.counter[b] = 0
         self.out[b] = 0.0
-        schedules(b, self.slot[b], 0.0, self.bp_t, self.bp_v, self.bp_n, self.plant.setpoint_C,
-                  self.ou, self.D, self.sp)  # fmt: skip
+        schedules(*self._schedules_args(b))
         r = slice(b, b + 1)
         self.plant.seed_rows(self.X[r], self.key[r])
         self.plant.steady_state(self.D[r], self.sp[r], self.X[r])
         self.plant.step(self.X[r], self.U[r], self.D[r], self.Z[r], dt=0.0)  # outputs of it
         self.U[b] = self.Z[b, self.valve_idx]
         self.U_prev[b] = self.U[b]
-        observe(b, self.Z, self.ints[N_HEAD : N_HEAD + self.ints[2]], self.obs_cs, self.ints[1],
+        observe(*self._observe_args(b))
+
+    def _schedules_args(self, b: int) -> tuple:
+        """The arguments of ``schedules`` for row b at t = 0."""
+        return (b, self.slot[b], 0.0, self.bp_t, self.bp_v, self.bp_n, self.plant.setpoint_C,
+                self.ou, self.D, self.sp)  # fmt: skip
+
+    def _observe_args(self, b: int) -> tuple:
+        """The arguments of ``observe`` for row b."""
+        return (b, self.Z, self.ints[N_HEAD : N_HEAD + self.ints[2]], self.obs_cs, self.ints[1],
                 self.key, self.counter, self.ep[b, E_NOISE], self.sp, self.D, self.obs,
                 self.meas)  # fmt: skip
+
+    def _step_args(self) -> tuple:
+        """The arguments of ``advance`` (built once; see _alloc_schedules)."""
+        if self._advance_args is None:
+            self._advance_args = (self.X, self.Z, self.U, self.U_prev, self.slot, self.bp_t,
+                                  self.bp_v, self.bp_n, self.ep, self.ou, self.key, self.counter,
+                                  self.ints, self.cfg, self.obs_cs, self.D, self.sp, self.obs,
+                                  self.meas, self.out)  # fmt: skip
+        return self._advance_args
+
+    def compile_calls(self) -> list[tuple[Any, tuple]]:
+        """(kernel, arguments) of the compiled calls of a reset and a step but the plant's
+        steady state, with arguments of the types they really get (actions: float32 or
+        float64), the env's kernels first and the plant's step last.
+
+        What the compile helper (steamtemp_gym/_prewarm.py) compiles, from the types alone.
+        """
+        actions = [np.zeros((self.B, self.plant.n_u), dtype=t) for t in (np.float32, np.float64)]
+        return [(schedules, self._schedules_args(0)),
+                (gauss, (np.uint64(0), 0, OU_CHANNEL)),
+                (observe, self._observe_args(0)),
+                *[(to_commands, (a, self.U)) for a in actions],
+                (advance, self._step_args()),
+                (self.plant.kernel(), self.plant.step_args(self.X, self.U, self.D, self.Z))]
 
     def step(self, A: np.ndarray) -> None:
         """Advance every row by one control interval with actions A (shape checked) in [-1, 1].
@@ -447,14 +479,12 @@ class Core:
         """
         if not to_commands(A, self.U):
             raise ValueError(f"action contains NaN or infinite values: {A.tolist()!r}")
-        if self._advance_args is None:
-            self._advance_args = (self.X, self.Z, self.U, self.U_prev, self.slot, self.bp_t,
-                                  self.bp_v, self.bp_n, self.ep, self.ou, self.key, self.counter,
-                                  self.ints, self.cfg, self.obs_cs, self.D, self.sp, self.obs,
-                                  self.meas, self.out)  # fmt: skip
+        args = self._advance_args
+        if args is None:
+            args = self._step_args()
         if self.B >= MIN_SPLIT_ROWS:
             self.plant.step(self.X, self.U, self.D, self.Z)
-            run_rows(advance, self._advance_args, per_row=ADVANCE_ROWS)
+            run_rows(advance, args, per_row=ADVANCE_ROWS)
             return
         # few rows: the kernels directly with arguments built once (1.3 us of a 10 us step
         # at B=1), unless the plant's class has a step of its own
@@ -462,7 +492,7 @@ class Core:
             self.plant.step(self.X, self.U, self.D, self.Z)
         else:
             self.plant.kernel()(*self._plant_args)
-        advance(*self._advance_args)
+        advance(*args)
 
     def info_row(self, b: int) -> dict[str, float | np.ndarray]:
         """Physical values of row b in engineering units (floats; an array for several valves).

@@ -18,6 +18,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+from steamtemp_gym import _prewarm
 from steamtemp_gym.checks import is_integer, is_real
 from steamtemp_gym.plants.threads import MIN_SPLIT_ROWS, run_rows
 
@@ -213,6 +214,22 @@ class Plant:
         if self.setpoint_param:
             self.setpoint_C = float(getattr(self.params, self.setpoint_param))
 
+    @classmethod
+    def skeleton(cls) -> Plant:
+        """An instance with the default parameters whose kernel arrays (P, jrow, jcol) are
+        placeholders of the right types: nothing is calibrated or compiled.
+
+        For compiling kernels from argument types alone (steamtemp_gym/_prewarm.py); its
+        kernels must never run on its arrays.
+        """
+        from steamtemp_gym._jit import read_only
+
+        plant = cls.__new__(cls)
+        empty = np.zeros(0, dtype=np.int64)
+        plant.pack = lambda params: (read_only(np.zeros(1)), empty, empty, 1)
+        plant.__init__()
+        return plant
+
     # -- to be provided by subclasses ---------------------------------------------
     @staticmethod
     def pack(params: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
@@ -273,6 +290,8 @@ class Plant:
 
         ``dt = 0`` only evaluates the outputs of the current state.
         """
+        if _prewarm.pending:  # the first step: let the compile helper finish
+            _prewarm.wait()
         args = self.step_args(X, U, D, Z, dt)
         if X.shape[0] < MIN_SPLIT_ROWS:
             self.kernel()(*args)

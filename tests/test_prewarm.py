@@ -1,0 +1,166 @@
+"""steamtemp_gym._prewarm: the compile helper that builds a plant's step path from types."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from numba import typeof
+
+import steamtemp_gym
+from steamtemp_gym import _prewarm, plants
+from steamtemp_gym.envs.core import Core
+from steamtemp_gym.rewards import RewardConfig
+
+
+def _types(core: Core) -> list[tuple]:
+    return [(kernel, tuple(typeof(a) for a in args)) for kernel, args in core.compile_calls()]
+
+
+@pytest.mark.parametrize("env_id", steamtemp_gym.ENV_IDS)
+def test_skeleton_compiles_what_the_env_calls(env_id):
+    """The helper compiles, from a skeleton plant, each kernel with exactly the argument
+    types a real env calls it with: after a real reset and steps with float32 and float64
+    actions, every (kernel, types) of the skeleton is among the kernel's signatures."""
+    cls = plants.plant_class(env_id)
+    skeleton = _types(Core(cls.skeleton(), 1, RewardConfig()))
+    env = gym.make(env_id)
+    env.reset(seed=0)
+    env.step(env.action_space.sample())  # float32
+    env.step(np.zeros(env.action_space.shape))  # float64
+    real = _types(env.unwrapped.core)
+    assert [k for k, _ in skeleton] == [k for k, _ in real]
+    for (kernel, sig), (_, real_sig) in zip(skeleton, real, strict=True):
+        assert sig == real_sig, kernel.py_func.__qualname__
+        assert sig in kernel.signatures, (kernel.py_func.__qualname__, sig, kernel.signatures)
+
+
+def test_skeleton_has_placeholders_and_no_calibration():
+    cls = plants.plant_class("steamtemp/SupercriticalFSH-v0")
+    sk = cls.skeleton()
+    assert type(sk) is cls and sk.P.shape == (1,) and not sk.P.flags.writeable
+    assert sk.params == cls.Params() and sk.n_u == len(cls.actions)
+
+
+_USE = """
+import json, sys
+import gymnasium as gym, numpy as np
+import steamtemp_gym
+env = gym.make(sys.argv[1])
+env.reset(seed=0)
+env.step(env.action_space.sample())
+env.step(np.zeros(env.action_space.shape))
+out = {}
+for kernel, _ in env.unwrapped.core.compile_calls():
+    s = kernel.stats
+    out[kernel.py_func.__qualname__] = [sum(s.cache_hits.values()), sum(s.cache_misses.values())]
+print(json.dumps(out))
+"""
+
+
+def test_helper_leaves_the_step_path_in_the_cache(tmp_path):
+    """End to end on an empty cache: the helper process compiles Cascade300MW's step path;
+    a later process (helper off) then loads every kernel of it from the cache, compiling
+    none; the helper's marker is left and its lock removed."""
+    env = dict(os.environ, STEAMTEMP_GYM_CACHE_DIR=str(tmp_path), STEAMTEMP_GYM_PREWARM="0")
+    env.pop("NUMBA_CACHE_DIR", None)
+    path = plants.PLANTS["steamtemp/Cascade300MW-v0"]
+    subprocess.run([sys.executable, "-m", "steamtemp_gym._prewarm", path], env=env, check=True)
+    (folder,) = tmp_path.glob("numba-*/prewarm")
+    assert sorted(f.name for f in folder.iterdir()) == ["Cascade300MW"]
+    out = subprocess.run([sys.executable, "-c", _USE, "steamtemp/Cascade300MW-v0"], env=env,
+                         check=True, capture_output=True, text=True).stdout  # fmt: skip
+    stats = json.loads(out.strip().splitlines()[-1])
+    assert len(stats) == 6  # to_commands twice (float32, float64 actions)
+    for name, (hits, misses) in stats.items():
+        assert misses == 0 and hits >= 1 + (name == "to_commands"), (name, hits, misses)
+
+
+class _FakeProc:
+    def __init__(self, args, **kwargs):
+        self.args, self.kwargs, self.returncode = args, kwargs, None
+        _FakeProc.made.append(self)
+
+    def wait(self, timeout=None):
+        self.returncode = 0
+        return 0
+
+
+@pytest.fixture
+def fake_helpers(tmp_path, monkeypatch):
+    """_prewarm with a temporary cache folder, two CPUs and a recording Popen."""
+    import numba
+
+    _FakeProc.made = []
+    monkeypatch.setattr(numba.config, "CACHE_DIR", str(tmp_path))
+    monkeypatch.setattr(_prewarm.subprocess, "Popen", _FakeProc)
+    monkeypatch.setattr(_prewarm, "_cpus", lambda: 2)
+    monkeypatch.setattr(_prewarm, "_started", set())
+    monkeypatch.setattr(_prewarm, "pending", {})
+    monkeypatch.delenv("STEAMTEMP_GYM_PREWARM", raising=False)
+    return tmp_path / "prewarm"
+
+
+def test_start_runs_one_helper_per_class_on_a_cold_cache(fake_helpers):
+    cls = plants.plant_class("steamtemp/Cascade300MW-v0")
+    _prewarm.start(cls)
+    _prewarm.start(cls)
+    assert len(_FakeProc.made) == 1 and list(_prewarm.pending) == [plants.PLANTS[cls.id]]
+    proc = _FakeProc.made[0]
+    assert proc.args[1:] == ["-m", "steamtemp_gym._prewarm", plants.PLANTS[cls.id]]
+    assert proc.kwargs["env"]["STEAMTEMP_GYM_PREWARM"] == "0"  # no helpers of helpers
+    assert (fake_helpers / "Cascade300MW.lock").exists()
+    _prewarm.wait()
+    assert not _prewarm.pending and proc.returncode == 0
+
+
+@pytest.mark.parametrize("why", ["marker", "lock", "off", "one_cpu"])
+def test_start_does_nothing_when_not_needed(fake_helpers, monkeypatch, why):
+    cls = plants.plant_class("steamtemp/Cascade300MW-v0")
+    fake_helpers.mkdir()
+    if why == "marker":  # an earlier helper finished
+        (fake_helpers / "Cascade300MW").touch()
+    elif why == "lock":  # another process's helper is running
+        (fake_helpers / "Cascade300MW.lock").touch()
+    elif why == "off":
+        monkeypatch.setenv("STEAMTEMP_GYM_PREWARM", "0")
+    else:
+        monkeypatch.setattr(_prewarm, "_cpus", lambda: 1)
+    _prewarm.start(cls)
+    assert _FakeProc.made == [] and not _prewarm.pending
+
+
+def test_a_stale_lock_does_not_block(fake_helpers):
+    cls = plants.plant_class("steamtemp/Cascade300MW-v0")
+    fake_helpers.mkdir()
+    lock = fake_helpers / "Cascade300MW.lock"
+    lock.touch()
+    old = lock.stat().st_mtime - _prewarm.STALE_S - 1
+    os.utime(lock, (old, old))
+    _prewarm.start(cls)
+    assert len(_FakeProc.made) == 1
+
+
+def test_wait_stops_a_helper_that_hangs(monkeypatch):
+    proc = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)"])
+    monkeypatch.setattr(_prewarm, "pending", {"x:Y": proc})
+    monkeypatch.setattr(_prewarm, "TIMEOUT_S", 0.2)
+    _prewarm.wait()
+    assert proc.returncode is not None and not _prewarm.pending
+
+
+def test_read_only_cache_folder_starts_nothing(fake_helpers, monkeypatch):
+    cls = plants.plant_class("steamtemp/Cascade300MW-v0")
+
+    def refuse(self, *a, **k):
+        raise PermissionError("read-only")
+
+    monkeypatch.setattr(Path, "mkdir", refuse)
+    _prewarm.start(cls)
+    assert _FakeProc.made == []
