@@ -2,9 +2,11 @@
 
 For each env id, in a fresh Python process with an empty cache folder
 (``STEAMTEMP_GYM_CACHE_DIR``): the wall time of ``import steamtemp_gym`` +
-``gym.make`` + ``reset`` + one ``step`` (cold: everything compiles), then the same
-in a second process (warm: everything loads from the cache), and the cache's size.
-Then all ids in one folder: the whole cache of a user of every plant.
+``gym.make`` + ``reset`` + one ``step`` (cold: everything compiles, the step path in the
+compile helper of steamtemp_gym/_prewarm.py if there are two CPUs), then the same in a
+second process (warm: everything loads from the cache), and the cache's size; then cold
+again in a third empty folder with the helper off (``STEAMTEMP_GYM_PREWARM=0``: all in
+one process). Then all ids in one folder: the whole cache of a user of every plant.
 
 Machines differ and this one is shared, so each figure is also given as a ratio to a
 reference measured in the same run: a fresh process compiling a fixed numba kernel
@@ -58,9 +60,11 @@ print(time.perf_counter() - t0)
 """
 
 
-def _run(code: str, cache: Path) -> float:
-    """Wall time reported by ``code`` run in a fresh interpreter with cache folder ``cache``."""
-    env = dict(os.environ, STEAMTEMP_GYM_CACHE_DIR=str(cache))
+def _run(code: str, cache: Path, helper: bool = True) -> float:
+    """Wall time reported by ``code`` run in a fresh interpreter with cache folder ``cache``
+    (and the compile helper on or off)."""
+    env = dict(os.environ, STEAMTEMP_GYM_CACHE_DIR=str(cache),
+               STEAMTEMP_GYM_PREWARM="1" if helper else "0")  # fmt: skip
     env.pop("NUMBA_CACHE_DIR", None)
     out = subprocess.run([sys.executable, "-c", code], cwd=ROOT, env=env, check=True,
                          capture_output=True, text=True)  # fmt: skip
@@ -86,15 +90,20 @@ def main(argv: list[str] | None = None) -> None:
 
     with tempfile.TemporaryDirectory() as tmp:
         ref = min(_run(REFERENCE, Path(tmp) / "ref") for _ in range(2))
-        print(f"reference (fresh process compiling one numba kernel): {ref:.2f} s\n")
-        print("| id | cold start, s | x reference | warm start, s | x reference | cache, MB |")
-        print("|---|---|---|---|---|---|")
+        cpus = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
+        print(f"reference (fresh process compiling one numba kernel): {ref:.2f} s; {cpus} CPUs\n")
+        print("| id | cold start, s | x reference | warm start, s | x reference | cache, MB "
+              "| cold, helper off, s | x reference |")  # fmt: skip
+        print("|---|---|---|---|---|---|---|---|")
         for env_id in ids:
             cache = Path(tmp) / env_id.replace("/", "_")
             cold = _run(START.format(env_id=env_id), cache)
             warm = _run(START.format(env_id=env_id), cache)
+            alone = _run(START.format(env_id=env_id), cache.with_name(cache.name + "_alone"),
+                         helper=False)  # fmt: skip
             print(f"| {env_id.split('/')[-1]} | {cold:.1f} | {cold / ref:.1f} | {warm:.2f} | "
-                  f"{warm / ref:.1f} | {size_mb(cache):.1f} |")  # fmt: skip
+                  f"{warm / ref:.1f} | {size_mb(cache):.1f} | {alone:.1f} | "
+                  f"{alone / ref:.1f} |")  # fmt: skip
         shared = Path(tmp) / "all"
         t0 = time.perf_counter()
         for env_id in ids:

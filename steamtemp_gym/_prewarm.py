@@ -16,9 +16,11 @@ The helper runs only if the cache folder is writable and holds no marker of an e
 helper for the class (``prewarm/<Class>``), at least two CPUs are available, and
 ``$STEAMTEMP_GYM_PREWARM`` is not ``0``. Nothing depends on it: a kernel it did not
 compile (it failed, was stopped, or a type differs) compiles in this process as before.
-Both processes may compile a shared kernel (a steam-table lookup) at once; numba's cache
-stays consistent as long as they compile it for the same types, which holds because
-every kernel here has a single signature (tests/test_jit.py).
+Both processes may compile a shared kernel (a steam-table lookup) at once. Numba's cache
+stays consistent when they compile it for the same types, as here: the kernels this
+process compiles meanwhile (calibration, steady state) take one signature each, and
+the helper's ``to_commands``, compiled for two action dtypes, runs here only after a
+reset, hence after :func:`wait`.
 """
 
 from __future__ import annotations
@@ -78,11 +80,15 @@ def start(cls: type) -> None:
         lock.touch()
     except OSError:  # a read-only cache: nothing would be kept
         return
-    pending[path] = subprocess.Popen(
-        [sys.executable, "-m", "steamtemp_gym._prewarm", path],
-        stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
-        env=dict(os.environ, STEAMTEMP_GYM_PREWARM="0"),
-    )  # fmt: skip
+    try:
+        pending[path] = subprocess.Popen(
+            [sys.executable, "-m", "steamtemp_gym._prewarm", path],
+            stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+            env=dict(os.environ, STEAMTEMP_GYM_PREWARM="0"),
+        )  # fmt: skip
+    except OSError as exc:  # no interpreter to start (embedded Python, ...)
+        log.debug("steamtemp_gym: no compile helper: %s", exc)
+        lock.unlink(missing_ok=True)
 
 
 def wait() -> None:
@@ -94,6 +100,7 @@ def wait() -> None:
         except subprocess.TimeoutExpired:
             proc.kill()
             proc.wait()
+            (_folder() / f"{path.split(':')[1]}.lock").unlink(missing_ok=True)
         if proc.returncode:
             log.debug("steamtemp_gym: compile helper of %s exited with %s", path,
                       proc.returncode)  # fmt: skip

@@ -18,6 +18,8 @@ from steamtemp_gym import _prewarm, plants
 from steamtemp_gym.envs.core import Core
 from steamtemp_gym.rewards import RewardConfig
 
+_POPEN = subprocess.Popen
+
 
 def _types(core: Core) -> list[tuple]:
     return [(kernel, tuple(typeof(a) for a in args)) for kernel, args in core.compile_calls()]
@@ -147,12 +149,15 @@ def test_a_stale_lock_does_not_block(fake_helpers):
     assert len(_FakeProc.made) == 1
 
 
-def test_wait_stops_a_helper_that_hangs(monkeypatch):
-    proc = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)"])
+def test_wait_stops_a_helper_that_hangs_and_removes_its_lock(fake_helpers, monkeypatch):
+    proc = _POPEN([sys.executable, "-c", "import time; time.sleep(60)"])
+    fake_helpers.mkdir()
+    (fake_helpers / "Y.lock").touch()
     monkeypatch.setattr(_prewarm, "pending", {"x:Y": proc})
     monkeypatch.setattr(_prewarm, "TIMEOUT_S", 0.2)
     _prewarm.wait()
     assert proc.returncode is not None and not _prewarm.pending
+    assert not (fake_helpers / "Y.lock").exists()
 
 
 def test_read_only_cache_folder_starts_nothing(fake_helpers, monkeypatch):
@@ -164,3 +169,12 @@ def test_read_only_cache_folder_starts_nothing(fake_helpers, monkeypatch):
     monkeypatch.setattr(Path, "mkdir", refuse)
     _prewarm.start(cls)
     assert _FakeProc.made == []
+
+
+def test_no_interpreter_to_start_is_not_an_error(fake_helpers, monkeypatch):
+    def fail(*a, **k):
+        raise FileNotFoundError("no python")
+
+    monkeypatch.setattr(_prewarm.subprocess, "Popen", fail)
+    _prewarm.start(plants.plant_class("steamtemp/Cascade300MW-v0"))
+    assert not _prewarm.pending and not (fake_helpers / "Cascade300MW.lock").exists()
