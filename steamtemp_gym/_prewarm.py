@@ -6,21 +6,22 @@ calibration and the steady state, which need the plant's numbers and run here; t
 other half is the step path (the plant's integrator step, the env's reset and step
 kernels), which needs only the argument types. :func:`start`, called by
 ``plants.make``, starts a helper process (``python -m steamtemp_gym._prewarm
-module:Class``) that compiles the step path from the arguments of a skeleton plant
-(:meth:`Plant.skeleton`: nothing calibrated) and a one-row env core
+module:Class``) that compiles most of the step path from the arguments of a skeleton
+plant (:meth:`Plant.skeleton`: nothing calibrated) and a one-row env core
 (:meth:`Core.compile_calls`), and leaves it in the on-disk cache. This process meanwhile
-calibrates; :meth:`Plant.step` calls :func:`wait` before the first step, so that the
-helper's kernels load from the cache instead of compiling a second time.
+calibrates, compiles the rest of the step path (:data:`HERE`, through :func:`share` when
+the env core is built) and solves the steady state; :meth:`Plant.step` calls :func:`wait`
+before the first step, so that the helper's kernels load from the cache instead of
+compiling a second time.
 
 The helper runs only if the cache folder is writable and holds no marker of an earlier
 helper for the class (``prewarm/<Class>``), at least two CPUs are available, and
 ``$STEAMTEMP_GYM_PREWARM`` is not ``0``. Nothing depends on it: a kernel it did not
 compile (it failed, was stopped, or a type differs) compiles in this process as before.
 Both processes may compile a shared kernel (a steam-table lookup) at once. Numba's cache
-stays consistent when they compile it for the same types, as here: the kernels this
-process compiles meanwhile (calibration, steady state) take one signature each, and
-the helper's ``to_commands``, compiled for two action dtypes, runs here only after a
-reset, hence after :func:`wait`.
+stays consistent when they compile it for the same types, as here: every kernel either
+of them compiles meanwhile takes a single signature, except ``to_commands`` (one per
+action dtype), which only this process compiles.
 """
 
 from __future__ import annotations
@@ -39,6 +40,13 @@ TIMEOUT_S = 300.0
 #: a helper's lock older than this is taken to be left by a process that died (s)
 STALE_S = 600.0
 _DIR = "prewarm"
+#: kernels of the step path this process compiles itself, after the calibration and
+#: before the steady state, while the helper is still at the plant's step: the env's
+#: ``advance``, ``observe`` and ``to_commands`` (about 2 s). This balances the two: with
+#: the helper compiling them too, it finished 2-3 s after this process reached its first
+#: step (SupercriticalFSH 10.2-11.1 s -> 8.0-8.7 s, BensonSubcritical 12.8-14.6 s ->
+#: 11.2-12.9 s; interleaved runs)
+HERE = ("advance", "observe", "to_commands")
 
 #: class path -> running helper; non-empty while a helper may still be compiling
 pending: dict[str, subprocess.Popen] = {}
@@ -106,18 +114,32 @@ def wait() -> None:
                       proc.returncode)  # fmt: skip
 
 
-def compile_step_path(cls: type) -> int:
-    """Compile the step path of plant class ``cls`` from argument types; the number of
-    kernels compiled (or loaded from the cache)."""
+def part(calls: list, here: bool) -> list:
+    """The calls (kernel, arguments) this process compiles (``here``) or the helper does."""
+    return [(k, args) for k, args in calls if (k.py_func.__name__ in HERE) == here]
+
+
+def _compile(calls: list, here: bool) -> None:
     from numba import typeof
 
+    for kernel, args in part(calls, here):
+        kernel.compile(tuple(typeof(a) for a in args))
+
+
+def share(core) -> None:
+    """While a helper runs, compile this process's part of ``core``'s step path
+    (:data:`HERE`); called by the env core once the plant is calibrated."""
+    if pending:
+        _compile(core.compile_calls(), here=True)
+
+
+def compile_step_path(cls: type) -> None:
+    """Compile the helper's part of the step path of plant class ``cls`` from argument
+    types (all of ``Core.compile_calls`` but :data:`HERE`)."""
     from steamtemp_gym.envs.core import Core
     from steamtemp_gym.rewards import RewardConfig
 
-    core = Core(cls.skeleton(), 1, RewardConfig())
-    for kernel, args in core.compile_calls():
-        kernel.compile(tuple(typeof(a) for a in args))
-    return len(core.compile_calls())
+    _compile(Core(cls.skeleton(), 1, RewardConfig()).compile_calls(), here=False)
 
 
 def main(path: str) -> None:

@@ -28,6 +28,7 @@ from typing import Any
 
 import numpy as np
 
+from steamtemp_gym import _prewarm
 from steamtemp_gym import scenarios as sc
 from steamtemp_gym._jit import njit
 from steamtemp_gym.plants.base import (
@@ -323,6 +324,7 @@ class Core:
         #: the rows of gather_info, in order
         self._info_columns = [*self._info_names, "measured_temp_C", "time_s", "setpoint_C", "load",
                               "spray_flow_kg_s"]  # fmt: skip
+        _prewarm.share(self)  # on a cold cache: compile our part while the helper runs
 
     def _alloc_schedules(self, n_slots: int, k: int) -> None:
         """(Re)allocate the schedule tables for n_slots scenarios of k breakpoints, keeping
