@@ -40,17 +40,20 @@ TIMEOUT_S = 300.0
 #: a helper's lock older than this is taken to be left by a process that died (s)
 STALE_S = 600.0
 _DIR = "prewarm"
-#: kernels of the step path this process compiles itself, after the calibration and
-#: before the steady state, while the helper is still at the plant's step: the env's
-#: ``advance``, ``observe`` and ``to_commands`` (about 2 s). This balances the two: with
-#: the helper compiling them too, it finished 2-3 s after this process reached its first
-#: step (SupercriticalFSH 10.2-11.1 s -> 8.0-8.7 s, BensonSubcritical 12.8-14.6 s ->
-#: 11.2-12.9 s; interleaved runs)
-HERE = ("advance", "observe", "to_commands")
+#: kernels of the step path that either process compiles, whichever gets to each first
+#: (claimed by a file ``prewarm/<Class>.<kernel>.claim``): this process when it reaches
+#: its first step while the helper is still at the plant's step (the physics plants), the
+#: helper once it is done with the rest (Cascade300MW, whose step compiles quickly).
+#: Balances the two: with the helper compiling them always, it finished 2-3 s after this
+#: process reached its first step (SupercriticalFSH 10.2-11.1 s -> 8.0-8.7 s,
+#: BensonSubcritical 12.8-14.6 s -> 11.2-12.9 s; interleaved runs)
+SHARED = ("observe", "to_commands", "advance")
 
 #: class path -> running helper; non-empty while a helper may still be compiling
 pending: dict[str, subprocess.Popen] = {}
 _started: set[str] = set()
+#: plant class name -> the step-path calls of this process's env core (share)
+_shared: dict[str, list] = {}
 
 
 def _cpus() -> int:
@@ -86,6 +89,8 @@ def start(cls: type) -> None:
         if lock.exists() and time.time() - lock.stat().st_mtime < STALE_S:
             return  # another process's helper is at it
         lock.touch()
+        for claim in folder.glob(f"{cls.__qualname__}.*.claim"):  # left by a stopped helper
+            claim.unlink(missing_ok=True)
     except OSError:  # a read-only cache: nothing would be kept
         return
     try:
@@ -100,7 +105,11 @@ def start(cls: type) -> None:
 
 
 def wait() -> None:
-    """Wait for the running helpers (at most :data:`TIMEOUT_S` each; then stop them)."""
+    """Compile the :data:`SHARED` kernels the helper has not claimed, then wait for the
+    running helpers (at most :data:`TIMEOUT_S` each; then stop them)."""
+    while _shared:
+        name, calls = _shared.popitem()
+        _compile_shared(name, calls, SHARED)
     while pending:
         path, proc = pending.popitem()
         try:
@@ -114,32 +123,53 @@ def wait() -> None:
                       proc.returncode)  # fmt: skip
 
 
-def part(calls: list, here: bool) -> list:
-    """The calls (kernel, arguments) this process compiles (``here``) or the helper does."""
-    return [(k, args) for k, args in calls if (k.py_func.__name__ in HERE) == here]
+def part(calls: list, shared: bool) -> list:
+    """The calls (kernel, arguments) of :data:`SHARED` kernels, or of the others."""
+    return [(k, args) for k, args in calls if (k.py_func.__name__ in SHARED) == shared]
 
 
-def _compile(calls: list, here: bool) -> None:
+def _compile(calls: list) -> None:
     from numba import typeof
 
-    for kernel, args in part(calls, here):
+    for kernel, args in calls:
         kernel.compile(tuple(typeof(a) for a in args))
 
 
+def _claim(name: str, kernel: str) -> bool:
+    """Whether this process takes the shared ``kernel`` of plant class ``name`` (first come)."""
+    try:
+        os.close(os.open(_folder() / f"{name}.{kernel}.claim", os.O_CREAT | os.O_EXCL))
+    except FileExistsError:
+        return False
+    except OSError:  # cannot tell: compile it (the other may too; same types, harmless)
+        pass
+    return True
+
+
+def _compile_shared(name: str, calls: list, order: tuple[str, ...]) -> None:
+    """Compile, in ``order``, the shared kernels of ``calls`` nobody has claimed."""
+    for kernel in order:
+        group = [(k, args) for k, args in calls if k.py_func.__name__ == kernel]
+        if group and _claim(name, kernel):
+            _compile(group)
+
+
 def share(core) -> None:
-    """While a helper runs, compile this process's part of ``core``'s step path
-    (:data:`HERE`); called by the env core once the plant is calibrated."""
+    """While a helper runs, note ``core``'s step path: :func:`wait` compiles the shared
+    kernels the helper has not claimed (called by the env core once it is built)."""
     if pending:
-        _compile(core.compile_calls(), here=True)
+        _shared[type(core.plant).__qualname__] = part(core.compile_calls(), shared=True)
 
 
 def compile_step_path(cls: type) -> None:
-    """Compile the helper's part of the step path of plant class ``cls`` from argument
-    types (all of ``Core.compile_calls`` but :data:`HERE`)."""
+    """The helper's work: compile the step path of plant class ``cls`` from argument types,
+    the kernels not :data:`SHARED` first, then the shared ones still unclaimed."""
     from steamtemp_gym.envs.core import Core
     from steamtemp_gym.rewards import RewardConfig
 
-    _compile(Core(cls.skeleton(), 1, RewardConfig()).compile_calls(), here=False)
+    calls = Core(cls.skeleton(), 1, RewardConfig()).compile_calls()
+    _compile(part(calls, shared=False))
+    _compile_shared(cls.__qualname__, calls, SHARED[::-1])
 
 
 def main(path: str) -> None:
@@ -150,12 +180,14 @@ def main(path: str) -> None:
     module, name = path.split(":")
     cls = getattr(importlib.import_module(module), name)
     folder = _folder()
+    folder.mkdir(parents=True, exist_ok=True)
     try:
         compile_step_path(cls)
-        folder.mkdir(parents=True, exist_ok=True)
         (folder / name).touch()
     finally:
         (folder / f"{name}.lock").unlink(missing_ok=True)
+        for claim in folder.glob(f"{name}.*.claim"):
+            claim.unlink(missing_ok=True)
 
 
 if __name__ == "__main__":

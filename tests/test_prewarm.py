@@ -6,12 +6,14 @@ import json
 import os
 import subprocess
 import sys
+import types
 from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
 import pytest
 from numba import typeof
+from numba.core import types as types_nb
 
 import steamtemp_gym
 from steamtemp_gym import _prewarm, plants
@@ -67,10 +69,10 @@ print(json.dumps(out))
 
 
 def test_helper_leaves_the_step_path_in_the_cache(tmp_path):
-    """End to end on an empty cache: the helper process compiles its part of
-    Cascade300MW's step path; a later process (helper off) then loads every kernel of that
-    part from the cache, compiling none of it; the helper's marker is left and its lock
-    removed."""
+    """End to end on an empty cache: the helper process alone compiles Cascade300MW's step
+    path (the shared kernels too, nobody claiming them); a later process (helper off) then
+    loads every kernel of it from the cache, compiling none; the helper's marker is left,
+    its lock and claims removed."""
     env = dict(os.environ, STEAMTEMP_GYM_CACHE_DIR=str(tmp_path), STEAMTEMP_GYM_PREWARM="0")
     env.pop("NUMBA_CACHE_DIR", None)
     path = plants.PLANTS["steamtemp/Cascade300MW-v0"]
@@ -82,19 +84,44 @@ def test_helper_leaves_the_step_path_in_the_cache(tmp_path):
     stats = json.loads(out.strip().splitlines()[-1])
     assert len(stats) == 6  # to_commands twice (float32, float64 actions)
     for name, (hits, misses) in stats.items():
-        if name in _prewarm.HERE:  # the first process's part: compiled there
-            assert hits == 0 and misses >= 1, (name, hits, misses)
-        else:
-            assert misses == 0 and hits >= 1 + (name == "to_commands"), (name, hits, misses)
+        assert misses == 0 and hits >= 1 + (name == "to_commands"), (name, hits, misses)
 
 
 def test_the_two_parts_cover_the_step_path_once():
     core = Core(plants.plant_class("steamtemp/DrumBoilerSH-v0").skeleton(), 1, RewardConfig())
     calls = core.compile_calls()
-    here, helper = _prewarm.part(calls, True), _prewarm.part(calls, False)
-    assert [k.py_func.__name__ for k, _ in here] == ["observe", "to_commands", "to_commands",
-                                                     "advance"]  # fmt: skip
-    assert len(here) + len(helper) == len(calls) and helper[-1][0] is core.plant.kernel()
+    shared, helper = _prewarm.part(calls, True), _prewarm.part(calls, False)
+    assert [k.py_func.__name__ for k, _ in shared] == ["observe", "to_commands", "to_commands",
+                                                       "advance"]  # fmt: skip
+    assert len(shared) + len(helper) == len(calls) and helper[-1][0] is core.plant.kernel()
+
+
+class _Kernel:
+    """Stand-in for a dispatcher: records what it is asked to compile."""
+
+    def __init__(self, name):
+        self.py_func = types.SimpleNamespace(__name__=name)
+        self.sigs = []
+
+    def compile(self, sig):
+        self.sigs.append(sig)
+
+
+def test_shared_kernels_go_to_whoever_claims_first(fake_helpers):
+    """wait() compiles the shared kernels the helper has not claimed, each group once (both
+    action dtypes of to_commands together), and only while a helper was running."""
+    fake_helpers.mkdir()
+    obs, cmd, adv = _Kernel("observe"), _Kernel("to_commands"), _Kernel("advance")
+    calls = [(obs, (1.0,)), (cmd, (np.zeros(1, np.float32),)), (cmd, (np.zeros(1),)),
+             (adv, (2,))]  # fmt: skip
+    assert _prewarm._claim("Plant", "advance")  # the helper got there first
+    assert not _prewarm._claim("Plant", "advance")
+    _prewarm._shared["Plant"] = calls
+    _prewarm.wait()
+    assert obs.sigs == [(types_nb.float64,)] and len(cmd.sigs) == 2 and adv.sigs == []
+    assert not _prewarm._shared
+    _prewarm.share(types.SimpleNamespace(plant=None, compile_calls=lambda: calls))
+    assert not _prewarm._shared  # no helper running: nothing noted
 
 
 class _FakeProc:
@@ -118,6 +145,7 @@ def fake_helpers(tmp_path, monkeypatch):
     monkeypatch.setattr(_prewarm, "_cpus", lambda: 2)
     monkeypatch.setattr(_prewarm, "_started", set())
     monkeypatch.setattr(_prewarm, "pending", {})
+    monkeypatch.setattr(_prewarm, "_shared", {})
     monkeypatch.delenv("STEAMTEMP_GYM_PREWARM", raising=False)
     return tmp_path / "prewarm"
 
