@@ -322,8 +322,11 @@ class Core:
         self._plant_args = (plant.step_args(self.X, self.U, self.D, self.Z)
                             if type(plant).step is Plant.step else None)  # fmt: skip
         self._advance_args: tuple | None = None
-        #: compiled entry points of (plant kernel or None, advance) for those arguments
+        #: compiled entry points of (plant kernel or None, advance) for those arguments,
+        #: and of gather_info
         self._entries: tuple | None = None
+        self._gather = None
+        self._no_trips = np.full(batch, TRIP_REASONS[0], dtype=_TRIP_NAMES.dtype)
         #: the rows of gather_info, in order
         self._info_columns = [*self._info_names, "measured_temp_C", "time_s", "setpoint_C", "load",
                               "spray_flow_kg_s"]  # fmt: skip
@@ -506,7 +509,7 @@ class Core:
 
     def __getstate__(self) -> dict:
         """Pickle and deepcopy without the compiled entry points (made again at a step)."""
-        return {**self.__dict__, "_entries": None}
+        return {**self.__dict__, "_entries": None, "_gather": None}
 
     def _entry_points(self, advance_args: tuple) -> tuple:
         """(plant kernel or None, advance): compiled entry points for their arguments' types,
@@ -543,10 +546,15 @@ class Core:
         """Physical values of every row, in engineering units (arrays of shape (B,) or (B, k))."""
         # one compiled gather into a fresh array (a numpy copy per column cost ~5 us at B=1)
         rows = np.empty((len(self._info_cols) + 5, self.B))
-        gather_info(self.Z, self._info_cols, self._spray_cols, self.meas, self.ep, self.sp, self.D,
-                    rows)  # fmt: skip
+        args = (self.Z, self._info_cols, self._spray_cols, self.meas, self.ep, self.sp, self.D,
+                rows)  # fmt: skip
+        if self._gather is None:  # its entry point (see step): the arrays' types never change
+            self._gather = gather_info.compile(tuple(typeof(a) for a in args))
+        self._gather(*args)
         info = dict(zip(self._info_columns, rows, strict=True))
-        info["trip_reason"] = _TRIP_NAMES[self.out[:, 1].astype(np.int64)]
+        codes = self.out[:, 1]
+        info["trip_reason"] = (_TRIP_NAMES[codes.astype(np.int64)] if np.count_nonzero(codes)
+                               else self._no_trips.copy())  # fmt: skip
         if self._valves is not None:
             info["spray_valve"] = self.Z[:, self._valves]
         return info

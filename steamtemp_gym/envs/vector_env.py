@@ -97,8 +97,8 @@ class SteamTempVectorEnv(VectorEnv):
         self._autoreset = np.zeros(self.num_envs, dtype=bool)
         self._shape = (self.num_envs, plant.n_u)
         self._started = False
-        #: (info keys, their mask keys, the all-rows mask), made at the first step
-        self._mask_keys: tuple[tuple[str, ...], list[str], np.ndarray] | None = None
+        #: (info keys, their mask keys, {mask key: the all-rows mask}), made at the first step
+        self._mask_keys: tuple[tuple[str, ...], list[str], dict] | None = None
 
     def _reset_rows(self, rows) -> None:
         for b in rows:
@@ -205,10 +205,11 @@ class SteamTempVectorEnv(VectorEnv):
         if self._mask_keys is None or self._mask_keys[0] != keys:
             every = np.ones(self.num_envs, dtype=bool)  # one shared read-only all-rows mask
             every.flags.writeable = False
-            self._mask_keys = (keys, ["_" + k for k in keys], every)
-        _, mask_keys, every = self._mask_keys
+            mask_keys = ["_" + k for k in keys]
+            self._mask_keys = (keys, mask_keys, dict.fromkeys(mask_keys, every))
+        _, mask_keys, all_rows = self._mask_keys
         if mask is None:  # every row reports
-            info.update(dict.fromkeys(mask_keys, every))
+            info.update(all_rows)
         else:
             masks = np.empty((len(keys), self.num_envs), dtype=bool)  # one allocation
             masks[:] = mask
