@@ -76,7 +76,7 @@ def enabled() -> bool:
 
 def start(cls: type) -> None:
     """Start the compile helper of plant class ``cls`` unless it is not needed (above)."""
-    path = f"{cls.__module__}:{cls.__qualname__}"
+    path = _path(cls)
     if path in _started or not enabled():
         return
     _started.add(path)
@@ -104,20 +104,26 @@ def start(cls: type) -> None:
         lock.unlink(missing_ok=True)
 
 
-def wait() -> None:
-    """Compile the :data:`SHARED` kernels the helper has not claimed, then wait for the
-    running helpers (at most :data:`TIMEOUT_S` each; then stop them)."""
-    while _shared:
-        name, calls = _shared.popitem()
-        _compile_shared(name, calls, SHARED)
-    while pending:
-        path, proc = pending.popitem()
+def _path(cls: type) -> str:
+    return f"{cls.__module__}:{cls.__qualname__}"
+
+
+def wait(cls: type) -> None:
+    """Compile the :data:`SHARED` kernels of plant class ``cls`` that its helper has not
+    claimed, then wait for the helper (at most :data:`TIMEOUT_S`; then stop it). Helpers
+    of other classes go on."""
+    calls = _shared.pop(cls.__qualname__, None)
+    if calls is not None:
+        _compile_shared(cls.__qualname__, calls, SHARED)
+    path = _path(cls)
+    proc = pending.pop(path, None)
+    if proc is not None:
         try:
             proc.wait(timeout=TIMEOUT_S)
         except subprocess.TimeoutExpired:
             proc.kill()
             proc.wait()
-            (_folder() / f"{path.split(':')[1]}.lock").unlink(missing_ok=True)
+            (_folder() / f"{cls.__qualname__}.lock").unlink(missing_ok=True)
         if proc.returncode:
             log.debug("steamtemp_gym: compile helper of %s exited with %s", path,
                       proc.returncode)  # fmt: skip
@@ -157,7 +163,7 @@ def _compile_shared(name: str, calls: list, order: tuple[str, ...]) -> None:
 def share(core) -> None:
     """While a helper runs, note ``core``'s step path: :func:`wait` compiles the shared
     kernels the helper has not claimed (called by the env core once it is built)."""
-    if pending:
+    if _path(type(core.plant)) in pending:
         _shared[type(core.plant).__qualname__] = part(core.compile_calls(), shared=True)
 
 

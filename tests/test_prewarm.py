@@ -114,14 +114,19 @@ def test_shared_kernels_go_to_whoever_claims_first(fake_helpers):
     obs, cmd, adv = _Kernel("observe"), _Kernel("to_commands"), _Kernel("advance")
     calls = [(obs, (1.0,)), (cmd, (np.zeros(1, np.float32),)), (cmd, (np.zeros(1),)),
              (adv, (2,))]  # fmt: skip
+    plant_cls = type("Plant", (), {"__module__": "somewhere"})
     assert _prewarm._claim("Plant", "advance")  # the helper got there first
     assert not _prewarm._claim("Plant", "advance")
     _prewarm._shared["Plant"] = calls
-    _prewarm.wait()
+    _prewarm.wait(plant_cls)
     assert obs.sigs == [(types_nb.float64,)] and len(cmd.sigs) == 2 and adv.sigs == []
     assert not _prewarm._shared
-    _prewarm.share(types.SimpleNamespace(plant=None, compile_calls=lambda: calls))
-    assert not _prewarm._shared  # no helper running: nothing noted
+    core = types.SimpleNamespace(plant=plant_cls(), compile_calls=lambda: calls)
+    _prewarm.share(core)
+    assert not _prewarm._shared  # no helper of that class running: nothing noted
+    _prewarm.pending["somewhere:Plant"] = _FakeProc([])
+    _prewarm.share(core)
+    assert [k for k, _ in _prewarm._shared["Plant"]] == [obs, cmd, cmd, adv]
 
 
 class _FakeProc:
@@ -159,7 +164,9 @@ def test_start_runs_one_helper_per_class_on_a_cold_cache(fake_helpers):
     assert proc.args[1:] == ["-m", "steamtemp_gym._prewarm", plants.PLANTS[cls.id]]
     assert proc.kwargs["env"]["STEAMTEMP_GYM_PREWARM"] == "0"  # no helpers of helpers
     assert (fake_helpers / "Cascade300MW.lock").exists()
-    _prewarm.wait()
+    _prewarm.wait(plants.plant_class("steamtemp/DrumBoilerSH-v0"))  # another plant's step
+    assert _prewarm.pending and proc.returncode is None  # does not wait for this helper
+    _prewarm.wait(cls)
     assert not _prewarm.pending and proc.returncode == 0
 
 
@@ -196,7 +203,7 @@ def test_wait_stops_a_helper_that_hangs_and_removes_its_lock(fake_helpers, monke
     (fake_helpers / "Y.lock").touch()
     monkeypatch.setattr(_prewarm, "pending", {"x:Y": proc})
     monkeypatch.setattr(_prewarm, "TIMEOUT_S", 0.2)
-    _prewarm.wait()
+    _prewarm.wait(type("Y", (), {"__module__": "x"}))
     assert proc.returncode is not None and not _prewarm.pending
     assert not (fake_helpers / "Y.lock").exists()
 

@@ -291,7 +291,7 @@ class Plant:
         ``dt = 0`` only evaluates the outputs of the current state.
         """
         if _prewarm.pending:  # the first step: let the compile helper finish
-            _prewarm.wait()
+            _prewarm.wait(type(self))
         args = self.step_args(X, U, D, Z, dt)
         if X.shape[0] < MIN_SPLIT_ROWS:
             self.kernel()(*args)
