@@ -70,8 +70,10 @@ def _folder() -> Path:
 
 
 def enabled() -> bool:
-    """Whether helpers may run here (the environment variable and the CPUs)."""
-    return os.environ.get("STEAMTEMP_GYM_PREWARM", "1") != "0" and _cpus() >= 2
+    """Whether helpers may run here: the environment variable, the CPUs, and an interpreter
+    to start (not a frozen application, whose executable is not Python)."""
+    return (os.environ.get("STEAMTEMP_GYM_PREWARM", "1") != "0" and _cpus() >= 2
+            and bool(sys.executable) and not getattr(sys, "frozen", False))  # fmt: skip
 
 
 def start(cls: type) -> None:

@@ -170,7 +170,7 @@ def test_start_runs_one_helper_per_class_on_a_cold_cache(fake_helpers):
     assert not _prewarm.pending and proc.returncode == 0
 
 
-@pytest.mark.parametrize("why", ["marker", "lock", "off", "one_cpu"])
+@pytest.mark.parametrize("why", ["marker", "lock", "off", "one_cpu", "frozen"])
 def test_start_does_nothing_when_not_needed(fake_helpers, monkeypatch, why):
     cls = plants.plant_class("steamtemp/Cascade300MW-v0")
     fake_helpers.mkdir()
@@ -180,6 +180,8 @@ def test_start_does_nothing_when_not_needed(fake_helpers, monkeypatch, why):
         (fake_helpers / "Cascade300MW.lock").touch()
     elif why == "off":
         monkeypatch.setenv("STEAMTEMP_GYM_PREWARM", "0")
+    elif why == "frozen":  # e.g. PyInstaller: sys.executable is the application
+        monkeypatch.setattr(sys, "frozen", True, raising=False)
     else:
         monkeypatch.setattr(_prewarm, "_cpus", lambda: 1)
     _prewarm.start(cls)
