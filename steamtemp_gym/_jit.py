@@ -41,6 +41,16 @@ def njit(*args, **kwargs):
     return lambda func: _widen_literals(made(func))
 
 
+def entry_point(kernel: Dispatcher, args: tuple):
+    """The compiled function ``kernel`` runs for arguments of the types of ``args``
+    (compiled or loaded from the cache now, nothing executed).
+
+    Calling it skips numba's dispatch on argument types: only for arguments that always
+    have those types (an env core's own arrays), since it does not check them.
+    """
+    return kernel.compile(tuple(numba.typeof(a) for a in args))
+
+
 def read_only(a: np.ndarray) -> np.ndarray:
     """A read-only view of ``a`` that sees later writes to ``a``.
 

@@ -6,12 +6,12 @@ calibration and the steady state, which need the plant's numbers and run here; t
 other half is the step path (the plant's integrator step, the env's reset and step
 kernels), which needs only the argument types. :func:`start`, called by
 ``plants.make``, starts a helper process (``python -m steamtemp_gym._prewarm
-module:Class``) that compiles most of the step path from the arguments of a skeleton
-plant (:meth:`Plant.skeleton`: nothing calibrated) and a one-row env core
+module:Class``) that compiles the step path from the arguments of a skeleton plant
+(:meth:`Plant.skeleton`: nothing calibrated) and a one-row env core
 (:meth:`Core.compile_calls`), and leaves it in the on-disk cache. This process meanwhile
-calibrates, compiles the rest of the step path (:data:`HERE`, through :func:`share` when
-the env core is built) and solves the steady state; :meth:`Plant.step` calls :func:`wait`
-before the first step, so that the helper's kernels load from the cache instead of
+calibrates and solves the steady state; :meth:`Plant.step` calls :func:`wait` before the
+first step, which compiles the :data:`SHARED` kernels the helper has not claimed yet and
+waits for the rest, so that the helper's kernels load from the cache instead of
 compiling a second time.
 
 The helper runs only if the cache folder is writable and holds no marker of an earlier
@@ -21,7 +21,7 @@ compile (it failed, was stopped, or a type differs) compiles in this process as 
 Both processes may compile a shared kernel (a steam-table lookup) at once. Numba's cache
 stays consistent when they compile it for the same types, as here: every kernel either
 of them compiles meanwhile takes a single signature, except ``to_commands`` (one per
-action dtype), which only this process compiles.
+action dtype), whose claim covers both, so that one process compiles it.
 """
 
 from __future__ import annotations
@@ -32,6 +32,10 @@ import subprocess
 import sys
 import time
 from pathlib import Path
+
+import numba
+
+from steamtemp_gym._jit import entry_point
 
 log = logging.getLogger("steamtemp_gym")
 
@@ -64,9 +68,12 @@ def _cpus() -> int:
 
 
 def _folder() -> Path:
-    import numba
-
     return Path(numba.config.CACHE_DIR) / _DIR
+
+
+def _drop_claims(folder: Path, name: str) -> None:
+    for claim in folder.glob(f"{name}.*.claim"):
+        claim.unlink(missing_ok=True)
 
 
 def enabled() -> bool:
@@ -91,8 +98,7 @@ def start(cls: type) -> None:
         if lock.exists() and time.time() - lock.stat().st_mtime < STALE_S:
             return  # another process's helper is at it
         lock.touch()
-        for claim in folder.glob(f"{cls.__qualname__}.*.claim"):  # left by a stopped helper
-            claim.unlink(missing_ok=True)
+        _drop_claims(folder, cls.__qualname__)  # left by a stopped helper
     except OSError:  # a read-only cache: nothing would be kept
         return
     try:
@@ -137,10 +143,8 @@ def part(calls: list, shared: bool) -> list:
 
 
 def _compile(calls: list) -> None:
-    from numba import typeof
-
     for kernel, args in calls:
-        kernel.compile(tuple(typeof(a) for a in args))
+        entry_point(kernel, args)
 
 
 def _claim(name: str, kernel: str) -> bool:
@@ -194,8 +198,7 @@ def main(path: str) -> None:
         (folder / name).touch()
     finally:
         (folder / f"{name}.lock").unlink(missing_ok=True)
-        for claim in folder.glob(f"{name}.*.claim"):
-            claim.unlink(missing_ok=True)
+        _drop_claims(folder, name)
 
 
 if __name__ == "__main__":

@@ -27,11 +27,10 @@ import dataclasses
 from typing import Any
 
 import numpy as np
-from numba import typeof
 
 from steamtemp_gym import _prewarm
 from steamtemp_gym import scenarios as sc
-from steamtemp_gym._jit import njit
+from steamtemp_gym._jit import entry_point, njit
 from steamtemp_gym.plants.base import (
     D_FOULING,
     D_HEAT_BIAS,
@@ -487,9 +486,7 @@ class Core:
         """
         if not to_commands(A, self.U):
             raise ValueError(f"action contains NaN or infinite values: {A.tolist()!r}")
-        args = self._advance_args
-        if args is None:
-            args = self._step_args()
+        args = self._advance_args or self._step_args()
         if self.B >= MIN_SPLIT_ROWS:
             self.plant.step(self.X, self.U, self.D, self.Z)
             run_rows(advance, args, per_row=ADVANCE_ROWS)
@@ -512,13 +509,10 @@ class Core:
         return {**self.__dict__, "_entries": None, "_gather": None}
 
     def _entry_points(self, advance_args: tuple) -> tuple:
-        """(plant kernel or None, advance): compiled entry points for their arguments' types,
-        which skip numba's dispatch on argument types (the arguments are never others)."""
-        def entry(kernel: Any, args: tuple) -> Any:
-            return kernel.compile(tuple(typeof(a) for a in args))
-
-        kernel = None if self._plant_args is None else entry(self.plant.kernel(), self._plant_args)
-        return kernel, entry(advance, advance_args)
+        """(plant kernel or None, advance): their compiled entry points (_jit.entry_point)."""
+        kernel = (None if self._plant_args is None
+                  else entry_point(self.plant.kernel(), self._plant_args))  # fmt: skip
+        return kernel, entry_point(advance, advance_args)
 
     def info_row(self, b: int) -> dict[str, float | np.ndarray]:
         """Physical values of row b in engineering units (floats; an array for several valves).
@@ -549,7 +543,7 @@ class Core:
         args = (self.Z, self._info_cols, self._spray_cols, self.meas, self.ep, self.sp, self.D,
                 rows)  # fmt: skip
         if self._gather is None:  # its entry point (see step): the arrays' types never change
-            self._gather = gather_info.compile(tuple(typeof(a) for a in args))
+            self._gather = entry_point(gather_info, args)
         self._gather(*args)
         info = dict(zip(self._info_columns, rows, strict=True))
         codes = self.out[:, 1]

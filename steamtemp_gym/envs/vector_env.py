@@ -97,8 +97,8 @@ class SteamTempVectorEnv(VectorEnv):
         self._autoreset = np.zeros(self.num_envs, dtype=bool)
         self._shape = (self.num_envs, plant.n_u)
         self._started = False
-        #: (info keys, their mask keys, {mask key: the all-rows mask}), made at the first step
-        self._mask_keys: tuple[tuple[str, ...], list[str], dict] | None = None
+        #: (the info keys' mask keys, {mask key: the all-rows mask}), made at the first reset
+        self._mask_keys: tuple[list[str], dict] | None = None
 
     def _reset_rows(self, rows) -> None:
         for b in rows:
@@ -201,17 +201,16 @@ class SteamTempVectorEnv(VectorEnv):
     def _info(self, mask: np.ndarray | None = None) -> dict[str, Any]:
         """Info columns, each with its own ``_key`` mask array (True where the row reports)."""
         info = self.core.info_columns()
-        keys = tuple(info)
-        if self._mask_keys is None or self._mask_keys[0] != keys:
+        if self._mask_keys is None:  # the core's info keys never change
             every = np.ones(self.num_envs, dtype=bool)  # one shared read-only all-rows mask
             every.flags.writeable = False
-            mask_keys = ["_" + k for k in keys]
-            self._mask_keys = (keys, mask_keys, dict.fromkeys(mask_keys, every))
-        _, mask_keys, all_rows = self._mask_keys
+            mask_keys = ["_" + k for k in info]
+            self._mask_keys = (mask_keys, dict.fromkeys(mask_keys, every))
+        mask_keys, all_rows = self._mask_keys
         if mask is None:  # every row reports
             info.update(all_rows)
         else:
-            masks = np.empty((len(keys), self.num_envs), dtype=bool)  # one allocation
+            masks = np.empty((len(mask_keys), self.num_envs), dtype=bool)  # one allocation
             masks[:] = mask
             info.update(zip(mask_keys, masks, strict=True))
         return info
