@@ -298,7 +298,7 @@ def profile(env_id: str, batch: int, seconds: float, rounds: int, counts, sample
     adv = (X0.copy(), Z.copy(), core.U.copy(), core.U_prev.copy(), core.slot, core.bp_t,
            core.bp_v, core.bp_n, core.ep.copy(), core.ou.copy(), core.key, core.counter.copy(),
            core.ints, core.cfg, core.obs_cs, core.D.copy(), core.sp.copy(), core.obs.copy(),
-           core.meas.copy(), core.out.copy())  # fmt: skip
+           core.meas.copy(), core.out.copy(), core.info.copy())  # fmt: skip
     timers = {
         "env step": (env_step, batch),
         "commands": (lambda r: [to_commands(a, core.U) for _ in range(r)], batch),

@@ -82,7 +82,7 @@ def test_helper_leaves_the_step_path_in_the_cache(tmp_path):
     out = subprocess.run([sys.executable, "-c", _USE, "steamtemp/Cascade300MW-v0"], env=env,
                          check=True, capture_output=True, text=True).stdout  # fmt: skip
     stats = json.loads(out.strip().splitlines()[-1])
-    assert len(stats) == 6  # to_commands twice (float32, float64 actions)
+    assert len(stats) == 7  # to_commands twice (float32, float64 actions)
     for name, (hits, misses) in stats.items():
         assert misses == 0 and hits >= 1 + (name == "to_commands"), (name, hits, misses)
 

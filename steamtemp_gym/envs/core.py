@@ -52,7 +52,7 @@ MIN_BREAKPOINTS = 64
 #: per-row episode values in Core.ep
 E_TIME, E_DUR, E_NOISE, E_OU_A, E_OU_B = 0, 1, 2, 3, 4
 #: length of the header of Core.ints (before the index lists)
-N_HEAD = 7
+N_HEAD = 8
 #: Why an episode terminated (``info["trip_reason"]``; Core.out[:, 1] holds the index): the
 #: true outlet above or below the plant's trip band, or the plant left its valid region (a
 #: non-finite state or output; its observation is then 0 and its reward that of a trip at
@@ -68,7 +68,9 @@ START_BAND_K = 5.0
 #: noise uses channels 0 .. n_obs - 1)
 OU_CHANNEL = 31
 #: Positions of advance's arguments whose first axis is the batch (the rest are shared).
-ADVANCE_ROWS = (0, 1, 2, 3, 4, 8, 9, 10, 11, 15, 16, 17, 18, 19)
+ADVANCE_ROWS = (0, 1, 2, 3, 4, 8, 9, 10, 11, 15, 16, 17, 18, 19, 20)
+#: The values every info carries after the plant's own outputs (Core.info's last columns).
+INFO_TAIL = ("measured_temp_C", "time_s", "setpoint_C", "load", "spray_flow_kg_s")
 
 
 @njit(cache=True, error_model="numpy")
@@ -144,7 +146,7 @@ def ou_coefficients(std: float, tau_s: float, dt: float) -> tuple[float, float]:
 
 @njit(cache=True, error_model="numpy", nogil=True)  # threads: plants/threads.py
 def advance(X, Z, U, U_prev, slot, bp_t, bp_v, bp_n, ep, ou, key, counter, ints, cfg, obs_cs, D,
-            sp, obs, meas, out):  # fmt: skip
+            sp, obs, meas, out, info):  # fmt: skip
     """Everything after the plant step, for every row (see module docstring).
 
     Args:
@@ -153,12 +155,13 @@ def advance(X, Z, U, U_prev, slot, bp_t, bp_v, bp_n, ep, ou, key, counter, ints,
             time advanced in place.
         ou: (B,) coloured heat-absorption disturbance, advanced in place.
         ints: [i_outlet, i_measured, n_obs_plant, n_valves, n_sprays, n_secondary, i_design,
-            obs idx..., valve idx..., spray idx..., secondary idx...] (output indices;
-            i_design < 0: the plant declares no design spray).
+            n_info, obs idx..., valve idx..., spray idx..., secondary idx..., info idx...]
+            (output indices; i_design < 0: the plant declares no design spray).
         cfg: [dt, sp_nom, trip_below_K, trip_above_K, spray_scale, reward weights...,
             secondary setpoints...].
         meas: (B,) written: the outlet thermocouple's reading (noise included).
         out: (B, 3) written: [reward, trip code (TRIP_REASONS index; 0: running), truncated].
+        info: (B, n_info + 5) written: the row's info values (:func:`fill_info`).
     """
     i_out, i_meas, n_obs, n_v, n_s, n_sec = ints[0], ints[1], ints[2], ints[3], ints[4], ints[5]
     i_design = ints[6]
@@ -166,6 +169,7 @@ def advance(X, Z, U, U_prev, slot, bp_t, bp_v, bp_n, ep, ou, key, counter, ints,
     obs_idx = ints[o : o + n_obs]
     s_idx = ints[o + n_obs + n_v : o + n_obs + n_v + n_s]
     sec_idx = ints[o + n_obs + n_v + n_s : o + n_obs + n_v + n_s + n_sec]
+    info_idx = ints[o + n_obs + n_v + n_s + n_sec : o + n_obs + n_v + n_s + n_sec + ints[7]]
     dt, sp_nom, trip_lo, trip_hi, s_scale = cfg[0], cfg[1], cfg[2], cfg[3], cfg[4]
     w = cfg[5 : 5 + N_WEIGHTS]
     sec_sp = cfg[5 + N_WEIGHTS :]
@@ -176,6 +180,7 @@ def advance(X, Z, U, U_prev, slot, bp_t, bp_v, bp_n, ep, ou, key, counter, ints,
             ou[b] = ep[b, E_OU_A] * ou[b] + ep[b, E_OU_B] * gauss(key[b], counter[b], OU_CHANNEL)
         schedules(b, slot[b], ep[b, E_TIME], bp_t, bp_v, bp_n, sp_nom, ou, D, sp)
         observe(b, Z, obs_idx, obs_cs, i_meas, key, counter, ep[b, E_NOISE], sp, D, obs, meas)
+        fill_info(b, Z, info_idx, s_idx, meas, ep, sp, D, info)
         e = sp[b] - Z[b, i_out]
         code = TRIP_ABOVE if e < -trip_hi else (TRIP_BELOW if e > trip_lo else 0)
         if not (_finite(X, b) and _finite(Z, b)):
@@ -214,21 +219,20 @@ def _finite(A, b):
 
 
 @njit(cache=True, error_model="numpy")
-def gather_info(Z, cols, sprays, meas, ep, sp, D, info):
-    """Fill info (k + 5, B): Z's columns ``cols`` of every row, then the measured
+def fill_info(b, Z, cols, sprays, meas, ep, sp, D, info):
+    """Fill info[b]: Z's columns ``cols`` of row b, then (:data:`INFO_TAIL`) the measured
     temperature, time, setpoint, load and the sum of the spray columns ``sprays``."""
     k = cols.shape[0]
-    for b in range(Z.shape[0]):
-        for j in range(k):
-            info[j, b] = Z[b, cols[j]]
-        info[k, b] = meas[b]
-        info[k + 1, b] = ep[b, E_TIME]
-        info[k + 2, b] = sp[b]
-        info[k + 3, b] = D[b, D_LOAD]
-        spray = 0.0
-        for j in range(sprays.shape[0]):
-            spray += Z[b, sprays[j]]
-        info[k + 4, b] = spray
+    for j in range(k):
+        info[b, j] = Z[b, cols[j]]
+    info[b, k] = meas[b]
+    info[b, k + 1] = ep[b, E_TIME]
+    info[b, k + 2] = sp[b]
+    info[b, k + 3] = D[b, D_LOAD]
+    spray = 0.0
+    for j in range(sprays.shape[0]):
+        spray += Z[b, sprays[j]]
+    info[b, k + 4] = spray
 
 
 @njit(cache=True, error_model="numpy")
@@ -291,44 +295,41 @@ class Core:
         self.i_out = idx[plant.outlet]
         self.valve_idx = [idx[v] for v in plant.valves]
         self.spray_idx = [idx[s] for s in plant.sprays]
+        self.scenario: list[sc.Scenario | None] = [None] * B
+        info_idx = [("outlet_temp_C", self.i_out),
+                    ("measured_temp_noise_free_C", idx[plant.outlet_measured]),
+                    ("spray_valve", self.valve_idx[0])]  # fmt: skip
+        info_idx += [(name, idx[name]) for name in plant.extra_info]
         self.ints = np.array(
             [self.i_out, idx[plant.outlet_measured], len(observed), len(plant.valves),
              len(plant.sprays), len(plant.secondary),
-             idx[plant.design_spray] if plant.design_spray else -1]
+             idx[plant.design_spray] if plant.design_spray else -1, len(info_idx)]
             + observed
             + self.valve_idx
             + self.spray_idx
-            + [idx[name] for name, _ in plant.secondary],
+            + [idx[name] for name, _ in plant.secondary]
+            + [i for _, i in info_idx],
             dtype=np.int64,
         )  # fmt: skip
+        #: the info values of every row, written by advance and reset_row (fill_info); the
+        #: names of its columns
+        self.info = np.zeros((B, len(info_idx) + len(INFO_TAIL)))
+        self._info_columns = [name for name, _ in info_idx] + list(INFO_TAIL)
         spray_scale = plant.outputs[self.spray_idx[0]].scale if self.spray_idx else 1.0
         trip_lo, trip_hi = plant.trip_band_K
         self.cfg = np.concatenate(
             [[plant.dt_s, plant.setpoint_C, trip_lo, trip_hi, spray_scale], reward_cfg.to_array(),
              [sp for _, sp in plant.secondary]]
         )  # fmt: skip
-        self.scenario: list[sc.Scenario | None] = [None] * B
-        self._info_idx = [("outlet_temp_C", self.i_out),
-                          ("measured_temp_noise_free_C", idx[plant.outlet_measured]),
-                          ("spray_valve", self.valve_idx[0])]  # fmt: skip
-        self._info_idx += [(name, idx[name]) for name in plant.extra_info]
         self._valves = self.valve_idx if len(self.valve_idx) > 1 else None
-        self._info_names = [name for name, _ in self._info_idx]
-        self._info_cols = np.array([i for _, i in self._info_idx], dtype=np.int64)
-        self._spray_cols = np.array(self.spray_idx, dtype=np.int64)
         #: arguments of the kernels, built once (the arrays keep their identity; the
         #: schedule tables are reallocated by _alloc_schedules, which clears the second)
         self._plant_args = (plant.step_args(self.X, self.U, self.D, self.Z)
                             if type(plant).step is Plant.step else None)  # fmt: skip
         self._advance_args: tuple | None = None
-        #: compiled entry points of (plant kernel or None, advance) for those arguments,
-        #: and of gather_info
+        #: compiled entry points of (plant kernel or None, advance) for those arguments
         self._entries: tuple | None = None
-        self._gather = None
         self._no_trips = np.full(batch, TRIP_REASONS[0], dtype=_TRIP_NAMES.dtype)
-        #: the rows of gather_info, in order
-        self._info_columns = [*self._info_names, "measured_temp_C", "time_s", "setpoint_C", "load",
-                              "spray_flow_kg_s"]  # fmt: skip
         _prewarm.share(self)  # on a cold cache: compile our part while the helper runs
 
     def _alloc_schedules(self, n_slots: int, k: int) -> None:
@@ -442,6 +443,14 @@ class Core:
         self.U[b] = self.Z[b, self.valve_idx]
         self.U_prev[b] = self.U[b]
         observe(*self._observe_args(b))
+        fill_info(*self._fill_info_args(b))
+
+    def _fill_info_args(self, b: int) -> tuple:
+        """The arguments of ``fill_info`` for row b."""
+        o, (n_obs, n_v, n_s, n_sec, n_info) = N_HEAD, self.ints[[2, 3, 4, 5, 7]]
+        lo = o + n_obs + n_v
+        return (b, self.Z, self.ints[lo + n_s + n_sec : lo + n_s + n_sec + n_info],
+                self.ints[lo : lo + n_s], self.meas, self.ep, self.sp, self.D, self.info)
 
     def _schedules_args(self, b: int) -> tuple:
         """The arguments of ``schedules`` for row b at t = 0."""
@@ -460,7 +469,7 @@ class Core:
             self._advance_args = (self.X, self.Z, self.U, self.U_prev, self.slot, self.bp_t,
                                   self.bp_v, self.bp_n, self.ep, self.ou, self.key, self.counter,
                                   self.ints, self.cfg, self.obs_cs, self.D, self.sp, self.obs,
-                                  self.meas, self.out)  # fmt: skip
+                                  self.meas, self.out, self.info)  # fmt: skip
         return self._advance_args
 
     def compile_calls(self) -> list[tuple[Any, tuple]]:
@@ -474,6 +483,7 @@ class Core:
         return [(schedules, self._schedules_args(0)),
                 (gauss, (np.uint64(0), 0, OU_CHANNEL)),
                 (observe, self._observe_args(0)),
+                (fill_info, self._fill_info_args(0)),
                 *[(to_commands, (a, self.U)) for a in actions],
                 (advance, self._step_args()),
                 (self.plant.kernel(), self.plant.step_args(self.X, self.U, self.D, self.Z))]
@@ -506,7 +516,7 @@ class Core:
 
     def __getstate__(self) -> dict:
         """Pickle and deepcopy without the compiled entry points (made again at a step)."""
-        return {**self.__dict__, "_entries": None, "_gather": None}
+        return {**self.__dict__, "_entries": None}
 
     def _entry_points(self, advance_args: tuple) -> tuple:
         """(plant kernel or None, advance): their compiled entry points (_jit.entry_point)."""
@@ -521,31 +531,15 @@ class Core:
         the observation), ``measured_temp_noise_free_C`` the thermocouple's own temperature
         (its lag, without the noise); ``trip_reason`` is "" or one of :data:`TRIP_REASONS`.
         """
-        z = self.Z[b].tolist()
-        info = {name: z[i] for name, i in self._info_idx}
-        info["measured_temp_C"] = float(self.meas[b])
-        info["time_s"] = float(self.ep[b, 0])
-        info["setpoint_C"] = float(self.sp[b])
+        info = dict(zip(self._info_columns, self.info[b].tolist(), strict=True))
         info["trip_reason"] = TRIP_REASONS[int(self.out[b, 1])]
-        info["load"] = float(self.D[b, D_LOAD])
-        spray = 0.0
-        for i in self.spray_idx:
-            spray += z[i]
-        info["spray_flow_kg_s"] = spray
         if self._valves is not None:
-            info["spray_valve"] = np.array([z[i] for i in self.valve_idx])
+            info["spray_valve"] = self.Z[b, self._valves]
         return info
 
     def info_columns(self) -> dict[str, np.ndarray]:
         """Physical values of every row, in engineering units (arrays of shape (B,) or (B, k))."""
-        # one compiled gather into a fresh array (a numpy copy per column cost ~5 us at B=1)
-        rows = np.empty((len(self._info_cols) + 5, self.B))
-        args = (self.Z, self._info_cols, self._spray_cols, self.meas, self.ep, self.sp, self.D,
-                rows)  # fmt: skip
-        if self._gather is None:  # its entry point (see step): the arrays' types never change
-            self._gather = entry_point(gather_info, args)
-        self._gather(*args)
-        info = dict(zip(self._info_columns, rows, strict=True))
+        info = dict(zip(self._info_columns, self.info.T.copy(), strict=True))  # one fresh array
         codes = self.out[:, 1]
         info["trip_reason"] = (_TRIP_NAMES[codes.astype(np.int64)] if np.count_nonzero(codes)
                                else self._no_trips.copy())  # fmt: skip
