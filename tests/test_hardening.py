@@ -266,6 +266,37 @@ def test_info_reports_what_the_sensor_reported(env_id):
         assert info["measured_temp_C"] != info["measured_temp_noise_free_C"]  # noise 0.25 K
 
 
+@pytest.mark.parametrize("env_id", IDS)
+def test_info_carries_each_rows_own_values(env_id):
+    """Single-env and vector info (written by the compiled step and by reset) hold row b's
+    outputs, reading, time, setpoint, load and spray, after a reset and after steps."""
+    sc = Scenario(name="distinct", duration_s=600.0, load=((0.0, 0.85), (600.0, 0.8)),
+                  fouling=((0.0, 1.05),), setpoint_offset_C=((0.0, 0.0), (600.0, -3.0)))  # fmt: skip
+    venv = _vec(env_id, 2, scenario=sc)
+    _, vinfo = venv.reset(seed=0)
+    core = venv.unwrapped.core
+    plant = core.plant
+    idx = plant.index
+    a = np.zeros(venv.action_space.shape, dtype=np.float32)
+    for k in range(3):
+        for b in range(2):
+            z, row = core.Z[b], core.info_row(b)
+            expect = {"outlet_temp_C": z[idx[plant.outlet]],
+                      "measured_temp_noise_free_C": z[idx[plant.outlet_measured]],
+                      "measured_temp_C": core.meas[b], "time_s": k * plant.dt_s,
+                      "setpoint_C": core.sp[b], "load": core.D[b, 0],
+                      "spray_flow_kg_s": sum(z[idx[s]] for s in plant.sprays),
+                      "trip_reason": ""}  # fmt: skip
+            expect.update({name: z[idx[name]] for name in plant.extra_info})
+            valves = [z[idx[v]] for v in plant.valves]
+            expect["spray_valve"] = valves[0] if len(valves) == 1 else np.array(valves)
+            assert row.keys() == expect.keys() == {k for k in vinfo if not k.startswith("_")}
+            for key, value in expect.items():
+                np.testing.assert_array_equal(row[key], value, err_msg=key)
+                np.testing.assert_array_equal(vinfo[key][b], value, err_msg=key)
+        _, _, _, _, vinfo = venv.step(a)
+
+
 # -------------------------------------------------------- 3. tables shared across rows
 def test_schedule_tables_are_shared_across_rows():
     n = 10_000
