@@ -271,7 +271,8 @@ def test_info_carries_each_rows_own_values(env_id):
     """Single-env and vector info (written by the compiled step and by reset) hold row b's
     outputs, reading, time, setpoint, load and spray, after a reset and after steps."""
     sc = Scenario(name="distinct", duration_s=600.0, load=((0.0, 0.85), (600.0, 0.8)),
-                  fouling=((0.0, 1.05),), setpoint_offset_C=((0.0, 0.0), (600.0, -3.0)))  # fmt: skip
+                  fouling=((0.0, 1.05),),
+                  setpoint_offset_C=((0.0, 0.0), (600.0, -3.0)))  # fmt: skip
     venv = _vec(env_id, 2, scenario=sc)
     _, vinfo = venv.reset(seed=0)
     core = venv.unwrapped.core
