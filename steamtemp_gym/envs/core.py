@@ -315,6 +315,9 @@ class Core:
         #: names of its columns
         self.info = np.zeros((B, len(info_idx) + len(INFO_TAIL)))
         self._info_columns = [name for name, _ in info_idx] + list(INFO_TAIL)
+        #: fill_info's index arguments for reset_row (advance takes them from ints)
+        self._info_idx = (np.array([i for _, i in info_idx], dtype=np.int64),
+                          np.array(self.spray_idx, dtype=np.int64))  # fmt: skip
         spray_scale = plant.outputs[self.spray_idx[0]].scale if self.spray_idx else 1.0
         trip_lo, trip_hi = plant.trip_band_K
         self.cfg = np.concatenate(
@@ -447,10 +450,7 @@ class Core:
 
     def _fill_info_args(self, b: int) -> tuple:
         """The arguments of ``fill_info`` for row b."""
-        o, (n_obs, n_v, n_s, n_sec, n_info) = N_HEAD, self.ints[[2, 3, 4, 5, 7]]
-        lo = o + n_obs + n_v
-        return (b, self.Z, self.ints[lo + n_s + n_sec : lo + n_s + n_sec + n_info],
-                self.ints[lo : lo + n_s], self.meas, self.ep, self.sp, self.D, self.info)
+        return (b, self.Z, *self._info_idx, self.meas, self.ep, self.sp, self.D, self.info)
 
     def _schedules_args(self, b: int) -> tuple:
         """The arguments of ``schedules`` for row b at t = 0."""
