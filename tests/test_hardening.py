@@ -295,7 +295,16 @@ def test_info_carries_each_rows_own_values(env_id):
             for key, value in expect.items():
                 np.testing.assert_array_equal(row[key], value, err_msg=key)
                 np.testing.assert_array_equal(vinfo[key][b], value, err_msg=key)
-        _, _, _, _, vinfo = venv.step(a)
+        kept = {key: np.copy(v) for key, v in vinfo.items()}
+        kept_row = {key: np.copy(v) for key, v in row.items()}
+        _, _, _, _, vinfo_next = venv.step(a)
+        row_next = core.info_row(1)
+        for key in kept:  # a step writes fresh arrays, it does not change those handed out
+            np.testing.assert_array_equal(vinfo[key], kept[key], err_msg=key)
+        for key in kept_row:
+            np.testing.assert_array_equal(row[key], kept_row[key], err_msg=key)
+        assert row_next["time_s"] != row["time_s"]
+        vinfo = vinfo_next
 
 
 # -------------------------------------------------------- 3. tables shared across rows

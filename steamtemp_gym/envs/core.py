@@ -324,7 +324,11 @@ class Core:
             [[plant.dt_s, plant.setpoint_C, trip_lo, trip_hi, spray_scale], reward_cfg.to_array(),
              [sp for _, sp in plant.secondary]]
         )  # fmt: skip
-        self._valves = self.valve_idx if len(self.valve_idx) > 1 else None
+        #: the valve openings' columns of Z for info (several valves): a slice when they are
+        #: adjacent (a copy of a slice costs a third of fancy indexing), else an index array
+        v = self.valve_idx
+        self._valves = (None if len(v) < 2 else slice(v[0], v[-1] + 1) if v == list(
+            range(v[0], v[-1] + 1)) else np.array(v, dtype=np.int64))  # fmt: skip
         #: arguments of the kernels, built once (the arrays keep their identity; the
         #: schedule tables are reallocated by _alloc_schedules, which clears the second)
         self._plant_args = (plant.step_args(self.X, self.U, self.D, self.Z)
@@ -534,7 +538,7 @@ class Core:
         info = dict(zip(self._info_columns, self.info[b].tolist(), strict=True))
         info["trip_reason"] = TRIP_REASONS[int(self.out[b, 1])]
         if self._valves is not None:
-            info["spray_valve"] = self.Z[b, self._valves]
+            info["spray_valve"] = self.Z[b, self._valves].copy()
         return info
 
     def info_columns(self) -> dict[str, np.ndarray]:
@@ -544,7 +548,7 @@ class Core:
         info["trip_reason"] = (_TRIP_NAMES[codes.astype(np.int64)] if np.count_nonzero(codes)
                                else self._no_trips.copy())  # fmt: skip
         if self._valves is not None:
-            info["spray_valve"] = self.Z[:, self._valves]
+            info["spray_valve"] = self.Z[:, self._valves].copy()
         return info
 
 
