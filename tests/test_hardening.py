@@ -307,6 +307,28 @@ def test_info_carries_each_rows_own_values(env_id):
         vinfo = vinfo_next
 
 
+@pytest.mark.parametrize("copier", ["pickle", "deepcopy"])
+def test_a_copied_env_steps_as_the_original(copier):
+    """Pickle and deepcopy drop the compiled entry points and the info dict maker and make
+    them again: the copy's observations, rewards and info equal the original's."""
+    import copy
+    import pickle
+
+    env = gym.make("steamtemp/BoilerTurbineMIMO-v0", scenario="load_following").unwrapped
+    env.reset(seed=3)
+    a = np.full(env.action_space.shape, 0.1, dtype=np.float32)
+    env.step(a)  # the entry points exist now
+    twin = pickle.loads(pickle.dumps(env)) if copier == "pickle" else copy.deepcopy(env)
+    for _ in range(3):
+        obs, r, term, trunc, info = env.step(a)
+        obs2, r2, term2, trunc2, info2 = twin.step(a)
+        np.testing.assert_array_equal(obs, obs2)
+        assert (r, term, trunc) == (r2, term2, trunc2)
+        assert info.keys() == info2.keys()
+        for key in info:
+            np.testing.assert_array_equal(info[key], info2[key], err_msg=key)
+
+
 # -------------------------------------------------------- 3. tables shared across rows
 def test_schedule_tables_are_shared_across_rows():
     n = 10_000

@@ -315,6 +315,7 @@ class Core:
         #: names of its columns
         self.info = np.zeros((B, len(info_idx) + len(INFO_TAIL)))
         self._info_columns = [name for name, _ in info_idx] + list(INFO_TAIL)
+        self._make_info = dict_maker(self._info_columns)
         #: fill_info's index arguments for reset_row (advance takes them from ints)
         self._info_idx = (np.array([i for _, i in info_idx], dtype=np.int64),
                           np.array(self.spray_idx, dtype=np.int64))  # fmt: skip
@@ -519,8 +520,13 @@ class Core:
         entries[1](*args)
 
     def __getstate__(self) -> dict:
-        """Pickle and deepcopy without the compiled entry points (made again at a step)."""
-        return {**self.__dict__, "_entries": None}
+        """Pickle and deepcopy without the compiled entry points (made again at a step) and
+        the info dict maker (made again by __setstate__)."""
+        return {**self.__dict__, "_entries": None, "_make_info": None}
+
+    def __setstate__(self, state: dict) -> None:
+        self.__dict__.update(state)
+        self._make_info = dict_maker(self._info_columns)
 
     def _entry_points(self, advance_args: tuple) -> tuple:
         """(plant kernel or None, advance): their compiled entry points (_jit.entry_point)."""
@@ -535,7 +541,7 @@ class Core:
         the observation), ``measured_temp_noise_free_C`` the thermocouple's own temperature
         (its lag, without the noise); ``trip_reason`` is "" or one of :data:`TRIP_REASONS`.
         """
-        info = dict(zip(self._info_columns, self.info[b].tolist(), strict=True))
+        info = self._make_info(self.info[b].tolist())
         info["trip_reason"] = TRIP_REASONS[int(self.out[b, 1])]
         if self._valves is not None:
             info["spray_valve"] = self.Z[b, self._valves].copy()
@@ -543,13 +549,24 @@ class Core:
 
     def info_columns(self) -> dict[str, np.ndarray]:
         """Physical values of every row, in engineering units (arrays of shape (B,) or (B, k))."""
-        info = dict(zip(self._info_columns, self.info.T.copy(), strict=True))  # one fresh array
+        info = self._make_info(self.info.T.copy())  # views of one fresh array
         codes = self.out[:, 1]
         info["trip_reason"] = (_TRIP_NAMES[codes.astype(np.int64)] if np.count_nonzero(codes)
                                else self._no_trips.copy())  # fmt: skip
         if self._valves is not None:
             info["spray_valve"] = self.Z[:, self._valves].copy()
         return info
+
+
+def dict_maker(keys: list[str]) -> Any:
+    """The function ``v -> {keys[0]: v[0], keys[1]: v[1], ...}``.
+
+    It is a dict display with constant keys, which CPython builds 1.7-2.5x faster than
+    ``dict(zip(keys, v))`` for the 12-15 info keys (0.36 against 0.64-1.0 us here): it
+    makes the info dict of every step.
+    """
+    body = ", ".join(f"{k!r}: v[{i}]" for i, k in enumerate(keys))
+    return eval(f"lambda v: {{{body}}}")  # the keys are repr'd: any string is safe
 
 
 def check_action(action: Any, shape: tuple[int, ...], single: bool = False) -> np.ndarray:
