@@ -30,7 +30,7 @@ def load(env_id: str, algo: str, zoo: Path | str | None = None):
     Args:
         env_id: Registered id.
         algo: Algorithm name of the file (``ppo``, ``sac``, ``td3``, ``ppo_residual``,
-            ``recurrentppo``).
+            ``recurrentppo``, ``sac_caps``).
         zoo: Directory holding ``<env>__<algo>.zip`` and ``.json`` (default: the shipped zoo).
     """
     directory = Path(zoo) if zoo is not None else ZOO

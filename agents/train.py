@@ -49,7 +49,7 @@ from agents import shipped
 #: Algorithm names: SB3's PPO, SAC, TD3, PPO as a residual on cascade_pi (its own YAML
 #: file, whose entries need ``residual_scale``) and sb3-contrib's RecurrentPPO (an LSTM
 #: policy: the memory is learned instead of given by agents.wrappers).
-ALGOS = ("ppo", "sac", "td3", "ppo_residual", "recurrentppo")
+ALGOS = ("ppo", "sac", "td3", "ppo_residual", "recurrentppo", "sac_caps")
 HYPERPARAMS = Path(__file__).with_name("hyperparams")
 ZOO = Path(__file__).with_name("zoo")
 #: Seeds of the validation episodes (``random`` scenario); training uses --seed + i.
@@ -73,6 +73,10 @@ def model_class(name: str):
 
     if hasattr(sb3, name):
         return getattr(sb3, name)
+    if name == "SACCAPS":
+        from agents.caps import SACCAPS
+
+        return SACCAPS
     try:
         import sb3_contrib
     except ImportError:
@@ -86,7 +90,8 @@ def model_class(name: str):
 def _algo_class(algo: str):
     if algo not in ALGOS:
         raise ConfigError(f"unknown algo {algo!r}; valid: {list(ALGOS)}")
-    return model_class("RecurrentPPO" if algo == "recurrentppo" else algo.split("_")[0].upper())
+    names = {"recurrentppo": "RecurrentPPO", "sac_caps": "SACCAPS"}
+    return model_class(names.get(algo, algo.split("_")[0].upper()))
 
 
 def _literal(node: ast.AST) -> Any:
@@ -152,7 +157,13 @@ def read_hyperparams(path: Path, env_id: str, algo: str) -> dict[str, Any]:
         raise ConfigError(f"--hyperparams {path}: {env_id} must map to a mapping")
     import inspect
 
-    ctor = set(inspect.signature(cls.__init__).parameters) - {"self", "env", "policy"}
+    ctor = set()
+    for c in cls.__mro__:  # a subclass taking **kwargs (agents/caps.py) passes them on
+        params = inspect.signature(c.__init__).parameters
+        ctor |= {n for n, p in params.items() if p.kind not in (p.VAR_POSITIONAL, p.VAR_KEYWORD)}
+        if not any(p.kind == p.VAR_KEYWORD for p in params.values()):
+            break
+    ctor -= {"self", "env", "policy"}
     unknown = sorted(set(hp) - set(SPECIAL) - ctor)
     if unknown:
         raise ConfigError(

@@ -61,6 +61,10 @@ SPACES: dict[str, dict[str, list[Any]]] = {
 }
 SPACES["td3"] = {k: v for k, v in SPACES["sac"].items() if k != "log_std_init"}
 SPACES["td3"]["noise_std"] = [0.05, 0.1, 0.2]
+#: CAPS's weights on the shipped SAC settings: 0.1 is smooth but slow, 1 a constant action
+#: (docs/agents.md)
+SPACES["sac_caps"] = {"caps_temporal": [0.003, 0.01, 0.03, 0.1],
+                      "caps_spatial": [0.003, 0.01, 0.03, 0.1]}  # fmt: skip
 
 
 def trial_entry(base: dict[str, Any], params: dict[str, Any]) -> dict[str, Any]:

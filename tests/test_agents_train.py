@@ -23,10 +23,13 @@ SMALL = {
     "td3": {"learning_starts": 300, "batch_size": 64, "train_freq": 8, "gradient_steps": 1,
             "noise_type": "normal", "noise_std": 0.1},
     "ppo_residual": {"n_steps": 128, "batch_size": 64, "n_epochs": 2, "residual_scale": 0.2},
+    "sac_caps": {"learning_starts": 300, "batch_size": 64, "train_freq": 8, "gradient_steps": 1,
+                 "caps_temporal": 0.1, "caps_spatial": 0.1},
     "recurrentppo": {"n_steps": 128, "batch_size": 64, "n_epochs": 2, "policy": "MlpLstmPolicy",
                      "policy_kwargs": "dict(lstm_hidden_size=8, net_arch=dict(pi=[16], vf=[16]))"},
 }  # fmt: skip
-STEPS = {"ppo": 2048, "sac": 1200, "td3": 1200, "ppo_residual": 1024, "recurrentppo": 1024}
+STEPS = {"ppo": 2048, "sac": 1200, "td3": 1200, "ppo_residual": 1024, "recurrentppo": 1024,
+         "sac_caps": 1200}
 ALGOS = list(STEPS)
 MEMORY = [{"agents.wrappers.ControllerMemory": {"integral_time_s": 60.0, "history": 1}}]
 

@@ -25,11 +25,12 @@ def test_trial_entry_maps_the_sampled_keys_onto_the_shipped_entry():
 @pytest.mark.parametrize("algo", sorted(tune.SPACES))
 def test_every_space_key_is_a_valid_hyperparameter(algo, tmp_path):
     """A trial built from the first choice of every key passes steamtemp-train's checks."""
-    raw = yaml.safe_load((train.HYPERPARAMS / f"{algo}.yml").read_text())[ENV_ID]
+    env_id = train.zoo_entries_of(algo)[0]  # the first env its shipped YAML has
+    raw = yaml.safe_load((train.HYPERPARAMS / f"{algo}.yml").read_text())[env_id]
     params = {k: v[0] for k, v in tune.SPACES[algo].items()}
     path = tmp_path / f"{algo}.yml"
-    path.write_text(yaml.safe_dump({ENV_ID: tune.trial_entry(raw, params)}))
-    train.read_hyperparams(path, ENV_ID, algo)
+    path.write_text(yaml.safe_dump({env_id: tune.trial_entry(raw, params)}))
+    train.read_hyperparams(path, env_id, algo)
 
 
 @pytest.mark.parametrize(("argv", "match"), [
