@@ -328,8 +328,9 @@ class Core:
         #: the valve openings' columns of Z for info (several valves): a slice when they are
         #: adjacent (a copy of a slice costs a third of fancy indexing), else an index array
         v = self.valve_idx
-        self._valves = (None if len(v) < 2 else slice(v[0], v[-1] + 1) if v == list(
-            range(v[0], v[-1] + 1)) else np.array(v, dtype=np.int64))  # fmt: skip
+        adjacent = v == list(range(v[0], v[0] + len(v)))
+        self._valves = (None if len(v) < 2
+                        else slice(v[0], v[0] + len(v)) if adjacent else np.array(v))  # fmt: skip
         #: arguments of the kernels, built once (the arrays keep their identity; the
         #: schedule tables are reallocated by _alloc_schedules, which clears the second)
         self._plant_args = (plant.step_args(self.X, self.U, self.D, self.Z)
