@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from steamtemp_gym.metrics import trajectory_metrics
+from steamtemp_gym.metrics import QUIET_SETTLE_S, quiet_peak_to_peak, trajectory_metrics
 from steamtemp_gym.plants.base import DIST
 
 TRACE_KEYS = ("time_s", "outlet_temp_C", "measured_temp_C", "setpoint_C", "load",
@@ -29,9 +29,16 @@ def _keys(env: Any) -> tuple[str, ...]:
     return TRACE_KEYS + tuple(name for name, _ in env.unwrapped.plant.secondary)
 
 
-def _metrics(env: Any, tr: dict[str, np.ndarray], ret: float, tripped: bool) -> dict[str, float]:
+def _metrics(env: Any, tr: dict[str, np.ndarray], ret: float, tripped: bool,
+             scenario: Any) -> dict[str, float]:  # fmt: skip
+    """The episode's metrics: steamtemp_gym.metrics of the main steam (and of the secondary
+    temperatures), ``quiet_p2p_K`` (the error's peak-to-peak over the quiet stretch after the
+    scenario's last scheduled change: the limit-cycle measure), return and trip."""
     metrics = trajectory_metrics(tr["time_s"], tr["outlet_temp_C"], tr["setpoint_C"],
                                  tr["spray_valve"], tr["spray_flow_kg_s"])  # fmt: skip
+    metrics["quiet_p2p_K"] = quiet_peak_to_peak(
+        tr["time_s"], tr["outlet_temp_C"] - tr["setpoint_C"],
+        scenario.last_change_s() + QUIET_SETTLE_S)  # fmt: skip
     for name, sp2 in env.unwrapped.plant.secondary:  # e.g. the reheat temperature
         m2 = trajectory_metrics(tr["time_s"], tr[name], np.full_like(tr[name], sp2),
                                 tr["spray_valve"], tr["spray_flow_kg_s"])  # fmt: skip
@@ -67,7 +74,7 @@ def run_episode(env: Any, policy: Any, seed: int) -> dict[str, Any]:
             break
     tr = {k: np.asarray(v, dtype=np.float64) for k, v in trace.items()}
     tr.update(zip(DISTURBANCE_KEYS, np.asarray(dist).T, strict=True))
-    return {"trace": tr, "metrics": _metrics(env, tr, ret, terminated)}
+    return {"trace": tr, "metrics": _metrics(env, tr, ret, terminated, env.unwrapped.scenario)}
 
 
 def run_batch(venv: Any, policy: Any, seeds: list[int]) -> list[dict[str, Any]]:
@@ -80,6 +87,7 @@ def run_batch(venv: Any, policy: Any, seeds: list[int]) -> list[dict[str, Any]]:
     if venv.num_envs != n:
         raise ValueError(f"vector env has {venv.num_envs} sub-envs for {n} seeds")
     obs, info = venv.reset(seed=[int(s) for s in seeds])
+    scenarios = list(venv.unwrapped.core.scenario)  # before any row starts a new episode
     policy.reset()
     keys = _keys(venv)
     D = venv.unwrapped.core.D
@@ -107,5 +115,6 @@ def run_batch(venv: Any, policy: Any, seeds: list[int]) -> list[dict[str, Any]]:
         tr = {k: v[: last + 1, i] for k, v in stacked.items()}
         tr.update(zip(DISTURBANCE_KEYS, dist_arr[: last + 1, i].T, strict=True))
         ret = float(np.cumsum(rew[:last, i])[-1])  # sequential, as run_episode adds
-        out.append({"trace": tr, "metrics": _metrics(venv, tr, ret, bool(term_arr[last - 1, i]))})
+        tripped = bool(term_arr[last - 1, i])
+        out.append({"trace": tr, "metrics": _metrics(venv, tr, ret, tripped, scenarios[i])})
     return out

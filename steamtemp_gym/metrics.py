@@ -85,7 +85,10 @@ __all__ = [
     "SATURATION_HIGH",
     "STEP_MIN_K",
     "find_setpoint_step",
+    "QUIET_SETTLE_S",
+    "QUIET_MIN_S",
     "metric_names",
+    "quiet_peak_to_peak",
     "step_response_metrics",
     "trajectory_metrics",
 ]
@@ -102,6 +105,12 @@ REVERSAL_DEADBAND: float = 0.002
 _VALVE_RANGE_TOL: float = 1e-6
 
 _DEFAULT_BANDS_K: tuple[float, ...] = (5.0, 8.0)
+#: The quiet stretch of :func:`quiet_peak_to_peak` starts this long after a scenario's last
+#: scheduled change (s): the time a well-damped loop needs to settle after it.
+QUIET_SETTLE_S: float = 600.0
+#: Shortest quiet stretch (s) on which the peak-to-peak is read: a limit cycle of the slowest
+#: loops (periods of 4-8 min) shows in it at least once.
+QUIET_MIN_S: float = 600.0
 
 
 def _band_key(band_K: float) -> str:
@@ -454,6 +463,37 @@ def trajectory_metrics(
         sat = sat.sum(axis=1)
     out["valve_saturated_s"] = float(np.sum(sat * dt))
     return out
+
+
+def quiet_peak_to_peak(
+    time_s: ArrayLike,
+    error_K: ArrayLike,
+    quiet_from_s: float,
+    min_length_s: float = QUIET_MIN_S,
+) -> float:
+    """Peak-to-peak of the control error (K) over the quiet stretch ``time_s >= quiet_from_s``.
+
+    The limit-cycle measure: after a scenario's last scheduled change (plus
+    :data:`QUIET_SETTLE_S`), a loop that settles shows only the response to noise and the
+    coloured disturbance; one that limit-cycles shows the cycle's full swing.
+
+    Returns:
+        ``max(e) - min(e)`` over the samples in the stretch, or NaN if it is shorter than
+        ``min_length_s`` (the measure does not apply).
+
+    Raises:
+        ValueError: On mismatched lengths, fewer than 2 samples, non-finite values or
+            non-increasing time.
+    """
+    t = _as_time(time_s)
+    e = _as_signal(error_K, "error_K", t.size)
+    if not math.isfinite(quiet_from_s) or not math.isfinite(min_length_s):
+        raise ValueError(f"quiet_from_s and min_length_s must be finite, got "
+                         f"{quiet_from_s!r}, {min_length_s!r}")  # fmt: skip
+    quiet = t >= quiet_from_s
+    if not quiet.any() or t[-1] - t[quiet][0] < min_length_s:
+        return math.nan
+    return float(np.max(e[quiet]) - np.min(e[quiet]))
 
 
 def _inflection(t: NDArray[np.float64], z: NDArray[np.float64]) -> tuple[float, float, float]:

@@ -11,6 +11,7 @@ from scipy.optimize import brentq
 from scipy.special import gammainc
 from scipy.stats import gamma
 
+from steamtemp_gym import metrics
 from steamtemp_gym.metrics import (
     METRIC_NAMES,
     METRIC_UNITS,
@@ -468,3 +469,21 @@ def test_step_response_bad_input() -> None:
         step_response_metrics(t, np.where(t == 3.0, np.nan, t))
     with pytest.raises(ValueError, match="strictly increasing"):
         step_response_metrics(t[::-1], t)
+
+
+def test_quiet_peak_to_peak_reads_the_swing_after_the_quiet_start():
+    t = np.arange(0.0, 3600.0, 2.0)
+    e = np.where(t < 1800.0, 20.0 * np.sin(t / 50.0), 1.5 * np.sin(2 * np.pi * t / 240.0))
+    p2p = metrics.quiet_peak_to_peak(t, e, 1800.0)
+    assert p2p == pytest.approx(3.0, abs=1e-3)  # the cycle's swing, not the transient's
+    assert metrics.quiet_peak_to_peak(t, e, 0.0) == pytest.approx(40.0, abs=0.1)
+
+
+def test_quiet_peak_to_peak_does_not_apply_to_a_short_stretch():
+    t = np.arange(0.0, 3600.0, 2.0)
+    e = np.sin(t)
+    assert np.isnan(metrics.quiet_peak_to_peak(t, e, 3600.0 - 500.0))
+    assert np.isnan(metrics.quiet_peak_to_peak(t, e, 5000.0))
+    assert np.isfinite(metrics.quiet_peak_to_peak(t, e, 3600.0 - 700.0))
+    with pytest.raises(ValueError, match="finite"):
+        metrics.quiet_peak_to_peak(t, e, float("nan"))

@@ -402,3 +402,12 @@ def test_random_scenario_rejects_a_bad_duration_before_drawing():
     for bad in (True, "3600", float("inf"), 1e300, -1.0):
         with pytest.raises(ValueError, match="duration_s"):
             scenarios.random_scenario(np.random.default_rng(0), bad)
+
+
+def test_last_change_is_the_end_of_the_last_ramp_or_step_of_any_channel():
+    s = Scenario(name="x", duration_s=3600.0, load=((0.0, 1.0), (600.0, 1.0), (1200.0, 0.5)),
+                 fouling=((0.0, 1.0), (1500.0, 1.0), (1500.0, 0.9), (2000.0, 0.9)))
+    assert s.last_change_s() == 1500.0
+    assert Scenario(name="flat", duration_s=60.0).last_change_s() == 0.0
+    assert Scenario(name="held", duration_s=60.0,
+                    load=((0.0, 0.8), (30.0, 0.8))).last_change_s() == 0.0

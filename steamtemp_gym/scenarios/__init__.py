@@ -316,6 +316,18 @@ class Scenario:
         pts = np.asarray(getattr(self, channel))
         return float(np.interp(t, pts[:, 0], pts[:, 1]))
 
+    def last_change_s(self) -> float:
+        """Time (s) at which the last scheduled change of any channel ends (0 if none):
+        the end of the last ramp or step of load, setpoint, heat absorption, fouling or
+        spray-water temperature."""
+        last = 0.0
+        for ch in CHANNELS:
+            pts = getattr(self, ch)
+            for (_, v0), (t1, v1) in zip(pts[:-1], pts[1:], strict=True):
+                if v1 != v0:
+                    last = max(last, t1)
+        return last
+
     def to_dict(self) -> dict[str, Any]:
         """The YAML-ready form of this scenario."""
         out: dict[str, Any] = {"name": self.name, "duration_s": self.duration_s}
