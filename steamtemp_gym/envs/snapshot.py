@@ -146,7 +146,19 @@ def put(core: Any, snap: Snapshot, target: np.ndarray, source: np.ndarray, rngs:
         getattr(core, name)[target] = snap.arrays[name][source]
     for b, i in zip(target.tolist(), source.tolist(), strict=True):
         core.assign_scenario(b, snap.scenarios[i])
+    for b, i in zip(target.tolist(), source.tolist(), strict=True):
         rng = np.random.Generator(type(rngs[b].bit_generator)())
         rng.bit_generator.state = snap.rng_states[i]
         rngs[b] = rng
         waiting[b] = snap.waiting[i]
+
+
+def copy_rows(src: Any, src_rows: np.ndarray, dst: Any, dst_rows: np.ndarray) -> None:
+    """Copy the state of ``src_rows`` of one core into ``dst_rows`` of another core of the
+    same plant object (a planner's fan-out without a Snapshot in between; unchecked: the
+    caller owns both cores)."""
+    for name in ROW_ARRAYS:
+        getattr(dst, name)[dst_rows] = getattr(src, name)[src_rows]
+    for b, i in zip(np.asarray(dst_rows).tolist(), np.asarray(src_rows).tolist(), strict=True):
+        if dst.scenario[b] is not src.scenario[i]:
+            dst.assign_scenario(b, src.scenario[i])
