@@ -1,10 +1,16 @@
 """steamtemp-leaderboard: every policy on every env, scenario and seed.
 
-Policies: the baselines (``baselines.NAMES``), the shipped trained agents
+Policies: by default the baselines (``baselines.NAMES``), the shipped trained agents
 (``agents.shipped()``, named ``sb3:<algo>``) and two references that are listed but never
 ranked: ``oracle`` (agents/oracle.py, the clairvoyant NMPC on the true plant, the 1 of
 the normalized score; ``--no-oracle`` leaves it out, and the score with it) and
 ``frozen_valve``. The score's 0, ``cascade_pi_ff``, and the references join every run.
+``--policies`` also takes your own (agents/specs.py; examples/README.md): a trained
+agent's files (``zoo:DIR``, or a path: a directory or model .zip written by
+``steamtemp-train --out`` or an RL Zoo run) and ``module:callable``, a factory
+``env -> Policy`` (``module`` a dotted name, with ``PYTHONPATH=.`` for the current
+directory, or a .py file), scored like the shipped ones. ``--import MODULE`` imports a
+module first (one that calls ``baselines.register`` or ``scenarios.register``).
 
 Every flag is checked before anything runs: env ids, policies, scenarios (names and YAML
 paths, resolved and built for each env with ``gym.make``), seeds and the output directory.
@@ -60,6 +66,7 @@ from __future__ import annotations
 import argparse
 import functools
 import hashlib
+import importlib
 import json
 import logging
 import math
@@ -82,7 +89,7 @@ import baselines
 import steamtemp_gym
 from agents import leaderboard_plots as plots
 from agents import leaderboard_report as report
-from agents import stats
+from agents import specs, stats
 from agents.difficulty import FrozenValves
 from agents.evaluation import run_batch, run_episode
 from agents.oracle import Oracle
@@ -123,6 +130,7 @@ class Plan:
     envs_made: dict[tuple[str, str], Any] = field(default_factory=dict)  # (env, scenario) -> env
     resolved: dict[tuple[str, str], Any] = field(default_factory=dict)  # -> Scenario
     fingerprints: dict[tuple[str, str, str], str] = field(default_factory=dict)
+    imports: tuple[str, ...] = ()  # --import: modules every worker imports first
 
     def grid(self) -> Iterable[Key]:
         """Every episode of the run, in run order."""
@@ -205,7 +213,8 @@ def _resolve(spec: str, env_id: str) -> Any:
 
 def _policies(ap: argparse.ArgumentParser, envs: list[str], text: str | None,
               oracle: bool = True) -> dict:  # fmt: skip
-    """Policies per env; every requested name must be available for at least one env.
+    """Policies per env; every requested name must parse (agents/specs.py) and be available
+    for at least one env, and a factory's policy is built once on each env and checked.
     :data:`ALWAYS` joins every env (the oracle only with ``oracle``)."""
     always = [p for p in ALWAYS if oracle or p != report.ONE]
     if text is None:
@@ -213,18 +222,40 @@ def _policies(ap: argparse.ArgumentParser, envs: list[str], text: str | None,
     names = _items(ap, "--policies", text)
     if not oracle and report.ONE in names:
         ap.error(f"argument --policies: {report.ONE} is listed but --no-oracle is given")
-    everywhere = sorted({p for e in envs for p in _available(e)})
-    unknown = [n for n in names if n not in everywhere]
-    if unknown:
+    parsed = {}
+    for n in names:
+        if n in (report.ONE, REFERENCE):
+            continue
+        try:
+            parsed[n] = specs.parse(n)
+        except ValueError as exc:
+            ap.error(f"argument --policies: {head(str(exc), 1000)}")
+        if parsed[n].kind in (specs.SHIPPED, specs.FILES) and not _sb3():
+            ap.error(f"argument --policies: {head(n, 60)!r} is a trained agent: it needs the "
+                     "agents extra, pip install 'steamtemp-gym[agents]'")  # fmt: skip
+
+    def here(n: str, e: str) -> bool:
+        return n not in parsed or parsed[n].available(e)
+
+    nowhere = [n for n in names if not any(here(n, e) for e in envs)]
+    if nowhere:
         ap.error(
-            f"argument --policies: unknown {[head(n, 60) for n in unknown]} for envs "
-            f"{envs}; valid choices: {everywhere}"
+            f"argument --policies: {[head(n, 60) for n in nowhere]} not available for envs "
+            f"{envs}: only for {[sorted(parsed[n].envs) for n in nowhere]}"
         )
-    out = {e: [n for n in names if n in _available(e)] for e in envs}
+    out = {e: [n for n in names if here(n, e)] for e in envs}
     for e, pols in out.items():
         missing = [n for n in names if n not in pols]
         if missing:
             print(f"note: {missing} not available for {e}; skipped there", file=sys.stderr)
+        factories = [n for n in pols if n in parsed and parsed[n].kind == specs.FACTORY]
+        env = gym.make(e) if factories else None
+        for n in factories:
+            try:
+                parsed[n].make(e, env)
+            except Exception as exc:  # noqa: BLE001 - any failure is a bad --policies value
+                ap.error(f"argument --policies: {head(n, 60)!r} on {e}: "
+                         f"{type(exc).__name__}: {head(str(exc), _EXCERPT)}")  # fmt: skip
         pols += [p for p in always if p not in pols]
     return out
 
@@ -269,10 +300,11 @@ def _source_digest() -> str:
 
 
 def _policy_digest(env_id: str, name: str) -> str:
-    if not name.startswith("sb3:"):
+    """The policy's part of the fingerprint: the name, with the hash of a trained agent's
+    files or of a factory's module (agents/specs.py)."""
+    if name in (report.ONE, REFERENCE):
         return name
-    path = agents.ZOO / f"{env_id.replace('/', '__')}__{name[4:]}.zip"
-    return name + ":" + hashlib.sha256(path.read_bytes()).hexdigest()
+    return specs.parse(name).digest(env_id)
 
 
 def fingerprint(env_id: str, scenario: Any, policy_digest: str, source_digest: str) -> str:
@@ -286,6 +318,13 @@ def fingerprint(env_id: str, scenario: Any, policy_digest: str, source_digest: s
 
 def build_plan(ap: argparse.ArgumentParser, args: argparse.Namespace) -> Plan:
     """Check every flag (argparse errors, exit code 2) and build the envs; runs nothing."""
+    imports = tuple(getattr(args, "modules", None) or ())
+    for module in imports:  # first: they may register env ids, baselines and scenarios
+        try:
+            importlib.import_module(module)
+        except Exception as exc:  # noqa: BLE001 - any failure is a bad --import value
+            ap.error(f"argument --import: cannot import {head(module, 100)!r}: "
+                     f"{type(exc).__name__}: {head(str(exc), _EXCERPT)}")  # fmt: skip
     envs = _items(ap, "--envs", args.envs)
     unknown = [e for e in envs if e not in steamtemp_gym.ENV_IDS]
     if unknown:
@@ -309,7 +348,8 @@ def build_plan(ap: argparse.ArgumentParser, args: argparse.Namespace) -> Plan:
                     f"argument --scenarios: {tail(sc, 80)!r} for {env_id}: "
                     f"{head(str(exc), _EXCERPT)}"
                 )
-    plan = Plan(envs=envs, scenarios=scs, seeds=seeds, policies=pols, resolved=resolved)
+    plan = Plan(envs=envs, scenarios=scs, seeds=seeds, policies=pols, resolved=resolved,
+                imports=imports)  # fmt: skip
     source = _source_digest()
     for env_id in envs:
         for sc in scs:
@@ -424,13 +464,11 @@ def _latest(rows: list[dict]) -> dict[tuple[Key, str], dict]:
 
 # --------------------------------------------------------------------------- episodes
 def _make_policy(name: str, env_id: str, env):
-    if name.startswith("sb3:"):
-        return agents.load(env_id, name[4:])
     if name == REFERENCE:
         return FrozenValves(env)
     if name == report.ONE:
         return Oracle(env)
-    return baselines.make(name, env)
+    return specs.parse(name).make(env_id, env)
 
 
 @dataclass
@@ -444,6 +482,7 @@ class Unit:
     seeds: list[int]
     fingerprint: str
     trace_seed: int | None  # the seed whose trace is kept for the plot
+    imports: tuple[str, ...] = ()  # modules to import first (--import)
 
 
 def _ok_row(u: Unit, seed: int, metrics: dict) -> dict:
@@ -458,6 +497,8 @@ def run_unit(u: Unit) -> tuple[list[dict], dict | None]:
     raises there, each seed runs alone (:func:`run_episode`, identical results) so that
     only the episodes that fail are recorded as failed.
     """
+    for module in u.imports:  # a spawned worker or a Ray task has not imported them
+        importlib.import_module(module)
     trace = None
     try:
         venv = gym.make_vec(u.env_id, num_envs=len(u.seeds), scenario=u.scenario,
@@ -539,7 +580,8 @@ def _units(plan: Plan, done: dict) -> list[Unit]:
                         if not _finished(done.get(((env_id, sc, name, s), fp)))]  # fmt: skip
                 if todo:
                     keep = plan.seeds[0] if plan.seeds[0] in todo else None
-                    out.append(Unit(env_id, sc, plan.resolved[env_id, sc], name, todo, fp, keep))
+                    out.append(Unit(env_id, sc, plan.resolved[env_id, sc], name, todo, fp, keep,
+                                    plan.imports))  # fmt: skip
     return sorted(out, key=lambda u: u.policy != report.ONE)  # stable: run order otherwise
 
 
@@ -711,9 +753,14 @@ def make_parser() -> argparse.ArgumentParser:
     ap.add_argument("--envs", default=",".join(steamtemp_gym.ENV_IDS),
                     help="comma list of env ids (default: all: %(default)s)")  # fmt: skip
     ap.add_argument("--policies", default=None,
-                    help="comma list (default: every baseline of baselines.NAMES and every "
-                    "shipped agent sb3:<algo> of agents.shipped(); cascade_pi_ff, oracle and "
-                    "frozen_valve are always added)")  # fmt: skip
+                    help="comma list of baseline names, sb3:<algo>, zoo:DIR or paths to a "
+                    "trained agent's files, and module:callable factories (default: every "
+                    "baseline of baselines.NAMES and every shipped agent sb3:<algo> of "
+                    "agents.shipped(); cascade_pi_ff, oracle and frozen_valve are always "
+                    "added)")  # fmt: skip
+    ap.add_argument("--import", dest="modules", action="append", default=[], metavar="MODULE",
+                    help="import this module first, in every worker too (one that registers "
+                    "baselines, scenarios or env variants; repeatable)")  # fmt: skip
     ap.add_argument("--no-oracle", action="store_true",
                     help="leave the oracle out (its episodes are the run's longest); the "
                     "normalized score is then not computed (default: off)")  # fmt: skip

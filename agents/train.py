@@ -45,6 +45,7 @@ import yaml
 
 import steamtemp_gym
 from agents import shipped
+from agents.files import stem
 
 #: Algorithm names: SB3's PPO, SAC, TD3, PPO as a residual on cascade_pi (its own YAML
 #: file, whose entries need ``residual_scale``) and sb3-contrib's RecurrentPPO (an LSTM
@@ -232,10 +233,9 @@ def _shown_path(path: Path) -> str:
 def _obs_stats(venv) -> dict[str, Any] | None:
     from stable_baselines3.common.vec_env import VecNormalize
 
-    if not isinstance(venv, VecNormalize) or not venv.norm_obs:
-        return None
-    return {"mean": venv.obs_rms.mean.tolist(), "var": venv.obs_rms.var.tolist(),
-            "epsilon": venv.epsilon, "clip_obs": venv.clip_obs}  # fmt: skip
+    from agents.policy import frozen_stats
+
+    return frozen_stats(venv) if isinstance(venv, VecNormalize) else None
 
 
 def validate(env_id: str, policy, n: int = N_VALIDATION) -> dict[str, float]:
@@ -252,10 +252,6 @@ def validate(env_id: str, policy, n: int = N_VALIDATION) -> dict[str, float]:
     venv.close()
     return {key: float(np.mean([r["metrics"][key] for r in runs]))
             for key in ("return", "iae_K_s")}  # fmt: skip
-
-
-def stem(env_id: str, algo: str) -> str:
-    return f"{env_id.replace('/', '__')}__{algo}"
 
 
 def train(env_id: str, algo: str, hyperparams: Path | None = None, timesteps: int | None = None,

@@ -119,6 +119,8 @@ LIMITS = {
     "spray_water_temp_offset_C": (-60.0, 60.0),
 }
 RANDOM = "random"
+#: How a held-out scenario is named: ``heldout:mill_trip`` (steamtemp_gym/scenarios/heldout).
+HELDOUT_PREFIX = "heldout:"
 
 #: Scalar fields with their inclusive ranges (units: K, fraction, s).
 _SCALAR_LIMITS = {
@@ -513,7 +515,19 @@ _REGISTRY: dict[str, tuple[Scenario, tuple[str, ...] | None]] = {}
 
 
 def register(scenario: Scenario, plants: Sequence[str] | None = None) -> Scenario:
-    """Register a named scenario, for every plant or only for the given plant ids."""
+    """Register a named scenario, for every plant or only for the given plant ids.
+
+    ``gym.make(id, scenario=name)``, ``reset(options={"scenario": name})``, the
+    leaderboard's ``--scenarios`` and :func:`names` then know it (on the command line,
+    ``--import MODULE`` imports the module that registers it). The scenario is used as
+    given: the named scenarios' disturbances (:data:`NAMED_DISTURBANCES`) are not added.
+    Registering the same scenario again does nothing.
+
+    Raises:
+        ValueError: not a Scenario, bad ``plants``, a name the command lines cannot spell
+            (``random``, ``heldout:...``, a ``.yaml``/``.yml`` ending, a comma) or a name
+            registered with another scenario; nothing is registered then.
+    """
     if not isinstance(scenario, Scenario):
         raise ValueError(f"register() needs a Scenario, got {_describe(scenario)}")
     if plants is not None and (
@@ -524,9 +538,18 @@ def register(scenario: Scenario, plants: Sequence[str] | None = None) -> Scenari
         raise ValueError(
             f"register() 'plants' must be a list of plant ids, got {_describe(plants)}"
         )
-    if scenario.name == RANDOM:
+    name = scenario.name
+    if name == RANDOM:
         raise ValueError(f"{RANDOM!r} is reserved for the seeded training distribution")
-    _REGISTRY[scenario.name] = (scenario, tuple(plants) if plants is not None else None)
+    if name.startswith(HELDOUT_PREFIX) or name.lower().endswith((".yaml", ".yml")) or "," in name:
+        raise ValueError(f"scenario name {_excerpt(name)} would read as a held-out scenario, "
+                         "a file or a list; choose another name")  # fmt: skip
+    entry = (scenario, tuple(plants) if plants is not None else None)
+    old = _REGISTRY.get(name)
+    if old is not None and (old[0].to_dict() != scenario.to_dict() or old[1] != entry[1]):
+        raise ValueError(f"scenario {_excerpt(name)} is already registered (with another "
+                         "schedule or other plants); choose another name")  # fmt: skip
+    _REGISTRY[name] = entry
     return scenario
 
 

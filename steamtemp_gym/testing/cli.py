@@ -34,8 +34,11 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument("ids", nargs="*", metavar="ID",
                    help="env ids to check (default: every steamtemp id, steamtemp_gym.ENV_IDS)")
     p.add_argument("--policy", action="append", default=[], metavar="NAME",
-                   help=f"also run the policy checks of this baseline on each id (repeatable; "
-                   f"one of {', '.join(baselines.NAMES)}, or 'all')")
+                   help="also run the policy checks of this policy on each id (repeatable): "
+                   f"a baseline ({', '.join(baselines.NAMES)}; 'all' for every one), "
+                   "sb3:<algo> (a shipped trained agent), zoo:DIR or a path to a trained "
+                   "agent's files (steamtemp-train --out, an RL Zoo run), or module:callable "
+                   "(a factory env -> Policy; module a dotted name or a .py file)")
     p.add_argument("--quick", action="store_true",
                    help="shorter runs, slow checks skipped (about 10-20 s per id from a warm "
                    "kernel cache)")
@@ -57,6 +60,25 @@ def _table(results: list[Result]) -> str:
                      for row in rows)  # fmt: skip
 
 
+def _check_policies(parser: argparse.ArgumentParser, policies: list[str], ids: list[str]) -> None:
+    """Every --policy parses (agents/specs.py); a factory's policy is built on the first id
+    and must have predict and reset."""
+    import steamtemp_gym
+    from agents import specs
+
+    for name in policies:
+        try:
+            spec = specs.parse(name)
+        except ValueError as exc:
+            parser.error(f"--policy: {exc} (or 'all')")
+        if spec.kind == specs.FACTORY:
+            env_id = (ids or steamtemp_gym.ENV_IDS)[0]
+            try:
+                spec.make(env_id, gym.make(env_id))
+            except Exception as exc:  # noqa: BLE001 - any failure is a bad --policy value
+                parser.error(f"--policy {name}: on {env_id}: {type(exc).__name__}: {exc}")
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of ``steamtemp-check``; returns the exit status."""
     import baselines
@@ -73,9 +95,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         parser.error(f"unknown env id(s) {unknown}; valid ids: {', '.join(steamtemp_ids())} "
                      "(register a variant and pass --import MODULE)")  # fmt: skip
     policies = list(baselines.NAMES) if "all" in args.policy else args.policy
-    bad = [p for p in policies if p not in baselines.NAMES]
-    if bad:
-        parser.error(f"unknown policy {bad}; valid: {', '.join(baselines.NAMES)}, all")
+    _check_policies(parser, policies, args.ids)
     bad = [c for c in args.check or () if c not in CHECK_NAMES]
     if bad:
         parser.error(f"unknown check {bad}; valid: {', '.join(CHECK_NAMES)}")
