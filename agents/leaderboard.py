@@ -93,6 +93,7 @@ from agents import specs, stats
 from agents.difficulty import FrozenValves
 from agents.evaluation import run_batch, run_episode
 from agents.oracle import Oracle
+from steamtemp_gym import envs as envs_
 from steamtemp_gym import scenarios
 from steamtemp_gym.checks import head, tail
 from steamtemp_gym.scenarios import heldout
@@ -205,9 +206,8 @@ def _sb3() -> bool:
 
 
 def _resolve(spec: str, env_id: str) -> Any:
-    """A scenario name, ``heldout:<name>`` or a YAML file as a Scenario."""
-    if heldout.is_heldout(spec):
-        return heldout.load(spec)
+    """A scenario name, ``heldout:<name>``, ``random`` or a YAML file as a Scenario (or
+    ``random``): steamtemp_gym.scenarios.resolve, as gym.make takes them."""
     return scenarios.resolve(spec, env_id)
 
 
@@ -258,6 +258,14 @@ def _policies(ap: argparse.ArgumentParser, envs: list[str], text: str | None,
                          f"{type(exc).__name__}: {head(str(exc), _EXCERPT)}")  # fmt: skip
         pols += [p for p in always if p not in pols]
     return out
+
+
+def _env_id(name: str) -> str:
+    """The id an --envs item names (with or without the namespace); itself if none."""
+    try:
+        return envs_.resolve_id(name)
+    except ValueError:
+        return name
 
 
 def _scenario_key(spec: str) -> str:
@@ -325,13 +333,14 @@ def build_plan(ap: argparse.ArgumentParser, args: argparse.Namespace) -> Plan:
         except Exception as exc:  # noqa: BLE001 - any failure is a bad --import value
             ap.error(f"argument --import: cannot import {head(module, 100)!r}: "
                      f"{type(exc).__name__}: {head(str(exc), _EXCERPT)}")  # fmt: skip
-    envs = _items(ap, "--envs", args.envs)
-    unknown = [e for e in envs if e not in steamtemp_gym.ENV_IDS]
+    envs = _items(ap, "--envs", args.envs, key=_env_id)
+    unknown = [e for e in envs if _env_id(e) not in envs_.ids()]
     if unknown:
         ap.error(
             f"argument --envs: unknown {[head(e, 60) for e in unknown]}; "
-            f"valid choices: {list(steamtemp_gym.ENV_IDS)}"
+            f"valid choices: {envs_.ids()} (the name after 'steamtemp/' is enough)"
         )
+    envs = [_env_id(e) for e in envs]
     seeds = parse_seeds(ap, args.seeds)
     pols = _policies(ap, envs, args.policies, oracle=not args.no_oracle)
     scs = _items(ap, "--scenarios", args.scenarios, key=_scenario_key)
@@ -346,7 +355,7 @@ def build_plan(ap: argparse.ArgumentParser, args: argparse.Namespace) -> Plan:
             except Exception as exc:  # noqa: BLE001 - any failure is a bad --scenarios value
                 ap.error(
                     f"argument --scenarios: {tail(sc, 80)!r} for {env_id}: "
-                    f"{head(str(exc), _EXCERPT)}"
+                    f"{head(str(exc), 1000)}"  # the message lists every form
                 )
     plan = Plan(envs=envs, scenarios=scs, seeds=seeds, policies=pols, resolved=resolved,
                 imports=imports)  # fmt: skip
@@ -751,7 +760,8 @@ def make_parser() -> argparse.ArgumentParser:
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     ap.add_argument("--envs", default=",".join(steamtemp_gym.ENV_IDS),
-                    help="comma list of env ids (default: all: %(default)s)")  # fmt: skip
+                    help="comma list of env ids, with or without the steamtemp/ namespace "
+                    "(default: all: %(default)s)")  # fmt: skip
     ap.add_argument("--policies", default=None,
                     help="comma list of baseline names, sb3:<algo>, zoo:DIR or paths to a "
                     "trained agent's files, and module:callable factories (default: every "
@@ -765,8 +775,9 @@ def make_parser() -> argparse.ArgumentParser:
                     help="leave the oracle out (its episodes are the run's longest); the "
                     "normalized score is then not computed (default: off)")  # fmt: skip
     ap.add_argument("--scenarios", default=",".join(DEFAULT_SCENARIOS),
-                    help="comma list of scenario names, heldout:<name> or YAML paths "
-                    "(default: %(default)s)")  # fmt: skip
+                    help="comma list of scenario names, heldout:<name>, random (the seeded "
+                    "training distribution) or YAML paths, as gym.make(..., scenario=...) "
+                    "takes them (default: %(default)s)")  # fmt: skip
     ap.add_argument("--seeds", default=DEFAULT_SEEDS,
                     help="integers >= 0 or ranges a-b (default: %(default)s)")  # fmt: skip
     ap.add_argument("--out", default="leaderboard_out",

@@ -259,6 +259,12 @@ def train(env_id: str, algo: str, hyperparams: Path | None = None, timesteps: in
           max_minutes: float | None = None, tensorboard: str | None = None,
           quiet: bool = False) -> dict[str, Any]:  # fmt: skip
     """Train one agent (module docstring); returns its metadata. Input is checked first."""
+    from steamtemp_gym.envs import resolve_id
+
+    try:
+        env_id = resolve_id(env_id)  # the namespace may be left out
+    except ValueError:
+        pass  # refused below, with the valid ids
     if env_id not in steamtemp_gym.ENV_IDS:
         raise ConfigError(f"unknown env {env_id!r}; valid: {list(steamtemp_gym.ENV_IDS)}")
     cls = _algo_class(algo)
@@ -366,7 +372,8 @@ def make_parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(prog="steamtemp-train", description=doc.split("\n")[0],
                                  epilog=doc.split("\n", 2)[2],
                                  formatter_class=argparse.RawDescriptionHelpFormatter)  # fmt: skip
-    ap.add_argument("--env", help=f"env id, one of {list(steamtemp_gym.ENV_IDS)}")
+    ap.add_argument("--env", help=f"env id, one of {list(steamtemp_gym.ENV_IDS)} (the name "
+                    "after 'steamtemp/' is enough)")
     ap.add_argument("--algo", help=f"one of {list(ALGOS)}")
     ap.add_argument("--timesteps", type=int, default=None, help="default: n_timesteps of the YAML")
     ap.add_argument("--seed", type=int, default=0)

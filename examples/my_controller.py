@@ -15,7 +15,7 @@ The leaderboard calls ``make_controller(env)`` with a single or a vector env and
 SB3 ``predict`` signature (baselines/policy.py). Score it from the project's root:
 
     steamtemp-leaderboard --policies cascade_pi,examples/my_controller.py:make_controller \\
-        --envs steamtemp/Cascade300MW-v0 --no-oracle --out my_leaderboard
+        --envs Cascade300MW-v0 --no-oracle --out my_leaderboard
 """
 
 from __future__ import annotations

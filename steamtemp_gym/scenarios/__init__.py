@@ -56,7 +56,7 @@ quoting at most a short excerpt of the input):
   complex numbers and containers are not numbers (in a file, ``1e3`` and ``3.6e3`` are
   numbers, as in YAML 1.2; a quoted ``"60"`` is a string).
 
-``resolve`` takes a name, ``"random"``, a :class:`Scenario` or a file: any
+``resolve`` takes a name, ``heldout:<name>``, ``"random"``, a :class:`Scenario` or a file: any
 ``os.PathLike`` is a file (it must end in ``.yaml`` or ``.yml``), and so is a ``str``
 ending in ``.yaml`` / ``.yml``.
 """
@@ -81,6 +81,7 @@ from steamtemp_gym.checks import head, is_real, tail
 __all__ = [
     "CHANNELS",
     "Scenario",
+    "forms",
     "get",
     "names",
     "register",
@@ -89,6 +90,7 @@ __all__ = [
     "random_scenario",
     "pack",
     "RANDOM",
+    "HELDOUT_PREFIX",
     "NAMED_DISTURBANCES",
     "MAX_FILE_BYTES",
     "MAX_BREAKPOINTS_PER_CHANNEL",
@@ -577,19 +579,29 @@ def get(name: str, plant_id: str | None = None) -> Scenario:
     if entry is None or (
         plant_id is not None and entry[1] is not None and plant_id not in entry[1]
     ):
-        raise ValueError(
-            f"unknown scenario {_excerpt(name)}; valid names: {names(plant_id)} "
-            "or a YAML file (a path ending in .yaml or .yml)"
-        )
+        raise ValueError(f"unknown scenario {_excerpt(name)}; {forms(plant_id)}")
     return entry[0]
+
+
+def forms(plant_id: str | None = None) -> str:
+    """Every way to name a scenario (for error messages and help texts)."""
+    from steamtemp_gym.scenarios import heldout
+
+    named = [n for n in names(plant_id) if n != RANDOM]
+    return (f"valid names: {named}, {HELDOUT_PREFIX}<name> of the held-out set "
+            f"{[HELDOUT_PREFIX + n for n in heldout.NAMES]}, {RANDOM!r} (the seeded training "
+            "distribution), or a YAML file (a path ending in .yaml or .yml)")
 
 
 def resolve(spec: str | os.PathLike[str] | Scenario, plant_id: str | None = None) -> Scenario | str:
     """Turn a scenario argument into a Scenario or ``"random"``.
 
     ``spec`` is a Scenario; a file (any ``os.PathLike``, or a ``str`` ending in ``.yaml`` or
-    ``.yml``, suffix case ignored), which must end in ``.yaml`` / ``.yml``; ``"random"``; or
-    the name of a registered scenario valid for ``plant_id``.
+    ``.yml``, suffix case ignored), which must end in ``.yaml`` / ``.yml``; ``"random"``;
+    ``heldout:<name>``, a held-out scenario (steamtemp_gym/scenarios/heldout); or the name
+    of a registered scenario valid for ``plant_id``. The same names work in ``gym.make``,
+    ``reset(options={"scenario": ...})``, the leaderboard's ``--scenarios`` and
+    ``steamtemp-check --scenario``.
 
     Raises:
         ValueError: naming the file or listing the valid names.
@@ -609,6 +621,12 @@ def resolve(spec: str | os.PathLike[str] | Scenario, plant_id: str | None = None
             return load_yaml(spec)
         if spec == RANDOM:
             return RANDOM
+        if spec.startswith(HELDOUT_PREFIX):
+            from steamtemp_gym.scenarios import heldout
+
+            if spec[len(HELDOUT_PREFIX):] not in heldout.NAMES:
+                raise ValueError(f"unknown held-out scenario {_excerpt(spec)}; {forms(plant_id)}")
+            return heldout.load(spec)
         try:
             return get(spec, plant_id)
         except ValueError as exc:

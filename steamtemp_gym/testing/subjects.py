@@ -21,10 +21,9 @@ class CheckSkipped(unittest.SkipTest):
 
 def steamtemp_ids() -> list[str]:
     """Every registered id built by SteamTempEnv: the suite's ids and registered variants."""
-    import steamtemp_gym
+    from steamtemp_gym.envs import ids
 
-    entry = gym.spec(steamtemp_gym.ENV_IDS[0]).entry_point
-    return [i for i, spec in gym.registry.items() if spec.entry_point == entry]
+    return ids()
 
 
 def short_id(env_id: str) -> str:
@@ -68,9 +67,10 @@ def resolve_env(env: str | Callable[..., gym.Env] | EnvTarget) -> EnvTarget:
     if isinstance(env, EnvTarget):
         return env
     if isinstance(env, str):
-        if env not in gym.registry:
-            raise ValueError(f"unknown env id {env!r}; valid ids: {steamtemp_ids()}")
-        return EnvTarget(env, env, None)
+        from steamtemp_gym.envs import resolve_id
+
+        env_id = resolve_id(env)  # also the name without the namespace
+        return EnvTarget(env_id, env_id, None)
     if callable(env):
         return EnvTarget(getattr(env, "__name__", repr(env)), None, env)
     raise ValueError(f"env must be a registered id or an env factory, got {env!r}")
@@ -142,7 +142,9 @@ def _failure(check: str, subject: str, call: str, exc: BaseException) -> Asserti
 
 
 def _quick_arg(kwargs: dict[str, Any]) -> str:
-    return ", quick=True" if kwargs.get("quick") else ""
+    """The keyword arguments of a reproducing call (``quick`` and a check's own)."""
+    out = ", quick=True" if kwargs.get("quick") else ""
+    return out + "".join(f", {k}={v!r}" for k, v in kwargs.items() if k != "quick")
 
 
 def env_check(fn: Callable[..., None]) -> Callable[..., None]:
