@@ -223,7 +223,11 @@ def index() -> str:
                      _first_paragraph(module.__doc__)])  # fmt: skip
     out = ["# Environments", "", _HEADER, "",
            "One page per env id: its observation and action signals with units and scaling, "
-           "its info keys, the scenarios it takes and its parameters with their sources.", ""]
+           "its info keys, the scenarios it takes and its parameters with their sources.", "",
+           "`import steamtemp_gym` registers the ids; `gym.make(\"steamtemp_gym:steamtemp/"
+           "Cascade300MW-v0\")` (Gymnasium's `module:id` form) imports it first, for code "
+           "and tools that take only an id string (`gym.make_vec` takes the same form; RL "
+           "Zoo's `--gym-packages steamtemp_gym` does the import instead).", ""]
     return "\n".join(out + _table(["id", "after", "actions", "plant"], rows)) + "\n"
 
 
