@@ -46,8 +46,8 @@ Outputs in ``--out``:
 All JSON is strict (no NaN or Infinity tokens).
 
 An episode that raises (a policy error, a plant failure) is recorded as a row with
-an ``error`` and the run goes on: a 3-hour leaderboard is not lost to one bad
-policy. At the end the failures are listed and the exit code is 1.
+an ``error`` and the run goes on: a long run is not lost to one bad policy. At the end
+the failures are listed and the exit code is 1.
 
 Cost: the oracle's episodes are the long ones (it optimizes by rollouts of the plant at
 every replanning instant); they are started first.
