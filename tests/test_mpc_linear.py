@@ -4,6 +4,8 @@ trip on the leaderboard's scenarios, a bad observation leaves the policy unchang
 
 from __future__ import annotations
 
+import dataclasses
+
 import gymnasium as gym
 import numpy as np
 import pytest
@@ -12,13 +14,16 @@ import steamtemp_gym
 from agents.evaluation import run_batch, run_episode
 from agents.leaderboard import DEFAULT_SCENARIOS
 from baselines.mpc_linear import MPCLinear
-from steamtemp_gym.scenarios import Scenario, heldout
+from steamtemp_gym.scenarios import NAMED_DISTURBANCES, Scenario, heldout
 
 IDS = steamtemp_gym.ENV_IDS
 FAST = "steamtemp/SupercriticalFSH-v0"
 #: +5 % heat absorption over a minute at minute 5, no noise, rated load
 HEAT_STEP = Scenario(name="heat_step", duration_s=2400.0,
                      heat_absorption_bias=((0.0, 0.0), (300.0, 0.0), (360.0, 0.05)))  # fmt: skip
+
+#: 100 -> 80 % at 2 %/min from the start
+RAMP = Scenario(name="ramp", duration_s=900.0, load=((0.0, 1.0), (600.0, 0.8)))
 
 
 def _quiet(env_id: str) -> dict:
@@ -50,8 +55,9 @@ def test_no_offset_under_a_constant_heat_absorption_step(env_id):
     "env_id", [i if "MIMO" in i else pytest.param(i, marks=pytest.mark.slow) for i in IDS])
 def test_batched_predict_equals_unbatched_bit_for_bit(env_id):
     """A vector env of 3 seeds under one policy acts exactly as 3 single envs with a policy
-    each (a load ramp: the local models and QP matrices change on the way)."""
-    sc = "load_ramp_100_50"
+    each (noise on, along a load ramp from the start: the local models and QP matrices
+    change on the way)."""
+    sc = dataclasses.replace(RAMP, **NAMED_DISTURBANCES)
     venv = gym.make_vec(env_id, num_envs=3, scenario=sc, vectorization_mode="vector_entry_point")
     batched = MPCLinear(venv)
     envs = [gym.make(env_id, scenario=sc) for _ in range(3)]
