@@ -9,7 +9,8 @@ function of the leaderboard (agents/evaluation.py):
 - ``random``: uniform random actions (seeded per episode);
 - ``cascade_pi``: the conventional baseline (baselines/cascade_pi.py);
 - ``cascade_pi_2x``: the same with doubled outer-loop gains (what tighter tuning buys);
-- ``cascade_pi_ff``: the same plus the identified load feed-forward (what a
+- ``cascade_pi_ff``: the registered industrial reference (baselines/cascade_pi.py
+  ``CascadePIFF``: load-scheduled gains and the identified load feed-forward; what a
   better-informed controller can gain: the load demand is in the observation).
 
 The difficulty targets (issue tracker, "benchmark with headroom"; the field
@@ -26,7 +27,7 @@ import gymnasium as gym
 import numpy as np
 
 from agents.evaluation import run_episode
-from baselines.cascade_pi import CascadePI
+from baselines.cascade_pi import CascadePI, CascadePIFF
 from baselines.identification import step_test
 from steamtemp_gym import scenarios
 from steamtemp_gym.plants.base import MAIN
@@ -122,7 +123,7 @@ def make_reference(name: str, env: Any):
         pi.gains[:, 0] *= 2.0
         return pi
     if name == "cascade_pi_ff":
-        return CascadePI(env, load_feedforward=True)
+        return CascadePIFF(env)
     raise ValueError(f"unknown reference policy {name!r}; valid: {list(REFERENCE_POLICIES)}")
 
 

@@ -1,10 +1,14 @@
 """steamtemp-leaderboard: every policy on every env, scenario and seed.
 
-Policies: the baselines (``baselines.NAMES``) and the shipped trained agents
-(``agents.shipped()``, named ``sb3:<algo>``). Every flag is checked before anything
-runs: env ids, policies, scenarios (names and YAML paths, resolved and built for each
-env with ``gym.make``), seeds and the output directory. A bad value is an
-argparse error (usage, the flag, the valid choices; exit code 2) and nothing is
+Policies: the baselines (``baselines.NAMES``), the shipped trained agents
+(``agents.shipped()``, named ``sb3:<algo>``) and two references that are listed but never
+ranked: ``oracle`` (agents/oracle.py, the clairvoyant NMPC on the true plant, the 1 of
+the normalized score; ``--no-oracle`` leaves it out, and the score with it) and
+``frozen_valve``. The score's 0, ``cascade_pi_ff``, and the references join every run.
+
+Every flag is checked before anything runs: env ids, policies, scenarios (names and YAML
+paths, resolved and built for each env with ``gym.make``), seeds and the output directory.
+A bad value is an argparse error (usage, the flag, the valid choices; exit code 2) and nothing is
 written (no output directory is created).
 
 Where: ``--jobs`` local worker processes (default), or ``--backend ray``: one Ray task
@@ -38,6 +42,9 @@ All JSON is strict (no NaN or Infinity tokens).
 An episode that raises (a policy error, a plant failure) is recorded as a row with
 an ``error`` and the run goes on: a 3-hour leaderboard is not lost to one bad
 policy. At the end the failures are listed and the exit code is 1.
+
+Cost: the oracle's episodes are the long ones (it optimizes by rollouts of the plant at
+every replanning instant); they are started first.
 
 ``--resume`` continues in an existing ``--out``: episodes already in
 ``episodes.jsonl`` with the same env, scenario, policy, seed and fingerprint and no
@@ -78,6 +85,7 @@ from agents import leaderboard_report as report
 from agents import stats
 from agents.difficulty import FrozenValves
 from agents.evaluation import run_batch, run_episode
+from agents.oracle import Oracle
 from steamtemp_gym import scenarios
 from steamtemp_gym.checks import head, tail
 from steamtemp_gym.scenarios import heldout
@@ -87,8 +95,10 @@ NAMED_SCENARIOS = ("load_ramp_100_50", "load_ramp_50_100", "load_cycle", "setpoi
                    "heat_imbalance_step", "load_following")  # fmt: skip
 DEFAULT_SCENARIOS = NAMED_SCENARIOS + tuple(heldout.PREFIX + n for n in heldout.NAMES)
 DEFAULT_SEEDS = "0-4"
-#: The reference policy run on every plant (0 of the normalized score; agents/difficulty.py).
+#: The frozen-valve reference run on every plant (agents/difficulty.py).
 REFERENCE = report.REFERENCE
+#: Policies that join every run: the score's 0, its 1 and the frozen valve.
+ALWAYS = (report.ZERO, report.ONE, REFERENCE)
 #: Version of the row format of episodes.jsonl (part of the fingerprint).
 SCHEMA = 2
 EPISODES = "episodes.jsonl"
@@ -170,7 +180,7 @@ def parse_seeds(ap: argparse.ArgumentParser, text: str) -> list[int]:
 
 def _available(env_id: str) -> list[str]:
     trained = [f"sb3:{a}" for e, a in agents.shipped() if e == env_id] if _sb3() else []
-    return list(baselines.NAMES) + trained + [REFERENCE]
+    return list(baselines.NAMES) + trained + [report.ONE, REFERENCE]
 
 
 @functools.lru_cache(maxsize=1)
@@ -193,12 +203,16 @@ def _resolve(spec: str, env_id: str) -> Any:
     return scenarios.resolve(spec, env_id)
 
 
-def _policies(ap: argparse.ArgumentParser, envs: list[str], text: str | None) -> dict:
+def _policies(ap: argparse.ArgumentParser, envs: list[str], text: str | None,
+              oracle: bool = True) -> dict:  # fmt: skip
     """Policies per env; every requested name must be available for at least one env.
-    The frozen-valve reference is added to every env (the 0 of the normalized score)."""
+    :data:`ALWAYS` joins every env (the oracle only with ``oracle``)."""
+    always = [p for p in ALWAYS if oracle or p != report.ONE]
     if text is None:
-        return {e: _available(e) for e in envs}
+        return {e: [p for p in _available(e) if oracle or p != report.ONE] for e in envs}
     names = _items(ap, "--policies", text)
+    if not oracle and report.ONE in names:
+        ap.error(f"argument --policies: {report.ONE} is listed but --no-oracle is given")
     everywhere = sorted({p for e in envs for p in _available(e)})
     unknown = [n for n in names if n not in everywhere]
     if unknown:
@@ -211,8 +225,7 @@ def _policies(ap: argparse.ArgumentParser, envs: list[str], text: str | None) ->
         missing = [n for n in names if n not in pols]
         if missing:
             print(f"note: {missing} not available for {e}; skipped there", file=sys.stderr)
-        if REFERENCE not in pols:
-            pols.append(REFERENCE)
+        pols += [p for p in always if p not in pols]
     return out
 
 
@@ -249,7 +262,7 @@ def _source_digest() -> str:
     h = hashlib.sha256()
     roots = [Path(steamtemp_gym.__file__).parent, Path(baselines.__file__).parent]
     files = [f for r in roots for f in sorted(r.rglob("*.py"))]
-    files += [Path(__file__).with_name("evaluation.py"), Path(__file__).with_name("difficulty.py")]
+    files += [Path(__file__).with_name(f) for f in ("evaluation.py", "difficulty.py", "oracle.py")]
     for f in files:
         h.update(f.read_bytes())
     return h.hexdigest()
@@ -281,7 +294,7 @@ def build_plan(ap: argparse.ArgumentParser, args: argparse.Namespace) -> Plan:
             f"valid choices: {list(steamtemp_gym.ENV_IDS)}"
         )
     seeds = parse_seeds(ap, args.seeds)
-    pols = _policies(ap, envs, args.policies)
+    pols = _policies(ap, envs, args.policies, oracle=not args.no_oracle)
     scs = _items(ap, "--scenarios", args.scenarios, key=_scenario_key)
     if args.out is None or str(args.out).strip() == "":
         ap.error("argument --out: empty path")
@@ -415,6 +428,8 @@ def _make_policy(name: str, env_id: str, env):
         return agents.load(env_id, name[4:])
     if name == REFERENCE:
         return FrozenValves(env)
+    if name == report.ONE:
+        return Oracle(env)
     return baselines.make(name, env)
 
 
@@ -513,7 +528,8 @@ def _mmss(s: float) -> str:
 
 
 def _units(plan: Plan, done: dict) -> list[Unit]:
-    """What is left to run, one unit per env, scenario and policy."""
+    """What is left to run, one unit per env, scenario and policy; the oracle's first
+    (they take the longest: the pool then ends with short units on every worker)."""
     out = []
     for env_id in plan.envs:
         for sc in plan.scenarios:
@@ -524,7 +540,7 @@ def _units(plan: Plan, done: dict) -> list[Unit]:
                 if todo:
                     keep = plan.seeds[0] if plan.seeds[0] in todo else None
                     out.append(Unit(env_id, sc, plan.resolved[env_id, sc], name, todo, fp, keep))
-    return out
+    return sorted(out, key=lambda u: u.policy != report.ONE)  # stable: run order otherwise
 
 
 def _finished(row: dict | None) -> bool:
@@ -696,8 +712,11 @@ def make_parser() -> argparse.ArgumentParser:
                     help="comma list of env ids (default: all: %(default)s)")  # fmt: skip
     ap.add_argument("--policies", default=None,
                     help="comma list (default: every baseline of baselines.NAMES and every "
-                    "shipped agent sb3:<algo> of agents.shipped(); frozen_valve is always "
-                    "added as the reference)")  # fmt: skip
+                    "shipped agent sb3:<algo> of agents.shipped(); cascade_pi_ff, oracle and "
+                    "frozen_valve are always added)")  # fmt: skip
+    ap.add_argument("--no-oracle", action="store_true",
+                    help="leave the oracle out (its episodes are the run's longest); the "
+                    "normalized score is then not computed (default: off)")  # fmt: skip
     ap.add_argument("--scenarios", default=",".join(DEFAULT_SCENARIOS),
                     help="comma list of scenario names, heldout:<name> or YAML paths "
                     "(default: %(default)s)")  # fmt: skip

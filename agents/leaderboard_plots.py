@@ -20,7 +20,11 @@ from typing import Any
 import numpy as np
 
 from agents import stats
+from agents.leaderboard_report import ONE, ZERO
 from steamtemp_gym.envs.render import BANDS_K
+
+#: The normalized score's 0 and 1 (labels).
+SCALE_ENDS = (ZERO, ONE)
 
 DPI = 150
 _RC = {"font.size": 10, "axes.titlesize": 11, "axes.labelsize": 10, "legend.fontsize": 9,
@@ -58,7 +62,7 @@ def actuator_labels(env: Any) -> list[str]:
 
 def trend(
     path: Path, env: Any, env_id: str, scenario: str, traces: dict[str, dict], seed: int,
-    reference: str = "frozen_valve",
+    reference: tuple[str, ...] = ("frozen_valve", "oracle"),
 ) -> Path:
     """The trend overlay of one plant and scenario (see the module docstring)."""
     plt = _plt()
@@ -183,7 +187,7 @@ def bars(path: Path, summary: dict[str, Any]) -> Path:
             ax.axvline(0, color="k", lw=0.8)
             ax.axvline(1, color="k", lw=0.8, ls="--")
             ax.set_title(_short(env_id))
-            ax.set_xlabel("IQM normalized score (0 = cascade_pi, 1 = zero cost)")
+            ax.set_xlabel(f"IQM normalized score (0 = {SCALE_ENDS[0]}, 1 = {SCALE_ENDS[1]})")
             ax.grid(axis="x", alpha=0.3)
         for ax in list(axes.flat)[len(plants):]:
             ax.axis("off")
@@ -198,7 +202,7 @@ def bars(path: Path, summary: dict[str, Any]) -> Path:
 
 def profiles(
     path: Path, scores: dict[str, dict[str, list[np.ndarray]]], n_seeds: int,
-    reference: str = "frozen_valve",
+    reference: tuple[str, ...] = ("frozen_valve", "oracle"),
 ) -> Path:
     """Performance profiles: ``scores[env][policy]`` = normalized scores per scenario."""
     plt = _plt()
@@ -207,14 +211,14 @@ def profiles(
     with plt.rc_context(_RC):
         fig, axes = plt.subplots(rows, cols, figsize=(5.2 * cols, 3.6 * rows), squeeze=False)
         for ax, env_id in zip(axes.flat, plants, strict=False):
-            ctrl = [np.concatenate(t) for p, t in scores[env_id].items() if p != reference]
+            ctrl = [np.concatenate(t) for p, t in scores[env_id].items() if p not in reference]
             lo = min([0.0] + [float(c.min()) for c in ctrl if c.size])
             hi = max([1.0] + [float(c.max()) for c in ctrl if c.size])
             pad = 0.05 * (hi - lo)
             taus = np.linspace(lo - pad, hi + pad, 401)
             for pol, tasks in scores[env_id].items():
                 if any(len(t) for t in tasks):
-                    ref = pol == reference
+                    ref = pol in reference
                     ax.plot(taus, stats.performance_profile(tasks, taus), lw=1.4, label=pol,
                             color="0.45" if ref else None, ls=":" if ref else "-")  # fmt: skip
             ax.axvline(0, color="k", lw=0.8)
@@ -232,7 +236,7 @@ def profiles(
         else:
             fig.legend(handles, labels, loc="center left", bbox_to_anchor=(1.0, 0.5))
         fig.suptitle(f"Performance profiles over scenario × seed ({n_seeds} seeds); "
-                     "0 = cascade_pi, 1 = zero cost")  # fmt: skip
+                     f"0 = {SCALE_ENDS[0]}, 1 = {SCALE_ENDS[1]}")  # fmt: skip
         fig.tight_layout()
         fig.savefig(path, dpi=DPI, bbox_inches="tight")
         plt.close(fig)

@@ -1,10 +1,12 @@
 """leaderboard.json's summary and leaderboard.md from the episode rows.
 
 The statistics (agents/stats.py) per plant and policy, over scenario x seed: the mean and
-IQM of the normalized score (0 = ``cascade_pi``'s mean return on that scenario, 1 = zero
-cost; agents/stats.py) and of the return, with 95 % stratified-bootstrap CIs; the probability of
-improvement over ``cascade_pi``; the rank per plant (by the IQM of the normalized score)
-and overall (the mean of the per-plant ranks). The engineering metrics are means over
+IQM of the normalized score (0 = the industrial reference ``cascade_pi_ff``'s mean return
+on that scenario, 1 = the clairvoyant ``oracle``'s; agents/stats.py ``normalize``) and of
+the return, with 95 % stratified-bootstrap CIs; the probability of improvement over
+``cascade_pi_ff``; the rank per plant (by the IQM of the normalized score; the references
+``oracle`` and ``frozen_valve`` are listed, never ranked) and overall (the mean of the
+per-plant ranks). The engineering metrics are means over
 scenario x seed of the episodes where they apply (a metric that does not apply, e.g.
 settling time without a setpoint step, is left out, never NaN; ``max_abs_dev_K`` is left
 out of an episode with a setpoint step, where it measures the step). The format is
@@ -23,9 +25,16 @@ from agents import stats
 from steamtemp_gym.checks import head
 
 #: Version of leaderboard.json's format (docs/leaderboard_schema.json).
-SCHEMA_VERSION = 3
+SCHEMA_VERSION = 4
+#: The 0 of the normalized score: the cascade as a commissioned unit runs it.
+ZERO = "cascade_pi_ff"
+#: The 1: the clairvoyant NMPC on the true plant (agents/oracle.py).
+ONE = "oracle"
+#: Policies listed and plotted but never ranked (not admissible controllers).
+REFERENCES = ("oracle", "frozen_valve")
 REFERENCE = "frozen_valve"
-VERSUS = "cascade_pi"
+#: The policy the probability of improvement compares against.
+VERSUS = ZERO
 TABLE_METRICS = ("iae_K_s", "max_abs_dev_K", "time_outside_5K_s", "overshoot_pct",
                  "settling_time_s", "spray_used_kg", "valve_travel", "valve_reversals",
                  "return")  # fmt: skip
@@ -79,16 +88,17 @@ def summarize(rows: list[dict], run: dict[str, Any]) -> dict[str, Any]:
             ret = {p: np.array([m["return"] for m in by[env_id][sc][p]]) for p in by[env_id][sc]}
             base = {p: float(v.mean()) for p, v in ret.items() if p in baselines.NAMES}
             ref: dict[str, Any] = {}
-            if VERSUS in ret:
-                ref.update(zero_policy=VERSUS, zero_return=float(ret[VERSUS].mean()))
-            ref["one_return"] = 0.0  # zero cost
+            if ZERO in ret:
+                ref.update(zero_policy=ZERO, zero_return=float(ret[ZERO].mean()))
+            if ONE in ret:
+                ref.update(one_policy=ONE, one_return=float(ret[ONE].mean()))
             if base:
                 ref["best_baseline"] = max(base, key=base.get)
             ref["normalized"] = False
             if "zero_return" in ref and "one_return" in ref:
-                probe = stats.normalize(np.zeros(1), ref["zero_return"], ref["one_return"])
-                ref["normalized"] = probe is not None
-            if ref["normalized"]:
+                ref["headroom"] = ref["one_return"] - ref["zero_return"]
+                ref["span"] = stats.score_span(ref["zero_return"], ref["one_return"])
+                ref["normalized"] = True
                 tasks_norm[sc] = {p: stats.normalize(v, ref["zero_return"], ref["one_return"])
                                   for p, v in ret.items()}  # fmt: skip
             refs[sc] = ref
@@ -119,7 +129,7 @@ def summarize(rows: list[dict], run: dict[str, Any]) -> dict[str, Any]:
                                                             "tasks": len(common)}  # fmt: skip
             pol_out[p] = entry
         ranked = {p: e["normalized_score"]["iqm"]["value"] for p, e in pol_out.items()
-                  if p != REFERENCE and "normalized_score" in e}  # fmt: skip
+                  if p not in REFERENCES and "normalized_score" in e}  # fmt: skip
         for p, k in stats.ranks(ranked).items():
             pol_out[p]["rank"] = k
         per_sc = {}
@@ -187,6 +197,11 @@ def headline_rows(summary: dict[str, Any]) -> tuple[list[str], list[list[str]]]:
         rank = f"{e['mean_rank']:.1f}" + (f" ({e['plants']} plants)" if e["plants"] < len(
             plants) else "")  # fmt: skip
         rows.append([str(e["position"]), e["policy"], *cells, rank])
+    for ref in REFERENCES:  # listed below the ranking, never ranked
+        ests = [summary["plants"][p]["policies"].get(ref, {}).get("normalized_score", {}).get(
+            "iqm") for p in plants]  # fmt: skip
+        if any(ests):
+            rows.append(["ref.", ref, *[_ci(est) if est else "-" for est in ests], "-"])
     return header, rows
 
 
@@ -198,10 +213,35 @@ def _table(header: list[str], rows: list[list[str]]) -> list[str]:
 def headline_markdown(summary: dict[str, Any]) -> str:
     """The headline table with its label (also in the README)."""
     n = len(summary["run"]["seeds"])
-    lines = [f"{stat_label(n)}; 0 = {VERSUS} on each scenario, 1 = zero cost; "
+    lines = [f"{stat_label(n)}: the share of the achievable improvement over the industrial "
+             f"reference that a policy realizes (0 = {ZERO}, the cascade a commissioned unit "
+             f"runs; 1 = {ONE}, the clairvoyant NMPC on the true plant; per scenario); "
              "(k) = rank on that plant.", ""]  # fmt: skip
     lines += _table(*headline_rows(summary))
+    lines += ["", *margin_markdown(summary)]
     return "\n".join(lines) + "\n"
+
+
+def margin_markdown(summary: dict[str, Any]) -> list[str]:
+    """The score's two ends per plant: mean returns over scenario x seed of the reference
+    and the oracle, the oracle's margin, and the scenarios where the span was floored."""
+    header = ["plant", f"{ZERO} return", f"{ONE} return", "margin", "floored scenarios"]
+    body = []
+    for env_id, p in summary["plants"].items():
+        refs = [r for r in p["reference"].values() if r.get("normalized")]
+        if not refs:
+            continue
+        zero = float(np.mean([r["zero_return"] for r in refs]))
+        one = float(np.mean([r["one_return"] for r in refs]))
+        floored = sum(r["span"] > r["headroom"] for r in refs)
+        body.append([env_id.split("/")[-1], f"{zero:.1f}", f"{one:.1f}", f"{one - zero:+.1f}",
+                     f"{floored} of {len(refs)}"])  # fmt: skip
+    if not body:
+        return [f"Not normalized: the run has no {ZERO} or no {ONE} episodes."]
+    return [f"Mean return over scenario × seed of the score's ends (the oracle's margin is "
+            f"the achievable improvement; where it is below {stats.MIN_SPAN:.0%} of "
+            f"{ZERO}'s cost the scale is held there: floored):", "",
+            *_table(header, body)]  # fmt: skip
 
 
 def _iqm_score(entry: dict[str, Any]) -> float:
@@ -248,10 +288,13 @@ def markdown(summary: dict[str, Any], rows: list[dict]) -> str:
     lines = ["# steamtemp_gym leaderboard", "",
              f"Seeds {run['seeds']}; scenarios: {', '.join(run['scenarios'])}. "
              "Return: the default reward summed over an episode (higher is better). "
-             f"Normalized score per scenario: 1 - R / R_pi, the fraction of {VERSUS}'s cost "
-             f"a policy removes (0 = {VERSUS}'s mean return over seeds, 1 = zero cost, "
-             f"negative = costlier than {VERSUS}); {REFERENCE} (every actuator held at its "
-             "reset opening) is a reference.",
+             f"Normalized score per scenario: (R - R0) / (R1 - R0) with R0 the mean return "
+             f"over seeds of {ZERO} (the industrial reference: load-scheduled cascade PI "
+             f"with load feed-forward) and R1 that of {ONE} (the clairvoyant NMPC on the "
+             f"true plant, an upper bound on any causal controller): the share of the "
+             f"achievable improvement a policy realizes, negative when it is worse than "
+             f"{ZERO}. {ONE} and {REFERENCE} (every actuator held at its reset opening) are "
+             "references, listed and never ranked.",
              "", "## Headline", "", headline_markdown(summary),
              "## Trained agents against the baselines", "", agents_markdown(summary)]  # fmt: skip
     for env_id, p in summary["plants"].items():
@@ -263,26 +306,31 @@ def markdown(summary: dict[str, Any], rows: list[dict]) -> str:
                   "same scenario, averaged over scenarios. IAE, max\\|dev\\| and time outside "
                   "±5 K: mean over scenario × seed where they apply.", ""]  # fmt: skip
         header = ["rank", "policy", "IQM norm. score", "mean norm. score", "IQM return",
-                  f"P(> {VERSUS})", "IAE [K s]", "max\\|dev\\| [K]", "t>5K [s]", "trips",
-                  "failed"]  # fmt: skip
+                  f"P(> {VERSUS})", "IAE [K s]", "max\\|dev\\| [K]", "t>5K [s]",
+                  "valve travel [strokes]", f"travel / {ZERO}'s", "trips", "failed"]  # fmt: skip
+        zero_travel = pols.get(ZERO, {}).get("metrics", {}).get("valve_travel")
         body = []
         for k in order:
             e = pols[k]
             ns = e.get("normalized_score", {})
             met = e["metrics"]
-            body.append([str(e.get("rank", "ref." if k == REFERENCE else "-")), k,
+            travel = met.get("valve_travel")
+            ratio = (f"{travel / zero_travel:.2f}" if travel is not None and zero_travel
+                     else "-")  # fmt: skip
+            body.append([str(e.get("rank", "ref." if k in REFERENCES else "-")), k,
                          _ci(ns.get("iqm")), _ci(ns.get("mean")),
                          _ci(e["return"]["iqm"], "{:.0f}"),
                          _ci(e.get(f"p_improvement_over_{VERSUS}")),
                          _fmt(met.get("iae_K_s")), _fmt(met.get("max_abs_dev_K")),
-                         _fmt(met.get("time_outside_5K_s")), str(e["trips"]),
-                         str(e["failed"])])  # fmt: skip
+                         _fmt(met.get("time_outside_5K_s")), _fmt(travel), ratio,
+                         str(e["trips"]), str(e["failed"])])  # fmt: skip
         lines += _table(header, body) + [""]
         lines += ["<details><summary>per scenario (mean over seeds)</summary>", ""]
         for sc, cells in p["scenarios"].items():
             ref = p["reference"][sc]
-            note = (f"0 = {VERSUS} ({ref['zero_return']:.0f}), 1 = zero cost"
-                    if ref["normalized"] else f"not normalized ({VERSUS} not run)")  # fmt: skip
+            note = (f"0 = {ZERO} ({ref['zero_return']:.1f}), 1 = {ONE} "
+                    f"({ref['one_return']:.1f}), scale {ref['span']:.1f}" if ref["normalized"]
+                    else f"not normalized ({ZERO} or {ONE} not run)")  # fmt: skip
             cols = [m for m in TABLE_METRICS if any(m in c for c in cells.values())]
             lines += [f"### {env_id.split('/')[-1]} - {sc}", "", f"Normalized score: {note}.", ""]
             header = ["policy", "seeds", "norm. score", *cols, "trips"]

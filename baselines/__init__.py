@@ -13,6 +13,7 @@ from baselines.policy import Policy
 
 _REGISTRY: dict[str, str] = {
     "cascade_pi": "baselines.cascade_pi:CascadePI",
+    "cascade_pi_ff": "baselines.cascade_pi:CascadePIFF",
     "fao_sf": "baselines.fao:FaoSF",
     "fao_fac": "baselines.fao:FaoFAC",
     "fuzzy_p2id": "baselines.fuzzy_p2id:FuzzyP2ID",

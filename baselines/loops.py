@@ -40,14 +40,15 @@ def pi_position(
     """Position-form PI v = v0 + kc (e + integral) with conditional integration.
 
     ``integral`` (a view into the caller's state) grows by e dt / ti unless the output
-    sits at a stop and kc e pushes it further in (no integration for ti = inf).
+    sits at a stop and kc e pushes it further in (no integration for ti = inf). ``kc`` and
+    ``ti`` may be scalars or per-row arrays.
 
     Returns:
         (v, stopped): the unclipped output and where it was held at a stop.
     """
     v = v0 + kc * (e + integral)
     stopped = into_stop(v, kc * e)
-    if np.isfinite(ti):
+    if np.all(np.isfinite(ti)):
         integral += np.where(stopped, 0.0, dt / ti * e)
     return v, stopped
 

@@ -81,7 +81,8 @@ def _args(tiny: Path, out: Path, **flags: str) -> list[str]:
     base = {"--envs": ENV, "--policies": "frozen", "--scenarios": str(tiny), "--seeds": "0",
             "--out": str(out), "--jobs": "1"}  # fmt: skip
     base.update(flags)
-    return [f"{k}={v}" for k, v in base.items()]
+    oracle = base.pop("oracle", None)  # the oracle (the slowest policy) only where a test asks
+    return [f"{k}={v}" for k, v in base.items()] + ([] if oracle else ["--no-oracle"])
 
 
 def _strict_load(path: Path):
@@ -241,9 +242,9 @@ def test_default_run_is_valid_without_running(monkeypatch, tmp_path):
     assert plan.envs == list(IDS) and plan.seeds == [0, 1, 2, 3, 4]
     assert plan.scenarios == list(lb.DEFAULT_SCENARIOS)
     assert {f"heldout:{n}" for n in steamtemp_gym.scenarios.heldout.NAMES} <= set(plan.scenarios)
-    for env_id in IDS:  # every baseline, every shipped agent, the reference
+    for env_id in IDS:  # every baseline, every shipped agent, the references
         shipped = [f"sb3:{a}" for e, a in agents.shipped() if e == env_id]
-        assert plan.policies[env_id] == [*baselines.NAMES, *shipped, lb.REFERENCE]
+        assert plan.policies[env_id] == [*baselines.NAMES, *shipped, "oracle", lb.REFERENCE]
     n = sum(len(p) for p in plan.policies.values())
     assert len(list(plan.grid())) == n * len(lb.DEFAULT_SCENARIOS) * 5
     assert not (tmp_path / "leaderboard_out").exists()
@@ -255,7 +256,7 @@ def test_help_documents_failures_and_resume(capsys):
     assert exc.value.code == 0
     text = capsys.readouterr().out
     for word in ("--resume", "episodes.jsonl", "exit code is 1", "0-4", "duplicates", "--jobs",
-                 "heldout:", "frozen_valve", "default:"):
+                 "heldout:", "frozen_valve", "oracle", "--no-oracle", "default:"):
         assert word in text
 
 
@@ -283,17 +284,17 @@ def test_resume_after_a_crash_completes_without_duplicates(tiny, tmp_path, fake_
     lb.main([*argv, "--resume"])
     rows = _jsonl(out / lb.EPISODES)
     keys = [(r["env"], r["scenario"], r["policy"], r["seed"]) for r in rows]
-    assert len(keys) == len(set(keys)) == 12
+    assert len(keys) == len(set(keys)) == 16
     board = _board(out)
     assert [(r["env"], r["policy"], r["seed"]) for r in board] == [
-        (e, p, s) for e in (ENV, ENV2) for p in ("frozen", "flaky", lb.REFERENCE)
+        (e, p, s) for e in (ENV, ENV2) for p in ("frozen", "flaky", "cascade_pi_ff", lb.REFERENCE)
         for s in (0, 1)]  # fmt: skip
     assert all(r["metrics"] is not None and "error" not in r for r in board)
     assert {p.name for p in (out / "plots").glob("*__*.png")} == {
         "Cascade300MW-v0__tiny.png", "DrumBoilerSH-v0__tiny.png"}  # fmt: skip
     # a finished run resumed again runs nothing and rebuilds the same board
     lb.main([*argv, "--resume"])
-    assert len(_jsonl(out / lb.EPISODES)) == 12
+    assert len(_jsonl(out / lb.EPISODES)) == 16
     assert _board(out) == board
 
 
@@ -306,14 +307,14 @@ def test_failed_episode_is_recorded_and_the_run_goes_on(tiny, tmp_path, fake_pol
         lb.main(argv)
     assert exc.value.code == 1
     err = capsys.readouterr().err
-    assert "1 of 6 episodes failed" in err and "controller diverged" in err and "--resume" in err
+    assert "1 of 8 episodes failed" in err and "controller diverged" in err and "--resume" in err
     rows = _jsonl(out / lb.EPISODES)
-    assert len(rows) == 6
+    assert len(rows) == 8
     (bad,) = [r for r in rows if "error" in r]
     assert (bad["policy"], bad["seed"], bad["metrics"]) == ("flaky", 0, None)
     assert "RuntimeError: controller diverged" in bad["error"] and "Traceback" in bad["traceback"]
     board = _board(out)
-    assert len(board) == 6 and sum("error" in r for r in board) == 1
+    assert len(board) == 8 and sum("error" in r for r in board) == 1
     assert all("traceback" not in r for r in board)
     md = (out / "leaderboard.md").read_text()
     assert "Failed episodes" in md and "controller diverged" in md and "| flaky |" in md
@@ -321,9 +322,9 @@ def test_failed_episode_is_recorded_and_the_run_goes_on(tiny, tmp_path, fake_pol
     fake_policies.clear()
     lb.main([*argv, "--resume"])
     rows = _jsonl(out / lb.EPISODES)
-    assert len(rows) == 7 and (rows[-1]["policy"], rows[-1]["seed"]) == ("flaky", 0)
+    assert len(rows) == 9 and (rows[-1]["policy"], rows[-1]["seed"]) == ("flaky", 0)
     board = _board(out)
-    assert len(board) == 6 and not any("error" in r for r in board)
+    assert len(board) == 8 and not any("error" in r for r in board)
     assert "Failed episodes" not in (out / "leaderboard.md").read_text()
 
 
@@ -431,7 +432,7 @@ def test_ray_backend_rows_equal_local_rows(tiny, tmp_path):
         ray.shutdown()
     a = _strict_load(tmp_path / "a" / "leaderboard.json")
     b = _strict_load(tmp_path / "b" / "leaderboard.json")
-    assert len(a["episodes"]) == 2 * 2 * 3  # scenarios x seeds x (2 policies + frozen_valve)
+    assert len(a["episodes"]) == 2 * 2 * 4  # scenarios x seeds x (2 + cascade_pi_ff, frozen)
     assert a["episodes"] == b["episodes"] and a["plants"] == b["plants"]
 
 
@@ -443,33 +444,42 @@ def test_ray_flags_are_checked(tiny, tmp_path, capsys):
 
 
 def test_leaderboard_cli_with_the_baseline(tmp_path):
-    """The real baselines on a named scenario: rows, summary, markdown and plots."""
+    """The real baselines, agents and references on two scenarios: rows, summary (0 =
+    cascade_pi_ff, 1 = oracle), markdown and plots."""
     lb.main(["--envs", IDS[0], "--scenarios", "setpoint_step,heldout:mill_trip", "--seeds",
              "0,1", "--out", str(tmp_path)])  # fmt: skip
     doc = _strict_load(tmp_path / "leaderboard.json")
     rows = doc["episodes"]
     trained = [f"sb3:{a}" for e, a in agents.shipped() if e == IDS[0]]  # shipped agents too
-    assert len(rows) == 2 * 2 * (len(baselines.NAMES) + len(trained) + 1)
+    assert len(rows) == 2 * 2 * (len(baselines.NAMES) + len(trained) + 2)
     assert all(np.isfinite(r["metrics"]["iae_K_s"]) for r in rows)
     pols = doc["plants"][IDS[0]]["policies"]
-    ranks = sorted(e["rank"] for p, e in pols.items() if p != lb.REFERENCE)
+    refs = lb.report.REFERENCES
+    ranks = sorted(e["rank"] for p, e in pols.items() if p not in refs)
     assert ranks[0] == 1 and len(ranks) == len(baselines.NAMES) + len(trained)
-    assert "rank" not in pols[lb.REFERENCE]
-    assert "p_improvement_over_cascade_pi" not in pols["cascade_pi"]
-    assert all(0 <= e["p_improvement_over_cascade_pi"]["value"] <= 1
-               for p, e in pols.items() if p != "cascade_pi")  # fmt: skip
-    assert pols["cascade_pi"]["normalized_score"]["mean"]["value"] == pytest.approx(0.0)
-    best = max(pols[p]["normalized_score"]["mean"]["value"] for p in baselines.NAMES)
-    assert 0.0 <= best <= 1.0  # 0 is cascade_pi, 1 zero cost (a return of 0)
+    assert all("rank" not in pols[r] for r in refs)
+    zero = lb.report.ZERO
+    assert f"p_improvement_over_{zero}" not in pols[zero]
+    assert all(0 <= e[f"p_improvement_over_{zero}"]["value"] <= 1
+               for p, e in pols.items() if p != zero)  # fmt: skip
+    assert pols[zero]["normalized_score"]["mean"]["value"] == pytest.approx(0.0)
+    for sc, ref in doc["plants"][IDS[0]]["reference"].items():  # the oracle at 1, or floored
+        cell = doc["plants"][IDS[0]]["scenarios"][sc]["oracle"]
+        assert cell["normalized_score"] == pytest.approx(ref["headroom"] / ref["span"])
+        assert ref["span"] >= ref["headroom"]
+    admissible = [*baselines.NAMES, *trained]
+    best = max(pols[p]["normalized_score"]["mean"]["value"] for p in admissible)
+    assert best <= pols["oracle"]["normalized_score"]["mean"]["value"]
     md = (tmp_path / "leaderboard.md").read_text()
-    assert "cascade_pi" in md and "setpoint_step" in md and "## Headline" in md
+    assert "cascade_pi_ff" in md and "setpoint_step" in md and "## Headline" in md
     assert "IQM of the normalized score over scenario × seed (2 seeds)" in md
-    # the agents table: cascade_pi, the best other baseline, every shipped agent, one bold IQM
+    assert "| ref. | oracle |" in md and "margin" in md
+    # the agents table: cascade_pi_ff, the best other baseline, every shipped agent, one bold
     part = md.split("## Trained agents against the baselines")[1].split("\n## ")[0]
     table = [line for line in part.splitlines() if line.startswith("| SupercriticalFSH")]
-    others = [p for p in baselines.NAMES if p != "cascade_pi"]
+    others = [p for p in baselines.NAMES if p != zero]
     best_base = max(others, key=lambda p: pols[p]["normalized_score"]["iqm"]["value"])
-    assert [r.split(" | ")[1] for r in table] == ["cascade_pi", f"{best_base} (best baseline)",
+    assert [r.split(" | ")[1] for r in table] == [zero, f"{best_base} (best baseline)",
                                                   *sorted(trained)]  # fmt: skip
     assert sum(r.split(" | ")[2].startswith("**") for r in table) == 1
     names = {p.name for p in (tmp_path / "plots").glob("*.png")}

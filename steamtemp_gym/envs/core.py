@@ -356,6 +356,12 @@ class Core:
         self.bp_t, self.bp_v, self.bp_n = bp_t, bp_v, bp_n
         self._advance_args = None
 
+    def assign_scenario(self, b: int, scenario: sc.Scenario) -> None:
+        """Make row b run ``scenario`` (its schedules packed into a table slot); the row's
+        state is not touched."""
+        self._assign_slot(b, scenario)
+        self.scenario[b] = scenario
+
     def _assign_slot(self, b: int, scenario: sc.Scenario) -> None:
         """Point row b at the table slot of ``scenario``, packing it if no row uses it yet."""
         prev = self.scenario[b]
@@ -432,8 +438,7 @@ class Core:
                 row b is left as it was.
         """
         self.check_start(scenario)
-        self._assign_slot(b, scenario)
-        self.scenario[b] = scenario
+        self.assign_scenario(b, scenario)
         ou_ab = ou_coefficients(
             scenario.heat_absorption_noise_std,
             scenario.heat_absorption_noise_tau_s,

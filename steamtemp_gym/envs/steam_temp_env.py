@@ -18,6 +18,7 @@ import numpy as np
 
 from steamtemp_gym import scenarios as sc
 from steamtemp_gym.envs import options as opts
+from steamtemp_gym.envs import snapshot as snap_
 from steamtemp_gym.envs.core import Core, check_action
 from steamtemp_gym.signals import OBS_LIMIT
 
@@ -101,6 +102,36 @@ class SteamTempEnv(gym.Env):
 
     def _info(self) -> dict[str, Any]:
         return self.core.info_row(0)
+
+    def snapshot(self) -> snap_.Snapshot:
+        """A copy of the episode's full state (envs/snapshot.py), to :meth:`restore` here
+        later or into rows of the native vector env.
+
+        Raises:
+            ValueError: no reset() yet.
+        """
+        if self.core.scenario[0] is None:
+            raise ValueError("call reset() before snapshot()")
+        return snap_.take(self.core, np.zeros(1, dtype=np.int64), [self.np_random],
+                          np.array([self._needs_reset]))  # fmt: skip
+
+    def restore(self, snapshot: snap_.Snapshot) -> np.ndarray:
+        """Continue from ``snapshot`` (one row, of this plant and parameters): the episode
+        goes on bit for bit as the snapshot's would. Returns its current observation.
+
+        Raises:
+            ValueError: a snapshot of another plant or parameter set, or of several rows;
+                nothing is changed.
+        """
+        if isinstance(snapshot, snap_.Snapshot) and len(snapshot) != 1:
+            raise ValueError(f"a single env restores one-row snapshots, got {len(snapshot)} rows")
+        target, source = snap_.check(self.core, snapshot, [0])
+        rngs, waiting = [self.np_random], np.zeros(1, dtype=bool)
+        snap_.put(self.core, snapshot, target, source, rngs, waiting)
+        self._np_random = rngs[0]
+        self._needs_reset = bool(waiting[0])
+        self._display = None
+        return self.core.obs[0].copy()
 
     def render(self):
         if self.render_mode != "rgb_array":

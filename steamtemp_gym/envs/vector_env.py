@@ -33,6 +33,7 @@ from gymnasium.vector.utils import batch_space
 
 from steamtemp_gym.checks import is_integer
 from steamtemp_gym.envs import options as opts
+from steamtemp_gym.envs import snapshot as snap_
 from steamtemp_gym.envs.core import Core, check_action
 from steamtemp_gym.envs.steam_temp_env import draw_episode, spaces
 
@@ -214,6 +215,40 @@ class SteamTempVectorEnv(VectorEnv):
             masks[:] = mask
             info.update(zip(mask_keys, masks, strict=True))
         return info
+
+    def snapshot(self, rows: Any = None) -> snap_.Snapshot:
+        """Copies of the full state of ``rows`` (None: every sub-env; an int; a sequence),
+        to :meth:`restore` later or into other rows (envs/snapshot.py).
+
+        Raises:
+            ValueError: rows out of range, repeated or not integers; no reset() yet.
+        """
+        if not self._started:
+            raise ValueError("call reset() before snapshot()")
+        rows = snap_.row_indices(rows, self.num_envs)
+        return snap_.take(self.core, rows, self._rngs, self._autoreset)
+
+    def restore(self, snapshot: snap_.Snapshot, rows: Any = None) -> None:
+        """Write ``snapshot`` into ``rows`` (None: the rows it was taken from): as many rows
+        as it holds, or any number of rows from a one-row snapshot. The rows then continue
+        bit for bit as the snapshot's would (envs/snapshot.py); :attr:`observations` gives
+        their observations.
+
+        Raises:
+            ValueError: a snapshot of another plant or parameter set, rows out of range or
+                of the wrong count, or (before the first reset) rows that do not cover every
+                sub-env; nothing is changed.
+        """
+        target, source = snap_.check(self.core, snapshot, rows)
+        if not self._started and target.size != self.num_envs:
+            raise ValueError("before the first reset() restore must cover every sub-env")
+        snap_.put(self.core, snapshot, target, source, self._rngs, self._autoreset)
+        self._started = True
+
+    @property
+    def observations(self) -> np.ndarray:
+        """A copy of every sub-env's current observation."""
+        return self.core.obs.copy()
 
     def close_extras(self, **kwargs: Any) -> None:
         pass

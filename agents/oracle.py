@@ -1,0 +1,217 @@
+"""The oracle: a clairvoyant nonlinear MPC on the true plant, the 1 of the normalized score.
+
+Not an admissible controller: a reference, like the frozen valve. At every replanning
+instant it copies the *full internal state* of each row of the env it acts on (plant,
+valve and thermowell states, the plant's own random generators, the coloured
+heat-absorption disturbance, the noise key and step counter, the scenario with its whole
+future: envs/snapshot.py) into rows of a planning core of the same plant object, and
+optimizes the valve commands over a receding horizon on the env's own compiled kernel
+and reward. Since the noise is counter-based and the scenario is known, its rollouts see
+the true future disturbances exactly: up to the optimizer's suboptimality, no causal
+controller can score more than it. The observation it is handed is ignored (only its
+shape is checked).
+
+Optimizer: the cross-entropy method over move-blocked command trajectories (Rubinstein
+and Kroese 2004; for MPC, e.g. Pinneri et al. 2020, "Sample-efficient cross-entropy
+method for real-time planning"). A plan is a piecewise-linear command trajectory through
+knots every ``knot_s`` seconds over ``horizon_s``. Each replan (every ``replan_s``)
+starts from the previous best plan shifted by the time elapsed (warm start), samples
+``samples - 1`` Gaussian perturbations of the mean knots per iteration next to the best
+plan so far (kept in the population, so a replan never returns a worse plan than its warm
+start within the horizon), scores every candidate by the env's own reward summed over the
+horizon (trip penalty included; nothing after the episode's end or a trip counts) and
+refits mean and spread to the best ``elites``. It returns the best plan's commands.
+Commands are openings in [0, 1]; the valve rate limits, lags and bounds are those the
+plant kernel enforces on every command.
+
+Deterministic given the episode: each row's random draws come from a generator seeded by
+the row's noise key and step counter, so a row gets the same plan alone or in a batch,
+in the single env or in the vector env.
+
+The budget (samples, iterations, horizon, knots, replanning interval) was chosen by
+measurement: docs/leaderboard.md, "The oracle", gives the return as the budget doubles.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from steamtemp_gym.envs.core import E_DUR, E_TIME, Core
+from steamtemp_gym.envs.snapshot import copy_rows
+from steamtemp_gym.rewards import RewardConfig
+
+
+@dataclass(frozen=True)
+class Budget:
+    """What one oracle decision may spend (module docstring)."""
+
+    horizon_s: float = 240.0
+    #: after the horizon the rollouts go on this long with the plan's last commands held, and
+    #: the rewards there count: a plan must not buy savings at its end (less spray) with a
+    #: temperature excursion that only its dead time and lag hide beyond the horizon
+    tail_s: float = 240.0
+    knot_s: float = 30.0
+    replan_s: float = 20.0
+    samples: int = 16
+    iterations: int = 4
+    elites: int = 2
+    sigma0: float = 0.05
+    sigma_min: float = 0.005
+
+    def __post_init__(self) -> None:
+        for name in ("horizon_s", "tail_s", "knot_s", "replan_s", "sigma0", "sigma_min"):
+            v = getattr(self, name)
+            if not (isinstance(v, (int, float)) and math.isfinite(v) and v >= 0) or (
+                    v == 0 and name != "tail_s"):  # fmt: skip
+                raise ValueError(f"oracle budget {name} must be a positive number, got {v!r}")
+        for name in ("samples", "iterations", "elites"):
+            v = getattr(self, name)
+            if not (isinstance(v, int) and not isinstance(v, bool) and v >= 1):
+                raise ValueError(f"oracle budget {name} must be a positive integer, got {v!r}")
+        if self.elites > self.samples:
+            raise ValueError(f"oracle budget: elites ({self.elites}) > samples ({self.samples})")
+        if self.knot_s > self.horizon_s or self.replan_s > self.horizon_s:
+            raise ValueError("oracle budget: knot_s and replan_s must not exceed horizon_s")
+
+
+class Oracle:
+    """Clairvoyant CEM-MPC on the env's own kernel (module docstring).
+
+    Args:
+        env: The env (single or native vector env) whose rows it acts on and reads.
+        budget: The optimizer's budget (:class:`Budget`).
+    """
+
+    def __init__(self, env: Any, budget: Budget | None = None) -> None:
+        u = env.unwrapped
+        if not isinstance(getattr(u, "core", None), Core):
+            raise ValueError("the oracle acts on a steamtemp_gym env (SteamTempEnv or the "
+                             f"native vector env), got {type(u).__name__}")  # fmt: skip
+        self.src: Core = u.core
+        self.budget = budget or Budget()
+        plant = self.src.plant
+        dt = plant.dt_s
+        b = self.budget
+        self.H = max(1, round(b.horizon_s / dt))
+        self.T = round(b.tail_s / dt)
+        self.K = max(1, round(b.knot_s / dt))
+        self.R = max(1, round(b.replan_s / dt))
+        self.n_knots = math.ceil(self.H / self.K) + 1
+        self.n_u = plant.n_u
+        # knot k sits at step k K of the plan; command of plan step h by linear interpolation
+        t = np.arange(self.H) / self.K
+        k0 = np.minimum(t.astype(np.int64), self.n_knots - 2)
+        self._k0, self._w = k0, (t - k0)[:, None]
+        self._core: Core | None = None
+        self.reset()
+
+    def reset(self) -> None:
+        self.plan: np.ndarray | None = None  # (rows, H, n_u) commands of each row's plan
+        self.knots: np.ndarray | None = None  # (rows, n_knots, n_u) its knots
+        self.start = np.zeros(0, dtype=np.int64)  # step counter at each row's plan start
+
+    # ---------------------------------------------------------------------- planning
+    def _planner(self) -> Core:
+        """The planning core (rows x samples rows), made once per source batch size."""
+        n = self.src.B * self.budget.samples
+        if self._core is None or self._core.B != n:
+            core = Core(self.src.plant, n, RewardConfig())
+            core.cfg[:] = self.src.cfg  # the env's own reward weights
+            self._core = core
+        return self._core
+
+    def _commands(self, knots: np.ndarray) -> np.ndarray:
+        """(..., H, n_u) commands of knots (..., n_knots, n_u)."""
+        a, b = knots[..., self._k0, :], knots[..., self._k0 + 1, :]
+        return a + (b - a) * self._w
+
+    def _returns(self, rows: np.ndarray, cand: np.ndarray) -> np.ndarray:
+        """Reward summed over the horizon of each candidate (len(rows), samples, n_knots,
+        n_u) from each source row's current state."""
+        core = self._planner()
+        S = self.budget.samples
+        n = len(rows) * S
+        dst = np.arange(n)
+        copy_rows(self.src, np.repeat(rows, S), core, dst)
+        U = self._commands(cand).reshape(n, self.H, self.n_u)
+        A = np.empty((core.B, self.n_u))
+        A[n:] = 0.0
+        ret = np.zeros(n)
+        alive = np.ones(n, dtype=bool)
+        left = core.ep[:n, E_DUR] - core.ep[:n, E_TIME]  # time to the episode's end
+        for h in range(self.H + self.T):
+            alive &= left > 1e-9
+            if h < self.H:  # the tail holds the last commands
+                A[:n] = (2.0 * U[:, h] - 1.0).astype(np.float32)  # as predict hands them out
+            core.step(A)
+            ret += np.where(alive, core.out[:n, 0], 0.0)
+            alive &= core.out[:n, 1] == 0.0  # a trip ends the row's episode
+            left -= self.src.plant.dt_s
+        return ret.reshape(len(rows), S)
+
+    def _optimize(self, rows: np.ndarray, mean: np.ndarray) -> np.ndarray:
+        """Best knots of each row: CEM from ``mean``, which is kept as a candidate."""
+        b = self.budget
+        n = len(rows)
+        sigma = np.full_like(mean, b.sigma0)
+        rngs = [np.random.default_rng([int(self.src.key[r]), int(self.src.counter[r])])
+                for r in rows]  # fmt: skip
+        best, best_ret = mean.copy(), np.full(n, -np.inf)
+        for _ in range(b.iterations):
+            eps = np.stack([g.standard_normal((b.samples - 1, *mean.shape[1:])) for g in rngs])
+            cand = np.empty((n, b.samples, *mean.shape[1:]))
+            cand[:, 1:] = np.clip(mean[:, None] + sigma[:, None] * eps, 0.0, 1.0)
+            cand[:, 0] = best
+            if b.samples > 2:
+                cand[:, 1] = mean  # the refitted mean itself, without noise
+            ret = self._returns(rows, cand)
+            top = np.argsort(-ret, axis=1, kind="stable")[:, : b.elites]
+            elite = np.take_along_axis(cand, top[:, :, None, None], axis=1)
+            mean = elite.mean(axis=1)
+            sigma = np.maximum(elite.std(axis=1), b.sigma_min)
+            i = top[:, 0]
+            better = ret[np.arange(n), i] > best_ret
+            best[better] = cand[np.arange(n), i][better]
+            best_ret = np.maximum(best_ret, ret[np.arange(n), i])
+        return best
+
+    def _shifted(self, rows: np.ndarray) -> np.ndarray:
+        """Warm start of each row: its plan shifted to now, held at its end (a new
+        episode: the commands held at its start)."""
+        U = self.src.U_prev[rows]
+        mean = np.repeat(U[:, None, :], self.n_knots, axis=1)
+        for j, r in enumerate(rows):
+            age = int(self.src.counter[r] - self.start[r])
+            if self.start[r] < 0 or age < 0 or age > self.H or self.src.counter[r] == 0:
+                continue
+            t = np.minimum(age + np.arange(self.n_knots) * self.K, self.H - 1)
+            mean[j] = self._commands(self.knots[r])[t]
+        return mean
+
+    def predict(self, observation, state=None, episode_start=None, deterministic=True):
+        """The next commands of each row's plan, replanning where due (module docstring)."""
+        obs = np.asarray(observation)
+        B = self.src.B
+        if obs.shape[: obs.ndim - 1] != ((B,) if obs.ndim == 2 else ()):
+            raise ValueError(f"the oracle's env has {B} row(s); observation shape {obs.shape}")
+        if self.plan is None or self.plan.shape[0] != B:
+            self.plan = np.zeros((B, self.H, self.n_u))
+            self.knots = np.zeros((B, self.n_knots, self.n_u))
+            self.start = np.full(B, -1, dtype=np.int64)
+        age = self.src.counter - self.start
+        due = (self.start < 0) | (age < 0) | (age >= self.R) | (self.src.counter == 0)
+        if episode_start is not None:
+            due |= np.broadcast_to(np.asarray(episode_start, dtype=bool), (B,))
+        rows = np.flatnonzero(due)
+        if rows.size:
+            best = self._optimize(rows, self._shifted(rows))
+            self.knots[rows] = best
+            self.plan[rows] = self._commands(best)
+            self.start[rows] = self.src.counter[rows]
+        age = self.src.counter - self.start
+        action = (2.0 * self.plan[np.arange(B), age] - 1.0).astype(np.float32)
+        return (action if obs.ndim == 2 else action[0]), None
