@@ -7,7 +7,7 @@ the coloured heat-absorption disturbance) and neither an evaluation scenario: a 
 heat-absorption step at minute 5 (40 min, rated load) and cascade_pi's feed-forward
 commissioning ramp (100 -> 60 -> 100 % at 3 %/min). For every weight of
 ``MOVE_WEIGHT_LADDER`` it prints mpc_linear's return and valve travel next to those of
-``cascade_pi`` with load feed-forward, and the rule's choice: the smallest weight (the
+``cascade_pi_ff``, and the rule's choice: the smallest weight (the
 least move suppression) whose travel stays within ``TRAVEL_RATIO_MAX`` times the
 reference's on both tests.
 """
@@ -19,9 +19,10 @@ import dataclasses
 
 import gymnasium as gym
 
+import baselines
 import steamtemp_gym
 from agents.evaluation import run_episode
-from baselines.cascade_pi import FF_RAMP, CascadePI
+from baselines.cascade_pi import FF_RAMP
 from baselines.mpc_linear import MOVE_WEIGHT_LADDER, MOVE_WEIGHTS, TRAVEL_RATIO_MAX, MPCLinear
 from steamtemp_gym.scenarios import NAMED_DISTURBANCES, Scenario
 
@@ -47,7 +48,7 @@ def main(argv: list[str] | None = None) -> None:
         refs = []
         for sc in TESTS:
             env = gym.make(env_id, scenario=sc)
-            refs.append(run_episode(env, CascadePI(env, load_feedforward=True), args.seed))
+            refs.append(run_episode(env, baselines.make("cascade_pi_ff", env), args.seed))
         for w in MOVE_WEIGHT_LADDER:
             fits = True
             for sc, ref in zip(TESTS, refs, strict=True):
