@@ -19,7 +19,7 @@ from steamtemp_gym.scenarios import NAMED_DISTURBANCES, Scenario, heldout
 IDS = steamtemp_gym.ENV_IDS
 FAST = "steamtemp/SupercriticalFSH-v0"
 #: +5 % heat absorption over a minute at minute 5, no noise, rated load
-HEAT_STEP = Scenario(name="heat_step", duration_s=2400.0,
+HEAT_STEP = Scenario(name="heat_step", duration_s=3600.0,
                      heat_absorption_bias=((0.0, 0.0), (300.0, 0.0), (360.0, 0.05)))  # fmt: skip
 
 #: 100 -> 80 % at 2 %/min from the start
