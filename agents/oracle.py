@@ -56,7 +56,7 @@ class Budget:
     tail_s: float = 240.0
     knot_s: float = 30.0
     replan_s: float = 20.0
-    samples: int = 16
+    samples: int = 8
     iterations: int = 4
     elites: int = 2
     sigma0: float = 0.05

@@ -3,7 +3,7 @@
     python scripts/update_readme_leaderboard.py [--out leaderboard_out]
         [--plot BensonSubcritical-v0__heldout_mill_trip.png]
 
-Reads ``<out>/leaderboard.json`` (schema version 3), writes the headline table (the one
+Reads ``<out>/leaderboard.json`` (schema version 4), writes the headline table (the one
 of leaderboard.md, same statistic and label) between the README's ``leaderboard:start``
 and ``leaderboard:end`` markers, the trained agents against the baselines
 (``agents_markdown``) between ``zoo:start`` and ``zoo:end``, and copies one trend plot of

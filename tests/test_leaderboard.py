@@ -227,7 +227,7 @@ def test_duplicates_are_dropped_in_order(tiny, tmp_path, fake_policies, capsys):
     args = ap.parse_args(_args(tiny, tmp_path / "out", **flags))
     plan = lb.build_plan(ap, args)
     assert plan.envs == [ENV]
-    assert plan.policies == {ENV: ["frozen", "flaky", lb.REFERENCE]}
+    assert plan.policies == {ENV: ["frozen", "flaky", "cascade_pi_ff", lb.REFERENCE]}
     assert plan.scenarios == [str(tiny)]
     assert plan.seeds == [3, 0, 1, 2]
     assert "duplicates dropped" in capsys.readouterr().err
@@ -346,7 +346,8 @@ def test_policy_that_cannot_be_built_fails_its_episodes_only(
     board = _board(out)
     assert [("error" in r, r["policy"]) for r in board] == [
         (True, "flaky"), (True, "flaky"), (False, "frozen"), (False, "frozen"),
-        (False, lb.REFERENCE), (False, lb.REFERENCE)]  # fmt: skip
+        (False, "cascade_pi_ff"), (False, "cascade_pi_ff"), (False, lb.REFERENCE),
+        (False, lb.REFERENCE)]  # fmt: skip
     assert list((out / "plots").glob("*.png"))
 
 
@@ -358,8 +359,8 @@ def test_changed_scenario_runs_again_on_resume(tiny, tmp_path, fake_policies):
     tiny.write_text(TINY.replace("0.95", "0.9"))
     lb.main([*argv, "--resume"])
     rows = _jsonl(out / lb.EPISODES)
-    assert len(rows) == 4 and not {r["fingerprint"] for r in rows[2:]} & fps
-    assert [r["fingerprint"] for r in _board(out)] == [r["fingerprint"] for r in rows[2:]]
+    assert len(rows) == 6 and not {r["fingerprint"] for r in rows[3:]} & fps
+    assert [r["fingerprint"] for r in _board(out)] == [r["fingerprint"] for r in rows[3:]]
 
 
 def test_outputs_are_strict_json_that_follows_the_schema(tiny, tmp_path, fake_policies):
@@ -372,7 +373,7 @@ def test_outputs_are_strict_json_that_follows_the_schema(tiny, tmp_path, fake_po
     jsonschema.validate(doc, json.loads(SCHEMA.read_text()))
     assert doc["schema_version"] == lb.report.SCHEMA_VERSION
     board = doc["episodes"]
-    assert len(board) == 4
+    assert len(board) == 6
     for r in board:
         assert r["metrics"]["settling_time_s"] is None
         assert set(r) == {"env", "scenario", "policy", "seed", "fingerprint", "metrics"}
