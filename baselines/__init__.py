@@ -22,6 +22,7 @@ _REGISTRY: dict[str, str] = {
     "lqi": "baselines.lqi:LQI",
     "mpc_evarx": "baselines.mpc_evarx:MPCEVARX",
     "mpc_arx": "baselines.mpc_evarx:MPCARX",
+    "mpc_linear": "baselines.mpc_linear:MPCLinear",
 }
 NAMES: tuple[str, ...] = tuple(_REGISTRY)
 
