@@ -130,7 +130,7 @@ class Oracle:
         return a + (b - a) * self._w
 
     def _returns(self, rows: np.ndarray, cand: np.ndarray) -> np.ndarray:
-        """Reward summed over the horizon of each candidate (len(rows), samples, n_knots,
+        """Reward summed over the horizon and tail of each candidate (len(rows), samples, n_knots,
         n_u) from each source row's current state."""
         core = self._planner()
         S = self.budget.samples

@@ -26,6 +26,7 @@ _REGISTRY: dict[str, str | Callable[..., Any]] = {
     "lqi": "baselines.lqi:LQI",
     "mpc_evarx": "baselines.mpc_evarx:MPCEVARX",
     "mpc_arx": "baselines.mpc_evarx:MPCARX",
+    "mpc_linear": "baselines.mpc_linear:MPCLinear",
 }
 #: The shipped controllers (register() cannot replace them).
 SHIPPED: tuple[str, ...] = tuple(_REGISTRY)

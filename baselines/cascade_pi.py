@@ -155,7 +155,9 @@ def gain_table(env_id: str, params_json: str) -> np.ndarray:
 
 
 @functools.lru_cache(maxsize=16)
-def _feedforward(env_id: str, params_json: str, scheduled: bool = False) -> tuple[np.ndarray, float]:
+def _feedforward(
+    env_id: str, params_json: str, scheduled: bool = False
+) -> tuple[np.ndarray, float]:
     """((a, b, c) per action, zeros for non-MAIN loops; tau_f):
     r_ff = a (L - L0) + b dL_f/dt + c (F - L), fitted on the cascade without feed-forward
     (with load-scheduled gains if ``scheduled``)."""

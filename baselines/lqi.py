@@ -84,9 +84,10 @@ import numpy as np
 from scipy.linalg import solve_discrete_are
 
 from baselines.cascade_pi import CascadePI
+from baselines.linear_models import interp_rows, kalman_gain, reachable, steady_point
 from baselines.loops import into_stop, observation_layout, restart_rows
 from steamtemp_gym import plants
-from steamtemp_gym.plants.base import MAIN, nominal_disturbances
+from steamtemp_gym.plants.base import MAIN
 
 #: Operating points of the three linear models (fraction of rated load).
 GRID_LOADS = (0.5, 0.75, 1.0)
@@ -100,24 +101,6 @@ E_MAX_K = 1.0
 W_REL = 0.01
 NOISE_K = 0.25
 V_REL = 0.01
-
-
-def _steady(plant: Any, load: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(x, u, y_observed) of the undisturbed steady state at ``load`` (what linearize uses)."""
-    x, z = plant.steady_outputs(nominal_disturbances(load)[0])
-    obs = [i for i, s in enumerate(plant.outputs) if s.observed]
-    return x, z[[plant.index[v] for v in plant.valves]], z[obs]
-
-
-def _reachable(A: np.ndarray, B: np.ndarray) -> np.ndarray:
-    """Boolean mask of the states some input reaches through nonzero entries of A and B."""
-    reach = np.any(B != 0.0, axis=1)
-    G = A != 0.0
-    while True:
-        new = reach | np.any(G[:, reach], axis=1)
-        if (new == reach).all():
-            return reach
-        reach = new
 
 
 def _t63(A: np.ndarray, B: np.ndarray, c: np.ndarray, dt: float) -> float:
@@ -141,7 +124,7 @@ def design(env_id: str, params_json: str) -> dict[str, Any]:
     models = [plant.linearize(L) for L in GRID_LOADS]
     keep = np.zeros(plant.n_x, dtype=bool)
     for A, B, *_ in models:
-        keep |= _reachable(A, B)
+        keep |= reachable(A, B)
     # state scale: peak response of each kept state to a unit step of every action, 100 %
     A, B = models[-1][0][np.ix_(keep, keep)], models[-1][1][keep]
     x, peak = np.zeros(A.shape[0]), np.zeros(A.shape[0])
@@ -167,12 +150,11 @@ def design(env_id: str, params_json: str) -> dict[str, Any]:
         R = np.eye(m) / DU_MAX**2
         P = solve_discrete_are(Aa, Ba, Q, R)
         K = np.linalg.solve(R + Ba.T @ P @ Ba, Ba.T @ P @ Aa)
-        S = solve_discrete_are(A.T, C.T, W_REL**2 * np.eye(n), np.diag(vy))
-        M = S @ C.T @ np.linalg.inv(C @ S @ C.T + np.diag(vy))
+        M = kalman_gain(A, C, W_REL**2 * np.eye(n), np.diag(vy))
         grid.append({"A": A, "B": B, "C": C, "M": M, "Kx": K[:, :n], "Kz": K[:, n],
                      "tau": tau, "rho_cl": float(np.abs(np.linalg.eigvals(Aa - Ba @ K)).max()),
                      "rho_est": float(np.abs(np.linalg.eigvals(A - M @ C @ A)).max())})  # fmt: skip
-    ops = [_steady(plant, L) for L in OP_LOADS]
+    ops = [steady_point(plant, L, [s.name for s in observed]) for L in OP_LOADS]
     ok = [k for k, (xo, uo, yo) in enumerate(ops) if np.all(np.isfinite(yo))]
     return {
         "grid": grid,
@@ -185,13 +167,6 @@ def design(env_id: str, params_json: str) -> dict[str, Any]:
         "u_op": np.array([ops[k][1] for k in ok]),
         "y_op": np.array([ops[k][2] for k in ok]),
     }
-
-
-def _interp_rows(L: np.ndarray, xp: np.ndarray, table: np.ndarray) -> np.ndarray:
-    """Linear interpolation of the rows of ``table`` (len(xp), k) at each L (held outside)."""
-    idx = np.clip(np.searchsorted(xp, L) - 1, 0, len(xp) - 2)
-    a = np.clip((L - xp[idx]) / (xp[idx + 1] - xp[idx]), 0.0, 1.0)[:, None]
-    return (1.0 - a) * table[idx] + a * table[idx + 1]
 
 
 class LQI:
@@ -234,13 +209,13 @@ class LQI:
 
     def _weights(self, L: np.ndarray) -> np.ndarray:
         """(n, 3) interpolation weights of the grid models at loads L (held outside)."""
-        return _interp_rows(L, np.array(GRID_LOADS), np.eye(len(GRID_LOADS)))
+        return interp_rows(L, np.array(GRID_LOADS), np.eye(len(GRID_LOADS)))
 
     def _op(self, L: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         d = self.d
         xp = d["op_loads"]
-        return (_interp_rows(L, xp, d["x_op"]), _interp_rows(L, xp, d["u_op"]),
-                _interp_rows(L, xp, d["y_op"]))  # fmt: skip
+        return (interp_rows(L, xp, d["x_op"]), interp_rows(L, xp, d["u_op"]),
+                interp_rows(L, xp, d["y_op"]))  # fmt: skip
 
     def predict(self, observation, state=None, episode_start=None, deterministic=True):
         obs = np.atleast_2d(np.asarray(observation, dtype=np.float64))

@@ -73,8 +73,8 @@ def test_bad_budgets_are_refused(field, value, words):
 def test_the_oracle_refuses_other_envs_and_batch_sizes():
     with pytest.raises(ValueError, match="steamtemp_gym env"):
         Oracle(gym.make("CartPole-v1"))
-    venv = gym.make_vec("steamtemp/Cascade300MW-v0", num_envs=2,
-                        vectorization_mode="vector_entry_point", scenario="setpoint_step")  # fmt: skip
+    venv = gym.make_vec("steamtemp/Cascade300MW-v0", num_envs=2, scenario="setpoint_step",
+                        vectorization_mode="vector_entry_point")  # fmt: skip
     obs, _ = venv.reset(seed=0)
     with pytest.raises(ValueError, match="2 row"):
         Oracle(venv).predict(obs[:1])

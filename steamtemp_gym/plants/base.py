@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import dataclasses
 import typing
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
@@ -327,6 +327,7 @@ class Plant:
         setpoint_C: float | None = None,
         rel_step: float = 1e-6,
         du: float = 1e-4,
+        outputs: Sequence[str] | None = None,
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """Discrete-time linear model (A, B, C, D) at the control interval around the
         steady state at ``load``.
@@ -341,32 +342,23 @@ class Plant:
 
         x: the plant's full state vector (its own units: SI enthalpies, pressures, ...);
         u: the actions as valve openings in [0, 1] (action a gives opening (a + 1) / 2);
-        y: the OBSERVED outputs (``Signal.observed``, in :attr:`outputs` order) in their
-        physical units (C, kg/s, MPa, ...). A and B are central finite differences of
-        one control interval of the compiled step (:meth:`step`, the kernel the env runs),
-        C and D of its output evaluation (``dt = 0``): x_i is perturbed by ``rel_step``
-        max(|x_i|, 1), u_j by ``du`` (one-sided, inward, at a closed valve or a fully open
-        one). The env's observation after a step is the outputs of the new state with the
-        command just held, so y_{k+1} = C x_{k+1} + D u_k there (D is zero for plants whose
-        outputs read the valve states only). Plant-internal random disturbances (seeded by
-        key 0) are the same in every evaluation and cancel in the differences; their
-        generator states appear as uncontrollable modes.
+        y: the OBSERVED outputs (``Signal.observed``, in :attr:`outputs` order), or the
+        outputs named in ``outputs``, in their physical units (C, kg/s, MPa, ...). A and B
+        are central finite differences of one control interval of the compiled step
+        (:meth:`step`, the kernel the env runs), C and D of its output evaluation
+        (``dt = 0``): x_i is perturbed by ``rel_step`` max(|x_i|, 1), u_j by ``du``
+        (one-sided, inward, at a closed valve or a fully open one). The env's observation
+        after a step is the outputs of the new state with the command just held, so
+        y_{k+1} = C x_{k+1} + D u_k there (D is zero for plants whose outputs read the valve
+        states only). Plant-internal random disturbances (seeded by key 0) are the same in
+        every evaluation and cancel in the differences; their generator states appear as
+        uncontrollable modes. The disturbances' columns are :meth:`linearize_disturbances`.
 
         Generic: no per-plant code. Checked against the env's finite-difference step
         responses for every id in tests/test_linearize.py.
         """
-        d = nominal_disturbances(load)
-        x, z = self.steady_outputs(d[0], setpoint_C)
-        x0 = x[None, :]
-        u0 = z[[self.index[v] for v in self.valves]].reshape(1, self.n_u)
-        obs = np.array([i for i, s in enumerate(self.outputs) if s.observed])
-
-        def run(x: np.ndarray, u: np.ndarray, dt: float | None) -> tuple[np.ndarray, np.ndarray]:
-            X, Z = x.copy(), np.zeros((1, self.n_z))
-            self.step(X, u, d, Z, dt=dt)
-            return X[0], Z[0, obs]
-
-        n, m, p = self.n_x, self.n_u, len(obs)
+        x0, u0, d, run = self._linear_point(load, setpoint_C, outputs)
+        n, m, p = self.n_x, self.n_u, len(run(x0, u0, d, 0.0)[1])
         A, B = np.zeros((n, n)), np.zeros((n, m))
         C, D = np.zeros((p, n)), np.zeros((p, m))
         for i in range(n):
@@ -374,12 +366,75 @@ class Plant:
             xp, xm = x0.copy(), x0.copy()
             xp[0, i] += h
             xm[0, i] -= h
-            A[:, i] = (run(xp, u0, None)[0] - run(xm, u0, None)[0]) / (2.0 * h)
-            C[:, i] = (run(xp, u0, 0.0)[1] - run(xm, u0, 0.0)[1]) / (2.0 * h)
+            A[:, i] = (run(xp, u0, d, None)[0] - run(xm, u0, d, None)[0]) / (2.0 * h)
+            C[:, i] = (run(xp, u0, d, 0.0)[1] - run(xm, u0, d, 0.0)[1]) / (2.0 * h)
         for j in range(m):
             lo, hi = max(u0[0, j] - du, 0.0), min(u0[0, j] + du, 1.0)
             up, um = u0.copy(), u0.copy()
             up[0, j], um[0, j] = hi, lo
-            B[:, j] = (run(x0, up, None)[0] - run(x0, um, None)[0]) / (hi - lo)
-            D[:, j] = (run(x0, up, 0.0)[1] - run(x0, um, 0.0)[1]) / (hi - lo)
+            B[:, j] = (run(x0, up, d, None)[0] - run(x0, um, d, None)[0]) / (hi - lo)
+            D[:, j] = (run(x0, up, d, 0.0)[1] - run(x0, um, d, 0.0)[1]) / (hi - lo)
         return A, B, C, D
+
+    def linearize_disturbances(
+        self,
+        load: float,
+        channels: Sequence[str] = DIST,
+        *,
+        setpoint_C: float | None = None,
+        rel_step: float = 1e-6,
+        outputs: Sequence[str] | None = None,
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """The disturbance columns (Bd, Dd) of :meth:`linearize`'s model at ``load``::
+
+            x_{k+1} = A x_k + B u_k + Bd w_k,    y_k = C x_k + D u_k + Dd w_k
+
+        w: the deviations of the disturbance ``channels`` (names of :data:`DIST`, in the
+        given order; e.g. ``heat_absorption_bias``, ``load``) from their nominal values at
+        the same operating point, held over the control interval as the env holds them.
+        Central finite differences of the same compiled step, channel i perturbed by
+        ``rel_step`` max(|w_i|, 1); ``outputs`` as for :meth:`linearize`.
+
+        Raises:
+            ValueError: On a channel name not in :data:`DIST`.
+        """
+        unknown = [c for c in channels if c not in DIST]
+        if unknown:
+            raise ValueError(f"unknown disturbance channel(s) {unknown}; valid: {list(DIST)}")
+        x0, u0, d0, run = self._linear_point(load, setpoint_C, outputs)
+        p = len(run(x0, u0, d0, 0.0)[1])
+        Bd, Dd = np.zeros((self.n_x, len(channels))), np.zeros((p, len(channels)))
+        for j, name in enumerate(channels):
+            c = DIST.index(name)
+            h = rel_step * max(abs(float(d0[0, c])), 1.0)
+            dp, dm = d0.copy(), d0.copy()
+            dp[0, c] += h
+            dm[0, c] -= h
+            Bd[:, j] = (run(x0, u0, dp, None)[0] - run(x0, u0, dm, None)[0]) / (2.0 * h)
+            Dd[:, j] = (run(x0, u0, dp, 0.0)[1] - run(x0, u0, dm, 0.0)[1]) / (2.0 * h)
+        return Bd, Dd
+
+    def _linear_point(
+        self, load: float, setpoint_C: float | None, outputs: Sequence[str] | None
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, Callable]:
+        """(x0, u0, d0, run) of the linearizations: the operating point (rows of one) and
+        ``run(x, u, d, dt) -> (x after dt, the selected outputs)``."""
+        if outputs is None:
+            rows = np.array([i for i, s in enumerate(self.outputs) if s.observed])
+        else:
+            unknown = [o for o in outputs if o not in self.index]
+            if unknown:
+                raise ValueError(f"unknown output(s) {unknown} of {self.id}; valid: "
+                                 f"{list(self.index)}")  # fmt: skip
+            rows = np.array([self.index[o] for o in outputs], dtype=np.int64)
+        d0 = nominal_disturbances(load)
+        x, z = self.steady_outputs(d0[0], setpoint_C)
+        u0 = z[[self.index[v] for v in self.valves]].reshape(1, self.n_u)
+
+        def run(x: np.ndarray, u: np.ndarray, d: np.ndarray,
+                dt: float | None) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+            X, Z = x.copy(), np.zeros((1, self.n_z))
+            self.step(X, u, d, Z, dt=dt)
+            return X[0], Z[0, rows]
+
+        return x[None, :], u0, d0, run
