@@ -267,7 +267,7 @@ def test_documented_example_command_line(tmp_path, monkeypatch, capsys):
     assert code == 0, out
     assert env.unwrapped.plant.params.n_segments == 12
     assert env.unwrapped._scenario_spec.name == "fouled_load_ramp"
-    assert "17 passed, 0 failed, 1 skipped" in out  # the slow check, skipped by --quick
+    assert "18 passed, 0 failed, 1 skipped" in out  # the slow check, skipped by --quick
 
 
 def _run_documented_pytest_file(tmp_path, pytester, *args, subprocess=False):
@@ -290,7 +290,7 @@ def test_documented_example_pytest_form_collects(tmp_path, pytester):
     result = _run_documented_pytest_file(tmp_path, pytester, "--collect-only", "-q")
     result.stdout.fnmatch_lines(["*test_contract[[]FSH12Fouled-v0-check_determinism[]]",
                                  "*FSH12Fouled-v0-cascade_pi-check_reset_clears_state*",
-                                 "18 tests collected*"])  # fmt: skip
+                                 "19 tests collected*"])  # fmt: skip
 
 
 @pytest.mark.slow
