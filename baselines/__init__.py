@@ -1,7 +1,9 @@
 """Baseline controllers: one module each, a registry, the Policy protocol.
 
 ``baselines.make(name, env) -> Policy``; ``baselines.NAMES`` lists them. Adding a
-controller = one module plus one entry in ``_REGISTRY``.
+controller = one module plus one entry in ``_REGISTRY``. Every baseline made here refuses
+a non-finite or misshapen observation with a ``ValueError`` before its state changes
+(``baselines.policy.checked``).
 """
 
 from __future__ import annotations
@@ -9,7 +11,7 @@ from __future__ import annotations
 import importlib
 from typing import Any
 
-from baselines.policy import Policy
+from baselines.policy import Policy, checked
 
 _REGISTRY: dict[str, str] = {
     "cascade_pi": "baselines.cascade_pi:CascadePI",
@@ -34,7 +36,7 @@ def make(name: str, env: Any, **kwargs: Any) -> Policy:
     except (KeyError, TypeError):
         raise ValueError(f"unknown baseline {name!r}; valid names: {list(NAMES)}") from None
     module, cls = path.split(":")
-    return getattr(importlib.import_module(module), cls)(env, **kwargs)
+    return checked(getattr(importlib.import_module(module), cls)(env, **kwargs), env)
 
 
 __all__ = ["NAMES", "Policy", "make"]

@@ -17,6 +17,7 @@ import gymnasium as gym
 import numpy as np
 
 from steamtemp_gym import scenarios as sc
+from steamtemp_gym.checks import key_list
 from steamtemp_gym.envs import options as opts
 from steamtemp_gym.envs import snapshot as snap_
 from steamtemp_gym.envs.core import Core, check_action
@@ -70,9 +71,13 @@ class SteamTempEnv(gym.Env):
         return self.core.scenario[0]
 
     def reset(self, *, seed: int | None = None, options: dict | None = None):
-        super().reset(seed=seed)
+        if options is not None and not isinstance(options, dict):
+            raise ValueError(
+                f"reset() options must be a dict or None, got {type(options).__name__}"
+            )
         if options:
-            raise ValueError(f"reset() takes no options, got {sorted(options)}")
+            raise ValueError(f"reset() takes no options, got {key_list(options)}")
+        super().reset(seed=seed)
         scenario, key = draw_episode(
             self.np_random, self._scenario_spec, self.plant.default_duration_s
         )

@@ -31,7 +31,7 @@ from gymnasium.utils import seeding
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
-from steamtemp_gym.checks import is_integer
+from steamtemp_gym.checks import is_integer, key_list
 from steamtemp_gym.envs import options as opts
 from steamtemp_gym.envs import snapshot as snap_
 from steamtemp_gym.envs.core import Core, check_action
@@ -79,7 +79,7 @@ class SteamTempVectorEnv(VectorEnv):
         autoreset_mode: AutoresetMode | str = AutoresetMode.NEXT_STEP,
         **options: Any,
     ) -> None:
-        if not isinstance(num_envs, (int, np.integer)) or num_envs < 1:
+        if not is_integer(num_envs) or num_envs < 1:
             raise ValueError(f"num_envs must be a positive integer, got {num_envs!r}")
         self.autoreset_mode = _autoreset_mode(autoreset_mode)
         self.metadata = {**self.metadata, "autoreset_mode": self.autoreset_mode}
@@ -116,10 +116,14 @@ class SteamTempVectorEnv(VectorEnv):
         ``seed``: None, an integer (sub-env i gets seed + i) or a list of num_envs integers
         or None entries (the sub-envs not reset ignore theirs).
         """
+        if options is not None and not isinstance(options, dict):
+            raise ValueError(
+                f"reset() options must be a dict or None, got {type(options).__name__}"
+            )
         options = dict(options or {})
         mask = options.pop("reset_mask", None)
         if options:
-            raise ValueError(f"unknown reset option(s) {sorted(options)}; valid: ['reset_mask']")
+            raise ValueError(f"unknown reset option(s) {key_list(options)}; valid: ['reset_mask']")
         if mask is None:
             mask = np.ones(self.num_envs, dtype=bool)
         elif not (isinstance(mask, np.ndarray) and mask.dtype == np.bool_
