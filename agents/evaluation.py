@@ -14,7 +14,12 @@ from typing import Any
 
 import numpy as np
 
-from steamtemp_gym.metrics import QUIET_SETTLE_S, quiet_peak_to_peak, trajectory_metrics
+from steamtemp_gym.metrics import (
+    METRIC_NAMES,
+    QUIET_SETTLE_S,
+    quiet_peak_to_peak,
+    trajectory_metrics,
+)
 from steamtemp_gym.plants.base import DIST
 
 TRACE_KEYS = ("time_s", "outlet_temp_C", "measured_temp_C", "setpoint_C", "load",
@@ -27,6 +32,18 @@ _DIST_COLUMNS = [DIST.index(k) for k in DISTURBANCE_KEYS]
 
 def _keys(env: Any) -> tuple[str, ...]:
     return TRACE_KEYS + tuple(name for name, _ in env.unwrapped.plant.secondary)
+
+
+#: The metrics of each secondary controlled temperature, named ``<temperature>_<metric>``.
+SECONDARY_METRICS = ("iae_K_s", "max_abs_dev_K")
+
+
+def metric_keys(secondary: tuple[tuple[str, float], ...]) -> tuple[str, ...]:
+    """The keys of an episode's ``metrics`` on a plant with these ``secondary``
+    temperatures (``Plant.secondary``)."""
+    return (*METRIC_NAMES, "quiet_p2p_K",
+            *(f"{name}_{m}" for name, _ in secondary for m in SECONDARY_METRICS),
+            "return", "tripped")  # fmt: skip
 
 
 def _metrics(env: Any, tr: dict[str, np.ndarray], ret: float, tripped: bool,
@@ -42,8 +59,8 @@ def _metrics(env: Any, tr: dict[str, np.ndarray], ret: float, tripped: bool,
     for name, sp2 in env.unwrapped.plant.secondary:  # e.g. the reheat temperature
         m2 = trajectory_metrics(tr["time_s"], tr[name], np.full_like(tr[name], sp2),
                                 tr["spray_valve"], tr["spray_flow_kg_s"])  # fmt: skip
-        metrics[f"{name}_iae_K_s"] = m2["iae_K_s"]
-        metrics[f"{name}_max_abs_dev_K"] = m2["max_abs_dev_K"]
+        for m in SECONDARY_METRICS:
+            metrics[f"{name}_{m}"] = m2[m]
     metrics["return"] = float(ret)
     metrics["tripped"] = float(tripped)
     return metrics

@@ -59,11 +59,17 @@ outputs are rebuilt. A last line cut off by a crash is dropped. Without
 ``--resume`` an existing non-empty ``episodes.jsonl`` is an error (pass
 ``--resume``, choose another ``--out``, or move the file aside). ``--resume`` on a
 new directory is an ordinary run.
+
+One run at a time writes to an ``--out``: a second run started on it while the first
+goes on is an argparse error (a lock on the directory). SIGTERM (``timeout``, CI runners,
+schedulers) stops a run as Ctrl-C does (exit code 143 instead of 130), and the worker
+processes end with it; they also end within a second of their parent's death by SIGKILL.
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import functools
 import hashlib
 import importlib
@@ -72,7 +78,9 @@ import logging
 import math
 import os
 import re
+import signal
 import sys
+import threading
 import time
 import traceback
 from collections import Counter
@@ -91,10 +99,10 @@ from agents import leaderboard_plots as plots
 from agents import leaderboard_report as report
 from agents import specs, stats
 from agents.difficulty import FrozenValves
-from agents.evaluation import run_batch, run_episode
+from agents.evaluation import metric_keys, run_batch, run_episode
 from agents.oracle import Oracle
 from steamtemp_gym import envs as envs_
-from steamtemp_gym import scenarios
+from steamtemp_gym import plants, scenarios
 from steamtemp_gym.checks import head, tail
 from steamtemp_gym.scenarios import heldout
 
@@ -434,11 +442,24 @@ def read_record(path: Path) -> list[dict]:
 
 
 def _row(line: bytes) -> dict:
-    """One episodes.jsonl line as a row (strict JSON, the key fields present)."""
+    """One episodes.jsonl line as a row (strict JSON, the key fields present; a finished
+    episode of a known env has every metric, each a number or null)."""
     row = json.loads(line, parse_constant=_reject_constant)
     need = {"env", "scenario", "policy", "seed", "fingerprint"}
     if not isinstance(row, dict) or not need <= set(row):
         raise ValueError(f"not an object with the fields {sorted(need)}")
+    if row.get("error") or row["env"] not in plants.PLANTS:
+        return row
+    metrics = row.get("metrics")
+    if not isinstance(metrics, dict):
+        raise ValueError("a finished episode's metrics must be an object")
+    missing = [k for k in metric_keys(plants.plant_class(row["env"]).secondary)
+               if k not in metrics]
+    if missing:
+        raise ValueError(f"metrics lack {missing[:5]}{' ...' if len(missing) > 5 else ''}")
+    bad = [k for k, v in metrics.items() if v is not None and not isinstance(v, (int, float))]
+    if bad:
+        raise ValueError(f"metrics {bad[:5]} are not numbers")
     return row
 
 
@@ -608,7 +629,25 @@ def _pool(jobs: int):
 
     fork = "fork" in mp.get_all_start_methods() and "torch" not in sys.modules
     return ProcessPoolExecutor(max_workers=jobs, mp_context=mp.get_context(
-        "fork" if fork else "spawn"))  # fmt: skip
+        "fork" if fork else "spawn"), initializer=_worker_start,
+        initargs=(os.getpid(),))  # fmt: skip
+
+
+#: How often a pool worker checks that the process that started it is alive (s).
+PARENT_POLL_S = 0.5
+
+
+def _worker_start(parent: int) -> None:
+    """In a pool worker: SIGTERM ends it (not the handler a forked worker inherits), and it
+    ends itself within :data:`PARENT_POLL_S` of its parent's death, SIGKILL included."""
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+
+    def watch() -> None:
+        while os.getppid() == parent:
+            time.sleep(PARENT_POLL_S)
+        os._exit(1)
+
+    threading.Thread(target=watch, name="parent-watch", daemon=True).start()
 
 
 def _local_results(units: list[Unit], jobs: int):
@@ -617,6 +656,7 @@ def _local_results(units: list[Unit], jobs: int):
         for u in units:
             yield u, run_unit(u)
         return
+    import multiprocessing as mp
     from concurrent.futures import as_completed
 
     with _pool(jobs) as pool:
@@ -627,6 +667,8 @@ def _local_results(units: list[Unit], jobs: int):
         except BaseException:
             for f in futures:
                 f.cancel()
+            for worker in mp.active_children():  # the pool's: stop their units now
+                worker.terminate()
             raise
 
 
@@ -750,6 +792,52 @@ def _rebuild(out: Path, plan: Plan, figures: bool = True) -> tuple[list[dict], d
     return rows, summary
 
 
+#: --out directories this process locked (resolved path -> descriptor)
+_LOCKS: dict[str, int] = {}
+
+
+def _lock_out(out: Path) -> int | None:
+    """An exclusive lock on the directory ``out``, held until this process ends or runs
+    again on it (a run in this process has ended by then), as its descriptor; None if
+    another process holds it. No lock (-1) where there is no flock."""
+    try:
+        import fcntl
+    except ImportError:  # not a POSIX system
+        return -1
+    key = os.path.realpath(out)
+    if key in _LOCKS:
+        os.close(_LOCKS.pop(key))
+    fd = os.open(out, os.O_RDONLY)
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except BlockingIOError:
+        os.close(fd)
+        return None
+    _LOCKS[key] = fd
+    return fd
+
+
+class Terminated(KeyboardInterrupt):
+    """SIGTERM (``timeout``, CI runners, schedulers): the run stops as on Ctrl-C."""
+
+
+def _on_sigterm(signum: int, frame: Any) -> None:
+    raise Terminated
+
+
+@contextlib.contextmanager
+def _sigterm_stops():
+    """SIGTERM raises :class:`Terminated` in this block (the handler before is restored)."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    before = signal.signal(signal.SIGTERM, _on_sigterm)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, before)
+
+
 def make_parser() -> argparse.ArgumentParser:
     """The CLI's argument parser."""
     doc = __doc__ or ""
@@ -825,11 +913,18 @@ def main(argv: list[str] | None = None) -> None:
     plan = build_plan(ap, args)
     out = Path(args.out)
     try:
+        out.mkdir(parents=True, exist_ok=True)
+        lock = _lock_out(out)
+    except OSError as exc:
+        ap.error(f"argument --out: cannot write {str(out)!r}: {exc.strerror or exc}")
+    if lock is None:
+        ap.error(f"argument --out: {str(out)!r} is in use by another steamtemp-leaderboard "
+                 "run; wait for it to end or choose another --out")  # fmt: skip
+    try:
         done = _latest(read_record(out / EPISODES)) if args.resume else {}
     except (OSError, ValueError) as exc:
         ap.error(f"argument --resume: {head(str(exc), _EXCERPT)}")
     try:
-        out.mkdir(parents=True, exist_ok=True)
         record = Record(out / EPISODES)
     except OSError as exc:
         ap.error(f"argument --out: cannot write {str(out)!r}: {exc.strerror or exc}")
@@ -837,15 +932,17 @@ def main(argv: list[str] | None = None) -> None:
     units = _units(plan, done)
     figures = Plots(out, plan, units)
     try:
-        _execute(plan, units, args.jobs, record, figures.add, args.backend, args.ray_address)
-        for key in figures.missing():
-            figures.draw(*key)
-    except KeyboardInterrupt:
+        with _sigterm_stops():
+            _execute(plan, units, args.jobs, record, figures.add, args.backend,
+                     args.ray_address)  # fmt: skip
+            for key in figures.missing():
+                figures.draw(*key)
+    except KeyboardInterrupt as exc:
         record.close()
         _rebuild(out, plan, figures=False)
         print(f"\ninterrupted: finished episodes are in {out / EPISODES}; "
               "run the same command with --resume to continue", file=sys.stderr)  # fmt: skip
-        raise SystemExit(130) from None
+        raise SystemExit(143 if isinstance(exc, Terminated) else 130) from None
     record.close()
     rows, summary = _rebuild(out, plan)
     if summary is not None:

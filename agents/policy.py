@@ -2,7 +2,9 @@
 observation and carries its own observation pipeline (controller memory, then the
 VecNormalize statistics frozen at the end of training) with the memory's state kept per
 row across calls; ``reset()`` or ``episode_start`` restarts it. A residual agent adds its
-scaled action to ``cascade_pi``'s.
+scaled action to ``cascade_pi``'s. ``predict`` refuses a non-finite or misshapen
+observation with a ``ValueError`` before any state changes, as the baselines do
+(``baselines.policy.check_predict_args``).
 
 The deterministic action of an MLP actor (PPO's, SAC's, TD3's) is computed in float64
 NumPy from the model's weights (:class:`MlpActor`): the same action as SB3's float32
@@ -20,6 +22,7 @@ import numpy as np
 
 from agents.wrappers import MemoryConfig, MemoryState
 from baselines.loops import restart_rows
+from baselines.policy import check_predict_args, observation_size
 
 
 class MlpActor:
@@ -121,6 +124,7 @@ class AgentPolicy:
         residual_scale: float | None = None,
     ) -> None:
         self.model = model
+        self.n_obs = observation_size(env)
         self.memory = None
         if memory is not None:
             self.memory = MemoryState(env, MemoryConfig.from_kwargs(memory))
@@ -146,7 +150,8 @@ class AgentPolicy:
             self.base.reset()
 
     def predict(self, observation, state=None, episode_start=None, deterministic=True):
-        obs = np.atleast_2d(np.asarray(observation, dtype=np.float64))
+        obs = np.atleast_2d(check_predict_args(observation, episode_start, self.n_obs)).astype(
+            np.float64, copy=False)  # fmt: skip
         n = obs.shape[0]
         restart = restart_rows(self._n != n, n, episode_start)
         self._n = n

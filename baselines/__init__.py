@@ -3,7 +3,9 @@
 ``baselines.make(name, env) -> Policy``; ``baselines.NAMES`` lists them. A controller of
 your own joins them with ``baselines.register(name, factory)``: ``baselines.make``, the
 leaderboard's ``--policies`` and ``steamtemp-check --policy`` then know the name (on the
-command line, ``--import MODULE`` imports the module that registers it).
+command line, ``--import MODULE`` imports the module that registers it). Every baseline
+made here refuses a non-finite or misshapen observation with a ``ValueError`` before its
+state changes (``baselines.policy.checked``).
 """
 
 from __future__ import annotations
@@ -13,7 +15,7 @@ import re
 from collections.abc import Callable
 from typing import Any
 
-from baselines.policy import Policy
+from baselines.policy import Policy, checked
 
 _REGISTRY: dict[str, str | Callable[..., Any]] = {
     "cascade_pi": "baselines.cascade_pi:CascadePI",
@@ -80,7 +82,7 @@ def make(name: str, env: Any, **kwargs: Any) -> Policy:
         factory = importlib.import_module(module)
         for part in attr.split("."):
             factory = getattr(factory, part)
-    return factory(env, **kwargs)
+    return checked(factory(env, **kwargs), env)
 
 
 __all__ = ["NAMES", "SHIPPED", "Policy", "make", "register"]

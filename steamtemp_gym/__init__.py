@@ -24,7 +24,7 @@ except PackageNotFoundError:  # running from a source tree
 
 #: the folder of this code version's compiled kernels (steamtemp_gym/_cache.py)
 CACHE_DIR = _cache.configure(__version__)
-_cache.announce_compiles(CACHE_DIR)
+_cache.announce_compiles()
 
 from steamtemp_gym.plants import PLANTS  # noqa: E402
 

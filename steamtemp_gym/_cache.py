@@ -15,6 +15,18 @@ import, folders of other versions are removed once unused for :data:`GRACE_S` an
 among the :data:`KEEP` most recently used, which bounds the cache to a few versions
 (about 23 MB each) while several checkouts are in use.
 
+Every kernel of the package is bound to that folder when it is defined
+(``steamtemp_gym._jit.njit`` calls :func:`pointed`): numba's own ``CACHE_DIR`` setting
+is left as the user has it, so numba reloading its configuration (when a ``NUMBA_*``
+variable changes) does not move the package's kernels, and other code's kernels do not
+land in the package's folder.
+
+A folder that cannot be written (a read-only container image, a shared cache) is read,
+never written: if it holds kernels, numba loads them from a temporary folder of links to
+its files (kernels missing there compile into that folder, which is removed at exit);
+if it holds none, or no temporary folder can be made, kernels compile in memory, again
+in every process, and the first compile says so in one warning.
+
 The steam tables are not part of the cached code (steamtemp_gym/steam), which keeps
 each folder small.
 
@@ -26,16 +38,25 @@ WARNING level (shown on stderr without any logging set-up). Silence it with
 from __future__ import annotations
 
 import ast
+import atexit
+import contextlib
 import hashlib
 import json
 import logging
 import os
 import shutil
+import tempfile
 import time
+from collections.abc import Iterator
+from dataclasses import dataclass
 from pathlib import Path
 
 import numba
-from numba.core import event
+
+try:  # numba's event API (documented as experimental): only the compile notice uses it
+    from numba.core import event
+except ImportError:  # pragma: no cover - the notice is then off (tests/test_cache.py)
+    event = None
 
 log = logging.getLogger("steamtemp_gym")
 
@@ -126,30 +147,114 @@ def _prune(base: Path, current: Path) -> None:
             shutil.rmtree(d, ignore_errors=True)
 
 
+@dataclass(frozen=True)
+class Folder:
+    """The cache folder of this code version and how numba uses it."""
+
+    #: this code version's folder (``steamtemp_gym.CACHE_DIR``)
+    path: Path
+    #: whether this process can write it (the compile helper runs only then)
+    writable: bool
+    #: the folder numba reads and writes: ``path``, a temporary folder of links to a
+    #: read-only ``path``'s files, or None (kernels compile in memory)
+    numba_dir: Path | None
+
+
+_FOLDER: Folder | None = None
+
+
+def folder() -> Folder | None:
+    """This process's cache folder (None before :func:`configure`)."""
+    return _FOLDER
+
+
+def _can_write(d: Path) -> bool:
+    """Whether ``d`` exists or can be made and takes a new file (numba's own test)."""
+    try:
+        d.mkdir(parents=True, exist_ok=True)
+        tempfile.TemporaryFile(dir=d).close()
+    except OSError:
+        return False
+    return True
+
+
+def _links(src: Path) -> Path | None:
+    """A new temporary folder mirroring ``src``'s kernel files as links (removed at this
+    process's exit); None if ``src`` holds no kernels or no such folder can be made."""
+    try:
+        if not any(src.rglob("*.nbi")):
+            return None
+        root = Path(tempfile.mkdtemp(prefix="steamtemp_gym-cache-"))
+    except OSError:
+        return None
+    try:
+        for dirpath, _, files in os.walk(src):
+            rel = Path(dirpath).relative_to(src)
+            if rel.parts[:1] == ("prewarm",):
+                continue
+            (root / rel).mkdir(exist_ok=True)
+            for f in files:
+                if f.endswith((".nbi", ".nbc")):
+                    os.symlink(Path(dirpath) / f, root / rel / f)
+    except OSError:
+        shutil.rmtree(root, ignore_errors=True)
+        return None
+    atexit.register(_remove, root, os.getpid())
+    return root
+
+
+def _remove(root: Path, pid: int) -> None:
+    if os.getpid() == pid:  # not in a forked child
+        shutil.rmtree(root, ignore_errors=True)
+
+
 def configure(version: str) -> Path:
-    """Point numba's cache at this code version's folder, stamp it used, prune others."""
+    """Choose this code version's folder and how numba uses it (module docstring); stamp
+    it used and prune other versions' folders when it is writable."""
+    global _FOLDER
     roots = [Path(__file__).parent]  # baselines' kernels call no other baselines module's
     base = base_dir()
     current = base / f"numba-{version}-{_code_digest(roots, base / 'code_keys.json')}"
-    numba.config.CACHE_DIR = str(current)
-    try:
-        current.mkdir(parents=True, exist_ok=True)
-        (current / _STAMP).touch()
-        _prune(base, current)
-    except OSError as exc:  # a read-only home: numba then compiles without caching
-        log.debug("steamtemp_gym: cache folder %s not usable: %s", current, exc)
+    if _can_write(current):
+        _FOLDER = Folder(current, True, current)
+        try:
+            (current / _STAMP).touch()
+            _prune(base, current)
+        except OSError as exc:
+            log.debug("steamtemp_gym: cache folder %s not stamped or pruned: %s", current, exc)
+    else:
+        _FOLDER = Folder(current, False, _links(current))
     return current
 
 
-class _CompileNotice(event.Listener):
-    """Logs one line when numba starts compiling a kernel of this project."""
+@contextlib.contextmanager
+def pointed() -> Iterator[bool]:
+    """While a kernel is defined: numba's ``CACHE_DIR`` at this code version's folder
+    (restored after); yields whether the kernel may be cached (False: compile in memory)."""
+    where = _FOLDER.numba_dir if _FOLDER is not None else None
+    if _FOLDER is None or where is None:
+        yield _FOLDER is None  # before configure: numba's own setting
+        return
+    before = numba.config.CACHE_DIR
+    numba.config.CACHE_DIR = str(where)
+    try:
+        yield True
+    finally:
+        numba.config.CACHE_DIR = before
 
-    def __init__(self, where: Path) -> None:
-        self.where = where
+
+class _CompileNotice(event.Listener if event is not None else object):
+    """Logs one line when numba starts compiling a kernel of this project: once per burst
+    at WARNING level where kernels are kept; where they are not (a read-only folder), one
+    WARNING that says so, then INFO lines."""
+
+    def __init__(self, where: Folder | None = None) -> None:
+        self.fixed = where  # None: this process's folder (configure)
         self.depth = 0
         self.last = -1e9
+        self.warned = False
 
-    def on_start(self, ev: event.Event) -> None:
+    def on_start(self, ev) -> None:
         self.depth += 1
         if self.depth > 1:
             return
@@ -158,23 +263,33 @@ class _CompileNotice(event.Listener):
         if module.split(".")[0] not in _PACKAGES or time.monotonic() - self.last < 5.0:
             return
         self.last = time.monotonic()
-        log.warning(
-            "steamtemp_gym: compiling kernels on first use (once per code version, about "
-            "5-25 s per plant; cached in %s)",
-            self.where,
-        )
+        where = self.fixed or _FOLDER
+        if where is None or where.writable:
+            log.warning(
+                "steamtemp_gym: compiling kernels on first use (once per code version, about "
+                "5-25 s per plant; cached in %s)", where.path if where else "numba's cache")
+        elif not self.warned:
+            self.warned = True
+            log.warning(
+                "steamtemp_gym: compiling kernels that are not kept (about 5-25 s per plant, "
+                "again in every process): the cache folder %s is not writable%s; point "
+                "STEAMTEMP_GYM_CACHE_DIR at a writable folder to keep them", where.path,
+                "" if where.numba_dir is None else " (the kernels it holds are used)")
+        else:
+            log.info("steamtemp_gym: compiling kernels that are not kept (%s is read-only)",
+                     where.path)  # fmt: skip
 
-    def on_end(self, ev: event.Event) -> None:
+    def on_end(self, ev) -> None:
         self.depth -= 1
         if self.depth == 0:
             self.last = time.monotonic()
 
 
-def announce_compiles(where: Path) -> None:
-    """Install the compile notice (once per process)."""
+def announce_compiles() -> None:
+    """Install the compile notice (once per process; nothing without numba's event API)."""
     global _NOTICE
-    if _NOTICE is None:
-        _NOTICE = _CompileNotice(where)
+    if _NOTICE is None and event is not None:
+        _NOTICE = _CompileNotice()
         event.register("numba:compile", _NOTICE)
 
 

@@ -15,8 +15,10 @@ waits for the rest, so that the helper's kernels load from the cache instead of
 compiling a second time.
 
 The helper runs only if the cache folder is writable and holds no marker of an earlier
-helper for the class (``prewarm/<Class>``), at least two CPUs are available, and
-``$STEAMTEMP_GYM_PREWARM`` is not ``0``. Nothing depends on it: a kernel it did not
+helper for the class (``prewarm/<Class>``), no other process's helper for it holds its
+lock (``prewarm/<Class>.lock``, an advisory ``flock`` the helper holds until it exits: a
+helper that dies, even by SIGKILL, releases it at once), at least two CPUs are
+available, and ``$STEAMTEMP_GYM_PREWARM`` is not ``0``. Nothing depends on it: a kernel it did not
 compile (it failed, was stopped, or a type differs) compiles in this process as before.
 Both processes may compile a shared kernel (a steam-table lookup) at once. Numba's cache
 stays consistent when they compile it for the same types, as here: every kernel either
@@ -30,19 +32,20 @@ import logging
 import os
 import subprocess
 import sys
-import time
 from pathlib import Path
 
-import numba
-
+from steamtemp_gym import _cache
 from steamtemp_gym._jit import entry_point
+
+try:
+    import fcntl
+except ImportError:  # not on a POSIX system: no helper (its lock needs flock)
+    fcntl = None
 
 log = logging.getLogger("steamtemp_gym")
 
 #: the longest this process waits for a helper before going on without it (s)
 TIMEOUT_S = 300.0
-#: a helper's lock older than this is taken to be left by a process that died (s)
-STALE_S = 600.0
 _DIR = "prewarm"
 #: kernels of the step path that either process compiles, whichever gets to each first
 #: (claimed by a file ``prewarm/<Class>.<kernel>.claim``): this process when it reaches
@@ -68,7 +71,7 @@ def _cpus() -> int:
 
 
 def _folder() -> Path:
-    return Path(numba.config.CACHE_DIR) / _DIR
+    return _cache.folder().path / _DIR
 
 
 def _drop_claims(folder: Path, name: str) -> None:
@@ -80,7 +83,8 @@ def enabled() -> bool:
     """Whether helpers may run here: the environment variable, the CPUs, and an interpreter
     to start (not a frozen application, whose executable is not Python)."""
     return (os.environ.get("STEAMTEMP_GYM_PREWARM", "1") != "0" and _cpus() >= 2
-            and bool(sys.executable) and not getattr(sys, "frozen", False))  # fmt: skip
+            and bool(sys.executable) and not getattr(sys, "frozen", False)
+            and fcntl is not None)  # fmt: skip
 
 
 def start(cls: type) -> None:
@@ -89,27 +93,33 @@ def start(cls: type) -> None:
     if path in _started or not enabled():
         return
     _started.add(path)
+    where = _cache.folder()
+    if where is None or not where.writable:  # a read-only cache: nothing would be kept
+        return
     folder = _folder()
-    done, lock = folder / cls.__qualname__, folder / f"{cls.__qualname__}.lock"
+    done = folder / cls.__qualname__
     try:
         if done.exists():
             return
         folder.mkdir(parents=True, exist_ok=True)
-        if lock.exists() and time.time() - lock.stat().st_mtime < STALE_S:
-            return  # another process's helper is at it
-        lock.touch()
-        _drop_claims(folder, cls.__qualname__)  # left by a stopped helper
-    except OSError:  # a read-only cache: nothing would be kept
+        lock = os.open(folder / f"{cls.__qualname__}.lock", os.O_CREAT | os.O_RDWR, 0o644)
+    except OSError:
         return
     try:
+        try:
+            fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:  # another process's helper holds it
+            return
+        _drop_claims(folder, cls.__qualname__)  # left by a stopped helper
         pending[path] = subprocess.Popen(
-            [sys.executable, "-m", "steamtemp_gym._prewarm", path],
+            [sys.executable, "-m", "steamtemp_gym._prewarm", path, str(lock)],
             stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
-            env=dict(os.environ, STEAMTEMP_GYM_PREWARM="0"),
+            env=dict(os.environ, STEAMTEMP_GYM_PREWARM="0"), pass_fds=(lock,),
         )  # fmt: skip
     except OSError as exc:  # no interpreter to start (embedded Python, ...)
         log.debug("steamtemp_gym: no compile helper: %s", exc)
-        lock.unlink(missing_ok=True)
+    finally:
+        os.close(lock)  # the helper holds the lock (its copy of the descriptor) until it exits
 
 
 def _path(cls: type) -> str:
@@ -131,7 +141,6 @@ def wait(cls: type) -> None:
         except subprocess.TimeoutExpired:
             proc.kill()
             proc.wait()
-            (_folder() / f"{cls.__qualname__}.lock").unlink(missing_ok=True)
         if proc.returncode:
             log.debug("steamtemp_gym: compile helper of %s exited with %s", path,
                       proc.returncode)  # fmt: skip
@@ -185,9 +194,11 @@ def compile_step_path(cls: type) -> None:
 
 
 def main(path: str) -> None:
+    """The helper process: compile ``path``'s step path (``module:Class``), then leave the
+    class's marker. It holds its lock through the descriptor it inherited."""
     import importlib
 
-    import steamtemp_gym  # noqa: F401  (points numba at the cache folder)
+    import steamtemp_gym  # noqa: F401  (chooses the cache folder)
 
     module, name = path.split(":")
     cls = getattr(importlib.import_module(module), name)
@@ -197,7 +208,6 @@ def main(path: str) -> None:
         compile_step_path(cls)
         (folder / name).touch()
     finally:
-        (folder / f"{name}.lock").unlink(missing_ok=True)
         _drop_claims(folder, name)
 
 

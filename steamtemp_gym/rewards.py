@@ -38,7 +38,7 @@ from dataclasses import asdict, dataclass, fields
 import numpy as np
 
 from steamtemp_gym._jit import njit
-from steamtemp_gym.checks import is_real
+from steamtemp_gym.checks import is_finite, is_real, key_list
 
 #: Largest weight accepted (every weight is >= 0): with the trip band and these ranges every
 #: per-step reward is finite (|e| is bounded by the steam tables' range, about 800 K).
@@ -67,7 +67,7 @@ class RewardConfig:
             lo, hi = RANGES.get(f.name, (0.0, MAX_WEIGHT))
             if not is_real(v):
                 raise ValueError(f"reward option {f.name!r} must be a number, got {v!r}")
-            if not (np.isfinite(v) and lo <= v <= hi):
+            if not (is_finite(v) and lo <= v <= hi):
                 raise ValueError(f"reward option {f.name!r} must be in [{lo:g}, {hi:g}], got {v!r}")
 
     @classmethod
@@ -80,7 +80,7 @@ class RewardConfig:
         if not isinstance(options, dict):
             raise ValueError(f"reward options must be a dict, got {type(options).__name__}")
         valid = [f.name for f in fields(cls)]
-        unknown = sorted(set(options) - set(valid))
+        unknown = key_list(set(options) - set(valid))
         if unknown:
             raise ValueError(f"unknown reward option(s) {unknown}; valid options: {valid}")
         return cls(**options)

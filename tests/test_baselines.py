@@ -3,7 +3,9 @@ tests/test_leaderboard.py."""
 
 from __future__ import annotations
 
+import copy
 import dataclasses
+import pickle
 
 import gymnasium as gym
 import numpy as np
@@ -16,7 +18,7 @@ from agents.difficulty import FrozenValves
 from agents.evaluation import run_episode
 from baselines.policy import Policy
 from steamtemp_gym import scenarios
-from steamtemp_gym.testing import parametrize_with_checks
+from steamtemp_gym.testing import check_bad_observations_rejected, parametrize_with_checks
 
 IDS = steamtemp_gym.ENV_IDS
 
@@ -86,3 +88,43 @@ def test_secondary_temperatures_are_traced_and_scored(env_id):
         assert res["trace"][name][0] == pytest.approx(sp, abs=0.05)
         assert np.isfinite(res["metrics"][f"{name}_max_abs_dev_K"])
         assert res["metrics"][f"{name}_iae_K_s"] > 0.0
+
+
+class _Proportional:
+    """A baseline as a new module would add it: no argument checks of its own."""
+
+    def __init__(self, env):
+        self.memory = 0.0
+
+    def predict(self, observation, state=None, episode_start=None, deterministic=True):
+        obs = np.atleast_2d(observation)
+        self.memory = 0.5 * self.memory + obs[:, -2]  # the error entry, filtered
+        a = np.clip(-0.1 * self.memory, -1.0, 1.0)[:, None]
+        return (a if np.ndim(observation) == 2 else a[0]), None
+
+    def reset(self):
+        self.memory = 0.0
+
+
+def test_a_baseline_added_to_the_registry_is_held_to_the_observation_checks(monkeypatch):
+    """baselines.make checks every registered baseline's predict arguments, so a baseline
+    added later passes check_bad_observations_rejected without code of its own."""
+    monkeypatch.setitem(baselines._REGISTRY, "proportional", f"{__name__}:_Proportional")
+    cascade = "steamtemp/Cascade300MW-v0"
+    check_bad_observations_rejected(lambda env: baselines.make("proportional", env), cascade,
+                                    quick=True)  # fmt: skip
+    with pytest.raises(AssertionError, match="accepted an observation all NaN"):
+        check_bad_observations_rejected(_Proportional, cascade, quick=True)
+
+
+def test_a_checked_baseline_pickles_copies_and_passes_attributes_through():
+    env = gym.make("steamtemp/Cascade300MW-v0", scenario="load_ramp_100_50")
+    obs, _ = env.reset(seed=0)
+    pol = baselines.make("lqi", env)
+    pol.predict(obs)
+    for twin in (copy.deepcopy(pol), pickle.loads(pickle.dumps(pol))):
+        np.testing.assert_array_equal(twin.predict(obs)[0], copy.deepcopy(pol).predict(obs)[0])
+        with pytest.raises(ValueError, match="NaN"):
+            twin.predict(np.full_like(obs, np.nan))
+    pol.max_move = pol.max_move * 0.5  # written through to the controller
+    assert pol.policy.max_move is pol.max_move

@@ -5,6 +5,8 @@ Registry-wide where the behaviour is generic; each defect of the issue is a test
 
 from __future__ import annotations
 
+from fractions import Fraction
+
 import gymnasium as gym
 import numpy as np
 import pytest
@@ -18,6 +20,7 @@ from steamtemp_gym.scenarios.stress import run_corners
 
 IDS = steamtemp_gym.ENV_IDS
 BENSON = "steamtemp/BensonSubcritical-v0"
+CASCADE = "steamtemp/Cascade300MW-v0"
 
 
 def _vec(env_id, n, **kw):
@@ -155,6 +158,62 @@ def test_action_dtypes():
             env.step(bad)
 
 
+def test_action_of_any_byte_order_is_accepted():
+    """Big-endian float actions step as the same values in native order, through both
+    paths of check_action (single env, vector env)."""
+    env, ref = (gym.make(CASCADE, scenario="setpoint_step") for _ in range(2))
+    venv, vref = (_vec(CASCADE, 2, scenario="setpoint_step") for _ in range(2))
+    for e in (env, ref, venv, vref):
+        e.reset(seed=0)
+    for dtype in (">f8", ">f4", "<f8"):
+        native = np.dtype(dtype).newbyteorder("=")
+        a, b = np.array([0.3], dtype=dtype), np.array([[0.3], [-0.2]], dtype=dtype)
+        np.testing.assert_array_equal(env.step(a)[0], ref.step(a.astype(native))[0])
+        np.testing.assert_array_equal(venv.step(b)[0], vref.step(b.astype(native))[0])
+
+
+def test_masked_actions_are_refused_unless_nothing_is_masked():
+    env, ref = (gym.make(CASCADE, scenario="setpoint_step") for _ in range(2))
+    env.reset(seed=0)
+    ref.reset(seed=0)
+    with pytest.raises(ValueError, match="1 masked entries"):
+        env.step(np.ma.masked_array([0.3], mask=[True]))
+    venv = _vec(CASCADE, 2, scenario="setpoint_step")
+    venv.reset(seed=0)
+    with pytest.raises(ValueError, match="1 masked entries"):
+        venv.step(np.ma.masked_array([[0.3], [0.2]], mask=[[False], [True]]))
+    np.testing.assert_array_equal(env.step(np.ma.masked_array([0.3], mask=[False]))[0],
+                                  ref.step(np.array([0.3]))[0])  # fmt: skip
+
+
+def test_integers_beyond_int64_are_actions_and_tensors_are_refused_with_value_error():
+    env, ref = (gym.make(CASCADE, scenario="setpoint_step") for _ in range(2))
+    env.reset(seed=0)
+    ref.reset(seed=0)
+    for big in (10**30, [10**30]):  # clipped to the valve's stop, as 1 is
+        np.testing.assert_array_equal(env.step(big)[0], ref.step(np.array([1.0]))[0])
+    with pytest.raises(ValueError, match="float range"):
+        env.step([10**400])
+    torch = pytest.importorskip("torch")
+    with pytest.raises(ValueError, match="action must be an array.*RuntimeError"):
+        env.step(torch.tensor([0.3], requires_grad=True))
+
+
+def test_reset_options_and_num_envs_are_checked_with_value_error():
+    env = gym.make(CASCADE, scenario="setpoint_step")
+    with pytest.raises(ValueError, match=r"option\(s\) \['a', 1\]; valid: \['scenario'\]"):
+        env.reset(options={1: 0, "a": 0})
+    with pytest.raises(ValueError, match="must be a dict or None, got str"):
+        env.reset(options="ab")
+    venv = _vec(CASCADE, 2, scenario="setpoint_step")
+    with pytest.raises(ValueError, match="must be a dict or None, got str"):
+        venv.reset(options="ab")
+    with pytest.raises(ValueError, match=r"unknown reset option\(s\) \['a', 1\]"):
+        venv.reset(options={1: 0, "a": 0})
+    with pytest.raises(ValueError, match="num_envs must be a positive integer, got True"):
+        _vec(CASCADE, True)
+
+
 # ------------------------------------------------------- 5./6. parameter types and bounds
 @pytest.mark.parametrize("env_id, params, match", [
     ("steamtemp/SupercriticalFSH-v0", {"dt_s": "2"}, "dt_s must be of type float"),
@@ -167,6 +226,10 @@ def test_action_dtypes():
     ("steamtemp/SupercriticalFSH-v0", {"n_substeps": 10**6}, "n_substeps"),
     ("steamtemp/BensonSubcritical-v0", {"dt_s": 1e6}, "dt_s"),
     ("steamtemp/SupercriticalFSH-v0", {"tube_length_m": 1e9}, "tube_length_m"),
+    ("steamtemp/SupercriticalFSH-v0", {"n_segments": 2**70}, "n_segments .*physical range"),
+    ("steamtemp/SupercriticalFSH-v0", {"dt_s": 10**400}, "dt_s must be finite"),
+    ("steamtemp/SupercriticalFSH-v0", {"tube_length_m": Fraction(10**12)}, "tube_length_m"),
+    ("steamtemp/Cascade300MW-v0", {1: 0.0, "dt_s": 1.0}, "names must be strings, got 1"),
 ])  # fmt: skip
 def test_parameters_are_typed_and_bounded(env_id, params, match):
     with pytest.raises(ValueError, match=match):
@@ -181,10 +244,20 @@ def test_parameters_accept_numpy_numbers():
 @pytest.mark.parametrize("reward, match", [
     ({"w_abs": 1e308}, "w_abs"), ({"T0_K": 1e-200}, "T0_K"), ({"trip_penalty": -1}, "trip"),
     ({"w_move": True}, "w_move"), ({"band_K": "5"}, "band_K"), ({"w_sq": float("inf")}, "w_sq"),
+    ({"w_abs": Fraction(10**9)}, "w_abs"), ({"w_abs": 10**400}, "w_abs"),
+    ({1: 0.0, "a": 0.0}, r"unknown reward option\(s\) \['a', 1\]"),
 ])  # fmt: skip
 def test_reward_options_are_bounded(reward, match):
     with pytest.raises(ValueError, match=match):
         gym.make(IDS[0], reward=reward)
+
+
+def test_reward_options_accept_any_real_number():
+    a = gym.make(CASCADE, scenario="setpoint_step", reward={"w_abs": Fraction(1, 2)})
+    b = gym.make(CASCADE, scenario="setpoint_step", reward={"w_abs": 0.5})
+    a.reset(seed=0)
+    b.reset(seed=0)
+    assert a.step(np.array([0.1]))[1] == b.step(np.array([0.1]))[1]
 
 
 def test_reward_is_finite_at_the_largest_accepted_weights():

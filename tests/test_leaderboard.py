@@ -9,6 +9,7 @@ policy keep these in seconds; one test runs the real baseline on the README's sc
 from __future__ import annotations
 
 import json
+import os
 from pathlib import Path
 
 import gymnasium as gym
@@ -487,3 +488,97 @@ def test_leaderboard_cli_with_the_baseline(tmp_path):
     assert {"scores.png", "profiles.png", "SupercriticalFSH-v0__heldout_mill_trip.png"} <= names
     with pytest.raises(SystemExit):
         lb.main(["--envs", "steamtemp/Nope-v0", "--out", str(tmp_path / "x")])
+
+
+# ------------------------------------------------------------- concurrency and signals
+def test_resume_refuses_a_hand_edited_row_without_metrics(tiny, tmp_path, fake_policies,
+                                                          capsys):  # fmt: skip
+    """A well-formed row of a finished episode whose metrics were emptied by hand is an
+    argparse error naming the line and what it lacks, not a KeyError traceback."""
+    out = tmp_path / "out"
+    lb.main(_args(tiny, out, **{"--seeds": "0,1"}))
+    rows = _jsonl(out / lb.EPISODES)
+    rows[0]["metrics"] = {}
+    (out / lb.EPISODES).write_text("".join(json.dumps(r) + "\n" for r in rows))
+    with pytest.raises(SystemExit) as exc:
+        lb.main([*_args(tiny, out, **{"--seeds": "0,1"}), "--resume"])
+    assert exc.value.code == 2
+    err = capsys.readouterr().err
+    assert "line 1" in err and "metrics lack" in err and "Traceback" not in err
+
+
+def _children(pid: int) -> list[int]:
+    path = Path(f"/proc/{pid}/task/{pid}/children")
+    return [int(c) for c in path.read_text().split()] if path.exists() else []
+
+
+def _alive(pid: int) -> bool:
+    """Running (not a zombie waiting for a parent that does not reap it)."""
+    try:
+        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] != "Z"
+    except (FileNotFoundError, ProcessLookupError, IndexError):
+        return False
+
+
+def _start_cli(out: Path, *extra: str):
+    """The leaderboard CLI in a process of its own (two workers, two policies of long
+    units) once its workers run, with its worker processes' ids."""
+    import subprocess
+    import sys
+    import time
+
+    args = [sys.executable, "-m", "agents.leaderboard", "--envs", ENV, "--policies",
+            "cascade_pi,lqi", "--scenarios", "load_ramp_100_50", "--seeds", "0-63",
+            "--jobs", "2", "--out", str(out), *extra]  # fmt: skip
+    proc = subprocess.Popen(args, cwd=Path(__file__).parents[1], stdout=subprocess.DEVNULL,
+                            stderr=subprocess.PIPE, text=True)  # fmt: skip
+    deadline = time.monotonic() + 60
+    while len(workers := _children(proc.pid)) < 2 and time.monotonic() < deadline:
+        assert proc.poll() is None, proc.stderr.read()
+        time.sleep(0.1)
+    assert len(workers) >= 2, "no worker processes"
+    return proc, workers
+
+
+@pytest.mark.parametrize("sig", ["SIGTERM", "SIGKILL"])
+def test_workers_end_with_the_leaderboard(tmp_path, sig):
+    """SIGTERM (timeout, CI runners) stops the run as Ctrl-C does and its workers end with
+    it; after a SIGKILL of it they end within a bounded time (a parent-death check)."""
+    import signal
+    import time
+
+    proc, workers = _start_cli(tmp_path / "out")
+    try:
+        proc.send_signal(getattr(signal, sig))
+        assert proc.wait(timeout=30) == (143 if sig == "SIGTERM" else -signal.SIGKILL)
+        deadline = time.monotonic() + 5 * lb.PARENT_POLL_S + 3
+        while any(_alive(w) for w in workers) and time.monotonic() < deadline:
+            time.sleep(0.1)
+        assert not any(_alive(w) for w in workers), f"workers {workers} outlived the run"
+    finally:
+        for w in workers:
+            if _alive(w):
+                os.kill(w, signal.SIGKILL)
+        if proc.poll() is None:
+            proc.kill()
+
+
+def test_a_second_run_on_the_same_out_is_refused(tmp_path, capsys):
+    """While one run writes to --out, a second one started on it is an argparse error and
+    writes nothing; the first is not disturbed."""
+    import signal
+
+    out = tmp_path / "out"
+    proc, workers = _start_cli(out)
+    try:
+        before = (out / lb.EPISODES).read_bytes()
+        with pytest.raises(SystemExit) as exc:
+            lb.main(["--envs", ENV, "--policies", "cascade_pi", "--scenarios", "setpoint_step",
+                     "--seeds", "0", "--jobs", "1", "--out", str(out), "--resume"])  # fmt: skip
+        assert exc.value.code == 2
+        assert "in use by another steamtemp-leaderboard run" in capsys.readouterr().err
+        assert (out / lb.EPISODES).read_bytes()[:len(before)] == before
+        assert proc.poll() is None
+    finally:
+        proc.send_signal(signal.SIGTERM)
+        proc.wait(timeout=30)

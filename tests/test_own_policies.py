@@ -265,10 +265,11 @@ def test_register_a_baseline(registry, at_root):
     baselines.register("single_loop_pi", make_controller)
     baselines.register("single_loop_pi", make_controller)  # the same again: nothing happens
     assert baselines.NAMES[-1] == "single_loop_pi" and "single_loop_pi" not in baselines.SHIPPED
-    assert isinstance(baselines.make("single_loop_pi", gym.make(ENV)), SingleLoopPI)
+    made = baselines.make("single_loop_pi", gym.make(ENV))  # checked, as every baseline
+    assert isinstance(made.policy, SingleLoopPI) and made.n_obs == 9
     assert specs.parse("single_loop_pi").kind == specs.BASELINE
     baselines.register("by_ref", "examples.my_controller:make_controller")
-    assert isinstance(baselines.make("by_ref", gym.make(ENV)), SingleLoopPI)
+    assert isinstance(baselines.make("by_ref", gym.make(ENV)).policy, SingleLoopPI)
     before = baselines.NAMES
     for name, factory, word in [("cascade_pi", make_controller, "shipped"),
                                 ("single_loop_pi", SingleLoopPI, "already registered"),

@@ -2,12 +2,13 @@
 
 from __future__ import annotations
 
+import fcntl
 import json
 import os
+import signal
 import subprocess
 import sys
 import types
-from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
@@ -16,7 +17,7 @@ from numba import typeof
 from numba.core import types as types_nb
 
 import steamtemp_gym
-from steamtemp_gym import _prewarm, plants
+from steamtemp_gym import _cache, _prewarm, plants
 from steamtemp_gym.envs.core import Core
 from steamtemp_gym.rewards import RewardConfig
 
@@ -142,10 +143,8 @@ class _FakeProc:
 @pytest.fixture
 def fake_helpers(tmp_path, monkeypatch):
     """_prewarm with a temporary cache folder, two CPUs and a recording Popen."""
-    import numba
-
     _FakeProc.made = []
-    monkeypatch.setattr(numba.config, "CACHE_DIR", str(tmp_path))
+    monkeypatch.setattr(_cache, "_FOLDER", _cache.Folder(tmp_path, True, tmp_path))
     monkeypatch.setattr(_prewarm.subprocess, "Popen", _FakeProc)
     monkeypatch.setattr(_prewarm, "_cpus", lambda: 2)
     monkeypatch.setattr(_prewarm, "_started", set())
@@ -161,9 +160,10 @@ def test_start_runs_one_helper_per_class_on_a_cold_cache(fake_helpers):
     _prewarm.start(cls)
     assert len(_FakeProc.made) == 1 and list(_prewarm.pending) == [plants.PLANTS[cls.id]]
     proc = _FakeProc.made[0]
-    assert proc.args[1:] == ["-m", "steamtemp_gym._prewarm", plants.PLANTS[cls.id]]
+    assert proc.args[1:4] == ["-m", "steamtemp_gym._prewarm", plants.PLANTS[cls.id]]
     assert proc.kwargs["env"]["STEAMTEMP_GYM_PREWARM"] == "0"  # no helpers of helpers
     assert (fake_helpers / "Cascade300MW.lock").exists()
+    assert proc.kwargs["pass_fds"] == (int(proc.args[-1]),)  # the helper inherits its lock
     _prewarm.wait(plants.plant_class("steamtemp/DrumBoilerSH-v0"))  # another plant's step
     assert _prewarm.pending and proc.returncode is None  # does not wait for this helper
     _prewarm.wait(cls)
@@ -176,8 +176,9 @@ def test_start_does_nothing_when_not_needed(fake_helpers, monkeypatch, why):
     fake_helpers.mkdir()
     if why == "marker":  # an earlier helper finished
         (fake_helpers / "Cascade300MW").touch()
-    elif why == "lock":  # another process's helper is running
-        (fake_helpers / "Cascade300MW.lock").touch()
+    elif why == "lock":  # another helper holds the lock
+        held = os.open(fake_helpers / "Cascade300MW.lock", os.O_CREAT | os.O_RDWR)
+        fcntl.flock(held, fcntl.LOCK_EX)
     elif why == "off":
         monkeypatch.setenv("STEAMTEMP_GYM_PREWARM", "0")
     elif why == "frozen":  # e.g. PyInstaller: sys.executable is the application
@@ -188,37 +189,40 @@ def test_start_does_nothing_when_not_needed(fake_helpers, monkeypatch, why):
     assert _FakeProc.made == [] and not _prewarm.pending
 
 
-def test_a_stale_lock_does_not_block(fake_helpers):
+def test_a_lock_left_by_a_killed_helper_does_not_block(fake_helpers):
+    """A process holding the helper's lock is killed with SIGKILL: the lock file is left
+    behind, fresh, and the next start() runs a helper at once."""
     cls = plants.plant_class("steamtemp/Cascade300MW-v0")
     fake_helpers.mkdir()
     lock = fake_helpers / "Cascade300MW.lock"
-    lock.touch()
-    old = lock.stat().st_mtime - _prewarm.STALE_S - 1
-    os.utime(lock, (old, old))
+    holder = _POPEN([sys.executable, "-c", "import fcntl, os, sys, time; "
+                     f"fd = os.open({str(lock)!r}, os.O_CREAT | os.O_RDWR); "
+                     "fcntl.flock(fd, fcntl.LOCK_EX); print('held', flush=True); time.sleep(60)"],
+                    stdout=subprocess.PIPE, text=True)  # fmt: skip
+    assert holder.stdout.readline().strip() == "held"
+    _prewarm.start(cls)
+    assert _FakeProc.made == []  # a helper holds the lock
+    holder.send_signal(signal.SIGKILL)
+    holder.wait()
+    assert lock.exists()
+    _prewarm._started.clear()
     _prewarm.start(cls)
     assert len(_FakeProc.made) == 1
 
 
-def test_wait_stops_a_helper_that_hangs_and_removes_its_lock(fake_helpers, monkeypatch):
+def test_wait_stops_a_helper_that_hangs(fake_helpers, monkeypatch):
     proc = _POPEN([sys.executable, "-c", "import time; time.sleep(60)"])
-    fake_helpers.mkdir()
-    (fake_helpers / "Y.lock").touch()
     monkeypatch.setattr(_prewarm, "pending", {"x:Y": proc})
     monkeypatch.setattr(_prewarm, "TIMEOUT_S", 0.2)
     _prewarm.wait(type("Y", (), {"__module__": "x"}))
     assert proc.returncode is not None and not _prewarm.pending
-    assert not (fake_helpers / "Y.lock").exists()
 
 
 def test_read_only_cache_folder_starts_nothing(fake_helpers, monkeypatch):
     cls = plants.plant_class("steamtemp/Cascade300MW-v0")
-
-    def refuse(self, *a, **k):
-        raise PermissionError("read-only")
-
-    monkeypatch.setattr(Path, "mkdir", refuse)
+    monkeypatch.setattr(_cache, "_FOLDER", _cache.Folder(fake_helpers.parent, False, None))
     _prewarm.start(cls)
-    assert _FakeProc.made == []
+    assert _FakeProc.made == [] and not fake_helpers.exists()
 
 
 def test_no_interpreter_to_start_is_not_an_error(fake_helpers, monkeypatch):
@@ -227,4 +231,7 @@ def test_no_interpreter_to_start_is_not_an_error(fake_helpers, monkeypatch):
 
     monkeypatch.setattr(_prewarm.subprocess, "Popen", fail)
     _prewarm.start(plants.plant_class("steamtemp/Cascade300MW-v0"))
-    assert not _prewarm.pending and not (fake_helpers / "Cascade300MW.lock").exists()
+    assert not _prewarm.pending
+    lock = os.open(fake_helpers / "Cascade300MW.lock", os.O_RDWR)
+    fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)  # not held: the next start may run one
+    os.close(lock)

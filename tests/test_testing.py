@@ -17,6 +17,7 @@ from steamtemp_gym.envs import register_variant
 from steamtemp_gym.testing import (
     CheckSkipped,
     check_actions_in_bounds,
+    check_bad_observations_rejected,
     check_batched_equals_unbatched,
     check_determinism,
     check_reset_clears_state,
@@ -114,6 +115,34 @@ def test_policy_checks_catch_broken_policies():
                                        quick=True)  # fmt: skip
 
 
+def test_bad_observation_check_holds_user_policies_to_it():
+    """A controller that takes a NaN observation into its state fails the check; the same
+    controller through baselines.policy.checked passes it."""
+    from baselines.policy import checked
+
+    with pytest.raises(AssertionError, match="predict accepted an observation all NaN"):
+        check_bad_observations_rejected(_Forgetful, CASCADE, quick=True)
+    check_bad_observations_rejected(lambda env: checked(_Forgetful(env), env), CASCADE,
+                                    quick=True)  # fmt: skip
+
+
+class _Refuses(_Forgetful):
+    """Refuses bad observations with a ValueError, but only after counting the call in its
+    state."""
+
+    def predict(self, observation, state=None, episode_start=None, deterministic=True):
+        from baselines.policy import check_predict_args
+
+        self.acc = self.acc + 0.01
+        check_predict_args(observation, episode_start, 9)
+        return super().predict(observation, state, episode_start, deterministic)
+
+
+def test_bad_observation_check_catches_a_state_changed_by_a_refused_call():
+    with pytest.raises(AssertionError, match="a copy that never saw them"):
+        check_bad_observations_rejected(_Refuses, CASCADE, quick=True)
+
+
 def test_sb3_check_is_skipped_visibly_without_sb3(monkeypatch):
     monkeypatch.setitem(sys.modules, "stable_baselines3.common.env_checker", None)
     with pytest.raises(CheckSkipped, match=r"stable_baselines3 is not installed.*\[agents\]"):
@@ -136,11 +165,11 @@ def test_parametrize_with_checks_ids_and_marks():
     params = {p.id: p for p in mark.args[1]}
     assert "SupercriticalFSH-v0-check_determinism" in params
     assert "SupercriticalFSH-v0-cascade_pi-check_reset_clears_state" in params
-    assert len(params) == 11 + 7
+    assert len(params) == 11 + 8
     slow = [i for i, p in params.items() if any(m.name == "slow" for m in p.marks)]
     assert slow == ["SupercriticalFSH-v0-cascade_pi-check_completes_every_scenario"]
     quick = parametrize_with_checks(ids=[FSH], policies=["cascade_pi"], env=False, quick=True)
-    assert len(quick.mark.args[1]) == 6  # the slow check is left out
+    assert len(quick.mark.args[1]) == 7  # the slow check is left out
 
 
 # ------------------------------------------------------------------------------ CLI
@@ -238,7 +267,7 @@ def test_documented_example_command_line(tmp_path, monkeypatch, capsys):
     assert code == 0, out
     assert env.unwrapped.plant.params.n_segments == 12
     assert env.unwrapped._scenario_spec.name == "fouled_load_ramp"
-    assert "17 passed, 0 failed, 1 skipped" in out  # the slow check, skipped by --quick
+    assert "18 passed, 0 failed, 1 skipped" in out  # the slow check, skipped by --quick
 
 
 def _run_documented_pytest_file(tmp_path, pytester, *args, subprocess=False):
@@ -261,7 +290,7 @@ def test_documented_example_pytest_form_collects(tmp_path, pytester):
     result = _run_documented_pytest_file(tmp_path, pytester, "--collect-only", "-q")
     result.stdout.fnmatch_lines(["*test_contract[[]FSH12Fouled-v0-check_determinism[]]",
                                  "*FSH12Fouled-v0-cascade_pi-check_reset_clears_state*",
-                                 "18 tests collected*"])  # fmt: skip
+                                 "19 tests collected*"])  # fmt: skip
 
 
 @pytest.mark.slow

@@ -31,6 +31,7 @@ import numpy as np
 from steamtemp_gym import _prewarm
 from steamtemp_gym import scenarios as sc
 from steamtemp_gym._jit import entry_point, njit
+from steamtemp_gym.checks import is_real
 from steamtemp_gym.plants.base import (
     D_FOULING,
     D_HEAT_BIAS,
@@ -597,24 +598,38 @@ def dict_maker(keys: list[str]) -> Any:
 
 
 def check_action(action: Any, shape: tuple[int, ...], single: bool = False) -> np.ndarray:
-    """An action batch of ``shape`` (n_rows, n_actuators) as a float32 or float64 array.
+    """An action batch of ``shape`` (n_rows, n_actuators) as a native float32 or float64 array.
 
-    Accepted: any array-like of real numbers (every float dtype, integers; not bool,
-    complex, strings or objects) of exactly ``shape`` (vector env) or, for the single env
-    (``single``, one row), of shape (n_actuators,) or, with one actuator, a scalar.
-    Finiteness is checked by :meth:`Core.step` (compiled, before anything changes).
+    Accepted: any array-like of real numbers (every float dtype and byte order, integers,
+    Python integers beyond int64, a masked array without masked entries; not bool,
+    complex, strings or other objects) of exactly ``shape`` (vector env) or, for the
+    single env (``single``, one row), of shape (n_actuators,) or, with one actuator, a
+    scalar. Finiteness is checked by :meth:`Core.step` (compiled, before anything changes).
 
     Raises:
         ValueError: anything else, naming the expected shape.
     """
-    if type(action) is np.ndarray and action.dtype.char in "fd" and (
+    if type(action) is np.ndarray and action.dtype.char in "fd" and action.dtype.isnative and (
             action.shape == (shape[1:] if single else shape)):  # fmt: skip
         return action.reshape(shape)  # the common case, checked in a fraction of a µs
     expected = f"({shape[1]},)" if single else str(shape)
+    if isinstance(action, np.ma.MaskedArray):
+        masked = int(np.ma.count_masked(action))
+        if masked:
+            raise ValueError(f"action has {masked} masked entries; every command must be given")
+        action = np.ma.getdata(action)
     try:
         a = np.asarray(action)
-    except (TypeError, ValueError) as exc:
-        raise ValueError(f"action must be an array of shape {expected}: {exc}") from None
+    except Exception as exc:  # noqa: BLE001 - TypeError, ValueError, a tensor's RuntimeError
+        raise ValueError(
+            f"action must be an array of shape {expected}: {type(exc).__name__}: {exc}"
+        ) from None
+    if a.dtype.kind == "O" and a.size and all(is_real(v) for v in a.flat):
+        try:  # Python integers beyond int64
+            a = a.astype(np.float64)
+        except OverflowError:
+            raise ValueError(f"action holds a number beyond the float range "
+                             f"({str(action)[:80]})") from None  # fmt: skip
     if a.dtype.kind not in "fiu":
         raise ValueError(
             f"action must hold real numbers (float or integer), got dtype {a.dtype} "

@@ -29,6 +29,9 @@ def build(plant_id: str, options: dict[str, Any]) -> tuple[Plant, Any, RewardCon
     params = options.get("params") or {}
     if not isinstance(params, dict):
         raise ValueError(f"params must be a dict of plant parameters, got {type(params).__name__}")
+    names = [k for k in params if not isinstance(k, str)]
+    if names:
+        raise ValueError(f"plant parameter names must be strings, got {names[0]!r}")
     plant = plants.make(plant_id, **params)
     spec = options.get("scenario", scenarios.RANDOM)
     scenario = scenarios.resolve(spec, plant_id)

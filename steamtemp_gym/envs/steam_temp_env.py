@@ -17,6 +17,7 @@ import gymnasium as gym
 import numpy as np
 
 from steamtemp_gym import scenarios as sc
+from steamtemp_gym.checks import key_list
 from steamtemp_gym.envs import options as opts
 from steamtemp_gym.envs import snapshot as snap_
 from steamtemp_gym.envs.core import Core, check_action
@@ -40,7 +41,9 @@ def scenario_option(options: dict | None, default: Any, plant_id: str,
     Raises:
         ValueError: an unknown option (``other`` are the caller's own) or scenario.
     """
-    unknown = sorted(set(options or {}) - {"scenario", *other}, key=str)
+    if options is not None and not isinstance(options, dict):
+        raise ValueError(f"reset() options must be a dict or None, got {type(options).__name__}")
+    unknown = key_list(set(options or {}) - {"scenario", *other})
     if unknown:
         raise ValueError(f"unknown reset option(s) {unknown}; valid: {['scenario', *other]}")
     if options and "scenario" in options:

@@ -19,7 +19,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from steamtemp_gym import _prewarm
-from steamtemp_gym.checks import is_integer, is_real
+from steamtemp_gym.checks import is_finite, is_integer, is_real, key_list
 from steamtemp_gym.plants.threads import MIN_SPLIT_ROWS, run_rows
 
 #: Disturbance vector entries handed to every plant kernel, in order.
@@ -108,10 +108,10 @@ def validate_params(
     for f in dataclasses.fields(params):
         v = getattr(params, f.name)
         _check_type(name_cls, f.name, hints.get(f.name), v)
-        if isinstance(v, (bool, np.bool_)) or not isinstance(v, (int, float, np.number)):
+        if not is_real(v):
             continue
-        if not np.isfinite(v):
-            raise ValueError(f"{name_cls}.{f.name} must be finite, got {v!r}")
+        if not is_finite(v):
+            raise ValueError(f"{name_cls}.{f.name} must be finite, got {str(v)[:50]}")
         if f.name not in bounds and isinstance(f.default, (int, float)):
             d = abs(float(f.default))
             lo, hi = (d / DEFAULT_SPAN, d * DEFAULT_SPAN) if d > 0 else (0.0, DEFAULT_SPAN)
@@ -199,7 +199,7 @@ class Plant:
 
     def __init__(self, **overrides: Any) -> None:
         valid = {f.name for f in dataclasses.fields(self.Params)}
-        unknown = sorted(set(overrides) - valid)
+        unknown = key_list(set(overrides) - valid)
         if unknown:
             raise ValueError(
                 f"unknown parameter(s) {unknown} for {self.id}; valid parameters: {sorted(valid)}"

@@ -28,6 +28,7 @@ from steamtemp_gym.testing.env_checks import (
 )
 from steamtemp_gym.testing.policy_checks import (
     check_actions_in_bounds,
+    check_bad_observations_rejected,
     check_batched_equals_unbatched,
     check_completes_a_scenario,
     check_completes_every_scenario,
@@ -52,6 +53,7 @@ from steamtemp_gym.testing.vector_checks import check_vector_env_matches_single_
 __all__ = [
     "CHECK_NAMES", "ENV_CHECKS", "POLICY_CHECKS", "SLOW_CHECKS", "BoundCheck", "CheckSkipped",
     "Result", "check_actions_in_bounds", "check_bad_inputs_rejected",
+    "check_bad_observations_rejected",
     "check_batched_equals_unbatched", "check_completes_a_scenario",
     "check_completes_every_scenario", "check_determinism", "check_env_id",
     "check_gymnasium_env", "check_info_keys_and_units", "check_named_scenarios_run_to_end",

@@ -288,7 +288,8 @@ def _bad_actions(n_u: int) -> list[tuple[str, Any]]:
              ("-inf", np.full(n_u, -np.inf)), ("one entry too many", np.zeros(n_u + 1)),
              ("a batch of one, shape (1, n)", z[None, :]), ("3-d", np.zeros((2, 2, 2))),
              ("strings", ["0.5"] * n_u), ("complex", z.astype(complex)),
-             ("bool", z.astype(bool)), ("None", None)]  # fmt: skip
+             ("bool", z.astype(bool)), ("None", None),
+             ("a masked array with a masked entry", np.ma.masked_array(z, mask=z == 0))]
     if n_u > 1:
         cases.append(("a column, shape (n, 1)", z[:, None]))
     return cases
@@ -331,6 +332,9 @@ def check_bad_inputs_rejected(target: EnvTarget, quick: bool = False) -> None:
         assert needle in msg, f"the error for {what} does not name {needle!r}: {msg!r}"
     msg = _expect_value_error("an unknown reset() option", env.reset, options={"no_such": 1})
     assert "no_such" in msg, f"the error for an unknown reset option does not name it: {msg!r}"
+    _expect_value_error("reset() options with keys of mixed types", env.reset,
+                        options={1: 0, "no_such": 1})  # fmt: skip
+    _expect_value_error("reset() options that are not a dict", env.reset, options="ab")
     params_cls = type(env.unwrapped.plant.params)
     defaults = params_cls()
     for f in dataclasses.fields(params_cls):
@@ -362,6 +366,7 @@ def _vector_bad_actions(target: EnvTarget, n_u: int) -> None:
     assert np.array_equal(o1, o2) and np.array_equal(r1, r2), (
         "rejected actions changed the vector env")
     _expect_value_error("an unknown vector reset() option", venv.reset, options={"no_such": 1})
+    _expect_value_error("vector reset() options that are not a dict", venv.reset, options="ab")
 
 
 @env_check

@@ -158,6 +158,54 @@ def check_actions_in_bounds(policy: PolicyTarget, target: EnvTarget, quick: bool
             f"observations, np.random.default_rng(0), call {k})")  # fmt: skip
 
 
+def _bad_observations(obs: np.ndarray) -> list[tuple[str, Any]]:
+    n = obs.shape[0]
+    one_nan = obs.copy()
+    one_nan[n // 2] = np.nan
+    return [("all NaN", np.full(n, np.nan)), ("one NaN entry", one_nan),
+            ("+inf", np.full(n, np.inf)), ("-inf in a batch", np.full((2, n), -np.inf)),
+            ("one entry short", obs[:-1]), ("one entry too many", np.append(obs, 0.0)),
+            ("a batch of another width", np.zeros((2, n + 1))), ("3-d", obs[None, None]),
+            ("an empty batch, shape (0, n)", np.zeros((0, n))), ("None", None),
+            ("strings", ["0.1"] * n), ("complex", obs.astype(complex)),
+            ("episode_start of another shape", (obs, np.array([True, False, True])))]  # fmt: skip
+
+
+@policy_check
+def check_bad_observations_rejected(policy: PolicyTarget, target: EnvTarget,
+                                    quick: bool = False) -> None:  # fmt: skip
+    """Mid-episode, NaN, infinite, misshapen (short, long, 3-d, an empty batch), ``None``,
+    string and complex observations and an ``episode_start`` of another shape raise a
+    ``ValueError``, and change nothing: the policy then acts as a copy that never saw
+    them, bit for bit (logged plant data holds such values; a policy must not carry them)."""
+    steps, bad_at = (20, 5) if quick else (60, 10)
+    env = target.make(scenario=RAMP)
+    p, twin = policy.make(env), policy.make(env)
+    obs, _ = env.reset(seed=0)
+    for k in range(steps):
+        if k == bad_at:
+            for what, bad in _bad_observations(obs):
+                o, start = bad if isinstance(bad, tuple) else (bad, np.array([False]))
+                try:
+                    p.predict(o, episode_start=start, deterministic=True)
+                except ValueError:
+                    continue
+                except Exception as exc:
+                    raise AssertionError(f"predict of an observation {what}: expected "
+                                         f"ValueError, got {type(exc).__name__}: {exc}") from exc
+                raise AssertionError(f"predict accepted an observation {what}; it must raise "
+                                     "ValueError")  # fmt: skip
+        start = np.array([k == 0])
+        a = np.asarray(p.predict(obs, episode_start=start, deterministic=True)[0])
+        b = np.asarray(twin.predict(obs, episode_start=start, deterministic=True)[0])
+        assert np.array_equal(a, b), (
+            f"after the rejected observations (step {bad_at}) the policy acts {a.tolist()} at "
+            f"step {k}, a copy that never saw them {b.tolist()} (scenario {RAMP}, seed 0)")
+        obs, _, term, trunc, _ = env.step(a)
+        if term or trunc:
+            break
+
+
 def _episode_without_trip(policy: PolicyTarget, target: EnvTarget, name: str, seed: int) -> None:
     env = target.make(scenario=name)
     p = policy.make(env)

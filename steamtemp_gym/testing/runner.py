@@ -25,8 +25,8 @@ ENV_CHECKS: tuple[Callable[..., None], ...] = (
 #: Every policy contract, in the order they run.
 POLICY_CHECKS: tuple[Callable[..., None], ...] = (
     pc.check_predict_signature, pc.check_batched_equals_unbatched, pc.check_policy_determinism,
-    pc.check_reset_clears_state, pc.check_actions_in_bounds, pc.check_completes_a_scenario,
-    pc.check_completes_every_scenario,
+    pc.check_reset_clears_state, pc.check_actions_in_bounds, pc.check_bad_observations_rejected,
+    pc.check_completes_a_scenario, pc.check_completes_every_scenario,
 )  # fmt: skip
 #: Checks too slow for the default test run and ``--quick`` (pytest marker ``slow``).
 SLOW_CHECKS = frozenset({pc.check_completes_every_scenario})
