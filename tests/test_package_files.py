@@ -100,7 +100,11 @@ def test_pytest_plugin_registers_the_slow_mark(pytester, monkeypatch):
             "-p", "no:xdist")  # fmt: skip
     without = pytester.runpytest_subprocess(*args, "-p", "no:steamtemp_gym")
     assert without.ret != 0 and "'slow' not found in `markers`" in without.stdout.str()
-    plugin = pytester.runpytest_subprocess(*args, "-p", "steamtemp_gym.testing.pytest_plugin")
+    from importlib.metadata import entry_points
+
+    installed = any(e.name == "steamtemp_gym" for e in entry_points(group="pytest11"))
+    load = () if installed else ("-p", "steamtemp_gym.testing.pytest_plugin")  # else it is
+    plugin = pytester.runpytest_subprocess(*args, *load)  # loaded by its entry point
     plugin.stdout.fnmatch_lines(["*cascade_pi-check_completes_every_scenario*",
                                  f"{len(POLICY_CHECKS)} tests collected*"])  # fmt: skip
     assert plugin.ret == 0
