@@ -1,10 +1,16 @@
 """steamtemp-leaderboard: every policy on every env, scenario and seed.
 
-Policies: the baselines (``baselines.NAMES``), the shipped trained agents
+Policies: by default the baselines (``baselines.NAMES``), the shipped trained agents
 (``agents.shipped()``, named ``sb3:<algo>``) and two references that are listed but never
 ranked: ``oracle`` (agents/oracle.py, the clairvoyant NMPC on the true plant, the 1 of
 the normalized score; ``--no-oracle`` leaves it out, and the score with it) and
 ``frozen_valve``. The score's 0, ``cascade_pi_ff``, and the references join every run.
+``--policies`` also takes your own (agents/specs.py; examples/README.md): a trained
+agent's files (``zoo:DIR``, or a path: a directory or model .zip written by
+``steamtemp-train --out`` or an RL Zoo run) and ``module:callable``, a factory
+``env -> Policy`` (``module`` a dotted name, with ``PYTHONPATH=.`` for the current
+directory, or a .py file), scored like the shipped ones. ``--import MODULE`` imports a
+module first (one that calls ``baselines.register`` or ``scenarios.register``).
 
 Every flag is checked before anything runs: env ids, policies, scenarios (names and YAML
 paths, resolved and built for each env with ``gym.make``), seeds and the output directory.
@@ -40,8 +46,8 @@ Outputs in ``--out``:
 All JSON is strict (no NaN or Infinity tokens).
 
 An episode that raises (a policy error, a plant failure) is recorded as a row with
-an ``error`` and the run goes on: a 3-hour leaderboard is not lost to one bad
-policy. At the end the failures are listed and the exit code is 1.
+an ``error`` and the run goes on: a long run is not lost to one bad policy. At the end
+the failures are listed and the exit code is 1.
 
 Cost: the oracle's episodes are the long ones (it optimizes by rollouts of the plant at
 every replanning instant); they are started first.
@@ -66,6 +72,7 @@ import argparse
 import contextlib
 import functools
 import hashlib
+import importlib
 import json
 import logging
 import math
@@ -90,10 +97,11 @@ import baselines
 import steamtemp_gym
 from agents import leaderboard_plots as plots
 from agents import leaderboard_report as report
-from agents import stats
+from agents import specs, stats
 from agents.difficulty import FrozenValves
 from agents.evaluation import metric_keys, run_batch, run_episode
 from agents.oracle import Oracle
+from steamtemp_gym import envs as envs_
 from steamtemp_gym import plants, scenarios
 from steamtemp_gym.checks import head, tail
 from steamtemp_gym.scenarios import heldout
@@ -131,6 +139,7 @@ class Plan:
     envs_made: dict[tuple[str, str], Any] = field(default_factory=dict)  # (env, scenario) -> env
     resolved: dict[tuple[str, str], Any] = field(default_factory=dict)  # -> Scenario
     fingerprints: dict[tuple[str, str, str], str] = field(default_factory=dict)
+    imports: tuple[str, ...] = ()  # --import: modules every worker imports first
 
     def grid(self) -> Iterable[Key]:
         """Every episode of the run, in run order."""
@@ -205,15 +214,15 @@ def _sb3() -> bool:
 
 
 def _resolve(spec: str, env_id: str) -> Any:
-    """A scenario name, ``heldout:<name>`` or a YAML file as a Scenario."""
-    if heldout.is_heldout(spec):
-        return heldout.load(spec)
+    """A scenario name, ``heldout:<name>``, ``random`` or a YAML file as a Scenario (or
+    ``random``): steamtemp_gym.scenarios.resolve, as gym.make takes them."""
     return scenarios.resolve(spec, env_id)
 
 
 def _policies(ap: argparse.ArgumentParser, envs: list[str], text: str | None,
               oracle: bool = True) -> dict:  # fmt: skip
-    """Policies per env; every requested name must be available for at least one env.
+    """Policies per env; every requested name must parse (agents/specs.py) and be available
+    for at least one env, and a factory's policy is built once on each env and checked.
     :data:`ALWAYS` joins every env (the oracle only with ``oracle``)."""
     always = [p for p in ALWAYS if oracle or p != report.ONE]
     if text is None:
@@ -221,20 +230,50 @@ def _policies(ap: argparse.ArgumentParser, envs: list[str], text: str | None,
     names = _items(ap, "--policies", text)
     if not oracle and report.ONE in names:
         ap.error(f"argument --policies: {report.ONE} is listed but --no-oracle is given")
-    everywhere = sorted({p for e in envs for p in _available(e)})
-    unknown = [n for n in names if n not in everywhere]
-    if unknown:
+    parsed = {}
+    for n in names:
+        if n in (report.ONE, REFERENCE):
+            continue
+        try:
+            parsed[n] = specs.parse(n)
+        except ValueError as exc:
+            ap.error(f"argument --policies: {head(str(exc), 1000)}")
+        if parsed[n].kind in (specs.SHIPPED, specs.FILES) and not _sb3():
+            ap.error(f"argument --policies: {head(n, 60)!r} is a trained agent: it needs the "
+                     "agents extra, pip install 'steamtemp-gym[agents]'")  # fmt: skip
+
+    def here(n: str, e: str) -> bool:
+        return n not in parsed or parsed[n].available(e)
+
+    nowhere = [n for n in names if not any(here(n, e) for e in envs)]
+    if nowhere:
         ap.error(
-            f"argument --policies: unknown {[head(n, 60) for n in unknown]} for envs "
-            f"{envs}; valid choices: {everywhere}"
+            f"argument --policies: {[head(n, 60) for n in nowhere]} not available for envs "
+            f"{envs}: only for {[sorted(parsed[n].envs) for n in nowhere]}"
         )
-    out = {e: [n for n in names if n in _available(e)] for e in envs}
+    out = {e: [n for n in names if here(n, e)] for e in envs}
     for e, pols in out.items():
         missing = [n for n in names if n not in pols]
         if missing:
             print(f"note: {missing} not available for {e}; skipped there", file=sys.stderr)
+        factories = [n for n in pols if n in parsed and parsed[n].kind == specs.FACTORY]
+        env = gym.make(e) if factories else None
+        for n in factories:
+            try:
+                parsed[n].make(e, env)
+            except Exception as exc:  # noqa: BLE001 - any failure is a bad --policies value
+                ap.error(f"argument --policies: {head(n, 60)!r} on {e}: "
+                         f"{type(exc).__name__}: {head(str(exc), _EXCERPT)}")  # fmt: skip
         pols += [p for p in always if p not in pols]
     return out
+
+
+def _env_id(name: str) -> str:
+    """The id an --envs item names (with or without the namespace); itself if none."""
+    try:
+        return envs_.resolve_id(name)
+    except ValueError:
+        return name
 
 
 def _scenario_key(spec: str) -> str:
@@ -277,10 +316,11 @@ def _source_digest() -> str:
 
 
 def _policy_digest(env_id: str, name: str) -> str:
-    if not name.startswith("sb3:"):
+    """The policy's part of the fingerprint: the name, with the hash of a trained agent's
+    files or of a factory's module (agents/specs.py)."""
+    if name in (report.ONE, REFERENCE):
         return name
-    path = agents.ZOO / f"{env_id.replace('/', '__')}__{name[4:]}.zip"
-    return name + ":" + hashlib.sha256(path.read_bytes()).hexdigest()
+    return specs.parse(name).digest(env_id)
 
 
 def fingerprint(env_id: str, scenario: Any, policy_digest: str, source_digest: str) -> str:
@@ -294,13 +334,21 @@ def fingerprint(env_id: str, scenario: Any, policy_digest: str, source_digest: s
 
 def build_plan(ap: argparse.ArgumentParser, args: argparse.Namespace) -> Plan:
     """Check every flag (argparse errors, exit code 2) and build the envs; runs nothing."""
-    envs = _items(ap, "--envs", args.envs)
-    unknown = [e for e in envs if e not in steamtemp_gym.ENV_IDS]
+    imports = tuple(getattr(args, "modules", None) or ())
+    for module in imports:  # first: they may register env ids, baselines and scenarios
+        try:
+            importlib.import_module(module)
+        except Exception as exc:  # noqa: BLE001 - any failure is a bad --import value
+            ap.error(f"argument --import: cannot import {head(module, 100)!r}: "
+                     f"{type(exc).__name__}: {head(str(exc), _EXCERPT)}")  # fmt: skip
+    envs = _items(ap, "--envs", args.envs, key=_env_id)
+    unknown = [e for e in envs if _env_id(e) not in envs_.ids()]
     if unknown:
         ap.error(
             f"argument --envs: unknown {[head(e, 60) for e in unknown]}; "
-            f"valid choices: {list(steamtemp_gym.ENV_IDS)}"
+            f"valid choices: {envs_.ids()} (the name after 'steamtemp/' is enough)"
         )
+    envs = [_env_id(e) for e in envs]
     seeds = parse_seeds(ap, args.seeds)
     pols = _policies(ap, envs, args.policies, oracle=not args.no_oracle)
     scs = _items(ap, "--scenarios", args.scenarios, key=_scenario_key)
@@ -315,9 +363,10 @@ def build_plan(ap: argparse.ArgumentParser, args: argparse.Namespace) -> Plan:
             except Exception as exc:  # noqa: BLE001 - any failure is a bad --scenarios value
                 ap.error(
                     f"argument --scenarios: {tail(sc, 80)!r} for {env_id}: "
-                    f"{head(str(exc), _EXCERPT)}"
+                    f"{head(str(exc), 1000)}"  # the message lists every form
                 )
-    plan = Plan(envs=envs, scenarios=scs, seeds=seeds, policies=pols, resolved=resolved)
+    plan = Plan(envs=envs, scenarios=scs, seeds=seeds, policies=pols, resolved=resolved,
+                imports=imports)  # fmt: skip
     source = _source_digest()
     for env_id in envs:
         for sc in scs:
@@ -445,13 +494,11 @@ def _latest(rows: list[dict]) -> dict[tuple[Key, str], dict]:
 
 # --------------------------------------------------------------------------- episodes
 def _make_policy(name: str, env_id: str, env):
-    if name.startswith("sb3:"):
-        return agents.load(env_id, name[4:])
     if name == REFERENCE:
         return FrozenValves(env)
     if name == report.ONE:
         return Oracle(env)
-    return baselines.make(name, env)
+    return specs.parse(name).make(env_id, env)
 
 
 @dataclass
@@ -465,6 +512,7 @@ class Unit:
     seeds: list[int]
     fingerprint: str
     trace_seed: int | None  # the seed whose trace is kept for the plot
+    imports: tuple[str, ...] = ()  # modules to import first (--import)
 
 
 def _ok_row(u: Unit, seed: int, metrics: dict) -> dict:
@@ -479,6 +527,8 @@ def run_unit(u: Unit) -> tuple[list[dict], dict | None]:
     raises there, each seed runs alone (:func:`run_episode`, identical results) so that
     only the episodes that fail are recorded as failed.
     """
+    for module in u.imports:  # a spawned worker or a Ray task has not imported them
+        importlib.import_module(module)
     trace = None
     try:
         venv = gym.make_vec(u.env_id, num_envs=len(u.seeds), scenario=u.scenario,
@@ -560,7 +610,8 @@ def _units(plan: Plan, done: dict) -> list[Unit]:
                         if not _finished(done.get(((env_id, sc, name, s), fp)))]  # fmt: skip
                 if todo:
                     keep = plan.seeds[0] if plan.seeds[0] in todo else None
-                    out.append(Unit(env_id, sc, plan.resolved[env_id, sc], name, todo, fp, keep))
+                    out.append(Unit(env_id, sc, plan.resolved[env_id, sc], name, todo, fp, keep,
+                                    plan.imports))  # fmt: skip
     return sorted(out, key=lambda u: u.policy != report.ONE)  # stable: run order otherwise
 
 
@@ -797,17 +848,24 @@ def make_parser() -> argparse.ArgumentParser:
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     ap.add_argument("--envs", default=",".join(steamtemp_gym.ENV_IDS),
-                    help="comma list of env ids (default: all: %(default)s)")  # fmt: skip
+                    help="comma list of env ids, with or without the steamtemp/ namespace "
+                    "(default: all: %(default)s)")  # fmt: skip
     ap.add_argument("--policies", default=None,
-                    help="comma list (default: every baseline of baselines.NAMES and every "
-                    "shipped agent sb3:<algo> of agents.shipped(); cascade_pi_ff, oracle and "
-                    "frozen_valve are always added)")  # fmt: skip
+                    help="comma list of baseline names, sb3:<algo>, zoo:DIR or paths to a "
+                    "trained agent's files, and module:callable factories (default: every "
+                    "baseline of baselines.NAMES and every shipped agent sb3:<algo> of "
+                    "agents.shipped(); cascade_pi_ff, oracle and frozen_valve are always "
+                    "added)")  # fmt: skip
+    ap.add_argument("--import", dest="modules", action="append", default=[], metavar="MODULE",
+                    help="import this module first, in every worker too (one that registers "
+                    "baselines, scenarios or env variants; repeatable)")  # fmt: skip
     ap.add_argument("--no-oracle", action="store_true",
                     help="leave the oracle out (its episodes are the run's longest); the "
                     "normalized score is then not computed (default: off)")  # fmt: skip
     ap.add_argument("--scenarios", default=",".join(DEFAULT_SCENARIOS),
-                    help="comma list of scenario names, heldout:<name> or YAML paths "
-                    "(default: %(default)s)")  # fmt: skip
+                    help="comma list of scenario names, heldout:<name>, random (the seeded "
+                    "training distribution) or YAML paths, as gym.make(..., scenario=...) "
+                    "takes them (default: %(default)s)")  # fmt: skip
     ap.add_argument("--seeds", default=DEFAULT_SEEDS,
                     help="integers >= 0 or ranges a-b (default: %(default)s)")  # fmt: skip
     ap.add_argument("--out", default="leaderboard_out",

@@ -80,6 +80,16 @@ class MlpActor:
         return np.clip(z, self.low, self.high)
 
 
+def frozen_stats(vecnormalize: Any) -> dict[str, Any] | None:
+    """The observation statistics of an SB3 VecNormalize (mean, var, epsilon, clip_obs) as
+    :func:`normalize_obs` takes them; None when it does not normalize observations."""
+    if not getattr(vecnormalize, "norm_obs", False):
+        return None
+    rms = vecnormalize.obs_rms
+    return {"mean": rms.mean.tolist(), "var": rms.var.tolist(),
+            "epsilon": vecnormalize.epsilon, "clip_obs": vecnormalize.clip_obs}  # fmt: skip
+
+
 def normalize_obs(obs: np.ndarray, stats: dict[str, Any] | None) -> np.ndarray:
     """SB3 VecNormalize's observation normalization with frozen ``stats`` (mean, var,
     epsilon, clip_obs), float32 as VecNormalize returns it; obs unchanged for None."""

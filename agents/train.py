@@ -45,6 +45,7 @@ import yaml
 
 import steamtemp_gym
 from agents import shipped
+from agents.files import stem
 
 #: Algorithm names: SB3's PPO, SAC, TD3, PPO as a residual on cascade_pi (its own YAML
 #: file, whose entries need ``residual_scale``) and sb3-contrib's RecurrentPPO (an LSTM
@@ -232,10 +233,9 @@ def _shown_path(path: Path) -> str:
 def _obs_stats(venv) -> dict[str, Any] | None:
     from stable_baselines3.common.vec_env import VecNormalize
 
-    if not isinstance(venv, VecNormalize) or not venv.norm_obs:
-        return None
-    return {"mean": venv.obs_rms.mean.tolist(), "var": venv.obs_rms.var.tolist(),
-            "epsilon": venv.epsilon, "clip_obs": venv.clip_obs}  # fmt: skip
+    from agents.policy import frozen_stats
+
+    return frozen_stats(venv) if isinstance(venv, VecNormalize) else None
 
 
 def validate(env_id: str, policy, n: int = N_VALIDATION) -> dict[str, float]:
@@ -254,15 +254,17 @@ def validate(env_id: str, policy, n: int = N_VALIDATION) -> dict[str, float]:
             for key in ("return", "iae_K_s")}  # fmt: skip
 
 
-def stem(env_id: str, algo: str) -> str:
-    return f"{env_id.replace('/', '__')}__{algo}"
-
-
 def train(env_id: str, algo: str, hyperparams: Path | None = None, timesteps: int | None = None,
           seed: int = 0, n_envs: int | None = None, out: Path = Path("trained"),
           max_minutes: float | None = None, tensorboard: str | None = None,
           quiet: bool = False) -> dict[str, Any]:  # fmt: skip
     """Train one agent (module docstring); returns its metadata. Input is checked first."""
+    from steamtemp_gym.envs import resolve_id
+
+    try:
+        env_id = resolve_id(env_id)  # the namespace may be left out
+    except ValueError:
+        pass  # refused below, with the valid ids
     if env_id not in steamtemp_gym.ENV_IDS:
         raise ConfigError(f"unknown env {env_id!r}; valid: {list(steamtemp_gym.ENV_IDS)}")
     cls = _algo_class(algo)
@@ -370,7 +372,8 @@ def make_parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(prog="steamtemp-train", description=doc.split("\n")[0],
                                  epilog=doc.split("\n", 2)[2],
                                  formatter_class=argparse.RawDescriptionHelpFormatter)  # fmt: skip
-    ap.add_argument("--env", help=f"env id, one of {list(steamtemp_gym.ENV_IDS)}")
+    ap.add_argument("--env", help=f"env id, one of {list(steamtemp_gym.ENV_IDS)} (the name "
+                    "after 'steamtemp/' is enough)")
     ap.add_argument("--algo", help=f"one of {list(ALGOS)}")
     ap.add_argument("--timesteps", type=int, default=None, help="default: n_timesteps of the YAML")
     ap.add_argument("--seed", type=int, default=0)

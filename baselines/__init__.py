@@ -1,19 +1,23 @@
 """Baseline controllers: one module each, a registry, the Policy protocol.
 
-``baselines.make(name, env) -> Policy``; ``baselines.NAMES`` lists them. Adding a
-controller = one module plus one entry in ``_REGISTRY``. Every baseline made here refuses
-a non-finite or misshapen observation with a ``ValueError`` before its state changes
-(``baselines.policy.checked``).
+``baselines.make(name, env) -> Policy``; ``baselines.NAMES`` lists them. A controller of
+your own joins them with ``baselines.register(name, factory)``: ``baselines.make``, the
+leaderboard's ``--policies`` and ``steamtemp-check --policy`` then know the name (on the
+command line, ``--import MODULE`` imports the module that registers it). Every baseline
+made here refuses a non-finite or misshapen observation with a ``ValueError`` before its
+state changes (``baselines.policy.checked``).
 """
 
 from __future__ import annotations
 
 import importlib
+import re
+from collections.abc import Callable
 from typing import Any
 
 from baselines.policy import Policy, checked
 
-_REGISTRY: dict[str, str] = {
+_REGISTRY: dict[str, str | Callable[..., Any]] = {
     "cascade_pi": "baselines.cascade_pi:CascadePI",
     "cascade_pi_ff": "baselines.cascade_pi:CascadePIFF",
     "fao_sf": "baselines.fao:FaoSF",
@@ -26,17 +30,59 @@ _REGISTRY: dict[str, str] = {
     "mpc_arx": "baselines.mpc_evarx:MPCARX",
     "mpc_linear": "baselines.mpc_linear:MPCLinear",
 }
-NAMES: tuple[str, ...] = tuple(_REGISTRY)
+#: The shipped controllers (register() cannot replace them).
+SHIPPED: tuple[str, ...] = tuple(_REGISTRY)
+NAMES: tuple[str, ...] = SHIPPED
+#: A registered name: a letter, then letters, digits, ``_``, ``-`` or ``.`` (no ``:`` or
+#: ``,``, which the command lines read as a module path and a list separator).
+_NAME = re.compile(r"^[A-Za-z][A-Za-z0-9_.\-]{0,99}$")
+_REF = re.compile(r"^[A-Za-z_][\w.]*:[A-Za-z_][\w.]*$")
+
+
+def register(name: str, factory: Callable[..., Policy] | str) -> None:
+    """Add a controller: ``baselines.make(name, env, **kwargs)`` then returns
+    ``factory(env, **kwargs)``, and ``NAMES`` ends with ``name``.
+
+    Args:
+        name: A letter, then up to 99 letters, digits, ``_``, ``-`` or ``.``.
+        factory: A class or function ``factory(env, **kwargs) -> Policy`` (``env`` a single
+            or a vector env), or a ``"module:callable"`` string imported at the first make.
+
+    Registering a name again with the same factory does nothing.
+
+    Raises:
+        ValueError: a bad name, a shipped name, a name registered with another factory, or a
+            factory that is neither callable nor a ``"module:callable"`` string; nothing is
+            registered then.
+    """
+    global NAMES
+    if not isinstance(name, str) or not _NAME.match(name):
+        raise ValueError(f"baseline name must be a letter followed by up to 99 letters, digits, "
+                         f"'_', '-' or '.', got {name!r}")  # fmt: skip
+    if not (callable(factory) or (isinstance(factory, str) and _REF.match(factory))):
+        raise ValueError(f"factory of {name!r} must be callable (env -> Policy) or a "
+                         f"'module:callable' string, got {factory!r}")  # fmt: skip
+    if name in SHIPPED:
+        raise ValueError(f"{name!r} is a shipped baseline; register under another name")
+    old = _REGISTRY.get(name)
+    if old is not None and old != factory:
+        raise ValueError(f"baseline {name!r} is already registered (with {old!r})")
+    _REGISTRY[name] = factory
+    NAMES = tuple(_REGISTRY)
 
 
 def make(name: str, env: Any, **kwargs: Any) -> Policy:
     """The baseline ``name`` for ``env``; ValueError listing the valid names otherwise."""
     try:
-        path = _REGISTRY[name]
+        factory = _REGISTRY[name]
     except (KeyError, TypeError):
         raise ValueError(f"unknown baseline {name!r}; valid names: {list(NAMES)}") from None
-    module, cls = path.split(":")
-    return checked(getattr(importlib.import_module(module), cls)(env, **kwargs), env)
+    if isinstance(factory, str):
+        module, attr = factory.split(":")
+        factory = importlib.import_module(module)
+        for part in attr.split("."):
+            factory = getattr(factory, part)
+    return checked(factory(env, **kwargs), env)
 
 
-__all__ = ["NAMES", "Policy", "make"]
+__all__ = ["NAMES", "SHIPPED", "Policy", "make", "register"]

@@ -32,9 +32,9 @@ Steam calls are counted in a subprocess that runs the plant's step as plain Pyth
 wrapped in counters), so the counts are those of the compiled step's code paths. The parts
 of the plant step and the schedules are timed in compiled loops over the rows (compute per
 row); env step, commands, plant step and ``advance`` are timed as called from Python, so at
-B = 1 they include the call overhead. Every component is timed in ``--rounds``
-interleaved rounds and the best kept; the derived columns (integrator rest, observation +
-reward, Python) are differences of such timings and carry their noise.
+B = 1 they include the call overhead. Every component is timed in ``--repeats``
+interleaved repetitions and the fastest kept; the derived columns (integrator rest,
+observation + reward, Python) are differences of such timings and carry their noise.
 """
 
 from __future__ import annotations
@@ -363,7 +363,9 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--batch", type=int, default=4096)
     ap.add_argument("--seconds", type=float, default=0.25,
                     help="length of one timed call of each component")
-    ap.add_argument("--rounds", type=int, default=5, help="interleaved rounds (best kept)")
+    ap.add_argument("--repeats", type=int, default=5,
+                    help="interleaved repetitions of each timing (the fastest kept)")
+    ap.add_argument("--rounds", type=int, dest="repeats", help=argparse.SUPPRESS)  # old name
     ap.add_argument("--asm", action="store_true",
                     help="count packed vs scalar arithmetic in the machine code (compiles afresh)")
     args = ap.parse_args(argv)
@@ -379,7 +381,7 @@ def main(argv: list[str] | None = None) -> None:
         counts, samples, rhs_u = steam_calls(env_id)
         n_steam = sum(v for k, v in counts.items() if not k.startswith("other:"))
         for batch in (1, args.batch):
-            row = profile(env_id, batch, args.seconds, args.rounds, counts, samples, rhs_u)
+            row = profile(env_id, batch, args.seconds, args.repeats, counts, samples, rhs_u)
             cells = [f"{row[c]:,.0f}" if c in row else "-" for c in COLUMNS]
             print(f"| {env_id.split('/')[1]} | {batch} | " + " | ".join(cells)
                   + f" | {n_steam} |")  # fmt: skip

@@ -175,7 +175,7 @@ def test_parametrize_with_checks_ids_and_marks():
 # ------------------------------------------------------------------------------ CLI
 def test_cli_rejects_bad_arguments_listing_the_choices(capsys):
     for argv, needle in ((["steamtemp/NoSuch-v0"], "valid ids: steamtemp/SupercriticalFSH-v0"),
-                         (["--policy", "nope"], "valid: cascade_pi"),
+                         (["--policy", "nope"], "valid names: cascade_pi"),
                          (["--check", "nope"], "valid: check_gymnasium_env")):  # fmt: skip
         with pytest.raises(SystemExit) as exc:
             main(argv)

@@ -5,7 +5,37 @@ from typing import Any
 from steamtemp_gym.envs.steam_temp_env import SteamTempEnv
 from steamtemp_gym.envs.vector_env import SteamTempVectorEnv
 
-__all__ = ["SteamTempEnv", "SteamTempVectorEnv", "register_variant"]
+__all__ = ["SteamTempEnv", "SteamTempVectorEnv", "ids", "register_variant", "resolve_id"]
+
+
+def ids() -> list[str]:
+    """Every registered id built by SteamTempEnv: the suite's and registered variants."""
+    import gymnasium as gym
+
+    import steamtemp_gym
+
+    entry = gym.spec(steamtemp_gym.ENV_IDS[0]).entry_point
+    return [i for i, spec in gym.registry.items() if spec.entry_point == entry]
+
+
+def resolve_id(name: str) -> str:
+    """The registered id ``name`` names: itself, or the one id of :func:`ids` whose name
+    without its namespace it is (``Cascade300MW-v0`` for ``steamtemp/Cascade300MW-v0``).
+
+    Raises:
+        ValueError: no such id, or several with that name (listing them).
+    """
+    import gymnasium as gym
+
+    if isinstance(name, str) and name in gym.registry:
+        return name
+    found = [i for i in ids() if isinstance(name, str) and i.split("/", 1)[-1] == name]
+    if len(found) == 1:
+        return found[0]
+    if found:
+        raise ValueError(f"env name {name!r} is ambiguous: {found}; give the full id")
+    raise ValueError(f"unknown env id {str(name)[:100]!r}; valid ids: {', '.join(ids())} "
+                     "(the name after 'steamtemp/' is enough)")  # fmt: skip
 
 
 def register_variant(new_id: str, base_id: str, **options: Any) -> None:

@@ -72,6 +72,30 @@ OU_CHANNEL = 31
 ADVANCE_ROWS = (0, 1, 2, 3, 4, 8, 9, 10, 11, 15, 16, 17, 18, 19, 20)
 #: The values every info carries after the plant's own outputs (Core.info's last columns).
 INFO_TAIL = ("measured_temp_C", "time_s", "setpoint_C", "load", "spray_flow_kg_s")
+#: Unit and meaning of the info values every plant has (the others are plant outputs).
+INFO_DOC = {
+    "outlet_temp_C": ("C", "true main-steam temperature (the trip band applies to it)"),
+    "measured_temp_noise_free_C": ("C", "the outlet thermocouple's own temperature (its lag, "
+                                        "without the noise)"),
+    "measured_temp_C": ("C", "what the outlet thermocouple reported, noise included (as "
+                             "observed)"),
+    "time_s": ("s", "time since the episode started (steps x control interval)"),
+    "setpoint_C": ("C", "main-steam temperature setpoint (the scenario's offset included)"),
+    "load": ("1", "load demand, fraction of rated"),
+    "spray_flow_kg_s": ("kg/s", "total spray-water flow of every attemperator"),
+    "trip_reason": ("", "why the episode terminated: '' or one of "
+                        + ", ".join(repr(r) for r in TRIP_REASONS[1:])),
+}  # fmt: skip
+
+
+def info_sources(plant: Any) -> list[tuple[str, str]]:
+    """(info key, the plant output it reads) of the info values taken from the plant's
+    outputs, in order; :data:`INFO_TAIL` and ``trip_reason`` follow them. With several
+    valves, ``spray_valve`` holds every valve's opening."""
+    return ([("outlet_temp_C", plant.outlet),
+             ("measured_temp_noise_free_C", plant.outlet_measured),
+             ("spray_valve", plant.valves[0])]
+            + [(name, name) for name in plant.extra_info])  # fmt: skip
 
 
 @njit(cache=True, error_model="numpy")
@@ -297,10 +321,7 @@ class Core:
         self.valve_idx = [idx[v] for v in plant.valves]
         self.spray_idx = [idx[s] for s in plant.sprays]
         self.scenario: list[sc.Scenario | None] = [None] * B
-        info_idx = [("outlet_temp_C", self.i_out),
-                    ("measured_temp_noise_free_C", idx[plant.outlet_measured]),
-                    ("spray_valve", self.valve_idx[0])]  # fmt: skip
-        info_idx += [(name, idx[name]) for name in plant.extra_info]
+        info_idx = [(key, idx[source]) for key, source in info_sources(plant)]
         self.ints = np.array(
             [self.i_out, idx[plant.outlet_measured], len(observed), len(plant.valves),
              len(plant.sprays), len(plant.secondary),

@@ -34,6 +34,23 @@ def draw_episode(
     return scenario, key
 
 
+def scenario_option(options: dict | None, default: Any, plant_id: str,
+                    other: tuple[str, ...] = ()) -> Any:  # fmt: skip
+    """The scenario of a reset: ``options["scenario"]`` resolved, else ``default``.
+
+    Raises:
+        ValueError: an unknown option (``other`` are the caller's own) or scenario.
+    """
+    if options is not None and not isinstance(options, dict):
+        raise ValueError(f"reset() options must be a dict or None, got {type(options).__name__}")
+    unknown = key_list(set(options or {}) - {"scenario", *other})
+    if unknown:
+        raise ValueError(f"unknown reset option(s) {unknown}; valid: {['scenario', *other]}")
+    if options and "scenario" in options:
+        return sc.resolve(options["scenario"], plant_id)
+    return default
+
+
 def spaces(core: Core) -> tuple[gym.spaces.Box, gym.spaces.Box]:
     """Single-env observation and action spaces."""
     n_obs = core.obs.shape[1]
@@ -47,9 +64,13 @@ class SteamTempEnv(gym.Env):
 
     Args:
         plant_id: Registered id whose plant to simulate.
-        **options: ``scenario`` (name, YAML path, Scenario or "random"; default
-            "random"), ``render_mode`` (None or "rgb_array"), ``reward`` (dict of
-            RewardConfig overrides), ``params`` (dict of plant parameter overrides).
+        **options: ``scenario`` (a name, ``heldout:<name>``, a YAML path, a Scenario or
+            "random": steamtemp_gym.scenarios.resolve; default "random"), ``render_mode``
+            (None or "rgb_array"), ``reward`` (dict of RewardConfig overrides), ``params``
+            (dict of plant parameter overrides).
+
+    ``reset(options={"scenario": spec})`` runs that episode under ``spec`` (the same
+    forms); later resets without it return to the env's own scenario.
     """
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": 10}
@@ -71,16 +92,9 @@ class SteamTempEnv(gym.Env):
         return self.core.scenario[0]
 
     def reset(self, *, seed: int | None = None, options: dict | None = None):
-        if options is not None and not isinstance(options, dict):
-            raise ValueError(
-                f"reset() options must be a dict or None, got {type(options).__name__}"
-            )
-        if options:
-            raise ValueError(f"reset() takes no options, got {key_list(options)}")
+        spec = scenario_option(options, self._scenario_spec, self.plant.id)
         super().reset(seed=seed)
-        scenario, key = draw_episode(
-            self.np_random, self._scenario_spec, self.plant.default_duration_s
-        )
+        scenario, key = draw_episode(self.np_random, spec, self.plant.default_duration_s)
         self.core.reset_row(0, scenario, key)
         self._needs_reset = False
         info = self._info()

@@ -31,11 +31,11 @@ from gymnasium.utils import seeding
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
-from steamtemp_gym.checks import is_integer, key_list
+from steamtemp_gym.checks import is_integer
 from steamtemp_gym.envs import options as opts
 from steamtemp_gym.envs import snapshot as snap_
 from steamtemp_gym.envs.core import Core, check_action
-from steamtemp_gym.envs.steam_temp_env import draw_episode, spaces
+from steamtemp_gym.envs.steam_temp_env import draw_episode, scenario_option, spaces
 
 #: No rows (the usual case of rows that ended last step).
 _NONE = np.zeros(0, dtype=np.int64)
@@ -101,11 +101,10 @@ class SteamTempVectorEnv(VectorEnv):
         #: (the info keys' mask keys, {mask key: the all-rows mask}), made at the first reset
         self._mask_keys: tuple[list[str], dict] | None = None
 
-    def _reset_rows(self, rows) -> None:
+    def _reset_rows(self, rows, spec: Any = None) -> None:
+        spec = self._scenario_spec if spec is None else spec
         for b in rows:
-            scenario, key = draw_episode(
-                self._rngs[b], self._scenario_spec, self.plant.default_duration_s
-            )
+            scenario, key = draw_episode(self._rngs[b], spec, self.plant.default_duration_s)
             self.core.reset_row(int(b), scenario, key)
 
     def reset(self, *, seed: int | list[int | None] | None = None, options: dict | None = None):
@@ -114,16 +113,12 @@ class SteamTempVectorEnv(VectorEnv):
         ``info`` masks are False for them).
 
         ``seed``: None, an integer (sub-env i gets seed + i) or a list of num_envs integers
-        or None entries (the sub-envs not reset ignore theirs).
+        or None entries (the sub-envs not reset ignore theirs). ``options={"scenario":
+        spec}`` starts the episodes of the sub-envs reset now under ``spec`` (as
+        SteamTempEnv's reset does); their autoresets return to the env's own scenario.
         """
-        if options is not None and not isinstance(options, dict):
-            raise ValueError(
-                f"reset() options must be a dict or None, got {type(options).__name__}"
-            )
-        options = dict(options or {})
-        mask = options.pop("reset_mask", None)
-        if options:
-            raise ValueError(f"unknown reset option(s) {key_list(options)}; valid: ['reset_mask']")
+        spec = scenario_option(options, self._scenario_spec, self.plant.id, ("reset_mask",))
+        mask = (options or {}).get("reset_mask")
         if mask is None:
             mask = np.ones(self.num_envs, dtype=bool)
         elif not (isinstance(mask, np.ndarray) and mask.dtype == np.bool_
@@ -138,7 +133,7 @@ class SteamTempVectorEnv(VectorEnv):
         for b, s in zip(rows, self._seeds(seed)[rows], strict=True):
             if s is not None:
                 self._rngs[b] = seeding.np_random(int(s))[0]
-        self._reset_rows(rows)
+        self._reset_rows(rows, spec)
         self._autoreset[rows] = False
         self._started = True
         return self.core.obs.copy(), self._info(mask)

@@ -95,7 +95,7 @@ With the defaults:
 Named scenarios of this plant: ``setpoint_step_535_545`` (Section 5: 535 C,
 step to 545 C at 500 s, rated load, 2000 s) and ``load_ramp_100_50_100_2pct``
 (100 -> 50 % at 2 %/min after 500 s, hold 20 min, back, hold 15 min: AGC-rate
-ramps, REFERENCE_DATA.md 1-2 %/min, through the load-dependent dynamics).
+ramps: AGC moves coal units at 1-2 %/min, through the load-dependent dynamics).
 The model load is the load demand, clipped to 20-120 %; the discretized
 matrices are tabulated at 1 % load steps (exact there, linearly interpolated in
 between; the 100 % entry is exact).
@@ -187,14 +187,14 @@ class CascadeParams:
     load_dependent: bool = True  # gains and time constants vary with load (table in module doc)
     load_gain_exponent_lead: float = 1.0  # K2 ~ L^-a (attemperator balance ~ 1/W)
     load_gain_exponent_inertia: float = 0.0  # K1 ~ L^-a
-    load_time_exponent: float = 1.0  # T1, T2 ~ L^-a (REFERENCE_DATA.md: ~1/load)
+    load_time_exponent: float = 1.0  # T1, T2 ~ L^-a (~1/load, IDAES 320 MW geometry; unverified)
     T_out_C: float = 535.0  # outlet operating point and setpoint (paper, Section 5)
     ht_rise_K: float = 65.0  # outlet minus intermediate temperature at rated load (unverified)
     spray_max_kg_s: float = 9.0  # spray flow with the valve fully open (unverified)
     spray_rated_kg_s: float = 4.5  # spray holding T_out at 100 % load (unverified)
     spray_half_load_kg_s: float = 2.0  # spray holding T_out at 50 % load (unverified)
     attemp_pressure_MPa: float = 17.5  # secondary attemperator, 300 MW drum unit (unverified)
-    spray_water_temp_C: float = 175.0  # feed-pump discharge (REFERENCE_DATA.md: 170-290 C)
+    spray_water_temp_C: float = 175.0  # feed-pump discharge (units: 170-290 C; unverified)
     omega_halfwidth_K: float = 3.0  # outer disturbance omega, marginal U(-a, a)
     omega_corr_time_s: float = 150.0  # correlation time of omega (0: white)
     omega2_scale_kg_s: float = 0.8  # inner disturbance omega_2 ~ b (Exp(1) - 1)
@@ -577,7 +577,7 @@ register_named(
             (500.0 + 2 * _RAMP + 20 * MIN, 1.0),
         ),
         description="100 -> 50 % at 2 %/min after 500 s, hold 20 min, back at 2 %/min, "
-        "hold 15 min (AGC-rate ramp, REFERENCE_DATA.md 1-2 %/min; load-dependent dynamics)",
+        "hold 15 min (an AGC-rate ramp: 1-2 %/min; load-dependent dynamics)",
     ),
     plants=[PLANT_ID],
 )

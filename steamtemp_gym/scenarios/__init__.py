@@ -56,7 +56,7 @@ quoting at most a short excerpt of the input):
   complex numbers and containers are not numbers (in a file, ``1e3`` and ``3.6e3`` are
   numbers, as in YAML 1.2; a quoted ``"60"`` is a string).
 
-``resolve`` takes a name, ``"random"``, a :class:`Scenario` or a file: any
+``resolve`` takes a name, ``heldout:<name>``, ``"random"``, a :class:`Scenario` or a file: any
 ``os.PathLike`` is a file (it must end in ``.yaml`` or ``.yml``), and so is a ``str``
 ending in ``.yaml`` / ``.yml``.
 """
@@ -81,6 +81,7 @@ from steamtemp_gym.checks import head, is_real, tail
 __all__ = [
     "CHANNELS",
     "Scenario",
+    "forms",
     "get",
     "names",
     "register",
@@ -89,6 +90,7 @@ __all__ = [
     "random_scenario",
     "pack",
     "RANDOM",
+    "HELDOUT_PREFIX",
     "NAMED_DISTURBANCES",
     "MAX_FILE_BYTES",
     "MAX_BREAKPOINTS_PER_CHANNEL",
@@ -119,6 +121,8 @@ LIMITS = {
     "spray_water_temp_offset_C": (-60.0, 60.0),
 }
 RANDOM = "random"
+#: How a held-out scenario is named: ``heldout:mill_trip`` (steamtemp_gym/scenarios/heldout).
+HELDOUT_PREFIX = "heldout:"
 
 #: Scalar fields with their inclusive ranges (units: K, fraction, s).
 _SCALAR_LIMITS = {
@@ -513,7 +517,19 @@ _REGISTRY: dict[str, tuple[Scenario, tuple[str, ...] | None]] = {}
 
 
 def register(scenario: Scenario, plants: Sequence[str] | None = None) -> Scenario:
-    """Register a named scenario, for every plant or only for the given plant ids."""
+    """Register a named scenario, for every plant or only for the given plant ids.
+
+    ``gym.make(id, scenario=name)``, ``reset(options={"scenario": name})``, the
+    leaderboard's ``--scenarios`` and :func:`names` then know it (on the command line,
+    ``--import MODULE`` imports the module that registers it). The scenario is used as
+    given: the named scenarios' disturbances (:data:`NAMED_DISTURBANCES`) are not added.
+    Registering the same scenario again does nothing.
+
+    Raises:
+        ValueError: not a Scenario, bad ``plants``, a name the command lines cannot spell
+            (``random``, ``heldout:...``, a ``.yaml``/``.yml`` ending, a comma) or a name
+            registered with another scenario; nothing is registered then.
+    """
     if not isinstance(scenario, Scenario):
         raise ValueError(f"register() needs a Scenario, got {_describe(scenario)}")
     if plants is not None and (
@@ -524,9 +540,18 @@ def register(scenario: Scenario, plants: Sequence[str] | None = None) -> Scenari
         raise ValueError(
             f"register() 'plants' must be a list of plant ids, got {_describe(plants)}"
         )
-    if scenario.name == RANDOM:
+    name = scenario.name
+    if name == RANDOM:
         raise ValueError(f"{RANDOM!r} is reserved for the seeded training distribution")
-    _REGISTRY[scenario.name] = (scenario, tuple(plants) if plants is not None else None)
+    if name.startswith(HELDOUT_PREFIX) or name.lower().endswith((".yaml", ".yml")) or "," in name:
+        raise ValueError(f"scenario name {_excerpt(name)} would read as a held-out scenario, "
+                         "a file or a list; choose another name")  # fmt: skip
+    entry = (scenario, tuple(plants) if plants is not None else None)
+    old = _REGISTRY.get(name)
+    if old is not None and (old[0].to_dict() != scenario.to_dict() or old[1] != entry[1]):
+        raise ValueError(f"scenario {_excerpt(name)} is already registered (with another "
+                         "schedule or other plants); choose another name")  # fmt: skip
+    _REGISTRY[name] = entry
     return scenario
 
 
@@ -554,19 +579,29 @@ def get(name: str, plant_id: str | None = None) -> Scenario:
     if entry is None or (
         plant_id is not None and entry[1] is not None and plant_id not in entry[1]
     ):
-        raise ValueError(
-            f"unknown scenario {_excerpt(name)}; valid names: {names(plant_id)} "
-            "or a YAML file (a path ending in .yaml or .yml)"
-        )
+        raise ValueError(f"unknown scenario {_excerpt(name)}; {forms(plant_id)}")
     return entry[0]
+
+
+def forms(plant_id: str | None = None) -> str:
+    """Every way to name a scenario (for error messages and help texts)."""
+    from steamtemp_gym.scenarios import heldout
+
+    named = [n for n in names(plant_id) if n != RANDOM]
+    return (f"valid names: {named}, {HELDOUT_PREFIX}<name> of the held-out set "
+            f"{[HELDOUT_PREFIX + n for n in heldout.NAMES]}, {RANDOM!r} (the seeded training "
+            "distribution), or a YAML file (a path ending in .yaml or .yml)")
 
 
 def resolve(spec: str | os.PathLike[str] | Scenario, plant_id: str | None = None) -> Scenario | str:
     """Turn a scenario argument into a Scenario or ``"random"``.
 
     ``spec`` is a Scenario; a file (any ``os.PathLike``, or a ``str`` ending in ``.yaml`` or
-    ``.yml``, suffix case ignored), which must end in ``.yaml`` / ``.yml``; ``"random"``; or
-    the name of a registered scenario valid for ``plant_id``.
+    ``.yml``, suffix case ignored), which must end in ``.yaml`` / ``.yml``; ``"random"``;
+    ``heldout:<name>``, a held-out scenario (steamtemp_gym/scenarios/heldout); or the name
+    of a registered scenario valid for ``plant_id``. The same names work in ``gym.make``,
+    ``reset(options={"scenario": ...})``, the leaderboard's ``--scenarios`` and
+    ``steamtemp-check --scenario``.
 
     Raises:
         ValueError: naming the file or listing the valid names.
@@ -586,6 +621,12 @@ def resolve(spec: str | os.PathLike[str] | Scenario, plant_id: str | None = None
             return load_yaml(spec)
         if spec == RANDOM:
             return RANDOM
+        if spec.startswith(HELDOUT_PREFIX):
+            from steamtemp_gym.scenarios import heldout
+
+            if spec[len(HELDOUT_PREFIX):] not in heldout.NAMES:
+                raise ValueError(f"unknown held-out scenario {_excerpt(spec)}; {forms(plant_id)}")
+            return heldout.load(spec)
         try:
             return get(spec, plant_id)
         except ValueError as exc:

@@ -19,7 +19,7 @@ from collections.abc import Sequence
 import gymnasium as gym
 
 from steamtemp_gym.testing.runner import CHECK_NAMES, Result, bound_checks, run
-from steamtemp_gym.testing.subjects import short_id, steamtemp_ids
+from steamtemp_gym.testing.subjects import short_id
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -32,10 +32,19 @@ def _parser() -> argparse.ArgumentParser:
         "message of each failure; exits 1 if any check fails.",
     )
     p.add_argument("ids", nargs="*", metavar="ID",
-                   help="env ids to check (default: every steamtemp id, steamtemp_gym.ENV_IDS)")
+                   help="env ids to check, with or without the steamtemp/ namespace (default: "
+                   "every steamtemp id, steamtemp_gym.ENV_IDS)")
     p.add_argument("--policy", action="append", default=[], metavar="NAME",
-                   help=f"also run the policy checks of this baseline on each id (repeatable; "
-                   f"one of {', '.join(baselines.NAMES)}, or 'all')")
+                   help="also run the policy checks of this policy on each id (repeatable): "
+                   f"a baseline ({', '.join(baselines.NAMES)}; 'all' for every one), "
+                   "sb3:<algo> (a shipped trained agent), zoo:DIR or a path to a trained "
+                   "agent's files (steamtemp-train --out, an RL Zoo run), or module:callable "
+                   "(a factory env -> Policy; module a dotted name or a .py file)")
+    p.add_argument("--scenario", action="append", default=[], metavar="SCENARIO",
+                   help="run check_completes_a_scenario under this scenario instead of "
+                   "setpoint_step (repeatable): a scenario name, heldout:<name>, random or a "
+                   "YAML path, as gym.make(..., scenario=...) and steamtemp-leaderboard "
+                   "--scenarios take them")
     p.add_argument("--quick", action="store_true",
                    help="shorter runs, slow checks skipped (about 10-20 s per id from a warm "
                    "kernel cache)")
@@ -57,6 +66,47 @@ def _table(results: list[Result]) -> str:
                      for row in rows)  # fmt: skip
 
 
+def _env_id(parser: argparse.ArgumentParser, name: str) -> str:
+    """The registered id of an ID argument (the namespace may be left out)."""
+    from steamtemp_gym.envs import resolve_id
+
+    try:
+        return resolve_id(name)
+    except ValueError as exc:
+        parser.error(f"{exc}; register a variant and pass --import MODULE")
+
+
+def _check_scenarios(parser: argparse.ArgumentParser, specs: list[str], ids: list[str]) -> None:
+    """Every --scenario resolves for every id's plant (steamtemp_gym.scenarios.resolve)."""
+    from steamtemp_gym import scenarios
+
+    for spec in specs:
+        for env_id in ids:
+            try:
+                scenarios.resolve(spec, gym.spec(env_id).kwargs.get("plant_id", env_id))
+            except ValueError as exc:
+                parser.error(f"--scenario {spec!r} for {env_id}: {exc}")
+
+
+def _check_policies(parser: argparse.ArgumentParser, policies: list[str], ids: list[str]) -> None:
+    """Every --policy parses (agents/specs.py); a factory's policy is built on the first id
+    and must have predict and reset."""
+    import steamtemp_gym
+    from agents import specs
+
+    for name in policies:
+        try:
+            spec = specs.parse(name)
+        except ValueError as exc:
+            parser.error(f"--policy: {exc} (or 'all')")
+        if spec.kind == specs.FACTORY:
+            env_id = (ids or steamtemp_gym.ENV_IDS)[0]
+            try:
+                spec.make(env_id, gym.make(env_id))
+            except Exception as exc:  # noqa: BLE001 - any failure is a bad --policy value
+                parser.error(f"--policy {name}: on {env_id}: {type(exc).__name__}: {exc}")
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of ``steamtemp-check``; returns the exit status."""
     import baselines
@@ -68,21 +118,18 @@ def main(argv: Sequence[str] | None = None) -> int:
             importlib.import_module(module)
         except ImportError as exc:
             parser.error(f"--import {module}: {exc}")
-    unknown = [i for i in args.ids if i not in gym.registry]
-    if unknown:
-        parser.error(f"unknown env id(s) {unknown}; valid ids: {', '.join(steamtemp_ids())} "
-                     "(register a variant and pass --import MODULE)")  # fmt: skip
+    args.ids = [_env_id(parser, i) for i in args.ids]
     policies = list(baselines.NAMES) if "all" in args.policy else args.policy
-    bad = [p for p in policies if p not in baselines.NAMES]
-    if bad:
-        parser.error(f"unknown policy {bad}; valid: {', '.join(baselines.NAMES)}, all")
+    _check_policies(parser, policies, args.ids)
     bad = [c for c in args.check or () if c not in CHECK_NAMES]
     if bad:
         parser.error(f"unknown check {bad}; valid: {', '.join(CHECK_NAMES)}")
     import steamtemp_gym
 
     ids = args.ids or list(steamtemp_gym.ENV_IDS)
-    checks = bound_checks(policies, args.quick, env=not args.no_env_checks, only=args.check)
+    _check_scenarios(parser, args.scenario, ids)
+    checks = bound_checks(policies, args.quick, env=not args.no_env_checks, only=args.check,
+                          scenarios=args.scenario)  # fmt: skip
     t0, results = time.perf_counter(), []
     for env_id in ids:
         for check in checks:

@@ -223,10 +223,12 @@ def _episode_without_trip(policy: PolicyTarget, target: EnvTarget, name: str, se
 
 
 @policy_check
-def check_completes_a_scenario(policy: PolicyTarget, target: EnvTarget,
-                               quick: bool = False) -> None:  # fmt: skip
-    """The policy runs the named scenario ``setpoint_step`` (seed 0) to its end, no trip."""
-    _episode_without_trip(policy, target, QUICK_SCENARIO, 0)
+def check_completes_a_scenario(policy: PolicyTarget, target: EnvTarget, quick: bool = False,
+                               scenario: Any = QUICK_SCENARIO) -> None:  # fmt: skip
+    """The policy runs ``scenario`` (default the named ``setpoint_step``; any form
+    ``gym.make`` takes: a name, ``heldout:<name>``, ``random``, a YAML file), seed 0, to
+    its end without a trip."""
+    _episode_without_trip(policy, target, scenario, 0)
 
 
 @policy_check

@@ -40,10 +40,18 @@ class BoundCheck:
     check: Callable[..., None]
     policy: Any = None
     quick: bool = False
+    #: The check's own keyword arguments, e.g. (("scenario", "heldout:mill_trip"),).
+    options: tuple[tuple[str, Any], ...] = ()
 
     @property
     def name(self) -> str:
         return self.check.__name__
+
+    @property
+    def label(self) -> str:
+        """The name, with the check's own arguments: ``check_completes_a_scenario[random]``."""
+        args = ",".join(str(v) for _, v in self.options)
+        return f"{self.name}[{args}]" if args else self.name
 
     @property
     def slow(self) -> bool:
@@ -55,25 +63,33 @@ class BoundCheck:
 
     def __call__(self, env: Any) -> None:
         kwargs = {"quick": True} if self.quick else {}
+        kwargs.update(self.options)
         if self.policy is None:
             self.check(env, **kwargs)
         else:
             self.check(self.policy, env, **kwargs)
 
     def __repr__(self) -> str:
-        return self.name if self.policy is None else f"{self.policy_label}-{self.name}"
+        return self.label if self.policy is None else f"{self.policy_label}-{self.label}"
 
 
 def bound_checks(policies: Iterable[Any] = (), quick: bool = False, env: bool = True,
-                 only: Sequence[str] | None = None) -> list[BoundCheck]:  # fmt: skip
-    """The env checks (if ``env``) then each policy's checks; ``only``: these names."""
+                 only: Sequence[str] | None = None,
+                 scenarios: Sequence[Any] = ()) -> list[BoundCheck]:  # fmt: skip
+    """The env checks (if ``env``) then each policy's checks; ``only``: these names;
+    ``scenarios``: the scenarios of ``check_completes_a_scenario`` (one check each; default
+    its own, ``setpoint_step``)."""
     unknown = sorted(set(only or ()) - set(CHECK_NAMES))
     if unknown:
         raise ValueError(f"unknown check(s) {unknown}; valid names: {list(CHECK_NAMES)}")
     out = [BoundCheck(c, None, quick) for c in ENV_CHECKS] if env else []
     for p in policies:
         resolve_policy(p)  # a bad name fails here, listing the valid ones
-        out += [BoundCheck(c, p, quick) for c in POLICY_CHECKS]
+        for c in POLICY_CHECKS:
+            if c is pc.check_completes_a_scenario and scenarios:
+                out += [BoundCheck(c, p, quick, (("scenario", s),)) for s in scenarios]
+            else:
+                out.append(BoundCheck(c, p, quick))
     return [b for b in out if only is None or b.name in only]
 
 
@@ -123,7 +139,7 @@ def run(env: Any, check: BoundCheck, skip_slow: bool = False) -> Result:
     """Run one bound check on one env, catching its failure into a Result."""
     label = resolve_env(env).label
     if skip_slow and check.slow:
-        return Result(label, check.policy_label, check.name, "skip", 0.0,
+        return Result(label, check.policy_label, check.label, "skip", 0.0,
                       "slow; run without --quick")  # fmt: skip
     t0 = time.perf_counter()
     try:
@@ -133,7 +149,7 @@ def run(env: Any, check: BoundCheck, skip_slow: bool = False) -> Result:
         status, msg = "skip", str(exc)
     except AssertionError as exc:
         status, msg = "fail", str(exc)
-    return Result(label, check.policy_label, check.name, status, time.perf_counter() - t0, msg)
+    return Result(label, check.policy_label, check.label, status, time.perf_counter() - t0, msg)
 
 
 def _raise_failures(results: list[Result]) -> list[Result]:

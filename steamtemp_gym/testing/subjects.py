@@ -21,10 +21,9 @@ class CheckSkipped(unittest.SkipTest):
 
 def steamtemp_ids() -> list[str]:
     """Every registered id built by SteamTempEnv: the suite's ids and registered variants."""
-    import steamtemp_gym
+    from steamtemp_gym.envs import ids
 
-    entry = gym.spec(steamtemp_gym.ENV_IDS[0]).entry_point
-    return [i for i, spec in gym.registry.items() if spec.entry_point == entry]
+    return ids()
 
 
 def short_id(env_id: str) -> str:
@@ -68,9 +67,10 @@ def resolve_env(env: str | Callable[..., gym.Env] | EnvTarget) -> EnvTarget:
     if isinstance(env, EnvTarget):
         return env
     if isinstance(env, str):
-        if env not in gym.registry:
-            raise ValueError(f"unknown env id {env!r}; valid ids: {steamtemp_ids()}")
-        return EnvTarget(env, env, None)
+        from steamtemp_gym.envs import resolve_id
+
+        env_id = resolve_id(env)  # also the name without the namespace
+        return EnvTarget(env_id, env_id, None)
     if callable(env):
         return EnvTarget(getattr(env, "__name__", repr(env)), None, env)
     raise ValueError(f"env must be a registered id or an env factory, got {env!r}")
@@ -93,45 +93,44 @@ class PolicyTarget:
 
 
 def resolve_policy(policy: str | Callable[[Any], Any] | PolicyTarget) -> PolicyTarget:
-    """A PolicyTarget of a baseline name, a shipped trained agent ``sb3:<algo>`` (the
-    plant's own, agents.load) or a factory (ValueError listing the names otherwise). Names
-    are looked up in ``baselines`` and ``agents`` (shipped in the same distribution;
-    imported only here, so the environments do not depend on them)."""
+    """A PolicyTarget of a policy name or a factory (ValueError listing the names otherwise).
+
+    Names are those of ``steamtemp-leaderboard --policies`` (agents/specs.py): a baseline
+    name, a shipped trained agent ``sb3:<algo>`` (the plant's own), ``zoo:DIR`` or a path
+    to a trained agent's files, or ``module:callable``. They are looked up in ``baselines``
+    and ``agents`` (shipped in the same distribution; imported only here, so the
+    environments do not depend on them). A name not available for an env's plant (an
+    agent trained on another plant) skips the checks there."""
     if isinstance(policy, PolicyTarget):
         return policy
     if isinstance(policy, str):
-        import agents
-        import baselines
+        from agents import specs
 
-        trained = sorted({f"sb3:{algo}" for _, algo in agents.shipped()})
-        if policy in trained:
-            return PolicyTarget(policy, policy, functools.partial(_make_agent, policy[4:]))
-        if policy not in baselines.NAMES:
-            raise ValueError(f"unknown policy {policy!r}; valid names: "
-                             f"{[*baselines.NAMES, *trained]}")  # fmt: skip
-        return PolicyTarget(policy, policy, functools.partial(_make_baseline, policy))
+        specs.parse(policy)  # a bad name fails here, listing every form
+        return PolicyTarget(policy, policy, functools.partial(_make_named, policy))
     if callable(policy):
         return PolicyTarget(getattr(policy, "__name__", repr(policy)), None, policy)
-    raise ValueError(f"policy must be a baseline name or a policy factory, got {policy!r}")
+    raise ValueError(f"policy must be a policy name or a policy factory, got {policy!r}")
 
 
-def _make_baseline(name: str, env: Any) -> Any:
-    import baselines
+def _make_named(name: str, env: Any) -> Any:
+    """The policy ``name`` for the env: for its registered id, else for its plant's (a
+    variant's base); CheckSkipped where it is available for neither."""
+    from agents import specs
 
-    return baselines.make(name, env)
-
-
-def _make_agent(algo: str, env: Any) -> Any:
-    """The shipped trained agent ``sb3:<algo>`` of the env's plant (needs the agents extra)."""
-    import agents
-
-    env_id = env.unwrapped.plant.id
-    if (env_id, algo) not in agents.shipped():
-        raise CheckSkipped(f"no sb3:{algo} agent shipped for {env_id}")
+    spec = specs.parse(name)
+    u = env.unwrapped
+    ids = [i for i in (getattr(getattr(u, "spec", None), "id", None), u.plant.id) if i]
+    env_id = next((i for i in ids if spec.available(i)), None)
+    if env_id is None:
+        raise CheckSkipped(f"{name} is not available for {ids[0]} (only for "
+                           f"{sorted(spec.envs or ())})")  # fmt: skip
     try:
-        return agents.load(env_id, algo)
+        return spec.make(env_id, env)
     except ImportError as exc:
-        raise CheckSkipped(f"sb3:{algo} needs the agents extra ({exc})") from exc
+        if spec.kind not in (specs.SHIPPED, specs.FILES):
+            raise
+        raise CheckSkipped(f"{name} needs the agents extra ({exc})") from exc
 
 
 def _failure(check: str, subject: str, call: str, exc: BaseException) -> AssertionError:
@@ -143,7 +142,9 @@ def _failure(check: str, subject: str, call: str, exc: BaseException) -> Asserti
 
 
 def _quick_arg(kwargs: dict[str, Any]) -> str:
-    return ", quick=True" if kwargs.get("quick") else ""
+    """The keyword arguments of a reproducing call (``quick`` and a check's own)."""
+    out = ", quick=True" if kwargs.get("quick") else ""
+    return out + "".join(f", {k}={v!r}" for k, v in kwargs.items() if k != "quick")
 
 
 def env_check(fn: Callable[..., None]) -> Callable[..., None]:

@@ -41,7 +41,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from steamtemp_gym.scenarios import RANDOM_DISTRIBUTION, Scenario, load_yaml
+from steamtemp_gym.scenarios import HELDOUT_PREFIX, RANDOM_DISTRIBUTION, Scenario, load_yaml
 
 __all__ = ["DIR", "NAMES", "PREFIX", "is_heldout", "load", "outside_training", "path"]
 
@@ -49,7 +49,7 @@ DIR = Path(__file__).parent
 #: Names of the held-out scenarios (the YAML file stems), sorted.
 NAMES: tuple[str, ...] = tuple(sorted(p.stem for p in DIR.glob("*.yaml")))
 #: How the leaderboard spells a held-out scenario: ``heldout:mill_trip``.
-PREFIX = "heldout:"
+PREFIX = HELDOUT_PREFIX
 _TOL = 1e-9
 
 

@@ -1,0 +1,220 @@
+"""A trained agent's files, found from a path: what ``steamtemp-train --out`` writes and
+what an RL Zoo run writes, each turned into the same Policy (agents/policy.py).
+
+Two layouts:
+
+- ``steamtemp-train --out DIR`` (and the shipped ``agents/zoo/``):
+  ``DIR/<env>__<algo>.zip`` (the SB3 model) and ``DIR/<env>__<algo>.json`` (env id,
+  ``sb3_class``, controller ``memory``, ``normalization`` statistics, ``residual_scale``);
+  ``<env>`` is the env id with ``/`` written ``__``.
+- an RL Zoo run (``python -m rl_zoo3.train --algo A --env ID --log-folder LOGS``):
+  ``LOGS/A/<name>_<n>/`` holding ``<name>.zip`` (the last model), ``best_model.zip``
+  (with evaluation) and ``<name>/`` with ``args.yml`` (``algo``, ``env``), ``config.yml``
+  (the hyperparameters: ``env_wrapper``, ``normalize``) and ``vecnormalize.pkl`` (the
+  VecNormalize statistics, when normalized); ``<name>`` is the env id with ``/`` written
+  ``-``.
+
+:func:`find` takes a directory of either layout or one model ``.zip`` in it. The files
+that decide an agent's actions (the model and its metadata or statistics) are hashed
+for the leaderboard's fingerprint (:meth:`AgentFiles.digest`).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import pickle
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+#: steamtemp-train's layout and RL Zoo's.
+STEAMTEMP, RL_ZOO = "steamtemp-train", "rl-zoo"
+#: RL Zoo's algo names of the model classes whose names are not the algo upper-cased.
+_RL_ZOO_CLASSES = {"ppo_lstm": "RecurrentPPO", "crossq": "CrossQ"}
+
+
+@dataclass(frozen=True)
+class AgentFiles:
+    """One trained agent on disk.
+
+    Attributes:
+        env_id: The env id it was trained on.
+        algo: Its algorithm name as its files spell it.
+        model: The SB3 model ``.zip``.
+        meta: The other files its actions depend on (metadata, normalization statistics).
+        layout: :data:`STEAMTEMP` or :data:`RL_ZOO`.
+    """
+
+    env_id: str
+    algo: str
+    model: Path
+    meta: tuple[Path, ...]
+    layout: str
+
+    def digest(self) -> str:
+        """SHA-256 over the model and its other files, in order."""
+        h = hashlib.sha256()
+        for f in (self.model, *self.meta):
+            h.update(f.read_bytes())
+        return h.hexdigest()
+
+    def load(self):
+        """The agent as a Policy (agents.policy.AgentPolicy) on a new env of its id."""
+        import gymnasium as gym
+
+        from agents.policy import AgentPolicy
+        from agents.train import model_class
+
+        if self.layout == STEAMTEMP:
+            meta = json.loads(self.meta[0].read_text(encoding="utf-8"))
+            cls, memory = meta["sb3_class"], meta["memory"]
+            norm, residual = meta["normalization"], meta["residual_scale"]
+        else:
+            cls = _RL_ZOO_CLASSES.get(self.algo, self.algo.upper())
+            memory, norm, residual = _rl_zoo_pipeline(self.model, self.meta), None, None
+            pkl = [f for f in self.meta if f.name == "vecnormalize.pkl"]
+            if pkl:
+                norm = _vecnormalize_stats(pkl[0])
+        model = model_class(cls).load(self.model, device="cpu")
+        return AgentPolicy(model, gym.make(self.env_id), memory=memory, obs_norm=norm,
+                           residual_scale=residual)  # fmt: skip
+
+
+def stem(env_id: str, algo: str) -> str:
+    """The file stem steamtemp-train gives an agent: ``steamtemp__Cascade300MW-v0__ppo``."""
+    return f"{env_id.replace('/', '__')}__{algo}"
+
+
+def steamtemp_files(directory: Path, env_id: str, algo: str) -> AgentFiles:
+    """steamtemp-train's files of (env_id, algo) in ``directory``.
+
+    Raises:
+        ValueError: the .zip or the .json is missing.
+    """
+    base = Path(directory) / stem(env_id, algo)
+    model, meta = base.with_suffix(".zip"), base.with_suffix(".json")
+    if not (model.is_file() and meta.is_file()):
+        raise ValueError(f"no trained agent {base}.zip/.json")
+    return AgentFiles(env_id, algo, model, (meta,), STEAMTEMP)
+
+
+def find(path: str | Path) -> list[AgentFiles]:
+    """Every agent in ``path``: a directory of steamtemp-train's files, an RL Zoo run
+    directory, or one model ``.zip`` of either layout (module docstring).
+
+    Raises:
+        ValueError: naming the path and what was looked for, when nothing is found there.
+    """
+    p = Path(path)
+    if p.is_file():
+        return [_one_file(p)]
+    if not p.is_dir():
+        raise ValueError(f"no file or directory {str(p)!r}")
+    ours = sorted(f for f in p.glob("*__*.zip") if f.with_suffix(".json").is_file())
+    if ours:
+        return [_steamtemp_of(f) for f in ours]
+    run = _rl_zoo_run(p)
+    if run is not None:
+        return [run]
+    raise ValueError(
+        f"{str(p)!r} holds no trained agent: expected steamtemp-train's <env>__<algo>.zip "
+        "with its .json, or an RL Zoo run (<name>.zip and <name>/args.yml)"
+    )
+
+
+def _steamtemp_of(model: Path) -> AgentFiles:
+    meta = model.with_suffix(".json")
+    try:
+        doc = json.loads(meta.read_text(encoding="utf-8"))
+        env_id, algo = doc["env_id"], doc["algo"]
+        for key in ("sb3_class", "memory", "normalization", "residual_scale"):
+            doc[key]  # noqa: B018 - every key load() reads
+    except (OSError, ValueError, KeyError, TypeError) as exc:
+        raise ValueError(f"{str(meta)!r} is not steamtemp-train's metadata ({exc!r})") from None
+    return AgentFiles(env_id, algo, model, (meta,), STEAMTEMP)
+
+
+def _one_file(model: Path) -> AgentFiles:
+    if model.suffix != ".zip":
+        raise ValueError(f"{str(model)!r}: a trained agent's model file ends in .zip")
+    if model.with_suffix(".json").is_file():
+        return _steamtemp_of(model)
+    run = _rl_zoo_run(model.parent, model)
+    if run is None:
+        raise ValueError(
+            f"{str(model)!r} has neither steamtemp-train's {model.stem}.json next to it nor "
+            "an RL Zoo run's <name>/args.yml in its directory"
+        )
+    return run
+
+
+def _rl_zoo_run(run: Path, model: Path | None = None) -> AgentFiles | None:
+    """The agent of an RL Zoo run directory (its last model, or ``model``), None if the
+    directory is not one."""
+    for args_file in sorted(run.glob("*/args.yml")):
+        params = args_file.parent
+        if model is None:
+            model = run / f"{params.name}.zip"
+            if not model.is_file():
+                continue
+        args = _zoo_yaml(args_file)
+        if not isinstance(args, dict) or not {"algo", "env"} <= set(args):
+            raise ValueError(f"{str(args_file)!r} has no 'algo' and 'env' (an RL Zoo args.yml)")
+        meta = [f for f in (params / "config.yml", params / "vecnormalize.pkl") if f.is_file()]
+        return AgentFiles(str(args["env"]), str(args["algo"]), model, tuple(meta), RL_ZOO)
+    return None
+
+
+class _ZooLoader(yaml.SafeLoader):
+    """YAML as RL Zoo writes it (PyYAML's dump of OrderedDicts) without running code:
+    an OrderedDict becomes a dict, a tuple a list, any other Python object None."""
+
+
+def _ordered_dict(loader: yaml.SafeLoader, node: yaml.Node) -> dict:
+    (pairs,) = loader.construct_sequence(node, deep=True) or ([],)
+    return {k: v for k, v in pairs}
+
+
+def _other(loader: yaml.SafeLoader, suffix: str, node: yaml.Node) -> Any:
+    return None
+
+
+_ZooLoader.add_constructor("tag:yaml.org,2002:python/object/apply:collections.OrderedDict",
+                           _ordered_dict)  # fmt: skip
+_ZooLoader.add_constructor("tag:yaml.org,2002:python/tuple",
+                           lambda loader, node: loader.construct_sequence(node, deep=True))
+_ZooLoader.add_multi_constructor("tag:yaml.org,2002:python/", _other)
+
+
+def _zoo_yaml(path: Path) -> Any:
+    try:
+        return yaml.load(path.read_text(encoding="utf-8"), Loader=_ZooLoader)  # noqa: S506
+    except (OSError, yaml.YAMLError) as exc:
+        raise ValueError(f"cannot read {str(path)!r} as YAML: {exc}") from None
+
+
+def _rl_zoo_pipeline(model: Path, meta: tuple[Path, ...]) -> dict | None:
+    """The controller-memory options of an RL Zoo run (its config.yml's ``env_wrapper``)."""
+    from agents.train import ConfigError, _memory_kwargs
+
+    config = [f for f in meta if f.name == "config.yml"]
+    hp = _zoo_yaml(config[0]) if config else {}
+    wrapper = (hp or {}).get("env_wrapper")
+    if wrapper is None:
+        return None
+    try:
+        return _memory_kwargs(wrapper)
+    except ConfigError as exc:
+        raise ValueError(f"{str(config[0])!r}: {exc}") from None
+
+
+def _vecnormalize_stats(path: Path) -> dict | None:
+    """Frozen observation statistics of a saved VecNormalize (None if it does not
+    normalize observations), in the form agents.policy.normalize_obs takes."""
+    from agents.policy import frozen_stats
+
+    with path.open("rb") as f:
+        return frozen_stats(pickle.load(f))  # the user's own training output, as SB3 reads it

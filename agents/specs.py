@@ -1,0 +1,218 @@
+"""Policy names as ``steamtemp-leaderboard --policies`` and ``steamtemp-check --policy``
+take them: one parser for both, so a name means the same policy everywhere.
+
+- a baseline: a name of ``baselines.NAMES`` (the shipped controllers and those added with
+  ``baselines.register``);
+- ``sb3:<algo>``: the shipped trained agent of the env's plant (``agents.shipped()``);
+- a trained agent's files: ``zoo:PATH``, or ``PATH`` itself when it contains a ``/`` or
+  ends in ``.zip``: a directory of ``steamtemp-train --out``'s files, an RL Zoo run
+  directory, or one model ``.zip`` of either (agents/files.py); available for the env
+  it was trained on;
+- ``module:callable``: a factory ``callable(env) -> Policy`` (``env`` a single or a vector
+  env; the policy needs ``predict`` and ``reset``, baselines/policy.py), with ``module`` a
+  dotted module importable from ``sys.path`` (``PYTHONPATH=.`` adds the current directory)
+  or a ``.py`` file; ``callable`` may be dotted (``MyController.create``).
+
+:func:`parse` checks a name (importing a factory's module, finding an agent's files);
+:meth:`Spec.make` builds the policy for an env; :func:`check_built` checks what a factory
+returns; :meth:`Spec.digest` is what the leaderboard's fingerprint hashes: the name, with
+the hash of a trained agent's files or of a factory's module file.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import importlib
+import importlib.util
+import re
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import agents
+import baselines
+from steamtemp_gym.checks import head
+
+BASELINE, SHIPPED, FILES, FACTORY = "baseline", "shipped", "files", "factory"
+SB3_PREFIX, ZOO_PREFIX = "sb3:", "zoo:"
+#: Every form, for error messages and --help.
+FORMS = ("a baseline name, sb3:<algo> (a shipped trained agent), zoo:DIR or a path to a "
+         "trained agent's files (a directory or .zip from steamtemp-train --out or an RL Zoo "
+         "run), or module:callable (a factory env -> Policy; module a dotted name or a .py "
+         "file)")  # fmt: skip
+_FACTORY = re.compile(r"^(?P<module>[A-Za-z_][\w.]*|.+\.py):(?P<attr>[A-Za-z_][\w.]*)$")
+
+
+@dataclass(frozen=True)
+class Spec:
+    """A parsed policy name.
+
+    Attributes:
+        name: The name as given.
+        kind: :data:`BASELINE`, :data:`SHIPPED`, :data:`FILES` or :data:`FACTORY`.
+        target: The baseline name, the algo, the path, or ``module:callable``.
+        envs: Env ids it is available for (None: every env).
+    """
+
+    name: str
+    kind: str
+    target: str
+    envs: frozenset[str] | None = None
+
+    def available(self, env_id: str) -> bool:
+        """Whether it can act on ``env_id``."""
+        return self.envs is None or env_id in self.envs
+
+    def make(self, env_id: str, env: Any) -> Any:
+        """The policy for ``env`` (a single or vector env of ``env_id``)."""
+        if self.kind == BASELINE:
+            return baselines.make(self.target, env)
+        if self.kind == SHIPPED:
+            return agents.load(env_id, self.target)
+        if self.kind == FILES:
+            return _agent(self.target, env_id).load()
+        policy = _factory(self.name, self.target)(env)
+        check_built(self.name, policy)
+        return policy
+
+    def digest(self, env_id: str) -> str:
+        """The name, and the hash of what decides its actions beyond the source of
+        steamtemp_gym, baselines and agents: a trained agent's files, a factory's module."""
+        if self.kind == SHIPPED:
+            from agents.files import steamtemp_files
+
+            return self.name + ":" + steamtemp_files(agents.ZOO, env_id, self.target).digest()
+        if self.kind == FILES:
+            return self.name + ":" + _agent(self.target, env_id).digest()
+        if self.kind == FACTORY:
+            module = _module(self.name, self.target.rsplit(":", 1)[0])
+            path = getattr(module, "__file__", None)
+            if path:
+                return self.name + ":" + hashlib.sha256(Path(path).read_bytes()).hexdigest()
+        return self.name
+
+
+def parse(name: str) -> Spec:
+    """The Spec of a policy name (module docstring).
+
+    Raises:
+        ValueError: an unknown name (listing every form and the valid names), a factory
+            that cannot be imported or is not callable, a path without a trained agent.
+    """
+    if not isinstance(name, str) or not name.strip():
+        raise ValueError(f"a policy name must be a non-empty string, got {_show(name)}; {FORMS}")
+    if name in baselines.NAMES:
+        return Spec(name, BASELINE, name)
+    if name.startswith(SB3_PREFIX):
+        algo = name[len(SB3_PREFIX):]
+        envs = frozenset(e for e, a in agents.shipped() if a == algo)
+        if not envs:
+            raise ValueError(f"no shipped trained agent {_show(name)}; shipped: "
+                             f"{', '.join(shipped_names())}")  # fmt: skip
+        return Spec(name, SHIPPED, algo, envs)
+    if name.startswith(ZOO_PREFIX):
+        return _files_spec(name, name[len(ZOO_PREFIX):])
+    m = _FACTORY.match(name)
+    if m:
+        _factory(name, name)
+        return Spec(name, FACTORY, name)
+    if "/" in name or "\\" in name or name.endswith(".zip"):
+        return _files_spec(name, name)
+    raise ValueError(f"unknown policy {_show(name)}; valid names: {', '.join(baselines.NAMES)}, "
+                     f"{', '.join(shipped_names())}; a policy is {FORMS}")  # fmt: skip
+
+
+def _show(name: Any) -> str:
+    """A bounded repr of a (possibly huge) name for messages."""
+    return repr(head(name, 100)) if isinstance(name, str) else repr(name)[:100]
+
+
+def shipped_names() -> list[str]:
+    """``sb3:<algo>`` of every shipped algo (for some plant)."""
+    return sorted({SB3_PREFIX + a for _, a in agents.shipped()})
+
+
+def check_built(name: str, policy: Any) -> None:
+    """A factory's return value has ``predict`` and ``reset``.
+
+    Raises:
+        ValueError: naming the policy and what is missing.
+    """
+    missing = [m for m in ("predict", "reset") if not callable(getattr(policy, m, None))]
+    if missing:
+        raise ValueError(f"policy {_show(name)}: the factory returned {type(policy).__name__}, "
+                         f"which has no {' and no '.join(missing)} method (a Policy needs "
+                         "predict(observation, state, episode_start, deterministic) and "
+                         "reset(), baselines/policy.py)")  # fmt: skip
+
+
+def _files_spec(name: str, path: str) -> Spec:
+    from agents.files import find
+
+    try:
+        found = find(path)
+    except ValueError as exc:
+        raise ValueError(f"policy {_show(name)}: {exc}") from None
+    by_env: dict[str, list[str]] = {}
+    for f in found:
+        by_env.setdefault(f.env_id, []).append(f.model.name)
+    several = {e: m for e, m in by_env.items() if len(m) > 1}
+    if several:
+        raise ValueError(f"policy {_show(name)}: several agents for one env in {path!r}: "
+                         f"{several}; name one model .zip instead")  # fmt: skip
+    return Spec(name, FILES, path, frozenset(by_env))
+
+
+def _agent(path: str, env_id: str):
+    """The agent of ``env_id`` among the files at ``path``."""
+    from agents.files import find
+
+    for f in find(path):
+        if f.env_id == env_id:
+            return f
+    raise ValueError(f"{path!r} holds no trained agent for {env_id}")
+
+
+def _module(name: str, ref: str):
+    """The module of a factory: a dotted name or a ``.py`` file (loaded once per file)."""
+    try:
+        if not ref.endswith(".py"):
+            return importlib.import_module(ref)
+        path = Path(ref).resolve()
+        if not path.is_file():
+            raise ValueError(f"no file {ref!r}")
+        key = path.stem if path.stem.isidentifier() else "_policy_module"
+        known = sys.modules.get(key)
+        if known is not None and getattr(known, "__file__", None) == str(path):
+            return known
+        if known is not None:  # another module of that name: a name of this file's own
+            key = f"{key}_{hashlib.sha256(str(path).encode()).hexdigest()[:12]}"
+            if key in sys.modules:
+                return sys.modules[key]
+        spec = importlib.util.spec_from_file_location(key, path)
+        module = importlib.util.module_from_spec(spec)
+        sys.modules[key] = module
+        try:
+            spec.loader.exec_module(module)
+        except BaseException:
+            del sys.modules[key]
+            raise
+        return module
+    except Exception as exc:  # noqa: BLE001 - any failure of the import is a bad name
+        raise ValueError(f"policy {_show(name)}: cannot import {ref!r}: {type(exc).__name__}: "
+                         f"{exc}") from None  # fmt: skip
+
+
+def _factory(name: str, ref: str):
+    """The callable of ``module:callable``."""
+    module_ref, attr = ref.rsplit(":", 1)
+    obj = _module(name, module_ref)
+    for part in attr.split("."):
+        if not hasattr(obj, part):
+            raise ValueError(f"policy {_show(name)}: {module_ref!r} has no attribute {attr!r}")
+        obj = getattr(obj, part)
+    if not callable(obj):
+        raise ValueError(f"policy {_show(name)}: {attr!r} is a {type(obj).__name__}, not callable "
+                         "(a factory env -> Policy)")  # fmt: skip
+    return obj
