@@ -886,11 +886,24 @@ def make_parser() -> argparse.ArgumentParser:
     return ap
 
 
+class _Stderr(logging.StreamHandler):
+    """A handler writing to whatever ``sys.stderr`` is when a line is logged (a stream
+    bound once would outlive a caller's redirection of stderr and write to a closed file)."""
+
+    @property
+    def stream(self):  # type: ignore[override]
+        return sys.stderr
+
+    @stream.setter
+    def stream(self, value) -> None:
+        pass
+
+
 def _show_library_log() -> None:
     """steamtemp_gym's INFO lines (e.g. the notice while kernels compile) on stderr."""
     log = logging.getLogger("steamtemp_gym")
     if not log.handlers:
-        handler = logging.StreamHandler(sys.stderr)
+        handler = _Stderr()
         handler.setFormatter(logging.Formatter("%(message)s"))  # lines name steamtemp_gym
         log.addHandler(handler)
     log.setLevel(logging.INFO)

@@ -56,6 +56,9 @@ class Budget:
     tail_s: float = 240.0
     knot_s: float = 30.0
     replan_s: float = 20.0
+    #: candidates per replan and iteration for a plant with one or two actuators; the
+    #: search space has knots x actuators dimensions, and plants with three or four
+    #: actuators get twice as many (``ceil(n_u / 2)`` times)
     samples: int = 8
     iterations: int = 4
     elites: int = 2
@@ -102,6 +105,7 @@ class Oracle:
         self.R = max(1, round(b.replan_s / dt))
         self.n_knots = math.ceil(self.H / self.K) + 1
         self.n_u = plant.n_u
+        self.samples = self.budget.samples * math.ceil(self.n_u / 2)
         # knot k sits at step k K of the plan; command of plan step h by linear interpolation
         t = np.arange(self.H) / self.K
         k0 = np.minimum(t.astype(np.int64), self.n_knots - 2)
@@ -117,7 +121,7 @@ class Oracle:
     # ---------------------------------------------------------------------- planning
     def _planner(self) -> Core:
         """The planning core (rows x samples rows), made once per source batch size."""
-        n = self.src.B * self.budget.samples
+        n = self.src.B * self.samples
         if self._core is None or self._core.B != n:
             core = Core(self.src.plant, n, RewardConfig())
             core.cfg[:] = self.src.cfg  # the env's own reward weights
@@ -133,7 +137,7 @@ class Oracle:
         """Reward summed over the horizon and tail of each candidate (len(rows), samples, n_knots,
         n_u) from each source row's current state."""
         core = self._planner()
-        S = self.budget.samples
+        S = self.samples
         n = len(rows) * S
         dst = np.arange(n)
         copy_rows(self.src, np.repeat(rows, S), core, dst)
@@ -162,11 +166,12 @@ class Oracle:
                 for r in rows]  # fmt: skip
         best, best_ret = mean.copy(), np.full(n, -np.inf)
         for _ in range(b.iterations):
-            eps = np.stack([g.standard_normal((b.samples - 1, *mean.shape[1:])) for g in rngs])
-            cand = np.empty((n, b.samples, *mean.shape[1:]))
+            eps = np.stack([g.standard_normal((self.samples - 1, *mean.shape[1:]))
+                            for g in rngs])  # fmt: skip
+            cand = np.empty((n, self.samples, *mean.shape[1:]))
             cand[:, 1:] = np.clip(mean[:, None] + sigma[:, None] * eps, 0.0, 1.0)
             cand[:, 0] = best
-            if b.samples > 2:
+            if self.samples > 2:
                 cand[:, 1] = mean  # the refitted mean itself, without noise
             ret = self._returns(rows, cand)
             top = np.argsort(-ret, axis=1, kind="stable")[:, : b.elites]

@@ -582,3 +582,20 @@ def test_a_second_run_on_the_same_out_is_refused(tmp_path, capsys):
     finally:
         proc.send_signal(signal.SIGTERM)
         proc.wait(timeout=30)
+
+
+def test_library_log_writes_to_the_stderr_of_the_moment(monkeypatch):
+    """The compile notice goes to the current stderr, not to one bound at the first run
+    (which a caller may have closed since: 'Logging error ... closed file')."""
+    import io
+    import logging
+
+    monkeypatch.setattr(logging.getLogger("steamtemp_gym"), "handlers", [])
+    first = io.StringIO()
+    monkeypatch.setattr("sys.stderr", first)
+    lb._show_library_log()
+    first.close()
+    now = io.StringIO()
+    monkeypatch.setattr("sys.stderr", now)
+    logging.getLogger("steamtemp_gym").warning("steamtemp_gym: compiling")
+    assert now.getvalue() == "steamtemp_gym: compiling\n"
