@@ -529,7 +529,7 @@ def _start_cli(out: Path, *extra: str):
 
     args = [sys.executable, "-m", "agents.leaderboard", "--envs", ENV, "--policies",
             "cascade_pi,lqi", "--scenarios", "load_ramp_100_50", "--seeds", "0-63",
-            "--jobs", "2", "--out", str(out), *extra]  # fmt: skip
+            "--jobs", "2", "--no-oracle", "--out", str(out), *extra]  # fmt: skip
     proc = subprocess.Popen(args, cwd=Path(__file__).parents[1], stdout=subprocess.DEVNULL,
                             stderr=subprocess.PIPE, text=True)  # fmt: skip
     deadline = time.monotonic() + 60
