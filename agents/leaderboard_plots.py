@@ -23,9 +23,6 @@ from agents import stats
 from agents.leaderboard_report import ONE, ZERO
 from steamtemp_gym.envs.render import BANDS_K
 
-#: The normalized score's 0 and 1 (labels).
-SCALE_ENDS = (ZERO, ONE)
-
 DPI = 150
 _RC = {"font.size": 10, "axes.titlesize": 11, "axes.labelsize": 10, "legend.fontsize": 9,
        "xtick.labelsize": 9, "ytick.labelsize": 9}  # fmt: skip
@@ -187,7 +184,7 @@ def bars(path: Path, summary: dict[str, Any]) -> Path:
             ax.axvline(0, color="k", lw=0.8)
             ax.axvline(1, color="k", lw=0.8, ls="--")
             ax.set_title(_short(env_id))
-            ax.set_xlabel(f"IQM normalized score (0 = {SCALE_ENDS[0]}, 1 = {SCALE_ENDS[1]})")
+            ax.set_xlabel(f"IQM normalized score (0 = {ZERO}, 1 = {ONE})")
             ax.grid(axis="x", alpha=0.3)
         for ax in list(axes.flat)[len(plants):]:
             ax.axis("off")
@@ -236,7 +233,7 @@ def profiles(
         else:
             fig.legend(handles, labels, loc="center left", bbox_to_anchor=(1.0, 0.5))
         fig.suptitle(f"Performance profiles over scenario × seed ({n_seeds} seeds); "
-                     f"0 = {SCALE_ENDS[0]}, 1 = {SCALE_ENDS[1]}")  # fmt: skip
+                     f"0 = {ZERO}, 1 = {ONE}")  # fmt: skip
         fig.tight_layout()
         fig.savefig(path, dpi=DPI, bbox_inches="tight")
         plt.close(fig)

@@ -146,7 +146,6 @@ def put(core: Any, snap: Snapshot, target: np.ndarray, source: np.ndarray, rngs:
         getattr(core, name)[target] = snap.arrays[name][source]
     for b, i in zip(target.tolist(), source.tolist(), strict=True):
         core.assign_scenario(b, snap.scenarios[i])
-    for b, i in zip(target.tolist(), source.tolist(), strict=True):
         rng = np.random.Generator(type(rngs[b].bit_generator)())
         rng.bit_generator.state = snap.rng_states[i]
         rngs[b] = rng
