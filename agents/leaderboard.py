@@ -41,7 +41,9 @@ Outputs in ``--out``:
   episode with the current fingerprint, without ``traceback``.
 - ``leaderboard.md``: means over seeds per env, scenario and policy; failed episodes
   are listed below the tables.
-- ``plots/``: one trend plot per env and scenario (all policies, the first seed without an error).
+- ``plots/``: one trend plot per env and scenario (the first seed; cascade_pi_ff, the oracle,
+  cascade_pi and the plant's three best-ranked policies, every policy with
+  ``--trend-all``), the scores (``scores.png``) and performance profiles (``profiles.png``).
 
 All JSON is strict (no NaN or Infinity tokens).
 
@@ -724,27 +726,44 @@ def _is_file(spec: str) -> bool:
 
 
 class Plots:
-    """Trend plots per env and scenario, drawn as soon as every policy of it has finished."""
+    """Trend plots per env and scenario, drawn for a plant as soon as all its episodes have
+    finished (the policies shown depend on the plant's scores: plots.trend_policies)."""
 
-    def __init__(self, out: Path, plan: Plan, units: list[Unit]) -> None:
-        self.out, self.plan = out, plan
-        self.pending = Counter((u.env_id, u.spec) for u in units)
+    def __init__(self, out: Path, plan: Plan, units: list[Unit], every: bool = False) -> None:
+        self.out, self.plan, self.every = out, plan, every
+        self.pending = Counter(u.env_id for u in units)
         self.traces: dict[tuple[str, str], dict[str, dict]] = {}
 
     def add(self, u: Unit, trace: dict | None) -> None:
-        key = (u.env_id, u.spec)
         if trace is not None:
-            self.traces.setdefault(key, {})[u.policy] = trace
-        self.pending[key] -= 1
-        if self.pending[key] == 0:
-            self.draw(*key)
+            self.traces.setdefault((u.env_id, u.spec), {})[u.policy] = trace
+        self.pending[u.env_id] -= 1
+        if self.pending[u.env_id] == 0:
+            for sc in self.plan.scenarios:
+                self.draw(u.env_id, sc)
+
+    def shown(self, env_id: str) -> tuple[list[str], dict[str, str]]:
+        """The policies a plant's trends show and their legend notes (rank and score)."""
+        rows = [r for r in _grid_rows(self.out, self.plan) if r["env"] == env_id]
+        ok = [r for r in rows if not r.get("error")]
+        plant = (report.summarize(ok, _run_info(self.plan, [env_id]))[0]["plants"][env_id]
+                 if ok else {})  # fmt: skip
+        names = plots.trend_policies(plant, self.plan.policies[env_id], self.every)
+        notes = {}
+        for name in names:
+            e = plant.get("policies", {}).get(name, {})
+            iqm = e.get("normalized_score", {}).get("iqm", {}).get("value")
+            if iqm is not None:
+                notes[name] = (f"#{e['rank']}, " if "rank" in e else "") + f"score {iqm:.2f}"
+        return names, notes
 
     def draw(self, env_id: str, sc: str) -> None:
         """The trend plot of one env and scenario (traces missing after a resume re-run)."""
         traces = self.traces.pop((env_id, sc), {})
         seed = self.plan.seeds[0]
         env = self.plan.envs_made[env_id, sc]
-        for name in self.plan.policies[env_id]:
+        names, notes = self.shown(env_id)
+        for name in names:
             if name not in traces:
                 try:
                     pol = _make_policy(name, env_id, env)
@@ -752,30 +771,44 @@ class Plots:
                 except Exception as exc:  # noqa: BLE001 - that episode is in the record
                     print(f"note: no trace of {name} seed {seed} for the plot: {exc}",
                           file=sys.stderr)  # fmt: skip
-        order = [n for n in self.plan.policies[env_id] if n in traces]
+        order = [n for n in names if n in traces]
         if order:
-            plots.trend(_plot_path(self.out, env_id, sc), env, env_id, sc,
-                        {n: traces[n] for n in order}, seed)  # fmt: skip
+            title = (self.plan.resolved[env_id, sc].name if _is_file(sc) else sc)
+            plots.trend(_plot_path(self.out, env_id, sc), env, env_id, title,
+                        {n: traces[n] for n in order}, seed,
+                        colors=plots.policy_colors(names), notes=notes)  # fmt: skip
 
     def missing(self) -> list[tuple[str, str]]:
         """Groups without a plot file (after a resume with nothing left to run)."""
         groups = [(e, s) for e in self.plan.envs for s in self.plan.scenarios]
         return [g for g in groups
-                if g not in self.pending and not _plot_path(self.out, *g).exists()]  # fmt: skip
+                if g[0] not in self.pending and not _plot_path(self.out, *g).exists()]  # fmt: skip
 
 
-def _rebuild(out: Path, plan: Plan, figures: bool = True) -> tuple[list[dict], dict | None]:
-    """leaderboard.json, leaderboard.md and the summary figures from episodes.jsonl."""
+def _grid_rows(out: Path, plan: Plan) -> list[dict]:
+    """The rows of the run's grid from episodes.jsonl: the last line of each episode with
+    the current fingerprint, without its traceback."""
     latest = _latest(read_record(out / EPISODES))
     rows = []
     for key in plan.grid():
         r = latest.get((key, plan.fingerprints[key[:3]]))
         if r is not None:
             rows.append({k: v for k, v in r.items() if k != "traceback"})
-    run = {"envs": plan.envs, "scenarios": plan.scenarios, "policies": plan.policies,
-           "seeds": plan.seeds, "steamtemp_gym_version": steamtemp_gym.__version__,
-           "n_bootstrap": stats.N_BOOTSTRAP, "confidence": stats.CONFIDENCE,
-           "reference": report.REFERENCE, "versus": report.VERSUS}  # fmt: skip
+    return rows
+
+
+def _run_info(plan: Plan, envs: list[str] | None = None) -> dict[str, Any]:
+    """leaderboard.json's ``run``: what ran, with the statistics' settings."""
+    return {"envs": envs or plan.envs, "scenarios": plan.scenarios, "policies": plan.policies,
+            "seeds": plan.seeds, "steamtemp_gym_version": steamtemp_gym.__version__,
+            "n_bootstrap": stats.N_BOOTSTRAP, "confidence": stats.CONFIDENCE,
+            "reference": report.REFERENCE, "versus": report.VERSUS}  # fmt: skip
+
+
+def _rebuild(out: Path, plan: Plan, figures: bool = True) -> tuple[list[dict], dict | None]:
+    """leaderboard.json, leaderboard.md and the summary figures from episodes.jsonl."""
+    rows = _grid_rows(out, plan)
+    run = _run_info(plan)
     summary, norm = (None, {})
     if any(not r.get("error") for r in rows):
         summary, norm = report.summarize(rows, run)
@@ -788,7 +821,10 @@ def _rebuild(out: Path, plan: Plan, figures: bool = True) -> tuple[list[dict], d
         (out / "plots").mkdir(parents=True, exist_ok=True)
         plots.bars(out / "plots" / "scores.png", summary)
         if any(norm.values()):
-            plots.profiles(out / "plots" / "profiles.png", norm, len(plan.seeds))
+            plots.profiles(out / "plots" / "profiles.png", norm, len(plan.seeds),
+                           order=plots.figure_order(summary), highlight={
+                               e: plots.trend_policies(summary["plants"][e], plan.policies[e])
+                               for e in summary["plants"]})  # fmt: skip
     return rows, summary
 
 
@@ -870,6 +906,9 @@ def make_parser() -> argparse.ArgumentParser:
                     help="integers >= 0 or ranges a-b (default: %(default)s)")  # fmt: skip
     ap.add_argument("--out", default="leaderboard_out",
                     help="output directory (default: %(default)s)")  # fmt: skip
+    ap.add_argument("--trend-all", action="store_true",
+                    help="trend plots show every policy (default: cascade_pi_ff, the oracle, "
+                    "cascade_pi and the plant's three best-ranked policies)")  # fmt: skip
     ap.add_argument("--resume", action="store_true",
                     help="continue in --out: skip the episodes already in its episodes.jsonl "
                     "(default: off)")  # fmt: skip
@@ -943,7 +982,7 @@ def main(argv: list[str] | None = None) -> None:
         ap.error(f"argument --out: cannot write {str(out)!r}: {exc.strerror or exc}")
     t0 = time.time()
     units = _units(plan, done)
-    figures = Plots(out, plan, units)
+    figures = Plots(out, plan, units, every=args.trend_all)
     try:
         with _sigterm_stops():
             _execute(plan, units, args.jobs, record, figures.add, args.backend,

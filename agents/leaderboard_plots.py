@@ -1,26 +1,34 @@
 """The leaderboard's figures (150 dpi, 10-11 pt text), written by agents/leaderboard.py.
 
-- :func:`trend`: one plant and scenario, one episode (seed stated in the title) of every
-  policy: the true outlet temperature against the setpoint with the +-5 / +-8 K bands
-  (and the thermocouple reading of the first policy, labelled as such), the plant's
-  secondary temperatures (reheat), one panel per actuator (names from
-  ``env.unwrapped.signals.action``), the load demand and the disturbances that act in
-  the scenario.
+- :func:`trend`: one plant and scenario, one episode (seed stated in the title) of each
+  policy shown (:func:`trend_policies`: by default the reference ``cascade_pi_ff``, the
+  oracle, ``cascade_pi`` and the plant's three best-scoring policies): the true outlet
+  temperature against the setpoint with the +-5 / +-8 K bands (and the thermocouple reading
+  of the first policy, labelled as such), the plant's secondary temperatures (reheat), one
+  panel per actuator (names from ``env.unwrapped.signals.action``), the load demand and the
+  disturbances that act in the scenario.
 - :func:`bars`: per plant, the IQM of the normalized score of each policy with its 95 %
   stratified-bootstrap confidence interval.
 - :func:`profiles`: per plant, performance profiles (fraction of runs above a normalized
-  score, averaged over scenarios).
+  score, averaged over scenarios) over the scores that matter, :data:`PROFILE_RANGE`; the
+  share of a policy's runs beyond it is given in the legend and marked at the axis edge.
+
+Colours (:func:`policy_colors`): baselines (``baselines.NAMES``) in blues and greens, trained
+agents and other policies in oranges, reds and purples, the references in grey and black;
+each policy its own colour within a figure.
 """
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+import baselines
 from agents import stats
-from agents.leaderboard_report import ONE, ZERO
+from agents.leaderboard_report import ONE, REFERENCES, ZERO
 from steamtemp_gym.envs.render import BANDS_K
 
 DPI = 150
@@ -33,6 +41,111 @@ _DIST = {
     "fouling": ("gas-side heat-transfer multiplier - 1 [%]", 100.0, -1.0),
     "spray_water_temp_offset_C": ("spray-water temperature offset [K]", 1.0, 0.0),
 }
+#: Colours of the disturbances (yellows and browns, outside both policy families).
+_DIST_COLORS = ("#b8860b", "#808000", "#d4a017")
+#: The baselines' colours (blues, greens, teals; the first is the reference's), in order.
+BASELINE_COLORS = ("#08306b", "#1f77b4", "#2ca02c", "#17becf", "#74c476", "#00695c", "#6baed6",
+                   "#00a087", "#1b5e20", "#4dd0e1", "#80cbc4")  # fmt: skip
+#: The other policies' colours (trained agents, your own: oranges, reds, purples), in order.
+AGENT_COLORS = ("#ff7f0e", "#d62728", "#9467bd", "#e377c2", "#8c564b", "#6a1b9a", "#c2185b",
+                "#fdae6b", "#7f0000", "#b39ddb")  # fmt: skip
+#: HSV hue ranges of the two families (extra colours are drawn from them; agents' wraps 1).
+BASELINE_HUES, AGENT_HUES = (0.30, 0.68), (0.72, 1.10)
+#: The references: the oracle near black, the frozen valve mid grey.
+REFERENCE_COLORS = {ONE: "#1a1a1a", "frozen_valve": "#8c8c8c"}
+#: Normalized scores shown by the profiles: the score's 0 and 1 and a little around.
+PROFILE_RANGE = (-0.5, 1.25)
+#: How many of the best-scoring policies a trend shows besides the fixed ones.
+TREND_TOP = 3
+
+
+def kind(name: str) -> str:
+    """``"reference"`` (oracle, frozen valve), ``"baseline"`` (``baselines.NAMES``) or
+    ``"agent"`` (a trained agent or any other policy)."""
+    if name in REFERENCES:
+        return "reference"
+    return "baseline" if name in baselines.NAMES else "agent"
+
+
+def _extra(hues: tuple[float, float], k: int) -> str:
+    """The k-th colour beyond a family's list: hues spread over its range, two shades."""
+    from matplotlib.colors import hsv_to_rgb, to_hex
+
+    golden = 0.381966  # spreads successive hues evenly over the range
+    lo, hi = hues[0] + 0.02, hues[1] - 0.02  # inside the range after rounding to hex
+    h = (lo + (hi - lo) * ((k * golden) % 1.0)) % 1.0
+    return to_hex(hsv_to_rgb((h, 0.75, 0.45 + 0.4 * (k % 2))))
+
+
+def policy_colors(names: Sequence[str]) -> dict[str, str]:
+    """One colour per policy, unique among ``names``: baselines from :data:`BASELINE_COLORS`
+    (``cascade_pi_ff`` always its first), the others from :data:`AGENT_COLORS`, in the
+    order given (so the first, e.g. the best-ranked, get the most distinct colours); beyond
+    the lists, further shades of the same family."""
+    out: dict[str, str] = {}
+    used: set[str] = set()
+    counts = {"baseline": 1, "agent": 0}  # the reference's colour is kept for it
+    for name in names:
+        if name in out:
+            continue
+        k = kind(name)
+        if k == "reference":
+            color = REFERENCE_COLORS.get(name, "#8c8c8c")
+        elif name == ZERO:
+            color = BASELINE_COLORS[0]
+        else:
+            pal, hues = ((BASELINE_COLORS, BASELINE_HUES) if k == "baseline"
+                         else (AGENT_COLORS, AGENT_HUES))  # fmt: skip
+            color = None
+            while color is None or color in used:
+                i = counts[k]
+                counts[k] += 1
+                color = pal[i] if i < len(pal) else _extra(hues, i - len(pal))
+        out[name] = color
+        used.add(color)
+    return out
+
+
+def _style(name: str, color: str) -> dict[str, Any]:
+    """Line style of a policy: the reference bold, the oracle dash-dot, the frozen valve
+    dotted."""
+    if name == ZERO:
+        return {"color": color, "lw": 2.2, "ls": "-"}
+    if name == ONE:
+        return {"color": color, "lw": 1.3, "ls": "-."}
+    if kind(name) == "reference":
+        return {"color": color, "lw": 1.2, "ls": ":"}
+    return {"color": color, "lw": 1.4, "ls": "-"}
+
+
+def trend_policies(plant: dict[str, Any], available: Sequence[str],
+                   every: bool = False) -> list[str]:  # fmt: skip
+    """The policies a plant's trend plots show, in legend order.
+
+    By default the reference ``cascade_pi_ff``, the ``oracle``, ``cascade_pi`` and the
+    :data:`TREND_TOP` best ranked of the others (by rank: the IQM of the normalized score;
+    in a run without the score, by the IQM of the return); with ``every``, all of
+    ``available``, ranked ones first.
+
+    Args:
+        plant: The plant's summary (``summary["plants"][env_id]``; an empty dict for none).
+        available: The policies run on the plant.
+        every: Show every policy.
+    """
+    pols = plant.get("policies", {})
+
+    def key(p: str) -> tuple[float, str]:
+        e = pols.get(p, {})
+        if "rank" in e:
+            return (e["rank"], p)
+        iqm = e.get("return", {}).get("iqm", {}).get("value")
+        return (1e6 - iqm if iqm is not None else 2e6, p)
+
+    fixed = [p for p in (ZERO, ONE, "cascade_pi") if p in available]
+    rest = sorted((p for p in available if p not in fixed and kind(p) != "reference"), key=key)
+    if every:
+        return fixed + rest + [p for p in available if p not in fixed and p not in rest]
+    return fixed + rest[:TREND_TOP]
 
 
 def _plt():
@@ -42,6 +155,13 @@ def _plt():
     import matplotlib.pyplot as plt
 
     return plt
+
+
+def _save(fig: Any, path: Path, **kw: Any) -> None:
+    """Write ``fig`` to ``path`` (its folder made if missing) at :data:`DPI` and close it."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=DPI, **kw)
+    _plt().close(fig)
 
 
 def _short(env_id: str) -> str:
@@ -59,16 +179,32 @@ def actuator_labels(env: Any) -> list[str]:
 
 def trend(
     path: Path, env: Any, env_id: str, scenario: str, traces: dict[str, dict], seed: int,
-    reference: tuple[str, ...] = ("frozen_valve", "oracle"),
+    colors: dict[str, str] | None = None, notes: dict[str, str] | None = None,
 ) -> Path:
-    """The trend overlay of one plant and scenario (see the module docstring)."""
+    """The trend overlay of one plant and scenario (see the module docstring).
+
+    Args:
+        path: The PNG to write.
+        env: The env (its plant's secondary temperatures and actuators label the panels).
+        env_id: The env id (title).
+        scenario: The scenario's name (title).
+        traces: Policy name -> the trace of its episode (``run_episode``), in legend order.
+        seed: The episode's seed (title).
+        colors: Policy name -> colour (default: :func:`policy_colors` of ``traces``).
+        notes: Policy name -> a note for its legend entry (e.g. its score).
+    """
     plt = _plt()
     plant = env.unwrapped.plant
     acts = actuator_labels(env)
+    colors = colors or policy_colors(list(traces))
+    notes = notes or {}
+    styles = {name: _style(name, colors[name]) for name in traces}
     first = next(iter(traces.values()))
     varying = [k for k in _DIST if k != "heat_absorption_bias" and np.ptp(first[k]) > 1e-9]
     n = 1 + len(plant.secondary) + len(acts) + 1 + (1 if varying else 0)
     ratios = [2.4] + [1.2] * (n - 1)
+    # y ranges: the controllers and the bands; the frozen valve may leave the axes
+    ranged = [name for name in traces if name != "frozen_valve"] or list(traces)
     with plt.rc_context(_RC):
         fig, axes = plt.subplots(n, 1, figsize=(10, 2.0 + 1.7 * n), sharex=True,
                                  gridspec_kw={"height_ratios": ratios})  # fmt: skip
@@ -79,22 +215,13 @@ def trend(
             ax.fill_between(t, sp - band, sp + band, color="tab:green", alpha=alpha, lw=0,
                             label=f"setpoint ±{band:g} K band")  # fmt: skip
         ax.plot(t, sp, "k--", lw=1.2, label="setpoint")
-        # one distinct colour per policy: tab10 repeats after ten, tab20 holds twenty
-        n_pol = sum(name != reference for name in traces)
-        palette = plt.get_cmap("tab10" if n_pol <= 10 else "tab20").colors
-        colors = {}
-        k = 0
         for name, tr in traces.items():
-            ref = name == reference
-            colors[name] = "0.45" if ref else palette[k % len(palette)]
-            k += 0 if ref else 1
-            ax.plot(tr["time_s"] / 60, tr["outlet_temp_C"], lw=1.2 if ref else 1.4,
-                    color=colors[name], ls=":" if ref else "-",
-                    label=f"{name}: true" + (" (reference)" if ref else ""))  # fmt: skip
-        # y range: the controllers and the bands; the reference may leave the axes
-        ctrl = [tr["outlet_temp_C"] - tr["setpoint_C"] for n, tr in traces.items()
-                if n != reference] or [first["outlet_temp_C"] - sp]  # fmt: skip
-        dev = max(BANDS_K[-1] + 2.0, 1.1 * max(float(np.max(np.abs(e))) for e in ctrl))
+            note = f" ({notes[name]})" if notes.get(name) else ""
+            ax.plot(tr["time_s"] / 60, tr["outlet_temp_C"], label=f"{name}{note}: true",
+                    **styles[name])  # fmt: skip
+        dev = max(BANDS_K[-1] + 2.0, 1.1 * max(
+            float(np.max(np.abs(traces[k]["outlet_temp_C"] - traces[k]["setpoint_C"])))
+            for k in ranged))  # fmt: skip
         ax.set_ylim(float(sp.min()) - dev, float(sp.max()) + dev)
         name0 = next(iter(traces))
         ax.plot(first["time_s"] / 60, first["measured_temp_C"], color=colors[name0], lw=0.6,
@@ -110,37 +237,35 @@ def trend(
                 axk.axhspan(sp2 - band, sp2 + band, color="tab:green", alpha=alpha, lw=0)
             axk.axhline(sp2, color="k", ls="--", lw=1)
             for name, tr in traces.items():
-                axk.plot(tr["time_s"] / 60, tr[key], lw=1.2, color=colors[name],
-                         ls=":" if name == reference else "-")  # fmt: skip
+                axk.plot(tr["time_s"] / 60, tr[key], **dict(styles[name], lw=1.2))
             axk.set_ylabel(key.replace("_temp_C", "").replace("_", " ") + " (true) [°C]")
-            e2 = [tr[key] - sp2 for n, tr in traces.items() if n != reference] or [first[key] - sp2]
-            d2 = max(BANDS_K[-1] + 2.0, 1.1 * max(float(np.max(np.abs(e))) for e in e2))
+            d2 = max(BANDS_K[-1] + 2.0, 1.1 * max(float(np.max(np.abs(traces[k][key] - sp2)))
+                                                  for k in ranged))  # fmt: skip
             axk.set_ylim(sp2 - d2, sp2 + d2)
             i += 1
         for j, label in enumerate(acts):
             axk = axes[i + j]
             for name, tr in traces.items():
                 v = np.asarray(tr["spray_valve"]).reshape(len(tr["time_s"]), -1)
-                axk.plot(tr["time_s"] / 60, 100 * v[:, j], lw=1.1, color=colors[name],
-                         ls=":" if name == reference else "-")  # fmt: skip
+                axk.plot(tr["time_s"] / 60, 100 * v[:, j], **dict(styles[name], lw=1.1))
             axk.set_ylabel("opening [%]")
             axk.text(0.01, 0.95, label, transform=axk.transAxes, va="top", fontsize=10,
                      bbox={"facecolor": "white", "alpha": 0.8, "lw": 0})  # fmt: skip
             axk.set_ylim(-5, 105)
         i += len(acts)
         axk = axes[i]
-        axk.plot(t, 100 * first["load"], color="tab:blue", lw=1.4, label="load demand [%]")
-        axk.set_ylabel("load demand [%]", color="tab:blue")
+        axk.plot(t, 100 * first["load"], color="0.25", lw=1.4, label="load demand [%]")
+        axk.set_ylabel("load demand [%]", color="0.25")
         axk.set_ylim(0, 110)
         lab, scale, off = _DIST["heat_absorption_bias"]
         axd = axk.twinx()
-        axd.plot(t, scale * (first["heat_absorption_bias"] + off), color="tab:brown", lw=0.9)
-        axd.set_ylabel(lab, color="tab:brown")
+        axd.plot(t, scale * (first["heat_absorption_bias"] + off), color=_DIST_COLORS[0], lw=0.9)
+        axd.set_ylabel(lab, color=_DIST_COLORS[0])
         if varying:
             axv = axes[i + 1]
-            for k in varying:
+            for k, color in zip(varying, _DIST_COLORS[1:], strict=False):
                 lab, scale, off = _DIST[k]
-                axv.plot(t, scale * (first[k] + off), lw=1.4, label=lab)
+                axv.plot(t, scale * (first[k] + off), lw=1.4, color=color, label=lab)
             axv.set_ylabel("disturbance")
             legends.append(axv.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0),
                                       borderaxespad=0))  # fmt: skip
@@ -151,10 +276,17 @@ def trend(
         for leg in legends:
             leg.set_in_layout(False)
         fig.tight_layout()
-        path.parent.mkdir(parents=True, exist_ok=True)
-        fig.savefig(path, dpi=DPI, bbox_inches="tight", bbox_extra_artists=legends)
-        plt.close(fig)
+        _save(fig, path, bbox_inches="tight", bbox_extra_artists=legends)
     return path
+
+
+def figure_order(summary: dict[str, Any]) -> list[str]:
+    """Every policy of a run in colour order: the reference, ``cascade_pi``, then by the
+    overall ranking, then the rest as run."""
+    run_pols = [p for pols in summary["run"]["policies"].values() for p in pols]
+    ranked = [e["policy"] for e in summary.get("ranking", [])]
+    order = [p for p in (ZERO, "cascade_pi") if p in run_pols] + ranked + run_pols
+    return list(dict.fromkeys(order))
 
 
 def _grid(n: int):
@@ -164,10 +296,13 @@ def _grid(n: int):
 
 
 def bars(path: Path, summary: dict[str, Any]) -> Path:
-    """IQM normalized score with 95 % CIs, one panel per plant, policies by rank."""
+    """IQM normalized score with 95 % CIs, one panel per plant, policies by rank; the axis
+    spans :data:`PROFILE_RANGE` and the scores of the ranked policies down to -1, a bar
+    beyond it ends at the edge with its value written there."""
     plt = _plt()
     plants = list(summary["plants"])
     rows, cols = _grid(len(plants))
+    colors = policy_colors(figure_order(summary))
     with plt.rc_context(_RC):
         fig, axes = plt.subplots(rows, cols, figsize=(5.2 * cols, 3.6 * rows), squeeze=False)
         for ax, env_id in zip(axes.flat, plants, strict=False):
@@ -175,10 +310,19 @@ def bars(path: Path, summary: dict[str, Any]) -> Path:
             ranked = sorted((p for p in pols if "rank" in pols[p]), key=lambda p: pols[p]["rank"])
             vals = [pols[p]["normalized_score"]["iqm"] for p in ranked]
             y = np.arange(len(ranked))
-            x = [v["value"] for v in vals]
-            err = np.array([[v["value"] - v["ci95"][0], v["ci95"][1] - v["value"]] for v in vals])
-            ax.barh(y, x, xerr=err.T if len(vals) else None, color="tab:blue", alpha=0.75,
-                    capsize=3)  # fmt: skip
+            x = np.array([v["value"] for v in vals])
+            lo_all = min([PROFILE_RANGE[0]] + [v["ci95"][0] for v in vals])
+            lo = max(lo_all, -1.0) - 0.05
+            hi = PROFILE_RANGE[1]
+            shown = np.clip(x, lo, hi)
+            err = np.array([[max(s - max(v["ci95"][0], lo), 0.0),
+                             max(min(v["ci95"][1], hi) - s, 0.0)]
+                            for s, v in zip(shown, vals, strict=True)])  # fmt: skip
+            ax.barh(y, shown, xerr=err.T if len(vals) else None,
+                    color=[colors[p] for p in ranked], alpha=0.85, capsize=3)  # fmt: skip
+            for k in np.flatnonzero(x < lo):
+                ax.text(lo, y[k], f" ◀ {x[k]:.2f}", va="center", ha="left", fontsize=8)
+            ax.set_xlim(lo, hi)
             ax.set_yticks(y, ranked)
             ax.invert_yaxis()
             ax.axvline(0, color="k", lw=0.8)
@@ -190,51 +334,74 @@ def bars(path: Path, summary: dict[str, Any]) -> Path:
             ax.axis("off")
         n_seeds = summary["run"]["seeds"]
         fig.suptitle(f"IQM over scenario × seed ({len(n_seeds)} seeds), "
-                     "95 % stratified-bootstrap CI")  # fmt: skip
+                     "95 % stratified-bootstrap CI; blue/green: baselines, "
+                     "orange/red/purple: trained agents")  # fmt: skip
         fig.tight_layout()
-        fig.savefig(path, dpi=DPI)
-        plt.close(fig)
+        _save(fig, path)
     return path
 
 
 def profiles(
     path: Path, scores: dict[str, dict[str, list[np.ndarray]]], n_seeds: int,
-    reference: tuple[str, ...] = ("frozen_valve", "oracle"),
+    order: Sequence[str] | None = None, highlight: dict[str, Sequence[str]] | None = None,
 ) -> Path:
-    """Performance profiles: ``scores[env][policy]`` = normalized scores per scenario."""
+    """Performance profiles: ``scores[env][policy]`` = normalized scores per scenario.
+
+    The axis spans :data:`PROFILE_RANGE`; where a policy has runs beyond it, a triangle
+    at that edge marks that its curve goes on (its height there is the share of runs above
+    the edge). ``order`` gives the colour order (default: as in ``scores``); the policies of
+    ``highlight[env]`` (e.g. those of the trend plots) are drawn bold, the others thin.
+    """
     plt = _plt()
     plants = list(scores)
     rows, cols = _grid(len(plants))
+    names = list(dict.fromkeys([*(order or []), *(p for e in scores.values() for p in e)]))
+    colors = policy_colors(names)
+    lo, hi = PROFILE_RANGE
+    taus = np.linspace(lo, hi, 351)
+    handles: dict[str, Any] = {}
     with plt.rc_context(_RC):
-        fig, axes = plt.subplots(rows, cols, figsize=(5.2 * cols, 3.6 * rows), squeeze=False)
+        fig, axes = plt.subplots(rows, cols, figsize=(5.6 * cols, 4.0 * rows), squeeze=False)
         for ax, env_id in zip(axes.flat, plants, strict=False):
-            ctrl = [np.concatenate(t) for p, t in scores[env_id].items() if p not in reference]
-            lo = min([0.0] + [float(c.min()) for c in ctrl if c.size])
-            hi = max([1.0] + [float(c.max()) for c in ctrl if c.size])
-            pad = 0.05 * (hi - lo)
-            taus = np.linspace(lo - pad, hi + pad, 401)
-            for pol, tasks in scores[env_id].items():
-                if any(len(t) for t in tasks):
-                    ref = pol in reference
-                    ax.plot(taus, stats.performance_profile(tasks, taus), lw=1.4, label=pol,
-                            color="0.45" if ref else None, ls=":" if ref else "-")  # fmt: skip
+            bold = set(highlight[env_id]) if highlight and env_id in highlight else set(names)
+            for pol in sorted(scores[env_id], key=lambda p: (p in bold, -names.index(p))):
+                tasks = scores[env_id][pol]
+                if not any(len(t) for t in tasks):
+                    continue
+                style = _style(pol, colors[pol])
+                if pol not in bold:
+                    style.update(lw=0.8, alpha=0.6)
+                prof = stats.performance_profile(tasks, taus)
+                (line,) = ax.plot(taus, prof, label=pol, **style)
+                handles.setdefault(pol, line)
+                for x, y, edge, marker in ((lo, prof[0], prof[0] < 1.0, "<"),
+                                           (hi, prof[-1], prof[-1] > 0.0, ">")):  # fmt: skip
+                    if edge:
+                        ax.plot([x], [y], marker=marker, ms=6, ls="none", clip_on=False,
+                                color=style["color"], alpha=style.get("alpha", 1.0))
+            ax.set_xlim(lo, hi)
+            ax.set_ylim(0.0, 1.02)
             ax.axvline(0, color="k", lw=0.8)
             ax.axvline(1, color="k", lw=0.8, ls="--")
             ax.set_title(_short(env_id))
             ax.set_xlabel("normalized score τ")
             ax.set_ylabel("fraction of runs > τ")
             ax.grid(alpha=0.3)
-        handles, labels = axes.flat[0].get_legend_handles_labels()
+        from matplotlib.lines import Line2D
+
+        labels = [p for p in names if p in handles]
+        proxies = [Line2D([], [], **_style(p, colors[p])) for p in labels]
         spare = list(axes.flat)[len(plants):]
         for ax in spare:
             ax.axis("off")
+        legend_args = {"handles": proxies, "labels": labels}
         if spare:
-            spare[0].legend(handles, labels, loc="center", ncol=2)
+            spare[0].legend(loc="center", ncol=2, title="bold: the plant's trend-plot policies",
+                            **legend_args)  # fmt: skip
         else:
-            fig.legend(handles, labels, loc="center left", bbox_to_anchor=(1.0, 0.5))
+            fig.legend(loc="center left", bbox_to_anchor=(1.0, 0.5), **legend_args)
         fig.suptitle(f"Performance profiles over scenario × seed ({n_seeds} seeds); "
-                     f"0 = {ZERO}, 1 = {ONE}")  # fmt: skip
+                     f"0 = {ZERO}, 1 = {ONE}; ◀ ▶: the curve goes on beyond the axis")  # fmt: skip
         fig.tight_layout()
-        fig.savefig(path, dpi=DPI, bbox_inches="tight")
-        plt.close(fig)
+        _save(fig, path, bbox_inches="tight")
     return path

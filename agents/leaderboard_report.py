@@ -38,6 +38,8 @@ VERSUS = ZERO
 TABLE_METRICS = ("iae_K_s", "max_abs_dev_K", "time_outside_5K_s", "overshoot_pct",
                  "settling_time_s", "spray_used_kg", "valve_travel", "valve_reversals",
                  "return")  # fmt: skip
+#: The metrics of the ranking tables of leaderboard.md, in column order.
+RANK_METRICS = ("iae_K_s", "max_abs_dev_K", "time_outside_5K_s", "valve_travel")
 SUMMARY_METRICS = ("iae_K_s", "max_abs_dev_K", "time_outside_5K_s", "time_outside_8K_s",
                    "spray_used_kg", "valve_travel", "return")  # fmt: skip
 
@@ -166,15 +168,41 @@ def _overall(plants: dict[str, Any]) -> list[dict[str, Any]]:
 
 
 # --------------------------------------------------------------------------- markdown
-def _ci(est: dict[str, Any] | None, fmt: str = "{:.2f}") -> str:
+#: How leaderboard.md shows each metric: column header (with its unit), scale from the
+#: metric's unit to the shown one, decimals.
+COLUMNS: dict[str, tuple[str, float, int]] = {
+    "iae_K_s": ("IAE [K s]", 1.0, 0),
+    "max_abs_dev_K": ("max\\|dev\\| [K]", 1.0, 2),
+    "time_outside_5K_s": ("t>5K [s]", 1.0, 0),
+    "time_outside_8K_s": ("t>8K [s]", 1.0, 0),
+    "overshoot_pct": ("overshoot [%]", 1.0, 1),
+    "settling_time_s": ("settling time [s]", 1.0, 0),
+    "spray_used_kg": ("spray [t]", 1e-3, 1),
+    "valve_travel": ("valve travel [strokes]", 1.0, 2),
+    "valve_reversals": ("valve reversals", 1.0, 0),
+    "return": ("return", 1.0, 1),
+}
+
+
+def num(v: float | None, decimals: int = 2, scale: float = 1.0) -> str:
+    """``v * scale`` rounded to ``decimals`` (no exponent, no minus sign on a zero); "-"
+    for None or a non-finite value."""
+    if v is None or not np.isfinite(v):
+        return "-"
+    text = f"{v * scale:.{decimals}f}"
+    return text[1:] if text.startswith("-") and float(text) == 0.0 else text
+
+
+def _col(key: str, v: float | None) -> str:
+    _, scale, decimals = COLUMNS[key]
+    return num(v, decimals, scale)
+
+
+def _ci(est: dict[str, Any] | None, decimals: int = 2) -> str:
     if not est:
         return "-"
     lo, hi = est["ci95"]
-    return f"{fmt.format(est['value'])} [{fmt.format(lo)}, {fmt.format(hi)}]"
-
-
-def _fmt(v: float | None) -> str:
-    return "-" if v is None else f"{v:.4g}"
+    return f"{num(est['value'], decimals)} [{num(lo, decimals)}, {num(hi, decimals)}]"
 
 
 def stat_label(n_seeds: int) -> str:
@@ -234,7 +262,7 @@ def margin_markdown(summary: dict[str, Any]) -> list[str]:
         zero = float(np.mean([r["zero_return"] for r in refs]))
         one = float(np.mean([r["one_return"] for r in refs]))
         floored = sum(r["span"] > r["headroom"] for r in refs)
-        body.append([env_id.split("/")[-1], f"{zero:.1f}", f"{one:.1f}", f"{one - zero:+.1f}",
+        body.append([env_id.split("/")[-1], num(zero, 1), num(one, 1), f"{one - zero:+.1f}",
                      f"{floored} of {len(refs)}"])  # fmt: skip
     if not body:
         return [f"Not normalized: the run has no {ZERO} or no {ONE} episodes."]
@@ -255,7 +283,8 @@ def agents_markdown(summary: dict[str, Any]) -> str:
     n = len(summary["run"]["seeds"])
     lines = [f"{stat_label(n)}; return and IAE: means over scenario × seed. **Bold**: the "
              "best of the plant's rows.", ""]  # fmt: skip
-    header = ["plant", "policy", "IQM norm. score", "mean return", "IAE [K s]", "trips"]
+    header = ["plant", "policy", "IQM norm. score", "mean return", COLUMNS["iae_K_s"][0],
+              "trips"]
     body = []
     for env_id, p in summary["plants"].items():
         pols = p["policies"]
@@ -271,7 +300,7 @@ def agents_markdown(summary: dict[str, Any]) -> str:
         for k in picks:
             e, met = pols[k], pols[k]["metrics"]
             score = _ci(e.get("normalized_score", {}).get("iqm"))
-            ret, iae = _fmt(met.get("return")), _fmt(met.get("iae_K_s"))
+            ret, iae = _col("return", met.get("return")), _col("iae_K_s", met.get("iae_K_s"))
             body.append([env_id.split("/")[-1],
                          f"{k} (best baseline)" if k == best_base else k,
                          f"**{score}**" if k == top else score,
@@ -301,13 +330,13 @@ def markdown(summary: dict[str, Any], rows: list[dict]) -> str:
         pols = p["policies"]
         order = sorted(pols, key=lambda k: (pols[k].get("rank", 10**6), k))
         lines += [f"## {env_id}", "", f"Ranking: statistics over scenario × seed ({n} seeds), "
-                  "95 % stratified-bootstrap CIs; P(> cascade_pi): probability that an "
-                  "episode of the policy has a higher return than one of cascade_pi on the "
+                  f"95 % stratified-bootstrap CIs; P(> {VERSUS}): probability that an "
+                  f"episode of the policy has a higher return than one of {VERSUS} on the "
                   "same scenario, averaged over scenarios. IAE, max\\|dev\\| and time outside "
                   "±5 K: mean over scenario × seed where they apply.", ""]  # fmt: skip
         header = ["rank", "policy", "IQM norm. score", "mean norm. score", "IQM return",
-                  f"P(> {VERSUS})", "IAE [K s]", "max\\|dev\\| [K]", "t>5K [s]",
-                  "valve travel [strokes]", f"travel / {ZERO}'s", "trips", "failed"]  # fmt: skip
+                  f"P(> {VERSUS})", *(COLUMNS[k][0] for k in RANK_METRICS),
+                  f"travel / {ZERO}'s", "trips", "failed"]  # fmt: skip
         zero_travel = pols.get(ZERO, {}).get("metrics", {}).get("valve_travel")
         body = []
         for k in order:
@@ -319,23 +348,23 @@ def markdown(summary: dict[str, Any], rows: list[dict]) -> str:
                      else "-")  # fmt: skip
             body.append([str(e.get("rank", "ref." if k in REFERENCES else "-")), k,
                          _ci(ns.get("iqm")), _ci(ns.get("mean")),
-                         _ci(e["return"]["iqm"], "{:.0f}"),
+                         _ci(e["return"]["iqm"], 0),
                          _ci(e.get(f"p_improvement_over_{VERSUS}")),
-                         _fmt(met.get("iae_K_s")), _fmt(met.get("max_abs_dev_K")),
-                         _fmt(met.get("time_outside_5K_s")), _fmt(travel), ratio,
+                         *(_col(k, met.get(k)) for k in RANK_METRICS), ratio,
                          str(e["trips"]), str(e["failed"])])  # fmt: skip
         lines += _table(header, body) + [""]
         lines += ["<details><summary>per scenario (mean over seeds)</summary>", ""]
         for sc, cells in p["scenarios"].items():
             ref = p["reference"][sc]
-            note = (f"0 = {ZERO} ({ref['zero_return']:.1f}), 1 = {ONE} "
-                    f"({ref['one_return']:.1f}), scale {ref['span']:.1f}" if ref["normalized"]
+            note = (f"0 = {ZERO} (return {num(ref['zero_return'], 1)}), 1 = {ONE} (return "
+                    f"{num(ref['one_return'], 1)}), scale {num(ref['span'], 1)}"
+                    if ref["normalized"]
                     else f"not normalized ({ZERO} or {ONE} not run)")  # fmt: skip
             cols = [m for m in TABLE_METRICS if any(m in c for c in cells.values())]
             lines += [f"### {env_id.split('/')[-1]} - {sc}", "", f"Normalized score: {note}.", ""]
-            header = ["policy", "seeds", "norm. score", *cols, "trips"]
-            body = [[k, str(c["seeds"]), _fmt(c.get("normalized_score")),
-                     *[_fmt(c.get(m)) for m in cols], str(c["trips"])]
+            header = ["policy", "seeds", "norm. score", *(COLUMNS[m][0] for m in cols), "trips"]
+            body = [[k, str(c["seeds"]), num(c.get("normalized_score")),
+                     *[_col(m, c.get(m)) for m in cols], str(c["trips"])]
                     for k, c in cells.items()]  # fmt: skip
             lines += _table(header, body) + [""]
         lines += ["</details>", ""]

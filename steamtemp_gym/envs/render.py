@@ -1,9 +1,11 @@
 """DCS-style trend display of ``render_mode="rgb_array"``: the main-steam temperature
-(true and measured) against its setpoint with the +-5 / +-8 K bands, the load demand,
-and every actuator's opening with the total spray flow, over the whole episode.
+(true and measured) against its setpoint with the +-5 / +-8 K bands, every other scored
+temperature (``Plant.secondary``, e.g. the reheat) against its setpoint with the same
+bands, the load demand, and every actuator's opening (sprays, dampers; named as in
+``signals.action``) with the total spray flow, over the whole episode.
 
 Like a DCS trend, the axes are fixed for the episode (time over the scenario's duration,
-the temperature over the setpoint at reset +-30 K, openings 0-100 %, spray flow 0 to the
+each temperature over its setpoint at reset +-30 K, openings 0-100 %, spray flow 0 to the
 plant's spray range), so matplotlib draws the frame, its labels and legends once per
 episode (:class:`TrendDisplay`); each step then rasterizes only its new segments into
 the image (a few pixel columns), and ``render()`` returns a copy: ~0.2 ms per frame
@@ -24,7 +26,7 @@ WIDTH, HEIGHT, DPI = 640, 480, 80
 #: temperature axis half-width around the setpoint at reset, K
 SPAN_K = 30.0
 _BAND_COLORS = ("#bfe3bf", "#e5f3e5")  # +-5 K, +-8 K (green at alpha 0.25 / 0.12 on white)
-_VALVE_COLORS = ("tab:purple", "tab:brown", "tab:olive", "tab:cyan")
+_VALVE_COLORS = ("tab:purple", "tab:brown", "tab:olive", "tab:cyan", "tab:pink", "tab:green")
 
 
 def _rgb(color: str) -> np.ndarray:
@@ -59,13 +61,16 @@ class TrendDisplay:
     Args:
         title: Figure title (plant id and scenario).
         duration_s: Episode length (the time axis).
-        first: The info dict at reset (setpoint, valves).
+        first: The info dict at reset (setpoint, valves, secondary temperatures).
         spray_max_kg_s: Top of the spray-flow axis.
         valve_names: Legend names of the actuators (``info["spray_valve"]`` order).
+        secondary: The other scored temperatures as (info key, setpoint in °C), one panel
+            each (``Plant.secondary``).
     """
 
     def __init__(self, title: str, duration_s: float, first: dict[str, Any],
-                 spray_max_kg_s: float, valve_names: tuple[str, ...] = ()) -> None:  # fmt: skip
+                 spray_max_kg_s: float, valve_names: tuple[str, ...] = (),
+                 secondary: tuple[tuple[str, float], ...] = ()) -> None:  # fmt: skip
         import matplotlib
 
         matplotlib.use("Agg", force=False)
@@ -75,47 +80,58 @@ class TrendDisplay:
         from matplotlib.patches import Patch
 
         n_valves = np.atleast_1d(first["spray_valve"]).size
+        self.secondary = tuple(secondary)
         self.t_max = max(duration_s, 1.0) / 60.0
         sp0 = float(first["setpoint_C"])
         fig = Figure(figsize=(WIDTH / DPI, HEIGHT / DPI), dpi=DPI)
-        ax1, ax2, ax3 = fig.subplots(3, 1, sharex=True, gridspec_kw={"height_ratios": [2, 1, 1]})
+        n_sec = len(self.secondary)
+        ratios = [2.0] + [1.1] * n_sec + [0.8, 1.3]
+        axs = fig.subplots(len(ratios), 1, sharex=True, gridspec_kw={"height_ratios": ratios})
+        ax1, sec_axes, ax2, ax3 = axs[0], list(axs[1:1 + n_sec]), axs[-2], axs[-1]
         ax3b = ax3.twinx()
-        lims = ((sp0 - SPAN_K, sp0 + SPAN_K), (0.0, 110.0), (-5.0, 105.0),
-                (0.0, max(spray_max_kg_s, 1e-3)))  # fmt: skip
-        for ax, ylim in zip((ax1, ax2, ax3, ax3b), lims, strict=True):
+        temps = [(ax1, (sp0 - SPAN_K, sp0 + SPAN_K))] + [
+            (ax, (sp2 - SPAN_K, sp2 + SPAN_K)) for ax, (_, sp2) in zip(sec_axes, self.secondary,
+                                                                    strict=True)]  # fmt: skip
+        frame = [*temps, (ax2, (0.0, 110.0)), (ax3, (-5.0, 105.0)),
+                 (ax3b, (0.0, max(spray_max_kg_s, 1e-3)))]  # fmt: skip
+        for ax, ylim in frame:
             ax.set_xlim(0.0, self.t_max)
             ax.set_ylim(*ylim)
-        for ax in (ax1, ax2, ax3):
+        for ax in (ax1, *sec_axes, ax2, ax3):
             ax.grid(alpha=0.3)
         ax1.set_ylabel("main steam [°C]")
-        ax2.set_ylabel("load demand [%]")
+        for ax, (key, _) in zip(sec_axes, self.secondary, strict=True):
+            ax.set_ylabel(key.removesuffix("_temp_C").replace("_", " ") + " [°C]")
+        ax2.set_ylabel("load [%]")
         ax3.set_ylabel("opening [%]")
         ax3b.set_ylabel("spray [kg/s]", color="tab:gray")
         ax3.set_xlabel("time [min]")
         ax1.set_title(title, fontsize=9)
+        small = {"fontsize": 7, "frameon": False, "borderaxespad": 0.1, "handlelength": 1.5,
+                 "columnspacing": 1.0}  # fmt: skip
         ax1.legend(handles=[
-            Line2D([], [], color="tab:red", lw=2, label="outlet (true)"),
-            Line2D([], [], color="tab:orange", lw=1, label="outlet (measured)"),
+            Line2D([], [], color="tab:red", lw=2, label="true"),
+            Line2D([], [], color="tab:orange", lw=1, label="measured"),
             Line2D([], [], color="k", lw=1, label="setpoint"),
             Patch(color=_BAND_COLORS[0], label="±5 K"), Patch(color=_BAND_COLORS[1], label="±8 K"),
-        ], loc="upper right", fontsize=7, ncol=3)  # fmt: skip
+        ], loc="lower right", ncol=5, **dict(small, frameon=True))  # fmt: skip
         ax3.legend(handles=[
-            *(Line2D([], [], color=_VALVE_COLORS[j % 4], lw=1,
+            *(Line2D([], [], color=_VALVE_COLORS[j % len(_VALVE_COLORS)], lw=1,
                      label=valve_names[j] if j < len(valve_names) else f"actuator {j + 1}")
               for j in range(n_valves)),
             Line2D([], [], color="tab:gray", lw=1, label="spray flow"),
-        ], loc="upper right", fontsize=7, ncol=n_valves + 1)  # fmt: skip
-        fig.tight_layout()
+        ], loc="lower left", bbox_to_anchor=(0.0, 1.0), ncol=min(n_valves + 1, 4),
+            **small)  # fmt: skip
+        fig.tight_layout(h_pad=0.3)
         canvas = FigureCanvasAgg(fig)
         canvas.draw()
         self.background = np.asarray(canvas.buffer_rgba())[:, :, :3].copy()
         xl = (0.0, self.t_max)
-        self.axes = [_Axis(ax, xl, ylim) for ax, ylim in zip((ax1, ax2, ax3, ax3b), lims,
-                                                                strict=True)]  # fmt: skip
+        self.axes = [_Axis(ax, xl, ylim) for ax, ylim in frame]
         self.colors = {k: _rgb(c) for k, c in (
             ("true", "tab:red"), ("meas", "tab:orange"), ("sp", "black"), ("load", "tab:blue"),
             ("spray", "tab:gray"))}  # fmt: skip
-        self.valve_colors = [_rgb(_VALVE_COLORS[j % 4]) for j in range(n_valves)]
+        self.valve_colors = [_rgb(_VALVE_COLORS[j % len(_VALVE_COLORS)]) for j in range(n_valves)]
         self.bands = [_rgb(c) for c in _BAND_COLORS]
         self.image = self.background.copy()
         self.last: dict[str, Any] | None = None
@@ -130,8 +146,9 @@ class TrendDisplay:
         """Draw the segment from the previous step to ``info``."""
         prev = self.last or info
         t0, t1 = prev["time_s"] / 60.0, info["time_s"] / 60.0
-        temp, load, act, spray = self.axes
-        self._bands(temp, t1, float(info["setpoint_C"]))
+        temp, *sec, load, act, spray = self.axes
+        c1 = self._columns(temp, t1)
+        self._bands(temp, c1, float(info["setpoint_C"]))
         pairs = [
             (temp, "setpoint_C", self.colors["sp"], 1, 1.0),
             (temp, "measured_temp_C", self.colors["meas"], 1, 1.0),
@@ -139,6 +156,11 @@ class TrendDisplay:
             (load, "load", self.colors["load"], 1, 100.0),
             (spray, "spray_flow_kg_s", self.colors["spray"], 1, 1.0),
         ]
+        for ax, (key, sp2) in zip(sec, self.secondary, strict=True):
+            self._bands(ax, c1, sp2)
+            self._segment(ax, t0, sp2, t1, sp2, self.colors["sp"], 1)
+            pairs.append((ax, key, self.colors["true"], 2, 1.0))
+        self.filled = max(self.filled, c1)
         for ax, key, color, width, scale in pairs:
             self._segment(ax, t0, scale * float(prev[key]), t1, scale * float(info[key]), color,
                           width)  # fmt: skip
@@ -147,16 +169,18 @@ class TrendDisplay:
             self._segment(act, t0, 100.0 * v0[j], t1, 100.0 * v1[j], color, 1)
         self.last = info
 
-    def _bands(self, ax: _Axis, t1: float, sp: float) -> None:
-        """The +-8 / +-5 K bands around ``sp`` in the columns up to time t1."""
-        c0, c1 = max(self.filled + 1, math.ceil(ax.left)), min(round(ax.x(t1)),
-                                                              math.floor(ax.right))  # fmt: skip
+    def _columns(self, ax: _Axis, t1: float) -> int:
+        """The last image column up to time t1 (all temperature panels share the columns)."""
+        return min(round(ax.x(t1)), math.floor(ax.right))
+
+    def _bands(self, ax: _Axis, c1: int, sp: float) -> None:
+        """The +-8 / +-5 K bands around ``sp`` in the columns not yet filled up to c1."""
+        c0 = max(self.filled + 1, math.ceil(ax.left))
         if c1 < c0:
             return
         for band, color in zip(reversed(BANDS_K), reversed(self.bands), strict=True):
             r0, r1 = round(ax.y(sp + band)), round(ax.y(sp - band))
             self.image[r0:r1 + 1, c0:c1 + 1] = color
-        self.filled = c1
 
     def _segment(self, ax: _Axis, t0: float, v0: float, t1: float, v1: float,
                  color: np.ndarray, width: int) -> None:  # fmt: skip

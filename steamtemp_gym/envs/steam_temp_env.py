@@ -103,8 +103,11 @@ class SteamTempEnv(gym.Env):
             from steamtemp_gym.envs.render import TrendDisplay, spray_range
 
             title = f"{self.plant.id}  scenario: {getattr(scenario, 'name', '')}"
+            names = tuple((s.description or s.name).removesuffix(" command")
+                          for s in self.signals.action)  # fmt: skip
             self._display = TrendDisplay(title, scenario.duration_s, info,
-                                         spray_range(self.plant), self.plant.valves)  # fmt: skip
+                                         spray_range(self.plant), names,
+                                         self.plant.secondary)  # fmt: skip
         return self.core.obs[0].copy(), info
 
     def step(self, action):

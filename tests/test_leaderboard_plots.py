@@ -1,0 +1,209 @@
+"""The leaderboard's figures (agents/leaderboard_plots.py) and leaderboard.md's numbers:
+colours unique per figure and by kind, the trend plots' policy selection, the profiles'
+focused axis with the clipped runs marked, display precision and units in the markdown.
+
+Figures are inspected before they are written (``_save`` replaced); synthetic traces and
+scores keep these in seconds.
+"""
+
+from __future__ import annotations
+
+import colorsys
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+from matplotlib.colors import to_rgb
+
+import baselines
+from agents import leaderboard_plots as plots
+from agents import leaderboard_report as report
+
+AGENTS = ("sb3:ppo", "sb3:sac", "sb3:sac_caps", "zoo:runs/a", "mine:make")
+
+
+@pytest.fixture
+def figures(monkeypatch):
+    """The figures the plot functions would write, in order, instead of the files."""
+    out = []
+
+    def keep(fig, path, **kw):
+        out.append(fig)
+
+    monkeypatch.setattr(plots, "_save", keep)
+    yield out
+    import matplotlib.pyplot as plt
+
+    for fig in out:
+        plt.close(fig)
+
+
+def _hue(color) -> float:
+    return colorsys.rgb_to_hsv(*to_rgb(color))[0]
+
+
+def _in(hue: float, hues: tuple[float, float]) -> bool:
+    lo, hi = hues
+    return lo <= hue <= hi or lo <= hue + 1.0 <= hi
+
+
+def _colors(lines) -> list[str]:
+    return [tuple(round(c, 4) for c in to_rgb(ln.get_color())) for ln in lines]
+
+
+def test_colours_are_unique_and_by_family(monkeypatch):
+    extra = tuple(f"my_baseline_{k}" for k in range(6))  # beyond the listed colours
+    monkeypatch.setattr(baselines, "NAMES", (*baselines.NAMES, *extra))
+    agents = (*AGENTS, *(f"zoo:runs/{k}" for k in range(12)))
+    names = [*baselines.NAMES, *agents, *report.REFERENCES]
+    colors = plots.policy_colors(names)
+    assert list(colors) == names
+    assert len({to_rgb(c) for c in colors.values()}) == len(names)
+    for name in baselines.NAMES:
+        assert _in(_hue(colors[name]), plots.BASELINE_HUES), (name, colors[name])
+    for name in agents:
+        assert _in(_hue(colors[name]), plots.AGENT_HUES), (name, colors[name])
+    for name in report.REFERENCES:  # grey: no hue at all
+        r, g, b = to_rgb(colors[name])
+        assert r == g == b
+    # the reference keeps its colour wherever it stands
+    assert plots.policy_colors(["sb3:ppo", "mpc_linear", report.ZERO])[report.ZERO] == \
+        plots.BASELINE_COLORS[0]
+
+
+def _plant(ranks: dict[str, int]) -> dict:
+    return {"policies": {p: {"rank": k} for p, k in ranks.items()}}
+
+
+def test_trend_shows_the_reference_the_oracle_cascade_pi_and_the_top_three():
+    available = [*baselines.NAMES, *AGENTS[:3], *report.REFERENCES]
+    ranks = {p: k for k, p in enumerate(
+        ["mpc_linear", "cascade_pi_ff", "sb3:ppo", "lqi", "fao_fac", "cascade_pi", "sb3:sac"], 1)}
+    shown = plots.trend_policies(_plant(ranks), available)
+    assert shown == ["cascade_pi_ff", "oracle", "cascade_pi", "mpc_linear", "sb3:ppo", "lqi"]
+    every = plots.trend_policies(_plant(ranks), available, every=True)
+    assert sorted(every) == sorted(available) and every[:6] == shown
+    # without the score (no oracle): by the IQM of the return
+    rets = {p: {"return": {"iqm": {"value": v}}} for p, v in
+            (("lqi", -5.0), ("fao_sf", -1.0), ("sb3:sac", -3.0), ("mpc_arx", -9.0))}
+    shown = plots.trend_policies({"policies": rets}, ["cascade_pi_ff", "cascade_pi", "lqi",
+                                                      "fao_sf", "sb3:sac", "mpc_arx"])
+    assert shown == ["cascade_pi_ff", "cascade_pi", "fao_sf", "sb3:sac", "lqi"]
+
+
+def _trace(n: int, offset: float, n_act: int, secondary: bool) -> dict:
+    t = np.arange(n) * 2.0
+    tr = {"time_s": t, "outlet_temp_C": 540.0 + offset * np.sin(t / 100),
+          "measured_temp_C": 540.0 + offset * np.sin(t / 100), "setpoint_C": np.full(n, 540.0),
+          "load": np.linspace(1.0, 0.5, n), "spray_valve": np.full((n, n_act), 0.4),
+          "spray_flow_kg_s": np.full(n, 5.0), "heat_absorption_bias": np.zeros(n),
+          "fouling": np.ones(n), "spray_water_temp_offset_C": np.zeros(n)}  # fmt: skip
+    if secondary:
+        tr["reheat_temp_C"] = 566.0 + offset * np.cos(t / 100)
+    return tr
+
+
+def _env(n_act: int, secondary: bool):
+    plant = SimpleNamespace(secondary=(("reheat_temp_C", 566.0),) if secondary else ())
+    acts = [SimpleNamespace(name=f"v{j}", description=f"valve {j} command") for j in range(n_act)]
+    return SimpleNamespace(unwrapped=SimpleNamespace(plant=plant,
+                                                     signals=SimpleNamespace(action=acts)))
+
+
+def test_trend_colours_are_unique_and_the_title_names_the_scenario(figures, tmp_path):
+    names = ["cascade_pi_ff", "oracle", "cascade_pi", "mpc_linear", "sb3:ppo", "lqi",
+             "sb3:sac", "frozen_valve"]  # fmt: skip
+    traces = {n: _trace(50, 1.0 + k, 3, True) for k, n in enumerate(names)}
+    plots.trend(tmp_path / "x.png", _env(3, True), "steamtemp/BoilerTurbineMIMO-v0",
+                "my_test", traces, 0, notes={"mpc_linear": "#1, score 0.75"})  # fmt: skip
+    (fig,) = figures
+    main = fig.axes[0]
+    lines = [ln for ln in main.get_lines() if ln.get_label().endswith(": true")]
+    assert [ln.get_label().removesuffix(": true").split(" (")[0] for ln in lines] == names
+    assert len(set(_colors(lines))) == len(names)
+    assert "mpc_linear (#1, score 0.75): true" in [ln.get_label() for ln in lines]
+    assert main.get_title().startswith("BoilerTurbineMIMO-v0 - my_test:")
+    # the same colour for a policy in every panel: main steam, reheat, three actuators
+    for ax in fig.axes[1:5]:
+        assert _colors(ax.get_lines()[-len(names):]) == _colors(lines)
+
+
+def test_profiles_span_the_score_range_and_mark_clipped_runs(figures, tmp_path):
+    lo, hi = plots.PROFILE_RANGE
+    rng = np.random.default_rng(0)
+    scores = {"steamtemp/A-v0": {
+        "cascade_pi_ff": [rng.normal(0.0, 0.1, 5) for _ in range(3)],
+        "sb3:sac": [np.array([-9.0, -4.0, 0.2, 0.3, -0.1]) for _ in range(3)],
+        "mpc_linear": [np.array([0.7, 0.8, 0.9, 3.0, 0.75]) for _ in range(3)],
+        "oracle": [np.ones(5) for _ in range(3)]}}  # fmt: skip
+    plots.profiles(tmp_path / "p.png", scores, 5)
+    (fig,) = figures
+    ax = fig.axes[0]
+    assert ax.get_xlim() == (lo, hi)
+    marks = {(m.get_marker(), to_rgb(m.get_color())) for m in ax.get_lines()
+             if m.get_marker() in ("<", ">")}  # fmt: skip
+    colors = plots.policy_colors(list(scores["steamtemp/A-v0"]))
+    assert marks == {("<", to_rgb(colors["sb3:sac"])), (">", to_rgb(colors["mpc_linear"]))}
+    curves = [ln for ln in ax.get_lines() if ln.get_label() in scores["steamtemp/A-v0"]]
+    assert len(set(_colors(curves))) == len(curves) == 4
+
+
+def test_bars_colour_by_family(figures, tmp_path):
+    pols = {p: {"rank": k, "normalized_score": {"iqm": {"value": v, "ci95": [v - 0.1, v + 0.1]}}}
+            for k, (p, v) in enumerate((("mpc_linear", 0.8), ("sb3:ppo", 0.3),
+                                        ("cascade_pi", -0.2), ("sb3:sac", -3.0)), 1)}  # fmt: skip
+    summary = {"run": {"seeds": [0, 1], "policies": {"e": list(pols)}},
+               "plants": {"steamtemp/A-v0": {"policies": pols}}, "ranking": []}  # fmt: skip
+    plots.bars(tmp_path / "s.png", summary)
+    (fig,) = figures
+    ax = fig.axes[0]
+    fills = [tuple(round(c, 4) for c in p.get_facecolor()[:3]) for p in ax.patches]
+    assert len(set(fills)) == 4
+    for p, c in zip(("mpc_linear", "sb3:ppo", "cascade_pi", "sb3:sac"), fills, strict=True):
+        fam = plots.BASELINE_HUES if p in baselines.NAMES else plots.AGENT_HUES
+        assert _in(colorsys.rgb_to_hsv(*c)[0], fam), p
+    assert ax.get_xlim()[0] >= -1.05  # the -3.0 bar is cut at the edge, its value written
+    assert any("-3.00" in t.get_text() for t in ax.texts)
+
+
+# --------------------------------------------------------------------------- markdown
+def test_numbers_are_rounded_to_display_precision():
+    assert report.num(-6.661e-17) == "0.00"
+    assert report.num(-0.004) == "0.00"
+    assert report.num(-0.006) == "-0.01"
+    assert report.num(12345.678, 0) == "12346"
+    assert report.num(79750.0, 1, 1e-3) == "79.8"
+    assert report.num(None) == report.num(float("nan")) == "-"
+
+
+def _rows() -> list[dict]:
+    rows = []
+    for p, base in (("cascade_pi_ff", -100.0), ("oracle", -40.0), ("mpc_linear", -50.0)):
+        for seed in range(3):
+            ret = base + (seed - 1) * 1e-13 * (p == "cascade_pi_ff") + seed
+            rows.append({"env": "steamtemp/A-v0", "scenario": "s", "policy": p, "seed": seed,
+                         "metrics": {"return": ret, "tripped": 0.0, "iae_K_s": 1234.5678,
+                                     "max_abs_dev_K": 3.14159, "spray_used_kg": 79750.0,
+                                     "valve_travel": 3e-9, "time_outside_5K_s": 0.0}})
+    return rows
+
+
+def test_markdown_has_no_exponents_and_carries_units():
+    run = {"envs": ["steamtemp/A-v0"], "scenarios": ["s"], "seeds": [0, 1, 2],
+           "policies": {"steamtemp/A-v0": ["cascade_pi_ff", "oracle", "mpc_linear"]}}
+    summary, _ = report.summarize(_rows(), run)
+    text = report.markdown(summary, [])
+    import re
+
+    assert not re.search(r"\d[eE][+-]?\d", text), re.findall(r"\S*\d[eE][+-]?\d\S*", text)
+    assert "-0.00" not in text
+    header = next(ln for ln in text.splitlines() if ln.startswith("| policy | seeds"))
+    for unit in ("IAE [K s]", "max\\|dev\\| [K]", "spray [t]", "valve travel [strokes]",
+                 "t>5K [s]"):  # fmt: skip
+        assert unit in header, header
+    assert "| 1235 |" in text and "| 79.8 |" in text and "| 3.14 |" in text
+
+
+def test_report_columns_cover_the_tables():
+    assert set(report.TABLE_METRICS) <= set(report.COLUMNS)
+    assert set(report.RANK_METRICS) <= set(report.COLUMNS)
