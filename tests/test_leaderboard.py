@@ -299,6 +299,27 @@ def test_resume_after_a_crash_completes_without_duplicates(tiny, tmp_path, fake_
     assert _board(out) == board
 
 
+@pytest.mark.parametrize("every", [False, True])
+def test_trend_plots_name_the_scenario_and_show_the_selection(tmp_path, fake_policies,
+                                                              monkeypatch, every):  # fmt: skip
+    """A trend plot's title names the scenario (the YAML's name, not its path); by default it
+    shows the reference and the best of the others (the frozen valve only with --trend-all),
+    each plant drawn once all its episodes have finished."""
+    path = tmp_path / "some_file.yaml"
+    path.write_text(TINY)
+    calls = []
+    monkeypatch.setattr(lb.plots, "trend", lambda p, env, env_id, sc, traces, seed, **kw:
+                        calls.append((p.name, env_id, sc, list(traces), kw["colors"])))
+    argv = _args(path, tmp_path / "out", **{"--policies": "frozen,flaky",
+                                            "--envs": f"{ENV},{ENV2}"})  # fmt: skip
+    lb.main(argv + (["--trend-all"] if every else []))
+    assert [c[:3] for c in calls] == [("Cascade300MW-v0__some_file.png", ENV, "tiny"),
+                                      ("DrumBoilerSH-v0__some_file.png", ENV2, "tiny")]
+    shown = ["cascade_pi_ff", "flaky", "frozen"] + (["frozen_valve"] if every else [])
+    assert all(sorted(c[3]) == sorted(shown) and c[3][0] == "cascade_pi_ff" for c in calls)
+    assert all(len(set(c[4].values())) == len(c[4]) for c in calls)
+
+
 def test_failed_episode_is_recorded_and_the_run_goes_on(tiny, tmp_path, fake_policies, capsys):
     """A batch that raises runs its seeds alone: only the failing seed is a failed row."""
     out = tmp_path / "out"

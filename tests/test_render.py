@@ -59,3 +59,52 @@ def test_render_before_reset_is_an_error():
     env = gym.make("steamtemp/Cascade300MW-v0", render_mode="rgb_array")
     with pytest.raises(RuntimeError, match="reset"):
         env.unwrapped.render()
+
+
+def test_secondary_temperatures_have_their_own_panel():
+    first = dict(_info(0.0, 540.0, valve=(0.5, 0.5, 0.3)), reheat_temp_C=566.0)
+    d = TrendDisplay("test", 600.0, first, spray_max_kg_s=20.0,
+                     valve_names=("SP1", "SP2", "RGD"), secondary=(("reheat_temp_C", 566.0),))
+    for k in range(1, 61):
+        d.add(dict(_info(10.0 * k, 540.0, valve=(0.5, 0.5, 0.3)),
+                   reheat_temp_C=566.0 - 15.0 * (k >= 30)))  # a 15 K drop at 5 min
+    temp, reheat, load, act, spray = d.axes
+    assert reheat.top > temp.bottom and load.top > reheat.bottom
+    red = np.array([214, 39, 40])
+    img = d.frame()
+    col = round(reheat.x(8.0))
+    rows = np.flatnonzero(np.all(img[:, col] == red, axis=1))
+    rows = rows[(rows >= reheat.rows[0]) & (rows <= reheat.rows[1])]
+    assert rows.size and abs(rows.mean() - reheat.y(551.0)) <= 1.5
+    # the main steam held its setpoint meanwhile
+    rows = np.flatnonzero(np.all(img[temp.rows[0]:temp.rows[1], col] == red, axis=1))
+    assert rows.size and abs(rows.mean() + temp.rows[0] - temp.y(540.0)) <= 1.5
+
+
+@pytest.mark.parametrize("env_id", sorted(__import__("steamtemp_gym").ENV_IDS))
+def test_every_plant_shows_every_scored_temperature_and_actuator(env_id):
+    """Each plant's frame: one temperature panel per scored temperature (main steam and
+    ``Plant.secondary``), each actuator's trace in its own colour, named as in
+    ``signals.action``."""
+    import gymnasium as gym
+
+    import steamtemp_gym  # noqa: F401
+    from steamtemp_gym.envs import render
+
+    env = gym.make(env_id, scenario="load_ramp_100_50", render_mode="rgb_array")
+    _, info = env.reset(seed=0)
+    for _ in range(20):
+        _, _, _, _, info = env.step(env.action_space.sample())
+    u = env.unwrapped
+    d = u._display
+    assert len(d.axes) == 1 + len(u.plant.secondary) + 3
+    assert [k for k, _ in d.secondary] == [k for k, _ in u.plant.secondary]
+    n = len(u.signals.action)
+    assert np.atleast_1d(info["spray_valve"]).size == n
+    act = d.axes[-2]
+    region = env.render()[act.rows[0]:act.rows[1] + 1, round(act.left) + 2:round(act.x(1.0))]
+    for j in range(n):
+        color = render._rgb(render._VALVE_COLORS[j % len(render._VALVE_COLORS)])
+        assert np.all(region == color, axis=2).any(), (env_id, j)
+    assert len(set(map(tuple, d.valve_colors))) == n
+    assert d.valve_names == tuple(s.description.removesuffix(" command") for s in u.signals.action)

@@ -115,10 +115,11 @@ class TrendDisplay:
             Line2D([], [], color="k", lw=1, label="setpoint"),
             Patch(color=_BAND_COLORS[0], label="±5 K"), Patch(color=_BAND_COLORS[1], label="±8 K"),
         ], loc="lower right", ncol=5, **dict(small, frameon=True))  # fmt: skip
+        self.valve_names = tuple(valve_names[j] if j < len(valve_names) else f"actuator {j + 1}"
+                                 for j in range(n_valves))  # fmt: skip
         ax3.legend(handles=[
-            *(Line2D([], [], color=_VALVE_COLORS[j % len(_VALVE_COLORS)], lw=1,
-                     label=valve_names[j] if j < len(valve_names) else f"actuator {j + 1}")
-              for j in range(n_valves)),
+            *(Line2D([], [], color=_VALVE_COLORS[j % len(_VALVE_COLORS)], lw=1, label=name)
+              for j, name in enumerate(self.valve_names)),
             Line2D([], [], color="tab:gray", lw=1, label="spray flow"),
         ], loc="lower left", bbox_to_anchor=(0.0, 1.0), ncol=min(n_valves + 1, 4),
             **small)  # fmt: skip
