@@ -16,7 +16,7 @@ function of the leaderboard (agents/evaluation.py):
 The difficulty targets (issue tracker, "benchmark with headroom"; the field
 tolerances of REFERENCE_DATA.md: about +-10 K once-through, +-8 K drum during
 load changes) are :data:`TARGETS`; tests/test_difficulty.py checks them and
-benchmarks/difficulty.py prints the table and regenerates the README's.
+benchmarks/difficulty.py prints the table and regenerates docs/difficulty.md's.
 """
 
 from __future__ import annotations
