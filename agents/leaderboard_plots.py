@@ -123,9 +123,10 @@ def trend_policies(plant: dict[str, Any], available: Sequence[str],
     """The policies a plant's trend plots show, in legend order.
 
     By default the reference ``cascade_pi_ff``, the ``oracle``, ``cascade_pi`` and the
-    :data:`TREND_TOP` best ranked of the others (by rank: the IQM of the normalized score;
-    in a run without the score, by the IQM of the return); with ``every``, all of
-    ``available``, ranked ones first.
+    :data:`TREND_TOP` best ranked of the other admissible policies (by rank: the IQM of the
+    normalized score; in a run without the score, by the IQM of the return; a policy over
+    the valve-travel budget, with a trip or a failed episode is left out); with ``every``,
+    all of ``available``, ranked ones first.
 
     Args:
         plant: The plant's summary (``summary["plants"][env_id]``; an empty dict for none).
@@ -145,7 +146,7 @@ def trend_policies(plant: dict[str, Any], available: Sequence[str],
     rest = sorted((p for p in available if p not in fixed and kind(p) != "reference"), key=key)
     if every:
         return fixed + rest + [p for p in available if p not in fixed and p not in rest]
-    return fixed + rest[:TREND_TOP]
+    return fixed + [p for p in rest if pols.get(p, {}).get("admissible") is not False][:TREND_TOP]
 
 
 def _plt():

@@ -81,6 +81,9 @@ def test_trend_shows_the_reference_the_oracle_cascade_pi_and_the_top_three():
         ["mpc_linear", "cascade_pi_ff", "sb3:ppo", "lqi", "fao_fac", "cascade_pi", "sb3:sac"], 1)}
     shown = plots.trend_policies(_plant(ranks), available)
     assert shown == ["cascade_pi_ff", "oracle", "cascade_pi", "mpc_linear", "sb3:ppo", "lqi"]
+    plant = _plant(ranks)
+    plant["policies"]["sb3:ppo"]["admissible"] = False  # over the valve-travel budget
+    assert plots.trend_policies(plant, available)[3:] == ["mpc_linear", "lqi", "fao_fac"]
     every = plots.trend_policies(_plant(ranks), available, every=True)
     assert sorted(every) == sorted(available) and every[:6] == shown
     # without the score (no oracle): by the IQM of the return
