@@ -322,7 +322,7 @@ def _iqm_score(entry: dict[str, Any]) -> float:
 def agents_markdown(summary: dict[str, Any]) -> str:
     """Per plant, each trained agent (``sb3:*``) against ``cascade_pi`` and the best other
     baseline (by the IQM of the normalized score): IQM normalized score with its CI, mean
-    return and mean IAE over scenario × seed, trips. The README's zoo table."""
+    return and mean IAE over scenario × seed, trips. The zoo table of docs/agents.md."""
     n = len(summary["run"]["seeds"])
     lines = [f"{stat_label(n)}; return and IAE: means over scenario × seed. **Bold**: the "
              f"best of the plant's rows; {admissibility_note(summary)}", ""]  # fmt: skip

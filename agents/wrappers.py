@@ -41,7 +41,7 @@ STOP_MARGIN = 0.005
 @dataclasses.dataclass(frozen=True)
 class MemoryConfig:
     """What the memory adds (module docstring); the defaults are the measured choice
-    (README, "Training agents")."""
+    (docs/agents.md, "Controller memory")."""
 
     integral: bool = True
     integral_time_s: float = 60.0

@@ -1,5 +1,5 @@
 """Docs and command-line help speak to users: no project-history words ('issue 14',
-'session 19', 'this round') in docs/, examples/ or any ``--help`` (history goes to
+'session 19', 'this round') in README.md, docs/, examples/ or any ``--help`` (history goes to
 CHANGELOG.md)."""
 
 from __future__ import annotations
@@ -27,7 +27,8 @@ def test_the_pattern_finds_history_words():
     assert _hits("products are rounded differently; a sessionless run") == []
 
 
-@pytest.mark.parametrize("path", sorted([*ROOT.glob("docs/**/*.md"), *ROOT.glob("examples/*")]),
+@pytest.mark.parametrize("path", sorted([ROOT / "README.md", *ROOT.glob("docs/**/*.md"),
+                                         *ROOT.glob("examples/*")]),
                          ids=lambda p: str(p.relative_to(ROOT)))  # fmt: skip
 def test_docs_have_no_history_words(path):
     assert not _hits(path.read_text(encoding="utf-8")), _hits(path.read_text(encoding="utf-8"))
