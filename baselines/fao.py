@@ -131,6 +131,7 @@ from scipy.linalg import expm
 from baselines.cascade_pi import FILTER_S, CascadePI, inner_schedule
 from baselines.identification import FOPDT, simc_pi, step_test
 from baselines.loops import input_filter, observation_layout, restart_rows
+from baselines.tuning import Knob
 from steamtemp_gym import plants
 from steamtemp_gym._jit import njit
 from steamtemp_gym.metrics import step_response_metrics
@@ -145,8 +146,9 @@ K0 = 273.15
 N_DIV, NU = 3, 1.0 / 3.0
 #: SF gains f_i of eq. (4): 6, 12, 8.
 F_GAINS = feedback_gains(N_DIV, NU)
-#: Scaling gains of the FAC and SF outputs (section 5, item 2).
+#: Scaling gains of the FAC and SF outputs (section 5, item 2) and their knobs.
 KK1, KK2 = 0.45, 0.01
+KNOB_KK1, KNOB_KK2 = Knob("kk1", 0.01, 5.0), Knob("kk2", 0.001, 0.1)
 #: Nominal enthalpy and temperature rise across the FSH, J/kg and K (section 5, item 3).
 DH0_J_KG, DT0_K = 217.8e3, 68.5
 #: Normal value of the steam temperature deviation (Delta t_a = Delta T_a / T0), K.
@@ -298,6 +300,20 @@ def _fsh_nominal(env_id: str, params_json: str) -> tuple[np.ndarray, np.ndarray,
     return sig["steam_flow_kg_s"] / par[2], h0, ha
 
 
+@functools.lru_cache(maxsize=8)
+def _fsh_unit_K(env_id: str, params_json: str) -> tuple[np.ndarray, np.ndarray]:
+    """(U_3, K per normalized unit): the attemperator-outlet temperature change that moves
+    the FSH inlet enthalpy by one normalized unit, h_a0 - h_e0 = 217.8 kJ/kg, i.e.
+    DH0 dT/dh(p, h) at the undisturbed steady state of each schedule load (the plant's
+    steam tables, the paper's eq. (14) ``tph``)."""
+    sig = {s: inner_schedule(env_id, params_json, s)[1] for s in (
+        "attemp_out_temp_meas_C", "steam_flow_kg_s", "pressure_MPa")}  # fmt: skip
+    plant = plants.make(env_id, **json.loads(params_json))
+    pT = zip(sig["pressure_MPa"] * 1e6, sig["attemp_out_temp_meas_C"] + K0, strict=True)
+    unit = np.array([DH0_J_KG * T_dTdh_ph(p, h_pT(p, T))[1] for p, T in pT])
+    return sig["steam_flow_kg_s"] / plant.params.W_nom_kg_s, unit
+
+
 def _pi_from_response(t: np.ndarray, y: np.ndarray, du: float, dt: float) -> tuple[float, float]:
     """SIMC PI (Kc, Ti) of the estimator from the model's step response y(t) to a step du."""
     m = step_response_metrics(t, y)
@@ -346,6 +362,8 @@ class _FSHObserver:
             "attemp_in_temp_C", "spray_flow_kg_s", "steam_flow_kg_s", "pressure_MPa",
             "outlet_temp_meas_C")]  # fmt: skip
         self.u3_tab, self.h0_tab, self.ha_tab = _fsh_nominal(plant.id, params_json)
+        self.unit_tab = _fsh_unit_K(plant.id, params_json)
+        self.unit_K = np.zeros(0)
         self.kc, self.ti = _fsh_observer_gains(plant.id, params_json)
         self.q0 = self.par[2] * DH0_J_KG
         self.a_f = float(np.exp(-self.dt / FILTER_S))
@@ -393,6 +411,7 @@ class _FSHObserver:
         theta = self.S[:, 3:6] / DH0_J_KG - x_nom
         dratio = (self.q_hat / W - (han - h0n)) / DH0_J_KG  # U2/U3 - (U2/U3)^nom
         self.last_dratio = dratio  # for analysis
+        self.unit_K = np.interp(u3, *self.unit_tab)
         return theta, dratio
 
 
@@ -449,6 +468,7 @@ class _LinearObserver:
         self.a_f = float(np.exp(-self.dt / FILTER_S))
         self.x = np.zeros((0, N_DIV))
         self.y0 = self.wi = self.ef = self.w = np.zeros(0)
+        self.unit_K = np.zeros(0)
 
     def __call__(self, y: np.ndarray, restart: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         n = y.shape[0]
@@ -468,6 +488,7 @@ class _LinearObserver:
         self.wi = np.clip(self.wi + self.kc * self.dt / self.ti * self.ef, -2.0, 2.0)
         self.w = np.clip(self.wi + self.kc * self.ef, -2.0, 2.0)
         self.x = self.x @ self.Ad.T + np.outer(u1, self.Bd[:, 0]) + np.outer(self.w, self.Bd[:, 1])
+        self.unit_K = np.full(n, self.dT0)
         return self.x + self.w[:, None] / N_DIV, self.w
 
 
@@ -479,11 +500,20 @@ class FaoCompensated:
         env: The env or native vector env.
         fuzzy: Add the FAC (``fao_fac``); SF alone otherwise (``fao_sf``).
         sf: Add the SF (default True; False gives FAC alone, for analysis).
+        kk1: Scaling gain of the FAC output (default the paper's KK1 = 0.45).
+        kk2: Scaling gain of the SF output (default the paper's KK2 = 0.01).
+
+    Raises:
+        ValueError: A knob that is not a positive finite number.
     """
 
     fuzzy = True
+    KNOBS: tuple[Knob, ...] = (KNOB_KK1, KNOB_KK2)
 
-    def __init__(self, env: Any, fuzzy: bool | None = None, sf: bool = True) -> None:
+    def __init__(self, env: Any, fuzzy: bool | None = None, sf: bool = True,
+                 kk1: float | None = None, kk2: float | None = None) -> None:  # fmt: skip
+        self.kk1 = KNOB_KK1.check(kk1, KK1)
+        self.kk2 = KNOB_KK2.check(kk2, KK2)
         u = env.unwrapped
         plant = u.plant
         if fuzzy is not None:
@@ -493,17 +523,15 @@ class FaoCompensated:
         names, self._scale, self._center = observation_layout(env)
         self.i_err = names.index("error_K")
         params = json.dumps(getattr(u, "_params_overrides", {}) or {}, sort_keys=True)
-        self.comp = []  # (observation index of the inner signal, observer, Delta T_0 in K)
+        self.comp = []  # (observation index of the inner signal, observer)
         for j, (inner, outer) in enumerate(plant.control_loops):
             if outer != MAIN or inner is None:
                 continue  # SCHEDULED / inner-only / damper loops: conventional CascadePI
             if isinstance(plant, SupercriticalFSH):
                 obs_ = _FSHObserver(env, names, params)
-                dT0 = DT0_K
             else:
                 obs_ = _LinearObserver(env, names, params, j)
-                dT0 = obs_.dT0
-            self.comp.append((names.index(inner), obs_, dT0))
+            self.comp.append((names.index(inner), obs_))
         self.a_f = float(np.exp(-plant.dt_s / FILTER_S))
         self._ef: np.ndarray | None = None
         self.bias = np.zeros((1, len(self.comp)))  # last bias (K) per row and compensated loop
@@ -524,12 +552,12 @@ class FaoCompensated:
         dta = -self._ef / T0_K  # (T_a - T_set) / T0
         out = obs.copy()
         self.bias = np.zeros((n, len(self.comp)))
-        for k, (i_in, observer, dT0) in enumerate(self.comp):
+        for k, (i_in, observer) in enumerate(self.comp):
             theta, dratio = observer(y, restart)
-            c = KK2 * (theta @ F_GAINS) if self.sf else np.zeros(n)
+            c = self.kk2 * (theta @ F_GAINS) if self.sf else np.zeros(n)
             if self.fuzzy:
-                c = c + KK1 * fac_output(dta, dratio)
-            self.bias[:, k] = dT0 * c
+                c = c + self.kk1 * fac_output(dta, dratio)
+            self.bias[:, k] = observer.unit_K * c
             out[:, i_in] += self.bias[:, k] / self._scale[i_in]
         ep = restart if episode_start is not None or restart.all() else None
         action, _ = self.pi.predict(out, episode_start=ep)
@@ -540,6 +568,7 @@ class FaoSF(FaoCompensated):
     """``fao_sf``: the FAO's state-feedback delay compensation alone (section 3)."""
 
     fuzzy = False
+    KNOBS: tuple[Knob, ...] = (KNOB_KK2,)
 
 
 class FaoFAC(FaoCompensated):

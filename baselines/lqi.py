@@ -86,6 +86,7 @@ from scipy.linalg import solve_discrete_are
 from baselines.cascade_pi import CascadePI
 from baselines.linear_models import interp_rows, kalman_gain, reachable, steady_point
 from baselines.loops import into_stop, observation_layout, restart_rows
+from baselines.tuning import Knob
 from steamtemp_gym import plants
 from steamtemp_gym.plants.base import MAIN
 
@@ -93,18 +94,36 @@ from steamtemp_gym.plants.base import MAIN
 GRID_LOADS = (0.5, 0.75, 1.0)
 #: Loads at which the steady operating points are tabulated (interpolated between).
 OP_LOADS = tuple(np.round(np.arange(0.3, 1.201, 0.05), 2))
-#: Bryson's rule: largest wanted valve move (fraction of stroke) and main-steam offset (K).
-DU_MAX = 0.1
-E_MAX_K = 1.0
 #: Kalman filter: process noise per scaled state, measurement noise of the thermocouples
-#: (K; the named scenarios' noise_std_C) and of the other signals (fraction of their scale).
+#: (K; the named scenarios' noise_std_C) and of the other signals (fraction of their scale),
+#: random-walk step of the output disturbances (fraction of their signal's scale).
 W_REL = 0.01
 NOISE_K = 0.25
 V_REL = 0.01
+P_REL = 0.002
+#: Defaults of the knobs (all chosen; see the module docstring); e_max_K per plant.
+DEFAULTS = {"du_max": 0.1, "e_max_K": 1.0, "ti_factor": 1.0, "heat_walk": 1.6e-3}
+E_MAX_K = {
+    "steamtemp/SupercriticalFSH-v0": 3.0,
+    "steamtemp/DrumBoilerSH-v0": 4.0,
+    "steamtemp/Cascade300MW-v0": 2.0,
+}
+KNOBS = (
+    Knob("du_max", 0.01, 1.0),
+    Knob("e_max_K", 0.1, 100.0),
+    Knob("ti_factor", 0.1, 10.0),
+    Knob("heat_walk", 1e-4, 1e-2),
+)
+
+
+def defaults(env_id: str) -> tuple[float, ...]:
+    """The knobs' default values on a plant, in :data:`KNOBS` order."""
+    return tuple(E_MAX_K.get(env_id, DEFAULTS[k.name]) if k.name == "e_max_K"
+                 else DEFAULTS[k.name] for k in KNOBS)  # fmt: skip
 
 
 def _t63(A: np.ndarray, B: np.ndarray, c: np.ndarray, dt: float) -> float:
-    """63 % time (s) of the step response c (I - A)^-1 ... of output row c to inputs B."""
+    """63 % time (s) of the step response of output row c to the summed inputs B."""
     x, ys = np.zeros(A.shape[0]), []
     for _ in range(3000):
         x = A @ x + B.sum(axis=1)
@@ -113,18 +132,50 @@ def _t63(A: np.ndarray, B: np.ndarray, c: np.ndarray, dt: float) -> float:
     return dt * (1 + int(np.argmax(ys >= 0.632 * ys[-1])))
 
 
-@functools.lru_cache(maxsize=16)
-def design(env_id: str, params_json: str) -> dict[str, Any]:
+def lq_gains(A: np.ndarray, Bm: np.ndarray, c: np.ndarray, dt: float, q_y: float, q_i: float,
+             r: float) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+    """(Kx, Kz) of the discrete LQI: x+ = A x + Bm du, z+ = z - dt c x, cost
+    sum q_y (c x)^2 + q_i z^2 + r |du|^2 (scipy.linalg.solve_discrete_are)."""
+    n, m = A.shape[0], Bm.shape[1]
+    Aa = np.block([[A, np.zeros((n, 1))], [-dt * c[None, :], np.ones((1, 1))]])
+    Ba = np.vstack([Bm, np.zeros((1, m))])
+    Q = np.zeros((n + 1, n + 1))
+    Q[:n, :n] = q_y * np.outer(c, c)
+    Q[n, n] = q_i
+    R = r * np.eye(m)
+    P = solve_discrete_are(Aa, Ba, Q, R)
+    K = np.linalg.solve(R + Ba.T @ P @ Ba, Ba.T @ P @ Aa)
+    return K[:, :n], K[:, n]
+
+
+def disturbance_target(A: np.ndarray, Bm: np.ndarray, bq: np.ndarray,
+                       c: np.ndarray) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+    """(Nu, Nx): the steady commands u_s = Nu q and states x_s = Nx q that hold c x at 0
+    under a constant heat-absorption bias q entering as bq (least-norm u_s)."""
+    inv = np.linalg.inv(np.eye(A.shape[0]) - A)
+    gu, gq = c @ inv @ Bm, float(c @ inv @ bq)
+    Nu = -np.linalg.pinv(gu[None, :])[:, 0] * gq
+    return Nu, inv @ (Bm @ Nu + bq)
+
+
+@functools.lru_cache(maxsize=32)
+def design(env_id: str, params_json: str, knobs: tuple[float, ...] | None = None
+           ) -> dict[str, Any]:  # fmt: skip
     """The scheduled LQI design of a plant (cached): per grid load the scaled, reduced
-    model (A, B, C), Kalman gain M, LQ gains (Kx, Kz); the operating-point tables."""
+    model (A, B, C, bq), the augmented Kalman gain M, LQ gains (Kx, Kz) and the
+    disturbance feed-forward Kq; the operating-point tables. ``knobs``: values in
+    :data:`KNOBS` order (None: the plant's defaults)."""
+    du_max, e_max, ti_factor, heat_walk = knobs or defaults(env_id)
     plant = plants.make(env_id, **json.loads(params_json))
     main = [j for j, (_, o) in enumerate(plant.control_loops) if o == MAIN]
     observed = [s for s in plant.outputs if s.observed]
     i_meas = [s.name for s in observed].index(plant.outlet_measured)
     models = [plant.linearize(L) for L in GRID_LOADS]
+    bqs = [plant.linearize_disturbances(L, ("heat_absorption_bias",))[0][:, 0]
+           for L in GRID_LOADS]  # fmt: skip
     keep = np.zeros(plant.n_x, dtype=bool)
-    for A, B, *_ in models:
-        keep |= reachable(A, B)
+    for (A, B, *_), bq in zip(models, bqs, strict=True):
+        keep |= reachable(A, np.column_stack([B, bq]))
     # state scale: peak response of each kept state to a unit step of every action, 100 %
     A, B = models[-1][0][np.ix_(keep, keep)], models[-1][1][keep]
     x, peak = np.zeros(A.shape[0]), np.zeros(A.shape[0])
@@ -135,25 +186,36 @@ def design(env_id: str, params_json: str) -> dict[str, Any]:
     sy = np.array([s.scale for s in observed])
     vy = np.array([(NOISE_K / s.scale if s.noisy else V_REL) ** 2 for s in observed])
     dt = plant.dt_s
+    p_rows = [j for j in range(len(observed)) if j != i_meas]  # output disturbances
+    n_y, n_p = len(observed), len(p_rows)
+    E = np.zeros((n_y, n_p))
+    E[p_rows, np.arange(n_p)] = 1.0
     grid = []
-    for A, B, C, _ in models:
+    for (A, B, C, _), bq in zip(models, bqs, strict=True):
         A = A[np.ix_(keep, keep)] / sx[:, None] * sx[None, :]
         B = B[keep] / sx[:, None]
+        bq = bq[keep] / sx
         C = C[:, keep] * sx[None, :] / sy[:, None]
-        n, m = A.shape[0], len(main)
+        n = A.shape[0]
         c_main = C[i_meas] * sy[i_meas]  # K per scaled state
-        Aa = np.block([[A, np.zeros((n, 1))], [-dt * c_main[None, :], np.ones((1, 1))]])
-        Ba = np.vstack([B[:, main], np.zeros((1, m))])
         tau = _t63(A, B[:, main], c_main, dt)
-        Q = np.zeros((n + 1, n + 1))
-        Q[n, n] = 1.0 / (E_MAX_K * tau) ** 2
-        R = np.eye(m) / DU_MAX**2
-        P = solve_discrete_are(Aa, Ba, Q, R)
-        K = np.linalg.solve(R + Ba.T @ P @ Ba, Ba.T @ P @ Aa)
-        M = kalman_gain(A, C, W_REL**2 * np.eye(n), np.diag(vy))
-        grid.append({"A": A, "B": B, "C": C, "M": M, "Kx": K[:, :n], "Kz": K[:, n],
-                     "tau": tau, "rho_cl": float(np.abs(np.linalg.eigvals(Aa - Ba @ K)).max()),
-                     "rho_est": float(np.abs(np.linalg.eigvals(A - M @ C @ A)).max())})  # fmt: skip
+        Kx, Kz = lq_gains(A, B[:, main], c_main, dt, 1.0 / e_max**2,
+                          1.0 / (e_max * ti_factor * tau) ** 2, 1.0 / du_max**2)  # fmt: skip
+        Nu, Nx = disturbance_target(A, B[:, main], bq, c_main)
+        nz = n + 1 + n_p
+        Az = np.eye(nz)
+        Az[:n, :n], Az[:n, n] = A, bq
+        Cz = np.hstack([C, np.zeros((n_y, 1)), E])
+        W = np.diag(np.r_[np.full(n, W_REL**2), heat_walk**2 * dt, np.full(n_p, P_REL**2)])
+        M = kalman_gain(Az, Cz, W, np.diag(vy))
+        Aa = np.block([[A, np.zeros((n, 1))], [-dt * c_main[None, :], np.ones((1, 1))]])
+        Ba = np.vstack([B[:, main], np.zeros((1, len(main)))])
+        grid.append({"A": Az, "B": np.vstack([B, np.zeros((1 + n_p, B.shape[1]))]), "C": Cz,
+                     "M": M, "Kx": Kx, "Kz": Kz, "Kq": Nu + Kx @ Nx, "bq": bq, "tau": tau,
+                     "rho_cl": float(np.abs(np.linalg.eigvals(
+                         Aa - Ba @ np.hstack([Kx, Kz[:, None]]))).max()),
+                     "rho_est": float(np.abs(np.linalg.eigvals(
+                         Az - M @ Cz @ Az)).max())})  # fmt: skip
     ops = [steady_point(plant, L, [s.name for s in observed]) for L in OP_LOADS]
     ok = [k for k, (xo, uo, yo) in enumerate(ops) if np.all(np.isfinite(yo))]
     return {
@@ -162,6 +224,7 @@ def design(env_id: str, params_json: str) -> dict[str, Any]:
         "keep": keep,
         "sx": sx,
         "sy": sy,
+        "n": int(keep.sum()),
         "op_loads": np.array(OP_LOADS)[ok],
         "x_op": np.array([ops[k][0][keep] / sx for k in ok]),
         "u_op": np.array([ops[k][1] for k in ok]),
@@ -170,19 +233,37 @@ def design(env_id: str, params_json: str) -> dict[str, Any]:
 
 
 class LQI:
-    """Gain-scheduled LQI with a steady-state Kalman filter (see module docstring).
+    """Gain-scheduled LQI with an offset-free steady-state Kalman filter (see module
+    docstring).
 
     Args:
         env: The env (or vector env) the policy will act on.
+        du_max: Bryson's largest wanted valve move (fraction of the stroke); R = 1/du_max^2.
+        e_max_K: Bryson's largest wanted main-steam error (K): the output weight 1/e_max^2.
+        ti_factor: The integrated error is weighted 1/(e_max_K ti_factor tau)^2, tau the
+            63 % time of the main steam's response to the MAIN valves at that load.
+        heat_walk: Random-walk intensity of the estimator's heat-absorption bias state
+            (fraction of the rated heat absorption per sqrt(s)).
+
+    Raises:
+        ValueError: A knob that is not a positive finite number.
     """
 
-    def __init__(self, env: Any) -> None:
+    KNOBS = KNOBS
+
+    def __init__(self, env: Any, du_max: float | None = None, e_max_K: float | None = None,
+                 ti_factor: float | None = None,
+                 heat_walk: float | None = None) -> None:  # fmt: skip
         u = env.unwrapped
         plant = u.plant
+        given = (du_max, e_max_K, ti_factor, heat_walk)
+        self.knobs = {k.name: k.check(v, d) for k, v, d in
+                      zip(KNOBS, given, defaults(plant.id), strict=True)}  # fmt: skip
         params = json.dumps(getattr(u, "_params_overrides", {}) or {}, sort_keys=True)
-        self.d = design(plant.id, params)
+        self.d = design(plant.id, params, tuple(self.knobs.values()))
         names, self._scale, self._center = observation_layout(env)
         self.n_y = sum(s.observed for s in plant.outputs)
+        self.n_x = self.d["n"]
         self.i_err = names.index("error_K")
         self.i_load = names.index("load_demand")
         self.i_valve = [names.index(v) for v in plant.valves]
@@ -200,6 +281,7 @@ class LQI:
         self._M = np.stack([m["M"] for m in g])
         self._Kx = np.stack([m["Kx"] for m in g])
         self._Kz = np.stack([m["Kz"] for m in g])
+        self._Kq = np.stack([m["Kq"] for m in g])
         self._st: dict[str, np.ndarray] | None = None
 
     def reset(self) -> None:
@@ -238,7 +320,8 @@ class LQI:
             st["yb"][restart] = y[restart, : self.n_y] - y_op[restart]
             st["u"][restart] = valve[restart]
         w = self._weights(L)
-        xh = st["xh"] - (x_op - st["xop"])  # the operating point moved with the load
+        xh = st["xh"].copy()
+        xh[:, : self.n_x] -= x_op - st["xop"]  # the operating point moved with the load
         st["xop"] = x_op
         dy = (y[:, : self.n_y] - y_op - st["yb"]) / self.d["sy"]
         innov = dy[:, None, :] - np.einsum("gpn,bn->bgp", self._C, xh)
@@ -246,7 +329,9 @@ class LQI:
         z = st["z"]
         Kx = np.einsum("bg,gmn->bmn", w, self._Kx)
         Kz = w @ self._Kz  # (n, m)
-        du = -np.einsum("bmn,bn->bm", Kx, xf) - Kz * z[:, None]
+        Kq = w @ self._Kq  # (n, m)
+        du = (-np.einsum("bmn,bn->bm", Kx, xf[:, : self.n_x]) - Kz * z[:, None]
+              + Kq * xf[:, self.n_x, None])  # fmt: skip
         m = self.main
         u_prev = st["u"][:, m]
         cmd = u_op[:, m] + st["ub"][:, m] + du
