@@ -148,14 +148,16 @@ def lq_gains(A: np.ndarray, Bm: np.ndarray, c: np.ndarray, dt: float, q_y: float
     return K[:, :n], K[:, n]
 
 
-def disturbance_target(A: np.ndarray, Bm: np.ndarray, bq: np.ndarray,
-                       c: np.ndarray) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
-    """(Nu, Nx): the steady commands u_s = Nu q and states x_s = Nx q that hold c x at 0
-    under a constant heat-absorption bias q entering as bq (least-norm u_s)."""
+def steady_targets(
+    A: np.ndarray, Bm: np.ndarray, bq: np.ndarray, c: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """(Nu_q, Nx_q, Nu_r, Nx_r): the steady commands u_s = Nu_q q + Nu_r dr and states
+    x_s = Nx_q q + Nx_r dr with c x_s = dr under a constant heat-absorption bias q entering
+    as bq and a setpoint dr (K) away from the operating point's (least-norm u_s)."""
     inv = np.linalg.inv(np.eye(A.shape[0]) - A)
-    gu, gq = c @ inv @ Bm, float(c @ inv @ bq)
-    Nu = -np.linalg.pinv(gu[None, :])[:, 0] * gq
-    return Nu, inv @ (Bm @ Nu + bq)
+    gu_pinv = np.linalg.pinv((c @ inv @ Bm)[None, :])[:, 0]
+    Nu_q, Nu_r = -gu_pinv * float(c @ inv @ bq), gu_pinv
+    return Nu_q, inv @ (Bm @ Nu_q + bq), Nu_r, inv @ (Bm @ Nu_r)
 
 
 @functools.lru_cache(maxsize=32)
@@ -201,7 +203,7 @@ def design(env_id: str, params_json: str, knobs: tuple[float, ...] | None = None
         tau = _t63(A, B[:, main], c_main, dt)
         Kx, Kz = lq_gains(A, B[:, main], c_main, dt, 1.0 / e_max**2,
                           1.0 / (e_max * ti_factor * tau) ** 2, 1.0 / du_max**2)  # fmt: skip
-        Nu, Nx = disturbance_target(A, B[:, main], bq, c_main)
+        Nu_q, Nx_q, Nu_r, Nx_r = steady_targets(A, B[:, main], bq, c_main)
         nz = n + 1 + n_p
         Az = np.eye(nz)
         Az[:n, :n], Az[:n, n] = A, bq
@@ -211,7 +213,8 @@ def design(env_id: str, params_json: str, knobs: tuple[float, ...] | None = None
         Aa = np.block([[A, np.zeros((n, 1))], [-dt * c_main[None, :], np.ones((1, 1))]])
         Ba = np.vstack([B[:, main], np.zeros((1, len(main)))])
         grid.append({"A": Az, "B": np.vstack([B, np.zeros((1 + n_p, B.shape[1]))]), "C": Cz,
-                     "M": M, "Kx": Kx, "Kz": Kz, "Kq": Nu + Kx @ Nx, "bq": bq, "tau": tau,
+                     "M": M, "Kx": Kx, "Kz": Kz, "Kq": Nu_q + Kx @ Nx_q,
+                     "Kr": Nu_r + Kx @ Nx_r, "bq": bq, "tau": tau,
                      "rho_cl": float(np.abs(np.linalg.eigvals(
                          Aa - Ba @ np.hstack([Kx, Kz[:, None]]))).max()),
                      "rho_est": float(np.abs(np.linalg.eigvals(
@@ -282,6 +285,9 @@ class LQI:
         self._Kx = np.stack([m["Kx"] for m in g])
         self._Kz = np.stack([m["Kz"] for m in g])
         self._Kq = np.stack([m["Kq"] for m in g])
+        self._Kr = np.stack([m["Kr"] for m in g])
+        self.i_meas = [s.name for s in plant.outputs if s.observed].index(plant.outlet_measured)
+        self.limited = np.zeros((1, len(self.main)), dtype=bool)
         self._st: dict[str, np.ndarray] | None = None
 
     def reset(self) -> None:
@@ -329,15 +335,15 @@ class LQI:
         z = st["z"]
         Kx = np.einsum("bg,gmn->bmn", w, self._Kx)
         Kz = w @ self._Kz  # (n, m)
-        Kq = w @ self._Kq  # (n, m)
+        e = y[:, self.i_err]
+        dr = e + dy[:, self.i_meas] * self.d["sy"][self.i_meas]  # setpoint - operating point
         du = (-np.einsum("bmn,bn->bm", Kx, xf[:, : self.n_x]) - Kz * z[:, None]
-              + Kq * xf[:, self.n_x, None])  # fmt: skip
+              + (w @ self._Kq) * xf[:, self.n_x, None] + (w @ self._Kr) * dr[:, None])  # fmt: skip
         m = self.main
         u_prev = st["u"][:, m]
-        cmd = u_op[:, m] + st["ub"][:, m] + du
-        cmd = np.clip(cmd, u_prev - self.max_move, u_prev + self.max_move)
-        u_main = np.clip(cmd, 0.0, 1.0)
-        e = y[:, self.i_err]
+        demand = u_op[:, m] + st["ub"][:, m] + du
+        u_main = np.clip(np.clip(demand, u_prev - self.max_move, u_prev + self.max_move), 0.0, 1.0)
+        self.limited = u_main != demand  # the actuator limits (eq. 32) hold the command back
         push = -Kz * e[:, None]  # direction integration would move the valves
         held = into_stop(u_main, push)
         st["z"] = z + np.where(held.any(axis=1) | restart, 0.0, self.dt * e)
