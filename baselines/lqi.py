@@ -101,12 +101,13 @@ W_REL = 0.01
 NOISE_K = 0.25
 V_REL = 0.01
 P_REL = 0.002
-#: Defaults of the knobs (all chosen; see the module docstring); e_max_K per plant.
+#: Defaults of the knobs (all chosen; see the module docstring) and the plants' own.
 DEFAULTS = {"du_max": 0.1, "e_max_K": 1.0, "ti_factor": 1.0, "heat_walk": 1.6e-3}
-E_MAX_K = {
-    "steamtemp/SupercriticalFSH-v0": 3.0,
-    "steamtemp/DrumBoilerSH-v0": 4.0,
-    "steamtemp/Cascade300MW-v0": 2.0,
+PLANT_DEFAULTS = {
+    "steamtemp/SupercriticalFSH-v0": {"e_max_K": 3.0},
+    "steamtemp/DrumBoilerSH-v0": {"e_max_K": 4.0},
+    "steamtemp/Cascade300MW-v0": {"e_max_K": 2.0},
+    "steamtemp/BensonSubcritical-v0": {"ti_factor": 0.5},
 }
 KNOBS = (
     Knob("du_max", 0.01, 1.0),
@@ -118,8 +119,8 @@ KNOBS = (
 
 def defaults(env_id: str) -> tuple[float, ...]:
     """The knobs' default values on a plant, in :data:`KNOBS` order."""
-    return tuple(E_MAX_K.get(env_id, DEFAULTS[k.name]) if k.name == "e_max_K"
-                 else DEFAULTS[k.name] for k in KNOBS)  # fmt: skip
+    own = PLANT_DEFAULTS.get(env_id, {})
+    return tuple(own.get(k.name, DEFAULTS[k.name]) for k in KNOBS)
 
 
 def _t63(A: np.ndarray, B: np.ndarray, c: np.ndarray, dt: float) -> float:
@@ -317,7 +318,8 @@ class LQI:
         if fresh:
             st = self._st = {"xh": np.zeros((n, self._A.shape[1])), "z": np.zeros(n),
                              "xop": x_op.copy(), "ub": np.zeros_like(valve),
-                             "yb": np.zeros((n, self.n_y)), "u": valve.copy()}  # fmt: skip
+                             "yb": np.zeros((n, self.n_y)), "rb": np.zeros(n),
+                             "u": valve.copy()}  # fmt: skip
         restart = restart_rows(fresh, n, episode_start)
         if restart.any():
             st["xh"][restart], st["z"][restart] = 0.0, 0.0
@@ -325,6 +327,7 @@ class LQI:
             st["ub"][restart] = valve[restart] - u_op[restart]
             st["yb"][restart] = y[restart, : self.n_y] - y_op[restart]
             st["u"][restart] = valve[restart]
+            st["rb"][restart] = y[restart, self.i_err]
         w = self._weights(L)
         xh = st["xh"].copy()
         xh[:, : self.n_x] -= x_op - st["xop"]  # the operating point moved with the load
@@ -336,7 +339,8 @@ class LQI:
         Kx = np.einsum("bg,gmn->bmn", w, self._Kx)
         Kz = w @ self._Kz  # (n, m)
         e = y[:, self.i_err]
-        dr = e + dy[:, self.i_meas] * self.d["sy"][self.i_meas]  # setpoint - operating point
+        # setpoint change since the start (its offset at the start is held with the biases)
+        dr = e - st["rb"] + dy[:, self.i_meas] * self.d["sy"][self.i_meas]
         du = (-np.einsum("bmn,bn->bm", Kx, xf[:, : self.n_x]) - Kz * z[:, None]
               + (w @ self._Kq) * xf[:, self.n_x, None] + (w @ self._Kr) * dr[:, None])  # fmt: skip
         m = self.main
