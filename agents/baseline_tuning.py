@@ -50,7 +50,7 @@ from agents.oracle import Oracle
 from baselines import tuning
 
 #: The baselines with knobs, tuned by default.
-TUNABLE = ("cascade_pi", "cascade_pi_ff", "fuzzy_p2id", "mpc_linear")
+TUNABLE = ("cascade_pi", "cascade_pi_ff", "fuzzy_p2id", "mpc_linear", "lqi", "fao_sf", "fao_fac")
 #: The industrial reference: the score's 0 and the travel budget's unit.
 ZERO = "cascade_pi_ff"
 #: First seed of the training episodes (``random`` scenario); far from the agents' training

@@ -66,7 +66,8 @@ What is taken and how it is generalized:
 
 Knobs (``KNOBS``; constructor keywords, None = default): du_max, e_max_K, ti_factor,
 heat_walk. The thesis's weights (eq. 37) lost their digits and belong to its drum
-outputs, so every default is chosen: du_max = 0.1 of the stroke, e_max_K = 1 K,
+outputs, so the defaults are the benchmark's common tuning (agents/baseline_tuning.py,
+stored in baselines/tuned/lqi.json), started from these commissioning values (:func:`start`): du_max = 0.1 of the stroke, e_max_K = 1 K,
 ti_factor = 1, heat_walk = 1.6e-3 (the named scenarios' coloured heat-absorption
 disturbance, std 0.02 and 300 s, as a random walk). Per plant (``PLANT_DEFAULTS``), chosen
 by hand so that the valve travel stays within 3x cascade_pi_ff's on the named and held-out
@@ -94,6 +95,7 @@ from typing import Any
 import numpy as np
 from scipy.linalg import solve_discrete_are
 
+from baselines import tuning
 from baselines.cascade_pi import CascadePI
 from baselines.linear_models import interp_rows, kalman_gain, reachable, steady_point
 from baselines.loops import into_stop, observation_layout, restart_rows
@@ -128,10 +130,21 @@ KNOBS = (
 )
 
 
-def defaults(env_id: str) -> tuple[float, ...]:
-    """The knobs' default values on a plant, in :data:`KNOBS` order."""
+def start(env_id: str) -> dict[str, float]:
+    """The commissioning values of the knobs on a plant (the common tuning's start)."""
     own = PLANT_DEFAULTS.get(env_id, {})
-    return tuple(own.get(k.name, DEFAULTS[k.name]) for k in KNOBS)
+    return {k.name: own.get(k.name, DEFAULTS[k.name]) for k in KNOBS}
+
+
+def defaults(env_id: str) -> tuple[float, ...]:
+    """The knobs' default values on a plant, in :data:`KNOBS` order: the benchmark's stored
+    tuning (baselines/tuned/lqi.json; the thesis gives no weights) where the plant has one,
+    else :func:`start`."""
+    try:
+        values = tuning.stored("lqi", env_id)
+    except ValueError:
+        values = start(env_id)
+    return tuple(values[k.name] for k in KNOBS)
 
 
 def _t63(A: np.ndarray, B: np.ndarray, c: np.ndarray, dt: float) -> float:
@@ -265,6 +278,7 @@ class LQI:
     """
 
     KNOBS = KNOBS
+    knob_defaults = staticmethod(start)
 
     def __init__(self, env: Any, du_max: float | None = None, e_max_K: float | None = None,
                  ti_factor: float | None = None,
