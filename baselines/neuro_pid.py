@@ -134,7 +134,7 @@ from typing import Any
 
 import numpy as np
 
-from baselines.cascade_pi import FILTER_S, CascadePI, simc_pi
+from baselines.cascade_pi import FILTER_S, GAIN_LOADS, CascadePI, simc_pi
 from baselines.identification import FOPDT
 from baselines.loops import input_filter, into_stop, observation_layout, pi_position, restart_rows
 from steamtemp_gym._jit import njit
@@ -149,8 +149,9 @@ N_W2 = N_HIDDEN * (N_IN + 1)  # input -> hidden weights (with bias), row p: (bia
 N_W = N_W2 + 3 * (N_HIDDEN + 1)  # plus hidden -> output weights (with bias)
 #: Seed and half-width of the uniform initial weights (documented, reproducible).
 INIT_SEED, INIT_HALFWIDTH = 0, 0.5
-#: Paper's secondary P controller (Section 5), kg/s of spray per K, on its own plant.
-INNER_P_KG_S_PER_K = {"steamtemp/Cascade300MW-v0": 8.0}
+#: Paper's secondary P controller G_C2 = 8 (Section 5), read as % of valve stroke per K of
+#: the (filtered) intermediate temperature, on its own plant (module docstring).
+INNER_P_PCT_PER_K = {"steamtemp/Cascade300MW-v0": 8.0}
 #: Measured disturbance inputs (omega, omega_2) per plant; see the module docstring.
 PROXIES = {
     "steamtemp/Cascade300MW-v0": ("omega_K", "omega2_kg_s"),
@@ -164,6 +165,8 @@ ERR_SCALE_K = 20.0  # the observation's error scale (steamtemp_gym.signals.T0_K)
 #: Initial derivative gain of eq. (4) (K per K): the commissioning tuning is a PI, g cannot
 #: output 0; 0.05 is a derivative time of ~0.1 s at the claim plant's k_p0 (negligible).
 KD0 = 0.05
+#: Bound of every PID gain of eq. (4) as a multiple of its commissioning value.
+GAIN_SPAN = 2.0
 #: Inner-setpoint step (K) of the commissioning test, and its length (s).
 STEP_K, STEP_DURATION_S = 2.0, 2400.0
 
@@ -265,11 +268,13 @@ def npid_step(X, E, W, G, V, Ebuf, Sbuf, nbuf, head, scale, mee, sigma, lam, L, 
 def initial_weights(k0: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(weights, output scales s_l) whose net gives exactly the gains ``k0`` at zero input.
 
-    s_l = max(1, 2 k_l0): the paper's gains g in (0, 1), widened only where the
-    commissioning gain is 1/2 or more (the start then sits at g's midpoint).
+    s_l = GAIN_SPAN k_l0: the net starts at g's midpoint and every gain stays in
+    (0, GAIN_SPAN k_l0) (module docstring).
     """
     k0 = np.asarray(k0, dtype=float)
-    scale = np.maximum(1.0, 2.0 * k0)
+    if not np.all(k0 > 0.0):
+        raise ValueError(f"commissioning gains must be positive, got {k0}")
+    scale = GAIN_SPAN * k0
     w = np.random.default_rng(INIT_SEED).uniform(-INIT_HALFWIDTH, INIT_HALFWIDTH, N_W)
     h = np.tanh(w[: N_W2 : N_IN + 1])  # hidden outputs at zero input: tanh(bias)
     for m in range(3):
@@ -281,22 +286,23 @@ def initial_weights(k0: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 # ------------------------------------------------------------------ commissioning
 def _inner_p_valve_per_K(plant: Any) -> float | None:
-    """The paper's G_C2 in valve stroke per K on its plant, None elsewhere."""
-    kg = INNER_P_KG_S_PER_K.get(plant.id)
-    return None if kg is None else kg / float(plant.params.spray_max_kg_s)
+    """The paper's G_C2 in valve stroke (fraction) per K on its plant, None elsewhere."""
+    pct = INNER_P_PCT_PER_K.get(plant.id)
+    return None if pct is None else pct / 100.0
 
 
-@functools.lru_cache(maxsize=16)
-def outer_models(env_id: str, params_json: str) -> tuple[FOPDT | None, ...]:
-    """Per action: FOPDT of inner setpoint -> measured outlet (MAIN loops), else None.
+@functools.lru_cache(maxsize=48)
+def outer_models(env_id: str, params_json: str, load: float = 1.0) -> tuple[FOPDT | None, ...]:
+    """Per action: FOPDT of inner setpoint -> measured outlet (MAIN loops) at ``load``, else
+    None.
 
-    Closed-loop step of the inner setpoint by STEP_K at rated load without noise (a
+    Closed-loop step of the inner setpoint by STEP_K at a constant ``load`` without noise (a
     scenario built here, not an evaluation one), run twice with the same seed, with and
     without the step, so the plant's own seeded disturbances cancel (as in step_test).
     """
     import gymnasium as gym
 
-    sc = Scenario(name="npid_commissioning", duration_s=STEP_DURATION_S, load=((0.0, 1.0),))
+    sc = Scenario(name="npid_commissioning", duration_s=STEP_DURATION_S, load=((0.0, load),))
     env = gym.make(env_id, scenario=sc, params=json.loads(params_json))
     plant = env.unwrapped.plant
     out: list[FOPDT | None] = [None] * len(plant.control_loops)
@@ -326,49 +332,59 @@ def outer_models(env_id: str, params_json: str) -> tuple[FOPDT | None, ...]:
 
 @functools.lru_cache(maxsize=16)
 def commissioning_gains(env_id: str, params_json: str) -> np.ndarray:
-    """(k_p0, k_i0, k_d0) of eq. (4) per action (zeros off MAIN), and the loop direction
-    (sign of the outer gain) as a 4th column; see the module docstring."""
-    models = outer_models(env_id, params_json)
-    n_main = sum(m is not None for m in models)
-    out = np.zeros((len(models), 4))
+    """(len(GAIN_LOADS), actions, 4) table: (k_p0, k_i0, k_d0) of eq. (4) per action at each
+    load of :data:`GAIN_LOADS` (zeros off MAIN), and the loop direction (sign of the outer
+    gain) as a 4th column; see the module docstring."""
     from steamtemp_gym import plants
 
     dt = plants.make(env_id, **json.loads(params_json)).dt_s
-    for j, m in enumerate(models):
-        if m is None:
-            continue
-        kc, ti = simc_pi(m)
-        kc = abs(kc) / n_main
-        out[j] = (kc, kc * dt / ti, KD0, np.sign(m.K))
-    return out
+    table = []
+    for load in GAIN_LOADS:
+        models = outer_models(env_id, params_json, load)
+        n_main = sum(m is not None for m in models)
+        out = np.zeros((len(models), 4))
+        for j, m in enumerate(models):
+            if m is None:
+                continue
+            kc, ti = simc_pi(m)
+            kc = abs(kc) / n_main
+            out[j] = (kc, kc * dt / ti, KD0, np.sign(m.K))
+        table.append(out)
+    return np.array(table)
 
 
 # ----------------------------------------------------------------------- the policy
 class NeuroPID:
-    """Neuro-PID on every MAIN loop over its inner loop; cascade_pi elsewhere.
+    """Neuro-PID on every MAIN loop over its inner loop; cascade_pi_ff's loops elsewhere.
 
     Args:
         env: The env (or vector env) the policy acts on.
         criterion: ``"mee"`` (minimum error entropy, the paper's) or ``"mse"``.
-        k0: Optional commissioning gains (k_p0, k_i0, k_d0[, direction]) per action,
-            overriding :func:`commissioning_gains`.
+        k0: Optional commissioning gains (k_p0, k_i0, k_d0[, direction]) per action, used at
+            every load instead of :func:`commissioning_gains`.
         force_u: If given, the outer output is held at this value (commissioning tests;
             no training).
-        eta: Learning rate (paper: 1e-4).
+        eta: Learning rate of eq. (9), (13) (None: the paper's 1e-4).
     """
+
+    KNOBS = ()
 
     def __init__(
         self, env: Any, criterion: str = "mee", k0: Any = None, force_u: float | None = None,
-        eta: float = ETA,
+        eta: float | None = None,
     ) -> None:  # fmt: skip
         if criterion not in ("mee", "mse"):
             raise ValueError(f"criterion must be 'mee' or 'mse', got {criterion!r}")
+        eta = ETA if eta is None else float(eta)
+        if not (math.isfinite(eta) and eta >= 0.0):
+            raise ValueError(f"eta must be a finite learning rate >= 0, got {eta!r}")
         u = env.unwrapped
         plant = u.plant
         self.mee = criterion == "mee"
-        self.eta = float(eta)
+        self.eta = eta
         self.force_u = force_u
-        self.pi = CascadePI(env)  # the non-MAIN loops, and the inner PI tuning
+        # the non-MAIN loops, and the inner PI tuning (load-scheduled, as cascade_pi_ff's)
+        self.pi = CascadePI(env, gain_schedule=True)
         names, self._scale, self._center = observation_layout(env)
         self.i_err, self.i_load = names.index("error_K"), names.index("load_demand")
         self.i_fire = names.index("firing_rate") if "firing_rate" in names else None
@@ -380,30 +396,41 @@ class NeuroPID:
         self.inner = [names.index(plant.control_loops[j][0]) if plant.control_loops[j][0]
                       else None for j in self.main]  # fmt: skip
         self.p_inner = _inner_p_valve_per_K(plant)
-        default = self.force_u is None and k0 is None
         prox = PROXIES.get(plant.id) or (
             "firing_minus_load" if self.i_fire is not None else "load_rate",
             "load_rate",
         )
         self.proxies = [(p, names.index(p) if p in names else None) for p in prox]
         params = json.dumps(getattr(u, "_params_overrides", {}) or {}, sort_keys=True)
-        k = commissioning_gains(plant.id, params) if default else np.asarray(k0, float)
-        if k.shape[1] == 3:
-            k = np.column_stack([k, np.ones(len(k))])
-        self.k0 = k
-        self.w0, self.s0 = [], []
-        for j in self.main:
-            w, s = initial_weights(k[j, :3])
-            self.w0.append(w)
-            self.s0.append(s)
-        self.w0, self.s0 = np.array(self.w0), np.array(self.s0)
-        self.direction = k[self.main, 3] if len(self.main) else np.zeros(0)
+        if force_u is None and k0 is None:
+            self.loads, table = np.array(GAIN_LOADS), commissioning_gains(plant.id, params)
+        else:
+            k = np.asarray(k0, float)
+            if k.shape[1] == 3:
+                k = np.column_stack([k, np.ones(len(k))])
+            self.loads, table = np.ones(1), k[None]
+        self.k0 = table  # (loads, actions, 4)
+        main = table[:, self.main, :3]
+        #: (loads, MAIN loops, 3) output scales s_l = GAIN_SPAN k_l0 at each load
+        self.s_table = GAIN_SPAN * main
+        self.w0 = np.array([initial_weights(table[-1, j, :3])[0] for j in self.main])
+        self.direction = table[-1, self.main, 3] if len(self.main) else np.zeros(0)
         self._st: dict[str, np.ndarray] | None = None
         self.gains = np.zeros((1, len(self.main), 3))  # last PID gains per row and MAIN loop
 
     def reset(self) -> None:
         self._st = None
         self.pi.reset()
+
+    def output_scales(self, load: np.ndarray) -> np.ndarray:
+        """(rows, MAIN loops, 3) output scales s_l at each row's load demand: the bounds
+        GAIN_SPAN k_l0(load) of the gains, k_l0 interpolated linearly between GAIN_LOADS."""
+        n, nm = len(load), len(self.main)
+        out = np.empty((n, nm, 3))
+        for c in range(nm):
+            for m in range(3):
+                out[:, c, m] = np.interp(load, self.loads, self.s_table[:, c, m])
+        return out
 
     # -- state ---------------------------------------------------------------------
     def _new_state(self, n: int) -> dict[str, np.ndarray]:
@@ -412,8 +439,8 @@ class NeuroPID:
         return {
             "y0": np.zeros((n, len(self._scale))), "yf": np.zeros((n, len(self._scale))),
             "Lf": np.zeros(n), "E": np.zeros((n, nm, 3)), "u": np.zeros((n, nm)),
-            "ii": np.zeros((n, nm)), "W": np.zeros((nu, N_W)), "G": np.zeros((nu, N_W)),
-            "V": np.zeros(nu), "Ebuf": np.zeros((nu, WINDOW)),
+            "ii": np.zeros((n, nm)), "kci": np.zeros((n, nm)), "W": np.zeros((nu, N_W)),
+            "G": np.zeros((nu, N_W)), "V": np.zeros(nu), "Ebuf": np.zeros((nu, WINDOW)),
             "Sbuf": np.zeros((nu, WINDOW, N_W)), "nbuf": np.zeros(nu, np.int64),
             "head": np.zeros(nu, np.int64),
         }  # fmt: skip
@@ -422,7 +449,7 @@ class NeuroPID:
         nm = len(self.main)
         st["y0"][rows], st["yf"][rows], st["Lf"][rows] = y[rows], y[rows], y[rows, self.i_load]
         st["E"][rows] = y[rows, self.i_err][:, None, None]
-        st["u"][rows], st["ii"][rows] = 0.0, 0.0
+        st["u"][rows], st["ii"][rows], st["kci"][rows] = 0.0, 0.0, 0.0
         units = (np.flatnonzero(rows)[:, None] * nm + np.arange(nm)).ravel()
         st["W"][units] = np.tile(self.w0, (rows.sum(), 1)) if nm else 0.0
         st["G"][units], st["nbuf"][units], st["head"][units] = 0.0, 0, 0
@@ -461,7 +488,8 @@ class NeuroPID:
             self._restart(st, restart, y)
         yf = st["yf"]
         input_filter(yf, y, self.a_filter, restart)  # DCS input filter
-        st["Lf"] += (1.0 - self.a_load) * (y[:, self.i_load] - st["Lf"])
+        load = y[:, self.i_load]
+        st["Lf"] += (1.0 - self.a_load) * (load - st["Lf"])
         nm = len(self.main)
         if nm == 0:
             return (action[0] if np.ndim(observation) == 1 else action), None
@@ -471,7 +499,7 @@ class NeuroPID:
         if self.force_u is None:
             x = np.repeat(self._inputs(st, y), nm, axis=0)
             gains = np.empty((n * nm, 3))
-            scale = np.tile(self.s0, (n, 1))
+            scale = self.output_scales(load).reshape(n * nm, 3)
             npid_step(x, E.reshape(n * nm, 3), st["W"], st["G"], st["V"], st["Ebuf"],
                       st["Sbuf"], st["nbuf"], st["head"], scale, self.mee, SIGMA_K, LAMBDA,
                       WINDOW, self.eta, gains)  # fmt: skip
@@ -483,6 +511,7 @@ class NeuroPID:
         else:
             u_new = np.full((n, nm), float(self.force_u))
         v0 = st["y0"][:, self.i_valve]
+        pi_gains = self.pi._row_gains(load) if self.p_inner is None else None
         for c, j in enumerate(self.main):
             i_in = self.inner[c]
             vj = v0[:, j]
@@ -491,16 +520,19 @@ class NeuroPID:
                 v = vj + u_new[:, c]
                 push = np.zeros(n)
             elif self.p_inner is not None:  # the paper's P secondary, reverse acting
-                dyi = y[:, i_in] - st["y0"][:, i_in]
-                dyf = yf[:, i_in] - st["y0"][:, i_in]
-                # velocity-form saturation: u held where the valve reaches its stop (read
-                # on the filtered inner temperature, so sensor noise does not bias u)
+                dyf = yf[:, i_in] - st["y0"][:, i_in]  # through the DCS input filter
+                # velocity-form saturation: u held where the valve reaches its stop
                 u_new[:, c] = np.clip(u_new[:, c], dyf - (1.0 - vj) / self.p_inner,
                                       dyf + vj / self.p_inner)  # fmt: skip
-                v = vj - self.p_inner * (u_new[:, c] - dyi)
+                v = vj - self.p_inner * (u_new[:, c] - dyf)
                 push = np.zeros(n)
-            else:  # cascade_pi's inner PI on the filtered inner temperature
-                _, _, kc_i, ti_i = self.pi.gains[j]
+            else:  # cascade_pi_ff's load-scheduled inner PI on the filtered inner temperature
+                kc_i = np.broadcast_to(pi_gains[:, j, 2], (n,))
+                ti_i = np.broadcast_to(pi_gains[:, j, 3], (n,))
+                prev = st["kci"][:, c]
+                ratio = np.divide(prev, kc_i, out=np.ones(n), where=(prev != 0.0) & (kc_i != 0.0))
+                st["ii"][:, c] *= ratio  # bumpless: kc times the integral is continuous
+                st["kci"][:, c] = kc_i
                 e_i = u_new[:, c] - (yf[:, i_in] - st["y0"][:, i_in])
                 v, _ = pi_position(vj, kc_i, e_i, st["ii"][:, c], self.dt, ti_i)
                 push = kc_i * (u_new[:, c] - st["u"][:, c])
