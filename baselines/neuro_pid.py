@@ -165,6 +165,9 @@ ERR_SCALE_K = 20.0  # the observation's error scale (steamtemp_gym.signals.T0_K)
 #: Initial derivative gain of eq. (4) (K per K): the commissioning tuning is a PI, g cannot
 #: output 0; 0.05 is a derivative time of ~0.1 s at the claim plant's k_p0 (negligible).
 KD0 = 0.05
+#: Learning rates at which the nets adapt (training episodes move k_i by ~10 %, the MEE
+#: gradient being ~100 times smaller than the MSE one): benchmarks/neuro_pid_eta.py.
+ADAPTING_ETA = {"mee": 0.1, "mse": 1e-3}
 #: Bound of every PID gain of eq. (4) as a multiple of its commissioning value.
 GAIN_SPAN = 2.0
 #: Inner-setpoint step (K) of the commissioning test, and its length (s).
@@ -417,6 +420,7 @@ class NeuroPID:
         self.direction = table[-1, self.main, 3] if len(self.main) else np.zeros(0)
         self._st: dict[str, np.ndarray] | None = None
         self.gains = np.zeros((1, len(self.main), 3))  # last PID gains per row and MAIN loop
+        self.outputs = np.zeros((1, len(self.main), 3))  # and the net's outputs g in (0, 1)
 
     def reset(self) -> None:
         self._st = None
@@ -505,6 +509,7 @@ class NeuroPID:
                       WINDOW, self.eta, gains)  # fmt: skip
             gains = gains.reshape(n, nm, 3)
             self.gains = gains
+            self.outputs = gains / scale.reshape(n, nm, 3)
             du = np.stack([E[..., 0] - E[..., 1], E[..., 0],
                            E[..., 0] - 2.0 * E[..., 1] + E[..., 2]], axis=-1)  # fmt: skip
             u_new = st["u"] + self.direction * np.einsum("nml,nml->nm", gains, du)  # eq. (4)
@@ -554,3 +559,27 @@ class NeuroPIDMSE(NeuroPID):
 
     def __init__(self, env: Any, **kwargs: Any) -> None:
         super().__init__(env, criterion="mse", **kwargs)
+
+
+class Recorder:
+    """Wraps a :class:`NeuroPID` and records, after every ``predict``, the PID gains, the
+    net outputs g (gain / bound) and the weights of the first MAIN loop of every row
+    (diagnostics: the claim tests and benchmarks/neuro_pid_eta.py)."""
+
+    def __init__(self, pol: NeuroPID) -> None:
+        self.pol = pol
+        self.gains: list[np.ndarray] = []
+        self.outputs: list[np.ndarray] = []
+        self.weights: list[np.ndarray] = []
+
+    def reset(self) -> None:
+        self.pol.reset()
+        self.gains, self.outputs, self.weights = [], [], []
+
+    def predict(self, observation, state=None, episode_start=None, deterministic=True):
+        out = self.pol.predict(observation, state, episode_start, deterministic)
+        nm = len(self.pol.main)
+        self.gains.append(self.pol.gains[:, 0].copy())
+        self.outputs.append(self.pol.outputs[:, 0].copy())
+        self.weights.append(self.pol._st["W"][::nm].copy())
+        return out

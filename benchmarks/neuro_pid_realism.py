@@ -1,7 +1,9 @@
 """Neuro-PID realism on every plant: valve travel against cascade_pi_ff, limit cycles, peaks.
 
     python benchmarks/neuro_pid_realism.py [--envs a,b] [--scenarios s,...] [--seeds 0-2]
-        [--policies neuro_pid_mee,neuro_pid_mse] [--eta 1e-4]
+        [--policies neuro_pid_mee,neuro_pid_mse:1e-3,...]
+
+A policy given as ``name:eta`` runs with that learning rate (default: the paper's).
 
 For each plant and scenario (default: the leaderboard's named and held-out scenarios, and
 on Cascade300MW also its own two), runs the policies and ``cascade_pi_ff`` on the same
@@ -44,11 +46,10 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--scenarios", default="")
     ap.add_argument("--seeds", default="0-2")
     ap.add_argument("--policies", default="neuro_pid_mee,neuro_pid_mse")
-    ap.add_argument("--eta", type=float, default=None)
     args = ap.parse_args(argv)
     a, _, b = args.seeds.partition("-")
     seeds = list(range(int(a), int(b or a) + 1))
-    kw = {} if args.eta is None else {"eta": args.eta}
+    policies = [p.partition(":") for p in args.policies.split(",") if p]
     print("| plant | scenario | policy | travel | ratio | quiet p2p K | bound | peak K | trips |")
     print("|---|---|---|---|---|---|---|---|---|")
     for env_id in [e for e in args.envs.split(",") if e]:
@@ -58,8 +59,10 @@ def main(argv: list[str] | None = None) -> None:
             ref = measure(env_id, spec, REF, seeds)
             bound = max(2.0 * ref["quiet_p2p_K"], 1.5)
             short = env_id.split("/")[1].removesuffix("-v0")
-            for name in [REF, *[p for p in args.policies.split(",") if p]]:
+            for name, _, eta in [(REF, "", ""), *policies]:
+                kw = {"eta": float(eta)} if eta else {}
                 m = ref if name == REF else measure(env_id, spec, name, seeds, **kw)
+                name = f"{name} (eta {eta})" if eta else name
                 ratio = m["valve_travel"] / ref["valve_travel"]
                 flag = " !" if ratio > 3.0 or m["quiet_p2p_K"] > bound else ""
                 print(f"| {short} | {spec} | {name} | {m['valve_travel']:.2f} | {ratio:.2f}{flag}"
