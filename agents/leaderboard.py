@@ -140,6 +140,7 @@ class Plan:
     resolved: dict[tuple[str, str], Any] = field(default_factory=dict)  # -> Scenario
     fingerprints: dict[tuple[str, str, str], str] = field(default_factory=dict)
     imports: tuple[str, ...] = ()  # --import: modules every worker imports first
+    travel_budget: float = stats.TRAVEL_BUDGET  # --travel-budget
 
     def grid(self) -> Iterable[Key]:
         """Every episode of the run, in run order."""
@@ -309,6 +310,7 @@ def _source_digest() -> str:
     h = hashlib.sha256()
     roots = [Path(steamtemp_gym.__file__).parent, Path(baselines.__file__).parent]
     files = [f for r in roots for f in sorted(r.rglob("*.py"))]
+    files += sorted(Path(baselines.__file__).parent.rglob("*.json"))  # the stored tunings
     files += [Path(__file__).with_name(f) for f in ("evaluation.py", "difficulty.py", "oracle.py")]
     for f in files:
         h.update(f.read_bytes())
@@ -350,6 +352,13 @@ def build_plan(ap: argparse.ArgumentParser, args: argparse.Namespace) -> Plan:
         )
     envs = [_env_id(e) for e in envs]
     seeds = parse_seeds(ap, args.seeds)
+    try:
+        budget = float(args.travel_budget)
+    except (TypeError, ValueError):
+        budget = math.nan
+    if not (math.isfinite(budget) and budget > 0.0):
+        ap.error(f"argument --travel-budget: must be a finite number > 0 (a multiple of "
+                 f"{report.ZERO}'s valve travel), got {head(str(args.travel_budget), 60)!r}")
     pols = _policies(ap, envs, args.policies, oracle=not args.no_oracle)
     scs = _items(ap, "--scenarios", args.scenarios, key=_scenario_key)
     if args.out is None or str(args.out).strip() == "":
@@ -366,7 +375,7 @@ def build_plan(ap: argparse.ArgumentParser, args: argparse.Namespace) -> Plan:
                     f"{head(str(exc), 1000)}"  # the message lists every form
                 )
     plan = Plan(envs=envs, scenarios=scs, seeds=seeds, policies=pols, resolved=resolved,
-                imports=imports)  # fmt: skip
+                imports=imports, travel_budget=budget)  # fmt: skip
     source = _source_digest()
     for env_id in envs:
         for sc in scs:
@@ -775,7 +784,8 @@ def _rebuild(out: Path, plan: Plan, figures: bool = True) -> tuple[list[dict], d
     run = {"envs": plan.envs, "scenarios": plan.scenarios, "policies": plan.policies,
            "seeds": plan.seeds, "steamtemp_gym_version": steamtemp_gym.__version__,
            "n_bootstrap": stats.N_BOOTSTRAP, "confidence": stats.CONFIDENCE,
-           "reference": report.REFERENCE, "versus": report.VERSUS}  # fmt: skip
+           "reference": report.REFERENCE, "versus": report.VERSUS,
+           "travel_budget": plan.travel_budget}  # fmt: skip
     summary, norm = (None, {})
     if any(not r.get("error") for r in rows):
         summary, norm = report.summarize(rows, run)
@@ -862,6 +872,10 @@ def make_parser() -> argparse.ArgumentParser:
     ap.add_argument("--no-oracle", action="store_true",
                     help="leave the oracle out (its episodes are the run's longest); the "
                     "normalized score is then not computed (default: off)")  # fmt: skip
+    ap.add_argument("--travel-budget", type=str, default=str(stats.TRAVEL_BUDGET),
+                    metavar="X", help="a policy is admissible on a plant when its mean valve "
+                    "travel there is at most X times cascade_pi_ff's and it never trips; "
+                    "rankings list admissible policies first (default: %(default)s)")  # fmt: skip
     ap.add_argument("--scenarios", default=",".join(DEFAULT_SCENARIOS),
                     help="comma list of scenario names, heldout:<name>, random (the seeded "
                     "training distribution) or YAML paths, as gym.make(..., scenario=...) "

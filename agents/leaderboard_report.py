@@ -25,7 +25,7 @@ from agents import stats
 from steamtemp_gym.checks import head
 
 #: Version of leaderboard.json's format (docs/leaderboard_schema.json).
-SCHEMA_VERSION = 4
+SCHEMA_VERSION = 5
 #: The 0 of the normalized score: the cascade as a commissioned unit runs it.
 ZERO = "cascade_pi_ff"
 #: The 1: the clairvoyant NMPC on the true plant (agents/oracle.py).
@@ -39,7 +39,7 @@ TABLE_METRICS = ("iae_K_s", "max_abs_dev_K", "time_outside_5K_s", "overshoot_pct
                  "settling_time_s", "spray_used_kg", "valve_travel", "valve_reversals",
                  "return")  # fmt: skip
 SUMMARY_METRICS = ("iae_K_s", "max_abs_dev_K", "time_outside_5K_s", "time_outside_8K_s",
-                   "spray_used_kg", "valve_travel", "return")  # fmt: skip
+                   "spray_used_kg", "valve_travel", "valve_reversals", "return")  # fmt: skip
 
 
 def _applicable(m: dict[str, Any]) -> dict[str, float]:
@@ -128,10 +128,14 @@ def summarize(rows: list[dict], run: dict[str, Any]) -> dict[str, Any]:
                     entry[f"p_improvement_over_{VERSUS}"] = {"value": point, "ci95": [lo, hi],
                                                             "tasks": len(common)}  # fmt: skip
             pol_out[p] = entry
+        _admissibility(pol_out, float(run.get("travel_budget", stats.TRAVEL_BUDGET)))
         ranked = {p: e["normalized_score"]["iqm"]["value"] for p, e in pol_out.items()
                   if p not in REFERENCES and "normalized_score" in e}  # fmt: skip
-        for p, k in stats.ranks(ranked).items():
-            pol_out[p]["rank"] = k
+        first = {p: v for p, v in ranked.items() if pol_out[p].get("admissible")}
+        for group, offset in ((first, 0), ({p: v for p, v in ranked.items() if p not in first},
+                                           len(first))):  # fmt: skip
+            for p, k in stats.ranks(group).items():
+                pol_out[p]["rank"] = offset + k
         per_sc = {}
         for sc in scs:
             per_sc[sc] = {}
@@ -148,6 +152,21 @@ def summarize(rows: list[dict], run: dict[str, Any]) -> dict[str, Any]:
         plants[env_id] = {"reference": refs, "policies": pol_out, "scenarios": per_sc}
     return {"schema_version": SCHEMA_VERSION, "run": run, "plants": plants,
             "ranking": _overall(plants)}, norm_scores  # fmt: skip
+
+
+def _admissibility(pol_out: dict[str, Any], budget: float) -> None:
+    """Each policy's ``travel_ratio`` (its mean valve travel over the reference's) and
+    ``admissible``: ratio <= ``budget``, no trip and no failed episode (references and runs
+    without the reference get no verdict)."""
+    zero = pol_out.get(ZERO, {}).get("metrics", {}).get("valve_travel")
+    for p, e in pol_out.items():
+        travel = e["metrics"].get("valve_travel")
+        if not zero or travel is None:
+            continue
+        e["travel_ratio"] = travel / zero
+        if p not in REFERENCES:
+            e["admissible"] = bool(e["travel_ratio"] <= budget and e["trips"] == 0
+                                   and e["failed"] == 0)  # fmt: skip
 
 
 def _overall(plants: dict[str, Any]) -> list[dict[str, Any]]:
@@ -183,6 +202,31 @@ def stat_label(n_seeds: int) -> str:
             "95 % stratified-bootstrap CI")  # fmt: skip
 
 
+#: Marks a policy that is not admissible on a plant (travel over budget, a trip or a failure).
+INADMISSIBLE = "†"
+
+
+def _travel(pe: dict[str, Any]) -> str:
+    return f"{pe['travel_ratio']:.1f}x" if "travel_ratio" in pe else "-"
+
+
+def _headline_cell(pe: dict[str, Any]) -> str:
+    """Score with CI, (rank), travel ratio and the inadmissible mark of one plant."""
+    est = pe.get("normalized_score", {}).get("iqm")
+    if not est or "rank" not in pe:
+        return "-"
+    mark = f" {INADMISSIBLE}" if pe.get("admissible") is False else ""
+    return f"{_ci(est)} ({pe['rank']}), travel {_travel(pe)}{mark}"
+
+
+def admissibility_note(summary: dict[str, Any]) -> str:
+    """What the travel column and the mark mean, with the run's budget."""
+    b = summary["run"].get("travel_budget", stats.TRAVEL_BUDGET)
+    return (f"travel: mean valve travel over {ZERO}'s on the same episodes; {INADMISSIBLE}: not "
+            f"admissible on that plant (travel above {b:g}x {ZERO}'s, a trip or a failed "
+            "episode), ranked after every admissible policy.")  # fmt: skip
+
+
 def headline_rows(summary: dict[str, Any]) -> tuple[list[str], list[list[str]]]:
     """Header and rows of the headline table (policy x plant)."""
     plants = list(summary["plants"])
@@ -191,9 +235,8 @@ def headline_rows(summary: dict[str, Any]) -> tuple[list[str], list[list[str]]]:
     for e in summary["ranking"]:
         cells = []
         for env_id in plants:
-            pe = summary["plants"][env_id]["policies"].get(e["policy"], {})
-            est = pe.get("normalized_score", {}).get("iqm")
-            cells.append(f"{_ci(est)} ({pe['rank']})" if est and "rank" in pe else "-")
+            cells.append(_headline_cell(summary["plants"][env_id]["policies"].get(
+                e["policy"], {})))  # fmt: skip
         rank = f"{e['mean_rank']:.1f}" + (f" ({e['plants']} plants)" if e["plants"] < len(
             plants) else "")  # fmt: skip
         rows.append([str(e["position"]), e["policy"], *cells, rank])
@@ -216,7 +259,7 @@ def headline_markdown(summary: dict[str, Any]) -> str:
     lines = [f"{stat_label(n)}: the share of the achievable improvement over the industrial "
              f"reference that a policy realizes (0 = {ZERO}, the cascade a commissioned unit "
              f"runs; 1 = {ONE}, the clairvoyant NMPC on the true plant; per scenario); "
-             "(k) = rank on that plant.", ""]  # fmt: skip
+             f"(k) = rank on that plant; {admissibility_note(summary)}", ""]  # fmt: skip
     lines += _table(*headline_rows(summary))
     lines += ["", *margin_markdown(summary)]
     return "\n".join(lines) + "\n"
@@ -254,8 +297,9 @@ def agents_markdown(summary: dict[str, Any]) -> str:
     return and mean IAE over scenario × seed, trips. The README's zoo table."""
     n = len(summary["run"]["seeds"])
     lines = [f"{stat_label(n)}; return and IAE: means over scenario × seed. **Bold**: the "
-             "best of the plant's rows.", ""]  # fmt: skip
-    header = ["plant", "policy", "IQM norm. score", "mean return", "IAE [K s]", "trips"]
+             f"best of the plant's rows; {admissibility_note(summary)}", ""]  # fmt: skip
+    header = ["plant", "policy", "IQM norm. score", "mean return", "IAE [K s]",
+              f"travel / {ZERO}'s", "trips"]  # fmt: skip
     body = []
     for env_id, p in summary["plants"].items():
         pols = p["policies"]
@@ -277,7 +321,8 @@ def agents_markdown(summary: dict[str, Any]) -> str:
                          f"**{score}**" if k == top else score,
                          f"**{ret}**" if met.get("return") == best_ret else ret,
                          f"**{iae}**" if met.get("iae_K_s") == best_iae else iae,
-                         str(e["trips"])])  # fmt: skip
+                         _travel(e) + (f" {INADMISSIBLE}" if e.get("admissible") is False
+                                       else ""), str(e["trips"])])  # fmt: skip
     return "\n".join(lines + _table(header, body)) + "\n"
 
 
@@ -307,22 +352,23 @@ def markdown(summary: dict[str, Any], rows: list[dict]) -> str:
                   "±5 K: mean over scenario × seed where they apply.", ""]  # fmt: skip
         header = ["rank", "policy", "IQM norm. score", "mean norm. score", "IQM return",
                   f"P(> {VERSUS})", "IAE [K s]", "max\\|dev\\| [K]", "t>5K [s]",
-                  "valve travel [strokes]", f"travel / {ZERO}'s", "trips", "failed"]  # fmt: skip
-        zero_travel = pols.get(ZERO, {}).get("metrics", {}).get("valve_travel")
+                  "valve travel [strokes]", f"travel / {ZERO}'s", "reversals",
+                  "admissible", "trips", "failed"]  # fmt: skip
         body = []
         for k in order:
             e = pols[k]
             ns = e.get("normalized_score", {})
             met = e["metrics"]
             travel = met.get("valve_travel")
-            ratio = (f"{travel / zero_travel:.2f}" if travel is not None and zero_travel
-                     else "-")  # fmt: skip
+            ratio = f"{e['travel_ratio']:.2f}" if "travel_ratio" in e else "-"
+            verdict = {True: "yes", False: f"no {INADMISSIBLE}"}.get(e.get("admissible"), "-")
             body.append([str(e.get("rank", "ref." if k in REFERENCES else "-")), k,
                          _ci(ns.get("iqm")), _ci(ns.get("mean")),
                          _ci(e["return"]["iqm"], "{:.0f}"),
                          _ci(e.get(f"p_improvement_over_{VERSUS}")),
                          _fmt(met.get("iae_K_s")), _fmt(met.get("max_abs_dev_K")),
                          _fmt(met.get("time_outside_5K_s")), _fmt(travel), ratio,
+                         _fmt(met.get("valve_reversals")), verdict,
                          str(e["trips"]), str(e["failed"])])  # fmt: skip
         lines += _table(header, body) + [""]
         lines += ["<details><summary>per scenario (mean over seeds)</summary>", ""]

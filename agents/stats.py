@@ -155,6 +155,10 @@ def performance_profile(scores: Scores, taus: np.ndarray) -> np.ndarray:
                    axis=0).reshape(taus.shape)  # fmt: skip
 
 
+#: The valve-travel budget: a policy is admissible on a plant when its mean valve travel there
+#: is at most this multiple of the industrial reference's (cascade_pi_ff) and it never trips.
+TRAVEL_BUDGET = 2.0
+
 #: Smallest scale of the normalized score, as a fraction of the reference's cost |R0|.
 MIN_SPAN = 0.05
 

@@ -71,18 +71,38 @@ def register(name: str, factory: Callable[..., Policy] | str) -> None:
     NAMES = tuple(_REGISTRY)
 
 
-def make(name: str, env: Any, **kwargs: Any) -> Policy:
-    """The baseline ``name`` for ``env``; ValueError listing the valid names otherwise."""
+def factory(name: str) -> Callable[..., Any]:
+    """The class or function behind the baseline ``name`` (imported on first use)."""
     try:
-        factory = _REGISTRY[name]
+        ref = _REGISTRY[name]
     except (KeyError, TypeError):
         raise ValueError(f"unknown baseline {name!r}; valid names: {list(NAMES)}") from None
-    if isinstance(factory, str):
-        module, attr = factory.split(":")
-        factory = importlib.import_module(module)
+    if isinstance(ref, str):
+        module, attr = ref.split(":")
+        ref = importlib.import_module(module)
         for part in attr.split("."):
-            factory = getattr(factory, part)
-    return checked(factory(env, **kwargs), env)
+            ref = getattr(ref, part)
+    return ref
 
 
-__all__ = ["NAMES", "SHIPPED", "Policy", "make", "register"]
+def make(name: str, env: Any, **kwargs: Any) -> Policy:
+    """The baseline ``name`` for ``env``; ValueError listing the valid names otherwise."""
+    return checked(factory(name)(env, **kwargs), env)
+
+
+class Tuned:
+    """The row ``<name>_tuned``: controller ``name`` with the knob values the benchmark's
+    common tuning stored for the env's plant (baselines/tuning.py), for controllers whose
+    paper gives its own parameters (those stay the default of ``name``)."""
+
+    def __init__(self, name: str) -> None:
+        self.name = name
+
+    def __call__(self, env: Any, **kwargs: Any) -> Any:
+        from baselines import tuning
+
+        values = tuning.stored(self.name, env.unwrapped.plant.id)
+        return factory(self.name)(env, **{**values, **kwargs})
+
+
+__all__ = ["NAMES", "SHIPPED", "Policy", "Tuned", "factory", "make", "register"]

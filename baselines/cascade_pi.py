@@ -59,6 +59,7 @@ import numpy as np
 
 from baselines.identification import FOPDT, simc_pi, step_test
 from baselines.loops import input_filter, observation_layout, pi_position, restart_rows
+from baselines.tuning import Knob
 from steamtemp_gym import plants
 from steamtemp_gym.plants.base import MAIN, SCHEDULED
 from steamtemp_gym.scenarios import Scenario
@@ -201,11 +202,25 @@ class CascadePI:
         gain_schedule: Schedule every loop's gains by the load demand, interpolated between
             the SIMC tunings from step tests at :data:`GAIN_LOADS` (bumpless: each integral
             is rescaled so that Kc times it is continuous).
+        outer_gain, outer_reset, inner_gain, inner_reset: Factors on every loop's SIMC gain
+            Kc and integral time Ti, outer and inner (the ``KNOBS``; None or 1: SIMC).
     """
+
+    #: Factors on the SIMC tuning, searched by agents.baseline_tuning (default 1: SIMC).
+    KNOBS = (Knob("outer_gain", 0.25, 4.0), Knob("outer_reset", 0.25, 4.0),
+             Knob("inner_gain", 0.25, 4.0), Knob("inner_reset", 0.25, 4.0))  # fmt: skip
+
+    @staticmethod
+    def knob_defaults(env_id: str) -> dict[str, float]:
+        """The SIMC tuning: every factor 1."""
+        return {"outer_gain": 1.0, "outer_reset": 1.0, "inner_gain": 1.0, "inner_reset": 1.0,
+                "feedforward_gain": 1.0}  # fmt: skip
 
     def __init__(
         self, env: Any, tuning: Any = None, load_feedforward: bool = False,
         feedforward: tuple[np.ndarray, float] | None = None, gain_schedule: bool = False,
+        outer_gain: float | None = None, outer_reset: float | None = None,
+        inner_gain: float | None = None, inner_reset: float | None = None,
     ) -> None:  # fmt: skip
         u = env.unwrapped
         plant = u.plant
@@ -231,8 +246,11 @@ class CascadePI:
         self.gains = np.array(
             tuning if tuning is not None else _tuning(plant.id, params), dtype=float
         )
+        factors = _factors(outer_gain, outer_reset, inner_gain, inner_reset)
+        self.gains = self.gains * factors
         #: (loads, table) of the load-scheduled gains (gain_table), or None
-        self.gain_schedule = (np.array(GAIN_LOADS), gain_table(plant.id, params)) if (
+        self.gain_schedule = (np.array(GAIN_LOADS), gain_table(plant.id, params) * np.array(
+            [factors[0], factors[0] / factors[1], factors[2], factors[2] / factors[3]])) if (
             gain_schedule) else None  # fmt: skip
         if feedforward is None and load_feedforward:
             feedforward = _feedforward(plant.id, params, gain_schedule)
@@ -335,14 +353,32 @@ class CascadePI:
         return (action[0] if np.ndim(observation) == 1 else action), None
 
 
+def _factors(*values: float | None) -> np.ndarray:
+    """(Kc_o, Ti_o, Kc_i, Ti_i) factors from the knobs (None: 1); ValueError unless > 0."""
+    out = np.array([1.0 if v is None else v for v in values], dtype=float)
+    if not np.all(np.isfinite(out) & (out > 0.0)):
+        raise ValueError(f"the tuning factors outer_gain, outer_reset, inner_gain and "
+                         f"inner_reset must be finite and > 0, got {out.tolist()}")  # fmt: skip
+    return out
+
+
 class CascadePIFF(CascadePI):
     """The cascade as a well-commissioned unit runs it: the loops of :class:`CascadePI`
     with load-scheduled gains (SIMC tunings from step tests at :data:`GAIN_LOADS`,
     interpolated bumplessly by the load demand), the load (and, where the plant measures
     it, firing) feed-forward to every main-steam cascade's inner setpoint, and the
     load-scheduled first stages of :class:`CascadePI`. The zero of the leaderboard's
-    normalized score.
+    normalized score. ``feedforward_gain`` (a knob, default 1) scales the fitted
+    feed-forward.
     """
 
-    def __init__(self, env: Any, **kwargs: Any) -> None:
+    KNOBS = (*CascadePI.KNOBS, Knob("feedforward_gain", 0.0, 2.0, log=False))
+
+    def __init__(self, env: Any, feedforward_gain: float | None = None, **kwargs: Any) -> None:
         super().__init__(env, load_feedforward=True, gain_schedule=True, **kwargs)
+        if feedforward_gain is not None:
+            g = float(feedforward_gain)
+            if not (np.isfinite(g) and g >= 0.0):
+                raise ValueError(f"feedforward_gain must be finite and >= 0, "
+                                 f"got {feedforward_gain!r}")
+            self.ff = self.ff * g

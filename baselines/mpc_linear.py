@@ -93,8 +93,10 @@ from typing import Any
 import numpy as np
 import scipy.sparse as sp
 
+from baselines import tuning
 from baselines.linear_models import balanced_basis, kalman_gain, reachable, steady_point
 from baselines.loops import observation_layout, restart_rows
+from baselines.tuning import Knob
 from steamtemp_gym import plants
 
 #: Loads of the local models (fraction of rated) and of the steady operating-point tables.
@@ -374,16 +376,30 @@ class MPCLinear:
         env: The env (or vector env) the policy will act on.
         disturbance_model: Estimate the heat-absorption and output disturbances (the
             offset-free design); False holds them at zero (no offset-free estimation).
-        move_weight: Move suppression (default: the plant's MOVE_WEIGHTS entry).
-        u_weight: Weight of the steady target (default U_WEIGHT).
+        move_weight: Move suppression; u_weight: weight of the steady target (the ``KNOBS``;
+            default: the benchmark's stored tuning, baselines/tuned/mpc_linear.json, where
+            the plant has one, else the commissioning rule's MOVE_WEIGHTS entry and U_WEIGHT).
     """
 
-    def __init__(self, env: Any, disturbance_model: bool = True,
-                 move_weight: float | None = None, u_weight: float = U_WEIGHT) -> None:  # fmt: skip
+    #: Searched by agents.baseline_tuning from the commissioning rule's values.
+    KNOBS = (Knob("move_weight", 1e-4, 0.1), Knob("u_weight", 1e-3, 1.0))
+
+    @staticmethod
+    def knob_defaults(env_id: str) -> dict[str, float]:
+        """The commissioning rule's move suppression and U_WEIGHT."""
+        return {"move_weight": MOVE_WEIGHTS.get(env_id, MOVE_WEIGHT_LADDER[1]),
+                "u_weight": U_WEIGHT}  # fmt: skip
+
+    def __init__(self, env: Any, disturbance_model: bool = True, move_weight: float | None = None,
+                 u_weight: float | None = None) -> None:  # fmt: skip
         u = env.unwrapped
         plant = u.plant
-        if move_weight is None:
-            move_weight = MOVE_WEIGHTS.get(plant.id, MOVE_WEIGHT_LADDER[1])
+        try:
+            base = tuning.stored("mpc_linear", plant.id)
+        except ValueError:
+            base = self.knob_defaults(plant.id)
+        move_weight = base["move_weight"] if move_weight is None else move_weight
+        u_weight = base["u_weight"] if u_weight is None else u_weight
         for name, v in (("move_weight", move_weight), ("u_weight", u_weight)):
             if not (isinstance(v, (int, float)) and np.isfinite(v) and v > 0):
                 raise ValueError(f"{name} must be a positive finite number, got {v!r}")

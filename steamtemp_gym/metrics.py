@@ -87,6 +87,9 @@ __all__ = [
     "find_setpoint_step",
     "QUIET_SETTLE_S",
     "QUIET_MIN_S",
+    "LIMIT_CYCLE_RATIO",
+    "LIMIT_CYCLE_FLOOR_K",
+    "limit_cycles",
     "metric_names",
     "quiet_peak_to_peak",
     "step_response_metrics",
@@ -111,6 +114,12 @@ QUIET_SETTLE_S: float = 600.0
 #: Shortest quiet stretch (s) on which the peak-to-peak is read: a limit cycle of the slowest
 #: loops (periods of 4-8 min) shows in it at least once.
 QUIET_MIN_S: float = 600.0
+#: A loop limit-cycles when its quiet peak-to-peak exceeds this multiple of the industrial
+#: reference's on the same episode (:func:`limit_cycles`) ...
+LIMIT_CYCLE_RATIO: float = 2.0
+#: ... and this floor (K): the sensor noise and coloured disturbance alone swing a settled
+#: loop by about 1 K peak to peak.
+LIMIT_CYCLE_FLOOR_K: float = 1.5
 
 
 def _band_key(band_K: float) -> str:
@@ -581,3 +590,12 @@ def step_response_metrics(
     t50 = _first_crossing(tw, zw, 0.5, 1.0) - t_step
     t90 = _first_crossing(tw, zw, 0.9, 1.0) - t_step
     return {"gain": gain, "Tu_s": float(tu), "Tg_s": float(tg), "t50_s": t50, "t90_s": t90}
+
+
+def limit_cycles(quiet_p2p_K: float, reference_p2p_K: float) -> bool:
+    """Whether a quiet peak-to-peak (:func:`quiet_peak_to_peak`) shows a sustained oscillation:
+    above ``max(LIMIT_CYCLE_RATIO * reference_p2p_K, LIMIT_CYCLE_FLOOR_K)``, the reference's
+    on the same episode. False where the measure does not apply (NaN)."""
+    if np.isnan(quiet_p2p_K):
+        return False
+    return bool(quiet_p2p_K > max(LIMIT_CYCLE_RATIO * reference_p2p_K, LIMIT_CYCLE_FLOOR_K))

@@ -1,10 +1,9 @@
 """Fuzzy P²ID (baselines/fuzzy_p2id.py): rule base vs scikit-fuzzy, the P+P+I mechanism, the
-TSK scheduler, the stored gain search, and the paper's claim on BensonSubcritical-v0."""
+TSK scheduler, the knobs, and the paper's claims on BensonSubcritical-v0."""
 
 from __future__ import annotations
 
 import functools
-import json
 
 import gymnasium as gym
 import numpy as np
@@ -104,69 +103,97 @@ def test_small_signal_is_p_plus_p_plus_i():
     assert fd[1] > 3.0 * dev_fz[1] > 0.0  # the derivative kick of the rising error
 
 
-@functools.lru_cache(maxsize=1)
-def _stored() -> dict:
-    return json.loads(fp.GAINS_FILE.read_text())
+def test_knobs_set_the_main_loop_rules_and_bad_knobs_are_refused():
+    """``kp_L``/``ki_L``/``kd_L`` are the main-steam P²ID's gain set of rule L; the first
+    stage keeps the SIMC-equivalent set; a bad knob is a ValueError."""
+    env = gym.make(BENSON)
+    p = fp.FuzzyP2ID(env, kp_50=2.0, ki_75=0.25, kd_100=0.3)
+    main = [j for j in p.fuzzy if p.loops[j][1] == fp.MAIN]
+    other = [j for j in p.fuzzy if j not in main]
+    assert main and other
+    np.testing.assert_allclose(p.gains[main[0], 0, 0], 2.0)
+    np.testing.assert_allclose(p.gains[main[0], 1, 1], 0.25)
+    np.testing.assert_allclose(p.gains[main[0], 2, 2], 0.3)
+    np.testing.assert_array_equal(p.gains[other[0]], np.tile(fp.GAINS_PI, (3, 1)))
+    for bad in ({"kp_60": 1.0}, {"kp_50": -1.0}, {"kd_75": float("nan")}):
+        with pytest.raises(ValueError, match="knob|gains"):
+            fp.FuzzyP2ID(env, **bad)
 
 
-def test_stored_gains_have_the_search_format_and_reproduce_its_objective():
-    """The JSON beside the module is :func:`search_gains`'s output for Benson; its objective
-    for the rated-load rule is recomputed from the stored gains (deterministic episodes)."""
-    data = _stored()[BENSON]
-    assert set(data) >= {"gains", "objective", "final_step", "evaluations"}
-    g = np.array(data["gains"])
-    assert g.shape == (2, len(fp.RULE_LOADS), 3) and (g > 0)[:, :, :2].all()
-    np.testing.assert_array_equal(fp.stored_gains(BENSON), g)
-    r = fp.RULE_LOADS.index(1.0)
-    # rel 1e-7, not bit-equal: the search ran before the plants' steady-state valve solver
-    # became one shared bisection (60 halvings where Benson had 45), which moves the start
-    # by 4e-14 and this closed-loop objective by 2e-9; a stale or wrong file moves it by %.
-    assert fp._Trainer(BENSON, 1.0)(g) == pytest.approx(data["objective"][r], rel=1e-7)
-    # the search improved on the SIMC-equivalent start on the training scenarios
-    assert data["objective"][r] < fp._Trainer(BENSON, 1.0)(np.tile(fp.GAINS_PI, (2, 3, 1)))
+def _run(venv, policy, seeds) -> dict[str, np.ndarray]:
+    """Per-row IAE (K s) and std (K) of the true outlet error, fuel (kg), spray (kg), trips."""
+    obs, info = venv.reset(seed=list(seeds))
+    policy.reset()
+    sig = venv.unwrapped.signals.observation
+    i_fuel = [s.name for s in sig].index("fuel_flow_kg_s")
+    scale, center = sig[i_fuel].scale, sig[i_fuel].center
+    n, dt = len(seeds), venv.unwrapped.plant.dt_s
+    errs, fuel, spray, tripped = [], [], [], np.zeros(n, dtype=bool)
+    start = np.ones(n, dtype=bool)
+    while True:
+        a, _ = policy.predict(obs, episode_start=start)
+        start[:] = False
+        obs, _, term, trunc, info = venv.step(a)
+        tripped |= term
+        errs.append(info["outlet_temp_C"] - info["setpoint_C"])
+        fuel.append(obs[:, i_fuel] * scale + center)
+        spray.append(info["spray_flow_kg_s"])
+        if term.any() or trunc.any():
+            break
+    E = np.array(errs)
+    return {"iae": np.abs(E).sum(axis=0) * dt, "std": E.std(axis=0),
+            "fuel_kg": np.array(fuel).sum(axis=0) * dt,
+            "spray_kg": np.array(spray).sum(axis=0) * dt, "tripped": tripped}  # fmt: skip
 
 
 @functools.lru_cache(maxsize=1)
 def _claim() -> dict:
-    """Per scenario and controller: run_batch over SEEDS on the native vector env."""
+    """Per scenario and controller: the claim metrics over SEEDS on the native vector env."""
     out = {}
     for sc in CLAIM_SCENARIOS:
         for name, cls in (("fuzzy_p2id", fp.FuzzyP2ID), ("cascade_pi", CascadePI)):
             venv = gym.make_vec(BENSON, num_envs=len(SEEDS),
                                 vectorization_mode="vector_entry_point", scenario=sc)  # fmt: skip
-            out[sc, name] = fp.run_batch(venv, cls(venv), SEEDS)
+            out[sc, name] = _run(venv, cls(venv), SEEDS)
     return out
+
+
+def _ratios(scenario: str) -> tuple[float, float, float]:
+    res = _claim()
+    f, p = res[scenario, "fuzzy_p2id"], res[scenario, "cascade_pi"]
+    assert not f["tripped"].any()
+    return (f["iae"].mean() / p["iae"].mean(), f["std"].mean() / p["std"].mean(),
+            f["fuel_kg"].mean() / p["fuel_kg"].mean())  # fmt: skip
 
 
 @pytest.mark.parametrize("scenario", CLAIM_SCENARIOS)
 def test_claim_more_accurate_and_less_fluctuation(scenario):
-    """The paper: "more accurate and less fluctuation" than the classic controller.
-    Measured here (5 seeds, means): IAE and std of the true outlet temperature error of the
-    P²ID relative to cascade_pi (MEASURED; the claim holds: both below 1 everywhere),
-    asserted at the measured ratio +-0.05 (per-seed ratios spread +-0.07 around the 5-seed
-    mean, which is deterministic), so a change that moves them shows."""
-    res = _claim()
-    f, p = res[scenario, "fuzzy_p2id"], res[scenario, "cascade_pi"]
-    assert not f["tripped"].any()
-    iae_ratio = f["iae"].mean() / p["iae"].mean()
-    std_ratio = f["std"].mean() / p["std"].mean()
-    exp_iae, exp_std = MEASURED[scenario]
+    """The paper: the P²ID is "more accurate and [has] less fluctuation" than the classic
+    controller: a smaller IAE and a smaller std of the outlet temperature error than
+    cascade_pi's on 50-100 % load changes (5 seeds, means)."""
+    iae_ratio, std_ratio, _ = _ratios(scenario)
     assert iae_ratio < 1.0 and std_ratio < 1.0
+
+
+@pytest.mark.xfail(strict=True, reason=(
+    "measured: fuel ratio fuzzy_p2id / cascade_pi 1.0000 +- 1e-4 on the three load changes "
+    "(BensonSubcritical's fuel follows the load demand through its fuel/water-ratio "
+    "schedule; the spray loops hardly move it)"))
+def test_claim_less_fuel():
+    """The paper: the P²ID also needs less fuel than the classic controller (5 seeds, means;
+    at least 0.05 % less on every load change)."""
+    for sc in CLAIM_SCENARIOS:
+        assert _ratios(sc)[2] < 1.0 - 5e-4
+
+
+@pytest.mark.parametrize("scenario", CLAIM_SCENARIOS)
+def test_pin_claim_ratios(scenario):
+    """Pins of the measured IAE and std ratios (+-0.05; the 5-seed means are deterministic),
+    so a change that moves them shows."""
+    iae_ratio, std_ratio, _ = _ratios(scenario)
+    exp_iae, exp_std = MEASURED[scenario]
     assert iae_ratio == pytest.approx(exp_iae, abs=0.05)
     assert std_ratio == pytest.approx(exp_std, abs=0.05)
-
-
-def test_claim_fuel_and_spray():
-    """The paper also claims less fuel; Benson observes the fuel flow. Not reproduced: the
-    fuel of the two controllers agrees within 0.01 % (the unit's fuel follows the load
-    demand through the fuel/water-ratio schedule; the spray loops hardly move it) and so
-    does the mean power; the spray totals agree within 1 % (measured 0.2-0.4 % less)."""
-    res = _claim()
-    for sc in CLAIM_SCENARIOS:
-        f, p = res[sc, "fuzzy_p2id"], res[sc, "cascade_pi"]
-        assert f["fuel_kg"].mean() == pytest.approx(p["fuel_kg"].mean(), rel=1e-4)
-        assert f["power_MW"].mean() == pytest.approx(p["power_MW"].mean(), rel=1e-4)
-        assert f["spray_kg"].mean() == pytest.approx(p["spray_kg"].mean(), rel=0.01)
 
 
 #: (IAE ratio, std ratio) fuzzy_p2id / cascade_pi measured on the claim scenarios.

@@ -132,6 +132,9 @@ BAD_FLAGS = [
     ({"--seeds": "9" * 30}, ["--seeds", "larger than"]),
     ({"--out": ""}, ["--out", "empty"]),
     ({"--out": " "}, ["--out", "empty"]),
+    ({"--travel-budget": "0"}, ["--travel-budget", "> 0", "'0'"]),
+    ({"--travel-budget": "nan"}, ["--travel-budget", "finite"]),
+    ({"--travel-budget": "two"}, ["--travel-budget", "'two'"]),
 ]
 
 

@@ -1,0 +1,281 @@
+"""Tune the baselines on equal terms: one search, one budget, one objective for all.
+
+``python -m agents.baseline_tuning [NAME ...] [--env ID ...]`` tunes each tunable baseline
+(a controller class with ``KNOBS``, baselines/tuning.py) on each env and writes
+``baselines/tuned/<name>.json``; with no NAME it tunes every one of :data:`TUNABLE`.
+
+Every controller gets the same terms:
+
+- **Training episodes**: :data:`EPISODES` episodes of the ``random`` training distribution
+  (the one the agents train on), seeds ``TUNING_SEED + k``. No named or held-out
+  scenario is ever seen.
+- **Objective**: the leaderboard's normalized score, averaged over those episodes, with
+  the leaderboard's ends: 0 = ``cascade_pi_ff``'s return, 1 = the oracle's, on the same
+  episodes (:func:`ends`, computed once per env and stored in ``baselines/tuned/ends.json``).
+- **Constraints**: no trip, and a mean valve travel of at most :data:`TRAVEL_BUDGET` times
+  ``cascade_pi_ff``'s on the same episodes. A candidate that breaks them ranks below every
+  one that keeps them, by how far it breaks them (so a start outside them is walked in).
+- **Search**: a deterministic compass search on the unit cube of the knobs (log or
+  linear, :class:`baselines.tuning.Knob`) from the controller's defaults: each round tries
+  +- the step along every knob in turn, moves to the first candidate that improves the
+  objective, and halves the step when none does, from :data:`STEP0` down to
+  :data:`MIN_STEP`.
+- **Budget**: :data:`EVALUATIONS` evaluations (each one batch of the training episodes)
+  per controller and env, the start included.
+
+Cost: a batch of :data:`EPISODES` one-hour episodes takes 1-10 s for the classical loops
+and up to about a minute for the MPCs on one core, so a controller takes minutes to an hour
+per env; the ends (the oracle's episodes) take a few minutes per env the first time.
+"""
+
+from __future__ import annotations
+
+import argparse
+import hashlib
+import json
+import sys
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+
+import baselines
+import steamtemp_gym
+from agents import stats
+from agents.evaluation import run_batch
+from agents.oracle import Oracle
+from baselines import tuning
+
+#: The baselines with knobs, tuned by default.
+TUNABLE = ("cascade_pi", "cascade_pi_ff", "fuzzy_p2id", "mpc_linear")
+#: The industrial reference: the score's 0 and the travel budget's unit.
+ZERO = "cascade_pi_ff"
+#: First seed of the training episodes (``random`` scenario); far from the agents' training
+#: seeds and the leaderboard's evaluation seeds.
+TUNING_SEED = 2_000_000
+EPISODES = 8
+EVALUATIONS = 48
+STEP0 = 0.25
+MIN_STEP = 1.0 / 64.0
+#: Largest mean valve travel, as a multiple of the reference's on the same episodes.
+TRAVEL_BUDGET = stats.TRAVEL_BUDGET
+
+
+def seeds() -> list[int]:
+    """The training episodes' seeds."""
+    return [TUNING_SEED + k for k in range(EPISODES)]
+
+
+def _venv(env_id: str) -> Any:
+    return gym.make_vec(env_id, num_envs=EPISODES, scenario="random",
+                        vectorization_mode="vector_entry_point")  # fmt: skip
+
+
+def _episodes(env_id: str, make_policy: Any) -> dict[str, np.ndarray]:
+    """Returns, valve travels and trips of one policy on the training episodes."""
+    venv = _venv(env_id)
+    res = run_batch(venv, make_policy(venv), seeds())
+    m = [r["metrics"] for r in res]
+    return {k: np.array([x[key] for x in m], dtype=float)
+            for k, key in (("return", "return"), ("travel", "valve_travel"),
+                           ("tripped", "tripped"))}  # fmt: skip
+
+
+def ends(env_id: str) -> dict[str, Any]:
+    """The score's ends on the training episodes of ``env_id``: ``zero`` and ``one`` (returns
+    per episode) and ``travel`` (the reference's mean valve travel), stored in
+    ``baselines/tuned/ends.json`` and recomputed when the episodes changed."""
+    f = tuning.TUNED / "ends.json"
+    table = json.loads(f.read_text()) if f.is_file() else {}
+    key = {"seeds": seeds(), "scenario": "random", "code": _code_digest(ends=True)}
+    got = table.get(env_id)
+    if got is not None and got.get("episodes") == key:
+        return got
+    zero = _episodes(env_id, lambda v: baselines.make(ZERO, v))
+    one = _episodes(env_id, Oracle)
+    got = {"episodes": key, "zero": zero["return"].tolist(), "one": one["return"].tolist(),
+           "travel": float(zero["travel"].mean())}  # fmt: skip
+    table[env_id] = got
+    tuning.TUNED.mkdir(exist_ok=True)
+    f.write_text(json.dumps(table, indent=1, sort_keys=True) + "\n")
+    return got
+
+
+@dataclass(frozen=True)
+class Evaluation:
+    """One candidate's result on the training episodes."""
+
+    knobs: dict[str, float]
+    score: float  # mean normalized score
+    travel_ratio: float  # mean travel / the reference's
+    trips: int
+
+    @property
+    def feasible(self) -> bool:
+        return self.trips == 0 and self.travel_ratio <= TRAVEL_BUDGET
+
+    @property
+    def merit(self) -> float:
+        """The search's objective: the score if feasible, else below every feasible one."""
+        if self.feasible:
+            return self.score
+        return -1e6 - self.trips - max(self.travel_ratio - TRAVEL_BUDGET, 0.0)
+
+
+def evaluate(name: str, env_id: str, values: dict[str, float], e: dict[str, Any]) -> Evaluation:
+    """Score controller ``name`` with knob ``values`` on the training episodes of ``env_id``
+    against the ends ``e``."""
+    r = _episodes(env_id, lambda v: baselines.make(name, v, **values))
+    score = np.mean([stats.normalize(x, z, o) for x, z, o in zip(r["return"], e["zero"],
+                                                                  e["one"], strict=True)])
+    return Evaluation(dict(values), float(score), float(r["travel"].mean() / e["travel"]),
+                      int(r["tripped"].sum()))  # fmt: skip
+
+
+def defaults(factory: Any, env_id: str) -> dict[str, float]:
+    """The knobs' start values: the class's ``knob_defaults(env_id)`` if it has one, else
+    each knob's geometric (log) or arithmetic midpoint clipped into its box."""
+    ks = tuning.knobs(factory)
+    given = factory.knob_defaults(env_id) if hasattr(factory, "knob_defaults") else {}
+    return {k.name: float(given[k.name]) if k.name in given else k.from_unit(0.5) for k in ks}
+
+
+def compass(x0: np.ndarray, evaluate_at: Any, budget: int = EVALUATIONS,
+            step0: float = STEP0, min_step: float = MIN_STEP) -> list[tuple[np.ndarray, Any]]:
+    """Deterministic compass search on the unit cube (module docstring).
+
+    Args:
+        x0: Start, in unit coordinates.
+        evaluate_at: ``u -> result`` with a ``merit`` attribute (higher is better).
+        budget: Evaluations in all, the start's included.
+
+    Returns:
+        Every (point, result) evaluated, in order; the best is the last accepted move.
+    """
+    x, best = np.asarray(x0, dtype=float), evaluate_at(np.asarray(x0, dtype=float))
+    history = [(x, best)]
+    step = step0
+    while len(history) < budget and step >= min_step:
+        moved = False
+        for i in range(len(x)):
+            for sign in (1.0, -1.0):
+                u = x.copy()
+                u[i] = min(max(u[i] + sign * step, 0.0), 1.0)
+                if u[i] == x[i] or len(history) >= budget:
+                    continue
+                cand = evaluate_at(u)
+                history.append((u, cand))
+                if cand.merit > best.merit:
+                    best, x, moved = cand, u, True
+                    break
+            if moved:
+                break
+        if not moved:
+            step /= 2.0
+    return history
+
+
+def best_of(history: list[tuple[np.ndarray, Any]]) -> Any:
+    """The result with the highest merit (the first of equals)."""
+    return max((r for _, r in history), key=lambda r: r.merit)
+
+
+def search(name: str, env_id: str, log: Any = None) -> dict[str, Any]:
+    """Compass search of controller ``name``'s knobs on ``env_id`` (module docstring)."""
+    factory = baselines.factory(name)
+    ks = tuning.knobs(factory)
+    if not ks:
+        raise ValueError(f"baseline {name!r} has no KNOBS to tune")
+    e = ends(env_id)
+    start = defaults(factory, env_id)
+    x0 = np.array([k.to_unit(start[k.name]) for k in ks])
+
+    def evaluate_at(u: np.ndarray) -> Evaluation:
+        values = dict(start) if np.array_equal(u, x0) else {  # the start exactly
+            k.name: k.from_unit(ui) for k, ui in zip(ks, u, strict=True)}  # fmt: skip
+        res = evaluate(name, env_id, values, e)
+        if log:
+            log(f"{name} {env_id}: score {res.score:.4f} travel x{res.travel_ratio:.2f} "
+                f"trips {res.trips}")
+        return res
+
+    history = compass(x0, evaluate_at)
+    best = best_of(history)
+    return {"knobs": best.knobs, "score": best.score, "travel_ratio": best.travel_ratio,
+            "trips": best.trips, "feasible": best.feasible, "evaluations": len(history),
+            "start": history[0][1].__dict__}  # fmt: skip
+
+
+def _code_digest(ends: bool = False) -> str:
+    """Hash of the code a tuning depends on: the plants, scenarios and metrics, the
+    evaluation, and the baselines (for the ends only the reference and the oracle)."""
+    h = hashlib.sha256()
+    here = Path(__file__).parent
+    files = sorted(Path(steamtemp_gym.__file__).parent.rglob("*.py"))
+    files += [here / "evaluation.py"]
+    if ends:
+        files += [Path(baselines.__file__).with_name(f) for f in ("cascade_pi.py", "loops.py",
+                                                                    "identification.py")]
+        files += [here / "oracle.py"]
+    else:
+        files += sorted(Path(baselines.__file__).parent.rglob("*.py"))
+    for f in files:
+        h.update(f.read_bytes())
+    return h.hexdigest()[:16]
+
+
+def write(name: str, env_ids: list[str], log: Any = None) -> dict[str, Any]:
+    """Tune ``name`` on ``env_ids`` and merge the results into its stored file."""
+    f = tuning.path(name)
+    data = json.loads(f.read_text()) if f.is_file() else {"controller": name, "plants": {}}
+    for env_id in env_ids:
+        t0 = time.perf_counter()
+        res = search(name, env_id, log)
+        res["seconds"] = round(time.perf_counter() - t0, 1)
+        data["plants"][env_id] = res
+        data["terms"] = {"episodes": EPISODES, "tuning_seed": TUNING_SEED,
+                         "evaluations": EVALUATIONS, "step0": STEP0, "min_step": MIN_STEP,
+                         "travel_budget": TRAVEL_BUDGET, "reference": ZERO}  # fmt: skip
+        data["code"] = _code_digest()
+        tuning.TUNED.mkdir(exist_ok=True)
+        f.write_text(json.dumps(data, indent=1, sort_keys=True) + "\n")  # after every env
+    return data
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(
+        prog="python -m agents.baseline_tuning",
+        description="Tune baselines on equal terms (same search, budget, objective and "
+        "travel budget) and write baselines/tuned/<name>.json. Takes minutes to an hour "
+        "per controller and env.")  # fmt: skip
+    ap.add_argument("names", nargs="*", help=f"baselines to tune (default: {', '.join(TUNABLE)})")
+    ap.add_argument("--env", action="append", dest="envs", metavar="ID",
+                    help="env id (repeatable; default: every registered env)")
+    args = ap.parse_args(argv)
+    names = args.names or list(TUNABLE)
+    for n in names:
+        try:
+            if not tuning.knobs(baselines.factory(n)):
+                ap.error(f"baseline {n!r} has no KNOBS; tunable: {list(TUNABLE)}")
+        except ValueError as exc:
+            ap.error(str(exc))
+    env_ids = []
+    for e in args.envs or list(steamtemp_gym.ENV_IDS):
+        try:
+            env_ids.append(steamtemp_gym.envs.resolve_id(e))
+        except ValueError as exc:
+            ap.error(f"argument --env: {exc}")
+    for n in names:
+        write(n, env_ids, log=lambda s: print(s, file=sys.stderr, flush=True))
+        print(f"wrote {tuning.path(n)}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
+
+__all__ = ["EPISODES", "EVALUATIONS", "TUNABLE", "Evaluation", "ends", "evaluate", "search",
+           "seeds", "write"]  # fmt: skip

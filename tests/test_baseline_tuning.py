@@ -1,0 +1,88 @@
+"""The common tuning of the baselines (agents/baseline_tuning.py, baselines/tuning.py): the
+knobs' boxes, the compass search on a known objective, the stored files and their rows."""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+import baselines
+from agents import baseline_tuning as bt
+from baselines import tuning
+from baselines.tuning import Knob
+
+FSH = "steamtemp/SupercriticalFSH-v0"
+
+
+def test_knob_unit_coordinates_round_trip_and_bad_boxes():
+    k, lin = Knob("g", 0.25, 4.0), Knob("b", -1.0, 3.0, log=False)
+    assert k.to_unit(1.0) == pytest.approx(0.5) and k.from_unit(0.5) == pytest.approx(1.0)
+    assert lin.to_unit(1.0) == pytest.approx(0.5) and lin.from_unit(1.0) == 3.0
+    assert k.to_unit(100.0) == 1.0 and k.from_unit(-3.0) == 0.25  # clipped into the box
+    for bad in (("g", 1.0, 1.0), ("g", 0.0, 1.0), ("1x", 0.1, 1.0), ("g", 0.1, float("inf"))):
+        with pytest.raises(ValueError, match="knob"):
+            Knob(*bad)
+
+
+@dataclass
+class _Result:
+    merit: float
+
+
+def test_compass_search_finds_a_known_optimum_within_its_budget():
+    """On merit = -|u - u*|^2 from the centre the search walks to u* to within its last
+    step, uses no more than its budget, and never accepts a worse point."""
+    target = np.array([0.8125, 0.25])
+    f = lambda u: _Result(-float(np.sum((u - target) ** 2)))  # noqa: E731
+    hist = bt.compass(np.array([0.5, 0.5]), f, budget=60)
+    assert len(hist) <= 60
+    best = bt.best_of(hist)
+    point = next(u for u, r in hist if r is best)
+    np.testing.assert_allclose(point, target, atol=bt.MIN_STEP)
+    hist5 = bt.compass(np.array([0.5, 0.5]), f, budget=5)
+    assert len(hist5) == 5 and bt.best_of(hist5).merit >= hist5[0][1].merit
+
+
+def test_infeasible_candidates_rank_below_every_feasible_one():
+    ok = bt.Evaluation({}, -5.0, 1.9, 0)
+    over = bt.Evaluation({}, 0.9, 2.1, 0)
+    trip = bt.Evaluation({}, 0.9, 1.0, 1)
+    assert ok.feasible and not over.feasible and not trip.feasible
+    assert ok.merit > over.merit and ok.merit > trip.merit
+    assert bt.Evaluation({}, 0.0, 2.5, 0).merit > bt.Evaluation({}, 0.0, 3.0, 0).merit
+
+
+def test_stored_names_the_command_when_there_is_no_tuning(tmp_path, monkeypatch):
+    monkeypatch.setattr(tuning, "TUNED", tmp_path)
+    with pytest.raises(ValueError, match="python -m agents.baseline_tuning nothing"):
+        tuning.stored("nothing", FSH)
+    (tmp_path / "x.json").write_text(json.dumps({"plants": {"other": {"knobs": {}}}}))
+    with pytest.raises(ValueError, match="no entry for"):
+        tuning.stored("x", FSH)
+
+
+def test_every_tunable_baseline_declares_knobs_with_defaults_in_their_boxes():
+    for name in bt.TUNABLE:
+        f = baselines.factory(name)
+        ks = tuning.knobs(f)
+        assert ks, name
+        start = bt.defaults(f, FSH)
+        for k in ks:
+            assert k.lo <= start[k.name] <= k.hi, (name, k, start[k.name])
+
+
+def test_cascade_knobs_scale_the_simc_tuning_and_bad_values_are_refused():
+    env = gym.make(FSH)
+    base, p = baselines.factory("cascade_pi")(env), baselines.factory("cascade_pi")(
+        env, outer_gain=2.0, inner_reset=0.5)
+    np.testing.assert_allclose(p.gains[:, 0], 2.0 * base.gains[:, 0])
+    np.testing.assert_allclose(p.gains[:, 3], 0.5 * base.gains[:, 3])
+    np.testing.assert_array_equal(p.gains[:, [1, 2]], base.gains[:, [1, 2]])
+    with pytest.raises(ValueError, match="tuning factors"):
+        baselines.make("cascade_pi", env, inner_gain=0.0)
+    with pytest.raises(ValueError, match="feedforward_gain"):
+        baselines.make("cascade_pi_ff", env, feedforward_gain=-1.0)
