@@ -9,7 +9,7 @@ named or held-out scenario): for each criterion and eta, the mean return less
 ``cascade_pi_ff``'s on the same seeds (the leaderboard's score before its normalization by
 the oracle), the valve-travel ratio to ``cascade_pi_ff``, trips, and how far the net moved
 the gains: the mean over the episode of |k_l(t) / k_l(0) - 1| for k_p and k_i, and the time
-share of k_i within 5 % of its bounds (0 and GAIN_SPAN k_i0: a saturated output). The choice
+share of k_i within 5 % of its bounds (k_i0 (1 -+ GAIN_RANGE): a saturated output). The choice
 per criterion is the eta of the highest return among those whose net adapts (training moves
 k_i at zero input by at least ADAPT_MIN = 10 % on average over the training episodes) and
 whose travel stays within 2x ``cascade_pi_ff``'s without a trip (the common tuner's
@@ -29,7 +29,7 @@ import numpy as np
 
 import baselines
 from agents.evaluation import run_batch
-from baselines.neuro_pid import ETA, N_HIDDEN, N_IN, NeuroPID, Recorder, _forward
+from baselines.neuro_pid import ETA, GAIN_RANGE, N_HIDDEN, N_IN, NeuroPID, Recorder, _forward
 
 TRAVEL_MAX, ADAPT_MIN = 2.0, 0.10
 
@@ -58,14 +58,14 @@ def learned(pol: NeuroPID) -> np.ndarray:
     out = []
     for w in W:
         _forward(w, np.zeros(N_IN), h, g)
-        out.append(np.abs(g / 0.5 - 1.0))
+        out.append(GAIN_RANGE * np.abs(g / 0.5 - 1.0))  # k / k0 - 1 = 2 r (g - 1/2)
     return np.array(out)
 
 
 def adaptation(g: np.ndarray) -> tuple[float, float, float]:
     """Mean |k/k0 - 1| of k_p and k_i (k0: the commissioning gain at the same load, the net's
     output at its start g0 = 1/2), and the time share of k_i within 5 % of its bounds."""
-    rel = np.abs(g / 0.5 - 1.0)
+    rel = GAIN_RANGE * np.abs(g / 0.5 - 1.0)
     near = (g[..., 1] < 0.05) | (g[..., 1] > 0.95)
     return float(rel[..., 0].mean()), float(rel[..., 1].mean()), float(near.mean())
 
