@@ -267,13 +267,14 @@ def test_bounded_gains_keep_the_deep_fast_ramp_stable(env_id):
 @pytest.mark.slow
 @pytest.mark.parametrize("env_id", steamtemp_gym.ENV_IDS)
 def test_realism_on_every_named_and_heldout_scenario(env_id):
-    """Every variant (the paper's eta, the adapting etas, gains driven to their bounds) on
+    """Every variant (the paper's eta, the adapting etas, the top of each knob's box) on
     every named and held-out scenario: no trip, travel within 3x cascade_pi_ff's, no limit
     cycle (seeds 0-1)."""
     variants = [("neuro_pid_mee", None), ("neuro_pid_mse", None),
                 ("neuro_pid_mee", npid.ADAPTING_ETA["mee"]),
                 ("neuro_pid_mse", npid.ADAPTING_ETA["mse"]),
-                ("neuro_pid_mse", ETA_SATURATING)]  # fmt: skip
+                ("neuro_pid_mee", npid.NeuroPIDMEE.KNOBS[0].hi),
+                ("neuro_pid_mse", npid.NeuroPIDMSE.KNOBS[0].hi)]  # fmt: skip
     for scenario in DEFAULT_SCENARIOS:
         ref = _metrics(env_id, scenario, "cascade_pi_ff", None, 2)
         for name, eta in variants:
@@ -363,14 +364,14 @@ def check_std_smaller(setting: str, seeds: int) -> None:
     assert 2.0 * paper <= _paired(rel)[0] <= 0.5 * paper, _paired(rel)
 
 
-@pytest.mark.xfail(strict=True, reason="MEE - MSE error mean +0.77 % (+0.0058 K) at the "
+@pytest.mark.xfail(strict=True, reason="MEE - MSE error mean +0.18 % (+0.0012 K) at the "
                    "paper's eta (20 seeds; paper -12.6 %): the nets barely learn")
 @SEEDS
 def test_claim_mee_smaller_error_mean_paper_eta(seeds):
     check_mean_smaller("paper", seeds)
 
 
-@pytest.mark.xfail(strict=True, reason="MEE - MSE error mean +5.5 % (+0.039 K) between "
+@pytest.mark.xfail(strict=True, reason="MEE - MSE error mean +9.2 % (+0.050 K) between "
                    "adapting nets (20 seeds; paper -12.6 %): MEE is shift-invariant, it does "
                    "not act on the mean, MSE does")
 @SEEDS
@@ -378,8 +379,8 @@ def test_claim_mee_smaller_error_mean_adapting(seeds):
     check_mean_smaller("adapting", seeds)
 
 
-@pytest.mark.xfail(strict=True, reason="MEE - MSE error std -0.10 % (-0.0029 K) at the "
-                   "paper's eta (20 seeds; paper -0.61 %): right direction, a sixth of the "
+@pytest.mark.xfail(strict=True, reason="MEE - MSE error std -0.023 % (-0.0007 K) at the "
+                   "paper's eta (20 seeds; paper -0.61 %): right direction, a 26th of the "
                    "size, the nets barely learn")
 @SEEDS
 def test_claim_mee_smaller_error_std_paper_eta(seeds):
@@ -388,8 +389,8 @@ def test_claim_mee_smaller_error_std_paper_eta(seeds):
 
 @SEEDS
 def test_claim_mee_smaller_error_std_adapting(seeds):
-    """Between nets that adapt alike, MEE narrows the error: -0.74 % (-0.0215 K) of std
-    (20 seeds; paper -0.61 %)."""
+    """Between nets that adapt alike, MEE narrows the error: -1.14 +- 0.12 % (-0.033 K) of
+    std (20 seeds; 4 seeds: -0.86 %; paper -0.61 %)."""
     check_std_smaller("adapting", seeds)
 
 
@@ -406,7 +407,7 @@ def test_claim_step_tracked_around_the_setpoint(seeds):
         assert np.abs(r[crit]["e"]).max() < 28.0, crit
 
 
-@pytest.mark.xfail(strict=True, reason="error mean / std 0.77 / 2.86 K (MEE), 0.76 / 2.87 K "
+@pytest.mark.xfail(strict=True, reason="error mean / std 0.70 / 2.86 K (MEE), 0.70 / 2.86 K "
                    "(MSE) at the paper's eta (20 seeds; paper 0.445 / 1.705, 0.509 / 1.715): "
                    "the plant's omega (uniform +-3 K, 150 s) is larger than the paper's, and "
                    "the inner P at 8 %/K tracks the step more slowly than a loop gain of 16")
@@ -428,7 +429,7 @@ def _gain_spread(run: dict) -> np.ndarray:
 
 
 @pytest.mark.xfail(strict=True, reason="gain std over time / k0 (20 seeds, paper's eta), MEE "
-                   "vs MSE: k_p 0.1841 vs 0.1844, k_i 0.1062 vs 0.1038, k_d 0.0830 vs 0.0834: "
+                   "vs MSE: k_p 0.0906 vs 0.0906, k_i 0.0516 vs 0.0510, k_d 0.0392 vs 0.0393: "
                    "k_i varies more under MEE; the spread is the inputs' modulation through the "
                    "initial weights, not training")
 @SEEDS
@@ -450,13 +451,16 @@ def _entropies(run: dict, lo: float, hi: float) -> np.ndarray:
 def test_claim_mee_smaller_error_entropy(setting, seeds):
     """Claim (Fig. 8): the error entropy (Renyi's quadratic, the performance index) is
     smaller under MEE than under MSE, after the step's transient. Measured (20 seeds):
-    -0.0015 (paper's eta), -0.011 (adapting) nats; the paper gives no number."""
+    -0.00029 +- 0.00005 (paper's eta), -0.0151 +- 0.0024 (adapting) nats; the paper gives
+    no number."""
     r = step_runs(setting, seeds)
     d = _entropies(r["mee"], SETTLED_S, np.inf) - _entropies(r["mse"], SETTLED_S, np.inf)
     _assert_negative(d, seeds)
 
 
-@SEEDS
+@pytest.mark.parametrize("seeds", [4, pytest.param(20, marks=[pytest.mark.slow, pytest.mark.xfail(
+    strict=True, reason="MEE - MSE entropy fall -0.0064 +- 0.0052 nats (20 seeds, adapting): "
+    "the direction, not significant")])])  # fmt: skip
 def test_claim_mee_pdf_narrows_along_time(seeds):
     """Claim (Fig. 9-12): under MEE the error PDF becomes narrower and sharper along the
     sampling time, against MSE: from 800-1400 s to 1400-2000 s its entropy falls by more
@@ -468,7 +472,7 @@ def test_claim_mee_pdf_narrows_along_time(seeds):
 
 
 @pytest.mark.xfail(strict=True, reason="mean-square weight increment of the MEE net, "
-                   "1400-2000 s over 800-1400 s: x1.18 (20 seeds, paper's eta; x1.18 adapting): "
+                   "1400-2000 s over 800-1400 s: x1.16 (20 seeds, paper's eta; x1.10 adapting): "
                    "with forgetting lambda = 0.04 the gradient follows the current errors, "
                    "which the plant's disturbances keep alive")
 @SEEDS
@@ -485,8 +489,8 @@ def test_claim_mee_weights_converge(seeds):
 
 
 @pytest.mark.xfail(strict=True, reason="MEE error std with - without the measured "
-                   "disturbance inputs +0.3 % (20 seeds): through eq. (4) they only modulate "
-                   "gains that multiply errors, no additive feed-forward")
+                   "disturbance inputs +0.0014 +- 0.0056 K (20 seeds): through eq. (4) they "
+                   "only modulate gains that multiply errors, no additive feed-forward")
 @SEEDS
 def test_claim_disturbance_inputs_act_as_feedforward(seeds):
     """Claim (abstract, Section 4): with the measurable disturbances omega, omega_2 as net
