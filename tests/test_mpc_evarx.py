@@ -201,8 +201,9 @@ def _run_steps(env, mpc, k_steps: int) -> list[np.ndarray]:
 
 def test_fallback_removes_the_bias_at_the_move_limit():
     """The safety layer: with the residual monitor tripping at every check from the second
-    model interval on, the bias falls back to the plain loops by at most the move limit per
-    interval (no jump), reaches zero, and the policy then acts as cascade_pi bit for bit."""
+    model interval on and a bias of 0.1 of stroke held before it, the bias falls back to the
+    plain loops by at most the move limit per interval (no jump), reaches zero, and the
+    policy then acts as cascade_pi bit for bit."""
     env = gym.make(BTM, scenario="load_ramp_100_50")
     mpc, pi = baselines.make("mpc_evarx", env), baselines.make("cascade_pi", env)
     mpc.monitor_K = np.zeros_like(mpc.monitor_K)
@@ -211,13 +212,15 @@ def test_fallback_removes_the_bias_at_the_move_limit():
     for k in range(600):
         a, _ = mpc.predict(obs, episode_start=np.array([k == 0]))
         a_pi, _ = pi.predict(obs, episode_start=np.array([k == 0]))
+        if k == mpc.n - 1:
+            mpc._st["b"][0] = 0.1
         bias.append(mpc._st["b"][0].copy())
         if k > 400:
             np.testing.assert_array_equal(a, a_pi)
         obs, *_ = env.step(a)
     bias = np.array(bias)
-    assert np.abs(bias[: mpc.n]).max() > 0  # the first interval's QP did move the biases
-    assert np.all(np.abs(np.diff(bias, axis=0)) <= mpc.move_max + 1e-12)
+    assert np.abs(bias[: mpc.n - 1]).max() > 0  # the first interval's QP did move the biases
+    assert np.all(np.abs(np.diff(bias[mpc.n - 1 :], axis=0)) <= mpc.move_max + 1e-12)
     assert np.all(bias[-1] == 0.0)
     assert mpc.stats["fallbacks"]["model"] == 600 // mpc.n - 1
 
