@@ -17,13 +17,18 @@ n, the multiple nearest to ``TS_TARGET_S``):
     y_j(t+1) = theta_j(w_t)^T phi(t),   theta_j(w) = theta_j0 + sum_i theta_ji f(w | gamma_ji)
     f(w | gamma_ji) = exp(-gamma_ji (w - w0_i)^2)                               (12)-(13)
 
-phi(t) = [xi_y(t), xi_u(t), xi_w(t), 1] (eq. 8-10): ``N_Y`` lags of every controlled
-output (MIMO, eq. 11), ``N_U`` lags of every bias (block means over the model interval)
-and ``N_W`` lags of the load change Delta w(t) = w(t) - w(t - Ts). The constant is ours
-(absolute temperatures are modelled; the paper's deviations have none). gamma has one
-entry per output and reference load (the diag{} of eq. 12). Reference loads ``W0`` =
-(0.5, 0.75, 1.0): the paper's 10/50/80 % span its simulator's range; this benchmark's
-scenarios span 50-100 % and a basis centred outside the data is not identifiable.
+y are the deviations STE, RTE (eq. 11's outputs: the measured main steam less its
+setpoint, every other controlled output less its value at the start). phi(t) = [xi_y(t),
+xi_u(t), xi_w(t)] (eq. 8-10): ``N_Y`` lags of every output (MIMO, eq. 11), ``N_U`` lags of
+every bias and ``N_W`` lags of the load change Delta w(t) = w(t) - w(t - Ts). The biases
+enter as changes of their block means over the model interval, Delta ubar(t), as the
+load enters as its change (ours: the loops integrate a held bias out, the step tests of
+the real closed loop end at zero, and a model on the levels fitted steady gains of either
+sign to the slow unmeasured disturbances). gamma has one entry per output and reference
+load (the diag{} of eq. 12). Reference loads ``W0`` = (0.5, 0.75, 1.0): the paper's
+10/50/80 % span its simulator's range; this benchmark's scenarios span 50-100 % and a
+basis centred outside the data is not identifiable. Orders (the paper gives none) chosen
+on the training data's fit.
 
 Identification for infinite-step prediction (section 4.2, eq. 14-20). The paper builds
 the model to predict any number of steps ahead with the future load known: eq. (14) feeds
@@ -32,36 +37,37 @@ prediction yhat. Read that way, theta and gamma minimise the *simulation* (outpu
 sum of squares, and the Gauss-Newton Jacobian d yhat / d Theta carries the recursion
 through the fed-back outputs (:func:`simulation_sensitivities`):
 
-    D(t+1) = d/dTheta [theta(w_t)^T phi] |_(yhat lags fixed) + A(w_t) [D(t), D(t-Ts), ...]
+    D(t+1) = d/dTheta [theta(w_t)^T phi] |_(yhat lags held) + A(w_t) [D(t), D(t-Ts), ...]
 
 with A(w_t) the output-lag block of the frozen coefficients. Two stages: the one-step
 (equation-error) Gauss-Newton of eq. (16) with the measured outputs in phi
 (:func:`fit_evarx`, gamma from ``GAMMA0`` = 1 / (2 x 0.25^2), half-width = centre
-spacing), then the simulation-error problem from that start, solved by
-scipy.optimize.least_squares (trust-region reflective: a damped Gauss-Newton; gamma kept
-in [``GAMMA_MIN``, ``GAMMA_MAX``]) with the analytic Jacobian above
-(:func:`fit_output_error`). The residuals are divided by each output's standard deviation
-on the training data, so STE and RTE count alike. The data are simulated as Ts-spaced
-sequences started at every control interval of the first Ts (n interleaved sequences),
-each started from the measured outputs.
+spacing), then Gauss-Newton eq. (17)-(20) on the simulation error from that start
+(:func:`fit_output_error`: Levenberg-Marquardt damped, gamma kept in [``GAMMA_MIN``,
+``GAMMA_MAX``]). The residuals are divided by each output's standard deviation on the
+training data, so STE and RTE count alike. The data are simulated as Ts-spaced
+sequences started at ``SEQ_STARTS`` control intervals spread over the first Ts, each
+started from the measured outputs. One-step estimates are biased where the outputs are
+noisy (the noise sits in the regressors); tests/test_mpc_evarx.py shows it on a known
+system, and that the simulation-error fit recovers it.
 
-Data (:func:`record`): a commissioning scenario built in code (``TRAIN_LOAD``: 50-100 %
-at 2-5 %/min; not an evaluation scenario) with cascade_pi running and maximal-length PRBS
-biases (9-bit LFSR, clock ``PRBS_CLOCK_S``, amplitude ``PRBS_AMP`` of stroke, one phase
-per actuator). Validation on a separate ramp (``VALID_LOAD``, other phases and seed) by
+Data (:func:`record`): a commissioning scenario built in code (``TRAIN_LOAD``, run
+``TRAIN_REPEATS`` times: 50-100 % at 2-5 %/min; not an evaluation scenario) with
+cascade_pi running and maximal-length PRBS biases (9-bit LFSR, clock ``PRBS_CLOCK_S``,
+amplitude ``PRBS_AMP`` of stroke, one phase per actuator), with the named scenarios'
+noise. Validation on a separate ramp (``VALID_LOAD``, other phases and seed) by
 simulation (eq. 14); fit % = 100 (1 - ||y - yhat|| / ||y - mean y||) per output.
 Comparison (section 7.1): linear ARX models of the same structure identified the same
-way (simulation error) from runs at constant loads ``ARX_LOADS`` (the paper's
-25/50/75/90 % of its range mapped onto 50-100 %), coefficients interpolated linearly in
-load; at constant load Delta w = 0, so they carry no load-change term (nor does the
-paper's scheme).
+way (simulation error) from runs of ``ARX_RUN_S`` at constant loads ``ARX_LOADS`` (the
+paper's 25/50/75/90 % of its range mapped onto 50-100 %), coefficients interpolated
+linearly in load; at constant load Delta w = 0, so they carry no load-change term (nor
+does the paper's scheme).
 
 Step tests of the real closed loop (:func:`closed_loop_steps`): at ``STEP_LOADS``, no
 noise, a ``STEP_DB`` bias step on one actuator against the same run without it. The
 loops integrate, so every bias is integrated out and the closed loop's steady gains are
-zero; what physics fixes is the direction and size of the first lobe of the response
-(:func:`first_lobe`: opening a spray cools, closing in the gas recirculation damper...).
-Measured numbers are in docs/baselines.md.
+zero; the signed gain physics fixes is the first lobe of the response
+(:func:`first_lobe`). Measured numbers are in docs/baselines.md.
 """
 
 from __future__ import annotations

@@ -1,10 +1,9 @@
 """Model predictive control on the EV-ARX model (``mpc_evarx``) and on interpolated linear
 ARX models (``mpc_arx``).
 
-Source: K. Toyoda and K. Wada, "Nonlinear time-series model for steam temperature
-controller design of thermal power plants" (Kyushu University, 1999; docs/references.md),
-section 7.2 (eq. 21-23, Fig. 9: the MPC beats the conventional PI under ramped load).
-The model and its identification are in baselines/evarx.py.
+Source: Toyoda and Wada 1999 (docs/references.md), section 7.2 (eq. 21-23, Fig. 9: the
+MPC beats the conventional PI under ramped load). The model and its identification are in
+baselines/evarx.py.
 
 Structure. As in the paper, the controlled process is the boiler-turbine with its existing
 controllers running (section 6: the model of Fig. 5 contains them, the identification of
@@ -16,57 +15,64 @@ With b = 0 the policy is exactly cascade_pi, which is also the safety fallback.
 Control (eq. 21-23). Every model interval Ts (about 20 s, evarx.TS_TARGET_S) the model
 is frozen at the measured load (theta(w_k): eq. 23's A(w_k), B1(w_k), B2(w_k), the
 linearization of the EV-ARX at the current load, on a 1 % load grid) and run in velocity
-form (differenced: the constant cancels and an unmeasured constant disturbance is carried
-as in GPC's CARIMA model). Its state is the shift register of past outputs, biases and
-load changes, all measured, so no observer is needed (eq. 23's observable canonical form
-realizes the same input-output map). The measured load change Delta w enters as a known
-input, assumed to continue for ``DW_HOLD_S`` then stop (no preview of the schedule).
-Predictions cover ``HORIZON_S`` = 900 s (the slow modes: Table 1's 137-217 s platen time
-constants plus the main-steam line). The condensed QP (decision variables: bias moves at
-``MOVE_STEPS`` model intervals, one slack per output):
+form (an unmeasured constant disturbance is carried as in GPC's CARIMA model). Its state
+is the shift register of past outputs, biases and load changes, all measured, so no
+observer is needed (eq. 23's observable canonical form realizes the same input-output
+map). The measured load change Delta w enters as a known input, assumed to continue for
+``DW_HOLD_S`` then stop (no preview of the schedule). Predictions cover ``HORIZON_S`` =
+900 s. The condensed QP (decision variables: bias moves at ``MOVE_STEPS`` model
+intervals, one slack per output):
 
-    min sum_k ||r - y(k)||^2 + sum_m R_m ||db_m||^2 + sum_k,m R_abs,m b_m(k)^2
+    min sum_k sum_j q_j (r_j - y_j(k))^2 + sum_m R_m ||db_m||^2 + sum_k,m R_abs,m b_m(k)^2
         + RHO_SLACK ||s||^2 + RHO_SLACK_L 1^T s
-    s.t. max(-B_MAX, -v_PI) <= b(k) <= min(B_MAX, 1 - v_PI)     (valve openings in [0, 1])
-         |db| <= rate x Ts                                      (the actuator's rate limit)
-         |y(k) - r| <= Y_MAX_K + s, s >= 0 (every 5th point)    (soft output bounds)  (21)-(22)
+    s.t. max(-b_max, -v_PI) <= b(k) <= min(b_max, 1 - v_PI)   (eq. 21's |u| <= u_max,
+                                                              valve openings in [0, 1])
+         |db| <= min(move_limit, rate x Ts)                   (move limit, actuator rate)
+         |y(k) - r| <= y_max_K + s, s >= 0 (every 5th point)  (eq. 21's |y| <= y_max, soft)
 
-Weights per K^2 of tracking error (STE and RTE alike); R_m = ``MOVE_WEIGHT`` N g_m^2 and
-R_abs,m = ``BIAS_WEIGHT`` g_m^2, g_m the largest step-response magnitude of actuator m
-over the horizon (so the weights are in units of the actuator's own effect). The bias
-penalty is needed because the loops integrate: a held bias has no steady effect and would
-drift without it. References: the observed setpoint for the main steam, the value at the
-episode start for the other outputs (as cascade_pi).
+The bias term is eq. (22)'s J = sum u^T R u (R_abs); the output bound is eq. (21)'s,
+softened (exact penalty) so the QP is always feasible. The tracking and move terms are
+ours: eq. (22) alone does not act while the outputs are inside the bound, and without a
+move term the biases chatter. Weights per K^2 of tracking error, q = (1,
+``secondary_weight``, ...) (main steam first); R_m = ``move_weight`` N g_m^2 and R_abs,m
+= ``bias_weight`` g_m^2, g_m the largest step-response magnitude of actuator m over the
+horizon (the weights in units of the actuator's own effect). References: the observed
+setpoint for the main steam, the value at the episode start for the other outputs (as
+cascade_pi).
 
-Solver: OSQP (Stellato et al., "OSQP: an operator splitting solver for quadratic
-programs", Mathematical Programming Computation 12, 2020). Sparse P and A are built once
-with a fixed pattern and their values updated per solve; each solve is warm-started from
-the row's previous solution and starts from the same rho (adaptive rho on, adapted every
+Knobs (``KNOBS``, constructor keywords; ``DEFAULTS``): ``move_weight``, ``bias_weight``,
+``secondary_weight``, ``y_max_K``, ``move_limit`` (stroke per model interval), ``b_max``
+(stroke). The paper gives the form of eq. (21)-(22) and no values: every default is ours,
+chosen so that the valve travel stays within twice ``cascade_pi_ff``'s on the named ramp.
+
+Solver: OSQP (Stellato et al. 2020). Sparse P and A are built once with a fixed pattern
+and their values updated per solve; each solve is warm-started from the row's previous
+solution and starts from the same rho (adaptive rho on, adapted every
 ``OSQP_SETTINGS['adaptive_rho_interval']`` iterations, a count rather than OSQP's default
 time-based rule), so a row's result does not depend on the rows solved before it
 (batched == single). ``policy.stats``: solves, iterations and solve times per solve,
 fallbacks by reason.
 
-Safety layer (fallbacks, counted in ``policy.stats['fallbacks']``): the bias is removed
-(the existing loops act alone) for the next interval when the QP is not ``solved``
-(``qp``), when the last one-interval prediction of an output missed by more than
-``MONITOR_SIGMA`` times the model's one-interval RMS error on the validation ramp
-(``model``), or when the main-steam error exceeds ``SAFE_FRACTION`` of the plant's upper
-trip band (``band``).
+Safety layer (fallbacks, counted in ``policy.stats['fallbacks']``): the bias is taken back
+towards zero by at most the move limit per interval (no jump of the valves) and the loops
+act alone once it is zero, while
+
+- ``sign``: the model frozen at the current load fails the monitor's sign check: the first
+  lobe of its step response (evarx.first_lobe) has another sign than the closed loop's on
+  a channel the step tests of the real closed loop at 50/75/100 % fix (``expected_signs``:
+  the same sign at every load, at least ``SIGN_SIGNIFICANT`` of the output's largest
+  lobe; on BoilerTurbineMIMO SP2 -> STE negative, RGD -> STE and RGD -> RTE positive). The
+  closed loop's steady gains are zero (the loops integrate every bias out), so the first
+  lobe is the signed gain the physics fixes;
+- ``model``: the last one-interval prediction of an output missed by more than
+  ``MONITOR_SIGMA`` times the model's one-interval RMS error on the validation ramp;
+- ``band``: the main-steam error exceeds ``SAFE_FRACTION`` of the plant's upper trip band;
+- ``qp``: the QP is not ``solved``.
 
 Generalization: every plant, every actuator (a bias on each loop's command); outputs are
-the measured main steam and every outer signal of ``control_loops``. Constants are ours
-(plausible engineering choices, not tuned on the evaluation scenarios); the paper gives
-no weights, horizons or orders. The paper solves the nonlinear problem by SQP; this is the
-practical linearized form (no SQP refinement).
-
-Claim check (tests/test_mpc_evarx.py, 5 seeds, BoilerTurbineMIMO; mean IAE over
-cascade_pi's, STE / RTE): load_ramp_100_50 ``mpc_evarx`` 2.86 / 1.55, ``mpc_arx``
-0.80 / 0.69; load_ramp_50_100 1.89 / 0.95 and 1.07 / 0.68; load_following 1.40 / 0.74 and
-1.11 / 0.67. The paper's claim (Fig. 9: MPC better than PI on both) holds for the RTE,
-not for the STE, and the EV-ARX model does not pay off in closed loop: the MPC on the
-interpolated linear ARX models is the better one (its validation fit is also the better,
-see baselines/evarx.py).
+the measured main steam and every outer signal of ``control_loops``. The paper solves the
+nonlinear problem by SQP; this is the linearized form (no SQP refinement). Measured
+numbers and the claims' status: docs/baselines.md.
 """
 
 from __future__ import annotations
