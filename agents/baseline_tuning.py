@@ -50,7 +50,8 @@ from agents.oracle import Oracle
 from baselines import tuning
 
 #: The baselines with knobs, tuned by default.
-TUNABLE = ("cascade_pi", "cascade_pi_ff", "fuzzy_p2id", "mpc_linear", "lqi", "fao_sf", "fao_fac")
+TUNABLE = ("cascade_pi", "cascade_pi_ff", "fuzzy_p2id", "mpc_linear", "lqi", "fao_sf", "fao_fac",
+           "neuro_pid_mee", "neuro_pid_mse", "mpc_evarx", "mpc_arx")  # fmt: skip
 #: The industrial reference: the score's 0 and the travel budget's unit.
 ZERO = "cascade_pi_ff"
 #: First seed of the training episodes (``random`` scenario); far from the agents' training

@@ -47,7 +47,8 @@ _REGISTRY: dict[str, str | Callable[..., Any]] = {
 }
 #: Rows of the benchmark's common tuning for controllers whose own parameters are published
 #: (SIMC for the cascades): ``<name>_tuned`` (baselines/tuning.py).
-TUNED_ROWS = ("cascade_pi", "cascade_pi_ff", "fao_sf", "fao_fac")
+TUNED_ROWS = ("cascade_pi", "cascade_pi_ff", "fao_sf", "fao_fac", "neuro_pid_mee",
+              "neuro_pid_mse")  # fmt: skip
 _REGISTRY.update({f"{n}_tuned": Tuned(n) for n in TUNED_ROWS})
 #: The shipped controllers (register() cannot replace them).
 SHIPPED: tuple[str, ...] = tuple(_REGISTRY)

@@ -67,7 +67,8 @@ What is taken and how it is generalized:
 Knobs (``KNOBS``; constructor keywords, None = default): du_max, e_max_K, ti_factor,
 heat_walk. The thesis's weights (eq. 37) lost their digits and belong to its drum
 outputs, so the defaults are the benchmark's common tuning (agents/baseline_tuning.py,
-stored in baselines/tuned/lqi.json), started from these commissioning values (:func:`start`): du_max = 0.1 of the stroke, e_max_K = 1 K,
+stored in baselines/tuned/lqi.json), started from these commissioning values (:func:`start`):
+du_max = 0.1 of the stroke, e_max_K = 1 K,
 ti_factor = 1, heat_walk = 1.6e-3 (the named scenarios' coloured heat-absorption
 disturbance, std 0.02 and 300 s, as a random walk). Per plant (``PLANT_DEFAULTS``), chosen
 by hand so that the valve travel stays within 3x cascade_pi_ff's on the named and held-out
