@@ -50,7 +50,8 @@ from agents.oracle import Oracle
 from baselines import tuning
 
 #: The baselines with knobs, tuned by default.
-TUNABLE = ("cascade_pi", "cascade_pi_ff", "fuzzy_p2id", "mpc_linear")
+TUNABLE = ("cascade_pi", "cascade_pi_ff", "fuzzy_p2id", "mpc_linear", "lqi", "fao_sf", "fao_fac",
+           "neuro_pid_mee", "neuro_pid_mse", "mpc_evarx", "mpc_arx")  # fmt: skip
 #: The industrial reference: the score's 0 and the travel budget's unit.
 ZERO = "cascade_pi_ff"
 #: First seed of the training episodes (``random`` scenario); far from the agents' training
@@ -84,16 +85,20 @@ def _episodes(env_id: str, make_policy: Any) -> dict[str, np.ndarray]:
                            ("tripped", "tripped"))}  # fmt: skip
 
 
-def ends(env_id: str) -> dict[str, Any]:
+def ends(env_id: str, compute: bool = True) -> dict[str, Any]:
     """The score's ends on the training episodes of ``env_id``: ``zero`` and ``one`` (returns
     per episode) and ``travel`` (the reference's mean valve travel), stored in
-    ``baselines/tuned/ends.json`` and recomputed when the episodes changed."""
+    ``baselines/tuned/ends.json`` and recomputed when the episodes or the code behind them
+    changed (``compute=False``: a ValueError instead)."""
     f = tuning.TUNED / "ends.json"
     table = json.loads(f.read_text()) if f.is_file() else {}
     key = {"seeds": seeds(), "scenario": "random", "code": _code_digest(ends=True)}
     got = table.get(env_id)
     if got is not None and got.get("episodes") == key:
         return got
+    if not compute:
+        raise ValueError(f"the stored score ends of {env_id} are missing or stale; run: "
+                         f"python -m agents.baseline_tuning --ends --env {env_id}")  # fmt: skip
     zero = _episodes(env_id, lambda v: baselines.make(ZERO, v))
     one = _episodes(env_id, Oracle)
     got = {"episodes": key, "zero": zero["return"].tolist(), "one": one["return"].tolist(),
@@ -245,6 +250,24 @@ def write(name: str, env_ids: list[str], log: Any = None) -> dict[str, Any]:
     return data
 
 
+def markdown(names: tuple[str, ...] = TUNABLE) -> str:
+    """The stored tunings as a markdown table: per controller and env, the training score and
+    travel ratio at the start and at the result, evaluations used, and the knobs."""
+    lines = ["| controller | plant | start: score, travel | tuned: score, travel | "
+             "evaluations | knobs |", "|---|---|---|---|---|---|"]  # fmt: skip
+    for name in names:
+        f = tuning.path(name)
+        if not f.is_file():
+            continue
+        for env_id, r in json.loads(f.read_text())["plants"].items():
+            st = r["start"]
+            knobs = ", ".join(f"{k} {v:.3g}" for k, v in sorted(r["knobs"].items()))
+            lines.append(f"| `{name}` | {env_id.split('/')[-1]} | {st['score']:.3f}, "
+                         f"{st['travel_ratio']:.2f}x | {r['score']:.3f}, {r['travel_ratio']:.2f}x"
+                         f" | {r['evaluations']} | {knobs} |")  # fmt: skip
+    return "\n".join(lines) + "\n"
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(
         prog="python -m agents.baseline_tuning",
@@ -254,8 +277,16 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("names", nargs="*", help=f"baselines to tune (default: {', '.join(TUNABLE)})")
     ap.add_argument("--env", action="append", dest="envs", metavar="ID",
                     help="env id (repeatable; default: every registered env)")
+    ap.add_argument("--ends", action="store_true",
+                    help="only (re)compute the score's ends on the training episodes "
+                    "(baselines/tuned/ends.json; the oracle's episodes: minutes per env)")
+    ap.add_argument("--markdown", action="store_true",
+                    help="print the stored tunings as a markdown table and exit")
     args = ap.parse_args(argv)
-    names = args.names or list(TUNABLE)
+    if args.markdown:
+        print(markdown(tuple(args.names) or TUNABLE), end="")
+        return 0
+    names = [] if args.ends and not args.names else (args.names or list(TUNABLE))
     for n in names:
         try:
             if not tuning.knobs(baselines.factory(n)):
@@ -268,6 +299,10 @@ def main(argv: list[str] | None = None) -> int:
             env_ids.append(steamtemp_gym.envs.resolve_id(e))
         except ValueError as exc:
             ap.error(f"argument --env: {exc}")
+    if args.ends:
+        for e in env_ids:
+            ends(e)
+            print(f"ends of {e} in {tuning.TUNED / 'ends.json'}")
     for n in names:
         write(n, env_ids, log=lambda s: print(s, file=sys.stderr, flush=True))
         print(f"wrote {tuning.path(n)}")

@@ -15,7 +15,22 @@ import re
 from collections.abc import Callable
 from typing import Any
 
+from baselines import tuning
 from baselines.policy import Policy, checked
+
+
+class Tuned:
+    """The row ``<name>_tuned``: controller ``name`` with the knob values the benchmark's
+    common tuning stored for the env's plant (baselines/tuning.py), for controllers whose
+    paper gives its own parameters (those stay the default of ``name``)."""
+
+    def __init__(self, name: str) -> None:
+        self.name = name
+
+    def __call__(self, env: Any, **kwargs: Any) -> Any:
+        values = tuning.stored(self.name, env.unwrapped.plant.id)
+        return factory(self.name)(env, **{**values, **kwargs})
+
 
 _REGISTRY: dict[str, str | Callable[..., Any]] = {
     "cascade_pi": "baselines.cascade_pi:CascadePI",
@@ -30,6 +45,11 @@ _REGISTRY: dict[str, str | Callable[..., Any]] = {
     "mpc_arx": "baselines.mpc_evarx:MPCARX",
     "mpc_linear": "baselines.mpc_linear:MPCLinear",
 }
+#: Rows of the benchmark's common tuning for controllers whose own parameters are published
+#: (SIMC for the cascades): ``<name>_tuned`` (baselines/tuning.py).
+TUNED_ROWS = ("cascade_pi", "cascade_pi_ff", "fao_sf", "fao_fac", "neuro_pid_mee",
+              "neuro_pid_mse")  # fmt: skip
+_REGISTRY.update({f"{n}_tuned": Tuned(n) for n in TUNED_ROWS})
 #: The shipped controllers (register() cannot replace them).
 SHIPPED: tuple[str, ...] = tuple(_REGISTRY)
 NAMES: tuple[str, ...] = SHIPPED
@@ -90,19 +110,5 @@ def make(name: str, env: Any, **kwargs: Any) -> Policy:
     return checked(factory(name)(env, **kwargs), env)
 
 
-class Tuned:
-    """The row ``<name>_tuned``: controller ``name`` with the knob values the benchmark's
-    common tuning stored for the env's plant (baselines/tuning.py), for controllers whose
-    paper gives its own parameters (those stay the default of ``name``)."""
-
-    def __init__(self, name: str) -> None:
-        self.name = name
-
-    def __call__(self, env: Any, **kwargs: Any) -> Any:
-        from baselines import tuning
-
-        values = tuning.stored(self.name, env.unwrapped.plant.id)
-        return factory(self.name)(env, **{**values, **kwargs})
-
-
 __all__ = ["NAMES", "SHIPPED", "Policy", "Tuned", "factory", "make", "register"]
+

@@ -1,10 +1,9 @@
 """Model predictive control on the EV-ARX model (``mpc_evarx``) and on interpolated linear
 ARX models (``mpc_arx``).
 
-Source: K. Toyoda and K. Wada, "Nonlinear time-series model for steam temperature
-controller design of thermal power plants" (Kyushu University, 1999; docs/references.md),
-section 7.2 (eq. 21-23, Fig. 9: the MPC beats the conventional PI under ramped load).
-The model and its identification are in baselines/evarx.py.
+Source: Toyoda and Wada 1999 (docs/references.md), section 7.2 (eq. 21-23, Fig. 9: the
+MPC beats the conventional PI under ramped load). The model and its identification are in
+baselines/evarx.py.
 
 Structure. As in the paper, the controlled process is the boiler-turbine with its existing
 controllers running (section 6: the model of Fig. 5 contains them, the identification of
@@ -16,57 +15,64 @@ With b = 0 the policy is exactly cascade_pi, which is also the safety fallback.
 Control (eq. 21-23). Every model interval Ts (about 20 s, evarx.TS_TARGET_S) the model
 is frozen at the measured load (theta(w_k): eq. 23's A(w_k), B1(w_k), B2(w_k), the
 linearization of the EV-ARX at the current load, on a 1 % load grid) and run in velocity
-form (differenced: the constant cancels and an unmeasured constant disturbance is carried
-as in GPC's CARIMA model). Its state is the shift register of past outputs, biases and
-load changes, all measured, so no observer is needed (eq. 23's observable canonical form
-realizes the same input-output map). The measured load change Delta w enters as a known
-input, assumed to continue for ``DW_HOLD_S`` then stop (no preview of the schedule).
-Predictions cover ``HORIZON_S`` = 900 s (the slow modes: Table 1's 137-217 s platen time
-constants plus the main-steam line). The condensed QP (decision variables: bias moves at
-``MOVE_STEPS`` model intervals, one slack per output):
+form (an unmeasured constant disturbance is carried as in GPC's CARIMA model). Its state
+is the shift register of past outputs, biases and load changes, all measured, so no
+observer is needed (eq. 23's observable canonical form realizes the same input-output
+map). The measured load change Delta w enters as a known input, assumed to continue for
+``DW_HOLD_S`` then stop (no preview of the schedule). Predictions cover ``HORIZON_S`` =
+900 s. The condensed QP (decision variables: bias moves at ``MOVE_STEPS`` model
+intervals, one slack per output):
 
-    min sum_k ||r - y(k)||^2 + sum_m R_m ||db_m||^2 + sum_k,m R_abs,m b_m(k)^2
+    min sum_k sum_j q_j (r_j - y_j(k))^2 + sum_m R_m ||db_m||^2 + sum_k,m R_abs,m b_m(k)^2
         + RHO_SLACK ||s||^2 + RHO_SLACK_L 1^T s
-    s.t. max(-B_MAX, -v_PI) <= b(k) <= min(B_MAX, 1 - v_PI)     (valve openings in [0, 1])
-         |db| <= rate x Ts                                      (the actuator's rate limit)
-         |y(k) - r| <= Y_MAX_K + s, s >= 0 (every 5th point)    (soft output bounds)  (21)-(22)
+    s.t. max(-b_max, -v_PI) <= b(k) <= min(b_max, 1 - v_PI)   (eq. 21's |u| <= u_max,
+                                                              valve openings in [0, 1])
+         |db| <= min(move_limit, rate x Ts)                   (move limit, actuator rate)
+         |y(k) - r| <= y_max_K + s, s >= 0 (every 5th point)  (eq. 21's |y| <= y_max, soft)
 
-Weights per K^2 of tracking error (STE and RTE alike); R_m = ``MOVE_WEIGHT`` N g_m^2 and
-R_abs,m = ``BIAS_WEIGHT`` g_m^2, g_m the largest step-response magnitude of actuator m
-over the horizon (so the weights are in units of the actuator's own effect). The bias
-penalty is needed because the loops integrate: a held bias has no steady effect and would
-drift without it. References: the observed setpoint for the main steam, the value at the
-episode start for the other outputs (as cascade_pi).
+The bias term is eq. (22)'s J = sum u^T R u (R_abs); the output bound is eq. (21)'s,
+softened (exact penalty) so the QP is always feasible. The tracking and move terms are
+ours: eq. (22) alone does not act while the outputs are inside the bound, and without a
+move term the biases chatter. Weights per K^2 of tracking error, q = (1,
+``secondary_weight``, ...) (main steam first); R_m = ``move_weight`` N g_m^2 and R_abs,m
+= ``bias_weight`` g_m^2, g_m the largest step-response magnitude of actuator m over the
+horizon (the weights in units of the actuator's own effect). References: the observed
+setpoint for the main steam, the value at the episode start for the other outputs (as
+cascade_pi).
 
-Solver: OSQP (Stellato et al., "OSQP: an operator splitting solver for quadratic
-programs", Mathematical Programming Computation 12, 2020). Sparse P and A are built once
-with a fixed pattern and their values updated per solve; each solve is warm-started from
-the row's previous solution and starts from the same rho (adaptive rho on, adapted every
+Knobs (``KNOBS``, constructor keywords; ``DEFAULTS``): ``move_weight``, ``bias_weight``,
+``secondary_weight``, ``y_max_K``, ``move_limit`` (stroke per model interval), ``b_max``
+(stroke). The paper gives the form of eq. (21)-(22) and no values: every default is ours,
+chosen so that the valve travel stays within twice ``cascade_pi_ff``'s on the named ramp.
+
+Solver: OSQP (Stellato et al. 2020). Sparse P and A are built once with a fixed pattern
+and their values updated per solve; each solve is warm-started from the row's previous
+solution and starts from the same rho (adaptive rho on, adapted every
 ``OSQP_SETTINGS['adaptive_rho_interval']`` iterations, a count rather than OSQP's default
 time-based rule), so a row's result does not depend on the rows solved before it
 (batched == single). ``policy.stats``: solves, iterations and solve times per solve,
 fallbacks by reason.
 
-Safety layer (fallbacks, counted in ``policy.stats['fallbacks']``): the bias is removed
-(the existing loops act alone) for the next interval when the QP is not ``solved``
-(``qp``), when the last one-interval prediction of an output missed by more than
-``MONITOR_SIGMA`` times the model's one-interval RMS error on the validation ramp
-(``model``), or when the main-steam error exceeds ``SAFE_FRACTION`` of the plant's upper
-trip band (``band``).
+Safety layer (fallbacks, counted in ``policy.stats['fallbacks']``): the bias is taken back
+towards zero by at most the move limit per interval (no jump of the valves) and the loops
+act alone once it is zero, while
+
+- ``sign``: the model frozen at the current load fails the monitor's sign check: the first
+  lobe of its step response (evarx.first_lobe) has another sign than the closed loop's on
+  a channel the step tests of the real closed loop at 50/75/100 % fix (``expected_signs``:
+  the same sign at every load, at least ``SIGN_SIGNIFICANT`` of the output's largest
+  lobe; on BoilerTurbineMIMO SP2 -> STE negative, RGD -> STE and RGD -> RTE positive). The
+  closed loop's steady gains are zero (the loops integrate every bias out), so the first
+  lobe is the signed gain the physics fixes;
+- ``model``: the last one-interval prediction of an output missed by more than
+  ``MONITOR_SIGMA`` times the model's one-interval RMS error on the validation ramp;
+- ``band``: the main-steam error exceeds ``SAFE_FRACTION`` of the plant's upper trip band;
+- ``qp``: the QP is not ``solved``.
 
 Generalization: every plant, every actuator (a bias on each loop's command); outputs are
-the measured main steam and every outer signal of ``control_loops``. Constants are ours
-(plausible engineering choices, not tuned on the evaluation scenarios); the paper gives
-no weights, horizons or orders. The paper solves the nonlinear problem by SQP; this is the
-practical linearized form (no SQP refinement).
-
-Claim check (tests/test_mpc_evarx.py, 5 seeds, BoilerTurbineMIMO; mean IAE over
-cascade_pi's, STE / RTE): load_ramp_100_50 ``mpc_evarx`` 2.86 / 1.55, ``mpc_arx``
-0.80 / 0.69; load_ramp_50_100 1.89 / 0.95 and 1.07 / 0.68; load_following 1.40 / 0.74 and
-1.11 / 0.67. The paper's claim (Fig. 9: MPC better than PI on both) holds for the RTE,
-not for the STE, and the EV-ARX model does not pay off in closed loop: the MPC on the
-interpolated linear ARX models is the better one (its validation fit is also the better,
-see baselines/evarx.py).
+the measured main steam and every outer signal of ``control_loops``. The paper solves the
+nonlinear problem by SQP; this is the linearized form (no SQP refinement). Measured
+numbers and the claims' status: docs/baselines.md.
 """
 
 from __future__ import annotations
@@ -77,20 +83,36 @@ from typing import Any
 import numpy as np
 import scipy.sparse as sp
 
+from baselines import tuning
 from baselines.cascade_pi import CascadePI
-from baselines.evarx import N_U, N_W, N_Y, Model, controlled_outputs, identify, split
+from baselines.evarx import (
+    N_W,
+    N_Y,
+    Model,
+    advance,
+    closed_loop_steps,
+    controlled_outputs,
+    first_lobe,
+    identify,
+    split,
+    step_responses,  # fmt: skip
+)
 from baselines.loops import observation_layout, restart_rows
+from baselines.tuning import Knob
 
 HORIZON_S = 900.0
 MOVE_STEPS = (0, 1, 2, 4, 8, 16)
 DW_HOLD_S = 300.0
-B_MAX = 0.2
-MOVE_WEIGHT = 0.005
-BIAS_WEIGHT = 0.1
-Y_MAX_K = 10.0
+#: knob start values (all chosen: the paper gives the form of eq. 21-22, no values); the
+#: default of each knob is the benchmark's stored tuning (baselines/tuned/mpc_<model>.json)
+DEFAULTS = {"move_weight": 0.05, "bias_weight": 0.1, "secondary_weight": 1.0,
+            "y_max_K": 10.0, "move_limit": 0.02, "b_max": 0.2}  # fmt: skip
 RHO_SLACK, RHO_SLACK_L = 1e3, 1e2
 MONITOR_SIGMA = 6.0
 SAFE_FRACTION = 0.5
+#: the first lobes of the closed-loop step tests whose sign the model monitor checks: the
+#: same sign at every test load and at least this fraction of the output's largest lobe
+SIGN_SIGNIFICANT = 0.25
 OSQP_SETTINGS = {"verbose": False, "adaptive_rho": True, "adaptive_rho_interval": 25,
                  "rho": 0.1, "eps_abs": 1e-5, "eps_rel": 1e-5, "max_iter": 4000,
                  "polishing": True, "warm_starting": True}  # fmt: skip
@@ -100,35 +122,13 @@ LOAD_GRID = np.round(np.arange(0.3, 1.201, 0.01), 2)
 
 
 # -- prediction in velocity form ---------------------------------------------------------
-def _advance(a, b, c, dy, du, ddw) -> np.ndarray:  # noqa: ANN001
-    """One model interval of the differenced model: Delta y(t + 1)."""
-    return np.einsum("jlo,lo->j", a, dy) + np.einsum("jlm,lm->j", b, du) + c @ ddw
-
-
-def step_responses(a: np.ndarray, b: np.ndarray, N: int) -> np.ndarray:
-    """(N, n_out, n_act): y(k + 1 .. k + N) after a unit step of each input at k (frozen)."""
-    n_out, n_act = b.shape[0], b.shape[2]
-    G = np.zeros((N, n_out, n_act))
-    for m in range(n_act):
-        dy, du = np.zeros((N_Y, n_out)), np.zeros((N_U, n_act))
-        du[0, m] = 1.0
-        y = np.zeros(n_out)
-        for k in range(N):
-            d = _advance(a, b, np.zeros((n_out, N_W)), dy, du, np.zeros(N_W))
-            y = y + d
-            G[k, :, m] = y
-            dy = np.vstack([d[None], dy[:-1]])
-            du = np.vstack([np.zeros((1, n_act)), du[:-1]])
-    return G
-
-
 def free_response(abc: tuple[np.ndarray, ...], dy: np.ndarray, du: np.ndarray,
                   ddw: np.ndarray, du_now: np.ndarray, dw_now: float, n_hold: int,
                   N: int) -> np.ndarray:  # fmt: skip
     """(N, n_out) output changes with the inputs held after the step ``du_now`` and Delta w
     held ``n_hold`` intervals, then zero.
 
-    dy (N_Y, n_out) and du (N_U - 1, n_act) past differences, ddw (N_W,) the differences of
+    dy (N_Y, n_out) and du (n_b - 1, n_act) past differences, ddw (N_W,) the differences of
     Delta w from t back, newest first.
     """
     a, b, c = abc
@@ -136,13 +136,24 @@ def free_response(abc: tuple[np.ndarray, ...], dy: np.ndarray, du: np.ndarray,
     du = np.vstack([du_now[None], du])
     out, y = np.zeros((N, a.shape[0])), np.zeros(a.shape[0])
     for k in range(N):
-        d = _advance(a, b, c, dy, du, ddw)
+        d = advance(a, b, c, dy, du, ddw)
         y = y + d
         out[k] = y
         dy = np.vstack([d[None], dy[:-1]])
         du = np.vstack([np.zeros_like(du[:1]), du[:-1]])
         ddw = np.concatenate([[-dw_now if k + 1 == n_hold else 0.0], ddw[:-1]])
     return out
+
+
+def expected_signs(G: np.ndarray) -> np.ndarray:
+    """(n_out, n_act) sign the model's first lobes must have (0: not checked) from the
+    closed-loop step tests G (loads, N, n_out, n_act): the sign where every load agrees and
+    the lobe is at least SIGN_SIGNIFICANT of the output's largest."""
+    lobes = np.stack([first_lobe(g) for g in G])  # (loads, n_out, n_act)
+    sig = np.abs(lobes).mean(0)
+    ok = (np.abs(np.sign(lobes).sum(0)) == len(G)) & (
+        sig >= SIGN_SIGNIFICANT * sig.max(1, keepdims=True))
+    return np.where(ok, np.sign(lobes[0]), 0.0)
 
 
 # -- the QP ------------------------------------------------------------------------------
@@ -161,12 +172,16 @@ class _QP:
         n_act: Biased actuators.
         N: Horizon in model intervals.
         rates: Largest bias move per model interval, per actuator (stroke).
+        weights: The knobs (``DEFAULTS``' keys).
     """
 
-    def __init__(self, n_out: int, n_act: int, N: int, rates: np.ndarray) -> None:
+    def __init__(self, n_out: int, n_act: int, N: int, rates: np.ndarray,
+                 weights: dict[str, float] | None = None) -> None:  # fmt: skip
         import osqp
 
+        self.w = {**DEFAULTS, **(weights or {})}
         self.N, self.n_out, self.n_act, self.M = N, n_out, n_act, len(MOVE_STEPS)
+        self.q = np.array([1.0] + [self.w["secondary_weight"]] * (n_out - 1))
         self.nv = nv = self.M * n_act
         self.nz = nv + n_out
         self.pts = np.arange(4, N, 5)
@@ -205,11 +220,13 @@ class _QP:
         for i, t0 in enumerate(MOVE_STEPS):
             S[t0:, :, i, :] = G[: N - t0]
         S = S.reshape(N * no, nv)
+        sq = np.tile(np.sqrt(self.q), N)[:, None]
         g2 = np.abs(G).max((0, 1)) ** 2 + 1e-9
-        R = np.tile(MOVE_WEIGHT * N * g2, self.M)
-        Rabs = np.tile(BIAS_WEIGHT * g2, N)
+        R = np.tile(self.w["move_weight"] * N * g2, self.M)
+        Rabs = np.tile(self.w["bias_weight"] * g2, N)
         H = np.zeros((self.nz, self.nz))
-        H[:nv, :nv] = 2.0 * (S.T @ S + np.diag(R) + self.Cb.T @ (Rabs[:, None] * self.Cb))
+        H[:nv, :nv] = 2.0 * ((sq * S).T @ (sq * S) + np.diag(R)
+                             + self.Cb.T @ (Rabs[:, None] * self.Cb))  # fmt: skip
         H[nv:, nv:] = 2.0 * RHO_SLACK * np.eye(no)
         Ssub = S.reshape(N, no, nv)[self.pts].reshape(-1, nv)
         return {"S": S, "Rabs": Rabs, "Px": H[self.P_idx], "Ax": self._A(Ssub)[self.A_idx]}
@@ -222,15 +239,17 @@ class _QP:
         Returns (solved, moves, (x, y) for the next warm start, OSQP info).
         """
         nv, no = self.nv, self.n_out
-        q = np.concatenate([-2.0 * mats["S"].T @ e_free.reshape(-1)
+        qe = (e_free * self.q).reshape(-1)
+        q = np.concatenate([-2.0 * mats["S"].T @ qe
                             + 2.0 * self.Cb.T @ (mats["Rabs"] * np.tile(b_last, self.N)),
                             np.full(no, RHO_SLACK_L)])  # fmt: skip
         esub = e_free[self.pts].reshape(-1)
         inf = np.full(self.ns, np.inf)
         rate = np.tile(self.rates, self.M)
-        lo = np.concatenate([np.tile(lo_b - b_last, self.M), -rate, -inf, esub - Y_MAX_K,
+        ym = self.w["y_max_K"]
+        lo = np.concatenate([np.tile(lo_b - b_last, self.M), -rate, -inf, esub - ym,
                              np.zeros(no)])  # fmt: skip
-        hi = np.concatenate([np.tile(hi_b - b_last, self.M), rate, esub + Y_MAX_K, inf,
+        hi = np.concatenate([np.tile(hi_b - b_last, self.M), rate, esub + ym, inf,
                              np.full(no, np.inf)])  # fmt: skip
         s = self.solver
         s.update(q=q, l=lo, u=hi, Px=mats["Px"], Ax=mats["Ax"])
@@ -248,21 +267,50 @@ class MPCEVARX:
     Args:
         env: The env (or vector env) the policy acts on.
         model: ``"evarx"`` (the paper's) or ``"arx"`` (linear ARX models interpolated by load).
+        move_weight, bias_weight, secondary_weight, y_max_K, move_limit, b_max: the knobs
+            (``KNOBS``; None = ``DEFAULTS``, all chosen: the paper gives eq. 21-22's form,
+            no values).
     """
 
     model_kind = "evarx"
 
-    def __init__(self, env: Any, model: str | None = None) -> None:
+    @staticmethod
+    def knob_defaults(env_id: str) -> dict[str, float]:
+        """The common tuning's start: the chosen :data:`DEFAULTS`."""
+        return dict(DEFAULTS)
+    KNOBS: tuple[Knob, ...] = (
+        Knob("move_weight", 1e-3, 10.0),
+        Knob("bias_weight", 1e-3, 10.0),
+        Knob("secondary_weight", 0.1, 10.0),
+        Knob("y_max_K", 1.0, 20.0),
+        Knob("move_limit", 0.002, 0.1),
+        Knob("b_max", 0.02, 0.3),
+    )
+
+    def __init__(self, env: Any, model: str | None = None, *, move_weight: float | None = None,
+                 bias_weight: float | None = None, secondary_weight: float | None = None,
+                 y_max_K: float | None = None, move_limit: float | None = None,
+                 b_max: float | None = None) -> None:  # fmt: skip
         kind = model or self.model_kind
         if kind not in ("evarx", "arx"):
             raise ValueError(f"unknown model {kind!r}; valid: ['evarx', 'arx']")
+        given = {"move_weight": move_weight, "bias_weight": bias_weight,
+                 "secondary_weight": secondary_weight, "y_max_K": y_max_K,
+                 "move_limit": move_limit, "b_max": b_max}  # fmt: skip
         u = env.unwrapped
         plant = u.plant
+        try:  # the paper gives no weights: the benchmark's common tuning is the default
+            base = {**DEFAULTS, **tuning.stored(f"mpc_{kind}", plant.id)}
+        except ValueError:
+            base = DEFAULTS
+        self.knobs = {k.name: k.check(given[k.name], base[k.name]) for k in self.KNOBS}
         params = json.dumps(getattr(u, "_params_overrides", {}) or {}, sort_keys=True)
         ident = identify(plant.id, params)
         self.model: Model = ident[kind]
         self.fit_pct = ident["fit_pct"][kind]
         self.monitor_K = MONITOR_SIGMA * ident["rms_1step"][kind]
+        #: signs the model's first lobes must have (0: not checked), from closed-loop steps
+        self.expected_signs = expected_signs(closed_loop_steps(plant.id, params))
         names, self._scale, self._center = observation_layout(env)
         self.i_y = [names.index(o) for o in controlled_outputs(plant)]
         self.i_sp = names.index("setpoint_C")
@@ -275,27 +323,37 @@ class MPCEVARX:
         rates = np.full(plant.n_u, DEFAULT_RATE_PER_S)
         for j, (_, _, ir) in enumerate(plant.actuators[: plant.n_u]):
             rates[j] = plant.P[ir]
-        self.qp = _QP(len(self.i_y), plant.n_u, self.N, np.minimum(rates * self.Ts, B_MAX))
+        self.move_max = np.minimum(rates * self.Ts, self.knobs["move_limit"])
+        self.qp = _QP(len(self.i_y), plant.n_u, self.N, self.move_max, self.knobs)
         self.cpi = CascadePI(env)
-        self._hist = max(N_Y, N_U, N_W + 1) * self.n + 1
+        self.n_b = split(self.model.coef(1.0), self.model.n_out, self.model.n_act)[1].shape[1]
+        self._hist = max(N_Y, self.n_b, N_W + 1) * self.n + 1
         self._frozen_cache: dict[int, tuple] = {}
         self.stats: dict[str, Any] = {"solves": 0, "iterations": [], "solve_time_s": [],
-                                      "fallbacks": {"qp": 0, "model": 0, "band": 0}}  # fmt: skip
+                                      "fallbacks": {"qp": 0, "model": 0, "sign": 0,
+                                                    "band": 0}}  # fmt: skip
         self._st: dict[str, Any] | None = None
 
     def reset(self) -> None:
         self._st = None
         self.cpi.reset()
 
-    def _frozen(self, w: float) -> tuple[tuple[np.ndarray, ...], dict[str, np.ndarray]]:
-        """(a, b, c) and the QP matrices of the model frozen at the grid load nearest w."""
+    def _frozen(self, w: float) -> tuple[tuple[np.ndarray, ...], dict[str, np.ndarray], bool]:
+        """(a, b, c), the QP matrices of the model frozen at the grid load nearest w, and
+        whether its first lobes have the expected signs (the monitor's sign check)."""
         g = int(np.argmin(np.abs(LOAD_GRID - w)))
         if g not in self._frozen_cache:
             m = self.model
             abc = split(m.coef(float(LOAD_GRID[g])), m.n_out, m.n_act)
-            self._frozen_cache[g] = (abc, self.qp.matrices(step_responses(abc[0], abc[1],
-                                                                          self.N)))  # fmt: skip
+            G = step_responses(abc[0], abc[1], self.N)
+            sign_ok = self.signs_ok(G)
+            self._frozen_cache[g] = (abc, self.qp.matrices(G), sign_ok)
         return self._frozen_cache[g]
+
+    def signs_ok(self, G: np.ndarray) -> bool:
+        """Whether step responses G (N, n_out, n_act) have first lobes of the expected signs."""
+        e = self.expected_signs
+        return bool(np.all((e == 0) | (np.sign(first_lobe(G)) == e)))
 
     def _new_state(self, nb: int) -> dict[str, Any]:
         no, na, H = len(self.i_y), self.qp.n_act, self._hist
@@ -337,22 +395,26 @@ class MPCEVARX:
         """Choose the bias of row r for the next model interval (QP or fallback)."""
         n = self.n
         Y, U, W = st["Y"][r], st["U"][r], st["W"][r]  # newest last; U up to t - 1
-        abc, mats = self._frozen(W[-1])
+        abc, mats, sign_ok = self._frozen(W[-1])
         idx = -1 - n * np.arange(max(N_Y, N_W) + 2)
         yl, wl = Y[idx], W[idx]  # y(t), y(t - n), ...
         dwl = wl[:-1] - wl[1:]  # Delta w(t), Delta w(t - n), ...
         ub = np.stack([U[len(U) - (lag + 1) * n : len(U) - lag * n].mean(0)
-                       for lag in range(N_U)])  # block means of the past biases  # fmt: skip
-        lo_b = np.maximum(-B_MAX, -v_pi)
-        hi_b = np.minimum(B_MAX, 1.0 - v_pi)
+                       for lag in range(self.n_b)])  # block means of the past biases  # fmt: skip
+        b_max = self.knobs["b_max"]
+        lo_b = np.maximum(-b_max, -v_pi)
+        hi_b = np.minimum(b_max, 1.0 - v_pi)
         b_last = np.clip(st["b"][r], lo_b, hi_b)
-        yf = Y[-1] + free_response(abc, (yl[:-1] - yl[1:])[:N_Y], (ub[:-1] - ub[1:])[: N_U - 1],
+        yf = Y[-1] + free_response(abc, (yl[:-1] - yl[1:])[:N_Y],
+                                   (ub[:-1] - ub[1:])[: self.n_b - 1],
                                    (dwl[:-1] - dwl[1:])[:N_W], b_last - ub[0], dwl[0],
                                    self.n_hold, self.N)  # fmt: skip
         ref = st["ref"][r].copy()
         ref[0] = yr[self.i_sp]
         reason = None
-        if np.any(np.abs(Y[-1] - st["yhat"][r]) > self.monitor_K):  # nan: no prediction yet
+        if not sign_ok:
+            reason = "sign"
+        elif np.any(np.abs(Y[-1] - st["yhat"][r]) > self.monitor_K):  # nan: no prediction yet
             reason = "model"
         elif abs(yr[self.i_sp] - Y[-1, 0]) > self.e_safe_K:
             reason = "band"
@@ -366,9 +428,12 @@ class MPCEVARX:
                 st["warm"][r] = warm
             else:
                 reason = "qp"
-        b_new = np.zeros_like(b_last) if reason else np.clip(b_last + moves[0], lo_b, hi_b)
-        if reason:
+        if reason:  # back to the plain loops, the bias removed at the move limit
             self.stats["fallbacks"][reason] += 1
+            b_new = b_last - np.clip(b_last, -self.move_max, self.move_max)
+        else:
+            b_new = np.clip(b_last + np.clip(moves[0], -self.move_max, self.move_max), lo_b,
+                            hi_b)  # fmt: skip
         # the model's prediction of y one interval ahead under b_new, for the monitor
         st["yhat"][r] = yf[0] + mats["S"][: self.model.n_out, : self.qp.n_act] @ (b_new - b_last)
         st["b"][r] = b_new

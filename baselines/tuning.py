@@ -46,6 +46,24 @@ class Knob:
         if self.log and self.lo <= 0.0:
             raise ValueError(f"knob {self.name!r}: a log-scale knob needs lo > 0, got {self.lo}")
 
+    def check(self, value: float | None, default: float) -> float:
+        """``value`` as a float (``default`` for None): a controller's constructor reads its
+        knob arguments through this.
+
+        Raises:
+            ValueError: a value that is not a finite number, or not positive for a log knob.
+        """
+        if value is None:
+            return float(default)
+        try:
+            v = float(value)
+        except (TypeError, ValueError):
+            raise ValueError(f"knob {self.name} must be a number, got {value!r}") from None
+        if not math.isfinite(v) or (self.log and v <= 0.0):
+            kind = "a positive finite number" if self.log else "a finite number"
+            raise ValueError(f"knob {self.name} must be {kind}, got {value!r}")
+        return v
+
     def to_unit(self, value: float) -> float:
         """``value`` as a coordinate of the unit interval (0 at ``lo``, 1 at ``hi``)."""
         v = min(max(float(value), self.lo), self.hi)

@@ -1,31 +1,38 @@
 """Neuro-PID by MEE / MSE (baselines/neuro_pid.py): the mechanism against independent
-references, the batched contract, and the claim check of Zhang et al. (ISA Trans. 2012) on
-steamtemp/Cascade300MW-v0, scenario ``setpoint_step_535_545``."""
+references, the batched contract, the inner loop, realism and stability, and one test per
+claim of Zhang et al. 2012 on steamtemp/Cascade300MW-v0, scenario ``setpoint_step_535_545``
+(the Claims table of docs/baselines.md)."""
 
 from __future__ import annotations
 
+import functools
 import math
 
 import gymnasium as gym
 import numpy as np
 import pytest
-from scipy import stats
 
 import baselines
-from agents.evaluation import run_episode
+import steamtemp_gym
+from agents.evaluation import run_batch
+from agents.leaderboard import DEFAULT_SCENARIOS
 from baselines import neuro_pid as npid
+from steamtemp_gym import scenarios
+from steamtemp_gym.metrics import limit_cycles
 
 ID = "steamtemp/Cascade300MW-v0"
 LAM, SIG = npid.LAMBDA, npid.SIGMA_K
+#: The realism bound on valve travel against cascade_pi_ff's (tests/test_baseline_realism.py).
+TRAVEL_MAX = 3.0
 
 
-def _net(w, x, scale):
-    """Reference forward pass of eq. (5)-(8) in plain numpy: gains s_l g(net_l)."""
+def _net(w, x, scale, base=0.0):
+    """Reference forward pass of eq. (5)-(8) in plain numpy: gains b_l + s_l g(net_l)."""
     W2 = w[: npid.N_W2].reshape(npid.N_HIDDEN, npid.N_IN + 1)
     W3 = w[npid.N_W2 :].reshape(3, npid.N_HIDDEN + 1)
     h = np.tanh(W2 @ np.r_[1.0, x])
     net = W3 @ np.r_[1.0, h]
-    return scale * np.exp(net) / (np.exp(net) + np.exp(-net))
+    return base + scale * np.exp(net) / (np.exp(net) + np.exp(-net))
 
 
 def _sens(w, x, E, scale):
@@ -55,12 +62,12 @@ def _run_kernel(mee, es, xs, w, L, eta=0.0):
     W, G, V = w[None].copy(), np.zeros((n, npid.N_W)), np.zeros(n)
     Eb, Sb = np.zeros((n, L)), np.zeros((n, L, npid.N_W))
     nb, hd, gains = np.zeros(n, np.int64), np.zeros(n, np.int64), np.zeros((n, 3))
-    scale = np.ones((n, 3))
+    base, scale = np.zeros((n, 3)), np.ones((n, 3))
     Gs, Vs = [], []
     for k in range(len(es)):
         E = np.array([[es[k], es[k - 1] if k else es[0], es[k - 2] if k > 1 else es[0]]])
-        npid.npid_step(xs[k][None], E, W, G, V, Eb, Sb, nb, hd, scale, mee, SIG, LAM, L, eta,
-                       gains)  # fmt: skip
+        npid.npid_step(xs[k][None], E, W, G, V, Eb, Sb, nb, hd, base, scale, mee, SIG, LAM, L,
+                       eta, gains)  # fmt: skip
         Gs.append(G[0].copy())
         Vs.append(V[0])
     return np.array(Gs), np.array(Vs)
@@ -118,16 +125,36 @@ def test_update_directions():
     assert np.linalg.norm(G_mee[-1]) < 0.2 * np.linalg.norm(G_mse[-1])
 
 
-def test_initial_net_gives_the_commissioning_gains():
-    k0 = npid.commissioning_gains(ID, "{}")[0]
-    w, scale = npid.initial_weights(k0[:3])
-    np.testing.assert_allclose(_net(w, np.zeros(npid.N_IN), scale), k0[:3], rtol=1e-12)
-    assert np.all(scale >= 1.0) and k0[3] == 1.0
-    # SIMC PI on the identified outer process (inner P loop closed): K ~ 2.09 * 16/17
+def test_initial_net_gives_the_commissioning_gains_at_the_midpoint_of_their_bounds():
+    table = npid.commissioning_gains(ID, "{}")
+    assert table.shape == (len(npid.GAIN_LOADS), 1, 4)
+    k0 = table[-1, 0]  # rated load
+    w, base, scale = npid.initial_weights(k0[:3])
+    np.testing.assert_allclose(_net(w, np.zeros(npid.N_IN), scale, base), k0[:3], rtol=1e-12)
+    # the gains can move within k0 (1 -+ 0.5) whatever the training does
+    np.testing.assert_allclose(base, 0.5 * k0[:3])
+    np.testing.assert_allclose(base + scale, 1.5 * k0[:3])
+    assert k0[3] == 1.0
+    # SIMC PI on the identified outer process with the inner P loop closed: loop gain
+    # G_C2 |K2| = 0.08 stroke/K x 9 kg/s x 2.01 K s/kg = 1.447, so K = 2.09 * 1.447/2.447
     m = npid.outer_models(ID, "{}")[0]
-    assert m.K == pytest.approx(2.09 * 16.08 / 17.08, rel=0.01)
-    w2, _ = npid.initial_weights(k0[:3])
+    assert m.K == pytest.approx(2.09 * 1.4472 / 2.4472, rel=0.01)
+    w2, _, _ = npid.initial_weights(k0[:3])
     np.testing.assert_array_equal(w, w2)  # reproducible
+    with pytest.raises(ValueError, match="positive"):
+        npid.initial_weights(np.array([0.5, 0.0, 0.05]))
+
+
+def test_commissioning_gains_follow_the_load_schedule():
+    """k_l0(L) linear between the commissioning loads, held beyond them."""
+    env = gym.make(ID)
+    pol = npid.NeuroPIDMEE(env)
+    table = npid.commissioning_gains(ID, "{}")[:, 0, :3]
+    k = pol.commissioning(np.array([0.3, 0.5, 0.625, 1.0, 1.1]))[:, 0]
+    np.testing.assert_allclose(k[[0, 1]], table[[0, 0]])
+    np.testing.assert_allclose(k[2], table[:2].mean(axis=0))
+    np.testing.assert_allclose(k[[3, 4]], table[[2, 2]])
+    assert table[0, 1] < table[-1, 1]  # the integral gain is lower at low load (slower plant)
 
 
 @pytest.mark.parametrize("name", ["neuro_pid_mee", "neuro_pid_mse"])
@@ -154,62 +181,321 @@ def test_batched_equals_single_while_learning_and_restart_restores_weights(name)
     assert batch._st is None
 
 
-# ---------------------------------------------------------------------- claim check
-def claim_stats(seeds: int) -> dict[str, np.ndarray]:
-    """Per policy, per seed: (mean, std) of e = setpoint - true outlet over the episode and
-    (mean, std) after 800 s (the transient of the 500 s step excluded)."""
+def test_knobs_and_bad_eta():
+    assert [k.name for k in npid.NeuroPIDMEE.KNOBS] == ["eta"]
+    assert [k.name for k in npid.NeuroPIDMSE.KNOBS] == ["eta"]
+    for cls in (npid.NeuroPIDMEE, npid.NeuroPIDMSE):
+        assert cls.knob_defaults(ID) == {"eta": npid.ETA}  # the paper's
+        k = cls.KNOBS[0]
+        assert k.lo < npid.ETA < k.hi
+    env = gym.make(ID)
+    assert npid.NeuroPIDMSE(env).eta == npid.ETA and npid.NeuroPIDMSE(env, eta=0.3).eta == 0.3
+    for bad in (-1.0, float("nan"), float("inf")):
+        with pytest.raises(ValueError, match="eta"):
+            npid.NeuroPIDMEE(env, eta=bad)
+
+
+# ------------------------------------------------------------------- the inner loop
+def test_inner_p_is_8_pct_of_stroke_per_K_through_the_input_filter():
+    """G_C2 = 8 % of stroke per K of the intermediate temperature, read through the 5 s
+    first-order DCS filter: a +1 K step of the measured intermediate temperature opens the
+    valve by 0.08 (1 - a^k) after k samples, a = exp(-T_s / 5 s); the outer output held."""
     env = gym.make(ID, scenario="setpoint_step_535_545")
-    out = {}
-    for name in ("neuro_pid_mee", "neuro_pid_mse", "cascade_pi"):
-        pol, rows = baselines.make(name, env), []
-        for seed in range(seeds):
-            tr = run_episode(env, pol, seed)["trace"]
-            e = tr["setpoint_C"] - tr["outlet_temp_C"]
-            late = tr["time_s"] >= 800.0
-            rows.append((e.mean(), e.std(), e[late].mean(), e[late].std()))
-        out[name] = np.array(rows)
-    return out
+    plant = env.unwrapped.plant
+    pol = npid.NeuroPID(env, force_u=0.0, k0=np.full((1, 3), 0.5))
+    names = [s.name for s in env.unwrapped.signals.observation]
+    i = names.index(plant.control_loops[0][0])
+    obs, _ = env.reset(seed=0)
+    a0, _ = pol.predict(obs)
+    stepped = obs.copy()
+    stepped[i] += 1.0 / env.unwrapped.signals.observation[i].scale
+    a = np.exp(-plant.dt_s / npid.FILTER_S)
+    for k in range(1, 30):
+        act, _ = pol.predict(stepped)
+        dv = (float(act[0]) - float(a0[0])) / 2.0  # action = 2 v - 1
+        assert dv == pytest.approx(0.08 * (1.0 - a**k), rel=1e-5), k
 
 
-def ci95(x: np.ndarray) -> tuple[float, float, float]:
-    """Mean and its two-sided 95 % Student-t confidence interval."""
-    m = float(np.mean(x))
-    h = float(stats.t.ppf(0.975, len(x) - 1) * np.std(x, ddof=1) / np.sqrt(len(x)))
-    return m, m - h, m + h
+# ------------------------------------------------------------- realism and stability
+@functools.cache
+def _metrics(env_id: str, scenario: str, name: str, eta: float | None, seeds: int) -> dict:
+    venv = gym.make_vec(env_id, num_envs=seeds, scenario=scenarios.resolve(scenario, env_id),
+                        vectorization_mode="vector_entry_point")  # fmt: skip
+    kw = {} if eta is None else {"eta": eta}
+    res = run_batch(venv, baselines.make(name, venv, **kw), list(range(seeds)))
+    return {k: float(np.mean([r["metrics"][k] for r in res])) for k in res[0]["metrics"]}
 
 
-def _check_claim(seeds: int, tol: float) -> None:
-    """What we measure (20 seeds, 95 % CI; whole episode mean / std, K):
-    MEE 1.449 [1.315, 1.583] / 2.757 [2.619, 2.896], MSE 1.421 [1.289, 1.553] / 2.759
-    [2.620, 2.897], cascade_pi 0.575 / 3.033; after 800 s std MEE 1.702 [1.537, 1.868],
-    MSE 1.709 [1.542, 1.875], cascade_pi 2.233 [2.028, 2.437]. Paper: MEE 0.4452 / 1.7049,
-    MSE 0.5093 / 1.7153. Paired MEE - MSE (same seeds, same disturbances): std -0.0013
-    [-0.0037, 0.0010] K (p = 0.25), late std -0.0063 [-0.0109, -0.0016] K (p = 0.01),
-    mean +0.028 [0.024, 0.032] K: no practical benefit of MEE (the paper: -0.0104 K std).
-    ``tol`` covers the seed-to-seed spread of the smaller default sample."""
-    r = claim_stats(seeds)
-    mee, mse, pi = r["neuro_pid_mee"], r["neuro_pid_mse"], r["cascade_pi"]
-    # the step is tracked and the late error std is of the paper's order (1.7 K)
-    for x in (mee, mse):
-        assert ci95(x[:, 3])[0] == pytest.approx(1.70, abs=tol)
-        assert abs(ci95(x[:, 2])[0]) < 1.5
-        assert ci95(x[:, 1])[0] == pytest.approx(2.76, abs=tol)
-    # the claim (MEE narrows the error distribution vs MSE) reproduces at most as a
-    # difference of no engineering weight: within 0.01 K (whole) and 0.02 K (late)
-    d = mee - mse
-    assert abs(ci95(d[:, 1])[0]) < 0.01 and abs(ci95(d[:, 3])[0]) < 0.02
-    if seeds >= 20:  # as measured: late std MEE below MSE, mean error MEE above MSE
-        assert -0.02 < ci95(d[:, 3])[2] < 0.0 and ci95(d[:, 0])[1] > 0.0
-    # the neuro-PID cascade (paper's P inner loop) holds the outlet tighter than cascade_pi
-    # after the step, but tracks the step more slowly (larger whole-episode mean error)
-    assert ci95(mee[:, 3] - pi[:, 3])[2] < 0.0
-    assert ci95(mee[:, 0] - pi[:, 0])[1] > 0.0
+@pytest.mark.parametrize("scenario", ["setpoint_step_535_545",
+                                      pytest.param("load_ramp_100_50", marks=pytest.mark.slow),
+                                      pytest.param("heldout:high_noise",
+                                                   marks=pytest.mark.slow)])  # fmt: skip
+def test_travel_within_three_times_cascade_pi_ff_on_the_papers_plant(scenario):
+    """The paper's P inner loop through the filter strokes the valve about as much as the
+    industrial cascade (measured 0.80x, 0.95x and 0.94x; 40x, 52x and 25x with G_C2 read
+    as 8 kg/s per K on the unfiltered temperature)."""
+    ref = _metrics(ID, scenario, "cascade_pi_ff", None, 1)
+    for name in ("neuro_pid_mee", "neuro_pid_mse"):
+        m = _metrics(ID, scenario, name, None, 1)
+        assert m["valve_travel"] <= TRAVEL_MAX * ref["valve_travel"], (name, m["valve_travel"])
+        assert not limit_cycles(m["quiet_p2p_K"], ref["quiet_p2p_K"]), name
 
 
-def test_claim_setpoint_step_5_seeds():
-    _check_claim(5, tol=0.35)
+#: A learning rate that drives the MSE net's gains to their bounds within an episode.
+ETA_SATURATING = 10.0
+
+
+@pytest.mark.parametrize("env_id", ["steamtemp/SupercriticalFSH-v0",
+                                    pytest.param("steamtemp/DrumBoilerSH-v0",
+                                                 marks=pytest.mark.slow)])  # fmt: skip
+def test_bounded_gains_keep_the_deep_fast_ramp_stable(env_id):
+    """Even with its gains driven to their bounds, the MSE net holds the held-out deep fast
+    ramp: no trip, no limit cycle against cascade_pi_ff, a peak no larger than the plain
+    cascade PI's. Measured peaks 11.7 K (FSH) and 16.6 K (drum), cascade_pi 13.0 and
+    19.0 K; gains bounded to twice their commissioning values instead: quiet p2p 28.7 K
+    on the FSH against cascade_pi_ff's 8.7 K; unbounded (the paper's eta): peaks 34.4 K
+    and 42.5 K."""
+    ref = _metrics(env_id, "heldout:deep_fast_ramp", "cascade_pi_ff", None, 1)
+    pi = _metrics(env_id, "heldout:deep_fast_ramp", "cascade_pi", None, 1)
+    m = _metrics(env_id, "heldout:deep_fast_ramp", "neuro_pid_mse", ETA_SATURATING, 1)
+    assert not m["tripped"]
+    assert m["max_abs_dev_K"] <= pi["max_abs_dev_K"], (m["max_abs_dev_K"], pi["max_abs_dev_K"])
+    assert not limit_cycles(m["quiet_p2p_K"], ref["quiet_p2p_K"]), m["quiet_p2p_K"]
+    assert m["valve_travel"] <= TRAVEL_MAX * ref["valve_travel"]
 
 
 @pytest.mark.slow
-def test_claim_setpoint_step_20_seeds():
-    _check_claim(20, tol=0.15)
+@pytest.mark.parametrize("env_id", steamtemp_gym.ENV_IDS)
+def test_realism_on_every_named_and_heldout_scenario(env_id):
+    """Every variant (the paper's eta, the adapting etas, the top of each knob's box) on
+    every named and held-out scenario: no trip, travel within 3x cascade_pi_ff's, no limit
+    cycle (seeds 0-1)."""
+    variants = [("neuro_pid_mee", None), ("neuro_pid_mse", None),
+                ("neuro_pid_mee", npid.ADAPTING_ETA["mee"]),
+                ("neuro_pid_mse", npid.ADAPTING_ETA["mse"]),
+                ("neuro_pid_mee", npid.NeuroPIDMEE.KNOBS[0].hi),
+                ("neuro_pid_mse", npid.NeuroPIDMSE.KNOBS[0].hi)]  # fmt: skip
+    for scenario in DEFAULT_SCENARIOS:
+        ref = _metrics(env_id, scenario, "cascade_pi_ff", None, 2)
+        for name, eta in variants:
+            m = _metrics(env_id, scenario, name, eta, 2)
+            assert not m["tripped"], (scenario, name, eta)
+            assert m["valve_travel"] <= TRAVEL_MAX * ref["valve_travel"], (scenario, name, eta)
+            assert not limit_cycles(m["quiet_p2p_K"], ref["quiet_p2p_K"]), (scenario, name, eta)
+
+
+# ----------------------------------------------------------------------- the claims
+# Zhang et al. 2012, Section 5, on steamtemp/Cascade300MW-v0 ``setpoint_step_535_545``
+# (535 C, step to 545 C at 500 s, rated load, 2000 s). e = setpoint - true outlet.
+PAPER = {"mee": (0.4452, 1.7049), "mse": (0.5093, 1.7153)}  # error mean, std (K)
+#: Transient of the step excluded from the "after the step" statistics (s).
+SETTLED_S = 800.0
+#: The two learning-rate settings compared: the paper's, and nets that adapt alike.
+SETTINGS = {"paper": {"mee": npid.ETA, "mse": npid.ETA}, "adapting": npid.ADAPTING_ETA}
+#: Few seeds in the default suite, 20 (the numbers quoted) in the slow one.
+SEEDS = pytest.mark.parametrize("seeds", [4, pytest.param(20, marks=pytest.mark.slow)])
+
+
+def renyi2(e: np.ndarray) -> float:
+    """Renyi's quadratic entropy -log V of samples e (Parzen estimate with the paper's
+    Gaussian kernel, sigma = 2 K: V = mean over pairs of kappa(e_i - e_j, 2 sigma^2))."""
+    d = e[:, None] - e[None, :]
+    k = np.exp(-d * d / (4.0 * SIG**2)) / (math.sqrt(2.0 * math.pi) * math.sqrt(2.0) * SIG)
+    return float(-np.log(k.mean()))
+
+
+class _NoDisturbanceInputs(npid.NeuroPID):
+    """The same neuro-PID with its two measured-disturbance inputs held at zero."""
+
+    def _inputs(self, st, y):
+        x = super()._inputs(st, y)
+        x[:, 3:] = 0.0
+        return x
+
+
+@functools.cache
+def step_runs(setting: str, seeds: int, disturbance_inputs: bool = True) -> dict:
+    """Per criterion, per seed: the error trace, the gains and the weights."""
+    venv = gym.make_vec(ID, num_envs=seeds, scenario="setpoint_step_535_545",
+                        vectorization_mode="vector_entry_point")  # fmt: skip
+    cls = npid.NeuroPID if disturbance_inputs else _NoDisturbanceInputs
+    out = {}
+    for crit, eta in SETTINGS[setting].items():
+        rec = npid.Recorder(cls(venv, criterion=crit, eta=eta))
+        res = run_batch(venv, rec, list(range(seeds)))
+        e = np.array([r["trace"]["setpoint_C"] - r["trace"]["outlet_temp_C"] for r in res])
+        out[crit] = {"t": res[0]["trace"]["time_s"], "e": e, "gains": np.array(rec.gains),
+                     "W": np.array(rec.weights)}  # fmt: skip
+    return out
+
+
+def _paired(x: np.ndarray) -> tuple[float, float]:
+    """Mean over seeds and its standard error."""
+    return float(x.mean()), float(x.std(ddof=1) / math.sqrt(len(x)))
+
+
+def _assert_negative(d: np.ndarray, seeds: int) -> None:
+    """A paired difference below zero: its mean over the seeds; on 20 seeds also by two
+    standard errors."""
+    m, se = _paired(d)
+    assert m < 0.0 and (seeds < 20 or m + 2.0 * se < 0.0), (m, se)
+
+
+def _mean_std(run: dict) -> np.ndarray:
+    return np.stack([run["e"].mean(axis=1), run["e"].std(axis=1)], axis=1)
+
+
+def check_mean_smaller(setting: str, seeds: int) -> None:
+    """Claim: MEE's error mean below MSE's, by the paper's -12.6 % (0.4452 against 0.5093)
+    within a factor of 2 (-6.3 % to -25 %)."""
+    r = step_runs(setting, seeds)
+    rel = _mean_std(r["mee"])[:, 0] / _mean_std(r["mse"])[:, 0] - 1.0
+    paper = PAPER["mee"][0] / PAPER["mse"][0] - 1.0
+    assert 2.0 * paper <= _paired(rel)[0] <= 0.5 * paper, _paired(rel)
+
+
+def check_std_smaller(setting: str, seeds: int) -> None:
+    """Claim: MEE's error std below MSE's, by the paper's -0.61 % (1.7049 against 1.7153)
+    within a factor of 2 (-0.30 % to -1.21 %), relative: the plant's disturbances make our
+    std about 1.7 times the paper's."""
+    r = step_runs(setting, seeds)
+    rel = _mean_std(r["mee"])[:, 1] / _mean_std(r["mse"])[:, 1] - 1.0
+    paper = PAPER["mee"][1] / PAPER["mse"][1] - 1.0
+    assert 2.0 * paper <= _paired(rel)[0] <= 0.5 * paper, _paired(rel)
+
+
+@pytest.mark.xfail(strict=True, reason="MEE - MSE error mean +0.18 % (+0.0012 K) at the "
+                   "paper's eta (20 seeds; paper -12.6 %): the nets barely learn")
+@SEEDS
+def test_claim_mee_smaller_error_mean_paper_eta(seeds):
+    check_mean_smaller("paper", seeds)
+
+
+@pytest.mark.xfail(strict=True, reason="MEE - MSE error mean +9.2 % (+0.050 K) between "
+                   "adapting nets (20 seeds; paper -12.6 %): MEE is shift-invariant, it does "
+                   "not act on the mean, MSE does")
+@SEEDS
+def test_claim_mee_smaller_error_mean_adapting(seeds):
+    check_mean_smaller("adapting", seeds)
+
+
+@pytest.mark.xfail(strict=True, reason="MEE - MSE error std -0.023 % (-0.0007 K) at the "
+                   "paper's eta (20 seeds; paper -0.61 %): right direction, a 26th of the "
+                   "size, the nets barely learn")
+@SEEDS
+def test_claim_mee_smaller_error_std_paper_eta(seeds):
+    check_std_smaller("paper", seeds)
+
+
+@SEEDS
+def test_claim_mee_smaller_error_std_adapting(seeds):
+    """Between nets that adapt alike, MEE narrows the error: -1.14 +- 0.12 % (-0.033 K) of
+    std (20 seeds; 4 seeds: -0.86 %; paper -0.61 %)."""
+    check_std_smaller("adapting", seeds)
+
+
+@SEEDS
+def test_claim_step_tracked_around_the_setpoint(seeds):
+    """Claim: "both approaches can stabilize the superheated temperature around the set
+    point": after the step's transient the error averages, over the seeds, within 0.5 K of
+    zero (no offset; single seeds wander by up to 0.65 K with the slow disturbance omega),
+    and it stays inside the trip band."""
+    r = step_runs("paper", seeds)
+    for crit in ("mee", "mse"):
+        late = r[crit]["t"] >= SETTLED_S
+        assert abs(r[crit]["e"][:, late].mean()) < 0.5, crit
+        assert np.abs(r[crit]["e"]).max() < 28.0, crit
+
+
+@pytest.mark.xfail(strict=True, reason="error mean / std 0.70 / 2.86 K (MEE), 0.70 / 2.86 K "
+                   "(MSE) at the paper's eta (20 seeds; paper 0.445 / 1.705, 0.509 / 1.715): "
+                   "the plant's omega (uniform +-3 K, 150 s) is larger than the paper's, and "
+                   "the inner P at 8 %/K tracks the step more slowly than a loop gain of 16")
+@SEEDS
+def test_claim_error_mean_and_std_of_the_papers_size(seeds):
+    """Claim: error mean / std 0.4452 / 1.7049 K (MEE), 0.5093 / 1.7153 K (MSE), each within
+    +-25 %."""
+    r = step_runs("paper", seeds)
+    for crit in ("mee", "mse"):
+        m = _mean_std(r[crit]).mean(axis=0)
+        assert m == pytest.approx(PAPER[crit], rel=0.25), crit
+
+
+def _gain_spread(run: dict) -> np.ndarray:
+    """(seeds, 3): std over time after the transient of each gain over its start value."""
+    late = run["t"][1:] >= SETTLED_S  # gains[k] act on the step k -> k + 1
+    g = run["gains"]
+    return (g[late] / g[0]).std(axis=0)
+
+
+@pytest.mark.xfail(strict=True, reason="gain std over time / k0 (20 seeds, paper's eta), MEE "
+                   "vs MSE: k_p 0.0906 vs 0.0906, k_i 0.0516 vs 0.0510, k_d 0.0392 vs 0.0393: "
+                   "k_i varies more under MEE; the spread is the inputs' modulation through the "
+                   "initial weights, not training")
+@SEEDS
+def test_claim_mee_gains_less_uncertain(seeds):
+    """Claim (Fig. 7): the MEE-trained PID gains have smaller uncertainties than the MSE
+    ones: the std over time of each of k_p, k_i, k_d smaller."""
+    r = step_runs("paper", seeds)
+    d = _gain_spread(r["mee"]) - _gain_spread(r["mse"])
+    assert np.all(d.mean(axis=0) < 0.0), d.mean(axis=0)
+
+
+def _entropies(run: dict, lo: float, hi: float) -> np.ndarray:
+    sel = (run["t"] >= lo) & (run["t"] < hi)
+    return np.array([renyi2(e[sel]) for e in run["e"]])
+
+
+@pytest.mark.parametrize("setting", ["paper", "adapting"])
+@SEEDS
+def test_claim_mee_smaller_error_entropy(setting, seeds):
+    """Claim (Fig. 8): the error entropy (Renyi's quadratic, the performance index) is
+    smaller under MEE than under MSE, after the step's transient. Measured (20 seeds):
+    -0.00029 +- 0.00005 (paper's eta), -0.0151 +- 0.0024 (adapting) nats; the paper gives
+    no number."""
+    r = step_runs(setting, seeds)
+    d = _entropies(r["mee"], SETTLED_S, np.inf) - _entropies(r["mse"], SETTLED_S, np.inf)
+    _assert_negative(d, seeds)
+
+
+@pytest.mark.parametrize("seeds", [4, pytest.param(20, marks=[pytest.mark.slow, pytest.mark.xfail(
+    strict=True, reason="MEE - MSE entropy fall -0.0064 +- 0.0052 nats (20 seeds, adapting): "
+    "the direction, not significant")])])  # fmt: skip
+def test_claim_mee_pdf_narrows_along_time(seeds):
+    """Claim (Fig. 9-12): under MEE the error PDF becomes narrower and sharper along the
+    sampling time, against MSE: from 800-1400 s to 1400-2000 s its entropy falls by more
+    than the MSE one does (adapting nets)."""
+    r = step_runs("adapting", seeds)
+    fall = {c: _entropies(r[c], 1400.0, np.inf) - _entropies(r[c], SETTLED_S, 1400.0)
+            for c in ("mee", "mse")}  # fmt: skip
+    _assert_negative(fall["mee"] - fall["mse"], seeds)
+
+
+@pytest.mark.xfail(strict=True, reason="mean-square weight increment of the MEE net, "
+                   "1400-2000 s over 800-1400 s: x1.16 (20 seeds, paper's eta; x1.10 adapting): "
+                   "with forgetting lambda = 0.04 the gradient follows the current errors, "
+                   "which the plant's disturbances keep alive")
+@SEEDS
+def test_claim_mee_weights_converge(seeds):
+    """Claim (Section 3.3, eq. (24)-(25)): with 0 < eta < 1 / max |lambda_i| the weight
+    increments vanish in mean square: the late mean of |W_(k+1) - W_k|^2 below the earlier
+    one."""
+    r = step_runs("paper", seeds)["mee"]
+    msq = (np.diff(r["W"], axis=0) ** 2).sum(axis=2)
+    t = r["t"][2:]
+    early = msq[(t >= SETTLED_S) & (t < 1400.0)].mean()
+    late = msq[t >= 1400.0].mean()
+    assert late < early, late / early
+
+
+@pytest.mark.xfail(strict=True, reason="MEE error std with - without the measured "
+                   "disturbance inputs +0.0014 +- 0.0056 K (20 seeds): through eq. (4) they "
+                   "only modulate gains that multiply errors, no additive feed-forward")
+@SEEDS
+def test_claim_disturbance_inputs_act_as_feedforward(seeds):
+    """Claim (abstract, Section 4): with the measurable disturbances omega, omega_2 as net
+    inputs "feedback control is combined with feedforward control": the error std at least
+    2 % below that of the same net without them."""
+    with_d = _mean_std(step_runs("paper", seeds)["mee"])[:, 1]
+    without = _mean_std(step_runs("paper", seeds, False)["mee"])[:, 1]
+    assert _paired(with_d / without - 1.0)[0] <= -0.02
