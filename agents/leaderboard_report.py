@@ -354,6 +354,32 @@ def agents_markdown(summary: dict[str, Any]) -> str:
     return "\n".join(lines + _table(header, body)) + "\n"
 
 
+def baselines_markdown(summary: dict[str, Any]) -> str:
+    """Every baseline on every plant: mean IAE of the main steam, valve travel relative to
+    the reference's and valve reversals, over scenario x seed (the README's baseline table's
+    actuator columns); † = not admissible."""
+    plants = list(summary["plants"])
+    header = ["baseline", *[f"{p.split('/')[-1]}: IAE [K s] / travel / reversals"
+                            for p in plants]]  # fmt: skip
+    body = []
+    for name in baselines.NAMES:
+        cells = []
+        for env_id in plants:
+            pe = summary["plants"][env_id]["policies"].get(name)
+            if pe is None:
+                cells.append("-")
+                continue
+            met = pe["metrics"]
+            mark = f" {INADMISSIBLE}" if pe.get("admissible") is False else ""
+            cells.append(f"{num(met.get('iae_K_s'), 0)} / {_travel(pe)} / "
+                         f"{num(met.get('valve_reversals'), 0)}{mark}")  # fmt: skip
+        if any(c != "-" for c in cells):
+            body.append([f"`{name}`", *cells])
+    n = len(summary["run"]["seeds"])
+    lines = [f"Means over scenario × seed ({n} seeds); {admissibility_note(summary)}", ""]
+    return "\n".join(lines + _table(header, body)) + "\n"
+
+
 def markdown(summary: dict[str, Any], rows: list[dict]) -> str:
     """leaderboard.md."""
     run = summary["run"]
