@@ -65,6 +65,11 @@ MIN_STEP = 1.0 / 64.0
 TRAVEL_BUDGET = stats.TRAVEL_BUDGET
 
 
+#: Modules of steamtemp_gym that no trajectory depends on (drawing, docs, the command line),
+#: left out of the code digests with the testing package.
+NO_DYNAMICS = ("render.py", "docs.py", "__main__.py")
+
+
 def seeds() -> list[int]:
     """The training episodes' seeds."""
     return [TUNING_SEED + k for k in range(EPISODES)]
@@ -219,7 +224,9 @@ def _code_digest(ends: bool = False) -> str:
     evaluation, and the baselines (for the ends only the reference and the oracle)."""
     h = hashlib.sha256()
     here = Path(__file__).parent
-    files = sorted(Path(steamtemp_gym.__file__).parent.rglob("*.py"))
+    pkg = Path(steamtemp_gym.__file__).parent
+    files = [f for f in sorted(pkg.rglob("*.py")) if f.name not in NO_DYNAMICS
+             and "testing" not in f.relative_to(pkg).parts]  # fmt: skip
     files += [here / "evaluation.py"]
     if ends:
         files += [Path(baselines.__file__).with_name(f) for f in ("cascade_pi.py", "loops.py",
