@@ -281,15 +281,17 @@ def _table(header: list[str], rows: list[list[str]]) -> list[str]:
             *["| " + " | ".join(r) + " |" for r in rows]]  # fmt: skip
 
 
-def headline_markdown(summary: dict[str, Any]) -> str:
-    """The headline table with its label (also in the README)."""
+def headline_markdown(summary: dict[str, Any], margins: bool = True) -> str:
+    """The headline table with its label (also in the README), and below it the score's
+    ends per plant (:func:`margin_markdown`) unless ``margins`` is False."""
     n = len(summary["run"]["seeds"])
     lines = [f"{stat_label(n)}: the share of the achievable improvement over the industrial "
              f"reference that a policy realizes (0 = {ZERO}, the cascade a commissioned unit "
              f"runs; 1 = {ONE}, the clairvoyant NMPC on the true plant; per scenario); "
              f"(k) = rank on that plant; {admissibility_note(summary)}", ""]  # fmt: skip
     lines += _table(*headline_rows(summary))
-    lines += ["", *margin_markdown(summary)]
+    if margins:
+        lines += ["", *margin_markdown(summary)]
     return "\n".join(lines) + "\n"
 
 

@@ -45,7 +45,9 @@ def section(doc: dict) -> str:
     lines = [f"{START} {_GEN}", "",
              f"{len(run['envs'])} plants, {len(run['scenarios'])} scenarios, seeds "
              f"{run['seeds']}, {n_eps} episodes (steamtemp_gym {run['steamtemp_gym_version']}).",
-             "", report.headline_markdown(doc), END]  # fmt: skip
+             "", report.headline_markdown(doc, margins=False),
+             "The score's ends per plant (mean returns of `cascade_pi_ff` and the oracle) are "
+             "in a run's `leaderboard.md`.", "", END]  # fmt: skip
     return "\n".join(lines)
 
 

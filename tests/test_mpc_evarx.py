@@ -16,6 +16,7 @@ import baselines
 import steamtemp_gym  # noqa: F401  (registers the ids)
 from agents.evaluation import run_episode
 from baselines import evarx as E
+from baselines import tuning
 from baselines.mpc_evarx import _QP, DEFAULTS, MOVE_STEPS, MPCEVARX, expected_signs
 
 BTM = "steamtemp/BoilerTurbineMIMO-v0"
@@ -184,7 +185,8 @@ def test_knobs_are_keywords_with_checked_ranges():
     assert set(names) == set(DEFAULTS)
     pol = baselines.make("mpc_evarx", env, move_weight=0.2, secondary_weight=0.5)
     assert pol.knobs["move_weight"] == 0.2 and pol.qp.w["secondary_weight"] == 0.5
-    assert pol.knobs["bias_weight"] == DEFAULTS["bias_weight"]
+    # a knob not given takes the stored common tuning of the plant
+    assert pol.knobs["bias_weight"] == tuning.stored("mpc_evarx", BTM)["bias_weight"]
     with pytest.raises(ValueError, match="move_weight"):
         baselines.make("mpc_evarx", env, move_weight=-1.0)
 
