@@ -275,10 +275,7 @@ class FuzzyP2ID:
         unknown = sorted(set(knobs) - names)
         if unknown:
             raise ValueError(f"unknown FuzzyP2ID knobs {unknown}; valid: {sorted(names)}")
-        try:
-            base = tuning.stored("fuzzy_p2id", plant.id)
-        except ValueError:
-            base = self.knob_defaults(plant.id)
+        base = tuning.stored_or("fuzzy_p2id", plant.id, self.knob_defaults(plant.id))
         values = {**base, **{k: v for k, v in knobs.items() if v is not None}}
         g = np.tile(np.array(GAINS_PI), (len(self.loops), len(RULE_LOADS), 1))
         for r, L in enumerate(RULE_LOADS):

@@ -141,10 +141,7 @@ def defaults(env_id: str) -> tuple[float, ...]:
     """The knobs' default values on a plant, in :data:`KNOBS` order: the benchmark's stored
     tuning (baselines/tuned/lqi.json; the thesis gives no weights) where the plant has one,
     else :func:`start`."""
-    try:
-        values = tuning.stored("lqi", env_id)
-    except ValueError:
-        values = start(env_id)
+    values = tuning.stored_or("lqi", env_id, start(env_id))
     return tuple(values[k.name] for k in KNOBS)
 
 

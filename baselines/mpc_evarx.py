@@ -299,10 +299,8 @@ class MPCEVARX:
                  "move_limit": move_limit, "b_max": b_max}  # fmt: skip
         u = env.unwrapped
         plant = u.plant
-        try:  # the paper gives no weights: the benchmark's common tuning is the default
-            base = {**DEFAULTS, **tuning.stored(f"mpc_{kind}", plant.id)}
-        except ValueError:
-            base = DEFAULTS
+        # the paper gives no weights: the benchmark's common tuning is the default
+        base = tuning.stored_or(f"mpc_{kind}", plant.id, DEFAULTS)
         self.knobs = {k.name: k.check(given[k.name], base[k.name]) for k in self.KNOBS}
         params = json.dumps(getattr(u, "_params_overrides", {}) or {}, sort_keys=True)
         ident = identify(plant.id, params)

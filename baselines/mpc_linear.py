@@ -394,10 +394,7 @@ class MPCLinear:
                  u_weight: float | None = None) -> None:  # fmt: skip
         u = env.unwrapped
         plant = u.plant
-        try:
-            base = tuning.stored("mpc_linear", plant.id)
-        except ValueError:
-            base = self.knob_defaults(plant.id)
+        base = tuning.stored_or("mpc_linear", plant.id, self.knob_defaults(plant.id))
         move_weight = base["move_weight"] if move_weight is None else move_weight
         u_weight = base["u_weight"] if u_weight is None else u_weight
         for name, v in (("move_weight", move_weight), ("u_weight", u_weight)):

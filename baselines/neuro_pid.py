@@ -393,6 +393,11 @@ class NeuroPID:
         eta: Learning rate of eq. (9), (13) (None: the paper's 1e-4).
     """
 
+    @staticmethod
+    def knob_defaults(env_id: str) -> dict[str, float]:
+        """The paper's learning rate (Section 5), both variants' start."""
+        return {"eta": ETA}
+
     def __init__(
         self, env: Any, criterion: str = "mee", k0: Any = None, force_u: float | None = None,
         eta: float | None = None,
@@ -577,11 +582,6 @@ class NeuroPIDMEE(NeuroPID):
 
     KNOBS = (Knob("eta", 1e-5, 10.0),)
 
-    @staticmethod
-    def knob_defaults(env_id: str) -> dict[str, float]:
-        """The paper's learning rate (Section 5)."""
-        return {"eta": ETA}
-
     def __init__(self, env: Any, eta: float | None = None, **kwargs: Any) -> None:
         super().__init__(env, criterion="mee", eta=eta, **kwargs)
 
@@ -595,11 +595,6 @@ class NeuroPIDMSE(NeuroPID):
     """
 
     KNOBS = (Knob("eta", 1e-6, 1.0),)
-
-    @staticmethod
-    def knob_defaults(env_id: str) -> dict[str, float]:
-        """The paper's learning rate (Section 5)."""
-        return {"eta": ETA}
 
     def __init__(self, env: Any, eta: float | None = None, **kwargs: Any) -> None:
         super().__init__(env, criterion="mse", eta=eta, **kwargs)

@@ -110,4 +110,13 @@ def stored(name: str, env_id: str) -> dict[str, float]:
     return {k: float(v) for k, v in plants[env_id]["knobs"].items()}
 
 
-__all__ = ["TUNED", "Knob", "knobs", "path", "stored"]
+def stored_or(name: str, env_id: str, start: dict[str, float]) -> dict[str, float]:
+    """The stored tuning of ``name`` on ``env_id`` over ``start``, or ``start`` where there is
+    none (the default of controllers whose sources publish no values)."""
+    try:
+        return {**start, **stored(name, env_id)}
+    except ValueError:
+        return dict(start)
+
+
+__all__ = ["TUNED", "Knob", "knobs", "path", "stored", "stored_or"]
