@@ -19,13 +19,19 @@ Every actuator gets the loop its plant declares in ``Plant.control_loops``
 
 Actuators without a loop stay where the episode started. Loops are tuned by the
 SIMC rules (Skogestad 2003, tau_c = theta) on first-order-plus-dead-time models
-read from open-loop step tests of each actuator at rated load
-(baselines/identification.py): the inner loop on actuator -> inner temperature,
+read from open-loop step tests of each actuator (baselines/identification.py) at
+each load of :data:`GAIN_LOADS` (50, 75 and 100 %): the inner loop on actuator -> inner temperature,
 the outer loop of a cascade on inner -> outer temperature (gain K_out/K_in, dead
 time and balance time of the outer response less those of the inner one), a
 single loop on actuator -> its temperature. The measurement filter's lag is added
 to each loop's dead time. Where k loops share the main-steam error, each outer
-gain is divided by k so that their sum has the SIMC loop gain.
+gain is divided by k so that their sum has the SIMC loop gain. Fixed gains are
+commissioned for the whole load range, as a unit without gain scheduling must be:
+per loop, the smallest SIMC gain and the longest integral time of the step tests
+at the three loads (:func:`commissioned_tuning`). A loop tuned at rated load alone
+is poorly damped at half load, where the superheater's dead time and gain are
+larger (decay ratios near 1 after a deep ramp). With ``gain_schedule=True`` the
+gains follow the load instead (:class:`CascadePIFF`).
 
 Measurement filter: every temperature the loops read goes through a first-order
 filter of ``FILTER_S`` = 5 s (the input filter a DCS puts on thermocouples), so
@@ -146,6 +152,21 @@ def _ramp_run(env: Any, pol: CascadePI) -> tuple[np.ndarray, ...]:
             return np.array(L), np.array(V), np.array(F), np.array(E)
 
 
+@functools.lru_cache(maxsize=64)
+def commissioned_tuning(env_id: str, params_json: str) -> np.ndarray:
+    """(loops, 4) fixed (Kc_o, Ti_o, Kc_i, Ti_i) for the whole load range: per loop the
+    SIMC gain of smallest magnitude and the longest integral time of the step tests at
+    :data:`GAIN_LOADS`."""
+    g = np.array([_tuning(env_id, params_json, load) for load in GAIN_LOADS], dtype=float)
+    out = np.empty(g.shape[1:])
+    for kc, ti in ((0, 1), (2, 3)):
+        k = np.abs(g[..., kc]).argmin(axis=0)
+        out[:, kc] = np.take_along_axis(g[..., kc], k[None], axis=0)[0]
+        out[:, ti] = g[..., ti].max(axis=0)
+    out.setflags(write=False)
+    return out
+
+
 def gain_table(env_id: str, params_json: str) -> np.ndarray:
     """(len(GAIN_LOADS), loops, 4) table of (Kc_o, Ki_o, Kc_i, Ki_i), Ki = Kc / Ti (0 for no
     integral), from the step tests at each of :data:`GAIN_LOADS`."""
@@ -243,9 +264,10 @@ class CascadePI:
             self.loops.append((i_in, i_out))
         self.dt = plant.dt_s
         self.a_filter = float(np.exp(-self.dt / FILTER_S))
-        self.gains = np.array(
-            tuning if tuning is not None else _tuning(plant.id, params), dtype=float
-        )
+        if tuning is None:  # scheduled: the rated-load tuning sets the feed-forward's filter
+            tuning = _tuning(plant.id, params) if gain_schedule else commissioned_tuning(
+                plant.id, params)  # fmt: skip
+        self.gains = np.array(tuning, dtype=float)
         factors = _factors(outer_gain, outer_reset, inner_gain, inner_reset)
         self.gains = self.gains * factors
         #: (loads, table) of the load-scheduled gains (gain_table), or None
