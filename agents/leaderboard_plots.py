@@ -28,7 +28,7 @@ import numpy as np
 
 import baselines
 from agents import stats
-from agents.leaderboard_report import ONE, REFERENCES, ZERO
+from agents.leaderboard_report import INADMISSIBLE, ONE, REFERENCES, ZERO
 from steamtemp_gym.envs.render import BANDS_K
 
 DPI = 150
@@ -296,10 +296,19 @@ def _grid(n: int):
     return rows, cols
 
 
+def _bar_label(name: str, pe: dict[str, Any]) -> str:
+    """A bar's label: the policy, its valve travel over the reference's and, when it is not
+    admissible on the plant, the report's mark."""
+    travel = f"  {pe['travel_ratio']:.1f}x" if "travel_ratio" in pe else ""
+    mark = f" {INADMISSIBLE}" if pe.get("admissible") is False else ""
+    return f"{name}{mark}{travel}"
+
+
 def bars(path: Path, summary: dict[str, Any]) -> Path:
-    """IQM normalized score with 95 % CIs, one panel per plant, policies by rank; the axis
-    spans :data:`PROFILE_RANGE` and the scores of the ranked policies down to -1, a bar
-    beyond it ends at the edge with its value written there."""
+    """IQM normalized score with 95 % CIs, one panel per plant, policies by rank (admissible
+    ones first), each labelled with its valve travel over the reference's and the
+    inadmissible mark; the axis spans :data:`PROFILE_RANGE` and the scores of the ranked
+    policies down to -1, a bar beyond it ends at the edge with its value written there."""
     plt = _plt()
     plants = list(summary["plants"])
     rows, cols = _grid(len(plants))
@@ -324,7 +333,7 @@ def bars(path: Path, summary: dict[str, Any]) -> Path:
             for k in np.flatnonzero(x < lo):
                 ax.text(lo, y[k], f" ◀ {x[k]:.2f}", va="center", ha="left", fontsize=8)
             ax.set_xlim(lo, hi)
-            ax.set_yticks(y, ranked)
+            ax.set_yticks(y, [_bar_label(p, pols[p]) for p in ranked])
             ax.invert_yaxis()
             ax.axvline(0, color="k", lw=0.8)
             ax.axvline(1, color="k", lw=0.8, ls="--")
@@ -334,9 +343,12 @@ def bars(path: Path, summary: dict[str, Any]) -> Path:
         for ax in list(axes.flat)[len(plants):]:
             ax.axis("off")
         n_seeds = summary["run"]["seeds"]
+        budget = summary["run"].get("travel_budget")
+        note = (f"\nlabels: valve travel over {ZERO}'s; {INADMISSIBLE}: not admissible "
+                f"(travel above {budget:g}x, a trip or a failure), ranked last") if budget else ""
         fig.suptitle(f"IQM over scenario × seed ({len(n_seeds)} seeds), "
                      "95 % stratified-bootstrap CI; blue/green: baselines, "
-                     "orange/red/purple: trained agents")  # fmt: skip
+                     f"orange/red/purple: trained agents{note}")  # fmt: skip
         fig.tight_layout()
         _save(fig, path)
     return path

@@ -169,6 +169,20 @@ def test_bars_colour_by_family(figures, tmp_path):
     assert any("-3.00" in t.get_text() for t in ax.texts)
 
 
+def test_bars_label_travel_and_the_inadmissible_mark(figures, tmp_path):
+    pols = {"mpc_linear": {"rank": 1, "travel_ratio": 1.24, "admissible": True},
+            "sb3:sac": {"rank": 2, "travel_ratio": 9.5, "admissible": False}}  # fmt: skip
+    for k, p in enumerate(pols):
+        pols[p]["normalized_score"] = {"iqm": {"value": 0.5 - k, "ci95": [0.4 - k, 0.6 - k]}}
+    summary = {"run": {"seeds": [0], "policies": {"e": list(pols)}, "travel_budget": 2.0},
+               "plants": {"steamtemp/A-v0": {"policies": pols}}, "ranking": []}  # fmt: skip
+    plots.bars(tmp_path / "s.png", summary)
+    (fig,) = figures
+    labels = [t.get_text() for t in fig.axes[0].get_yticklabels()]
+    assert labels == ["mpc_linear  1.2x", f"sb3:sac {report.INADMISSIBLE}  9.5x"]
+    assert "above 2x" in fig.texts[0].get_text()  # the suptitle explains the labels
+
+
 # --------------------------------------------------------------------------- markdown
 def test_numbers_are_rounded_to_display_precision():
     assert report.num(-6.661e-17) == "0.00"
