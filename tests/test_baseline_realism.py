@@ -38,23 +38,17 @@ def _metrics(env_id: str, scenario: str, name: str) -> dict:
 #: ramp of loops tuned at rated load, or MPCs on identified models that the plant's own
 #: loops partly cancel; see docs/baselines.md.
 MEASURED_FAILURES = {
-    ("SupercriticalFSH-v0", "cascade_pi"): "deep ramp: quiet p2p 21.14 K (reference 8.72 K)",
     ("SupercriticalFSH-v0", "mpc_evarx"): "deep ramp: quiet p2p 20.95 K (reference 8.72 K)",
     ("SupercriticalFSH-v0", "mpc_arx"): "deep ramp: quiet p2p 17.47 K (reference 8.72 K)",
     ("SupercriticalFSH-v0", "cascade_pi_tuned"): "deep ramp: travel 14.48x the reference's",
-    ("BensonSubcritical-v0", "cascade_pi"): "ramp: quiet p2p 5.87 K (reference 2.52 K)",
-    ("BensonSubcritical-v0", "fao_sf"): "deep ramp: quiet p2p 17.32 K (reference 8.59 K)",
     ("BensonSubcritical-v0", "fuzzy_p2id"): "ramp: travel 3.17x the reference's",
     ("BensonSubcritical-v0", "mpc_evarx"): "ramp: quiet p2p 5.69 K (reference 2.52 K)",
     ("BensonSubcritical-v0", "mpc_arx"): "ramp: quiet p2p 5.87 K (reference 2.52 K)",
-    ("DrumBoilerSH-v0", "fao_sf"): "deep ramp: quiet p2p 33.46 K (reference 15.92 K)",
-    ("DrumBoilerSH-v0", "fao_fac"): "deep ramp: travel 6.13x the reference's",
     ("DrumBoilerSH-v0", "fuzzy_p2id"): "deep ramp: travel 9.02x the reference's",
     ("BoilerTurbineMIMO-v0", "mpc_arx"): "ramp: quiet p2p 5.59 K (reference 2.49 K)",
     ("DrumBoilerSH-v0", "mpc_evarx"): "ramp: travel 3.28x the reference's",
     ("DrumBoilerSH-v0", "mpc_arx"): "ramp: travel 3.27x the reference's",
     ("DrumBoilerSH-v0", "cascade_pi_tuned"): "deep ramp: travel 3.04x the reference's",
-    ("DrumBoilerSH-v0", "cascade_pi"): "deep ramp: quiet p2p 37.69 K (reference 15.92 K)",
 }
 
 
