@@ -2,7 +2,8 @@
 observation and carries its own observation pipeline (controller memory, then the
 VecNormalize statistics frozen at the end of training) with the memory's state kept per
 row across calls; ``reset()`` or ``episode_start`` restarts it. A residual agent adds its
-scaled action to ``cascade_pi``'s. ``predict`` refuses a non-finite or misshapen
+scaled action to ``cascade_pi``'s; an incremental agent's action is a bounded valve move
+per interval (agents/moves.py). ``predict`` refuses a non-finite or misshapen
 observation with a ``ValueError`` before any state changes, as the baselines do
 (``baselines.policy.check_predict_args``).
 
@@ -20,6 +21,7 @@ from typing import Any
 
 import numpy as np
 
+from agents.moves import MoveState
 from agents.wrappers import MemoryConfig, MemoryState
 from baselines.loops import restart_rows
 from baselines.policy import check_predict_args, observation_size
@@ -108,6 +110,8 @@ class AgentPolicy:
         memory: Controller-memory options (agents.wrappers.MemoryConfig fields) or None.
         obs_norm: Frozen VecNormalize statistics or None.
         residual_scale: If set, the action is cascade_pi's plus this times the model's.
+        max_move: If set, the model's action is a valve move of at most this fraction of
+            stroke per control interval (agents/moves.py); not with ``residual_scale``.
     """
 
     #: Batched and unbatched actions agree to this (read by steamtemp_gym.testing's
@@ -122,7 +126,11 @@ class AgentPolicy:
         memory: dict | None = None,
         obs_norm: dict | None = None,
         residual_scale: float | None = None,
+        max_move: float | None = None,
     ) -> None:
+        if residual_scale is not None and max_move is not None:
+            raise ValueError("an agent is either residual (residual_scale) or incremental "
+                             "(max_move), not both")  # fmt: skip
         self.model = model
         self.n_obs = observation_size(env)
         self.memory = None
@@ -135,6 +143,7 @@ class AgentPolicy:
             import baselines
 
             self.base = baselines.make("cascade_pi", env)
+        self.moves = None if max_move is None else MoveState(env, max_move)
         #: The LSTM state of a recurrent model (sb3-contrib's RecurrentPPO), per row.
         self.recurrent = hasattr(getattr(model, "policy", None), "lstm_actor")
         self.actor = None if self.recurrent else MlpActor.of(model)
@@ -155,6 +164,8 @@ class AgentPolicy:
         n = obs.shape[0]
         restart = restart_rows(self._n != n, n, episode_start)
         self._n = n
+        if self.moves is not None and restart.any():
+            self.moves.restart(obs, restart)
         x = self.memory(obs, restart) if self.memory is not None else obs
         x = normalize_obs(x, self.obs_norm)
         if self.recurrent:  # the model restarts the LSTM state of the restarted rows
@@ -169,4 +180,6 @@ class AgentPolicy:
         if self.base is not None:
             base, _ = self.base.predict(obs, episode_start=restart)
             action = np.clip(base + self.residual_scale * action, -1.0, 1.0).astype(np.float32)
+        if self.moves is not None:
+            action = self.moves(action)
         return (action[0] if np.ndim(observation) == 1 else action), None

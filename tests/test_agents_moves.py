@@ -1,0 +1,125 @@
+"""Incremental actions (agents/moves.py): every move within ``max_move``, a bumpless start
+at the observed openings, restarted rows, the training wrapper and the Policy giving the
+env the same commands, and bad values refused."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from agents.moves import MoveState, VecMoves
+from agents.policy import AgentPolicy
+from agents.vec_env import NativeVecEnv
+from steamtemp_gym.scenarios import Scenario
+from baselines.loops import observation_layout
+
+ENV = "steamtemp/Cascade300MW-v0"
+MAX_MOVE = 0.03
+
+
+class Model:
+    """A stand-in model: a fixed pseudo-random action sequence, whatever it observes."""
+
+    def __init__(self, n_act: int, n_rows: int, seed: int = 0) -> None:
+        self.rng = np.random.default_rng(seed)
+        self.shape = (n_rows, n_act)
+
+    def predict(self, x, deterministic=True):
+        return self.rng.uniform(-1.5, 1.5, self.shape).astype(np.float32), None
+
+
+def _openings(venv, obs) -> np.ndarray:
+    names, scale, center = observation_layout(venv)
+    i = [names.index(n) for n in venv.unwrapped.plant.valves]
+    return obs[:, i] * scale[i] + center[i]
+
+
+@pytest.fixture(scope="module")
+def native():
+    venv = NativeVecEnv(ENV, 2, scenario="load_ramp_100_50")
+    yield venv
+    venv.close()
+
+
+def test_moves_are_bounded_and_start_at_the_observed_openings(native):
+    native.seed(3)
+    obs = native.reset()
+    ms = MoveState(native.venv, MAX_MOVE)
+    ms.restart(obs, np.ones(2, dtype=bool))
+    first = ms(np.zeros((2, native.action_space.shape[0])))
+    np.testing.assert_allclose((first + 1.0) / 2.0, _openings(native.venv, obs), atol=1e-6)
+    rng = np.random.default_rng(1)
+    prev = (first.astype(np.float64) + 1.0) / 2.0
+    for _ in range(40):
+        u = (ms(rng.uniform(-3, 3, first.shape)).astype(np.float64) + 1.0) / 2.0
+        assert np.all(np.abs(u - prev) <= MAX_MOVE + 1e-6) and np.all((u >= 0) & (u <= 1))
+        prev = u
+    assert np.abs(u - (first + 1.0) / 2.0).max() > MAX_MOVE  # it does move over the steps
+
+
+def test_a_restarted_row_starts_again_from_its_opening_and_the_other_keeps_its_command(native):
+    native.seed(0)
+    obs = native.reset()
+    ms = MoveState(native.venv, MAX_MOVE)
+    ms.restart(obs, np.ones(2, dtype=bool))
+    n = native.action_space.shape[0]
+    for _ in range(5):
+        kept = ms(np.ones((2, n)))
+    before = ms.u.copy()
+    obs2 = obs.copy()
+    obs2[0] = obs[1]  # row 0 restarts on another observation
+    ms.restart(obs2, np.array([True, False]))
+    np.testing.assert_allclose(ms.u[0], np.clip(_openings(native.venv, obs2)[0], 0, 1))
+    np.testing.assert_array_equal(ms.u[1], before[1])
+    assert kept.dtype == np.float32
+
+
+def test_the_training_wrapper_and_the_policy_command_the_same():
+    """The same model actions through VecMoves (training) and AgentPolicy (evaluation) give
+    the env the same commands, across an episode boundary of the wrapper's auto-reset."""
+    short = Scenario(name="short", duration_s=10.0, load=0.8)
+    native = NativeVecEnv(ENV, 2, scenario=short)
+    steps = int(short.duration_s / native.venv.unwrapped.plant.dt_s)
+    assert steps < 20  # two episodes and a half in the 25 steps below
+    n = native.action_space.shape[0]
+    wrapped = VecMoves(native, native.venv, MAX_MOVE)
+    sent = []
+    orig = native.step_async
+    native.step_async = lambda a: (sent.append(np.array(a)), orig(a))[1]
+    try:
+        native.seed(7)
+        obs = wrapped.reset()
+        model = Model(n, 2)
+        for _ in range(25):
+            wrapped.step_async(model.predict(obs)[0])
+            obs, *_ = wrapped.step_wait()
+    finally:
+        native.step_async = orig
+    commands = np.array(sent)
+
+    policy = AgentPolicy(Model(n, 2), native.venv, max_move=MAX_MOVE)
+    native.seed(7)
+    obs = native.reset()
+    start = np.ones(2, dtype=bool)
+    for k in range(25):
+        a, _ = policy.predict(obs, episode_start=start)
+        np.testing.assert_array_equal(a, commands[k])
+        native.step_async(a)
+        obs, _, start, _ = native.step_wait()
+    native.close()
+
+
+@pytest.mark.parametrize("bad", [0, 0.0, -0.1, 1.5, float("nan"), float("inf"), True, "0.1", None])
+def test_bad_max_move_is_refused(native, bad):
+    with pytest.raises(ValueError, match="max_move"):
+        MoveState(native.venv, bad)
+
+
+def test_residual_and_incremental_together_are_refused(native):
+    with pytest.raises(ValueError, match="residual_scale.*max_move"):
+        AgentPolicy(Model(1, 2), native.venv, residual_scale=0.2, max_move=0.02)
+
+
+def test_commands_before_a_start_are_refused(native):
+    with pytest.raises(ValueError, match="restart"):
+        MoveState(native.venv, 0.1)(np.zeros((2, native.action_space.shape[0])))
