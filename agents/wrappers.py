@@ -3,8 +3,8 @@ policy needs to remove a steady offset and to see a dead time, as extra observat
 entries (the env's own observation is left as it is, first).
 
 A PI controller integrates the error; an MLP policy acting on one observation cannot,
-so under a persistent disturbance it keeps a steady offset (measured in issue 11:
--1.36 K on SupercriticalFSH without an integral, 0.00 K with it). The memory adds:
+so under a persistent disturbance it keeps a steady offset (measured on
+SupercriticalFSH: -1.36 K without an integral, 0.00 K with it; docs/agents.md). The memory adds:
 
 - the error integral ``I_k = clamp(I_{k-1} + e_k dt / T_i, -L, L)`` (K; ``T_i``:
   ``integral_time_s``, ``L``: ``integral_limit_K``), with two anti-windups as a PI has
