@@ -37,7 +37,7 @@ REFERENCE = "frozen_valve"
 VERSUS = ZERO
 TABLE_METRICS = ("iae_K_s", "max_abs_dev_K", "time_outside_5K_s", "overshoot_pct",
                  "settling_time_s", "spray_used_kg", "valve_travel", "valve_reversals",
-                 "return")  # fmt: skip
+                 "quiet_p2p_K", "return")  # fmt: skip
 #: The metrics of the ranking tables of leaderboard.md, in column order.
 RANK_METRICS = ("iae_K_s", "max_abs_dev_K", "time_outside_5K_s", "valve_travel")
 SUMMARY_METRICS = ("iae_K_s", "max_abs_dev_K", "time_outside_5K_s", "time_outside_8K_s",
@@ -199,6 +199,7 @@ COLUMNS: dict[str, tuple[str, float, int]] = {
     "spray_used_kg": ("spray [t]", 1e-3, 1),
     "valve_travel": ("valve travel [strokes]", 1.0, 2),
     "valve_reversals": ("valve reversals", 1.0, 0),
+    "quiet_p2p_K": ("quiet p2p [K]", 1.0, 2),
     "return": ("return", 1.0, 1),
 }
 
@@ -380,6 +381,28 @@ def baselines_markdown(summary: dict[str, Any]) -> str:
     n = len(summary["run"]["seeds"])
     lines = [f"Means over scenario × seed ({n} seeds); {admissibility_note(summary)}", ""]
     return "\n".join(lines + _table(header, body)) + "\n"
+
+
+#: The columns of :func:`comparison_markdown`, in order.
+COMPARISON_METRICS = ("return", "iae_K_s", "valve_travel", "quiet_p2p_K")
+
+
+def comparison_markdown(summary: dict[str, Any], policies: list[str]) -> str:
+    """Per plant and scenario, the mean over seeds of the return, IAE, valve travel and
+    quiet peak-to-peak of each of ``policies``, side by side (``a / b / c`` per cell; "-"
+    where a policy was not run or a metric does not apply)."""
+    n = len(summary["run"]["seeds"])
+    lines = [f"Means over seeds ({n} seeds); each cell is {' / '.join(policies)}; quiet "
+             "p2p: the main-steam error's peak-to-peak over the quiet stretch after the "
+             "scenario's last scheduled change (- where it does not apply).", ""]  # fmt: skip
+    header = ["scenario", *(COLUMNS[m][0] for m in COMPARISON_METRICS)]
+    for env_id, plant in summary["plants"].items():
+        body = []
+        for sc, cells in plant["scenarios"].items():
+            body.append([sc, *(" / ".join(_col(m, cells.get(p, {}).get(m)) for p in policies)
+                               for m in COMPARISON_METRICS)])  # fmt: skip
+        lines += [f"#### {env_id.split('/')[-1]}", "", *_table(header, body), ""]
+    return "\n".join(lines)
 
 
 def markdown(summary: dict[str, Any], rows: list[dict]) -> str:

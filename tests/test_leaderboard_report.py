@@ -63,3 +63,12 @@ def test_the_budget_is_the_run_s_and_the_tables_show_ratio_and_mark():
     assert f"travel 3.0x {report.INADMISSIBLE}" in md
     assert f"above {stats.TRAVEL_BUDGET:g}x {report.ZERO}'s" in md
     assert "| no †" in md and "| yes |" in md
+
+
+def test_the_comparison_table_puts_the_policies_side_by_side_per_scenario():
+    md = report.comparison_markdown(_summary(), ["fine", "cascade_pi", "absent"])
+    assert "#### SupercriticalFSH-v0" in md and "each cell is fine / cascade_pi / absent" in md
+    rows = {ln.split(" | ")[0].lstrip("| "): ln for ln in md.splitlines() if ln.startswith("| a")}
+    # scenario a: returns -59.9 and -109.9 (seed means), IAE 60 and 110, travel 3.80 and 1.50;
+    # the absent policy and the quiet p2p (not in these rows) read "-"
+    assert rows["a"] == "| a | -59.9 / -109.9 / - | 60 / 110 / - | 3.80 / 1.50 / - | - / - / - |"

@@ -77,7 +77,7 @@ def test_readme_is_a_guide():
 
 
 MARKERS = [(README, "leaderboard"), (README, "trend"), (README, "baselines"),
-           (ROOT / "docs" / "agents.md", "zoo"),
+           (ROOT / "docs" / "agents.md", "zoo"), (ROOT / "docs" / "baselines.md", "compare"),
            (ROOT / "docs" / "difficulty.md", "difficulty")]  # fmt: skip
 
 
@@ -99,10 +99,13 @@ def test_leaderboard_generator_rewrites_readme_and_agents_page(tmp_path, monkeyp
 
     gen = _script(ROOT / "scripts" / "update_readme_leaderboard.py")
     readme, agents_page = tmp_path / "README.md", tmp_path / "agents.md"
+    baselines_page = tmp_path / "baselines.md"
     shutil.copy(README, readme)
     shutil.copy(ROOT / "docs" / "agents.md", agents_page)
+    shutil.copy(ROOT / "docs" / "baselines.md", baselines_page)
     monkeypatch.setattr(gen, "README", readme)
     monkeypatch.setattr(gen, "AGENTS_PAGE", agents_page)
+    monkeypatch.setattr(gen, "BASELINES_PAGE", baselines_page)
     monkeypatch.setattr(gen, "ROOT", tmp_path)
     monkeypatch.setattr(gen, "IMAGE", tmp_path / "img" / "trend.png")
     env = "steamtemp/A-v0"
@@ -127,6 +130,8 @@ def test_leaderboard_generator_rewrites_readme_and_agents_page(tmp_path, monkeyp
     strip = re.compile(r"<!-- (leaderboard|trend|baselines):start.*?<!-- \1:end -->", re.S)
     assert strip.sub("", after) == strip.sub("", before)
     assert "| A-v0 | sb3:ppo | **0.50" in agents_page.read_text()
+    assert "| s | - / - / -100.5 | - / - / 100 | - / - / 1.00 | - / - / - |" in (
+        baselines_page.read_text())  # mpc_linear / cascade_pi / cascade_pi_ff, two not run
     assert (tmp_path / "img" / "trend.png").read_bytes() == b"png"
 
 
