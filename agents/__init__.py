@@ -4,7 +4,8 @@
 ``agents/zoo/`` (ValueError listing what is shipped otherwise): the SB3 model with its
 observation pipeline (controller memory, normalization statistics; agents/policy.py),
 as ``steamtemp-train`` (agents/train.py) wrote it. A trained agent's files elsewhere
-(``steamtemp-train --out``, an RL Zoo run) are found by ``agents.files.find``.
+(``steamtemp-train --out``, an RL Zoo run) are found by ``agents.files.find``. An agent
+may have several independent training runs (``agents.runs``; ``load(..., run=k)``).
 """
 
 from __future__ import annotations
@@ -15,29 +16,38 @@ ZOO = Path(__file__).with_name("zoo")
 
 
 def shipped() -> list[tuple[str, str]]:
-    """(env_id, algo) pairs of the shipped trained agents (a model .zip with its .json)."""
-    out = []
-    for f in sorted(ZOO.glob("*.zip")) if ZOO.exists() else []:
-        if f.with_suffix(".json").exists():
-            env, algo = f.stem.rsplit("__", 1)
-            out.append((env.replace("__", "/"), algo))
-    return out
+    """(env_id, algo) pairs of the shipped trained agents (a model .zip with its .json),
+    each pair once however many training runs it has (:func:`runs`)."""
+    from agents.files import zoo_runs
+
+    return list(zoo_runs(ZOO))
 
 
-def load(env_id: str, algo: str, zoo: Path | str | None = None):
+def runs(env_id: str, algo: str, zoo: Path | str | None = None) -> list[int]:
+    """The training runs of a trained agent in ``zoo`` (default: the shipped zoo), sorted:
+    ``[0]`` for a single file without a run index (agents/files.py); ``[]`` for none."""
+    from agents.files import zoo_runs
+
+    return zoo_runs(Path(zoo) if zoo is not None else ZOO).get((env_id, algo), [])
+
+
+def load(env_id: str, algo: str, zoo: Path | str | None = None, run: int = 0):
     """A trained agent as a Policy: ``predict`` takes the env's raw observation.
 
     Args:
         env_id: Registered id.
         algo: Algorithm name of the file (``ppo``, ``sac``, ``td3``, ``ppo_residual``,
             ``recurrentppo``, ``sac_caps``).
-        zoo: Directory holding ``<env>__<algo>.zip`` and ``.json`` (default: the shipped zoo).
+        zoo: Directory holding ``<env>__<algo>.zip`` and ``.json``, or the run-indexed
+            ``<env>__<algo>__run<k>`` files (default: the shipped zoo).
+        run: Which training run (0: ``__run0``, else the file without a run index).
 
     Raises:
-        ValueError: no such agent (listing the shipped ones for the shipped zoo).
+        ValueError: no such agent or run (listing the shipped ones for the shipped zoo).
     """
     from agents.files import steamtemp_files
 
-    if zoo is None and (env_id, algo) not in shipped():
-        raise ValueError(f"no trained agent {algo!r} shipped for {env_id!r}; shipped: {shipped()}")
-    return steamtemp_files(Path(zoo) if zoo is not None else ZOO, env_id, algo).load()
+    if zoo is None and run not in runs(env_id, algo):
+        raise ValueError(f"no trained agent {algo!r} run {run} shipped for {env_id!r}; shipped: "
+                         f"{ {f'{e} {a}': runs(e, a) for e, a in shipped()} }")  # fmt: skip
+    return steamtemp_files(Path(zoo) if zoo is not None else ZOO, env_id, algo, run).load()

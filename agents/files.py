@@ -6,7 +6,10 @@ Two layouts:
 - ``steamtemp-train --out DIR`` (and the shipped ``agents/zoo/``):
   ``DIR/<env>__<algo>.zip`` (the SB3 model) and ``DIR/<env>__<algo>.json`` (env id,
   ``sb3_class``, controller ``memory``, ``normalization`` statistics, ``residual_scale``);
-  ``<env>`` is the env id with ``/`` written ``__``.
+  ``<env>`` is the env id with ``/`` written ``__``. Independent training runs of one
+  agent (``python -m agents.train --zoo --runs K``) are ``<env>__<algo>__run<k>``,
+  k = 0..K-1; a file without the run index is read as run 0 (where ``__run0`` is absent).
+  :func:`stem` builds these names and :func:`parse_stem` reads them.
 - an RL Zoo run (``python -m rl_zoo3.train --algo A --env ID --log-folder LOGS``):
   ``LOGS/A/<name>_<n>/`` holding ``<name>.zip`` (the last model), ``best_model.zip``
   (with evaluation) and ``<name>/`` with ``args.yml`` (``algo``, ``env``), ``config.yml``
@@ -24,6 +27,7 @@ from __future__ import annotations
 import hashlib
 import json
 import pickle
+import re
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -34,6 +38,10 @@ import yaml
 STEAMTEMP, RL_ZOO = "steamtemp-train", "rl-zoo"
 #: RL Zoo's algo names of the model classes whose names are not the algo upper-cased.
 _RL_ZOO_CLASSES = {"ppo_lstm": "RecurrentPPO", "crossq": "CrossQ"}
+#: The run index at the end of a stem: ``__run<k>``, k without leading zeros.
+RUN_TAG = "__run"
+_STEM = re.compile(r"^(?P<env>.+?)__(?!run[0-9]*(?:__|$))(?P<algo>[A-Za-z0-9]+(?:_[A-Za-z0-9]+)*)"
+                   r"(?:__run(?P<run>0|[1-9][0-9]*))?$")  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -83,22 +91,78 @@ class AgentFiles:
                            residual_scale=residual)  # fmt: skip
 
 
-def stem(env_id: str, algo: str) -> str:
-    """The file stem steamtemp-train gives an agent: ``steamtemp__Cascade300MW-v0__ppo``."""
-    return f"{env_id.replace('/', '__')}__{algo}"
+def stem(env_id: str, algo: str, run: int | None = None) -> str:
+    """The file stem steamtemp-train gives an agent: ``steamtemp__Cascade300MW-v0__ppo``,
+    and with a run index ``steamtemp__Cascade300MW-v0__ppo__run2``.
+
+    Raises:
+        ValueError: an env id that is empty or holds ``__`` (it would not read back), an
+            algo that is not letters and digits joined by single ``_`` (or is ``run`` with
+            or without digits), or a run that is not an integer >= 0.
+    """
+    if not isinstance(env_id, str) or not env_id or "__" in env_id or env_id.endswith("/"):
+        raise ValueError(f"env id {env_id!r}: must be a non-empty string without '__' "
+                         "(its '/' is written '__' in file names)")  # fmt: skip
+    if run is not None and (isinstance(run, bool) or not isinstance(run, int) or run < 0):
+        raise ValueError(f"run index {run!r}: must be an integer >= 0")
+    name = f"{env_id.replace('/', '__')}__{algo}" + ("" if run is None else f"{RUN_TAG}{run}")
+    if parse_stem(name, check=False) != (env_id, algo, run):
+        raise ValueError(f"algo {algo!r}: must be letters and digits joined by single '_', "
+                         "and not 'run' with or without digits (the run index's tag)")
+    return name
 
 
-def steamtemp_files(directory: Path, env_id: str, algo: str) -> AgentFiles:
-    """steamtemp-train's files of (env_id, algo) in ``directory``.
+def parse_stem(name: str, check: bool = True) -> tuple[str, str, int | None]:
+    """``(env_id, algo, run)`` of a stem :func:`stem` builds; ``run`` is None for a stem
+    without a run index (read as run 0).
+
+    Raises:
+        ValueError: ``name`` is not such a stem.
+    """
+    m = _STEM.match(name) if isinstance(name, str) else None
+    env = m.group("env") if m else ""
+    if m is None or not env or "____" in env or env.startswith("__") or env.endswith("__"):
+        if not check:
+            return ("", "", None)
+        raise ValueError(f"{name!r} is not a trained agent's file stem: expected "
+                         "<env>__<algo> or <env>__<algo>__run<k> (<env> the env id with '/' "
+                         "written '__', k an integer >= 0 without leading zeros)")  # fmt: skip
+    run = m.group("run")
+    return env.replace("__", "/"), m.group("algo"), None if run is None else int(run)
+
+
+def zoo_runs(directory: Path) -> dict[tuple[str, str], list[int]]:
+    """The run indices of every (env id, algo) of steamtemp-train's files in ``directory``
+    (a model .zip with its .json), in file-name order; the file without a run index is
+    run 0 unless ``__run0`` is there too.
+
+    Raises:
+        ValueError: a model .zip with its .json whose stem :func:`parse_stem` refuses.
+    """
+    out: dict[tuple[str, str], set[int]] = {}
+    d = Path(directory)
+    for f in sorted(d.glob("*.zip")) if d.is_dir() else []:
+        if f.with_suffix(".json").is_file():
+            env_id, algo, run = parse_stem(f.stem)
+            out.setdefault((env_id, algo), set()).add(0 if run is None else run)
+    return {k: sorted(v) for k, v in out.items()}
+
+
+def steamtemp_files(directory: Path, env_id: str, algo: str, run: int = 0) -> AgentFiles:
+    """steamtemp-train's files of run ``run`` of (env_id, algo) in ``directory``: the
+    ``__run<k>`` files, or for run 0 without them the files without a run index.
 
     Raises:
         ValueError: the .zip or the .json is missing.
     """
-    base = Path(directory) / stem(env_id, algo)
-    model, meta = base.with_suffix(".zip"), base.with_suffix(".json")
-    if not (model.is_file() and meta.is_file()):
-        raise ValueError(f"no trained agent {base}.zip/.json")
-    return AgentFiles(env_id, algo, model, (meta,), STEAMTEMP)
+    for k in (run, None) if run == 0 else (run,):
+        base = Path(directory) / stem(env_id, algo, k)
+        model, meta = base.with_suffix(".zip"), base.with_suffix(".json")
+        if model.is_file() and meta.is_file():
+            return AgentFiles(env_id, algo, model, (meta,), STEAMTEMP)
+    raise ValueError(f"no trained agent {Path(directory) / stem(env_id, algo, run)}.zip/.json"
+                     + (f" nor {Path(directory) / stem(env_id, algo)}.zip/.json" if run == 0
+                        else ""))  # fmt: skip
 
 
 def find(path: str | Path) -> list[AgentFiles]:

@@ -99,7 +99,7 @@ import baselines
 import steamtemp_gym
 from agents import leaderboard_plots as plots
 from agents import leaderboard_report as report
-from agents import specs, stats
+from agents import ray_backend, specs, stats
 from agents.difficulty import FrozenValves
 from agents.evaluation import metric_keys, run_batch, run_episode
 from agents.oracle import Oracle
@@ -686,22 +686,7 @@ def _local_results(units: list[Unit], jobs: int):
 def _ray_results(units: list[Unit], jobs: int, address: str | None):
     """(unit, run_unit's result) as they finish, each unit a Ray task (one CPU): on a new
     local Ray with ``jobs`` CPUs, or on the cluster at ``address``."""
-    import ray
-
-    if not ray.is_initialized():
-        ray.init(address=address, num_cpus=None if address else jobs, include_dashboard=False,
-                 log_to_driver=False, configure_logging=False)  # fmt: skip
-    task = ray.remote(num_cpus=1)(run_unit)
-    pending = {task.remote(u): u for u in units}
-    try:
-        while pending:
-            done, _ = ray.wait(list(pending), num_returns=1)
-            for ref in done:
-                yield pending.pop(ref), ray.get(ref)
-    except BaseException:
-        for ref in pending:
-            ray.cancel(ref)
-        raise
+    return ray_backend.results(run_unit, units, jobs, address)
 
 
 def _execute(plan: Plan, units: list[Unit], jobs: int, record: Record, on_trace,
@@ -971,11 +956,8 @@ def main(argv: list[str] | None = None) -> None:
         ap.error(f"argument --jobs: must be >= 1, got {args.jobs}")
     if args.ray_address is not None and args.backend != "ray":
         ap.error("argument --ray-address: only with --backend ray")
-    if args.backend == "ray":
-        import importlib.util
-
-        if importlib.util.find_spec("ray") is None:
-            ap.error("argument --backend: ray is not installed; pip install 'steamtemp-gym[ray]'")
+    if args.backend == "ray" and not ray_backend.installed():
+        ap.error(f"argument --backend: ray is not installed; {ray_backend.INSTALL}")
     plan = build_plan(ap, args)
     out = Path(args.out)
     try:

@@ -2,9 +2,11 @@
 
     steamtemp-train --env steamtemp/Cascade300MW-v0 --algo ppo [--timesteps N] [--seed 0]
         [--n-envs N] [--out DIR] [--hyperparams FILE] [--max-minutes M] [--tensorboard DIR]
-    python -m agents.train --zoo [--env ID] [--algo A] [--out DIR]
+    python -m agents.train --zoo [--env ID] [--algo A] [--out DIR] [--runs K]
+        [--backend {local,ray}] [--address ADDRESS] [--jobs N] [--max-minutes M]
         # rebuild agents/zoo/ (or DIR): every shipped agent from its shipped YAML entry;
-        # with --env/--algo, every YAML entry of that env/algo
+        # with --env/--algo, every YAML entry of that env/algo; with --runs K, K
+        # independent training runs of each (run k: seed --seed + 1000 k)
 
 Hyperparameters: RL Zoo's YAML format (``agents/hyperparams/<algo>.yml``, keyed by env
 id; the same files work with ``python -m rl_zoo3.train --gym-packages steamtemp_gym
@@ -26,6 +28,13 @@ one is kept. Output in ``--out``: ``<env>__<algo>.zip`` (the best SB3 model) and
 ``<env>__<algo>.json`` (env id, package version, git revision, hyperparameters, seed,
 timesteps, wall time, the validation curve and score, the normalization statistics and
 the wrapper config: everything ``agents.load`` needs).
+
+Training runs (``--zoo --runs K``): run k of an agent is trained with seed
+:func:`run_seed` (``--seed`` + :data:`RUN_SEED_STRIDE` k: its training envs draw seeds
+``seed + 1000 k + i``, never another run's) into ``<env>__<algo>__run<k>.zip/.json``
+(agents/files.py). The runs go one after another at nice 10 (``--backend local``), or
+each as a Ray task of one CPU (``--backend ray``: a new local Ray with ``--jobs`` CPUs, or
+the cluster at ``--address``); ``--max-minutes`` bounds each run.
 """
 
 from __future__ import annotations
@@ -44,7 +53,7 @@ import numpy as np
 import yaml
 
 import steamtemp_gym
-from agents import shipped
+from agents import ray_backend, shipped
 from agents.files import stem
 
 #: Algorithm names: SB3's PPO, SAC, TD3, PPO as a residual on cascade_pi (its own YAML
@@ -59,6 +68,11 @@ N_VALIDATION = 3
 #: Where in the budget the agent is validated (and the best kept): every eighth.
 EVAL_FRACTIONS = tuple(k / 8 for k in range(1, 9))
 MEMORY_WRAPPER = "agents.wrappers.ControllerMemory"
+#: Run k of ``--zoo --runs K`` trains with seed ``--seed + RUN_SEED_STRIDE * k``: more than
+#: any n_envs, so no two runs share a training env's seed.
+RUN_SEED_STRIDE = 1000
+#: Most runs per agent (run seeds stay far below VALIDATION_SEED).
+MAX_RUNS = 100
 #: RL Zoo keys with a meaning of their own (the rest go to the algorithm's constructor).
 SPECIAL = ("n_timesteps", "n_envs", "policy", "normalize", "env_wrapper", "policy_kwargs",
            "noise_type", "noise_std", "residual_scale")  # fmt: skip
@@ -257,8 +271,9 @@ def validate(env_id: str, policy, n: int = N_VALIDATION) -> dict[str, float]:
 def train(env_id: str, algo: str, hyperparams: Path | None = None, timesteps: int | None = None,
           seed: int = 0, n_envs: int | None = None, out: Path = Path("trained"),
           max_minutes: float | None = None, tensorboard: str | None = None,
-          quiet: bool = False) -> dict[str, Any]:  # fmt: skip
-    """Train one agent (module docstring); returns its metadata. Input is checked first."""
+          quiet: bool = False, run: int | None = None) -> dict[str, Any]:  # fmt: skip
+    """Train one agent (module docstring); returns its metadata. Input is checked first.
+    ``run``: the training run's index in the file names (None: names without one)."""
     from steamtemp_gym.envs import resolve_id
 
     try:
@@ -295,7 +310,7 @@ def train(env_id: str, algo: str, hyperparams: Path | None = None, timesteps: in
                 **kwargs)  # fmt: skip
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    name = stem(env_id, algo)
+    name = stem(env_id, algo, run)
     t0 = time.monotonic()
     curve: list[dict[str, Any]] = []
     best: dict[str, Any] = {}
@@ -341,7 +356,7 @@ def train(env_id: str, algo: str, hyperparams: Path | None = None, timesteps: in
         "env_id": env_id, "algo": algo, "sb3_class": cls.__name__,
         "package_version": steamtemp_gym.__version__, "git_revision": _git_revision(),
         "hyperparams_file": _shown_path(path),
-        "hyperparameters": json.loads(json.dumps(hp, default=str)), "seed": seed,
+        "hyperparameters": json.loads(json.dumps(hp, default=str)), "seed": seed, "run": run,
         "n_envs": n_envs, "timesteps_budget": total, "timesteps_trained": model.num_timesteps,
         "timesteps_of_best": best["timesteps"], "wall_time_s": time.monotonic() - t0,
         "validation": {"scenario": "random", "seeds": [VALIDATION_SEED + k
@@ -367,6 +382,46 @@ def zoo_entries() -> list[tuple[str, str]]:
     return [(env_id, algo) for algo in ALGOS for env_id in zoo_entries_of(algo)]
 
 
+def run_seed(seed: int, run: int) -> int:
+    """The seed of training run ``run`` of an agent: ``seed + RUN_SEED_STRIDE * run``."""
+    return seed + RUN_SEED_STRIDE * run
+
+
+def _run_count(text: str) -> int:
+    """``--runs``: an integer from 1 to :data:`MAX_RUNS`."""
+    try:
+        k = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be an integer >= 1, got {text!r}") from None
+    if not 1 <= k <= MAX_RUNS:
+        raise argparse.ArgumentTypeError(f"must be an integer from 1 to {MAX_RUNS}, got {k}")
+    return k
+
+
+def _nice() -> None:
+    """Lower this process's priority to nice 10 (no further if it is already lower)."""
+    os.nice(max(0, 10 - os.nice(0)))
+
+
+def zoo_run(job: dict[str, Any]) -> dict[str, Any]:
+    """One training run of ``--zoo`` at nice 10 (a Ray task with ``--backend ray``):
+    :func:`train` with the keyword arguments ``job``; its metadata."""
+    _nice()
+    return train(**job)
+
+
+def zoo_jobs(entries: list[tuple[str, str]], out: Path, seed: int, runs: int | None,
+             max_minutes: float, **options: Any) -> list[dict[str, Any]]:  # fmt: skip
+    """The :func:`zoo_run` jobs of ``entries``: one per entry without ``runs`` (file names
+    without a run index, ``seed``), else ``runs`` per entry (run k: :func:`run_seed`);
+    ``options``: further arguments of :func:`train` (those that are not None)."""
+    ks = [None] if runs is None else list(range(runs))
+    extra = {k: v for k, v in options.items() if v is not None}
+    return [{"env_id": env_id, "algo": algo, "out": Path(out).resolve(), "run": k,
+             "seed": seed if k is None else run_seed(seed, k), "max_minutes": max_minutes,
+             **extra} for env_id, algo in entries for k in ks]  # fmt: skip
+
+
 def make_parser() -> argparse.ArgumentParser:
     doc = __doc__ or ""
     ap = argparse.ArgumentParser(prog="steamtemp-train", description=doc.split("\n")[0],
@@ -381,29 +436,71 @@ def make_parser() -> argparse.ArgumentParser:
     ap.add_argument("--out", default=None,
                     help="output directory (default: trained; with --zoo: agents/zoo/)")
     ap.add_argument("--hyperparams", default=None, help="YAML file (default: the shipped one)")
-    ap.add_argument("--max-minutes", type=float, default=None, help="stop after this wall time")
+    ap.add_argument("--max-minutes", type=float, default=None,
+                    help="stop after this wall time (with --zoo: of each run, default 10)")
     ap.add_argument("--tensorboard", default=None, help="TensorBoard log directory")
     ap.add_argument("--zoo", action="store_true",
                     help="rebuild agents/zoo/ (or --out): every shipped agent from its YAML "
-                         "entry, or with --env/--algo every entry of those; one at a time, at "
-                         "nice 10 (--max-minutes each, default 10)")  # fmt: skip
+                         "entry (or --hyperparams), or with --env/--algo every entry of "
+                         "those; one at a time, at nice 10 (--max-minutes each, default 10; "
+                         "--timesteps and --n-envs, when given, for each)")  # fmt: skip
+    ap.add_argument("--runs", type=_run_count, default=None, metavar="K",
+                    help=f"with --zoo: K independent training runs per agent (1 to {MAX_RUNS}), "
+                    "written <env>__<algo>__run<k>; run k trains with seed --seed + "
+                    f"{RUN_SEED_STRIDE} k (default: one run, written <env>__<algo>)")  # fmt: skip
+    ap.add_argument("--backend", choices=("local", "ray"), default="local",
+                    help="with --zoo: local trains the runs one after another; ray runs each "
+                    "as a Ray task of one CPU (needs the ray extra) (default: %(default)s)")
+    ap.add_argument("--address", default=None,
+                    help="with --backend ray: an existing Ray cluster (e.g. ray://host:10001 "
+                    "or auto); default: start a local Ray with --jobs CPUs")  # fmt: skip
+    ap.add_argument("--jobs", type=int, default=os.cpu_count() or 1,
+                    help="with --backend ray: CPUs of a new local Ray, so runs at a time "
+                    "(default: the number of CPUs, %(default)s)")  # fmt: skip
     return ap
+
+
+def _check_zoo_flags(ap: argparse.ArgumentParser, args: argparse.Namespace) -> None:
+    """argparse errors for --runs, --backend, --address and --jobs out of place."""
+    given = [f for f, v in (("--runs", args.runs is not None),
+                            ("--backend", args.backend != "local"),
+                            ("--address", args.address is not None)) if v]  # fmt: skip
+    if given and not args.zoo:
+        ap.error(f"argument {given[0]}: only with --zoo")
+    if args.address is not None and args.backend != "ray":
+        ap.error("argument --address: only with --backend ray")
+    if args.jobs < 1:
+        ap.error(f"argument --jobs: must be >= 1, got {args.jobs}")
+    if args.backend == "ray" and not ray_backend.installed():
+        ap.error(f"argument --backend: ray is not installed; {ray_backend.INSTALL}")
 
 
 def main(argv: list[str] | None = None) -> None:
     ap = make_parser()
     args = ap.parse_args(argv)
+    _check_zoo_flags(ap, args)
     try:
         if args.zoo:
-            os.nice(10)
+            if args.max_minutes is not None and args.max_minutes <= 0:
+                raise ConfigError(f"--max-minutes must be > 0, got {args.max_minutes}")
             entries = zoo_entries()
             if not (args.env or args.algo):  # rebuild what ships (a residual ships only
                 entries = [e for e in entries if e in set(shipped())]  # where it pays)
-            for env_id, algo in entries:
-                if (args.env and env_id != args.env) or (args.algo and algo != args.algo):
-                    continue
-                meta = train(env_id, algo, seed=args.seed, out=Path(args.out or ZOO),
-                             max_minutes=args.max_minutes or 10.0)  # fmt: skip
+            entries = [(env_id, algo) for env_id, algo in entries
+                       if (not args.env or env_id == args.env)
+                       and (not args.algo or algo == args.algo)]  # fmt: skip
+            for env_id, algo in entries:  # every entry checked before the first run
+                read_hyperparams(Path(args.hyperparams or HYPERPARAMS / f"{algo}.yml"),
+                                 env_id, algo)  # fmt: skip
+            jobs = zoo_jobs(entries, Path(args.out or ZOO), args.seed, args.runs,
+                            args.max_minutes or 10.0, timesteps=args.timesteps,
+                            n_envs=args.n_envs, hyperparams=args.hyperparams and
+                            Path(args.hyperparams).resolve())  # fmt: skip
+            if args.backend == "ray":
+                done = ray_backend.results(zoo_run, jobs, args.jobs, args.address)
+            else:
+                done = ((job, zoo_run(job)) for job in jobs)
+            for _, meta in done:
                 print(_summary(meta), flush=True)
             return
         if not args.env or not args.algo:
@@ -417,7 +514,7 @@ def main(argv: list[str] | None = None) -> None:
 
 
 def _summary(meta: dict[str, Any]) -> str:
-    keys = ("env_id", "algo", "timesteps_trained", "wall_time_s")
+    keys = ("env_id", "algo", "run", "seed", "timesteps_trained", "wall_time_s")
     return json.dumps({k: meta[k] for k in keys} | {"validation": meta["validation"]["best"]})
 
 
