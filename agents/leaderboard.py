@@ -199,7 +199,8 @@ def parse_seeds(ap: argparse.ArgumentParser, text: str) -> list[int]:
 
 
 def _available(env_id: str) -> list[str]:
-    trained = [f"sb3:{a}" for e, a in agents.shipped() if e == env_id] if _sb3() else []
+    trained = [r for e, a in agents.shipped() if e == env_id
+               for r in specs.training_runs(f"{specs.SB3_PREFIX}{a}", e)] if _sb3() else []
     return list(baselines.NAMES) + trained + [report.ONE, REFERENCE]
 
 
@@ -257,6 +258,7 @@ def _policies(ap: argparse.ArgumentParser, envs: list[str], text: str | None,
     out = {e: [n for n in names if here(n, e)] for e in envs}
     for e, pols in out.items():
         missing = [n for n in names if n not in pols]
+        pols[:] = list(dict.fromkeys(r for n in pols for r in specs.training_runs(n, e)))
         if missing:
             print(f"note: {missing} not available for {e}; skipped there", file=sys.stderr)
         factories = [n for n in pols if n in parsed and parsed[n].kind == specs.FACTORY]
@@ -721,16 +723,21 @@ def _is_file(spec: str) -> bool:
 
 class Plots:
     """Trend plots per env and scenario, drawn for a plant as soon as all its episodes have
-    finished (the policies shown depend on the plant's scores: plots.trend_policies)."""
+    finished (the policies shown depend on the plant's scores: plots.trend_policies). A
+    trained agent with several training runs is shown by its first run."""
 
     def __init__(self, out: Path, plan: Plan, units: list[Unit], every: bool = False) -> None:
         self.out, self.plan, self.every = out, plan, every
         self.pending = Counter(u.env_id for u in units)
         self.traces: dict[tuple[str, str], dict[str, dict]] = {}
+        self.trace_run: dict[tuple[str, str, str], int] = {}  # the run of a trace kept
 
     def add(self, u: Unit, trace: dict | None) -> None:
-        if trace is not None:
-            self.traces.setdefault((u.env_id, u.spec), {})[u.policy] = trace
+        name, run = specs.split_run(u.policy)
+        key = (u.env_id, u.spec, name)
+        if trace is not None and (run or 0) <= self.trace_run.get(key, run or 0):
+            self.trace_run[key] = run or 0
+            self.traces.setdefault((u.env_id, u.spec), {})[name] = trace
         self.pending[u.env_id] -= 1
         if self.pending[u.env_id] == 0:
             for sc in self.plan.scenarios:
@@ -742,7 +749,8 @@ class Plots:
         ok = [r for r in rows if not r.get("error")]
         plant = (report.summarize(ok, _run_info(self.plan, [env_id]))[0]["plants"][env_id]
                  if ok else {})  # fmt: skip
-        names = plots.trend_policies(plant, self.plan.policies[env_id], self.every)
+        names = plots.trend_policies(plant, report.agent_names(self.plan.policies[env_id]),
+                                     self.every)  # fmt: skip
         notes = {}
         for name in names:
             e = plant.get("policies", {}).get(name, {})
@@ -760,7 +768,9 @@ class Plots:
         for name in names:
             if name not in traces:
                 try:
-                    pol = _make_policy(name, env_id, env)
+                    runs = [r for r in self.plan.policies[env_id]
+                            if specs.split_run(r)[0] == name]  # fmt: skip
+                    pol = _make_policy(runs[0] if runs else name, env_id, env)
                     traces[name] = run_episode(env, pol, seed)["trace"]
                 except Exception as exc:  # noqa: BLE001 - that episode is in the record
                     print(f"note: no trace of {name} seed {seed} for the plot: {exc}",
@@ -818,7 +828,8 @@ def _rebuild(out: Path, plan: Plan, figures: bool = True) -> tuple[list[dict], d
         if any(norm.values()):
             plots.profiles(out / "plots" / "profiles.png", norm, len(plan.seeds),
                            order=plots.figure_order(summary), highlight={
-                               e: plots.trend_policies(summary["plants"][e], plan.policies[e])
+                               e: plots.trend_policies(summary["plants"][e],
+                                                       report.agent_names(plan.policies[e]))
                                for e in summary["plants"]})  # fmt: skip
     return rows, summary
 

@@ -28,7 +28,7 @@ import numpy as np
 
 import baselines
 from agents import stats
-from agents.leaderboard_report import INADMISSIBLE, ONE, REFERENCES, ZERO
+from agents.leaderboard_report import INADMISSIBLE, ONE, REFERENCES, ZERO, agent_names
 from steamtemp_gym.envs.render import BANDS_K
 
 DPI = 150
@@ -284,7 +284,7 @@ def trend(
 def figure_order(summary: dict[str, Any]) -> list[str]:
     """Every policy of a run in colour order: the reference, ``cascade_pi``, then by the
     overall ranking, then the rest as run."""
-    run_pols = [p for pols in summary["run"]["policies"].values() for p in pols]
+    run_pols = agent_names([p for pols in summary["run"]["policies"].values() for p in pols])
     ranked = [e["policy"] for e in summary.get("ranking", [])]
     order = [p for p in (ZERO, "cascade_pi") if p in run_pols] + ranked + run_pols
     return list(dict.fromkeys(order))

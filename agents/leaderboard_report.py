@@ -6,7 +6,11 @@ on that scenario, 1 = the clairvoyant ``oracle``'s; agents/stats.py ``normalize`
 the return, with 95 % stratified-bootstrap CIs; the probability of improvement over
 ``cascade_pi_ff``; the rank per plant (by the IQM of the normalized score; the references
 ``oracle`` and ``frozen_valve`` are listed, never ranked) and overall (the mean of the
-per-plant ranks). The engineering metrics are means over
+per-plant ranks). A trained agent scored over several training runs (policy names
+``sb3:<algo>@run<k>``, agents/specs.py) is one policy, ``sb3:<algo>``, over training run x
+scenario x seed: its normalized score's and return's CIs resample the training runs and,
+within each, the episodes (agents/stats.py ``training_run_bootstrap_ci``), and each
+statistic also gives its value per run and their range. The engineering metrics are means over
 scenario x seed of the episodes where they apply (a metric that does not apply, e.g.
 settling time without a setpoint step, is left out, never NaN; ``max_abs_dev_K`` is left
 out of an episode with a setpoint step, where it measures the step). The format is
@@ -21,11 +25,11 @@ from typing import Any
 import numpy as np
 
 import baselines
-from agents import stats
+from agents import specs, stats
 from steamtemp_gym.checks import head
 
 #: Version of leaderboard.json's format (docs/leaderboard_schema.json).
-SCHEMA_VERSION = 5
+SCHEMA_VERSION = 6
 #: The 0 of the normalized score: the cascade as a commissioned unit runs it.
 ZERO = "cascade_pi_ff"
 #: The 1: the clairvoyant NMPC on the true plant (agents/oracle.py).
@@ -61,30 +65,62 @@ def _means(ms: list[dict[str, float]], keys) -> dict[str, float]:
     return out
 
 
-def _estimate(tasks: list[np.ndarray]) -> dict[str, Any]:
+def _estimate(tasks: list[np.ndarray], by_run: list[list[np.ndarray]] | None = None,
+              ) -> dict[str, Any]:  # fmt: skip
+    """Mean and IQM with CIs over ``tasks`` (scores per task); with ``by_run`` (per training
+    run, its scores per task; several runs) the CIs resample the runs too and each
+    statistic gets ``per_run`` and ``run_range``."""
     out: dict[str, Any] = {}
     for name, f in stats.AGGREGATES.items():
-        point, lo, hi = stats.stratified_bootstrap_ci(tasks, f)
-        out[name] = {"value": point, "ci95": [lo, hi]}
+        if by_run is None:
+            point, lo, hi = stats.stratified_bootstrap_ci(tasks, f)
+            out[name] = {"value": point, "ci95": [lo, hi]}
+        else:
+            point, lo, hi = stats.training_run_bootstrap_ci(by_run, f)
+            each = stats.per_run(by_run, f)
+            out[name] = {"value": point, "ci95": [lo, hi], "per_run": each,
+                         "run_range": [min(each), max(each)]}  # fmt: skip
     out["tasks"] = len(tasks)
     out["runs"] = int(sum(len(t) for t in tasks))
     return out
 
 
+def agent_names(policies: list[str]) -> list[str]:
+    """The policies a summary lists for the names that ran: one per trained agent scored
+    over several training runs (specs.split_run), in order of first appearance."""
+    return list(dict.fromkeys(specs.split_run(p)[0] for p in policies))
+
+
+def _by_run(values: dict[str, np.ndarray], runs: dict[str, np.ndarray], ks: list[int],
+            ) -> list[list[np.ndarray]] | None:  # fmt: skip
+    """Per training run in ``ks``, its part of each task's ``values`` (``runs``: the run of
+    each value); None for fewer than two runs."""
+    if len(ks) < 2:
+        return None
+    return [[v[runs[sc] == k] for sc, v in values.items()] for k in ks]
+
+
 def summarize(rows: list[dict], run: dict[str, Any]) -> dict[str, Any]:
     """The summary of leaderboard.json (rows: this run's grid, failed ones included)."""
     by = defaultdict(lambda: defaultdict(lambda: defaultdict(list)))  # env, scenario, policy
+    run_of = defaultdict(lambda: defaultdict(lambda: defaultdict(list)))  # training run of each
     failed = defaultdict(int)
     for r in rows:
+        name, k = specs.split_run(r["policy"])
         if r.get("error"):
-            failed[r["env"], r["policy"]] += 1
+            failed[r["env"], name] += 1
         else:
-            by[r["env"]][r["scenario"]][r["policy"]].append(r["metrics"])
+            by[r["env"]][r["scenario"]][name].append(r["metrics"])
+            run_of[r["env"]][r["scenario"]][name].append(0 if k is None else k)
     plants: dict[str, Any] = {}
     norm_scores: dict[str, dict[str, list[np.ndarray]]] = {}
     for env_id in run["envs"]:
         scs = [s for s in run["scenarios"] if s in by[env_id]]
-        policies = [p for p in run["policies"][env_id] if any(p in by[env_id][s] for s in scs)]
+        policies = [p for p in agent_names(run["policies"][env_id])
+                    if any(p in by[env_id][s] for s in scs)]  # fmt: skip
+        runs_of = {p: {s: np.array(run_of[env_id][s][p], dtype=int) for s in scs
+                       if p in by[env_id][s]} for p in policies}  # fmt: skip
+        ks = {p: sorted({int(k) for v in runs_of[p].values() for k in v}) for p in policies}
         refs, tasks_norm = {}, {}
         for sc in scs:
             ret = {p: np.array([m["return"] for m in by[env_id][sc][p]]) for p in by[env_id][sc]}
@@ -108,19 +144,22 @@ def summarize(rows: list[dict], run: dict[str, Any]) -> dict[str, Any]:
         norm_scores[env_id] = {}
         for p in policies:
             ms = [m for s in scs for m in by[env_id][s].get(p, [])]
-            rets = [np.array([m["return"] for m in by[env_id][s][p]]) for s in scs
-                    if by[env_id][s].get(p)]  # fmt: skip
-            norm = [tasks_norm[s][p] for s in tasks_norm if p in tasks_norm[s]]
+            rets = {s: np.array([m["return"] for m in by[env_id][s][p]]) for s in scs
+                    if by[env_id][s].get(p)}  # fmt: skip
+            norm = {s: tasks_norm[s][p] for s in tasks_norm if p in tasks_norm[s]}
             entry: dict[str, Any] = {
                 "episodes": len(ms),
                 "failed": failed[env_id, p],
                 "trips": int(sum(m["tripped"] for m in ms)),
-                "return": _estimate(rets),
+                "return": _estimate(list(rets.values()), _by_run(rets, runs_of[p], ks[p])),
                 "metrics": _means([_applicable(m) for m in ms], SUMMARY_METRICS),
             }
+            if len(ks[p]) > 1:
+                entry["training_runs"] = ks[p]
             if norm:
-                entry["normalized_score"] = _estimate(norm)
-                norm_scores[env_id][p] = norm
+                entry["normalized_score"] = _estimate(list(norm.values()),
+                                                      _by_run(norm, runs_of[p], ks[p]))
+                norm_scores[env_id][p] = list(norm.values())
             if p != VERSUS:
                 common = [s for s in scs if by[env_id][s].get(p) and by[env_id][s].get(VERSUS)]
                 if common:
@@ -146,6 +185,8 @@ def summarize(rows: list[dict], run: dict[str, Any]) -> dict[str, Any]:
                 if not ms:
                     continue
                 cell: dict[str, Any] = {"seeds": len(ms)}
+                if len(ks[p]) > 1:
+                    cell["training_runs"] = len(set(runs_of[p][sc].tolist()))
                 cell.update(_means([_applicable(m) for m in ms], TABLE_METRICS))
                 cell["trips"] = int(sum(m["tripped"] for m in ms))
                 if sc in tasks_norm and p in tasks_norm[sc]:
@@ -225,6 +266,26 @@ def _ci(est: dict[str, Any] | None, decimals: int = 2) -> str:
     return f"{num(est['value'], decimals)} [{num(lo, decimals)}, {num(hi, decimals)}]"
 
 
+def _multi_run(summary: dict[str, Any]) -> bool:
+    """Whether any policy of the summary is a trained agent over several training runs."""
+    return any("training_runs" in e for p in summary["plants"].values()
+               for e in p["policies"].values())  # fmt: skip
+
+
+def _run_range(est: dict[str, Any] | None, decimals: int = 2) -> str:
+    """``min to max (k runs)`` of a statistic's per-run values; "-" without them."""
+    if not est or "per_run" not in est:
+        return "-"
+    lo, hi = est["run_range"]
+    return f"{num(lo, decimals)} to {num(hi, decimals)} ({len(est['per_run'])} runs)"
+
+
+#: How the tables describe a trained agent over several training runs.
+RUNS_NOTE = ("A trained agent with several training runs is one row over training run × "
+             "scenario × seed; its CIs resample the runs and, within each, the episodes; "
+             "runs: the range of its per-run IQM.")
+
+
 def stat_label(n_seeds: int) -> str:
     """How the headline statistic is labelled everywhere (console, markdown, plots)."""
     return (f"IQM of the normalized score over scenario × seed ({n_seeds} seeds), "
@@ -289,7 +350,8 @@ def headline_markdown(summary: dict[str, Any], margins: bool = True) -> str:
     lines = [f"{stat_label(n)}: the share of the achievable improvement over the industrial "
              f"reference that a policy realizes (0 = {ZERO}, the cascade a commissioned unit "
              f"runs; 1 = {ONE}, the clairvoyant NMPC on the true plant; per scenario); "
-             f"(k) = rank on that plant; {admissibility_note(summary)}", ""]  # fmt: skip
+             f"(k) = rank on that plant; {admissibility_note(summary)}"
+             + (f" {RUNS_NOTE}" if _multi_run(summary) else ""), ""]  # fmt: skip
     lines += _table(*headline_rows(summary))
     if margins:
         lines += ["", *margin_markdown(summary)]
@@ -327,10 +389,12 @@ def agents_markdown(summary: dict[str, Any]) -> str:
     baseline (by the IQM of the normalized score): IQM normalized score with its CI, mean
     return and mean IAE over scenario × seed, trips. The zoo table of docs/agents.md."""
     n = len(summary["run"]["seeds"])
+    multi = _multi_run(summary)
     lines = [f"{stat_label(n)}; return and IAE: means over scenario × seed. **Bold**: the "
-             f"best of the plant's rows; {admissibility_note(summary)}", ""]  # fmt: skip
-    header = ["plant", "policy", "IQM norm. score", "mean return", COLUMNS["iae_K_s"][0],
-              f"travel / {ZERO}'s", "trips"]  # fmt: skip
+             f"best of the plant's rows; {admissibility_note(summary)}"
+             + (f" {RUNS_NOTE}" if multi else ""), ""]  # fmt: skip
+    header = ["plant", "policy", "IQM norm. score", *(["runs"] if multi else []),
+              "mean return", COLUMNS["iae_K_s"][0], f"travel / {ZERO}'s", "trips"]  # fmt: skip
     body = []
     for env_id, p in summary["plants"].items():
         pols = p["policies"]
@@ -347,9 +411,10 @@ def agents_markdown(summary: dict[str, Any]) -> str:
             e, met = pols[k], pols[k]["metrics"]
             score = _ci(e.get("normalized_score", {}).get("iqm"))
             ret, iae = _col("return", met.get("return")), _col("iae_K_s", met.get("iae_K_s"))
+            spread = [_run_range(e.get("normalized_score", {}).get("iqm"))] if multi else []
             body.append([env_id.split("/")[-1],
                          f"{k} (best baseline)" if k == best_base else k,
-                         f"**{score}**" if k == top else score,
+                         f"**{score}**" if k == top else score, *spread,
                          f"**{ret}**" if met.get("return") == best_ret else ret,
                          f"**{iae}**" if met.get("iae_K_s") == best_iae else iae,
                          _travel(e) + (f" {INADMISSIBLE}" if e.get("admissible") is False
@@ -421,6 +486,7 @@ def markdown(summary: dict[str, Any], rows: list[dict]) -> str:
              "references, listed and never ranked.",
              "", "## Headline", "", headline_markdown(summary),
              "## Trained agents against the baselines", "", agents_markdown(summary)]  # fmt: skip
+    multi = _multi_run(summary)
     for env_id, p in summary["plants"].items():
         pols = p["policies"]
         order = sorted(pols, key=lambda k: (pols[k].get("rank", 10**6), k))
@@ -428,8 +494,10 @@ def markdown(summary: dict[str, Any], rows: list[dict]) -> str:
                   f"95 % stratified-bootstrap CIs; P(> {VERSUS}): probability that an "
                   f"episode of the policy has a higher return than one of {VERSUS} on the "
                   "same scenario, averaged over scenarios. IAE, max\\|dev\\| and time outside "
-                  "±5 K: mean over scenario × seed where they apply.", ""]  # fmt: skip
-        header = ["rank", "policy", "IQM norm. score", "mean norm. score", "IQM return",
+                  "±5 K: mean over scenario × seed where they apply."
+                  + (f" {RUNS_NOTE}" if multi else ""), ""]  # fmt: skip
+        header = ["rank", "policy", "IQM norm. score", *(["runs"] if multi else []),
+                  "mean norm. score", "IQM return",
                   f"P(> {VERSUS})", *(COLUMNS[k][0] for k in RANK_METRICS),
                   f"travel / {ZERO}'s", COLUMNS["valve_reversals"][0], "admissible", "trips",
                   "failed"]  # fmt: skip
@@ -441,7 +509,8 @@ def markdown(summary: dict[str, Any], rows: list[dict]) -> str:
             ratio = f"{e['travel_ratio']:.2f}" if "travel_ratio" in e else "-"
             verdict = {True: "yes", False: f"no {INADMISSIBLE}"}.get(e.get("admissible"), "-")
             body.append([str(e.get("rank", "ref." if k in REFERENCES else "-")), k,
-                         _ci(ns.get("iqm")), _ci(ns.get("mean")),
+                         _ci(ns.get("iqm")), *([_run_range(ns.get("iqm"))] if multi else []),
+                         _ci(ns.get("mean")),
                          _ci(e["return"]["iqm"], 0),
                          _ci(e.get(f"p_improvement_over_{VERSUS}")),
                          *(_col(k, met.get(k)) for k in RANK_METRICS), ratio,

@@ -3,7 +3,11 @@ take them: one parser for both, so a name means the same policy everywhere.
 
 - a baseline: a name of ``baselines.NAMES`` (the shipped controllers and those added with
   ``baselines.register``);
-- ``sb3:<algo>``: the shipped trained agent of the env's plant (``agents.shipped()``);
+- ``sb3:<algo>``: the shipped trained agent of the env's plant (``agents.shipped()``): its
+  run 0; ``sb3:<algo>@run<k>``: its training run k (``agents.runs``). Where the zoo holds
+  several runs, :func:`training_runs` turns ``sb3:<algo>`` into one name per run and
+  :func:`split_run` reads the agent and the run back (the leaderboard scores each run and
+  reports the agent over all of them);
 - a trained agent's files: ``zoo:PATH``, or ``PATH`` itself when it contains a ``/`` or
   ends in ``.zip``: a directory of ``steamtemp-train --out``'s files, an RL Zoo run
   directory, or one model ``.zip`` of either (agents/files.py); available for the env
@@ -36,6 +40,9 @@ from steamtemp_gym.checks import head
 
 BASELINE, SHIPPED, FILES, FACTORY = "baseline", "shipped", "files", "factory"
 SB3_PREFIX, ZOO_PREFIX = "sb3:", "zoo:"
+#: ``sb3:<algo>@run<k>``: training run k of a shipped agent.
+RUN_SUFFIX = "@run"
+_RUN = re.compile(r"^(?P<agent>sb3:[^@]+)@run(?P<run>0|[1-9][0-9]*)$")
 #: Every form, for error messages and --help.
 FORMS = ("a baseline name, sb3:<algo> (a shipped trained agent), zoo:DIR or a path to a "
          "trained agent's files (a directory or .zip from steamtemp-train --out or an RL Zoo "
@@ -53,12 +60,14 @@ class Spec:
         kind: :data:`BASELINE`, :data:`SHIPPED`, :data:`FILES` or :data:`FACTORY`.
         target: The baseline name, the algo, the path, or ``module:callable``.
         envs: Env ids it is available for (None: every env).
+        run: A shipped agent's training run (None: run 0, the agent's default).
     """
 
     name: str
     kind: str
     target: str
     envs: frozenset[str] | None = None
+    run: int | None = None
 
     def available(self, env_id: str) -> bool:
         """Whether it can act on ``env_id``."""
@@ -69,7 +78,7 @@ class Spec:
         if self.kind == BASELINE:
             return baselines.make(self.target, env)
         if self.kind == SHIPPED:
-            return agents.load(env_id, self.target)
+            return agents.load(env_id, self.target, run=self.run or 0)
         if self.kind == FILES:
             return _agent(self.target, env_id).load()
         policy = _factory(self.name, self.target)(env)
@@ -82,7 +91,8 @@ class Spec:
         if self.kind == SHIPPED:
             from agents.files import steamtemp_files
 
-            return self.name + ":" + steamtemp_files(agents.ZOO, env_id, self.target).digest()
+            files = steamtemp_files(agents.ZOO, env_id, self.target, self.run or 0)
+            return self.name + ":" + files.digest()
         if self.kind == FILES:
             return self.name + ":" + _agent(self.target, env_id).digest()
         if self.kind == FACTORY:
@@ -105,12 +115,19 @@ def parse(name: str) -> Spec:
     if name in baselines.NAMES:
         return Spec(name, BASELINE, name)
     if name.startswith(SB3_PREFIX):
-        algo = name[len(SB3_PREFIX):]
+        agent, run = split_run(name)
+        algo = agent[len(SB3_PREFIX):]
         envs = frozenset(e for e, a in agents.shipped() if a == algo)
         if not envs:
             raise ValueError(f"no shipped trained agent {_show(name)}; shipped: "
                              f"{', '.join(shipped_names())}")  # fmt: skip
-        return Spec(name, SHIPPED, algo, envs)
+        if run is not None:
+            have = {e: agents.runs(e, algo) for e in envs}
+            envs = frozenset(e for e in envs if run in have[e])
+            if not envs:
+                raise ValueError(f"no training run {run} of {agent!r} shipped; its runs: "
+                                 f"{ {e: have[e] for e in sorted(have)} }")  # fmt: skip
+        return Spec(name, SHIPPED, algo, envs, run)
     if name.startswith(ZOO_PREFIX):
         return _files_spec(name, name[len(ZOO_PREFIX):])
     m = _FACTORY.match(name)
@@ -126,6 +143,29 @@ def parse(name: str) -> Spec:
 def _show(name: Any) -> str:
     """A bounded repr of a (possibly huge) name for messages."""
     return repr(head(name, 100)) if isinstance(name, str) else repr(name)[:100]
+
+
+def run_name(agent: str, run: int) -> str:
+    """The policy name of training run ``run`` of the shipped agent ``agent``
+    (``sb3:ppo``, 2 -> ``sb3:ppo@run2``)."""
+    return f"{agent}{RUN_SUFFIX}{run}"
+
+
+def split_run(name: str) -> tuple[str, int | None]:
+    """``(agent, run)`` of a policy name: ``sb3:ppo@run2`` -> ``("sb3:ppo", 2)``; any other
+    name -> ``(name, None)``."""
+    m = _RUN.match(name)
+    return (m.group("agent"), int(m.group("run"))) if m else (name, None)
+
+
+def training_runs(name: str, env_id: str) -> list[str]:
+    """The names a policy name is scored under on ``env_id``: one per training run
+    (:func:`run_name`) for ``sb3:<algo>`` when the zoo holds several runs of it there,
+    else the name itself."""
+    if not name.startswith(SB3_PREFIX) or split_run(name)[1] is not None:
+        return [name]
+    runs = agents.runs(env_id, name[len(SB3_PREFIX):])
+    return [run_name(name, k) for k in runs] if len(runs) > 1 else [name]
 
 
 def shipped_names() -> list[str]:

@@ -12,9 +12,20 @@ averaged over tasks) and performance profiles (:func:`performance_profile`: the 
 of runs above a threshold, averaged over tasks).
 
 Tasks may have different run counts (a failed episode leaves its seed out), so scores
-are lists of 1-d arrays, one per task. ``rliable`` itself is not a dependency (it pulls
-pandas, statsmodels, arch and seaborn); tests/test_stats.py checks this implementation
-on hand-computable cases and against the plain (unstratified) percentile bootstrap.
+are lists of 1-d arrays, one per task.
+
+A trained agent with several independent *training* runs has, per training run, such a
+list (episodes = evaluation seeds, per task). Its CI comes from a two-level bootstrap
+(:func:`training_run_bootstrap_ci`): each replicate draws as many training runs as there
+are, with replacement, and within each drawn run its episodes with replacement, task by
+task; the statistic is taken over every drawn episode. It thus carries the spread between
+training runs, which resampling the pooled episodes would hide (Agarwal et al. 2021 take
+the training run as the unit that is resampled). With one training run it is
+:func:`stratified_bootstrap_ci` of that run, draw for draw.
+
+``rliable`` itself is not a dependency (it pulls pandas, statsmodels, arch and seaborn);
+tests/test_stats.py checks this implementation on hand-computable cases and against the
+plain (unstratified) percentile bootstrap.
 
 Normalized score (:func:`normalize`): per task (plant x scenario), 0 is the mean episode
 return over seeds of ``cascade_pi_ff``, the cascade PI as a well-commissioned unit runs it
@@ -89,6 +100,68 @@ def stratified_bootstrap_ci(
     q = 100 * (1 - confidence) / 2
     lo, hi = np.percentile(reps, [q, 100 - q])
     return float(statistic(np.concatenate(tasks))), float(lo), float(hi)
+
+
+def training_run_bootstrap_ci(
+    runs: Sequence[Scores],
+    statistic: Callable = iqm,
+    n_boot: int = N_BOOTSTRAP,
+    confidence: float = CONFIDENCE,
+    seed: int = 0,
+) -> tuple[float, float, float]:
+    """Point estimate and percentile confidence interval of ``statistic`` over the episodes
+    of several training runs, resampling the runs and, within each, its episodes.
+
+    Args:
+        runs: Per training run, its scores per task (the same tasks, in the same order; a
+            task may be empty in a run).
+
+    Each replicate draws ``len(runs)`` runs with replacement; a run drawn in a slot
+    contributes, for every task, as many of its episodes on that task as it has, drawn
+    with replacement (module docstring). One run: :func:`stratified_bootstrap_ci`.
+
+    Returns:
+        ``(point, lower, upper)``; the point is ``statistic`` of every episode of every run.
+
+    Raises:
+        ValueError: no run, runs with different task counts, a run without any score,
+            a non-finite score.
+    """
+    if len(runs) == 0:
+        raise ValueError("no training runs")
+    if len({len(r) for r in runs}) > 1:
+        raise ValueError(f"the training runs have different task counts: {[len(r) for r in runs]}")
+    if len(runs) == 1:
+        return stratified_bootstrap_ci(runs[0], statistic, n_boot, confidence, seed)
+    cells = [[np.asarray(s, dtype=float).ravel() for s in r] for r in runs]
+    for k, r in enumerate(cells):
+        try:
+            _tasks(r)
+        except ValueError as exc:
+            raise ValueError(f"training run {k}: {exc}") from None
+    n_runs = len(cells)
+    rng = np.random.default_rng(seed)
+    pick = rng.integers(0, n_runs, (n_boot, n_runs))  # the run in each slot of a replicate
+    rows, slots = np.arange(n_boot)[:, None], np.arange(n_runs)[None, :]
+    per_task = []  # per task: per run, its drawn episodes in every (replicate, slot)
+    for t in range(len(cells[0])):
+        per_task.append([c[t][rng.integers(0, c[t].size, (n_boot, n_runs, c[t].size))]
+                         for c in cells])  # fmt: skip
+    if all(len({d.shape for d in drawn}) == 1 for drawn in per_task):  # equal sizes per task
+        parts = [np.stack(drawn)[pick, rows, slots].reshape(n_boot, -1) for drawn in per_task]
+        reps = statistic(np.concatenate(parts, axis=1), axis=1)
+    else:
+        reps = np.array([statistic(np.concatenate([drawn[pick[b, j]][b, j] for drawn in per_task
+                                                   for j in range(n_runs)]))
+                         for b in range(n_boot)])  # fmt: skip
+    q = 100 * (1 - confidence) / 2
+    lo, hi = np.percentile(reps, [q, 100 - q])
+    return float(statistic(np.concatenate([t for r in cells for t in r]))), float(lo), float(hi)
+
+
+def per_run(runs: Sequence[Scores], statistic: Callable = iqm) -> list[float]:
+    """``statistic`` of each training run's scores over all its tasks."""
+    return [float(statistic(np.concatenate(_tasks(r)))) for r in runs]
 
 
 def percentile_bootstrap_ci(
