@@ -12,18 +12,19 @@ FIXED = {"cascade_pi_ff": (-100.0, 2.0), "oracle": (-20.0, 3.0), "cascade_pi": (
 
 
 def metrics(ret: float, travel: float) -> dict:
+    """One episode's metrics."""
     return {"return": ret, "valve_travel": travel, "valve_reversals": 4.0, "iae_K_s": -30 * ret,
             "tripped": 0.0}
 
 
-def rows(agent: str, offsets: dict[str | None, float]) -> list[dict]:
+def rows(agent: str, offsets: dict[int | None, float], spread: bool = True) -> list[dict]:
     """Every episode of the fixed policies and of ``agent``: the agent's run ``k`` (its
-    policy name ``agent@run<k>``, or ``agent`` for the key None) returns -60 + offset +
-    a spread over scenario and seed."""
+    policy name ``agent@run<k>``, or ``agent`` for the key None) returns -60 + offset,
+    plus (with ``spread``) a spread over scenario and seed that every policy has."""
     out = []
     for i, sc in enumerate(SCENARIOS):
         for seed in SEEDS:
-            wobble = 1.5 * seed - 0.7 * i + 0.3 * (seed * i % 3)
+            wobble = (1.5 * seed - 0.7 * i + 0.3 * (seed * i % 3)) if spread else 0.0
             for p, (ret, travel) in FIXED.items():
                 out.append({"env": ENV, "scenario": sc, "policy": p, "seed": seed,
                             "fingerprint": "f", "metrics": metrics(ret + wobble, travel)})
