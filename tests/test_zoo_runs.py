@@ -1,0 +1,258 @@
+"""Independent training runs of an agent: the run-indexed file names (agents/files.py),
+the zoo's runs (agents.runs; a file without a run index is run 0), the policy names of
+runs (agents/specs.py), ``python -m agents.train --zoo --runs K`` with its flags checked,
+tiny runs trained locally and as Ray tasks (the same files either way), and the
+leaderboard scoring each run of a zoo agent and reporting the agent once."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+
+import agents
+from agents import files, specs, stats, train
+from agents import leaderboard as lb
+
+ENV = "steamtemp/BensonSubcritical-v0"  # 5 s control interval: short validation episodes
+TINY_PPO = {ENV: {"n_envs": 2, "policy": "MlpPolicy", "n_steps": 64, "batch_size": 64,
+                  "n_epochs": 1, "policy_kwargs": "dict(net_arch=dict(pi=[8], vf=[8]))"}}
+TINY_SCENARIO = "name: tiny\nduration_s: 60\nload: [[0, 1.0], [30, 0.95]]\n"
+
+
+# --------------------------------------------------------------------------- names
+@pytest.mark.parametrize(("env_id", "algo", "run"), [
+    ("steamtemp/Cascade300MW-v0", "ppo", None), ("steamtemp/Cascade300MW-v0", "ppo", 0),
+    ("steamtemp/DrumBoilerSH-v0", "sac_caps", 2), ("steamtemp/X-v0", "ppo_residual", 10),
+    ("MyEnv-v1", "td3", 99), ("a/b/c-v0", "recurrentppo", 1),
+])  # fmt: skip
+def test_stems_read_back(env_id, algo, run):
+    name = files.stem(env_id, algo, run)
+    assert files.parse_stem(name) == (env_id, algo, run)
+    assert name.endswith(algo if run is None else f"{algo}__run{run}")
+
+
+def test_the_stem_of_a_run():
+    name = files.stem("steamtemp/Cascade300MW-v0", "ppo", 2)
+    assert name == "steamtemp__Cascade300MW-v0__ppo__run2"
+    assert files.parse_stem("steamtemp__Cascade300MW-v0__ppo") == (
+        "steamtemp/Cascade300MW-v0", "ppo", None)  # fmt: skip
+
+
+@pytest.mark.parametrize("name", [
+    "", "ppo", "__ppo", "steamtemp__X-v0__", "steamtemp__X-v0__ppo__", "e__ppo__run",
+    "e__ppo__run01", "e__ppo__run-1", "e__ppo__run1.5", "e__run3", "e__run", "e____x__ppo",
+    "e__pp o", "e__ppo__run 1", "e__ppo___run1", None, 3,
+])  # fmt: skip
+def test_bad_stems_are_refused(name):
+    with pytest.raises(ValueError, match="not a trained agent's file stem"):
+        files.parse_stem(name)
+
+
+@pytest.mark.parametrize(("args", "match"), [
+    (("steamtemp__X-v0", "ppo"), "env id"), (("", "ppo"), "env id"), (("e/", "ppo"), "env id"),
+    (("e", "ppo", -1), "run index"), (("e", "ppo", True), "run index"),
+    (("e", "ppo", 1.0), "run index"), (("e", "ppo", "1"), "run index"),
+    (("e", ""), "algo"), (("e", "a__b"), "algo"), (("e", "p o"), "algo"), (("e", "run2"), "algo"),
+])  # fmt: skip
+def test_bad_stem_parts_are_refused(args, match):
+    with pytest.raises(ValueError, match=match):
+        files.stem(*args)
+
+
+# --------------------------------------------------------------------------- a zoo's runs
+def _fake(d: Path, name: str) -> None:
+    """A model .zip and .json pair (contents only hashed, never loaded)."""
+    (d / f"{name}.zip").write_bytes(name.encode())
+    (d / f"{name}.json").write_text("{}")
+
+
+def test_a_file_without_run_index_is_run_0_unless_run0_is_there(tmp_path):
+    for k in (None, 1, 2):
+        _fake(tmp_path, files.stem(ENV, "ppo", k))
+    (tmp_path / f"{files.stem(ENV, 'sac', 5)}.zip").write_bytes(b"no .json: not an agent")
+    assert files.zoo_runs(tmp_path) == {(ENV, "ppo"): [0, 1, 2]}
+    assert agents.runs(ENV, "ppo", zoo=tmp_path) == [0, 1, 2]
+    assert files.steamtemp_files(tmp_path, ENV, "ppo").model.name == f"{files.stem(ENV, 'ppo')}.zip"
+    assert files.steamtemp_files(tmp_path, ENV, "ppo", 2).model.stem == files.stem(ENV, "ppo", 2)
+    with pytest.raises(ValueError, match="__run3.zip"):
+        files.steamtemp_files(tmp_path, ENV, "ppo", 3)
+    _fake(tmp_path, files.stem(ENV, "ppo", 0))
+    assert files.zoo_runs(tmp_path) == {(ENV, "ppo"): [0, 1, 2]}
+    assert files.steamtemp_files(tmp_path, ENV, "ppo", 0).model.stem == files.stem(ENV, "ppo", 0)
+
+
+def test_a_zoo_file_with_a_bad_name_is_refused(tmp_path):
+    _fake(tmp_path, "model")
+    with pytest.raises(ValueError, match="'model' is not a trained agent's file stem"):
+        files.zoo_runs(tmp_path)
+
+
+def test_the_shipped_zoo_is_run_0_of_each_agent():
+    assert agents.shipped()
+    for env_id, algo in agents.shipped():
+        assert agents.runs(env_id, algo) == [0]
+        assert specs.training_runs(f"sb3:{algo}", env_id) == [f"sb3:{algo}"]
+        assert files.steamtemp_files(agents.ZOO, env_id, algo).model.stem == files.stem(
+            env_id, algo)  # fmt: skip
+    assert specs.parse("sb3:ppo@run0").run == 0
+    with pytest.raises(ValueError, match="no training run 1 of 'sb3:ppo' shipped"):
+        specs.parse("sb3:ppo@run1")
+    with pytest.raises(ValueError, match="no trained agent 'ppo' run 1 shipped"):
+        agents.load(ENV, "ppo", run=1)
+
+
+def test_policy_names_of_runs(tmp_path, monkeypatch):
+    for k in (0, 1, 2):
+        _fake(tmp_path, files.stem(ENV, "ppo", k))
+    _fake(tmp_path, files.stem(ENV, "sac"))
+    monkeypatch.setattr(agents, "ZOO", tmp_path)
+    assert specs.training_runs("sb3:ppo", ENV) == ["sb3:ppo@run0", "sb3:ppo@run1", "sb3:ppo@run2"]
+    assert specs.training_runs("sb3:sac", ENV) == ["sb3:sac"]
+    assert specs.training_runs("sb3:ppo@run1", ENV) == ["sb3:ppo@run1"]
+    assert specs.training_runs("cascade_pi", ENV) == ["cascade_pi"]
+    for name, want in (("sb3:ppo@run2", ("sb3:ppo", 2)), ("sb3:ppo", ("sb3:ppo", None)),
+                       ("sb3:ppo@run02", ("sb3:ppo@run02", None)),
+                       ("cascade_pi", ("cascade_pi", None))):  # fmt: skip
+        assert specs.split_run(name) == want
+    assert specs.split_run(specs.run_name("sb3:sac_caps", 7)) == ("sb3:sac_caps", 7)
+    spec = specs.parse("sb3:ppo@run2")
+    assert (spec.kind, spec.target, spec.run, spec.envs) == (specs.SHIPPED, "ppo", 2,
+                                                             frozenset({ENV}))  # fmt: skip
+    digests = {specs.parse(f"sb3:ppo@run{k}").digest(ENV).split(":", 2)[2] for k in (0, 1, 2)}
+    assert len(digests) == 3  # each run's own files
+    assert specs.parse("sb3:ppo").digest(ENV).endswith(specs.parse("sb3:ppo@run0").digest(
+        ENV).split(":", 2)[2])  # fmt: skip
+    with pytest.raises(ValueError, match="no shipped trained agent 'sb3:ppo@run02'"):
+        specs.parse("sb3:ppo@run02")
+
+
+# --------------------------------------------------------------------------- the CLI
+@pytest.mark.parametrize(("value", "match"), [
+    ("0", "from 1 to 100, got 0"), ("-1", "from 1 to 100, got -1"), ("101", "got 101"),
+    ("x", "integer >= 1, got 'x'"), ("1.5", "integer >= 1, got '1.5'"), ("", "got ''"),
+])  # fmt: skip
+def test_bad_runs_are_argparse_errors(value, match, capsys):
+    with pytest.raises(SystemExit) as exc:
+        train.main(["--zoo", "--runs", value])
+    err = capsys.readouterr().err
+    assert exc.value.code == 2 and "argument --runs" in err and match in err
+
+
+@pytest.mark.parametrize(("argv", "match"), [
+    (["--env", ENV, "--algo", "ppo", "--runs", "2"], "argument --runs: only with --zoo"),
+    (["--env", ENV, "--algo", "ppo", "--backend", "ray"], "argument --backend: only with --zoo"),
+    (["--zoo", "--address", "auto"], "argument --address: only with --backend ray"),
+    (["--zoo", "--backend", "ray", "--jobs", "0"], "argument --jobs: must be >= 1"),
+    (["--zoo", "--backend", "dask"], "invalid choice: 'dask'"),
+    (["--zoo", "--max-minutes", "0"], "--max-minutes must be > 0"),
+])  # fmt: skip
+def test_zoo_flags_are_checked_before_training(argv, match, capsys, tmp_path):
+    with pytest.raises(SystemExit) as exc:
+        train.main([*argv, "--out", str(tmp_path / "zoo")])
+    assert exc.value.code == 2 and match in capsys.readouterr().err
+    assert not (tmp_path / "zoo").exists()
+
+
+def test_every_entry_is_checked_before_the_first_run(tmp_path, capsys):
+    yml = tmp_path / "ppo.yml"
+    yml.write_text(yaml.safe_dump({ENV: TINY_PPO[ENV]}))
+    with pytest.raises(SystemExit) as exc:  # the file has no entry for the other plants
+        train.main(["--zoo", "--algo", "ppo", "--runs", "2", "--hyperparams", str(yml),
+                    "--out", str(tmp_path / "zoo")])  # fmt: skip
+    assert exc.value.code == 2 and "no entry for steamtemp/" in capsys.readouterr().err
+    assert not (tmp_path / "zoo").exists()
+
+
+def test_run_seeds_never_share_a_training_env_seed(tmp_path):
+    assert [train.run_seed(5, k) for k in range(3)] == [5, 1005, 2005]
+    jobs = train.zoo_jobs([(ENV, "ppo"), (ENV, "sac")], tmp_path, 7, 3, 2.0, timesteps=None)
+    assert [(j["algo"], j["run"], j["seed"]) for j in jobs] == [
+        ("ppo", 0, 7), ("ppo", 1, 1007), ("ppo", 2, 2007),
+        ("sac", 0, 7), ("sac", 1, 1007), ("sac", 2, 2007)]  # fmt: skip
+    assert all(j["max_minutes"] == 2.0 and "timesteps" not in j for j in jobs)
+    (one,) = train.zoo_jobs([(ENV, "ppo")], tmp_path, 7, None, 2.0, timesteps=300)
+    assert (one["run"], one["seed"], one["timesteps"]) == (None, 7, 300)
+    n_envs = [hp.get("n_envs", 1) for f in train.HYPERPARAMS.glob("*.yml")
+              for hp in (yaml.safe_load(f.read_text()) or {}).values()]  # fmt: skip
+    assert n_envs and max(n_envs) < train.RUN_SEED_STRIDE
+    assert train.run_seed(0, train.MAX_RUNS) < train.VALIDATION_SEED
+
+
+# --------------------------------------------------------------------------- tiny runs
+def _zoo_args(tmp: Path, out: Path) -> list[str]:
+    yml = tmp / "ppo.yml"
+    yml.write_text(yaml.safe_dump(TINY_PPO))
+    return ["--zoo", "--env", ENV, "--algo", "ppo", "--runs", "2", "--timesteps", "256",
+            "--hyperparams", str(yml), "--out", str(out), "--max-minutes", "1"]
+
+
+@pytest.fixture(scope="module")
+def local_zoo(tmp_path_factory) -> Path:
+    """Two tiny runs of PPO trained one after the other."""
+    tmp = tmp_path_factory.mktemp("local")
+    train.main(_zoo_args(tmp, tmp / "zoo"))
+    return tmp / "zoo"
+
+
+def _meta(zoo: Path, run: int) -> dict:
+    return json.loads((zoo / f"{files.stem(ENV, 'ppo', run)}.json").read_text())
+
+
+def _outcome(meta: dict) -> dict:
+    """What a run's result is, without its wall times."""
+    curve = [{k: v for k, v in c.items() if k != "wall_s"} for c in meta["validation"]["curve"]]
+    return {"seed": meta["seed"], "run": meta["run"], "steps": meta["timesteps_trained"],
+            "curve": curve, "normalization": meta["normalization"]}
+
+
+def test_local_runs_write_run_indexed_files_with_their_seeds(local_zoo, tmp_path):
+    assert sorted(f.name for f in local_zoo.iterdir()) == [
+        f"{files.stem(ENV, 'ppo', k)}{ext}" for k in (0, 1) for ext in (".json", ".zip")]
+    m0, m1 = _meta(local_zoo, 0), _meta(local_zoo, 1)
+    assert (m0["run"], m0["seed"], m1["run"], m1["seed"]) == (0, 0, 1, train.RUN_SEED_STRIDE)
+    assert m0["validation"]["curve"] != m1["validation"]["curve"]  # independent runs
+    assert agents.runs(ENV, "ppo", zoo=local_zoo) == [0, 1]
+    pol = agents.load(ENV, "ppo", zoo=local_zoo, run=1)
+    assert pol.predict(np.zeros(pol.n_obs))[0].shape == (2,)
+    again = train.train(ENV, "ppo", local_zoo.parent / "ppo.yml", timesteps=256, seed=1000,
+                        out=tmp_path, max_minutes=1, quiet=True, run=1)  # fmt: skip
+    assert _outcome(again) == _outcome(m1)  # same seed, same run
+    assert (tmp_path / f"{files.stem(ENV, 'ppo', 1)}.zip").is_file()
+
+
+def test_ray_runs_equal_local_runs(local_zoo, tmp_path):
+    """--backend ray on a new local Ray of one CPU: each run a task, the same results."""
+    pytest.importorskip("ray", reason="the ray extra is not installed")
+    import ray
+
+    try:
+        train.main([*_zoo_args(tmp_path, tmp_path / "zoo"), "--backend", "ray", "--jobs", "1"])
+    finally:
+        ray.shutdown()
+    for k in (0, 1):
+        assert _outcome(_meta(tmp_path / "zoo", k)) == _outcome(_meta(local_zoo, k))
+
+
+def test_the_leaderboard_scores_each_run_and_reports_the_agent(local_zoo, tmp_path, monkeypatch):
+    monkeypatch.setattr(agents, "ZOO", local_zoo)
+    tiny = tmp_path / "tiny.yaml"
+    tiny.write_text(TINY_SCENARIO)
+    lb.main(["--envs", ENV, "--policies", "cascade_pi,sb3:ppo", "--scenarios", str(tiny),
+             "--seeds", "0-2", "--jobs", "1", "--out", str(tmp_path / "lb")])
+    doc = json.loads((tmp_path / "lb" / "leaderboard.json").read_text())
+    assert doc["run"]["policies"][ENV][:3] == ["cascade_pi", "sb3:ppo@run0", "sb3:ppo@run1"]
+    by_run = {k: [r["metrics"]["return"] for r in doc["episodes"]
+                  if r["policy"] == f"sb3:ppo@run{k}"] for k in (0, 1)}  # fmt: skip
+    assert [len(v) for v in by_run.values()] == [3, 3]
+    e = doc["plants"][ENV]["policies"]["sb3:ppo"]
+    assert "sb3:ppo@run0" not in doc["plants"][ENV]["policies"]
+    assert e["training_runs"] == [0, 1] and e["episodes"] == 6
+    assert len(e["normalized_score"]["iqm"]["per_run"]) == 2
+    assert e["return"]["iqm"]["per_run"] == pytest.approx([stats.iqm(np.array(v))
+                                                           for v in by_run.values()])
+    md = (tmp_path / "lb" / "leaderboard.md").read_text()
+    assert "| sb3:ppo |" in md and "(2 runs)" in md
