@@ -5,6 +5,9 @@ Policies: by default the baselines (``baselines.NAMES``), the shipped trained ag
 ranked: ``oracle`` (agents/oracle.py, the clairvoyant NMPC on the true plant, the 1 of
 the normalized score; ``--no-oracle`` leaves it out, and the score with it) and
 ``frozen_valve``. The score's 0, ``cascade_pi_ff``, and the references join every run.
+A shipped agent with several training runs in the zoo runs as one policy per run,
+``sb3:<algo>@run<k>`` (``sb3:<algo>`` in ``--policies`` means all of them), and is
+reported as one row over its runs (agents/leaderboard_report.py).
 ``--policies`` also takes your own (agents/specs.py; examples/README.md): a trained
 agent's files (``zoo:DIR``, or a path: a directory or model .zip written by
 ``steamtemp-train --out`` or an RL Zoo run) and ``module:callable``, a factory
