@@ -93,11 +93,11 @@ def agent_names(policies: list[str]) -> list[str]:
 
 def _by_run(values: dict[str, np.ndarray], runs: dict[str, np.ndarray], ks: list[int],
             ) -> list[list[np.ndarray]] | None:  # fmt: skip
-    """Per training run in ``ks``, its part of each task's ``values`` (``runs``: the run of
-    each value); None for fewer than two runs."""
-    if len(ks) < 2:
-        return None
-    return [[v[runs[sc] == k] for sc, v in values.items()] for k in ks]
+    """Per training run in ``ks`` with values, its part of each task's ``values`` (``runs``:
+    the run of each value); None for fewer than two such runs."""
+    parts = [[v[runs[sc] == k] for sc, v in values.items()] for k in ks]
+    parts = [p for p in parts if any(v.size for v in p)]
+    return parts if len(parts) > 1 else None
 
 
 def summarize(rows: list[dict], run: dict[str, Any]) -> dict[str, Any]:

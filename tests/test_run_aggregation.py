@@ -154,3 +154,16 @@ def test_failed_episodes_of_a_run_count_for_the_agent():
     e = s["plants"][ENV]["policies"][AGENT]
     assert e["failed"] == 1 and e["episodes"] == 23 and e["admissible"] is False
     assert e["normalized_score"]["runs"] == 23 and len(e["normalized_score"]["iqm"]["per_run"]) == 2
+
+
+def test_a_run_without_scored_episodes_is_left_out_of_the_score_s_runs():
+    """Run 2 ran only scenario c, where cascade_pi_ff did not run (not normalized): the
+    return counts three runs, the normalized score two."""
+    r = [x for x in rows(AGENT, {0: 0.0, 1: 8.0, 2: -10.0})
+         if not (x["policy"] == f"{AGENT}@run2" and x["scenario"] != "c")
+         and not (x["policy"] == "cascade_pi_ff" and x["scenario"] == "c")]  # fmt: skip
+    names = [f"{AGENT}@run{k}" for k in range(3)]
+    s, _ = report.summarize(r, run_info([*FIXED, *names]))
+    e = s["plants"][ENV]["policies"][AGENT]
+    assert e["training_runs"] == [0, 1, 2] and len(e["return"]["iqm"]["per_run"]) == 3
+    assert len(e["normalized_score"]["iqm"]["per_run"]) == 2 and e["normalized_score"]["tasks"] == 2
