@@ -454,9 +454,9 @@ def make_parser() -> argparse.ArgumentParser:
     ap.add_argument("--address", default=None,
                     help="with --backend ray: an existing Ray cluster (e.g. ray://host:10001 "
                     "or auto); default: start a local Ray with --jobs CPUs")  # fmt: skip
-    ap.add_argument("--jobs", type=int, default=os.cpu_count() or 1,
+    ap.add_argument("--jobs", type=int, default=None,
                     help="with --backend ray: CPUs of a new local Ray, so runs at a time "
-                    "(default: the number of CPUs, %(default)s)")  # fmt: skip
+                    f"(default: the number of CPUs, {os.cpu_count() or 1})")  # fmt: skip
     return ap
 
 
@@ -464,12 +464,14 @@ def _check_zoo_flags(ap: argparse.ArgumentParser, args: argparse.Namespace) -> N
     """argparse errors for --runs, --backend, --address and --jobs out of place."""
     given = [f for f, v in (("--runs", args.runs is not None),
                             ("--backend", args.backend != "local"),
-                            ("--address", args.address is not None)) if v]  # fmt: skip
+                            ("--address", args.address is not None),
+                            ("--jobs", args.jobs is not None)) if v]  # fmt: skip
     if given and not args.zoo:
         ap.error(f"argument {given[0]}: only with --zoo")
-    if args.address is not None and args.backend != "ray":
-        ap.error("argument --address: only with --backend ray")
-    if args.jobs < 1:
+    for flag, value in (("--address", args.address), ("--jobs", args.jobs)):
+        if value is not None and args.backend != "ray":
+            ap.error(f"argument {flag}: only with --backend ray")
+    if args.jobs is not None and args.jobs < 1:
         ap.error(f"argument --jobs: must be >= 1, got {args.jobs}")
     if args.backend == "ray" and not ray_backend.installed():
         ap.error(f"argument --backend: ray is not installed; {ray_backend.INSTALL}")
@@ -497,7 +499,8 @@ def main(argv: list[str] | None = None) -> None:
                             n_envs=args.n_envs, hyperparams=args.hyperparams and
                             Path(args.hyperparams).resolve())  # fmt: skip
             if args.backend == "ray":
-                done = ray_backend.results(zoo_run, jobs, args.jobs, args.address)
+                done = ray_backend.results(zoo_run, jobs, args.jobs or os.cpu_count() or 1,
+                                           args.address)  # fmt: skip
             else:
                 done = ((job, zoo_run(job)) for job in jobs)
             for _, meta in done:

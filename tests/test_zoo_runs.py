@@ -147,6 +147,7 @@ def test_bad_runs_are_argparse_errors(value, match, capsys):
     (["--env", ENV, "--algo", "ppo", "--backend", "ray"], "argument --backend: only with --zoo"),
     (["--zoo", "--address", "auto"], "argument --address: only with --backend ray"),
     (["--zoo", "--backend", "ray", "--jobs", "0"], "argument --jobs: must be >= 1"),
+    (["--zoo", "--jobs", "2"], "argument --jobs: only with --backend ray"),
     (["--zoo", "--backend", "dask"], "invalid choice: 'dask'"),
     (["--zoo", "--max-minutes", "0"], "--max-minutes must be > 0"),
 ])  # fmt: skip
