@@ -45,12 +45,14 @@ Knobs (``KNOBS``, constructor keywords; ``DEFAULTS``): ``move_weight``, ``bias_w
 (stroke). The paper gives the form of eq. (21)-(22) and no values: every default is ours,
 chosen so that the valve travel stays within twice ``cascade_pi_ff``'s on the named ramp.
 
-Solver: OSQP (Stellato et al. 2020). Sparse P and A are built once with a fixed pattern
-and their values updated per solve; each solve is warm-started from the row's previous
-solution and starts from the same rho (adaptive rho on, adapted every
-``OSQP_SETTINGS['adaptive_rho_interval']`` iterations, a count rather than OSQP's default
-time-based rule), so a row's result does not depend on the rows solved before it
-(batched == single). ``policy.stats``: solves, iterations and solve times per solve,
+Solver: OSQP (Stellato et al. 2020), one solver per row, set up afresh at the row's episode
+start. Sparse P and A have a fixed pattern and their values are updated per solve; each
+solve is warm-started from the row's previous solution and starts from the same rho
+(adaptive rho on, adapted every ``OSQP_SETTINGS['adaptive_rho_interval']`` iterations, a
+count rather than OSQP's default time-based rule). An OSQP object carries state from solve
+to solve beyond these (measured: the same inputs give moves 5e-18 apart after another
+row's solve), so with a solver per row a row's result does not depend on the other rows or
+on earlier episodes (batched == single, bit for bit). ``policy.stats``: solves, iterations and solve times per solve,
 fallbacks by reason.
 
 Safety layer (fallbacks, counted in ``policy.stats['fallbacks']``): the bias is taken back
@@ -198,9 +200,24 @@ class _QP:
         A = sp.csc_matrix(self._A(np.ones((self.ns, nv))))
         self.P_idx, self.A_idx = _pattern(P), _pattern(A)
         self.nc = A.shape[0]
-        self.solver = osqp.OSQP()
-        self.solver.setup(P=P, q=np.zeros(self.nz), A=A, l=-np.ones(self.nc),
-                          u=np.ones(self.nc), **OSQP_SETTINGS)  # fmt: skip
+        self._setup = {"P": P, "q": np.zeros(self.nz), "A": A, "l": -np.ones(self.nc),
+                       "u": np.ones(self.nc), **OSQP_SETTINGS}  # fmt: skip
+        self._osqp = osqp.OSQP
+        #: One solver per row, set up afresh when its episode starts (:meth:`restart`): an
+        #: OSQP object carries state from solve to solve, so a shared one would make a
+        #: row's result depend on the rows solved before it.
+        self.solvers: dict[int, Any] = {}
+
+    def restart(self, row: int) -> None:
+        """Row ``row`` starts an episode: its next solve uses a new solver."""
+        self.solvers.pop(row, None)
+
+    def _solver(self, row: int) -> Any:
+        if row not in self.solvers:
+            s = self._osqp()
+            s.setup(**self._setup)
+            self.solvers[row] = s
+        return self.solvers[row]
 
     def _A(self, Ssub: np.ndarray) -> np.ndarray:
         """Constraint matrix: bias bounds, move bounds, soft outputs (two sides), slacks."""
@@ -232,9 +249,10 @@ class _QP:
         return {"S": S, "Rabs": Rabs, "Px": H[self.P_idx], "Ax": self._A(Ssub)[self.A_idx]}
 
     def solve(self, mats: dict[str, np.ndarray], e_free: np.ndarray, b_last: np.ndarray,
-              lo_b: np.ndarray, hi_b: np.ndarray, warm: tuple) -> tuple:  # fmt: skip
+              lo_b: np.ndarray, hi_b: np.ndarray, warm: tuple, row: int = 0) -> tuple:  # fmt: skip
         """Bias moves (M, n_act) for the free tracking error e_free = r - y_free (N, n_out),
-        the current bias b_last and its bounds [lo_b, hi_b] (b_last inside them).
+        the current bias b_last and its bounds [lo_b, hi_b] (b_last inside them), solved by
+        row ``row``'s solver.
 
         Returns (solved, moves, (x, y) for the next warm start, OSQP info).
         """
@@ -251,7 +269,7 @@ class _QP:
                              np.zeros(no)])  # fmt: skip
         hi = np.concatenate([np.tile(hi_b - b_last, self.M), rate, esub + ym, inf,
                              np.full(no, np.inf)])  # fmt: skip
-        s = self.solver
+        s = self._solver(row)
         s.update(q=q, l=lo, u=hi, Px=mats["Px"], Ax=mats["Ax"])
         s.update_settings(rho=OSQP_SETTINGS["rho"])
         s.warm_start(x=warm[0], y=warm[1])
@@ -365,6 +383,7 @@ class MPCEVARX:
             st["ref"][r], st["b"][r], st["k"][r] = y[r, self.i_y], 0.0, 0
             st["yhat"][r] = np.nan
             st["warm"][r] = (np.zeros(self.qp.nz), np.zeros(self.qp.nc))
+            self.qp.restart(int(r))
 
     def predict(self, observation, state=None, episode_start=None, deterministic=True):
         obs = np.atleast_2d(np.asarray(observation, dtype=np.float64))
@@ -418,7 +437,7 @@ class MPCEVARX:
             reason = "band"
         else:
             ok, moves, warm, info = self.qp.solve(mats, ref - yf, b_last, lo_b, hi_b,
-                                                  st["warm"][r])  # fmt: skip
+                                                  st["warm"][r], row=r)  # fmt: skip
             self.stats["solves"] += 1
             self.stats["iterations"].append(int(info.iter))
             self.stats["solve_time_s"].append(float(info.solve_time))
