@@ -237,20 +237,30 @@ def test_snapshot_of_a_drawn_plant():
         nominal.unwrapped.restore(snap)
 
 
+def _peaks(trace: dict) -> tuple[float, float]:
+    """The largest |outlet - setpoint| (K) before the last tenth of an episode and in it."""
+    err = np.abs(trace["outlet_temp_C"] - trace["setpoint_C"])
+    assert np.isfinite(err).all()
+    k = len(err) - len(err) // 10
+    return float(err[:k].max()), float(err[k:].max())
+
+
 @pytest.mark.parametrize("env_id", IDS)
 def test_cascade_pi_ff_commissioned_nominal_holds_every_variant(env_id):
-    """cascade_pi_ff, commissioned on the nominal plant, neither trips nor diverges on
-    any variant on load_ramp_100_50 (seed 0): the error of the last fifth of the episode
-    stays below 10 K and below 1.5 times the largest error before it."""
+    """cascade_pi_ff, commissioned on the nominal plant, neither trips nor diverges on any
+    variant on load_ramp_100_50 (seed 0): every error stays below 15 K (the trip band is
+    28 K above and 50 K below), and the error does not grow at the end: the last tenth's
+    largest error is below the largest before it, or within twice the nominal plant's
+    last tenth under the same disturbances."""
     nominal = gym.make(env_id, scenario="load_ramp_100_50")
     policy = baselines.make("cascade_pi_ff", nominal)  # commissioned on the model
+    res = run_episode(nominal, policy, 0)
+    assert res["metrics"]["tripped"] == 0.0
+    nominal_last = _peaks(res["trace"])[1]
     for v, p in perturb.MISMATCH[env_id].items():
         env = gym.make(env_id, scenario="load_ramp_100_50", params=p)
         res = run_episode(env, policy, 0)
-        tr = res["trace"]
-        err = np.abs(tr["outlet_temp_C"] - tr["setpoint_C"])
-        late = err[-len(err) // 5:]
-        early = err[: -len(err) // 5]
         assert res["metrics"]["tripped"] == 0.0, v
-        assert np.isfinite(err).all() and late.max() < 10.0, v
-        assert late.max() < 1.5 * early.max(), v
+        before, last = _peaks(res["trace"])
+        assert max(before, last) < 15.0, (v, before, last)
+        assert last < before or last < 2.0 * nominal_last, (v, before, last, nominal_last)
