@@ -406,17 +406,29 @@ class Core:
         entry[1] += 1
         self.slot[b] = entry[0]
 
-    def _start_error(self, scenario: sc.Scenario) -> tuple[float, np.ndarray, float]:
-        """(setpoint - outlet, Z, setpoint) of ``scenario``'s steady start with its coloured
-        disturbance at the mean; the error is NaN if the steady state is not finite."""
+    def _start_error(self, scenario: sc.Scenario,
+                     plant: Plant | None = None) -> tuple[float, np.ndarray, float]:  # fmt: skip
+        """(setpoint - outlet, Z, setpoint) of ``scenario``'s steady start on ``plant``
+        (default: the core's) with its coloured disturbance at the mean; the error is NaN if
+        the steady state is not finite."""
+        plant = self.plant if plant is None else plant
         k = sc.max_breakpoints([scenario])
         tables = (np.zeros((1, N_CH, k)), np.zeros((1, N_CH, k)), np.ones((1, N_CH), np.int64))
         sc.pack(scenario, tables[0][0], tables[1][0], tables[2][0])
         D, sp = np.zeros((1, N_DIST)), np.zeros(1)
-        schedules(0, 0, 0.0, *tables, self.plant.setpoint_C, np.zeros(1), D, sp)
-        _, z = self.plant.steady_outputs(D[0], sp[0])
+        schedules(0, 0, 0.0, *tables, plant.setpoint_C, np.zeros(1), D, sp)
+        _, z = plant.steady_outputs(D[0], sp[0])
         e = sp[0] - z[self.i_out] if np.all(np.isfinite(z)) else float("nan")
         return e, z, float(sp[0])
+
+    def start_fits(self, scenario: sc.Scenario, plant: Plant) -> bool:
+        """Whether ``plant`` (of the core's class and setpoint) holds ``scenario``'s start in
+        steady state within :data:`START_BAND_K` of the setpoint (:meth:`check_start`)."""
+        return bool(abs(self._start_error(scenario, plant)[0]) <= START_BAND_K)
+
+    def row_plant(self, b: int) -> Plant:
+        """The plant row b simulates (every row's is the core's plant)."""
+        return self.plant
 
     def check_start(self, scenario: sc.Scenario) -> None:
         """Raise ValueError unless the plant can hold ``scenario``'s start in steady state.
@@ -473,9 +485,10 @@ class Core:
         self.out[b] = 0.0
         schedules(*self._schedules_args(b))
         r = slice(b, b + 1)
-        self.plant.seed_rows(self.X[r], self.key[r])
-        self.plant.steady_state(self.D[r], self.sp[r], self.X[r])
-        self.plant.step(self.X[r], self.U[r], self.D[r], self.Z[r], dt=0.0)  # outputs of it
+        plant = self.row_plant(b)
+        plant.seed_rows(self.X[r], self.key[r])
+        plant.steady_state(self.D[r], self.sp[r], self.X[r])
+        plant.step(self.X[r], self.U[r], self.D[r], self.Z[r], dt=0.0)  # outputs of it
         self.U[b] = self.Z[b, self.valve_idx]
         self.U_prev[b] = self.U[b]
         observe(*self._observe_args(b))
@@ -528,7 +541,7 @@ class Core:
             ValueError: A holds NaN or infinite values (nothing is changed).
         """
         if not to_commands(A, self.U):
-            raise ValueError(f"action contains NaN or infinite values: {A.tolist()!r}")
+            raise non_finite_action(A)
         args = self._advance_args or self._step_args()
         if self.B >= MIN_SPLIT_ROWS:
             self.plant.step(self.X, self.U, self.D, self.Z)
@@ -584,6 +597,11 @@ class Core:
         if self._valves is not None:
             info["spray_valve"] = self.Z[:, self._valves].copy()
         return info
+
+
+def non_finite_action(A: np.ndarray) -> ValueError:
+    """The error of an action batch holding NaN or infinite values."""
+    return ValueError(f"action contains NaN or infinite values: {A.tolist()!r}")
 
 
 def dict_maker(keys: list[str]) -> Any:

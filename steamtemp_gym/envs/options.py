@@ -5,10 +5,13 @@ from __future__ import annotations
 from typing import Any
 
 from steamtemp_gym import plants, scenarios
+from steamtemp_gym.envs.core import Core
+from steamtemp_gym.envs.plant_rows import PlantRowsCore
+from steamtemp_gym.plants import perturb
 from steamtemp_gym.plants.base import Plant
 from steamtemp_gym.rewards import RewardConfig
 
-OPTIONS = ("scenario", "render_mode", "reward", "params")
+OPTIONS = ("scenario", "render_mode", "reward", "params", "plant_randomization")
 RENDER_MODES = (None, "rgb_array")
 
 
@@ -16,7 +19,8 @@ def build(plant_id: str, options: dict[str, Any]) -> tuple[Plant, Any, RewardCon
     """Validate the options of ``gym.make``: (plant, scenario or "random", reward, render_mode).
 
     Raises:
-        ValueError: unknown option, scenario, render mode, reward key or plant parameter.
+        ValueError: unknown option, scenario, render mode, reward key, plant parameter or
+            ``plant_randomization`` value.
     """
     unknown = sorted(set(options) - set(OPTIONS))
     if unknown:
@@ -33,7 +37,27 @@ def build(plant_id: str, options: dict[str, Any]) -> tuple[Plant, Any, RewardCon
     if names:
         raise ValueError(f"plant parameter names must be strings, got {names[0]!r}")
     plant = plants.make(plant_id, **params)
+    randomization(plant_id, options)
     spec = options.get("scenario", scenarios.RANDOM)
     scenario = scenarios.resolve(spec, plant_id)
     reward = RewardConfig.from_options(options.get("reward"))
     return plant, scenario, reward, render_mode
+
+
+def randomization(plant_id: str, options: dict[str, Any]) -> dict[str, tuple[float, float]] | None:
+    """The factor range per parameter group of the ``plant_randomization`` option, or None
+    without it (steamtemp_gym/plants/perturb.py).
+
+    Raises:
+        ValueError: a bad value (unknown group, a range not 0 < lo <= hi, not numbers).
+    """
+    return perturb.parse(plant_id, options.get("plant_randomization"))
+
+
+def make_core(plant: Plant, batch: int, reward: RewardConfig, options: dict[str, Any]) -> Any:
+    """The env's core: a Core, or with ``plant_randomization`` a PlantRowsCore drawing each
+    row's plant at its resets (envs/plant_rows.py)."""
+    ranges = randomization(plant.id, options)
+    if ranges is None:
+        return Core(plant, batch, reward)
+    return PlantRowsCore(plant, batch, reward, ranges, options.get("params") or {})

@@ -52,6 +52,9 @@ class Snapshot:
     Attributes:
         plant_id: The plant the rows simulate.
         params: The plant's parameters (its frozen dataclass); restore needs equal ones.
+        plants: The plant of each row (with ``plant_randomization`` each row's drawn one:
+            restore then needs equal parameters per row, or an env with the option, whose
+            rows take these plants).
         rows: The rows it was taken from.
         arrays: Per-row copies of :data:`ROW_ARRAYS`, first axis ``len(rows)``.
         scenarios: The scenario of each row.
@@ -66,6 +69,7 @@ class Snapshot:
     scenarios: tuple[Any, ...]
     rng_states: tuple[dict, ...]
     waiting: np.ndarray
+    plants: tuple[Any, ...] = ()
 
     def __len__(self) -> int:
         return len(self.rows)
@@ -107,6 +111,7 @@ def take(core: Any, rows: np.ndarray, rngs: list, waiting: np.ndarray) -> Snapsh
         scenarios=tuple(core.scenario[r] for r in rows),
         rng_states=tuple(rngs[r].bit_generator.state for r in rows),
         waiting=np.asarray(waiting, dtype=bool)[rows].copy(),
+        plants=tuple(core.row_plant(int(r)) for r in rows),
     )
 
 
@@ -116,11 +121,15 @@ def check(core: Any, snap: Any, rows: Any) -> tuple[np.ndarray, np.ndarray]:
         raise ValueError(f"expected a Snapshot (env.snapshot()), got {type(snap).__name__}")
     if snap.plant_id != core.plant.id:
         raise ValueError(f"snapshot of {snap.plant_id} cannot be restored into {core.plant.id}")
-    if snap.params != core.plant.params:
-        diff = [f.name for f in dataclasses.fields(snap.params)
-                if getattr(snap.params, f.name) != getattr(core.plant.params, f.name)]  # fmt: skip
-        raise ValueError(f"snapshot of {snap.plant_id} with other plant parameters "
-                         f"(differing: {diff}) cannot be restored into this env")  # fmt: skip
+    own = core.plant.params
+    # an env drawing its rows' plants takes the snapshot's; any other needs its own in each
+    wanted = [snap.params] if own_rows(core) else [p.params for p in snap.plants] or [snap.params]
+    for params in wanted:
+        if params != own:
+            diff = [f.name for f in dataclasses.fields(params)
+                    if getattr(params, f.name) != getattr(own, f.name)]  # fmt: skip
+            raise ValueError(f"snapshot of {snap.plant_id} with other plant parameters "
+                             f"(differing: {diff}) cannot be restored into this env")  # fmt: skip
     if any(snap.scenarios[i] is None for i in range(len(snap))):
         raise ValueError("snapshot of rows that were never reset")
     n = core.B
@@ -146,10 +155,17 @@ def put(core: Any, snap: Snapshot, target: np.ndarray, source: np.ndarray, rngs:
         getattr(core, name)[target] = snap.arrays[name][source]
     for b, i in zip(target.tolist(), source.tolist(), strict=True):
         core.assign_scenario(b, snap.scenarios[i])
+        if own_rows(core) and snap.plants:
+            core.set_plant(b, snap.plants[i])
         rng = np.random.Generator(type(rngs[b].bit_generator)())
         rng.bit_generator.state = snap.rng_states[i]
         rngs[b] = rng
         waiting[b] = snap.waiting[i]
+
+
+def own_rows(core: Any) -> bool:
+    """Whether ``core``'s rows each simulate a plant of their own (plant_randomization)."""
+    return hasattr(core, "plants")
 
 
 def copy_rows(src: Any, src_rows: np.ndarray, dst: Any, dst_rows: np.ndarray) -> None:

@@ -67,7 +67,10 @@ class SteamTempEnv(gym.Env):
         **options: ``scenario`` (a name, ``heldout:<name>``, a YAML path, a Scenario or
             "random": steamtemp_gym.scenarios.resolve; default "random"), ``render_mode``
             (None or "rgb_array"), ``reward`` (dict of RewardConfig overrides), ``params``
-            (dict of plant parameter overrides).
+            (dict of plant parameter overrides), ``plant_randomization`` (True or
+            ``{group: (lo, hi)}``: a plant drawn per episode from its seed,
+            steamtemp_gym/plants/perturb.py; ``env.unwrapped.episode_plant`` is the
+            current one).
 
     ``reset(options={"scenario": spec})`` runs that episode under ``spec`` (the same
     forms); later resets without it return to the env's own scenario.
@@ -79,12 +82,18 @@ class SteamTempEnv(gym.Env):
         plant, self._scenario_spec, reward_cfg, self.render_mode = opts.build(plant_id, options)
         self._params_overrides = dict(options.get("params") or {})
         self.plant = plant
-        self.core = Core(plant, 1, reward_cfg)
+        self.core = opts.make_core(plant, 1, reward_cfg, options)
         self.signals = self.core.signals
         self.observation_space, self.action_space = spaces(self.core)
         self._shape = (1, plant.n_u)
         self._display = None  # the trend display of render_mode="rgb_array" (envs/render.py)
         self._needs_reset = True
+
+    @property
+    def episode_plant(self) -> Any:
+        """The plant of the current episode: :attr:`plant`, or with ``plant_randomization``
+        the one drawn at the last reset."""
+        return self.core.row_plant(0)
 
     @property
     def scenario(self) -> sc.Scenario | None:

@@ -34,7 +34,7 @@ from gymnasium.vector.utils import batch_space
 from steamtemp_gym.checks import is_integer
 from steamtemp_gym.envs import options as opts
 from steamtemp_gym.envs import snapshot as snap_
-from steamtemp_gym.envs.core import Core, check_action
+from steamtemp_gym.envs.core import check_action
 from steamtemp_gym.envs.steam_temp_env import draw_episode, scenario_option, spaces
 
 #: No rows (the usual case of rows that ended last step).
@@ -67,7 +67,8 @@ class SteamTempVectorEnv(VectorEnv):
         num_envs: Number of sub-envs.
         autoreset_mode: A ``gymnasium.vector.AutoresetMode`` or its value (module
             docstring); default NEXT_STEP.
-        **options: As for SteamTempEnv (``scenario``, ``reward``, ``params``; no rendering).
+        **options: As for SteamTempEnv (``scenario``, ``reward``, ``params``,
+            ``plant_randomization``: ``core.plants[i]`` is sub-env i's plant; no rendering).
     """
 
     metadata = {"autoreset_mode": AutoresetMode.NEXT_STEP, "render_modes": []}
@@ -89,7 +90,7 @@ class SteamTempVectorEnv(VectorEnv):
         self._params_overrides = dict(options.get("params") or {})
         self.plant = plant
         self.num_envs = int(num_envs)
-        self.core = Core(plant, self.num_envs, reward_cfg)
+        self.core = opts.make_core(plant, self.num_envs, reward_cfg, options)
         self.signals = self.core.signals
         self.single_observation_space, self.single_action_space = spaces(self.core)
         self.observation_space = batch_space(self.single_observation_space, self.num_envs)

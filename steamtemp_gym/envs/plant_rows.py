@@ -1,0 +1,119 @@
+"""A core whose rows each simulate a plant of their own, drawn at every reset: the
+``plant_randomization`` option of SteamTempEnv and the native vector env.
+
+At a reset of row b, after the scenario and noise key are drawn as always, the row's
+plant is drawn from the key (steamtemp_gym/plants/perturb.py: one factor per parameter
+group over the env's own parameters, redrawn until the plant holds the episode's start),
+so an episode's plant, like its scenario and noise, depends on its seed alone: the vector
+env's row i is the single env seeded ``seed + i``, bit for bit, plant included. Without
+the option the envs use the plain Core, untouched.
+
+Cost: the draw builds a plant (its packing and calibration) at each reset. The step of a
+single env is the plain Core's (the row's parameter vector is swapped in at the reset);
+a vector env steps its rows' plants one row at a time (one compiled call per row, no
+threads) and runs the rest of the step batched as always.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+from steamtemp_gym._jit import entry_point
+from steamtemp_gym.envs.core import Core, advance, non_finite_action, to_commands
+from steamtemp_gym.plants import perturb
+from steamtemp_gym.plants.base import Plant
+from steamtemp_gym.rewards import RewardConfig
+
+
+class PlantRowsCore(Core):
+    """Core over B rows, row b simulating ``plants[b]``, drawn at each of its resets.
+
+    Args:
+        plant: The env's plant (its ``params`` option): the base of the draws.
+        batch: Number of rows.
+        reward_cfg: Reward weights.
+        ranges: Factor range per parameter group (perturb.parse).
+        base: The env's parameter overrides (``params``) the factors multiply.
+
+    Attributes:
+        plants: The plant of each row (the env's plant until the row's first reset).
+        factors: The group factors of each row's plant (empty until its first reset).
+    """
+
+    def __init__(self, plant: Plant, batch: int, reward_cfg: RewardConfig,
+                 ranges: dict[str, tuple[float, float]],
+                 base: Mapping[str, Any]) -> None:  # fmt: skip
+        super().__init__(plant, batch, reward_cfg)
+        self.ranges = dict(ranges)
+        self.base = dict(base)
+        self.plants: list[Plant] = [plant] * batch
+        self.factors: list[dict[str, float]] = [{} for _ in range(batch)]
+        self._row_args = [self._args_of(b, plant) for b in range(batch)]
+        self._row_entries: tuple | None = None
+        if batch > 1:
+            self.step = self._step_rows  # type: ignore[method-assign]
+
+    def _args_of(self, b: int, plant: Plant) -> tuple:
+        """The plant kernel's arguments for row b alone (views of the core's arrays)."""
+        r = slice(b, b + 1)
+        return plant.step_args(self.X[r], self.U[r], self.D[r], self.Z[r])
+
+    def row_plant(self, b: int) -> Plant:
+        return self.plants[b]
+
+    def set_plant(self, b: int, plant: Plant, factors: Mapping[str, float] | None = None) -> None:
+        """Make row b simulate ``plant`` (of the core's plant class); its state is not
+        touched."""
+        self.plants[b] = plant
+        self.factors[b] = dict(factors or {})
+        self._row_args[b] = self._args_of(b, plant)
+        if self.B == 1 and self._plant_args is not None:  # Core.step runs this row's plant
+            self._plant_args = plant.step_args(self.X, self.U, self.D, self.Z)
+
+    def reset_row(self, b: int, scenario: Any, key: int) -> None:
+        """Draw row b's plant from ``key`` (plants/perturb.py), then start the row as
+        Core.reset_row does.
+
+        Raises:
+            ValueError: the env's own plant cannot hold the scenario's start, or no draw
+                can (perturb.draw_plant); row b is left as it was.
+        """
+        self.check_start(scenario)
+        plant, factors = perturb.draw_plant(self.plant.id, self.base, self.ranges, key,
+                                            lambda p: self.start_fits(scenario, p))  # fmt: skip
+        old = self.plants[b], self.factors[b]
+        self.set_plant(b, plant, factors)
+        try:
+            super().reset_row(b, scenario, key)
+        except Exception:
+            self.set_plant(b, *old)
+            raise
+
+    def _step_rows(self, A: Any) -> None:
+        """Core.step for rows of different plants: each row's plant kernel, then the rest
+        of the step over every row."""
+        if not to_commands(A, self.U):
+            raise non_finite_action(A)
+        entries = self._row_entries
+        if entries is None:
+            entries = self._row_entries = (entry_point(self.plant.kernel(), self._row_args[0]),
+                                           entry_point(advance, self._step_args()))  # fmt: skip
+        kernel = entries[0]
+        for args in self._row_args:
+            kernel(*args)
+        entries[1](*(self._advance_args or self._step_args()))
+
+    def __getstate__(self) -> dict:
+        """As Core's, without the per-row kernel arguments (views of the row arrays, made
+        again by __setstate__ over the copied arrays) and the bound step."""
+        state = super().__getstate__()
+        state.update(_row_entries=None, _row_args=None)
+        state.pop("step", None)
+        return state
+
+    def __setstate__(self, state: dict) -> None:
+        super().__setstate__(state)
+        self._row_args = [self._args_of(b, p) for b, p in enumerate(self.plants)]
+        if self.B > 1:
+            self.step = self._step_rows  # type: ignore[method-assign]
