@@ -5,7 +5,8 @@ Two layouts:
 
 - ``steamtemp-train --out DIR`` (and the shipped ``agents/zoo/``):
   ``DIR/<env>__<algo>.zip`` (the SB3 model) and ``DIR/<env>__<algo>.json`` (env id,
-  ``sb3_class``, controller ``memory``, ``normalization`` statistics, ``residual_scale``);
+  ``sb3_class``, controller ``memory``, ``normalization`` statistics, ``residual_scale``,
+  ``max_move``);
   ``<env>`` is the env id with ``/`` written ``__``. Independent training runs of one
   agent (``python -m agents.train --zoo --runs K``) are ``<env>__<algo>__run<k>``,
   k = 0..K-1; a file without the run index is read as run 0 (where ``__run0`` is absent).
@@ -80,15 +81,17 @@ class AgentFiles:
             meta = json.loads(self.meta[0].read_text(encoding="utf-8"))
             cls, memory = meta["sb3_class"], meta["memory"]
             norm, residual = meta["normalization"], meta["residual_scale"]
+            max_move = meta.get("max_move")  # no key: the action is a valve position
         else:
             cls = _RL_ZOO_CLASSES.get(self.algo, self.algo.upper())
             memory, norm, residual = _rl_zoo_pipeline(self.model, self.meta), None, None
+            max_move = None
             pkl = [f for f in self.meta if f.name == "vecnormalize.pkl"]
             if pkl:
                 norm = _vecnormalize_stats(pkl[0])
         model = model_class(cls).load(self.model, device="cpu")
         return AgentPolicy(model, gym.make(self.env_id), memory=memory, obs_norm=norm,
-                           residual_scale=residual)  # fmt: skip
+                           residual_scale=residual, max_move=max_move)  # fmt: skip
 
 
 def stem(env_id: str, algo: str, run: int | None = None) -> str:

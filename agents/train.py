@@ -15,9 +15,10 @@ id; the same files work with ``python -m rl_zoo3.train --gym-packages steamtemp_
 "dict(...)" string of VecNormalize options), ``env_wrapper`` (RL Zoo's forms; here
 agents.wrappers.ControllerMemory), ``policy_kwargs`` (a dict or RL Zoo's "dict(...)"
 string), ``learning_rate`` (a number or "lin_<x>"), ``noise_type``/``noise_std``
-(SAC/TD3 action noise), ``residual_scale`` (our extension, not RL Zoo's: train a
-residual on cascade_pi; such entries are not for RL Zoo). Every other key must be an
-argument of the algorithm's constructor. All input is checked before training starts.
+(SAC/TD3 action noise), ``residual_scale`` and ``max_move`` (our extensions, not RL
+Zoo's: train a residual on cascade_pi, or an incremental agent whose action is a valve move
+of at most ``max_move`` of stroke per interval, agents/moves.py; such entries are not for
+RL Zoo). Every other key must be an argument of the algorithm's constructor. All input is checked before training starts.
 
 Training runs on the ``random`` scenario distribution through the native vector env
 (agents.vec_env), with the controller memory and VecNormalize when configured. At every
@@ -55,6 +56,7 @@ import yaml
 import steamtemp_gym
 from agents import ray_backend, shipped
 from agents.files import stem
+from agents.moves import check_max_move
 
 #: Algorithm names: SB3's PPO, SAC, TD3, PPO as a residual on cascade_pi (its own YAML
 #: file, whose entries need ``residual_scale``) and sb3-contrib's RecurrentPPO (an LSTM
@@ -75,7 +77,7 @@ RUN_SEED_STRIDE = 1000
 MAX_RUNS = 100
 #: RL Zoo keys with a meaning of their own (the rest go to the algorithm's constructor).
 SPECIAL = ("n_timesteps", "n_envs", "policy", "normalize", "env_wrapper", "policy_kwargs",
-           "noise_type", "noise_std", "residual_scale")  # fmt: skip
+           "noise_type", "noise_std", "residual_scale", "max_move")  # fmt: skip
 
 
 class ConfigError(ValueError):
@@ -188,6 +190,14 @@ def read_hyperparams(path: Path, env_id: str, algo: str) -> dict[str, Any]:
     if ("residual_scale" in hp) != algo.endswith("_residual"):
         raise ConfigError(f"--hyperparams {path}: residual_scale is required for a *_residual "
                           f"algo and only there (algo {algo!r})")  # fmt: skip
+    if "max_move" in hp:
+        if "residual_scale" in hp:
+            raise ConfigError(f"--hyperparams {path}: residual_scale and max_move exclude each "
+                              "other (an agent is residual or incremental)")  # fmt: skip
+        try:
+            check_max_move(hp["max_move"])
+        except ValueError as exc:
+            raise ConfigError(f"--hyperparams {path}: {exc}") from None
     hp = dict(hp)
     hp["policy_kwargs"] = _dict_string("policy_kwargs", hp.get("policy_kwargs", {}))
     norm = hp.get("normalize", False)
@@ -218,6 +228,7 @@ def make_training_env(env_id: str, n_envs: int, seed: int, hp: dict[str, Any]):
     """(VecEnv for training, the native vector env under it)."""
     from stable_baselines3.common.vec_env import VecMonitor, VecNormalize
 
+    from agents.moves import VecMoves
     from agents.vec_env import NativeVecEnv
     from agents.wrappers import VecControllerMemory, VecResidual
 
@@ -225,6 +236,8 @@ def make_training_env(env_id: str, n_envs: int, seed: int, hp: dict[str, Any]):
     venv = base
     if hp.get("residual_scale") is not None:
         venv = VecResidual(venv, base.venv, hp["residual_scale"])
+    if hp.get("max_move") is not None:
+        venv = VecMoves(venv, base.venv, hp["max_move"])
     if hp["env_wrapper"] is not None:
         venv = VecControllerMemory(venv, base.venv, **hp["env_wrapper"])
     venv = VecMonitor(venv)
@@ -317,7 +330,8 @@ def train(env_id: str, algo: str, hyperparams: Path | None = None, timesteps: in
 
     def snapshot_policy():
         return AgentPolicy(model, native, memory=hp["env_wrapper"], obs_norm=_obs_stats(venv),
-                           residual_scale=hp.get("residual_scale"))  # fmt: skip
+                           residual_scale=hp.get("residual_scale"),
+                           max_move=hp.get("max_move"))  # fmt: skip
 
     class Progress(BaseCallback):
         def __init__(self) -> None:
@@ -363,7 +377,7 @@ def train(env_id: str, algo: str, hyperparams: Path | None = None, timesteps: in
                        for k in range(N_VALIDATION)], "best": {k: best[k] for k in
                        ("return", "iae_K_s")}, "curve": curve},
         "normalization": best["obs_norm"], "memory": hp["env_wrapper"],
-        "residual_scale": hp.get("residual_scale"),
+        "residual_scale": hp.get("residual_scale"), "max_move": hp.get("max_move"),
     }  # fmt: skip
     (out / f"{name}.json").write_text(json.dumps(meta, indent=1), encoding="utf-8")
     venv.close()

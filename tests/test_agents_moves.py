@@ -4,6 +4,8 @@ env the same commands, and bad values refused."""
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pytest
 
@@ -123,3 +125,58 @@ def test_residual_and_incremental_together_are_refused(native):
 def test_commands_before_a_start_are_refused(native):
     with pytest.raises(ValueError, match="restart"):
         MoveState(native.venv, 0.1)(np.zeros((2, native.action_space.shape[0])))
+
+
+def _ppo_yaml(tmp_path, **extra):
+    import yaml
+
+    hp = {"n_envs": 2, "policy": "MlpPolicy", "normalize": "dict(norm_obs=True)",
+          "n_steps": 64, "batch_size": 64, "n_epochs": 1,
+          "policy_kwargs": "dict(net_arch=dict(pi=[8], vf=[8]))", **extra}  # fmt: skip
+    path = tmp_path / "ppo.yml"
+    path.write_text(yaml.safe_dump({ENV: hp}))
+    return path
+
+
+def test_an_incremental_agent_trains_and_acts_within_its_move_bound(tmp_path):
+    """``max_move`` in the hyperparameters: trained through VecMoves, written to the
+    metadata, and the loaded Policy's commands move at most that much per interval."""
+    import gymnasium as gym
+
+    import agents
+    from agents import train
+
+    train.train(ENV, "ppo", _ppo_yaml(tmp_path, max_move=MAX_MOVE), timesteps=128, seed=0,
+                out=tmp_path, quiet=True)  # fmt: skip
+    meta = json.loads((tmp_path / "steamtemp__Cascade300MW-v0__ppo.json").read_text())
+    assert meta["max_move"] == MAX_MOVE
+    (files,) = agents.files.find(tmp_path)
+    pol = files.load()
+    assert pol.moves is not None and pol.moves.max_move == MAX_MOVE
+    env = gym.make(ENV, scenario="load_ramp_100_50")
+    obs, _ = env.reset(seed=0)
+    prev = None
+    for _ in range(30):
+        a, _ = pol.predict(obs)
+        u = (a.astype(np.float64) + 1.0) / 2.0
+        if prev is not None:
+            assert np.all(np.abs(u - prev) <= MAX_MOVE + 1e-6)
+        prev = u
+        obs, *_ = env.step(a)
+
+
+@pytest.mark.parametrize(("extra", "match"), [({"max_move": 0.0}, "max_move"),
+                                              ({"max_move": "fast"}, "max_move"),
+                                              ({"max_move": 0.1, "residual_scale": 0.2},
+                                               "exclude each other")])  # fmt: skip
+def test_bad_max_move_in_the_hyperparameters_is_refused_before_training(tmp_path, capsys,
+                                                                         extra, match):
+    from agents import train
+
+    algo = "ppo_residual" if "residual_scale" in extra else "ppo"
+    args = ["--env", ENV, "--algo", algo, "--hyperparams", str(_ppo_yaml(tmp_path, **extra)),
+            "--out", str(tmp_path / "out")]  # fmt: skip
+    with pytest.raises(SystemExit) as exc:
+        train.main(args)
+    assert exc.value.code == 2 and match in capsys.readouterr().err
+    assert not (tmp_path / "out").exists()
