@@ -251,8 +251,8 @@ ETA_SATURATING = 10.0
 def test_bounded_gains_keep_the_deep_fast_ramp_stable(env_id):
     """Even with its gains driven to their bounds, the MSE net holds the held-out deep fast
     ramp: no trip, no limit cycle against cascade_pi_ff, a peak no larger than the plain
-    cascade PI's. Measured peaks 11.7 K (FSH) and 16.6 K (drum), cascade_pi 13.0 and
-    19.0 K; gains bounded to twice their commissioning values instead: quiet p2p 28.7 K
+    cascade PI's. Measured peaks 12.8 K (FSH) and 16.5 K (drum), cascade_pi 15.6 and
+    16.9 K; gains bounded to twice their commissioning values instead: quiet p2p 28.7 K
     on the FSH against cascade_pi_ff's 8.7 K; unbounded (the paper's eta): peaks 34.4 K
     and 42.5 K."""
     ref = _metrics(env_id, "heldout:deep_fast_ramp", "cascade_pi_ff", None, 1)
