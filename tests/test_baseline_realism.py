@@ -34,21 +34,22 @@ def _metrics(env_id: str, scenario: str, name: str) -> dict:
 
 
 #: The (plant, baseline) pairs measured to break the criterion, with the first check that
-#: fails (seed 0). Most are slow, poorly damped recoveries at low load after the deep fast
-#: ramp of loops tuned at rated load, or MPCs on identified models that the plant's own
-#: loops partly cancel; see docs/baselines.md.
+#: fails (seed 0). The deep fast ramp ends at 35 % load, below the 50-100 % of the training
+#: episodes and of the loops' commissioning: fixed gains tuned there for the best training
+#: score (the ``_tuned`` rows, ``fuzzy_p2id``) stroke the valves at that load; see
+#: docs/baselines.md.
 MEASURED_FAILURES = {
+    ("SupercriticalFSH-v0", "cascade_pi_tuned"): "deep ramp: travel 16.60x the reference's",
+    ("DrumBoilerSH-v0", "cascade_pi_tuned"): "deep ramp: travel 14.76x the reference's",
+    ("BoilerTurbineMIMO-v0", "cascade_pi_tuned"): "deep ramp: travel 5.42x the reference's",
+    ("DrumBoilerSH-v0", "fuzzy_p2id"): "deep ramp: travel 3.58x the reference's",
     ("SupercriticalFSH-v0", "mpc_evarx"): "deep ramp: quiet p2p 20.95 K (reference 8.72 K)",
     ("SupercriticalFSH-v0", "mpc_arx"): "deep ramp: quiet p2p 17.47 K (reference 8.72 K)",
-    ("SupercriticalFSH-v0", "cascade_pi_tuned"): "deep ramp: travel 14.48x the reference's",
-    ("BensonSubcritical-v0", "fuzzy_p2id"): "ramp: travel 3.17x the reference's",
     ("BensonSubcritical-v0", "mpc_evarx"): "ramp: quiet p2p 5.69 K (reference 2.52 K)",
     ("BensonSubcritical-v0", "mpc_arx"): "ramp: quiet p2p 5.87 K (reference 2.52 K)",
-    ("DrumBoilerSH-v0", "fuzzy_p2id"): "deep ramp: travel 9.02x the reference's",
     ("BoilerTurbineMIMO-v0", "mpc_arx"): "ramp: quiet p2p 5.59 K (reference 2.49 K)",
     ("DrumBoilerSH-v0", "mpc_evarx"): "ramp: travel 3.28x the reference's",
     ("DrumBoilerSH-v0", "mpc_arx"): "ramp: travel 3.27x the reference's",
-    ("DrumBoilerSH-v0", "cascade_pi_tuned"): "deep ramp: travel 3.04x the reference's",
 }
 
 
