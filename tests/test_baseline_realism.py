@@ -43,10 +43,6 @@ MEASURED_FAILURES = {
     ("DrumBoilerSH-v0", "cascade_pi_tuned"): "deep ramp: travel 14.76x the reference's",
     ("BoilerTurbineMIMO-v0", "cascade_pi_tuned"): "deep ramp: travel 5.42x the reference's",
     ("DrumBoilerSH-v0", "fuzzy_p2id"): "deep ramp: travel 3.58x the reference's",
-    ("SupercriticalFSH-v0", "mpc_arx"): "deep ramp: quiet p2p 17.47 K (reference 8.72 K)",
-    ("BensonSubcritical-v0", "mpc_arx"): "ramp: quiet p2p 5.87 K (reference 2.52 K)",
-    ("BoilerTurbineMIMO-v0", "mpc_arx"): "ramp: quiet p2p 5.59 K (reference 2.49 K)",
-    ("DrumBoilerSH-v0", "mpc_arx"): "ramp: travel 3.27x the reference's",
 }
 
 

@@ -117,7 +117,10 @@ def steps():
     return E.closed_loop_steps(BTM, "{}")
 
 
-@pytest.mark.parametrize("kind", ["evarx", "arx"])
+@pytest.mark.parametrize("kind", [pytest.param("evarx", marks=pytest.mark.xfail(
+    strict=True, reason="measured: EV-ARX at 100 % load, RGD -> STE first lobe -5.59 against "
+    "the closed loop's +5.39 (50 and 75 % match); the sign monitor falls back there")),
+    "arx"])  # fmt: skip
 def test_model_gains_match_closed_loop_step_tests_at_three_loads(ident, steps, kind):
     """The identified model against step tests of the real closed loop at 50, 75 and 100 %
     load: zero steady gains (the loops integrate every bias out; the closed loop ends within
@@ -209,6 +212,7 @@ def test_fallback_removes_the_bias_at_the_move_limit():
     env = gym.make(BTM, scenario="load_ramp_100_50")
     mpc, pi = baselines.make("mpc_evarx", env), baselines.make("cascade_pi", env)
     mpc.monitor_K = np.zeros_like(mpc.monitor_K)
+    mpc.expected_signs = np.zeros_like(mpc.expected_signs)  # the residual monitor alone
     obs, _ = env.reset(seed=0)
     bias = []
     for k in range(600):
@@ -230,14 +234,15 @@ def test_fallback_removes_the_bias_at_the_move_limit():
 def test_monitor_detects_a_sign_flipped_model_and_falls_back():
     """A deliberately sign-flipped model (every bias coefficient negated): the monitor's
     sign check against the closed-loop step tests rejects it at every load, and the policy
-    is the plain loops (no bias ever applied); the true model passes at every load."""
+    is the plain loops (no bias ever applied); the identified model passes at 50 and 75 %
+    load (at 100 % one channel's sign is wrong: the first test above)."""
     env = gym.make(BTM, scenario="load_ramp_100_50")
     mpc = baselines.make("mpc_evarx", env)
     m = mpc.model
     ny = E.N_Y * m.n_out
     theta = m.theta.copy()
     theta[..., ny : ny + E.N_U * m.n_act] *= -1.0
-    for L in (0.5, 0.75, 1.0):
+    for L in (0.5, 0.75):
         assert mpc.signs_ok(m.step_response(L, mpc.N))
     flipped = dataclasses.replace(m, theta=theta)
     for L in (0.5, 0.75, 1.0):
@@ -252,7 +257,7 @@ def test_monitor_detects_a_sign_flipped_model_and_falls_back():
 
 
 # -- claims of Toyoda and Wada 1999 ------------------------------------------------------
-FIT = {"evarx": (26.6, 41.0), "arx": (40.3, 29.5)}  # validation fit %, STE / RTE
+FIT = {"evarx": (48.7, 42.5), "arx": (40.2, 10.7)}  # validation fit %, STE / RTE
 
 
 def test_pin_validation_fit(ident):
@@ -261,12 +266,10 @@ def test_pin_validation_fit(ident):
         np.testing.assert_allclose(ident["fit_pct"][kind], v, atol=3.0)
 
 
-@pytest.mark.xfail(strict=True, reason="EV-ARX fit 26.6 / 41.0 % (STE / RTE) against the "
-                   "interpolated ARX's 40.3 / 29.5 %: better on RTE only")  # fmt: skip
 def test_claim_evarx_models_the_ramped_plant_better_than_interpolated_arx(ident):
     """Section 7.1 / Fig. 8: under ramped load the EV-ARX predicts (infinite-step, eq. 14)
     better than linear ARX models identified at constant loads and interpolated by load,
-    on both outputs."""
+    on both outputs. Measured: fit 48.7 / 42.5 % (STE / RTE) against 40.2 / 10.7 %."""
     fit = ident["fit_pct"]
     assert np.all(fit["evarx"] > fit["arx"])
 
@@ -288,12 +291,14 @@ def ramp():
     return _iae(("cascade_pi", "cascade_pi_ff", "mpc_evarx", "mpc_arx"), range(2))
 
 
-@pytest.mark.xfail(strict=True, reason="load_ramp_100_50, seeds 0-1, IAE K s STE / RTE: "
-                   "mpc_evarx 2979 / 5675, mpc_arx 3270 / 5375, cascade_pi 3126 / 5372")
-@pytest.mark.parametrize("name", ["mpc_evarx", "mpc_arx"])
+@pytest.mark.parametrize("name", ["mpc_evarx", pytest.param("mpc_arx", marks=pytest.mark.xfail(
+    strict=True, reason="load_ramp_100_50, seeds 0-1, IAE K s STE / RTE: mpc_arx 2327 / 5671 "
+    "against cascade_pi 2336 / 5666 (RTE 0.1 % worse)"))])  # fmt: skip
 def test_claim_mpc_beats_pi_on_ste_and_rte(ramp, name):
     """Section 7.2 / Fig. 9: the MPC on the model keeps STE and RTE closer than the
-    conventional PI under a ramped load change."""
+    conventional PI under a ramped load change. Measured (seeds 0-1, IAE K s STE / RTE):
+    mpc_evarx 2307 / 5619 against cascade_pi 2336 / 5666, 1.2 % and 0.8 % lower: the
+    direction of the paper's claim, by a small margin."""
     assert ramp[name][0] < ramp["cascade_pi"][0] and ramp[name][1] < ramp["cascade_pi"][1]
 
 
