@@ -40,8 +40,10 @@ def test_cascade_pi_peak_on_the_ramps_is_in_the_field_band(env_id):
 
 #: Plants where the identified feed-forward falls short of the 25 % margin (measured, 3 seeds).
 FF_SHORT = {
-    "steamtemp/BoilerTurbineMIMO-v0": "margins 23 % down-ramp (4.07 -> 3.13 K), 19 % up-ramp "
-    "(4.94 -> 4.01 K); not diagnosed",
+    "steamtemp/BoilerTurbineMIMO-v0": "margins 33 % down-ramp (4.7 -> 3.1 K), 5 % up-ramp "
+    "(4.2 -> 4.0 K); not diagnosed",
+    "steamtemp/SupercriticalFSH-v0": "margins 24.5 % down-ramp (5.23 -> 3.95 K), 45 % up-ramp "
+    "(6.2 -> 3.5 K): the range-commissioned PI peaks lower on the down-ramp",
 }
 
 
