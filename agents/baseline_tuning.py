@@ -13,8 +13,15 @@ Every controller gets the same terms:
   the leaderboard's ends: 0 = ``cascade_pi_ff``'s return, 1 = the oracle's, on the same
   episodes (:func:`ends`, computed once per env and stored in ``baselines/tuned/ends.json``).
 - **Constraints**: no trip, and a mean valve travel of at most :data:`TRAVEL_BUDGET` times
-  ``cascade_pi_ff``'s on the same episodes. A candidate that breaks them ranks below every
-  one that keeps them, by how far it breaks them (so a start outside them is walked in).
+  ``cascade_pi_ff``'s on the same episodes; and the commissioning check at the bottom of
+  the load range (:data:`MIN_LOAD_CHECK`, one episode held at :data:`MIN_LOAD`): no trip,
+  no limit cycle and a valve travel within ``stats.REALISM_TRAVEL_MAX`` times the
+  reference's on that episode (:func:`agents.stats.realism_breach`), as a unit is
+  commissioned over its whole load range while the training episodes stay at 50-100 %. A
+  candidate that breaks them ranks below every one that keeps them, by how far it breaks
+  them (so a start outside them is walked in). The check runs on the start and on every
+  candidate that would otherwise be accepted: one that does not improve the objective
+  cannot be accepted whatever the check says, so the search is the same as checking all.
 - **Search**: a deterministic compass search on the unit cube of the knobs (log or
   linear, :class:`baselines.tuning.Knob`) from the controller's defaults: each round tries
   +- the step along every knob in turn, moves to the first candidate that improves the
@@ -35,7 +42,7 @@ import hashlib
 import json
 import sys
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
@@ -45,9 +52,10 @@ import numpy as np
 import baselines
 import steamtemp_gym
 from agents import stats
-from agents.evaluation import run_batch
+from agents.evaluation import run_batch, run_episode
 from agents.oracle import Oracle
 from baselines import tuning
+from steamtemp_gym.scenarios import Scenario
 
 #: The baselines with knobs, tuned by default.
 TUNABLE = ("cascade_pi", "cascade_pi_ff", "fuzzy_p2id", "mpc_linear", "lqi", "fao_sf", "fao_fac",
@@ -63,6 +71,26 @@ STEP0 = 0.25
 MIN_STEP = 1.0 / 64.0
 #: Largest mean valve travel, as a multiple of the reference's on the same episodes.
 TRAVEL_BUDGET = stats.TRAVEL_BUDGET
+#: Load of the commissioning check: the bottom of the load range the suite's scenarios cover.
+MIN_LOAD = 0.35
+_MIN = 60.0
+#: The commissioning check at minimum load: held at :data:`MIN_LOAD`, a +5 K setpoint step at
+#: minute 5 and a +5 % heat-absorption step at minute 20, with the training episodes' noise;
+#: the quiet stretch (minutes 31-50) shows a limit cycle. Not a scenario of the leaderboard.
+MIN_LOAD_CHECK = Scenario(
+    name="min_load_check",
+    duration_s=50 * _MIN,
+    load=((0.0, MIN_LOAD),),
+    setpoint_offset_C=((0.0, 0.0), (5 * _MIN, 0.0), (5 * _MIN, 5.0)),
+    heat_absorption_bias=((0.0, 0.0), (20 * _MIN, 0.0), (21 * _MIN, 0.05)),
+    noise_std_C=0.25,
+    heat_absorption_noise_std=0.02,
+    heat_absorption_noise_tau_s=300.0,
+    description="commissioning check of the baseline tuner: 35 % load, setpoint and "
+    "heat-absorption steps",
+)
+#: Seed of the check episode.
+CHECK_SEED = TUNING_SEED - 1
 
 
 #: Modules of steamtemp_gym that no trajectory depends on (drawing, docs, the command line),
@@ -114,25 +142,36 @@ def ends(env_id: str, compute: bool = True) -> dict[str, Any]:
     return got
 
 
+def check_metrics(env_id: str, make_policy: Any) -> dict[str, Any]:
+    """Metrics of one policy on the commissioning check (:data:`MIN_LOAD_CHECK`)."""
+    env = gym.make(env_id, scenario=MIN_LOAD_CHECK)
+    return run_episode(env, make_policy(env), CHECK_SEED)["metrics"]
+
+
 @dataclass(frozen=True)
 class Evaluation:
-    """One candidate's result on the training episodes."""
+    """One candidate's result on the training episodes and, once run, the commissioning
+    check (``check``: None if not run, "" if passed, else what broke)."""
 
     knobs: dict[str, float]
     score: float  # mean normalized score
     travel_ratio: float  # mean travel / the reference's
     trips: int
+    check: str | None = None
+    check_travel_ratio: float = float("nan")  # travel on the check / the reference's
 
     @property
     def feasible(self) -> bool:
-        return self.trips == 0 and self.travel_ratio <= TRAVEL_BUDGET
+        return self.trips == 0 and self.travel_ratio <= TRAVEL_BUDGET and not self.check
 
     @property
     def merit(self) -> float:
-        """The search's objective: the score if feasible, else below every feasible one."""
+        """The search's objective: the score if feasible, else below every feasible one.
+        Never raised by running the check, so a candidate is judged before it is checked."""
         if self.feasible:
             return self.score
-        return -1e6 - self.trips - max(self.travel_ratio - TRAVEL_BUDGET, 0.0)
+        broken = 1.0 if self.check else 0.0
+        return -1e6 - self.trips - max(self.travel_ratio - TRAVEL_BUDGET, 0.0) - broken
 
 
 def evaluate(name: str, env_id: str, values: dict[str, float], e: dict[str, Any]) -> Evaluation:
@@ -154,18 +193,24 @@ def defaults(factory: Any, env_id: str) -> dict[str, float]:
 
 
 def compass(x0: np.ndarray, evaluate_at: Any, budget: int = EVALUATIONS,
-            step0: float = STEP0, min_step: float = MIN_STEP) -> list[tuple[np.ndarray, Any]]:
+            step0: float = STEP0, min_step: float = MIN_STEP,
+            confirm: Any = None) -> list[tuple[np.ndarray, Any]]:
     """Deterministic compass search on the unit cube (module docstring).
 
     Args:
         x0: Start, in unit coordinates.
         evaluate_at: ``u -> result`` with a ``merit`` attribute (higher is better).
         budget: Evaluations in all, the start's included.
+        confirm: ``(u, result) -> result``, a further check run on the start and on a
+            candidate only when its merit beats the best's; it may lower the merit, never
+            raise it (None: no check).
 
     Returns:
         Every (point, result) evaluated, in order; the best is the last accepted move.
     """
-    x, best = np.asarray(x0, dtype=float), evaluate_at(np.asarray(x0, dtype=float))
+    confirm = confirm or (lambda u, r: r)
+    x = np.asarray(x0, dtype=float)
+    best = confirm(x, evaluate_at(x))
     history = [(x, best)]
     step = step0
     while len(history) < budget and step >= min_step:
@@ -177,6 +222,8 @@ def compass(x0: np.ndarray, evaluate_at: Any, budget: int = EVALUATIONS,
                 if u[i] == x[i] or len(history) >= budget:
                     continue
                 cand = evaluate_at(u)
+                if cand.merit > best.merit:
+                    cand = confirm(u, cand)
                 history.append((u, cand))
                 if cand.merit > best.merit:
                     best, x, moved = cand, u, True
@@ -189,8 +236,10 @@ def compass(x0: np.ndarray, evaluate_at: Any, budget: int = EVALUATIONS,
 
 
 def best_of(history: list[tuple[np.ndarray, Any]]) -> Any:
-    """The result with the highest merit (the first of equals)."""
-    return max((r for _, r in history), key=lambda r: r.merit)
+    """The result with the highest merit (the first of equals) among those the search
+    judged in full (an :class:`Evaluation` whose check ran)."""
+    judged = [r for _, r in history if getattr(r, "check", "") is not None]
+    return max(judged, key=lambda r: r.merit)
 
 
 def search(name: str, env_id: str, log: Any = None) -> dict[str, Any]:
@@ -203,6 +252,8 @@ def search(name: str, env_id: str, log: Any = None) -> dict[str, Any]:
     start = defaults(factory, env_id)
     x0 = np.array([k.to_unit(start[k.name]) for k in ks])
 
+    ref = check_metrics(env_id, lambda env: baselines.make(ZERO, env))
+
     def evaluate_at(u: np.ndarray) -> Evaluation:
         values = dict(start) if np.array_equal(u, x0) else {  # the start exactly
             k.name: k.from_unit(ui) for k, ui in zip(ks, u, strict=True)}  # fmt: skip
@@ -212,11 +263,26 @@ def search(name: str, env_id: str, log: Any = None) -> dict[str, Any]:
                 f"trips {res.trips}")
         return res
 
-    history = compass(x0, evaluate_at)
+    def confirm(u: np.ndarray, res: Evaluation) -> Evaluation:
+        m = check_metrics(env_id, lambda env: baselines.make(name, env, **res.knobs))
+        breach = stats.realism_breach(m, ref)
+        if log:
+            log(f"{name} {env_id}: min-load check {breach or 'passed'}")
+        return replace(res, check=breach or "",
+                       check_travel_ratio=m["valve_travel"] / ref["valve_travel"])
+
+    history = compass(x0, evaluate_at, confirm=confirm)
     best = best_of(history)
     return {"knobs": best.knobs, "score": best.score, "travel_ratio": best.travel_ratio,
             "trips": best.trips, "feasible": best.feasible, "evaluations": len(history),
-            "start": history[0][1].__dict__}  # fmt: skip
+            "check_travel_ratio": best.check_travel_ratio, "start": history[0][1].__dict__,
+            "history": [_row(r) for _, r in history]}  # fmt: skip
+
+
+def _row(r: Evaluation) -> dict[str, Any]:
+    """One evaluation as stored: its knobs, score, travel ratio, trips and check."""
+    return {"knobs": r.knobs, "score": r.score, "travel_ratio": r.travel_ratio,
+            "trips": r.trips, "check": r.check}  # fmt: skip
 
 
 def _code_digest(ends: bool = False) -> str:
@@ -250,7 +316,9 @@ def write(name: str, env_ids: list[str], log: Any = None) -> dict[str, Any]:
         data["plants"][env_id] = res
         data["terms"] = {"episodes": EPISODES, "tuning_seed": TUNING_SEED,
                          "evaluations": EVALUATIONS, "step0": STEP0, "min_step": MIN_STEP,
-                         "travel_budget": TRAVEL_BUDGET, "reference": ZERO}  # fmt: skip
+                         "travel_budget": TRAVEL_BUDGET, "reference": ZERO,
+                         "min_load_check": {"load": MIN_LOAD, "seed": CHECK_SEED,
+                                            "travel_max": stats.REALISM_TRAVEL_MAX}}  # fmt: skip
         data["code"] = _code_digest()
         tuning.TUNED.mkdir(exist_ok=True)
         f.write_text(json.dumps(data, indent=1, sort_keys=True) + "\n")  # after every env

@@ -43,9 +43,12 @@ means over seeds, never by a near-zero gap. (The previous scales, 0 = ``cascade_
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
+from typing import Any
 
 import numpy as np
 from scipy.stats import trim_mean
+
+from steamtemp_gym.metrics import limit_cycles
 
 Scores = Sequence[np.ndarray]  # one 1-d array of run scores per task
 #: Bootstrap replicates (rliable's examples use 2,000 to 50,000; 2,000 keeps the percentile
@@ -231,6 +234,29 @@ def performance_profile(scores: Scores, taus: np.ndarray) -> np.ndarray:
 #: The valve-travel budget: a policy is admissible on a plant when its mean valve travel there
 #: is at most this multiple of the industrial reference's (cascade_pi_ff) and it never trips.
 TRAVEL_BUDGET = 2.0
+
+#: The actuator-realism bound: on any one episode a baseline's valve travel stays within this
+#: multiple of the industrial reference's on the same episode (the registry-wide realism test
+#: and the baseline tuner's minimum-load check, :func:`realism_breach`).
+REALISM_TRAVEL_MAX = 3.0
+
+
+def realism_breach(m: dict[str, Any], ref: dict[str, Any]) -> str | None:
+    """What a plant engineer would reject in one episode, against the industrial reference's
+    metrics ``ref`` on the same episode, or None: a trip, valve travel above
+    :data:`REALISM_TRAVEL_MAX` times the reference's, or a limit cycle in the quiet stretch
+    (:func:`steamtemp_gym.metrics.limit_cycles`). ``m`` and ``ref`` are the metrics of
+    :func:`agents.evaluation.run_episode`."""
+    if m["tripped"]:
+        return "tripped"
+    ratio = m["valve_travel"] / ref["valve_travel"]
+    if ratio > REALISM_TRAVEL_MAX:
+        return (f"travel {m['valve_travel']:.2f} = {ratio:.2f}x the reference's "
+                f"{ref['valve_travel']:.2f}")  # fmt: skip
+    if limit_cycles(m["quiet_p2p_K"], ref["quiet_p2p_K"]):
+        return (f"quiet p2p {m['quiet_p2p_K']:.2f} K against the reference's "
+                f"{ref['quiet_p2p_K']:.2f} K")  # fmt: skip
+    return None
 
 #: Smallest scale of the normalized score, as a fraction of the reference's cost |R0|.
 MIN_SPAN = 0.05

@@ -1,10 +1,11 @@
 """Actuator realism of every baseline on every plant: what a plant would accept.
 
 On a load ramp and a held-out fast deep ramp (seed 0), each baseline's valve travel stays
-within :data:`TRAVEL_MAX` times the industrial reference's (``cascade_pi_ff``) on the same
-episode, and its quiet stretch shows no sustained oscillation
+within ``agents.stats.REALISM_TRAVEL_MAX`` times the industrial reference's
+(``cascade_pi_ff``) on the same episode, and its quiet stretch shows no sustained oscillation
 (``steamtemp_gym.metrics.limit_cycles``: the quiet peak-to-peak at most
-``LIMIT_CYCLE_RATIO`` times the reference's, or ``LIMIT_CYCLE_FLOOR_K``). Spray valves
+``LIMIT_CYCLE_RATIO`` times the reference's, or ``LIMIT_CYCLE_FLOOR_K``):
+``agents.stats.realism_breach``. Spray valves
 erode with stroking; a controller that chatters or limit-cycles would be taken off a unit
 whatever its IAE.
 """
@@ -19,10 +20,10 @@ import pytest
 import baselines
 import steamtemp_gym
 from agents.evaluation import run_episode
+from agents.stats import realism_breach
 from steamtemp_gym.metrics import limit_cycles
 
 REFERENCE = "cascade_pi_ff"
-TRAVEL_MAX = 3.0
 SCENARIOS = ("load_ramp_100_50", "heldout:deep_fast_ramp")
 SEED = 0
 
@@ -62,13 +63,18 @@ def _cases() -> list:
 def test_travel_within_three_times_the_reference_and_no_limit_cycle(env_id, name):
     for scenario in SCENARIOS:
         ref, m = _metrics(env_id, scenario, REFERENCE), _metrics(env_id, scenario, name)
-        assert not m["tripped"], (scenario, "tripped")
-        ratio = m["valve_travel"] / ref["valve_travel"]
-        assert ratio <= TRAVEL_MAX, (scenario, f"travel {m['valve_travel']:.2f} = {ratio:.2f}x "
-                                               f"the reference's {ref['valve_travel']:.2f}")
-        assert not limit_cycles(m["quiet_p2p_K"], ref["quiet_p2p_K"]), (
-            scenario, f"quiet p2p {m['quiet_p2p_K']:.2f} K against the reference's "
-                      f"{ref['quiet_p2p_K']:.2f} K")  # fmt: skip
+        breach = realism_breach(m, ref)
+        assert breach is None, (scenario, breach)
+
+
+def test_realism_breach_names_each_check():
+    """Each check of the criterion fails on its own, with its numbers, and nothing else."""
+    ref = {"tripped": False, "valve_travel": 2.0, "quiet_p2p_K": 1.0}
+    assert realism_breach(dict(ref), ref) is None
+    assert realism_breach({**ref, "tripped": True}, ref) == "tripped"
+    assert "3.50x" in realism_breach({**ref, "valve_travel": 7.0}, ref)
+    assert realism_breach({**ref, "valve_travel": 6.0}, ref) is None  # exactly 3x passes
+    assert "quiet p2p 2.10 K" in realism_breach({**ref, "quiet_p2p_K": 2.1}, ref)
 
 
 def test_limit_cycle_criterion():
