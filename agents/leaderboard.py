@@ -313,11 +313,12 @@ def _check_out(ap: argparse.ArgumentParser, out: Path, resume: bool) -> None:
 
 
 def _source_digest() -> str:
-    """Hash of the code that produces a row (physics, scenarios, metrics, baselines)."""
+    """Hash of the code that produces a row (physics, scenarios, metrics, baselines). The
+    baselines' stored tunings are part of their rows' policy digests (agents/specs.py), so
+    a new tuning reruns that controller's rows, not the oracle's or the agents'."""
     h = hashlib.sha256()
     roots = [Path(steamtemp_gym.__file__).parent, Path(baselines.__file__).parent]
     files = [f for r in roots for f in sorted(r.rglob("*.py"))]
-    files += sorted(Path(baselines.__file__).parent.rglob("*.json"))  # the stored tunings
     files += [Path(__file__).with_name(f) for f in ("evaluation.py", "difficulty.py", "oracle.py")]
     for f in files:
         h.update(f.read_bytes())

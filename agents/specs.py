@@ -20,7 +20,8 @@ take them: one parser for both, so a name means the same policy everywhere.
 :func:`parse` checks a name (importing a factory's module, finding an agent's files);
 :meth:`Spec.make` builds the policy for an env; :func:`check_built` checks what a factory
 returns; :meth:`Spec.digest` is what the leaderboard's fingerprint hashes: the name, with
-the hash of a trained agent's files or of a factory's module file.
+a baseline's stored tuning on the env, or the hash of a trained agent's files or of a
+factory's module file.
 """
 
 from __future__ import annotations
@@ -28,6 +29,7 @@ from __future__ import annotations
 import hashlib
 import importlib
 import importlib.util
+import json
 import re
 import sys
 from dataclasses import dataclass
@@ -36,6 +38,7 @@ from typing import Any
 
 import agents
 import baselines
+from baselines import tuning
 from steamtemp_gym.checks import head
 
 BASELINE, SHIPPED, FILES, FACTORY = "baseline", "shipped", "files", "factory"
@@ -87,7 +90,10 @@ class Spec:
 
     def digest(self, env_id: str) -> str:
         """The name, and the hash of what decides its actions beyond the source of
-        steamtemp_gym, baselines and agents: a trained agent's files, a factory's module."""
+        steamtemp_gym, baselines and agents: a baseline's stored tuning on the env
+        (:func:`tuning_digest`), a trained agent's files, a factory's module."""
+        if self.kind == BASELINE:
+            return self.name + ":" + tuning_digest(self.target, env_id)
         if self.kind == SHIPPED:
             from agents.files import steamtemp_files
 
@@ -101,6 +107,17 @@ class Spec:
             if path:
                 return self.name + ":" + hashlib.sha256(Path(path).read_bytes()).hexdigest()
         return self.name
+
+
+def tuning_digest(name: str, env_id: str) -> str:
+    """Hash of the knob values the benchmark's tuning stored for baseline ``name`` (or, for a
+    ``<base>_tuned`` row, for ``base``) on ``env_id``: so a new tuning reruns that
+    controller's rows and no other."""
+    f = baselines.factory(name)
+    path = tuning.path(f.name if isinstance(f, baselines.Tuned) else name)
+    entry = json.loads(path.read_text())["plants"].get(env_id) if path.is_file() else None
+    knobs = entry.get("knobs") if isinstance(entry, dict) else None
+    return hashlib.sha256(json.dumps(knobs, sort_keys=True).encode()).hexdigest()[:16]
 
 
 def parse(name: str) -> Spec:

@@ -56,6 +56,54 @@ def test_infeasible_candidates_rank_below_every_feasible_one():
     assert bt.Evaluation({}, 0.0, 2.5, 0).merit > bt.Evaluation({}, 0.0, 3.0, 0).merit
 
 
+def test_a_failed_commissioning_check_ranks_below_every_feasible_candidate():
+    passed = bt.Evaluation({}, -5.0, 1.9, 0, check="")
+    broken = bt.Evaluation({}, 0.9, 1.0, 0, check="travel 9.00 = 4.50x the reference's 2.00")
+    unchecked = bt.Evaluation({}, 0.9, 1.0, 0)
+    assert passed.feasible and unchecked.feasible and not broken.feasible
+    assert passed.merit > broken.merit
+    # running the check never raises a merit, so a candidate can be judged before it
+    assert broken.merit <= unchecked.merit
+
+
+def _constrained(u: np.ndarray) -> bt.Evaluation:
+    """A known objective whose optimum lies in a region the check refuses."""
+    score = -float(np.sum((u - np.array([0.9, 0.3])) ** 2))
+    return bt.Evaluation({"u0": float(u[0]), "u1": float(u[1])}, score, 1.0, 0)
+
+
+def _check(u: np.ndarray, r: bt.Evaluation) -> bt.Evaluation:
+    from dataclasses import replace
+
+    return replace(r, check="limit cycle" if u[0] > 0.6 else "")
+
+
+def test_checking_only_would_be_accepted_candidates_is_the_search_that_checks_all():
+    """The lazy check (on the start and on candidates that beat the best) walks the same
+    path to the same best as a search that checks every candidate, and the best it
+    returns passed the check."""
+    lazy = bt.compass(np.array([0.5, 0.5]), _constrained, budget=40, confirm=_check)
+    full = bt.compass(np.array([0.5, 0.5]), lambda u: _check(u, _constrained(u)), budget=40)
+    assert [tuple(u) for u, _ in lazy] == [tuple(u) for u, _ in full]
+    assert bt.best_of(lazy) == bt.best_of(full)
+    best = bt.best_of(lazy)
+    assert best.check == "" and best.knobs["u0"] <= 0.6
+    assert any(r.check is None for _, r in lazy)  # some candidates were never checked
+    assert sum(r.check is not None for _, r in lazy) < len(lazy)
+
+
+def test_the_commissioning_check_is_no_leaderboard_scenario():
+    """The check is a constraint of the tuner at the bottom of the load range, not one of
+    the scenarios the leaderboard scores (named or held-out)."""
+    from steamtemp_gym import scenarios
+    from steamtemp_gym.scenarios import heldout
+
+    assert bt.MIN_LOAD_CHECK.value("load", 0.0) == bt.MIN_LOAD
+    assert bt.MIN_LOAD_CHECK.name not in scenarios.names(None) + list(heldout.NAMES)
+    assert all(bt.MIN_LOAD_CHECK != heldout.load(n) for n in heldout.NAMES)
+    assert bt.CHECK_SEED not in bt.seeds()
+
+
 def test_stored_names_the_command_when_there_is_no_tuning(tmp_path, monkeypatch):
     monkeypatch.setattr(tuning, "TUNED", tmp_path)
     with pytest.raises(ValueError, match="python -m agents.baseline_tuning nothing"):
@@ -100,3 +148,24 @@ def test_the_stored_tuning_reproduces_its_recorded_result(name):
     assert again.travel_ratio == pytest.approx(rec["travel_ratio"], abs=1e-9)
     assert again.trips == rec["trips"] and rec["feasible"]
     assert rec["score"] >= rec["start"]["score"]  # the search never ends below its start
+
+
+def _stored_pairs() -> list:
+    out = []
+    for name in bt.TUNABLE:
+        f = tuning.path(name)
+        for env_id in sorted(json.loads(f.read_text())["plants"]) if f.is_file() else ():
+            out.append(pytest.param(name, env_id, id=f"{name}-{env_id.split('/')[-1]}"))
+    return out
+
+
+@pytest.mark.parametrize(("name", "env_id"), _stored_pairs())
+def test_every_stored_tuning_passes_the_commissioning_check(name, env_id):
+    """Each stored tuning was chosen under the minimum-load check: run again, it trips not,
+    limit-cycles not and strokes the valve at most 3x the reference's on the check episode."""
+    rec = json.loads(tuning.path(name).read_text())
+    assert "min_load_check" in rec["terms"], "tuned before the check existed: rerun the tuning"
+    knobs = rec["plants"][env_id]["knobs"]
+    ref = bt.check_metrics(env_id, lambda env: baselines.make(bt.ZERO, env))
+    m = bt.check_metrics(env_id, lambda env: baselines.make(name, env, **knobs))
+    assert bt.stats.realism_breach(m, ref) is None

@@ -317,3 +317,24 @@ def test_register_a_scenario(registry, tmp_path, capsys):
         with pytest.raises(ValueError, match=word):
             scenarios.register(bad)
     assert scenarios.get("setpoint_step").duration_s != 30.0
+
+
+def test_a_new_tuning_changes_only_its_controllers_fingerprints(tmp_path, monkeypatch):
+    """A baseline's stored tuning on the env is part of its rows' fingerprint (its own and its
+    ``_tuned`` row's), and no other row's: retuning one controller on one plant reruns its
+    rows there only, not the oracle's, the agents' or another controller's."""
+    from baselines import tuning
+
+    other = "steamtemp/SupercriticalFSH-v0"
+    names = ["cascade_pi", "cascade_pi_tuned", "cascade_pi_ff", "lqi", "oracle", lb.REFERENCE]
+    before = {(e, n): lb._policy_digest(e, n) for e in (ENV, other) for n in names}
+    stored = tuning.TUNED
+    monkeypatch.setattr(tuning, "TUNED", tmp_path)
+    for f in stored.glob("*.json"):
+        shutil.copy(f, tmp_path)
+    assert {(e, n): lb._policy_digest(e, n) for e, n in before} == before
+    src = json.loads(tuning.path("cascade_pi").read_text())
+    src["plants"][ENV]["knobs"]["outer_gain"] *= 1.5
+    tuning.path("cascade_pi").write_text(json.dumps(src))
+    changed = [k for k in before if lb._policy_digest(*k) != before[k]]
+    assert changed == [(ENV, "cascade_pi"), (ENV, "cascade_pi_tuned")]
