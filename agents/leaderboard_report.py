@@ -100,8 +100,36 @@ def _by_run(values: dict[str, np.ndarray], runs: dict[str, np.ndarray], ks: list
     return parts if len(parts) > 1 else None
 
 
+#: Breaches listed per policy and plant in the summary's ``realism`` entry.
+REALISM_LISTED = 3
+
+
+def _realism(rows: list[dict]) -> dict[tuple[str, str], dict[str, Any]]:
+    """Per (env, policy): the episodes compared with the industrial reference's on the same
+    scenario and seed, how many of them a plant engineer would reject
+    (:func:`agents.stats.realism_breach`: a trip, travel above 3x the reference's, a limit
+    cycle in the quiet stretch) and the first :data:`REALISM_LISTED` of those."""
+    ref = {(r["env"], r["scenario"], r["seed"]): r["metrics"] for r in rows
+           if r["policy"] == ZERO and not r.get("error")}  # fmt: skip
+    out: dict[tuple[str, str], dict[str, Any]] = {}
+    for r in rows:
+        name = specs.split_run(r["policy"])[0]
+        m0 = ref.get((r["env"], r["scenario"], r["seed"]))
+        if r.get("error") or m0 is None or name in (ZERO, *REFERENCES):
+            continue
+        e = out.setdefault((r["env"], name), {"episodes": 0, "breaches": 0, "listed": []})
+        e["episodes"] += 1
+        why = stats.realism_breach(r["metrics"], m0)
+        if why:
+            e["breaches"] += 1
+            if len(e["listed"]) < REALISM_LISTED:
+                e["listed"].append(f"{r['policy']} {r['scenario']} seed {r['seed']}: {why}")
+    return out
+
+
 def summarize(rows: list[dict], run: dict[str, Any]) -> dict[str, Any]:
     """The summary of leaderboard.json (rows: this run's grid, failed ones included)."""
+    realism = _realism(rows)
     by = defaultdict(lambda: defaultdict(lambda: defaultdict(list)))  # env, scenario, policy
     run_of = defaultdict(lambda: defaultdict(lambda: defaultdict(list)))  # training run of each
     failed = defaultdict(int)
@@ -156,6 +184,8 @@ def summarize(rows: list[dict], run: dict[str, Any]) -> dict[str, Any]:
             }
             if len(ks[p]) > 1:
                 entry["training_runs"] = ks[p]
+            if (env_id, p) in realism:
+                entry["realism"] = realism[env_id, p]
             if norm:
                 entry["normalized_score"] = _estimate(list(norm.values()),
                                                       _by_run(norm, runs_of[p], ks[p]))
@@ -427,7 +457,7 @@ def baselines_markdown(summary: dict[str, Any]) -> str:
     the reference's and valve reversals, over scenario x seed (the README's baseline table's
     actuator columns); † = not admissible."""
     plants = list(summary["plants"])
-    header = ["baseline", *[f"{p.split('/')[-1]}: IAE [K s] / travel / reversals"
+    header = ["baseline", *[f"{p.split('/')[-1]}: IAE [K s] / travel / reversals / rejected"
                             for p in plants]]  # fmt: skip
     body = []
     for name in baselines.NAMES:
@@ -440,12 +470,22 @@ def baselines_markdown(summary: dict[str, Any]) -> str:
             met = pe["metrics"]
             mark = f" {INADMISSIBLE}" if pe.get("admissible") is False else ""
             cells.append(f"{num(met.get('iae_K_s'), 0)} / {_travel(pe)} / "
-                         f"{num(met.get('valve_reversals'), 0)}{mark}")  # fmt: skip
+                         f"{num(met.get('valve_reversals'), 0)} / {_rejected(pe)}{mark}")  # fmt: skip
         if any(c != "-" for c in cells):
             body.append([f"`{name}`", *cells])
     n = len(summary["run"]["seeds"])
-    lines = [f"Means over scenario × seed ({n} seeds); {admissibility_note(summary)}", ""]
+    lines = [f"Means over scenario × seed ({n} seeds); {admissibility_note(summary)}; "
+             f"rejected: the episodes a plant engineer would reject against cascade_pi_ff's "
+             f"on the same scenario and seed (a trip, valve travel above "
+             f"{num(stats.REALISM_TRAVEL_MAX, 0)}x, or a limit cycle in the quiet stretch "
+             f"after the last scheduled change).", ""]  # fmt: skip
     return "\n".join(lines + _table(header, body)) + "\n"
+
+
+def _rejected(pe: dict[str, Any]) -> str:
+    """``k/n``: a policy's rejected episodes of those compared (``-`` where none were)."""
+    r = pe.get("realism")
+    return f"{r['breaches']}/{r['episodes']}" if r else "-"
 
 
 #: The columns of :func:`comparison_markdown`, in order.

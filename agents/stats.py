@@ -42,6 +42,7 @@ means over seeds, never by a near-zero gap. (The previous scales, 0 = ``cascade_
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Sequence
 from typing import Any
 
@@ -249,13 +250,14 @@ def realism_breach(m: dict[str, Any], ref: dict[str, Any]) -> str | None:
     :func:`agents.evaluation.run_episode`."""
     if m["tripped"]:
         return "tripped"
-    ratio = m["valve_travel"] / ref["valve_travel"]
-    if ratio > REALISM_TRAVEL_MAX:
-        return (f"travel {m['valve_travel']:.2f} = {ratio:.2f}x the reference's "
-                f"{ref['valve_travel']:.2f}")  # fmt: skip
-    if limit_cycles(m["quiet_p2p_K"], ref["quiet_p2p_K"]):
-        return (f"quiet p2p {m['quiet_p2p_K']:.2f} K against the reference's "
-                f"{ref['quiet_p2p_K']:.2f} K")  # fmt: skip
+    travel, ref_travel = float(m["valve_travel"]), float(ref["valve_travel"])
+    if travel > REALISM_TRAVEL_MAX * ref_travel:
+        ratio = f"{travel / ref_travel:.2f}x" if ref_travel > 0 else "infinitely"
+        return f"travel {travel:.2f} = {ratio} the reference's {ref_travel:.2f}"
+    p2p, ref_p2p = (math.nan if x.get("quiet_p2p_K") is None else float(x["quiet_p2p_K"])
+                    for x in (m, ref))  # fmt: skip
+    if limit_cycles(p2p, ref_p2p):
+        return f"quiet p2p {p2p:.2f} K against the reference's {ref_p2p:.2f} K"
     return None
 
 #: Smallest scale of the normalized score, as a fraction of the reference's cost |R0|.

@@ -98,6 +98,8 @@ def test_one_run_gives_the_one_run_summary(run):
     gold = json.loads(GOLDEN.read_text())
     s, r = _summary({run: 0.0})
     assert s["schema_version"] == gold["summary"]["schema_version"] + 1 == 6
+    for pe in s["plants"][ENV]["policies"].values():  # the record predates this entry
+        pe.pop("realism", None)
     assert s["plants"] == gold["summary"]["plants"]
     assert s["ranking"] == gold["summary"]["ranking"]
     if run is None:
@@ -167,3 +169,29 @@ def test_a_run_without_scored_episodes_is_left_out_of_the_score_s_runs():
     e = s["plants"][ENV]["policies"][AGENT]
     assert e["training_runs"] == [0, 1, 2] and len(e["return"]["iqm"]["per_run"]) == 3
     assert len(e["normalized_score"]["iqm"]["per_run"]) == 2 and e["normalized_score"]["tasks"] == 2
+
+
+def test_realism_counts_the_episodes_a_plant_engineer_would_reject():
+    """Against cascade_pi_ff's travel 2.0 on the same scenario and seed: cascade_pi (1.5) is
+    never rejected; the agent's travel 3.0 + 0.1 seed passes at 3x (6.0) until a seed or a
+    scenario pushes it over; a trip and a limit cycle are rejected whatever the travel."""
+    r = rows(AGENT, {None: 0.0})
+    for row in r:
+        if row["policy"] == AGENT and row["scenario"] == "b":
+            row["metrics"]["valve_travel"] = 6.5 if row["seed"] == 1 else 1.0
+        if row["policy"] == AGENT and row["scenario"] == "c" and row["seed"] == 3:
+            row["metrics"]["tripped"] = 1.0
+        row["metrics"]["quiet_p2p_K"] = 1.0
+        if row["policy"] == "cascade_pi" and row["scenario"] == "a" and row["seed"] == 2:
+            row["metrics"]["quiet_p2p_K"] = 2.5
+    s, _ = report.summarize(r, run_info([*FIXED, AGENT]))
+    pol = s["plants"][ENV]["policies"]
+    assert pol["cascade_pi"]["realism"] == {
+        "episodes": 12, "breaches": 1,
+        "listed": ["cascade_pi a seed 2: quiet p2p 2.50 K against the reference's 1.00 K"]}
+    assert pol[AGENT]["realism"]["episodes"] == 12 and pol[AGENT]["realism"]["breaches"] == 2
+    assert pol[AGENT]["realism"]["listed"] == [
+        f"{AGENT} b seed 1: travel 6.50 = 3.25x the reference's 2.00",
+        f"{AGENT} c seed 3: tripped"]
+    assert all("realism" not in pol[p] for p in ("cascade_pi_ff", "oracle"))
+    assert "1/12" in report.baselines_markdown(s)
