@@ -15,17 +15,23 @@ id; the same files work with ``python -m rl_zoo3.train --gym-packages steamtemp_
 "dict(...)" string of VecNormalize options), ``env_wrapper`` (RL Zoo's forms; here
 agents.wrappers.ControllerMemory), ``policy_kwargs`` (a dict or RL Zoo's "dict(...)"
 string), ``learning_rate`` (a number or "lin_<x>"), ``noise_type``/``noise_std``
-(SAC/TD3 action noise), ``residual_scale`` and ``max_move`` (our extensions, not RL
-Zoo's: train a residual on cascade_pi, or an incremental agent whose action is a valve move
-of at most ``max_move`` of stroke per interval, agents/moves.py; such entries are not for
-RL Zoo). Every other key must be an argument of the algorithm's constructor. All input is checked before training starts.
+(SAC/TD3 action noise), ``residual_scale``, ``max_move`` and ``train_reward`` (our
+extensions, not RL Zoo's: train a residual on cascade_pi; an incremental agent whose action
+is a valve move of at most ``max_move`` of stroke per interval, agents/moves.py; reward
+options for the training envs only, e.g. ``{w_move: 1.0}`` to charge valve travel more
+while learning, steamtemp_gym/rewards.py; such entries are not for RL Zoo). Every other key
+must be an argument of the algorithm's constructor. All input is checked before training
+starts. Validation, the leaderboard and every score use the env's default reward.
 
 Training runs on the ``random`` scenario distribution through the native vector env
 (agents.vec_env), with the controller memory and VecNormalize when configured. At every
 eighth of the budget (and at a --max-minutes stop) the agent is evaluated (agents.evaluation) on
 ``random`` validation episodes with seeds from :data:`VALIDATION_SEED` (training envs
 use ``--seed`` + i: never the same draws; never the leaderboard's scenarios); the best
-one is kept. Output in ``--out``: ``<env>__<algo>.zip`` (the best SB3 model) and
+one is kept: the highest validation return among the checkpoints within the leaderboard's
+valve-travel budget (mean travel at most ``agents.stats.TRAVEL_BUDGET`` times
+``cascade_pi_ff``'s on the same validation episodes), or, if none is, the one of least
+travel. Output in ``--out``: ``<env>__<algo>.zip`` (the best SB3 model) and
 ``<env>__<algo>.json`` (env id, package version, git revision, hyperparameters, seed,
 timesteps, wall time, the validation curve and score, the normalization statistics and
 the wrapper config: everything ``agents.load`` needs).
@@ -77,7 +83,7 @@ RUN_SEED_STRIDE = 1000
 MAX_RUNS = 100
 #: RL Zoo keys with a meaning of their own (the rest go to the algorithm's constructor).
 SPECIAL = ("n_timesteps", "n_envs", "policy", "normalize", "env_wrapper", "policy_kwargs",
-           "noise_type", "noise_std", "residual_scale", "max_move")  # fmt: skip
+           "noise_type", "noise_std", "residual_scale", "max_move", "train_reward")  # fmt: skip
 
 
 class ConfigError(ValueError):
@@ -198,6 +204,13 @@ def read_hyperparams(path: Path, env_id: str, algo: str) -> dict[str, Any]:
             check_max_move(hp["max_move"])
         except ValueError as exc:
             raise ConfigError(f"--hyperparams {path}: {exc}") from None
+    if "train_reward" in hp:
+        from steamtemp_gym.rewards import RewardConfig
+
+        try:
+            RewardConfig.from_options(hp["train_reward"])
+        except ValueError as exc:
+            raise ConfigError(f"--hyperparams {path}: train_reward: {exc}") from None
     hp = dict(hp)
     hp["policy_kwargs"] = _dict_string("policy_kwargs", hp.get("policy_kwargs", {}))
     norm = hp.get("normalize", False)
@@ -232,7 +245,7 @@ def make_training_env(env_id: str, n_envs: int, seed: int, hp: dict[str, Any]):
     from agents.vec_env import NativeVecEnv
     from agents.wrappers import VecControllerMemory, VecResidual
 
-    base = NativeVecEnv(env_id, n_envs, scenario="random")
+    base = NativeVecEnv(env_id, n_envs, scenario="random", reward=hp.get("train_reward"))
     venv = base
     if hp.get("residual_scale") is not None:
         venv = VecResidual(venv, base.venv, hp["residual_scale"])
@@ -266,19 +279,34 @@ def _obs_stats(venv) -> dict[str, Any] | None:
 
 
 def validate(env_id: str, policy, n: int = N_VALIDATION) -> dict[str, float]:
-    """Mean return and IAE of ``policy`` over the validation episodes, run as one batch in
-    the native vector env by agents.evaluation.run_batch (row k is ``gym.make(env_id,
-    scenario="random")`` reset with seed VALIDATION_SEED + k, bit for bit)."""
+    """Mean return, IAE and valve travel of ``policy`` over the validation episodes (default
+    reward), run as one batch in the native vector env by agents.evaluation.run_batch (row k
+    is ``gym.make(env_id, scenario="random")`` reset with seed VALIDATION_SEED + k, bit for
+    bit). ``policy``: a Policy, or a factory ``venv -> Policy``."""
     import gymnasium as gym
 
     from agents.evaluation import run_batch
 
     venv = gym.make_vec(env_id, num_envs=n, vectorization_mode="vector_entry_point",
                         scenario="random")  # fmt: skip
+    if not hasattr(policy, "predict"):
+        policy = policy(venv)
     runs = run_batch(venv, policy, [VALIDATION_SEED + k for k in range(n)])
     venv.close()
     return {key: float(np.mean([r["metrics"][key] for r in runs]))
-            for key in ("return", "iae_K_s")}  # fmt: skip
+            for key in ("return", "iae_K_s", "valve_travel")}  # fmt: skip
+
+
+def better_checkpoint(new: dict[str, float], best: dict[str, float], budget: float) -> bool:
+    """Whether validation result ``new`` beats ``best`` (both with ``return`` and
+    ``travel_ratio``): within the travel budget first, then the higher return; outside it,
+    the lower travel."""
+    if not best:
+        return True
+    ok_new, ok_best = new["travel_ratio"] <= budget, best["travel_ratio"] <= budget
+    if ok_new != ok_best:
+        return ok_new
+    return new["return"] > best["return"] if ok_new else new["travel_ratio"] < best["travel_ratio"]
 
 
 def train(env_id: str, algo: str, hyperparams: Path | None = None, timesteps: int | None = None,
@@ -324,6 +352,10 @@ def train(env_id: str, algo: str, hyperparams: Path | None = None, timesteps: in
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     name = stem(env_id, algo, run)
+    import baselines
+    from agents.stats import TRAVEL_BUDGET
+
+    reference = validate(env_id, lambda v: baselines.make("cascade_pi_ff", v))
     t0 = time.monotonic()
     curve: list[dict[str, Any]] = []
     best: dict[str, Any] = {}
@@ -358,8 +390,9 @@ def train(env_id: str, algo: str, hyperparams: Path | None = None, timesteps: in
 
         def _evaluate(self, steps: int, wall: float) -> None:
             score = validate(env_id, snapshot_policy())
+            score["travel_ratio"] = score["valve_travel"] / reference["valve_travel"]
             curve.append({"timesteps": steps, "fraction": steps / total, "wall_s": wall, **score})
-            if not best or score["return"] > best["return"]:
+            if better_checkpoint(score, best, TRAVEL_BUDGET):
                 best.update(score, timesteps=steps, obs_norm=_obs_stats(venv))
                 model.save(out / f"{name}.zip")
 
@@ -375,9 +408,12 @@ def train(env_id: str, algo: str, hyperparams: Path | None = None, timesteps: in
         "timesteps_of_best": best["timesteps"], "wall_time_s": time.monotonic() - t0,
         "validation": {"scenario": "random", "seeds": [VALIDATION_SEED + k
                        for k in range(N_VALIDATION)], "best": {k: best[k] for k in
-                       ("return", "iae_K_s")}, "curve": curve},
+                       ("return", "iae_K_s", "valve_travel", "travel_ratio")},
+                       "reference": {"policy": "cascade_pi_ff", **reference},
+                       "travel_budget": TRAVEL_BUDGET, "curve": curve},
         "normalization": best["obs_norm"], "memory": hp["env_wrapper"],
         "residual_scale": hp.get("residual_scale"), "max_move": hp.get("max_move"),
+        "train_reward": hp.get("train_reward"),
     }  # fmt: skip
     (out / f"{name}.json").write_text(json.dumps(meta, indent=1), encoding="utf-8")
     venv.close()

@@ -12,6 +12,8 @@ import numpy as np
 import pytest
 import yaml
 
+from steamtemp_gym.rewards import RewardConfig
+
 import agents
 from agents import train
 from agents.evaluation import run_episode
@@ -74,8 +76,14 @@ def test_smoke_training_writes_model_and_metadata(trained, algo):
         assert meta["memory"] == MEMORY[0]["agents.wrappers.ControllerMemory"]
         assert len(meta["normalization"]["mean"]) == n_obs + 1 + 3  # integral + 1 x (e, 2 valves)
     assert meta["residual_scale"] == (0.2 if algo == "ppo_residual" else None)
-    assert meta["validation"]["best"]["return"] == max(
-        c["return"] for c in meta["validation"]["curve"])
+    chosen: dict = {}
+    for c in meta["validation"]["curve"]:
+        if train.better_checkpoint(c, chosen, meta["validation"]["travel_budget"]):
+            chosen = c
+    assert meta["validation"]["best"]["return"] == chosen["return"]
+    ref = meta["validation"]["reference"]
+    assert ref["policy"] == "cascade_pi_ff" and ref["valve_travel"] > 0
+    assert chosen["travel_ratio"] == pytest.approx(chosen["valve_travel"] / ref["valve_travel"])
     assert meta["git_revision"] and meta["wall_time_s"] > 0
 
 
@@ -175,3 +183,35 @@ def test_numpy_actor_matches_sb3_predict(trained, algo):
     np.testing.assert_allclose(pol.actor(x), expected, atol=1e-5)
     # batch size changes float64 rounding only (an ulp), not float32's (1e-7)
     np.testing.assert_allclose(pol.actor(x[3:4]), pol.actor(x)[3:4], rtol=0, atol=1e-15)
+
+
+def test_checkpoints_within_the_travel_budget_come_first():
+    """The kept checkpoint: the best return within the budget; a checkpoint over it only
+    when none is within, and then the one of least travel."""
+    a = {"return": -50.0, "travel_ratio": 3.0}
+    b = {"return": -80.0, "travel_ratio": 1.5}
+    c = {"return": -70.0, "travel_ratio": 1.9}
+    d = {"return": -40.0, "travel_ratio": 2.5}
+    assert train.better_checkpoint(a, {}, 2.0)
+    assert train.better_checkpoint(b, a, 2.0) and not train.better_checkpoint(a, b, 2.0)
+    assert train.better_checkpoint(c, b, 2.0) and not train.better_checkpoint(d, c, 2.0)
+    assert train.better_checkpoint(d, a, 2.0)  # both over: the lower travel
+
+
+def test_train_reward_is_checked_and_applies_to_the_training_envs_only(tmp_path):
+    path = tmp_path / "ppo.yml"
+    path.write_text(yaml.safe_dump({ENV_ID: {"policy": "MlpPolicy", "train_reward": {"w_mov": 1}}}))
+    with pytest.raises(train.ConfigError, match="train_reward: unknown reward option"):
+        train.read_hyperparams(path, ENV_ID, "ppo")
+    path.write_text(yaml.safe_dump({ENV_ID: {"policy": "MlpPolicy",
+                                             "train_reward": {"w_move": 5.0}}}))  # fmt: skip
+    hp = train.read_hyperparams(path, ENV_ID, "ppo")
+    charged, _ = train.make_training_env(ENV_ID, 2, 0, hp)
+    plain, _ = train.make_training_env(ENV_ID, 2, 0, {**hp, "train_reward": None})
+    stroke = np.ones((2, charged.action_space.shape[0]))  # open every valve fully
+    rewards = []
+    for venv in (charged, plain):
+        venv.reset()
+        rewards.append(venv.step(stroke)[1])
+    assert np.all(rewards[0] < rewards[1])  # the same move, charged 50x more
+    assert RewardConfig().w_move == 0.1  # what validation and the leaderboard charge
