@@ -12,6 +12,10 @@ SupercriticalFSH: -1.36 K without an integral, 0.00 K with it; docs/agents.md). 
   +-L, and conditional integration: while every valve sits at a stop (opening <= 0.5 %
   or >= 99.5 %) the integral may only shrink; it is observed as ``I / e_scale`` (the
   error's own normalization, ``signals``);
+- with ``secondary_integral``, the same integral of the error of each secondary scored
+  temperature (``Plant.secondary``, e.g. BoilerTurbineMIMO's reheat: its setpoint minus
+  its measurement), observed in that measurement's normalization: a plant that scores two
+  temperatures needs an integral per temperature to remove both offsets;
 - the error and the valve openings ``history`` samples back, ``history_stride`` control
   steps apart (oldest last), normalized as the env normalizes them.
 
@@ -44,6 +48,7 @@ class MemoryConfig:
     (docs/agents.md, "Controller memory")."""
 
     integral: bool = True
+    secondary_integral: bool = False
     integral_time_s: float = 60.0
     integral_limit_K: float = 40.0
     history: int = 4
@@ -58,8 +63,11 @@ class MemoryConfig:
             v = getattr(self, name)
             if not (isinstance(v, int) and not isinstance(v, bool) and v >= lo):
                 raise ValueError(f"{name} must be an integer >= {lo}, got {v!r}")
-        if not isinstance(self.integral, bool):
-            raise ValueError(f"integral must be true or false, got {self.integral!r}")
+        for name in ("integral", "secondary_integral"):
+            if not isinstance(getattr(self, name), bool):
+                raise ValueError(f"{name} must be true or false, got {getattr(self, name)!r}")
+        if self.secondary_integral and not self.integral:
+            raise ValueError("secondary_integral needs integral (the main-steam integral)")
 
     @classmethod
     def from_kwargs(cls, kwargs: dict[str, Any] | None) -> MemoryConfig:
@@ -71,9 +79,11 @@ class MemoryConfig:
             raise ValueError(f"unknown controller-memory option(s) {unknown}; valid: {valid}")
         return cls(**kwargs)
 
-    def n_extra(self, n_valves: int) -> int:
-        """How many entries the memory adds for a plant with n_valves actuators."""
-        return int(self.integral) + self.history * (1 + n_valves)
+    def n_extra(self, n_valves: int, n_secondary: int = 0) -> int:
+        """How many entries the memory adds for a plant with ``n_valves`` actuators and
+        ``n_secondary`` secondary scored temperatures."""
+        n_int = int(self.integral) * (1 + (n_secondary if self.secondary_integral else 0))
+        return n_int + self.history * (1 + n_valves)
 
 
 class MemoryState:
@@ -94,8 +104,16 @@ class MemoryState:
         self.v_scale, self.v_center = scale[self.i_valve], center[self.i_valve]
         self.dt = plant.dt_s
         self.n_obs = len(names)
-        self.n_extra = config.n_extra(len(self.i_valve))
-        self._integral = np.zeros(0)
+        # secondary scored temperatures: (observation index, setpoint) of each measurement
+        second = ([(_measured(names, n), sp) for n, sp in plant.secondary]
+                  if config.secondary_integral else [])  # fmt: skip
+        self.i_sec = np.array([i for i, _ in second], dtype=int)
+        self.sp_sec = np.array([sp for _, sp in second], dtype=float)
+        self.sec_scale, self.sec_center = scale[self.i_sec], center[self.i_sec]
+        # every integral is observed in its own error's normalization
+        self.i_scale = np.concatenate([[self.e_scale], self.sec_scale])
+        self.n_extra = config.n_extra(len(self.i_valve), len(second))
+        self._integral = np.zeros((0, 1 + len(second)))
         self._buf = np.zeros((0, 0, 0))  # (rows, samples kept, 1 + n_valves)
 
     def extend_space(self, space: gym.spaces.Box) -> gym.spaces.Box:
@@ -111,7 +129,7 @@ class MemoryState:
         c = self.config
         keep = c.history * c.history_stride + 1
         if self._integral.shape[0] != n:
-            self._integral = np.zeros(n)
+            self._integral = np.zeros((n, 1 + self.i_sec.size))
             self._buf = np.zeros((n, keep, 1 + len(self.i_valve)))
             restart = np.ones(n, dtype=bool)
         elif restart is None:
@@ -121,17 +139,20 @@ class MemoryState:
             self._integral[restart] = 0.0
             self._buf[restart] = sample[restart, None, :]
         if c.integral:
-            e_K = obs[:, self.i_err] * self.e_scale
+            e_K = obs[:, [self.i_err]] * self.e_scale
+            if self.i_sec.size:
+                measured = obs[:, self.i_sec] * self.sec_scale + self.sec_center
+                e_K = np.concatenate([e_K, self.sp_sec - measured], axis=1)
             step = e_K * (self.dt / c.integral_time_s)
             opening = obs[:, self.i_valve] * self.v_scale + self.v_center
             at_stop = ((opening <= STOP_MARGIN) | (opening >= 1.0 - STOP_MARGIN)).all(axis=1)
             grows = np.abs(self._integral + step) > np.abs(self._integral)
-            step[at_stop & grows] = 0.0
+            step[at_stop[:, None] & grows] = 0.0
             self._integral = np.clip(self._integral + step, -c.integral_limit_K,
                                      c.integral_limit_K)  # fmt: skip
         parts = [obs]
         if c.integral:
-            parts.append((self._integral / self.e_scale)[:, None])
+            parts.append(self._integral / self.i_scale)
         if c.history:
             self._buf = np.roll(self._buf, 1, axis=1)
             self._buf[:, 0] = sample
@@ -145,6 +166,16 @@ class MemoryState:
 
     def set_state(self, state: tuple[np.ndarray, np.ndarray]) -> None:
         self._integral, self._buf = state[0].copy(), state[1].copy()
+
+
+def _measured(names: list[str], true_name: str) -> int:
+    """Index of the observed measurement of a secondary temperature ``<x>_C``
+    (``<x>_meas_C``)."""
+    meas = true_name[: -len("_C")] + "_meas_C" if true_name.endswith("_C") else true_name
+    if meas not in names:
+        raise ValueError(f"no measurement {meas!r} of the secondary temperature "
+                         f"{true_name!r} among the observations {names}")  # fmt: skip
+    return names.index(meas)
 
 
 class ControllerMemory(gym.Wrapper):

@@ -105,6 +105,30 @@ def test_front_ends_agree():
     assert ends == 3
 
 
+def test_secondary_integral_integrates_each_scored_temperature():
+    """On BoilerTurbineMIMO (main steam and reheat scored) the secondary integral adds the
+    reheat error's integral (setpoint minus measurement), observed in the reheat
+    measurement's scale, next to the main-steam one; without the option the memory is the
+    main-steam integral alone, bit for bit."""
+    env = gym.make("steamtemp/BoilerTurbineMIMO-v0")
+    plant = env.unwrapped.plant
+    (name, sp), = plant.secondary
+    both = MemoryState(env, MemoryConfig(secondary_integral=True, integral_time_s=20.0,
+                                         history=0))  # fmt: skip
+    main = MemoryState(env, MemoryConfig(integral_time_s=20.0, history=0))
+    assert both.n_extra == 2 and main.n_extra == 1
+    obs = _obs_like(both, 2.0, 0.5)
+    i_rh = both.i_sec[0]
+    obs[:, i_rh] = (sp - 3.0 - both.sec_center[0]) / both.sec_scale[0]  # 3 K below its setpoint
+    dt = plant.dt_s
+    out_both, out_main = both(obs), main(obs)
+    assert out_both[0, -2] * both.e_scale == pytest.approx(2.0 * dt / 20.0)
+    assert out_both[0, -1] * both.sec_scale[0] == pytest.approx(3.0 * dt / 20.0)
+    np.testing.assert_array_equal(out_both[0, :-1], out_main[0])
+    with pytest.raises(ValueError, match="secondary_integral needs integral"):
+        MemoryConfig(integral=False, secondary_integral=True)
+
+
 def test_unknown_or_bad_options():
     with pytest.raises(ValueError, match="unknown controller-memory option.*integral_time_s"):
         MemoryConfig.from_kwargs({"integral_tme_s": 3})
