@@ -488,6 +488,34 @@ def _rejected(pe: dict[str, Any]) -> str:
     return f"{r['breaches']}/{r['episodes']}" if r else "-"
 
 
+def realism_markdown(summary: dict[str, Any]) -> str:
+    """Every baseline-plant pair with an episode a plant engineer would reject
+    (:func:`agents.stats.realism_breach` against ``cascade_pi_ff`` on the same scenario and
+    seed): how many of its episodes, and the first of them with their numbers."""
+    rows, clean = [], 0
+    for name in baselines.NAMES:
+        for env_id, plant in summary["plants"].items():
+            r = plant["policies"].get(name, {}).get("realism")
+            if not r:
+                continue
+            if not r["breaches"]:
+                clean += 1
+                continue
+            listed = "; ".join(x.split(" ", 1)[1] for x in r["listed"])
+            rows.append([f"`{name}`", env_id.split("/")[-1], f"{r['breaches']}/{r['episodes']}",
+                         listed + ("; ..." if r["breaches"] > len(r["listed"]) else "")])  # fmt: skip
+    n = len(summary["run"]["seeds"])
+    head = (f"Over every scenario and seed ({n} seeds) of the run, {clean} of "
+            f"{clean + len(rows)} baseline-plant pairs have no episode a plant engineer would "
+            f"reject against `cascade_pi_ff`'s on the same scenario and seed (a trip, valve "
+            f"travel above {num(stats.REALISM_TRAVEL_MAX, 0)}x, or a limit cycle in the quiet "
+            f"stretch: the quiet peak-to-peak above max(2x the reference's, 1.5 K)).")
+    if not rows:
+        return head + "\n"
+    return "\n".join([head + " The others:", "",
+                      *_table(["baseline", "plant", "rejected", "first episodes"], rows)]) + "\n"
+
+
 #: The columns of :func:`comparison_markdown`, in order.
 COMPARISON_METRICS = ("return", "iae_K_s", "valve_travel", "quiet_p2p_K")
 

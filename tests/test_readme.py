@@ -78,6 +78,7 @@ def test_readme_is_a_guide():
 
 MARKERS = [(README, "leaderboard"), (README, "trend"), (README, "baselines"),
            (ROOT / "docs" / "agents.md", "zoo"), (ROOT / "docs" / "baselines.md", "compare"),
+           (ROOT / "docs" / "baselines.md", "realism"),
            (ROOT / "docs" / "difficulty.md", "difficulty")]  # fmt: skip
 
 
@@ -125,13 +126,14 @@ def test_leaderboard_generator_rewrites_readme_and_agents_page(tmp_path, monkeyp
     gen.main(["--out", str(out), "--plot", "A-v0__heldout_sootblowing.png"])
     after = readme.read_text()
     assert "| 1 | sb3:ppo | 0.50" in after and "scenario `heldout:sootblowing`" in after
-    assert "| `lqi` | 100 / 1.0x / - |" in after  # the baselines' actuator table
+    assert "| `lqi` | 100 / 1.0x / - / 0/2 |" in after  # the baselines' actuator table
     # outside the markers nothing changed
     strip = re.compile(r"<!-- (leaderboard|trend|baselines):start.*?<!-- \1:end -->", re.S)
     assert strip.sub("", after) == strip.sub("", before)
     assert "| A-v0 | sb3:ppo | **0.50" in agents_page.read_text()
     assert "| s | - / - / -100.5 | - / - / 100 | - / - / 1.00 | - / - / - |" in (
         baselines_page.read_text())  # mpc_linear / cascade_pi / cascade_pi_ff, two not run
+    assert "1 of 1 baseline-plant pairs have no episode" in baselines_page.read_text()
     assert (tmp_path / "img" / "trend.png").read_bytes() == b"png"
 
 

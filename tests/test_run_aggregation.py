@@ -195,3 +195,7 @@ def test_realism_counts_the_episodes_a_plant_engineer_would_reject():
         f"{AGENT} c seed 3: tripped"]
     assert all("realism" not in pol[p] for p in ("cascade_pi_ff", "oracle"))
     assert "1/12" in report.baselines_markdown(s)
+    md = report.realism_markdown(s)  # baselines only: the agent is not listed
+    assert "0 of 1 baseline-plant pairs have no episode" in md
+    assert ("| `cascade_pi` | SupercriticalFSH-v0 | 1/12 | a seed 2: quiet p2p 2.50 K against "
+            "the reference's 1.00 K |") in md and AGENT not in md
