@@ -34,29 +34,9 @@ def _metrics(env_id: str, scenario: str, name: str) -> dict:
     return run_episode(env, baselines.make(name, env), SEED)["metrics"]
 
 
-#: The (plant, baseline) pairs measured to break the criterion, with the first check that
-#: fails (seed 0). The deep fast ramp ends at 35 % load, below the 50-100 % of the training
-#: episodes and of the loops' commissioning: fixed gains tuned there for the best training
-#: score (the ``_tuned`` rows, ``fuzzy_p2id``) stroke the valves at that load; see
-#: docs/baselines.md.
-MEASURED_FAILURES = {
-    ("SupercriticalFSH-v0", "cascade_pi_tuned"): "deep ramp: travel 16.60x the reference's",
-    ("DrumBoilerSH-v0", "cascade_pi_tuned"): "deep ramp: travel 14.76x the reference's",
-    ("BoilerTurbineMIMO-v0", "cascade_pi_tuned"): "deep ramp: travel 5.42x the reference's",
-    ("DrumBoilerSH-v0", "fuzzy_p2id"): "deep ramp: travel 3.58x the reference's",
-}
-
-
 def _cases() -> list:
-    out = []
-    for env_id in steamtemp_gym.ENV_IDS:
-        for name in baselines.SHIPPED:
-            if name == REFERENCE:
-                continue
-            reason = MEASURED_FAILURES.get((env_id.split("/")[-1], name))
-            marks = [pytest.mark.xfail(strict=True, reason=f"measured: {reason}")] if reason else []
-            out.append(pytest.param(env_id, name, marks=marks, id=f"{env_id}-{name}"))
-    return out
+    return [pytest.param(env_id, name, id=f"{env_id}-{name}") for env_id in steamtemp_gym.ENV_IDS
+            for name in baselines.SHIPPED if name != REFERENCE]
 
 
 @pytest.mark.parametrize(("env_id", "name"), _cases())
