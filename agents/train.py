@@ -356,6 +356,7 @@ def train(env_id: str, algo: str, hyperparams: Path | None = None, timesteps: in
     from agents.stats import TRAVEL_BUDGET
 
     reference = validate(env_id, lambda v: baselines.make("cascade_pi_ff", v))
+    revision = _git_revision()  # the code this run trains with
     t0 = time.monotonic()
     curve: list[dict[str, Any]] = []
     best: dict[str, Any] = {}
@@ -401,7 +402,7 @@ def train(env_id: str, algo: str, hyperparams: Path | None = None, timesteps: in
         Progress()._evaluate(model.num_timesteps, time.monotonic() - t0)
     meta = {
         "env_id": env_id, "algo": algo, "sb3_class": cls.__name__,
-        "package_version": steamtemp_gym.__version__, "git_revision": _git_revision(),
+        "package_version": steamtemp_gym.__version__, "git_revision": revision,
         "hyperparams_file": _shown_path(path),
         "hyperparameters": json.loads(json.dumps(hp, default=str)), "seed": seed, "run": run,
         "n_envs": n_envs, "timesteps_budget": total, "timesteps_trained": model.num_timesteps,
