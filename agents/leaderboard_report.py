@@ -474,7 +474,7 @@ def baselines_markdown(summary: dict[str, Any]) -> str:
         if any(c != "-" for c in cells):
             body.append([f"`{name}`", *cells])
     n = len(summary["run"]["seeds"])
-    lines = [f"Means over scenario × seed ({n} seeds); {admissibility_note(summary)}; "
+    lines = [f"Means over scenario × seed ({n} seeds); {admissibility_note(summary)[:-1]}; "
              f"rejected: the episodes a plant engineer would reject against cascade_pi_ff's "
              f"on the same scenario and seed (a trip, valve travel above "
              f"{num(stats.REALISM_TRAVEL_MAX, 0)}x, or a limit cycle in the quiet stretch "
