@@ -470,7 +470,8 @@ def baselines_markdown(summary: dict[str, Any]) -> str:
             met = pe["metrics"]
             mark = f" {INADMISSIBLE}" if pe.get("admissible") is False else ""
             cells.append(f"{num(met.get('iae_K_s'), 0)} / {_travel(pe)} / "
-                         f"{num(met.get('valve_reversals'), 0)} / {_rejected(pe)}{mark}")  # fmt: skip
+                         f"{num(met.get('valve_reversals'), 0)} / "
+                         f"{_rejected(pe)}{mark}")  # fmt: skip
         if any(c != "-" for c in cells):
             body.append([f"`{name}`", *cells])
     n = len(summary["run"]["seeds"])
@@ -502,8 +503,9 @@ def realism_markdown(summary: dict[str, Any]) -> str:
                 clean += 1
                 continue
             listed = "; ".join(x.split(" ", 1)[1] for x in r["listed"])
+            more = "; ..." if r["breaches"] > len(r["listed"]) else ""
             rows.append([f"`{name}`", env_id.split("/")[-1], f"{r['breaches']}/{r['episodes']}",
-                         listed + ("; ..." if r["breaches"] > len(r["listed"]) else "")])  # fmt: skip
+                         listed + more])  # fmt: skip
     n = len(summary["run"]["seeds"])
     head = (f"Over every scenario and seed ({n} seeds) of the run, {clean} of "
             f"{clean + len(rows)} baseline-plant pairs have no episode a plant engineer would "

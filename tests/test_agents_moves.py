@@ -12,8 +12,8 @@ import pytest
 from agents.moves import MoveState, VecMoves
 from agents.policy import AgentPolicy
 from agents.vec_env import NativeVecEnv
-from steamtemp_gym.scenarios import Scenario
 from baselines.loops import observation_layout
+from steamtemp_gym.scenarios import Scenario
 
 ENV = "steamtemp/Cascade300MW-v0"
 MAX_MOVE = 0.03

@@ -12,11 +12,10 @@ import numpy as np
 import pytest
 import yaml
 
-from steamtemp_gym.rewards import RewardConfig
-
 import agents
 from agents import train
 from agents.evaluation import run_episode
+from steamtemp_gym.rewards import RewardConfig
 
 ENV_ID = "steamtemp/BensonSubcritical-v0"  # 5 s control interval: short validation episodes
 SMALL = {
