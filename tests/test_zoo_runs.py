@@ -91,18 +91,23 @@ def test_a_zoo_file_with_a_bad_name_is_refused(tmp_path):
         files.zoo_runs(tmp_path)
 
 
-def test_the_shipped_zoo_is_run_0_of_each_agent():
+def test_the_shipped_zoo_holds_runs_0_to_k_of_each_agent():
+    """Every shipped agent has run 0 (the file without a run index) and runs 1..k-1 beside
+    it; an agent with several runs is scored as one name per run, one with a single run
+    under its own name."""
     assert agents.shipped()
     for env_id, algo in agents.shipped():
-        assert agents.runs(env_id, algo) == [0]
-        assert specs.training_runs(f"sb3:{algo}", env_id) == [f"sb3:{algo}"]
+        ks = agents.runs(env_id, algo)
+        assert ks == list(range(len(ks))), (env_id, algo, ks)
         assert files.steamtemp_files(agents.ZOO, env_id, algo).model.stem == files.stem(
             env_id, algo)  # fmt: skip
+        names = specs.training_runs(f"sb3:{algo}", env_id)
+        assert names == ([f"sb3:{algo}"] if ks == [0] else
+                         [specs.run_name(f"sb3:{algo}", k) for k in ks])  # fmt: skip
+    single = next(e for e, a in agents.shipped() if a == "ppo" and agents.runs(e, a) == [0])
     assert specs.parse("sb3:ppo@run0").run == 0
-    with pytest.raises(ValueError, match="no training run 1 of 'sb3:ppo' shipped"):
-        specs.parse("sb3:ppo@run1")
     with pytest.raises(ValueError, match="no trained agent 'ppo' run 1 shipped"):
-        agents.load(ENV, "ppo", run=1)
+        agents.load(single, "ppo", run=1)
 
 
 def test_policy_names_of_runs(tmp_path, monkeypatch):
