@@ -20,6 +20,7 @@ import agents
 import baselines
 import steamtemp_gym
 from agents import leaderboard as lb
+from agents import specs
 from agents.difficulty import FrozenValves
 from agents.evaluation import run_batch, run_episode
 
@@ -247,7 +248,8 @@ def test_default_run_is_valid_without_running(monkeypatch, tmp_path):
     assert plan.scenarios == list(lb.DEFAULT_SCENARIOS)
     assert {f"heldout:{n}" for n in steamtemp_gym.scenarios.heldout.NAMES} <= set(plan.scenarios)
     for env_id in IDS:  # every baseline, every shipped agent, the references
-        shipped = [f"sb3:{a}" for e, a in agents.shipped() if e == env_id]
+        shipped = [n for e, a in agents.shipped() if e == env_id  # one name per training run
+                   for n in specs.training_runs(f"sb3:{a}", env_id)]  # fmt: skip
         assert plan.policies[env_id] == [*baselines.NAMES, *shipped, "oracle", lb.REFERENCE]
     n = sum(len(p) for p in plan.policies.values())
     assert len(list(plan.grid())) == n * len(lb.DEFAULT_SCENARIOS) * 5
@@ -477,7 +479,8 @@ def test_leaderboard_cli_with_the_baseline(tmp_path):
     doc = _strict_load(tmp_path / "leaderboard.json")
     rows = doc["episodes"]
     trained = [f"sb3:{a}" for e, a in agents.shipped() if e == IDS[0]]  # shipped agents too
-    assert len(rows) == 2 * 2 * (len(baselines.NAMES) + len(trained) + 2)
+    runs = sum(len(agents.runs(IDS[0], t.removeprefix("sb3:"))) for t in trained)
+    assert len(rows) == 2 * 2 * (len(baselines.NAMES) + runs + 2)  # a row per training run
     assert all(np.isfinite(r["metrics"]["iae_K_s"]) for r in rows)
     pols = doc["plants"][IDS[0]]["policies"]
     refs = lb.report.REFERENCES
