@@ -386,6 +386,7 @@ def build_plan(ap: argparse.ArgumentParser, args: argparse.Namespace) -> Plan:
                 imports=imports, travel_budget=budget)  # fmt: skip
     source = _source_digest()
     for env_id in envs:
+        digests = {name: _policy_digest(env_id, name) for name in pols[env_id]}  # once per env
         for sc in scs:
             try:
                 plan.envs_made[env_id, sc] = gym.make(env_id, scenario=resolved[env_id, sc])
@@ -396,7 +397,7 @@ def build_plan(ap: argparse.ArgumentParser, args: argparse.Namespace) -> Plan:
                 )
             for name in pols[env_id]:
                 plan.fingerprints[env_id, sc, name] = fingerprint(
-                    env_id, resolved[env_id, sc], _policy_digest(env_id, name), source
+                    env_id, resolved[env_id, sc], digests[name], source
                 )
     return plan
 
