@@ -110,11 +110,10 @@ class Spec:
 
 
 def tuning_digest(name: str, env_id: str) -> str:
-    """Hash of the knob values the benchmark's tuning stored for baseline ``name`` (or, for a
-    ``<base>_tuned`` row, for ``base``) on ``env_id``: so a new tuning reruns that
-    controller's rows and no other."""
-    base = name.removesuffix("_tuned")
-    path = tuning.path(base if base in baselines.TUNED_ROWS and base != name else name)
+    """Hash of the knob values the benchmark's tuning stored on ``env_id`` for the controller
+    whose tuning the baseline row ``name`` reads (``baselines.tuning_source``): so a new
+    tuning reruns that controller's rows and no other."""
+    path = tuning.path(baselines.tuning_source(name))
     entry = json.loads(path.read_text())["plants"].get(env_id) if path.is_file() else None
     knobs = entry.get("knobs") if isinstance(entry, dict) else None
     return hashlib.sha256(json.dumps(knobs, sort_keys=True).encode()).hexdigest()[:16]

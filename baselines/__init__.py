@@ -105,10 +105,18 @@ def factory(name: str) -> Callable[..., Any]:
     return ref
 
 
+def tuning_source(name: str) -> str:
+    """The controller whose stored tuning (baselines/tuning.py) the row ``name`` reads: the
+    base controller of a ``<base>_tuned`` row, else ``name`` itself."""
+    ref = _REGISTRY.get(name)
+    return ref.name if isinstance(ref, Tuned) else name
+
+
 def make(name: str, env: Any, **kwargs: Any) -> Policy:
     """The baseline ``name`` for ``env``; ValueError listing the valid names otherwise."""
     return checked(factory(name)(env, **kwargs), env)
 
 
-__all__ = ["NAMES", "SHIPPED", "Policy", "Tuned", "factory", "make", "register"]
+__all__ = ["NAMES", "SHIPPED", "Policy", "Tuned", "factory", "make", "register",
+           "tuning_source"]  # fmt: skip
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import functools
 import json
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import gymnasium as gym
 import numpy as np
@@ -74,8 +74,6 @@ def _constrained(u: np.ndarray) -> bt.Evaluation:
 
 
 def _check(u: np.ndarray, r: bt.Evaluation) -> bt.Evaluation:
-    from dataclasses import replace
-
     return replace(r, check="limit cycle" if u[0] > 0.6 else "")
 
 
