@@ -13,15 +13,18 @@ Every controller gets the same terms:
   the leaderboard's ends: 0 = ``cascade_pi_ff``'s return, 1 = the oracle's, on the same
   episodes (:func:`ends`, computed once per env and stored in ``baselines/tuned/ends.json``).
 - **Constraints**: no trip, and a mean valve travel of at most :data:`TRAVEL_BUDGET` times
-  ``cascade_pi_ff``'s on the same episodes; and the commissioning check at the bottom of
-  the load range (:data:`MIN_LOAD_CHECK`, one episode held at :data:`MIN_LOAD`): no trip,
-  no limit cycle and a valve travel within ``stats.REALISM_TRAVEL_MAX`` times the
-  reference's on that episode (:func:`agents.stats.realism_breach`), as a unit is
-  commissioned over its whole load range while the training episodes stay at 50-100 %. A
-  candidate that breaks them ranks below every one that keeps them, by how far it breaks
-  them (so a start outside them is walked in). The check runs on the start and on every
-  candidate that would otherwise be accepted: one that does not improve the objective
-  cannot be accepted whatever the check says, so the search is the same as checking all.
+  ``cascade_pi_ff``'s on the same episodes; and the commissioning checks at the two ends
+  of the load range (:data:`COMMISSIONING_CHECKS`, one episode held at each of
+  :data:`CHECK_LOADS` with a setpoint and a heat-absorption step): no trip, no limit cycle
+  and a valve travel within ``stats.REALISM_TRAVEL_MAX`` times the reference's on that
+  episode (:func:`agents.stats.realism_breach`), as a unit is commissioned with step tests
+  over its whole load range. The training episodes move the load all the time, so they
+  have no quiet stretch in which a limit cycle would show; the checks have one. A
+  candidate that breaks the constraints ranks below every one that keeps them, by how far
+  it breaks them (so a start outside them is walked in). The checks run on the start and
+  on every candidate that would otherwise be accepted: one that does not improve the
+  objective cannot be accepted whatever the checks say, so the search is the same as
+  checking all.
 - **Search**: a deterministic compass search on the unit cube of the knobs (log or
   linear, :class:`baselines.tuning.Knob`) from the controller's defaults: each round tries
   +- the step along every knob in turn, moves to the first candidate that improves the
@@ -71,25 +74,33 @@ STEP0 = 0.25
 MIN_STEP = 1.0 / 64.0
 #: Largest mean valve travel, as a multiple of the reference's on the same episodes.
 TRAVEL_BUDGET = stats.TRAVEL_BUDGET
-#: Load of the commissioning check: the bottom of the load range the suite's scenarios cover.
-MIN_LOAD = 0.35
+#: Loads of the commissioning checks: the bottom of the load range the suite's scenarios
+#: reach, and rated load.
+CHECK_LOADS = (0.35, 1.0)
 _MIN = 60.0
-#: The commissioning check at minimum load: held at :data:`MIN_LOAD`, a +5 K setpoint step at
-#: minute 5 and a +5 % heat-absorption step at minute 20, with the training episodes' noise;
-#: the quiet stretch (minutes 31-50) shows a limit cycle. Not a scenario of the leaderboard.
-MIN_LOAD_CHECK = Scenario(
-    name="min_load_check",
-    duration_s=50 * _MIN,
-    load=((0.0, MIN_LOAD),),
-    setpoint_offset_C=((0.0, 0.0), (5 * _MIN, 0.0), (5 * _MIN, 5.0)),
-    heat_absorption_bias=((0.0, 0.0), (20 * _MIN, 0.0), (21 * _MIN, 0.05)),
-    noise_std_C=0.25,
-    heat_absorption_noise_std=0.02,
-    heat_absorption_noise_tau_s=300.0,
-    description="commissioning check of the baseline tuner: 35 % load, setpoint and "
-    "heat-absorption steps",
-)
-#: Seed of the check episode.
+
+
+def commissioning_check(load: float) -> Scenario:
+    """The commissioning check at ``load``: held there, a +5 K setpoint step at minute 5 and
+    a +5 % heat-absorption step at minute 20, with the training episodes' noise; the quiet
+    stretch (minutes 31-50) shows a limit cycle. Not a scenario of the leaderboard."""
+    return Scenario(
+        name=f"commissioning_check_{round(100 * load)}",
+        duration_s=50 * _MIN,
+        load=((0.0, load),),
+        setpoint_offset_C=((0.0, 0.0), (5 * _MIN, 0.0), (5 * _MIN, 5.0)),
+        heat_absorption_bias=((0.0, 0.0), (20 * _MIN, 0.0), (21 * _MIN, 0.05)),
+        noise_std_C=0.25,
+        heat_absorption_noise_std=0.02,
+        heat_absorption_noise_tau_s=300.0,
+        description=f"commissioning check of the baseline tuner: {round(100 * load)} % load, "
+        "setpoint and heat-absorption steps",
+    )
+
+
+#: The commissioning checks, one per load of :data:`CHECK_LOADS`.
+COMMISSIONING_CHECKS = tuple(commissioning_check(load) for load in CHECK_LOADS)
+#: Seed of the check episodes.
 CHECK_SEED = TUNING_SEED - 1
 
 
@@ -142,23 +153,37 @@ def ends(env_id: str, compute: bool = True) -> dict[str, Any]:
     return got
 
 
-def check_metrics(env_id: str, make_policy: Any) -> dict[str, Any]:
-    """Metrics of one policy on the commissioning check (:data:`MIN_LOAD_CHECK`)."""
-    env = gym.make(env_id, scenario=MIN_LOAD_CHECK)
-    return run_episode(env, make_policy(env), CHECK_SEED)["metrics"]
+def check_metrics(env_id: str, make_policy: Any) -> list[dict[str, Any]]:
+    """Metrics of one policy on each commissioning check (:data:`COMMISSIONING_CHECKS`)."""
+    out = []
+    for sc in COMMISSIONING_CHECKS:
+        env = gym.make(env_id, scenario=sc)
+        out.append(run_episode(env, make_policy(env), CHECK_SEED)["metrics"])
+    return out
+
+
+def check_breach(ms: list[dict[str, Any]], refs: list[dict[str, Any]]) -> tuple[str, float]:
+    """What broke on the commissioning checks ("" if none), against the reference's metrics
+    ``refs`` on them, and the largest valve-travel ratio to the reference's over the checks."""
+    broke = [f"at {round(100 * load)} % load: {b}"
+             for load, m, r in zip(CHECK_LOADS, ms, refs, strict=True)
+             if (b := stats.realism_breach(m, r))]  # fmt: skip
+    ratio = max(m["valve_travel"] / r["valve_travel"] for m, r in zip(ms, refs, strict=True))
+    return "; ".join(broke), float(ratio)
 
 
 @dataclass(frozen=True)
 class Evaluation:
     """One candidate's result on the training episodes and, once run, the commissioning
-    check (``check``: None if not run, "" if passed, else what broke)."""
+    checks (``check``: None if not run, "" if passed, else what broke;
+    ``check_travel_ratio``: the largest valve-travel ratio to the reference's over them)."""
 
     knobs: dict[str, float]
     score: float  # mean normalized score
     travel_ratio: float  # mean travel / the reference's
     trips: int
     check: str | None = None
-    check_travel_ratio: float = float("nan")  # travel on the check / the reference's
+    check_travel_ratio: float = float("nan")
 
     @property
     def feasible(self) -> bool:
@@ -242,8 +267,16 @@ def best_of(history: list[tuple[np.ndarray, Any]]) -> Any:
     return max(judged, key=lambda r: r.merit)
 
 
-def search(name: str, env_id: str, log: Any = None) -> dict[str, Any]:
-    """Compass search of controller ``name``'s knobs on ``env_id`` (module docstring)."""
+def search(name: str, env_id: str, log: Any = None,
+           replay: list[dict[str, Any]] | None = None) -> dict[str, Any]:
+    """Compass search of controller ``name``'s knobs on ``env_id`` (module docstring).
+
+    ``replay``: the ``history`` of an earlier search of the same controller and env. Where
+    the search meets knobs evaluated there, their result on the training episodes is taken
+    from it instead of run again (the commissioning checks always run). Valid while the
+    training episodes' dynamics are unchanged: the start is evaluated again and must give
+    the stored result bit for bit, else nothing is replayed.
+    """
     factory = baselines.factory(name)
     ks = tuning.knobs(factory)
     if not ks:
@@ -251,32 +284,50 @@ def search(name: str, env_id: str, log: Any = None) -> dict[str, Any]:
     e = ends(env_id)
     start = defaults(factory, env_id)
     x0 = np.array([k.to_unit(start[k.name]) for k in ks])
+    stored = {_key(r["knobs"]): r for r in replay or ()}
+    replayed = 0
 
-    ref = check_metrics(env_id, lambda env: baselines.make(ZERO, env))
+    refs = check_metrics(env_id, lambda env: baselines.make(ZERO, env))
 
     def evaluate_at(u: np.ndarray) -> Evaluation:
+        nonlocal replayed
         values = dict(start) if np.array_equal(u, x0) else {  # the start exactly
             k.name: k.from_unit(ui) for k, ui in zip(ks, u, strict=True)}  # fmt: skip
+        r = None if np.array_equal(u, x0) else stored.get(_key(values))
+        if r is not None:
+            replayed += 1
+            return Evaluation(dict(values), r["score"], r["travel_ratio"], r["trips"])
         res = evaluate(name, env_id, values, e)
+        if np.array_equal(u, x0) and stored:
+            r = stored.get(_key(values))
+            same = r is not None and (r["score"], r["travel_ratio"], r["trips"]) == (
+                res.score, res.travel_ratio, res.trips)
+            if not same:
+                stored.clear()
+            if log:
+                log(f"{name} {env_id}: replay {'valid' if same else 'refused: start differs'}")
         if log:
             log(f"{name} {env_id}: score {res.score:.4f} travel x{res.travel_ratio:.2f} "
                 f"trips {res.trips}")
         return res
 
     def confirm(u: np.ndarray, res: Evaluation) -> Evaluation:
-        m = check_metrics(env_id, lambda env: baselines.make(name, env, **res.knobs))
-        breach = stats.realism_breach(m, ref)
+        ms = check_metrics(env_id, lambda env: baselines.make(name, env, **res.knobs))
+        breach, ratio = check_breach(ms, refs)
         if log:
-            log(f"{name} {env_id}: min-load check {breach or 'passed'}")
-        return replace(res, check=breach or "",
-                       check_travel_ratio=m["valve_travel"] / ref["valve_travel"])
+            log(f"{name} {env_id}: commissioning checks {breach or 'passed'}")
+        return replace(res, check=breach, check_travel_ratio=ratio)
 
     history = compass(x0, evaluate_at, confirm=confirm)
     best = best_of(history)
     return {"knobs": best.knobs, "score": best.score, "travel_ratio": best.travel_ratio,
             "trips": best.trips, "feasible": best.feasible, "evaluations": len(history),
-            "check_travel_ratio": best.check_travel_ratio, "start": history[0][1].__dict__,
-            "history": [_row(r) for _, r in history]}  # fmt: skip
+            "replayed": replayed, "check_travel_ratio": best.check_travel_ratio,
+            "start": history[0][1].__dict__, "history": [_row(r) for _, r in history]}
+
+
+def _key(knobs: dict[str, float]) -> tuple[tuple[str, float], ...]:
+    return tuple(sorted((k, float(v)) for k, v in knobs.items()))
 
 
 def _row(r: Evaluation) -> dict[str, Any]:
@@ -305,20 +356,22 @@ def _code_digest(ends: bool = False) -> str:
     return h.hexdigest()[:16]
 
 
-def write(name: str, env_ids: list[str], log: Any = None) -> dict[str, Any]:
-    """Tune ``name`` on ``env_ids`` and merge the results into its stored file."""
+def write(name: str, env_ids: list[str], log: Any = None, replay: bool = False) -> dict[str, Any]:
+    """Tune ``name`` on ``env_ids`` and merge the results into its stored file (``replay``:
+    reuse the stored search's evaluations on the training episodes, :func:`search`)."""
     f = tuning.path(name)
     data = json.loads(f.read_text()) if f.is_file() else {"controller": name, "plants": {}}
     for env_id in env_ids:
         t0 = time.perf_counter()
-        res = search(name, env_id, log)
+        old = data["plants"].get(env_id, {}).get("history") if replay else None
+        res = search(name, env_id, log, replay=old)
         res["seconds"] = round(time.perf_counter() - t0, 1)
         data["plants"][env_id] = res
         data["terms"] = {"episodes": EPISODES, "tuning_seed": TUNING_SEED,
                          "evaluations": EVALUATIONS, "step0": STEP0, "min_step": MIN_STEP,
                          "travel_budget": TRAVEL_BUDGET, "reference": ZERO,
-                         "min_load_check": {"load": MIN_LOAD, "seed": CHECK_SEED,
-                                            "travel_max": stats.REALISM_TRAVEL_MAX}}  # fmt: skip
+                         "commissioning_checks": {"loads": list(CHECK_LOADS), "seed": CHECK_SEED,
+                                                  "travel_max": stats.REALISM_TRAVEL_MAX}}  # fmt: skip
         data["code"] = _code_digest()
         tuning.TUNED.mkdir(exist_ok=True)
         f.write_text(json.dumps(data, indent=1, sort_keys=True) + "\n")  # after every env
@@ -355,6 +408,10 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--ends", action="store_true",
                     help="only (re)compute the score's ends on the training episodes "
                     "(baselines/tuned/ends.json; the oracle's episodes: minutes per env)")
+    ap.add_argument("--replay", action="store_true",
+                    help="reuse the stored searches' evaluations on the training episodes "
+                    "where the new search meets the same knobs (after a change of the "
+                    "constraints only; refused per search if its start does not reproduce)")
     ap.add_argument("--markdown", action="store_true",
                     help="print the stored tunings as a markdown table and exit")
     args = ap.parse_args(argv)
@@ -379,7 +436,7 @@ def main(argv: list[str] | None = None) -> int:
             ends(e)
             print(f"ends of {e} in {tuning.TUNED / 'ends.json'}")
     for n in names:
-        write(n, env_ids, log=lambda s: print(s, file=sys.stderr, flush=True))
+        write(n, env_ids, log=lambda s: print(s, file=sys.stderr, flush=True), replay=args.replay)
         print(f"wrote {tuning.path(n)}")
     return 0
 

@@ -91,16 +91,47 @@ def test_checking_only_would_be_accepted_candidates_is_the_search_that_checks_al
     assert sum(r.check is not None for _, r in lazy) < len(lazy)
 
 
-def test_the_commissioning_check_is_no_leaderboard_scenario():
-    """The check is a constraint of the tuner at the bottom of the load range, not one of
-    the scenarios the leaderboard scores (named or held-out)."""
+def test_the_commissioning_checks_are_no_leaderboard_scenarios():
+    """The checks are constraints of the tuner at the ends of the load range, not scenarios
+    the leaderboard scores (named or held-out)."""
     from steamtemp_gym import scenarios
     from steamtemp_gym.scenarios import heldout
 
-    assert bt.MIN_LOAD_CHECK.value("load", 0.0) == bt.MIN_LOAD
-    assert bt.MIN_LOAD_CHECK.name not in scenarios.names(None) + list(heldout.NAMES)
-    assert all(bt.MIN_LOAD_CHECK != heldout.load(n) for n in heldout.NAMES)
+    assert [c.value("load", 0.0) for c in bt.COMMISSIONING_CHECKS] == list(bt.CHECK_LOADS)
+    assert min(bt.CHECK_LOADS) == 0.35 and max(bt.CHECK_LOADS) == 1.0
+    named = [scenarios.get(n) for n in scenarios.names(None) if n != "random"]
+    for c in bt.COMMISSIONING_CHECKS:
+        assert c.name not in scenarios.names(None) + list(heldout.NAMES)
+        assert all(c != heldout.load(n) for n in heldout.NAMES) and c not in named
     assert bt.CHECK_SEED not in bt.seeds()
+
+
+def test_a_replayed_search_runs_only_what_it_has_not_stored(monkeypatch):
+    """A search given an earlier history takes the training-episode results it stores for
+    the same knobs and walks the same path as a search from scratch; the start always runs,
+    and a start that does not reproduce refuses the whole replay."""
+    monkeypatch.setattr(bt, "ends", lambda env_id: {})
+    monkeypatch.setattr(bt, "check_metrics", lambda env_id, make: [])
+    monkeypatch.setattr(bt, "check_breach", lambda ms, refs: ("", 1.0))
+    ks = tuning.knobs(baselines.factory("cascade_pi"))
+    monkeypatch.setattr(bt, "defaults", lambda f, env_id: {k.name: 1.0 for k in ks})
+    target = np.array([0.9, 0.3, 0.6, 0.2])
+    calls = []
+
+    def evaluate(name, env_id, values, e):
+        calls.append(values)
+        u = np.array([k.to_unit(values[k.name]) for k in ks])
+        return bt.Evaluation(dict(values), -float(np.sum((u - target) ** 2)), 1.0, 0)
+
+    monkeypatch.setattr(bt, "evaluate", evaluate)
+    fresh = bt.search("cascade_pi", FSH)
+    n_fresh = len(calls)
+    again = bt.search("cascade_pi", FSH, replay=fresh["history"])
+    assert again["history"] == fresh["history"] and again["knobs"] == fresh["knobs"]
+    assert len(calls) == n_fresh + 1 and again["replayed"] == fresh["evaluations"] - 1
+    stale = [dict(r, score=r["score"] + 1.0) for r in fresh["history"]]
+    refused = bt.search("cascade_pi", FSH, replay=stale)
+    assert refused["replayed"] == 0 and refused["history"] == fresh["history"]
 
 
 def test_stored_names_the_command_when_there_is_no_tuning(tmp_path, monkeypatch):
@@ -159,19 +190,19 @@ def _stored_pairs() -> list:
 
 
 @functools.cache
-def _check_reference(env_id: str) -> dict:
+def _check_reference(env_id: str) -> list[dict]:
     return bt.check_metrics(env_id, lambda env: baselines.make(bt.ZERO, env))
 
 
 @pytest.mark.parametrize(("name", "env_id"), _stored_pairs())
 def test_every_stored_tuning_passes_the_commissioning_check(name, env_id):
-    """Each stored tuning was chosen under the minimum-load check: run again, it trips not,
-    limit-cycles not and strokes the valve at most 3x the reference's on the check episode."""
+    """Each stored tuning was chosen under the commissioning checks: run again, it trips
+    not, limit-cycles not and strokes the valve at most 3x the reference's on each check."""
     rec = json.loads(tuning.path(name).read_text())
-    assert "min_load_check" in rec["terms"], "tuned before the check existed: rerun the tuning"
+    assert rec["terms"].get("commissioning_checks", {}).get("loads") == list(bt.CHECK_LOADS), \
+        "tuned under other commissioning checks: rerun the tuning"
     knobs = rec["plants"][env_id]["knobs"]
-    ref = _check_reference(env_id)
-    m = bt.check_metrics(env_id, lambda env: baselines.make(name, env, **knobs))
-    assert bt.stats.realism_breach(m, ref) is None
-    recorded = rec["plants"][env_id]["check_travel_ratio"]
-    assert m["valve_travel"] / ref["valve_travel"] == pytest.approx(recorded, rel=1e-9)
+    ms = bt.check_metrics(env_id, lambda env: baselines.make(name, env, **knobs))
+    breach, ratio = bt.check_breach(ms, _check_reference(env_id))
+    assert breach == ""
+    assert ratio == pytest.approx(rec["plants"][env_id]["check_travel_ratio"], rel=1e-9)
