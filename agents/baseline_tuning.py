@@ -64,7 +64,7 @@ from steamtemp_gym.scenarios import Scenario
 TUNABLE = ("cascade_pi", "cascade_pi_ff", "fuzzy_p2id", "mpc_linear", "lqi", "fao_sf", "fao_fac",
            "neuro_pid_mee", "neuro_pid_mse", "mpc_evarx", "mpc_arx")  # fmt: skip
 #: The industrial reference: the score's 0 and the travel budget's unit.
-ZERO = "cascade_pi_ff"
+ZERO = baselines.INDUSTRIAL_REFERENCE
 #: First seed of the training episodes (``random`` scenario); far from the agents' training
 #: seeds and the leaderboard's evaluation seeds.
 TUNING_SEED = 2_000_000
@@ -370,8 +370,9 @@ def write(name: str, env_ids: list[str], log: Any = None, replay: bool = False) 
         data["terms"] = {"episodes": EPISODES, "tuning_seed": TUNING_SEED,
                          "evaluations": EVALUATIONS, "step0": STEP0, "min_step": MIN_STEP,
                          "travel_budget": TRAVEL_BUDGET, "reference": ZERO,
-                         "commissioning_checks": {"loads": list(CHECK_LOADS), "seed": CHECK_SEED,
-                                                  "travel_max": stats.REALISM_TRAVEL_MAX}}  # fmt: skip
+                         "commissioning_checks": {
+                             "loads": list(CHECK_LOADS), "seed": CHECK_SEED,
+                             "travel_max": stats.REALISM_TRAVEL_MAX}}  # fmt: skip
         data["code"] = _code_digest()
         tuning.TUNED.mkdir(exist_ok=True)
         f.write_text(json.dumps(data, indent=1, sort_keys=True) + "\n")  # after every env

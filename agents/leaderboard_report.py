@@ -31,7 +31,7 @@ from steamtemp_gym.checks import head
 #: Version of leaderboard.json's format (docs/leaderboard_schema.json).
 SCHEMA_VERSION = 6
 #: The 0 of the normalized score: the cascade as a commissioned unit runs it.
-ZERO = "cascade_pi_ff"
+ZERO = baselines.INDUSTRIAL_REFERENCE
 #: The 1: the clairvoyant NMPC on the true plant (agents/oracle.py).
 ONE = "oracle"
 #: Policies listed and plotted but never ranked (not admissible controllers).

@@ -2,9 +2,10 @@
 observation and carries its own observation pipeline (controller memory, then the
 VecNormalize statistics frozen at the end of training) with the memory's state kept per
 row across calls; ``reset()`` or ``episode_start`` restarts it. A residual agent adds its
-scaled action to ``cascade_pi``'s; an incremental agent's action is a bounded valve move
-per interval (agents/moves.py). ``predict`` refuses a non-finite or misshapen
-observation with a ``ValueError`` before any state changes, as the baselines do
+scaled action to the industrial reference's (``cascade_pi_ff``); an incremental agent's
+action is a bounded valve move per interval (agents/moves.py). ``predict`` refuses a
+non-finite or misshapen observation with a ``ValueError`` before any state changes, as the
+baselines do
 (``baselines.policy.check_predict_args``).
 
 The deterministic action of an MLP actor (PPO's, SAC's, TD3's) is computed in float64
@@ -106,10 +107,11 @@ class AgentPolicy:
 
     Args:
         model: The SB3 model (anything with SB3's ``predict``).
-        env: The env it acts on (observation layout, plant; cascade_pi for a residual).
+        env: The env it acts on (observation layout, plant; the base of a residual).
         memory: Controller-memory options (agents.wrappers.MemoryConfig fields) or None.
         obs_norm: Frozen VecNormalize statistics or None.
-        residual_scale: If set, the action is cascade_pi's plus this times the model's.
+        residual_scale: If set, the action is the industrial reference's
+            (``baselines.INDUSTRIAL_REFERENCE``) plus this times the model's.
         max_move: If set, the model's action is a valve move of at most this fraction of
             stroke per control interval (agents/moves.py); not with ``residual_scale``.
     """
@@ -142,7 +144,7 @@ class AgentPolicy:
         if residual_scale is not None:
             import baselines
 
-            self.base = baselines.make("cascade_pi", env)
+            self.base = baselines.make(baselines.INDUSTRIAL_REFERENCE, env)
         self.moves = None if max_move is None else MoveState(env, max_move)
         #: The LSTM state of a recurrent model (sb3-contrib's RecurrentPPO), per row.
         self.recurrent = hasattr(getattr(model, "policy", None), "lstm_actor")

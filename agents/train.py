@@ -16,10 +16,11 @@ id; the same files work with ``python -m rl_zoo3.train --gym-packages steamtemp_
 agents.wrappers.ControllerMemory), ``policy_kwargs`` (a dict or RL Zoo's "dict(...)"
 string), ``learning_rate`` (a number or "lin_<x>"), ``noise_type``/``noise_std``
 (SAC/TD3 action noise), ``residual_scale``, ``max_move`` and ``train_reward`` (our
-extensions, not RL Zoo's: train a residual on cascade_pi; an incremental agent whose action
-is a valve move of at most ``max_move`` of stroke per interval, agents/moves.py; reward
-options for the training envs only, e.g. ``{w_move: 1.0}`` to charge valve travel more
-while learning, steamtemp_gym/rewards.py; such entries are not for RL Zoo). Every other key
+extensions, not RL Zoo's: train a residual on the industrial reference ``cascade_pi_ff``;
+an incremental agent whose action is a valve move of at most ``max_move`` of stroke per
+interval, agents/moves.py; reward options for the training envs only, e.g.
+``{w_move: 1.0}`` to charge valve travel more while learning, steamtemp_gym/rewards.py;
+such entries are not for RL Zoo). Every other key
 must be an argument of the algorithm's constructor. All input is checked before training
 starts. Validation, the leaderboard and every score use the env's default reward.
 
@@ -64,7 +65,7 @@ from agents import ray_backend, shipped
 from agents.files import stem
 from agents.moves import check_max_move
 
-#: Algorithm names: SB3's PPO, SAC, TD3, PPO as a residual on cascade_pi (its own YAML
+#: Algorithm names: SB3's PPO, SAC, TD3, PPO as a residual on cascade_pi_ff (its own YAML
 #: file, whose entries need ``residual_scale``) and sb3-contrib's RecurrentPPO (an LSTM
 #: policy: the memory is learned instead of given by agents.wrappers).
 ALGOS = ("ppo", "sac", "td3", "ppo_residual", "recurrentppo", "sac_caps")
@@ -355,7 +356,7 @@ def train(env_id: str, algo: str, hyperparams: Path | None = None, timesteps: in
     import baselines
     from agents.stats import TRAVEL_BUDGET
 
-    reference = validate(env_id, lambda v: baselines.make("cascade_pi_ff", v))
+    reference = validate(env_id, lambda v: baselines.make(baselines.INDUSTRIAL_REFERENCE, v))
     revision = _git_revision()  # the code this run trains with
     t0 = time.monotonic()
     curve: list[dict[str, Any]] = []
@@ -410,7 +411,7 @@ def train(env_id: str, algo: str, hyperparams: Path | None = None, timesteps: in
         "validation": {"scenario": "random", "seeds": [VALIDATION_SEED + k
                        for k in range(N_VALIDATION)], "best": {k: best[k] for k in
                        ("return", "iae_K_s", "valve_travel", "travel_ratio")},
-                       "reference": {"policy": "cascade_pi_ff", **reference},
+                       "reference": {"policy": baselines.INDUSTRIAL_REFERENCE, **reference},
                        "travel_budget": TRAVEL_BUDGET, "curve": curve},
         "normalization": best["obs_norm"], "memory": hp["env_wrapper"],
         "residual_scale": hp.get("residual_scale"), "max_move": hp.get("max_move"),

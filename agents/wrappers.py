@@ -228,9 +228,10 @@ class VecControllerMemory(VecEnvWrapper):
 
 
 class VecResidual(VecEnvWrapper):
-    """SB3 VecEnv wrapper for a residual agent: the env receives cascade_pi's action plus
-    ``scale`` times the agent's, clipped to [-1, 1] (the arrangement industrial RL deploys:
-    the conventional loops stay in charge, the agent corrects them)."""
+    """SB3 VecEnv wrapper for a residual agent: the env receives the industrial reference's
+    action (``baselines.INDUSTRIAL_REFERENCE``) plus ``scale`` times the agent's, clipped to
+    [-1, 1] (the arrangement industrial RL deploys: the conventional loops stay in charge,
+    the agent corrects them)."""
 
     def __init__(self, venv: VecEnv, env: Any, scale: float) -> None:
         import baselines
@@ -238,7 +239,7 @@ class VecResidual(VecEnvWrapper):
         if not (isinstance(scale, (int, float)) and 0 < scale <= 2):
             raise ValueError(f"residual_scale must be a number in (0, 2], got {scale!r}")
         super().__init__(venv)
-        self.base = baselines.make("cascade_pi", env)
+        self.base = baselines.make(baselines.INDUSTRIAL_REFERENCE, env)
         self.scale = float(scale)
         self._obs = np.zeros((venv.num_envs, *venv.observation_space.shape))
         self._start = np.ones(venv.num_envs, dtype=bool)

@@ -50,6 +50,10 @@ _REGISTRY: dict[str, str | Callable[..., Any]] = {
 TUNED_ROWS = ("cascade_pi", "cascade_pi_ff", "fao_sf", "fao_fac", "neuro_pid_mee",
               "neuro_pid_mse")  # fmt: skip
 _REGISTRY.update({f"{n}_tuned": Tuned(n) for n in TUNED_ROWS})
+#: The industrial reference: the cascade as a commissioned unit runs it (load-scheduled
+#: gains, load feed-forward). The leaderboard's score 0, the unit of the valve-travel
+#: budget, the base a residual agent corrects.
+INDUSTRIAL_REFERENCE = "cascade_pi_ff"
 #: The shipped controllers (register() cannot replace them).
 SHIPPED: tuple[str, ...] = tuple(_REGISTRY)
 NAMES: tuple[str, ...] = SHIPPED

@@ -52,8 +52,8 @@ solve is warm-started from the row's previous solution and starts from the same 
 count rather than OSQP's default time-based rule). An OSQP object carries state from solve
 to solve beyond these (measured: the same inputs give moves 5e-18 apart after another
 row's solve), so with a solver per row a row's result does not depend on the other rows or
-on earlier episodes (batched == single, bit for bit). ``policy.stats``: solves, iterations and solve times per solve,
-fallbacks by reason.
+on earlier episodes (batched == single, bit for bit). ``policy.stats``: solves, iterations
+and solve times per solve, fallbacks by reason.
 
 Safety layer (fallbacks, counted in ``policy.stats['fallbacks']``): the bias is taken back
 towards zero by at most the move limit per interval (no jump of the valves) and the loops
