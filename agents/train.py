@@ -20,7 +20,8 @@ extensions, not RL Zoo's: train a residual on the industrial reference ``cascade
 an incremental agent whose action is a valve move of at most ``max_move`` of stroke per
 interval, agents/moves.py; reward options for the training envs only, e.g.
 ``{w_move: 1.0}`` to charge valve travel more while learning, steamtemp_gym/rewards.py;
-such entries are not for RL Zoo). Every other key
+``plant_randomization``: the training envs' option of that name, a plant drawn per episode,
+docs/robustness.md; such entries are not for RL Zoo). Every other key
 must be an argument of the algorithm's constructor. All input is checked before training
 starts. Validation, the leaderboard and every score use the env's default reward.
 
@@ -84,7 +85,8 @@ RUN_SEED_STRIDE = 1000
 MAX_RUNS = 100
 #: RL Zoo keys with a meaning of their own (the rest go to the algorithm's constructor).
 SPECIAL = ("n_timesteps", "n_envs", "policy", "normalize", "env_wrapper", "policy_kwargs",
-           "noise_type", "noise_std", "residual_scale", "max_move", "train_reward")  # fmt: skip
+           "noise_type", "noise_std", "residual_scale", "max_move", "train_reward",
+           "plant_randomization")  # fmt: skip
 
 
 class ConfigError(ValueError):
@@ -212,6 +214,13 @@ def read_hyperparams(path: Path, env_id: str, algo: str) -> dict[str, Any]:
             RewardConfig.from_options(hp["train_reward"])
         except ValueError as exc:
             raise ConfigError(f"--hyperparams {path}: train_reward: {exc}") from None
+    if "plant_randomization" in hp:
+        from steamtemp_gym.plants import perturb
+
+        try:
+            perturb.parse(env_id, hp["plant_randomization"])
+        except ValueError as exc:
+            raise ConfigError(f"--hyperparams {path}: {exc}") from None
     hp = dict(hp)
     hp["policy_kwargs"] = _dict_string("policy_kwargs", hp.get("policy_kwargs", {}))
     norm = hp.get("normalize", False)
@@ -246,7 +255,8 @@ def make_training_env(env_id: str, n_envs: int, seed: int, hp: dict[str, Any]):
     from agents.vec_env import NativeVecEnv
     from agents.wrappers import VecControllerMemory, VecResidual
 
-    base = NativeVecEnv(env_id, n_envs, scenario="random", reward=hp.get("train_reward"))
+    base = NativeVecEnv(env_id, n_envs, scenario="random", reward=hp.get("train_reward"),
+                        plant_randomization=hp.get("plant_randomization"))  # fmt: skip
     venv = base
     if hp.get("residual_scale") is not None:
         venv = VecResidual(venv, base.venv, hp["residual_scale"])

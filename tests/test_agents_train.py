@@ -214,3 +214,19 @@ def test_train_reward_is_checked_and_applies_to_the_training_envs_only(tmp_path)
         rewards.append(venv.step(stroke)[1])
     assert np.all(rewards[0] < rewards[1])  # the same move, charged 50x more
     assert RewardConfig().w_move == 0.1  # what validation and the leaderboard charge
+
+
+def test_plant_randomization_is_checked_and_draws_the_training_plants(tmp_path):
+    path = tmp_path / "ppo.yml"
+    path.write_text(yaml.safe_dump({ENV_ID: {"policy": "MlpPolicy",
+                                             "plant_randomization": {"heat_transfr": [0.8, 1.2]}}}))
+    with pytest.raises(train.ConfigError, match="unknown group"):
+        train.read_hyperparams(path, ENV_ID, "ppo")
+    path.write_text(yaml.safe_dump({ENV_ID: {"policy": "MlpPolicy", "plant_randomization": True}}))
+    hp = train.read_hyperparams(path, ENV_ID, "ppo")
+    drawn, base = train.make_training_env(ENV_ID, 2, 0, hp)
+    drawn.reset()
+    plants = base.core.plants
+    assert plants[0].params != plants[1].params  # each row its own unit
+    _, nominal = train.make_training_env(ENV_ID, 2, 0, {**hp, "plant_randomization": None})
+    assert not hasattr(nominal.core, "plants")
