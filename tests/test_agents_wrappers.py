@@ -138,10 +138,10 @@ def test_unknown_or_bad_options():
         MemoryConfig(integral_limit_K=-1.0)
 
 
-def test_residual_adds_scaled_action_to_cascade_pi():
+def test_residual_adds_scaled_action_to_the_industrial_reference():
     base = NativeVecEnv(ENV_ID, 2, scenario=SHORT)
     res = VecResidual(base, base.venv, 0.25)
-    pi = baselines.make("cascade_pi", base.venv)
+    pi = baselines.make(baselines.INDUSTRIAL_REFERENCE, base.venv)
     res.seed(1)
     obs = res.reset()
     a = np.full((2, 2), 0.4, np.float32)

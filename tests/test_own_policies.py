@@ -103,8 +103,9 @@ def test_factory_is_fingerprinted_by_its_file(tmp_path):
 
 # --------------------------------------------------------------------------- agent files
 def test_trained_agent_files_score_as_the_shipped_agent(tmp_path, tiny):
-    """steamtemp-train's files (a copy of the shipped PPO agent), named as a directory with
-    zoo:, as a directory path and as the model .zip: rows identical to sb3:ppo's."""
+    """steamtemp-train's files (a copy of the shipped PPO agent's run 0), named as a
+    directory with zoo:, as a directory path and as the model .zip: rows identical to that
+    run's (``sb3:ppo``, or ``sb3:ppo@run0`` where the zoo holds several runs)."""
     trained = tmp_path / "trained"
     trained.mkdir()
     stem = files.stem(ENV, "ppo")
@@ -113,10 +114,11 @@ def test_trained_agent_files_score_as_the_shipped_agent(tmp_path, tiny):
     names = [f"zoo:{trained}", f"{trained}/", f"{trained / stem}.zip"]
     rows = _run(tmp_path, tiny, ",".join(["sb3:ppo", *names]))
     by = {(r["policy"], r["seed"]): r for r in rows}
+    shipped = specs.training_runs("sb3:ppo", ENV)[0]
     for name in names:
         for seed in (0, 1):
-            assert by[name, seed]["metrics"] == by["sb3:ppo", seed]["metrics"], name
-    digests = {n: lb._policy_digest(ENV, n) for n in ["sb3:ppo", *names]}
+            assert by[name, seed]["metrics"] == by[shipped, seed]["metrics"], name
+    digests = {n: lb._policy_digest(ENV, n) for n in [shipped, *names]}
     assert len({d.rsplit(":", 1)[1] for d in digests.values()}) == 1  # the same files' hash
 
 

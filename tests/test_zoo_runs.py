@@ -7,6 +7,7 @@ leaderboard scoring each run of a zoo agent and reporting the agent once."""
 from __future__ import annotations
 
 import json
+import shutil
 from pathlib import Path
 
 import numpy as np
@@ -104,10 +105,20 @@ def test_the_shipped_zoo_holds_runs_0_to_k_of_each_agent():
         names = specs.training_runs(f"sb3:{algo}", env_id)
         assert names == ([f"sb3:{algo}"] if ks == [0] else
                          [specs.run_name(f"sb3:{algo}", k) for k in ks])  # fmt: skip
-    single = next(e for e, a in agents.shipped() if a == "ppo" and agents.runs(e, a) == [0])
     assert specs.parse("sb3:ppo@run0").run == 0
+
+
+def test_a_zoo_with_one_run_scores_it_under_its_own_name(tmp_path, monkeypatch):
+    """A zoo holding only run 0 of an agent (the file without a run index) scores it as
+    ``sb3:<algo>`` and refuses another run by name."""
+    stem = files.stem(ENV, "ppo")
+    for suffix in (".zip", ".json"):
+        shutil.copy(agents.ZOO / (stem + suffix), tmp_path / (stem + suffix))
+    monkeypatch.setattr(agents, "ZOO", tmp_path)
+    assert agents.runs(ENV, "ppo") == [0]
+    assert specs.training_runs("sb3:ppo", ENV) == ["sb3:ppo"]
     with pytest.raises(ValueError, match="no trained agent 'ppo' run 1 shipped"):
-        agents.load(single, "ppo", run=1)
+        agents.load(ENV, "ppo", run=1)
 
 
 def test_policy_names_of_runs(tmp_path, monkeypatch):
