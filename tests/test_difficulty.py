@@ -1,8 +1,9 @@
 """The benchmark has headroom: difficulty targets over every id (agents/difficulty.py).
 
 Means over 3 seeds of the named scenarios (sensor noise and the coloured heat-absorption
-disturbance on). Targets from the issue tracker's "benchmark with headroom" and the
-field tolerances of REFERENCE_DATA.md (+-10 K once-through, +-8 K drum in load changes).
+disturbance on). Targets: the field tolerances of steam temperature control in load
+changes (+-10 K once-through, +-8 K drum; docs/difficulty.md) and a benchmark with headroom
+above the plain cascade.
 """
 
 from __future__ import annotations

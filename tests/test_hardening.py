@@ -1,6 +1,6 @@
-"""Hardening: no NaN reaches an agent, bounded and typed inputs, exact shapes (issue 7).
+"""Hardening: no NaN reaches an agent, bounded and typed inputs, exact shapes.
 
-Registry-wide where the behaviour is generic; each defect of the issue is a test here.
+Registry-wide where the behaviour is generic; each defect found is a test here.
 """
 
 from __future__ import annotations
@@ -29,9 +29,9 @@ def _vec(env_id, n, **kw):
 
 # ------------------------------------------------------------------ 1. NaN never observed
 def test_benson_low_load_cold_steam_stays_finite():
-    """The issue's repro: 110 % -> 20 % with -40 % heat absorption and a -40 K setpoint.
-    The HP exhaust fell below saturation and was taken as water (reheat NaN); it is now
-    dry-saturated steam at worst."""
+    """110 % -> 20 % with -40 % heat absorption and a -40 K setpoint: the HP exhaust falls
+    below saturation; it is taken as dry-saturated steam at worst, never as water (which
+    made the reheat NaN)."""
     sc = Scenario(name="r", duration_s=1800, load=[[0, 1.1], [394, 0.2]],
                   heat_absorption_bias=[[0, 0.0], [100, -0.25]],
                   setpoint_offset_C=[[0, 0.0], [100, -25.0]])  # fmt: skip
