@@ -206,4 +206,6 @@ def test_every_stored_tuning_passes_the_commissioning_check(name, env_id):
     ms = bt.check_metrics(env_id, lambda env: baselines.make(name, env, **knobs))
     breach, ratio = bt.check_breach(ms, _check_reference(env_id))
     assert breach == ""
-    assert ratio == pytest.approx(rec["plants"][env_id]["check_travel_ratio"], rel=1e-9)
+    # Library versions (scipy's Riccati and least-squares solvers, BLAS) move the last
+    # digits: the stored ratio is reproduced to 1e-6, not bit for bit, across them.
+    assert ratio == pytest.approx(rec["plants"][env_id]["check_travel_ratio"], rel=1e-6)
