@@ -8,6 +8,10 @@ the normalized score; ``--no-oracle`` leaves it out, and the score with it) and
 A shipped agent with several training runs in the zoo runs as one policy per run,
 ``sb3:<algo>@run<k>`` (``sb3:<algo>`` in ``--policies`` means all of them), and is
 reported as one row over its runs (agents/leaderboard_report.py).
+Model mismatch: when ``load_ramp_100_50`` is among the scenarios, every policy but the
+references is also commissioned on the nominal plant and run unchanged on each perturbed
+variant of the plant (rows ``mismatch:<variant>``, agents/leaderboard_mismatch.py): the
+robustness column, kept out of the scores; ``--no-mismatch`` leaves them out.
 ``--policies`` also takes your own (agents/specs.py; examples/README.md): a trained
 agent's files (``zoo:DIR``, or a path: a directory or model .zip written by
 ``steamtemp-train --out`` or an RL Zoo run) and ``module:callable``, a factory
@@ -100,6 +104,7 @@ import numpy as np
 import agents
 import baselines
 import steamtemp_gym
+from agents import leaderboard_mismatch as mismatch
 from agents import leaderboard_plots as plots
 from agents import leaderboard_report as report
 from agents import ray_backend, specs, stats
@@ -146,12 +151,25 @@ class Plan:
     fingerprints: dict[tuple[str, str, str], str] = field(default_factory=dict)
     imports: tuple[str, ...] = ()  # --import: modules every worker imports first
     travel_budget: float = stats.TRAVEL_BUDGET  # --travel-budget
+    #: env -> mismatch label -> the variant's params (agents/leaderboard_mismatch.py)
+    variants: dict[str, dict[str, dict]] = field(default_factory=dict)
+
+    def scenarios_of(self, env_id: str) -> list[str]:
+        """The run's scenarios on ``env_id``, then its mismatch labels."""
+        return [*self.scenarios, *self.variants.get(env_id, {})]
+
+    def policies_of(self, env_id: str, sc: str) -> list[str]:
+        """The policies run on ``env_id`` under ``sc``: all but the references on a
+        mismatch variant."""
+        if sc in self.variants.get(env_id, {}):
+            return [p for p in self.policies[env_id] if p not in report.REFERENCES]
+        return self.policies[env_id]
 
     def grid(self) -> Iterable[Key]:
         """Every episode of the run, in run order."""
         for env_id in self.envs:
-            for sc in self.scenarios:
-                for name in self.policies[env_id]:
+            for sc in self.scenarios_of(env_id):
+                for name in self.policies_of(env_id, sc):
                     for seed in self.seeds:
                         yield env_id, sc, name, seed
 
@@ -333,11 +351,15 @@ def _policy_digest(env_id: str, name: str) -> str:
     return specs.parse(name).digest(env_id)
 
 
-def fingerprint(env_id: str, scenario: Any, policy_digest: str, source_digest: str) -> str:
-    """Short hash of everything but the seed that decides an episode's result."""
+def fingerprint(env_id: str, scenario: Any, policy_digest: str, source_digest: str,
+                params: dict | None = None) -> str:  # fmt: skip
+    """Short hash of everything but the seed that decides an episode's result (``params``:
+    a mismatch variant's plant parameters)."""
     sc = scenario.to_dict() if isinstance(scenario, scenarios.Scenario) else str(scenario)
     payload = {"schema": SCHEMA, "env": env_id, "scenario": sc, "policy": policy_digest,
                "source": source_digest}  # fmt: skip
+    if params:
+        payload["params"] = params
     text = json.dumps(payload, sort_keys=True, allow_nan=False, default=str)
     return hashlib.sha256(text.encode()).hexdigest()[:16]
 
@@ -384,6 +406,11 @@ def build_plan(ap: argparse.ArgumentParser, args: argparse.Namespace) -> Plan:
                 )
     plan = Plan(envs=envs, scenarios=scs, seeds=seeds, policies=pols, resolved=resolved,
                 imports=imports, travel_budget=budget)  # fmt: skip
+    if not args.no_mismatch and mismatch.SCENARIO in scs:
+        for env_id in envs:
+            plan.variants[env_id] = mismatch.labels(env_id)
+            for label in plan.variants[env_id]:
+                resolved[env_id, label] = resolved[env_id, mismatch.SCENARIO]
     source = _source_digest()
     for env_id in envs:
         digests = {name: _policy_digest(env_id, name) for name in pols[env_id]}  # once per env
@@ -395,9 +422,11 @@ def build_plan(ap: argparse.ArgumentParser, args: argparse.Namespace) -> Plan:
                     f"argument --scenarios: {tail(sc, 80)!r} for {env_id}: "
                     f"{type(exc).__name__}: {head(str(exc), _EXCERPT)}"
                 )
-            for name in pols[env_id]:
+        for sc in plan.scenarios_of(env_id):
+            params = plan.variants.get(env_id, {}).get(sc)
+            for name in plan.policies_of(env_id, sc):
                 plan.fingerprints[env_id, sc, name] = fingerprint(
-                    env_id, resolved[env_id, sc], digests[name], source
+                    env_id, resolved[env_id, sc], digests[name], source, params
                 )
     return plan
 
@@ -531,6 +560,7 @@ class Unit:
     fingerprint: str
     trace_seed: int | None  # the seed whose trace is kept for the plot
     imports: tuple[str, ...] = ()  # modules to import first (--import)
+    params: dict | None = None  # a mismatch variant's plant; the policy sees the nominal one
 
 
 def _ok_row(u: Unit, seed: int, metrics: dict) -> dict:
@@ -548,10 +578,15 @@ def run_unit(u: Unit) -> tuple[list[dict], dict | None]:
     for module in u.imports:  # a spawned worker or a Ray task has not imported them
         importlib.import_module(module)
     trace = None
+    plant = {"params": u.params} if u.params else {}
     try:
-        venv = gym.make_vec(u.env_id, num_envs=len(u.seeds), scenario=u.scenario,
-                            vectorization_mode="vector_entry_point")  # fmt: skip
-        results = run_batch(venv, _make_policy(u.policy, u.env_id, venv), u.seeds)
+        def venv(**kw: Any) -> Any:
+            return gym.make_vec(u.env_id, num_envs=len(u.seeds), scenario=u.scenario,
+                                vectorization_mode="vector_entry_point", **kw)  # fmt: skip
+
+        unit = venv(**plant)
+        model = venv() if plant else unit  # the plant the policy is commissioned on
+        results = run_batch(unit, _make_policy(u.policy, u.env_id, model), u.seeds)
     except Exception:  # noqa: BLE001 - isolate the failing seeds below
         results = None
     if results is not None:
@@ -559,9 +594,10 @@ def run_unit(u: Unit) -> tuple[list[dict], dict | None]:
         if u.trace_seed is not None:
             trace = results[u.seeds.index(u.trace_seed)]["trace"]
         return rows, trace
-    env = gym.make(u.env_id, scenario=u.scenario)
+    env = gym.make(u.env_id, scenario=u.scenario, **plant)
     try:
-        policy = _make_policy(u.policy, u.env_id, env)
+        model = gym.make(u.env_id, scenario=u.scenario) if plant else env
+        policy = _make_policy(u.policy, u.env_id, model)
     except Exception as exc:  # noqa: BLE001 - every seed of it fails alike
         policy = exc
     rows = []
@@ -621,15 +657,16 @@ def _units(plan: Plan, done: dict) -> list[Unit]:
     (they take the longest: the pool then ends with short units on every worker)."""
     out = []
     for env_id in plan.envs:
-        for sc in plan.scenarios:
-            for name in plan.policies[env_id]:
+        for sc in plan.scenarios_of(env_id):
+            params = plan.variants.get(env_id, {}).get(sc)
+            for name in plan.policies_of(env_id, sc):
                 fp = plan.fingerprints[env_id, sc, name]
                 todo = [s for s in plan.seeds
                         if not _finished(done.get(((env_id, sc, name, s), fp)))]  # fmt: skip
                 if todo:
-                    keep = plan.seeds[0] if plan.seeds[0] in todo else None
+                    keep = plan.seeds[0] if plan.seeds[0] in todo and params is None else None
                     out.append(Unit(env_id, sc, plan.resolved[env_id, sc], name, todo, fp, keep,
-                                    plan.imports))  # fmt: skip
+                                    plan.imports, params))  # fmt: skip
     return sorted(out, key=lambda u: u.policy != report.ONE)  # stable: run order otherwise
 
 
@@ -812,7 +849,9 @@ def _run_info(plan: Plan, envs: list[str] | None = None) -> dict[str, Any]:
             "seeds": plan.seeds, "steamtemp_gym_version": steamtemp_gym.__version__,
             "n_bootstrap": stats.N_BOOTSTRAP, "confidence": stats.CONFIDENCE,
             "reference": report.REFERENCE, "versus": report.VERSUS,
-            "travel_budget": plan.travel_budget}  # fmt: skip
+            "travel_budget": plan.travel_budget,
+            "mismatch": {e: [v.removeprefix(mismatch.PREFIX) for v in plan.variants.get(e, {})]
+                         for e in envs or plan.envs if plan.variants.get(e)}}  # fmt: skip
 
 
 def _rebuild(out: Path, plan: Plan, figures: bool = True) -> tuple[list[dict], dict | None]:
@@ -909,6 +948,11 @@ def make_parser() -> argparse.ArgumentParser:
     ap.add_argument("--no-oracle", action="store_true",
                     help="leave the oracle out (its episodes are the run's longest); the "
                     "normalized score is then not computed (default: off)")  # fmt: skip
+    ap.add_argument("--no-mismatch", action="store_true",
+                    help="leave out the model-mismatch episodes (every policy but the "
+                    "references, commissioned on the nominal plant, on each variant of "
+                    "perturb.MISMATCH under load_ramp_100_50; run when load_ramp_100_50 is "
+                    "among --scenarios) and the robustness column (default: off)")  # fmt: skip
     ap.add_argument("--travel-budget", type=str, default=str(stats.TRAVEL_BUDGET),
                     metavar="X", help="a policy is admissible on a plant when its mean valve "
                     "travel there is at most X times cascade_pi_ff's and it never trips; "

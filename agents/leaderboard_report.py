@@ -13,7 +13,9 @@ within each, the episodes (agents/stats.py ``training_run_bootstrap_ci``), and e
 statistic also gives its value per run and their range. The engineering metrics are means over
 scenario x seed of the episodes where they apply (a metric that does not apply, e.g.
 settling time without a setpoint step, is left out, never NaN; ``max_abs_dev_K`` is left
-out of an episode with a setpoint step, where it measures the step). The format is
+out of an episode with a setpoint step, where it measures the step). Each plant's
+``robustness`` entry summarizes the model-mismatch rows (agents/leaderboard_mismatch.py),
+which take no part in the scores. The format is
 docs/leaderboard_schema.json, described in docs/leaderboard.md.
 """
 
@@ -25,11 +27,12 @@ from typing import Any
 import numpy as np
 
 import baselines
+from agents import leaderboard_mismatch as mismatch
 from agents import specs, stats
 from steamtemp_gym.checks import head
 
 #: Version of leaderboard.json's format (docs/leaderboard_schema.json).
-SCHEMA_VERSION = 6
+SCHEMA_VERSION = 7
 #: The 0 of the normalized score: the cascade as a commissioned unit runs it.
 ZERO = baselines.INDUSTRIAL_REFERENCE
 #: The 1: the clairvoyant NMPC on the true plant (agents/oracle.py).
@@ -128,7 +131,10 @@ def _realism(rows: list[dict]) -> dict[tuple[str, str], dict[str, Any]]:
 
 
 def summarize(rows: list[dict], run: dict[str, Any]) -> dict[str, Any]:
-    """The summary of leaderboard.json (rows: this run's grid, failed ones included)."""
+    """The summary of leaderboard.json (rows: this run's grid, failed ones included). The
+    model-mismatch rows go to each plant's ``robustness`` entry only
+    (agents/leaderboard_mismatch.py)."""
+    all_rows, rows = rows, [r for r in rows if not mismatch.is_label(r["scenario"])]
     realism = _realism(rows)
     by = defaultdict(lambda: defaultdict(lambda: defaultdict(list)))  # env, scenario, policy
     run_of = defaultdict(lambda: defaultdict(lambda: defaultdict(list)))  # training run of each
@@ -223,6 +229,9 @@ def summarize(rows: list[dict], run: dict[str, Any]) -> dict[str, Any]:
                     cell["normalized_score"] = float(np.mean(tasks_norm[sc][p]))
                 per_sc[sc][p] = cell
         plants[env_id] = {"reference": refs, "policies": pol_out, "scenarios": per_sc}
+        robust = mismatch.summarize(all_rows, env_id, pol_out, ZERO, REFERENCES)
+        if robust is not None:
+            plants[env_id]["robustness"] = robust
     return {"schema_version": SCHEMA_VERSION, "run": run, "plants": plants,
             "ranking": _overall(plants)}, norm_scores  # fmt: skip
 
@@ -556,6 +565,9 @@ def markdown(summary: dict[str, Any], rows: list[dict]) -> str:
              "references, listed and never ranked.",
              "", "## Headline", "", headline_markdown(summary),
              "## Trained agents against the baselines", "", agents_markdown(summary)]  # fmt: skip
+    robust = mismatch.markdown(summary, ZERO)
+    if robust:
+        lines += ["## Robustness to model mismatch", "", robust]
     multi = _multi_run(summary)
     for env_id, p in summary["plants"].items():
         pols = p["policies"]

@@ -97,7 +97,7 @@ def _summary(offsets: dict, spread: bool = True) -> tuple[dict, list[dict]]:
 def test_one_run_gives_the_one_run_summary(run):
     gold = json.loads(GOLDEN.read_text())
     s, r = _summary({run: 0.0})
-    assert s["schema_version"] == gold["summary"]["schema_version"] + 1 == 6
+    assert s["schema_version"] == gold["summary"]["schema_version"] + 2 == 7
     for pe in s["plants"][ENV]["policies"].values():  # the record predates this entry
         pe.pop("realism", None)
     assert s["plants"] == gold["summary"]["plants"]
