@@ -484,6 +484,18 @@ def zoo_jobs(entries: list[tuple[str, str]], out: Path, seed: int, runs: int | N
              **extra} for env_id, algo in entries for k in ks]  # fmt: skip
 
 
+def _zoo_env(name: str | None) -> str | None:
+    """``--env`` of ``--zoo`` as a registered id (the namespace may be left out)."""
+    if not name:
+        return None
+    from steamtemp_gym.envs import resolve_id
+
+    try:
+        return resolve_id(name)
+    except ValueError as exc:
+        raise ConfigError(str(exc)) from None
+
+
 def make_parser() -> argparse.ArgumentParser:
     doc = __doc__ or ""
     ap = argparse.ArgumentParser(prog="steamtemp-train", description=doc.split("\n")[0],
@@ -550,9 +562,14 @@ def main(argv: list[str] | None = None) -> None:
             entries = zoo_entries()
             if not (args.env or args.algo):  # rebuild what ships (a residual ships only
                 entries = [e for e in entries if e in set(shipped())]  # where it pays)
+            env = _zoo_env(args.env)
             entries = [(env_id, algo) for env_id, algo in entries
-                       if (not args.env or env_id == args.env)
+                       if (not env or env_id == env)
                        and (not args.algo or algo == args.algo)]  # fmt: skip
+            if not entries:
+                raise ConfigError(f"no entry for --env {args.env!r} and --algo {args.algo!r} "
+                                  f"in the shipped hyperparameter files; entries: "
+                                  f"{zoo_entries()}")  # fmt: skip
             for env_id, algo in entries:  # every entry checked before the first run
                 read_hyperparams(Path(args.hyperparams or HYPERPARAMS / f"{algo}.yml"),
                                  env_id, algo)  # fmt: skip

@@ -230,3 +230,16 @@ def test_plant_randomization_is_checked_and_draws_the_training_plants(tmp_path):
     assert plants[0].params != plants[1].params  # each row its own unit
     _, nominal = train.make_training_env(ENV_ID, 2, 0, {**hp, "plant_randomization": None})
     assert not hasattr(nominal.core, "plants")
+
+
+def test_zoo_env_takes_the_short_name_and_refuses_an_empty_selection(tmp_path, capsys):
+    """``--zoo --env`` resolves the id as ``--env`` does elsewhere; a selection without any
+    YAML entry is an error, not a run that trains nothing."""
+    assert train._zoo_env("Cascade300MW-v0") == "steamtemp/Cascade300MW-v0"
+    for args, match in ((["--env", "Nope-v0"], "unknown env id"),
+                        (["--env", "BensonSubcritical-v0", "--algo", "recurrentppo"],
+                         "no entry for")):  # fmt: skip
+        with pytest.raises(SystemExit) as exc:
+            train.main(["--zoo", *args, "--out", str(tmp_path / "z")])
+        assert exc.value.code == 2 and match in capsys.readouterr().err
+    assert not (tmp_path / "z").exists()
