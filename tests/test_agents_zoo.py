@@ -1,5 +1,5 @@
 """The shipped zoo (agents/zoo/): every agent loads, runs a full named scenario without
-error, deterministically, and the leaderboard lists it; every plant has a PPO agent. The
+error, deterministically, and the leaderboard lists it; every plant has a trained agent. The
 RL Zoo path (slow): the shipped YAML works unchanged with ``python -m rl_zoo3.train``."""
 
 from __future__ import annotations
@@ -17,8 +17,9 @@ from agents import leaderboard, train
 from agents.evaluation import run_episode
 
 
-def test_every_plant_has_a_shipped_ppo_agent():
-    assert {e for e, a in agents.shipped() if a == "ppo"} == set(steamtemp_gym.ENV_IDS)
+def test_every_plant_has_a_shipped_agent_with_three_training_runs():
+    assert {e for e, a in agents.shipped()} == set(steamtemp_gym.ENV_IDS)
+    assert all(agents.runs(e, a) == [0, 1, 2] for e, a in agents.shipped())
 
 
 @pytest.mark.parametrize(("env_id", "algo"), agents.shipped())

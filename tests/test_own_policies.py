@@ -34,6 +34,8 @@ ROOT = Path(__file__).parents[1]
 EXAMPLE = ROOT / "examples" / "my_controller.py"
 FACTORY = "examples/my_controller.py:make_controller"
 ENV = "steamtemp/Cascade300MW-v0"
+#: The shipped agent of ENV's plant.
+ALGO = next(a for e, a in agents.shipped() if e == ENV)
 TINY = Scenario(name="tiny", duration_s=60.0, load=((0.0, 1.0), (30.0, 0.95)))
 
 
@@ -102,19 +104,25 @@ def test_factory_is_fingerprinted_by_its_file(tmp_path):
 
 
 # --------------------------------------------------------------------------- agent files
+def _run0_stem() -> str:
+    """The file stem of the shipped agent's run 0 (with or without the run index)."""
+    return next(s for s in (files.stem(ENV, ALGO, 0), files.stem(ENV, ALGO))
+                if (agents.ZOO / f"{s}.zip").is_file())  # fmt: skip
+
+
 def test_trained_agent_files_score_as_the_shipped_agent(tmp_path, tiny):
-    """steamtemp-train's files (a copy of the shipped PPO agent's run 0), named as a
-    directory with zoo:, as a directory path and as the model .zip: rows identical to that
-    run's (``sb3:ppo``, or ``sb3:ppo@run0`` where the zoo holds several runs)."""
+    """steamtemp-train's files (a copy of the shipped agent's run 0), named as a directory
+    with zoo:, as a directory path and as the model .zip: rows identical to that run's
+    (``sb3:<algo>``, or ``sb3:<algo>@run0`` where the zoo holds several runs)."""
     trained = tmp_path / "trained"
     trained.mkdir()
-    stem = files.stem(ENV, "ppo")
+    stem = _run0_stem()
     for suffix in (".zip", ".json"):
         shutil.copy(agents.ZOO / (stem + suffix), trained / (stem + suffix))
     names = [f"zoo:{trained}", f"{trained}/", f"{trained / stem}.zip"]
-    rows = _run(tmp_path, tiny, ",".join(["sb3:ppo", *names]))
+    rows = _run(tmp_path, tiny, ",".join([f"sb3:{ALGO}", *names]))
     by = {(r["policy"], r["seed"]): r for r in rows}
-    shipped = specs.training_runs("sb3:ppo", ENV)[0]
+    shipped = specs.training_runs(f"sb3:{ALGO}", ENV)[0]
     for name in names:
         for seed in (0, 1):
             assert by[name, seed]["metrics"] == by[shipped, seed]["metrics"], name
@@ -125,7 +133,7 @@ def test_trained_agent_files_score_as_the_shipped_agent(tmp_path, tiny):
 def test_agent_files_are_available_for_their_env_only(tmp_path):
     trained = tmp_path / "t"
     trained.mkdir()
-    stem = files.stem(ENV, "ppo")
+    stem = _run0_stem()
     for suffix in (".zip", ".json"):
         shutil.copy(agents.ZOO / (stem + suffix), trained / (stem + suffix))
     spec = specs.parse(f"zoo:{trained}")
@@ -244,10 +252,10 @@ def test_bad_policy_is_an_argparse_error_of_both_clis(name, words, tmp_path, tin
 # --------------------------------------------------------------------------- steamtemp-check
 def test_check_cli_takes_sb3_names_and_factories(at_root, capsys):
     code = cli.main([ENV, "--no-env-checks", "--check", "check_predict_signature",
-                     "--policy", "sb3:ppo", "--policy", FACTORY])  # fmt: skip
+                     "--policy", f"sb3:{ALGO}", "--policy", FACTORY])  # fmt: skip
     out = capsys.readouterr().out
     assert code == 0, out
-    assert re.search(r"Cascade300MW-v0\s+sb3:ppo\s+check_predict_signature\s+PASS", out)
+    assert re.search(rf"Cascade300MW-v0\s+sb3:{ALGO}\s+check_predict_signature\s+PASS", out)
     assert re.search(rf"Cascade300MW-v0\s+{re.escape(FACTORY)}\s+check_predict_signature\s+PASS",
                      out)  # fmt: skip
 
