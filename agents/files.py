@@ -74,8 +74,7 @@ class AgentFiles:
         """The agent as a Policy (agents.policy.AgentPolicy) on a new env of its id."""
         import gymnasium as gym
 
-        from agents.policy import AgentPolicy
-        from agents.train import model_class
+        from agents.policy import AgentPolicy, model_class
 
         if self.layout == STEAMTEMP:
             meta = json.loads(self.meta[0].read_text(encoding="utf-8"))
@@ -265,7 +264,7 @@ def _zoo_yaml(path: Path) -> Any:
 
 def _rl_zoo_pipeline(model: Path, meta: tuple[Path, ...]) -> dict | None:
     """The controller-memory options of an RL Zoo run (its config.yml's ``env_wrapper``)."""
-    from agents.train import ConfigError, _memory_kwargs
+    from agents.wrappers import memory_options
 
     config = [f for f in meta if f.name == "config.yml"]
     hp = _zoo_yaml(config[0]) if config else {}
@@ -273,8 +272,8 @@ def _rl_zoo_pipeline(model: Path, meta: tuple[Path, ...]) -> dict | None:
     if wrapper is None:
         return None
     try:
-        return _memory_kwargs(wrapper)
-    except ConfigError as exc:
+        return memory_options(wrapper)
+    except ValueError as exc:
         raise ValueError(f"{str(config[0])!r}: {exc}") from None
 
 

@@ -185,3 +185,23 @@ class AgentPolicy:
         if self.moves is not None:
             action = self.moves(action)
         return (action[0] if np.ndim(observation) == 1 else action), None
+
+
+def model_class(name: str):
+    """The SB3 or sb3-contrib class of a model class name (a zoo .json's ``sb3_class``)."""
+    import stable_baselines3 as sb3
+
+    if hasattr(sb3, name):
+        return getattr(sb3, name)
+    if name == "SACCAPS":
+        from agents.caps import SACCAPS
+
+        return SACCAPS
+    try:
+        import sb3_contrib
+    except ImportError:
+        raise ValueError(f"{name} needs sb3-contrib: pip install sb3-contrib (part of the "
+                          "project's [agents] extra)") from None  # fmt: skip
+    if not hasattr(sb3_contrib, name):
+        raise ValueError(f"unknown model class {name!r}")
+    return getattr(sb3_contrib, name)

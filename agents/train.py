@@ -65,6 +65,8 @@ import steamtemp_gym
 from agents import ray_backend, shipped
 from agents.files import stem
 from agents.moves import check_max_move
+from agents.policy import model_class
+from agents.wrappers import memory_options
 
 #: Algorithm names: SB3's PPO, SAC, TD3, PPO as a residual on cascade_pi_ff (its own YAML
 #: file, whose entries need ``residual_scale``) and sb3-contrib's RecurrentPPO (an LSTM
@@ -77,7 +79,6 @@ VALIDATION_SEED = 1_000_000
 N_VALIDATION = 3
 #: Where in the budget the agent is validated (and the best kept): every eighth.
 EVAL_FRACTIONS = tuple(k / 8 for k in range(1, 9))
-MEMORY_WRAPPER = "agents.wrappers.ControllerMemory"
 #: Run k of ``--zoo --runs K`` trains with seed ``--seed + RUN_SEED_STRIDE * k``: more than
 #: any n_envs, so no two runs share a training env's seed.
 RUN_SEED_STRIDE = 1000
@@ -93,31 +94,14 @@ class ConfigError(ValueError):
     """Bad training input (env, algo, YAML, hyperparameter keys)."""
 
 
-def model_class(name: str):
-    """The SB3 or sb3-contrib class of a model class name (a zoo .json's ``sb3_class``)."""
-    import stable_baselines3 as sb3
-
-    if hasattr(sb3, name):
-        return getattr(sb3, name)
-    if name == "SACCAPS":
-        from agents.caps import SACCAPS
-
-        return SACCAPS
-    try:
-        import sb3_contrib
-    except ImportError:
-        raise ConfigError(f"{name} needs sb3-contrib: pip install sb3-contrib (part of the "
-                          "project's [agents] extra)") from None  # fmt: skip
-    if not hasattr(sb3_contrib, name):
-        raise ConfigError(f"unknown model class {name!r}")
-    return getattr(sb3_contrib, name)
-
-
 def _algo_class(algo: str):
     if algo not in ALGOS:
         raise ConfigError(f"unknown algo {algo!r}; valid: {list(ALGOS)}")
     names = {"recurrentppo": "RecurrentPPO", "sac_caps": "SACCAPS"}
-    return model_class(names.get(algo, algo.split("_")[0].upper()))
+    try:
+        return model_class(names.get(algo, algo.split("_")[0].upper()))
+    except ValueError as exc:
+        raise ConfigError(str(exc)) from None
 
 
 def _literal(node: ast.AST) -> Any:
@@ -140,27 +124,6 @@ def _dict_string(key: str, value: Any) -> dict:
         raise ConfigError(
             f"{key} must be a mapping or a 'dict(key=literal, ...)' string, got {value!r}"
         ) from None
-
-
-def _memory_kwargs(value: Any) -> dict | None:
-    """The controller-memory options of an RL Zoo ``env_wrapper`` value: a class name, a
-    one-entry mapping {name: kwargs}, or a list of those."""
-    from agents.wrappers import MemoryConfig
-
-    out = None
-    for item in value if isinstance(value, list) else [value]:
-        if isinstance(item, dict) and len(item) == 1:
-            name, kwargs = next(iter(item.items()))
-        else:
-            name, kwargs = item, {}
-        if name != MEMORY_WRAPPER or not isinstance(kwargs, (dict, type(None))):
-            raise ConfigError(f"env_wrapper: only {MEMORY_WRAPPER} is supported, got {item!r}")
-        out = dict(kwargs or {})
-        try:
-            MemoryConfig.from_kwargs(out)  # checks the option names and values
-        except ValueError as exc:
-            raise ConfigError(f"env_wrapper: {exc}") from None
-    return out
 
 
 def read_hyperparams(path: Path, env_id: str, algo: str) -> dict[str, Any]:
@@ -225,7 +188,10 @@ def read_hyperparams(path: Path, env_id: str, algo: str) -> dict[str, Any]:
     hp["policy_kwargs"] = _dict_string("policy_kwargs", hp.get("policy_kwargs", {}))
     norm = hp.get("normalize", False)
     hp["normalize"] = norm if isinstance(norm, bool) else _dict_string("normalize", norm)
-    hp["env_wrapper"] = _memory_kwargs(hp["env_wrapper"]) if "env_wrapper" in hp else None
+    try:
+        hp["env_wrapper"] = memory_options(hp["env_wrapper"]) if "env_wrapper" in hp else None
+    except ValueError as exc:
+        raise ConfigError(str(exc)) from None
     if hp.get("noise_type") not in (None, "normal"):
         raise ConfigError(f"noise_type: only 'normal' is supported, got {hp['noise_type']!r}")
     return hp

@@ -257,3 +257,26 @@ class VecResidual(VecEnvWrapper):
         self._obs, rew, dones, infos = self.venv.step_wait()
         self._start = dones
         return self._obs, rew, dones, infos
+
+
+#: The controller memory as an RL Zoo ``env_wrapper`` names it.
+MEMORY_WRAPPER = "agents.wrappers.ControllerMemory"
+
+
+def memory_options(value: Any) -> dict | None:
+    """The controller-memory options of an RL Zoo ``env_wrapper`` value: a class name, a
+    one-entry mapping {name: kwargs}, or a list of those (ValueError naming the problem)."""
+    out = None
+    for item in value if isinstance(value, list) else [value]:
+        if isinstance(item, dict) and len(item) == 1:
+            name, kwargs = next(iter(item.items()))
+        else:
+            name, kwargs = item, {}
+        if name != MEMORY_WRAPPER or not isinstance(kwargs, (dict, type(None))):
+            raise ValueError(f"env_wrapper: only {MEMORY_WRAPPER} is supported, got {item!r}")
+        out = dict(kwargs or {})
+        try:
+            MemoryConfig.from_kwargs(out)  # checks the option names and values
+        except ValueError as exc:
+            raise ValueError(f"env_wrapper: {exc}") from None
+    return out
