@@ -20,6 +20,7 @@ each policy its own colour within a figure.
 
 from __future__ import annotations
 
+import textwrap
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -296,12 +297,22 @@ def _grid(n: int):
     return rows, cols
 
 
+#: Longest policy name on a bar's label; a longer one (a path) keeps its end.
+LABEL_CHARS = 28
+
+
+def short_name(name: str, n: int = LABEL_CHARS) -> str:
+    """``name`` in at most ``n`` characters: a longer one (an agent's path, a factory)
+    keeps its last ``n - 1`` characters after an ellipsis."""
+    return name if len(name) <= n else "…" + name[-(n - 1):]
+
+
 def _bar_label(name: str, pe: dict[str, Any]) -> str:
     """A bar's label: the policy, its valve travel over the reference's and, when it is not
     admissible on the plant, the report's mark."""
     travel = f"  {pe['travel_ratio']:.1f}x" if "travel_ratio" in pe else ""
     mark = f" {INADMISSIBLE}" if pe.get("admissible") is False else ""
-    return f"{name}{mark}{travel}"
+    return f"{short_name(name)}{mark}{travel}"
 
 
 def bars(path: Path, summary: dict[str, Any]) -> Path:
@@ -314,7 +325,8 @@ def bars(path: Path, summary: dict[str, Any]) -> Path:
     rows, cols = _grid(len(plants))
     colors = policy_colors(figure_order(summary))
     with plt.rc_context(_RC):
-        fig, axes = plt.subplots(rows, cols, figsize=(5.2 * cols, 3.6 * rows), squeeze=False)
+        width = max(5.2 * cols, 8.0)  # one plant: room for the title and the labels
+        fig, axes = plt.subplots(rows, cols, figsize=(width, 3.6 * rows), squeeze=False)
         for ax, env_id in zip(axes.flat, plants, strict=False):
             pols = summary["plants"][env_id]["policies"]
             ranked = sorted((p for p in pols if "rank" in pols[p]), key=lambda p: pols[p]["rank"])
@@ -346,9 +358,10 @@ def bars(path: Path, summary: dict[str, Any]) -> Path:
         budget = summary["run"].get("travel_budget")
         note = (f"\nlabels: valve travel over {ZERO}'s; {INADMISSIBLE}: not admissible "
                 f"(travel above {budget:g}x, a trip or a failure), ranked last") if budget else ""
-        fig.suptitle(f"IQM over scenario × seed ({len(n_seeds)} seeds), "
-                     "95 % stratified-bootstrap CI; blue/green: baselines, "
-                     f"orange/red/purple: trained agents{note}")  # fmt: skip
+        title = (f"IQM over scenario × seed ({len(n_seeds)} seeds), 95 % stratified-bootstrap "
+                 f"CI; blue/green: baselines, orange/red/purple: trained agents{note}")
+        fig.suptitle("\n".join(textwrap.fill(line, int(width * 13))
+                               for line in title.split("\n")))  # fmt: skip
         fig.tight_layout()
         _save(fig, path)
     return path

@@ -224,3 +224,12 @@ def test_markdown_has_no_exponents_and_carries_units():
 def test_report_columns_cover_the_tables():
     assert set(report.TABLE_METRICS) <= set(report.COLUMNS)
     assert set(report.RANK_METRICS) <= set(report.COLUMNS)
+
+
+def test_long_policy_names_keep_their_end_on_the_bars():
+    """An agent's path or a factory is cut to its last characters on a bar's label."""
+    path = "/home/me/runs/steamtemp__Cascade300MW-v0__ppo_residual__run2.zip"
+    label = plots.short_name(path)
+    assert len(label) == plots.LABEL_CHARS and label.startswith("…")
+    assert label.endswith("ppo_residual__run2.zip")
+    assert plots.short_name("cascade_pi_ff_tuned") == "cascade_pi_ff_tuned"
