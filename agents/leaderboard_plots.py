@@ -350,7 +350,7 @@ def bars(path: Path, summary: dict[str, Any]) -> Path:
             ax.axvline(0, color="k", lw=0.8)
             ax.axvline(1, color="k", lw=0.8, ls="--")
             ax.set_title(_short(env_id))
-            ax.set_xlabel(f"IQM normalized score (0 = {ZERO}, 1 = {ONE})")
+            ax.set_xlabel(f"IQM normalized score\n(0 = {ZERO}, 1 = {ONE})")
             ax.grid(axis="x", alpha=0.3)
         for ax in list(axes.flat)[len(plants):]:
             ax.axis("off")
