@@ -35,8 +35,15 @@ def test_baseline_is_a_policy_and_beats_open_loop(env_id, name):
     assert res["metrics"]["iae_K_s"] < 0.5 * ref["metrics"]["iae_K_s"]
 
 
-#: Every baseline and every shipped trained agent (sb3:<algo>, agents/zoo/).
-POLICIES = (*baselines.NAMES, *sorted({f"sb3:{algo}" for _, algo in agents.shipped()}))
+def _contracts(quick: bool = False):
+    """Every baseline on every plant and every shipped trained agent (sb3:<algo>,
+    agents/zoo/) on its own plant: the policy contracts of steamtemp_gym.testing."""
+    params = [*parametrize_with_checks(ids=IDS, policies=baselines.NAMES, env=False,
+                                       quick=quick).mark.args[1]]  # fmt: skip
+    for env_id, algo in agents.shipped():
+        params += parametrize_with_checks(ids=[env_id], policies=[f"sb3:{algo}"], env=False,
+                                          quick=quick).mark.args[1]  # fmt: skip
+    return pytest.mark.parametrize(("env_id", "check"), params)
 
 #: Contracts a shipped baseline breaks today (docs/checking.md): (env id, baseline, check);
 #: strict xfail, so a fix shows up here. None at present.
@@ -49,7 +56,7 @@ def _run_contract(request, env_id, check):
     check(env_id)
 
 
-@parametrize_with_checks(ids=IDS, policies=POLICIES, env=False, quick=True)
+@_contracts(quick=True)
 def test_policy_contract(request, env_id, check):
     """The policy contracts of steamtemp_gym.testing, short runs (the slow check is in
     test_policy_contract_full)."""
@@ -57,7 +64,7 @@ def test_policy_contract(request, env_id, check):
 
 
 @pytest.mark.slow
-@parametrize_with_checks(ids=IDS, policies=POLICIES, env=False)
+@_contracts()
 def test_policy_contract_full(request, env_id, check):
     """The same contracts with full-length runs, and every named scenario, seeds 0-2."""
     _run_contract(request, env_id, check)
