@@ -250,7 +250,7 @@ class CascadePI:
         self.i_load = names.index("load_demand")
         self.i_fire = names.index("firing_rate") if "firing_rate" in names else None
         self.i_valve = [names.index(n) for n in plant.valves]
-        params = json.dumps(getattr(u, "_params_overrides", {}) or {}, sort_keys=True)
+        params = json.dumps(getattr(u, "params_overrides", {}) or {}, sort_keys=True)
         self.loops = []  # (inner idx | None, outer: MAIN | SCHEDULED | idx | None)
         self.schedules: dict[int, tuple[np.ndarray, np.ndarray]] = {}
         for j, (inner, outer) in enumerate(plant.control_loops):

@@ -530,7 +530,7 @@ class FaoCompensated:
         self.pi = CascadePI(env)
         names, self._scale, self._center = observation_layout(env)
         self.i_err = names.index("error_K")
-        params = json.dumps(getattr(u, "_params_overrides", {}) or {}, sort_keys=True)
+        params = json.dumps(getattr(u, "params_overrides", {}) or {}, sort_keys=True)
         self.comp = []  # (observation index of the inner signal, observer)
         for j, (inner, outer) in enumerate(plant.control_loops):
             if outer != MAIN or inner is None:

@@ -286,7 +286,7 @@ class LQI:
         given = (du_max, e_max_K, ti_factor, heat_walk)
         self.knobs = {k.name: k.check(v, d) for k, v, d in
                       zip(KNOBS, given, defaults(plant.id), strict=True)}  # fmt: skip
-        params = json.dumps(getattr(u, "_params_overrides", {}) or {}, sort_keys=True)
+        params = json.dumps(getattr(u, "params_overrides", {}) or {}, sort_keys=True)
         self.d = design(plant.id, params, tuple(self.knobs.values()))
         names, self._scale, self._center = observation_layout(env)
         self.n_y = sum(s.observed for s in plant.outputs)
@@ -298,8 +298,7 @@ class LQI:
         self.other = [j for j in range(plant.n_u) if j not in self.main]
         self.pi = CascadePI(env) if self.other else None
         self.dt = plant.dt_s
-        rates = [float(plant.P[ir]) for _, _, ir in plant.actuators]
-        rates += [np.inf] * (plant.n_u - len(rates))
+        rates = plant.rate_limits
         self.max_move = np.array([rates[j] * self.dt for j in self.main])
         g = self.d["grid"]
         self._A = np.stack([m["A"] for m in g])

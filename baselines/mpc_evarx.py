@@ -320,7 +320,7 @@ class MPCEVARX:
         # the paper gives no weights: the benchmark's common tuning is the default
         base = tuning.stored_or(f"mpc_{kind}", plant.id, DEFAULTS)
         self.knobs = {k.name: k.check(given[k.name], base[k.name]) for k in self.KNOBS}
-        params = json.dumps(getattr(u, "_params_overrides", {}) or {}, sort_keys=True)
+        params = json.dumps(getattr(u, "params_overrides", {}) or {}, sort_keys=True)
         ident = identify(plant.id, params)
         self.model: Model = ident[kind]
         self.fit_pct = ident["fit_pct"][kind]
@@ -336,9 +336,8 @@ class MPCEVARX:
         self.N = int(round(HORIZON_S / self.Ts))
         self.n_hold = int(round(DW_HOLD_S / self.Ts))
         self.e_safe_K = SAFE_FRACTION * plant.trip_band_K[1]
-        rates = np.full(plant.n_u, DEFAULT_RATE_PER_S)
-        for j, (_, _, ir) in enumerate(plant.actuators[: plant.n_u]):
-            rates[j] = plant.P[ir]
+        rates = np.array(plant.rate_limits)
+        rates[np.isinf(rates)] = DEFAULT_RATE_PER_S
         self.move_max = np.minimum(rates * self.Ts, self.knobs["move_limit"])
         self.qp = _QP(len(self.i_y), plant.n_u, self.N, self.move_max, self.knobs)
         self.cpi = CascadePI(env)

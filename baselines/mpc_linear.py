@@ -320,9 +320,7 @@ def design(env_id: str, params_json: str) -> dict[str, Any]:
         })  # fmt: skip
     ops = [steady_point(plant, L, [s.name for s in observed] + ctrl) for L in OP_LOADS]
     ok = [k for k, (_, _, y) in enumerate(ops) if np.all(np.isfinite(y))]
-    rates = np.full(n_u, np.inf)
-    for j, (_, _, ir) in enumerate(plant.actuators[:n_u]):
-        rates[j] = float(plant.P[ir])
+    rates = np.array(plant.rate_limits)
     return {
         "grid": grid, "r": r, "n_p": n_p, "n_y": n_y, "n_c": n_c, "n_md": n_md,
         "md_rows": md_rows, "md_gain": md_gain, "Ec": Ec, "pts": pts, "moves": moves,
@@ -400,7 +398,7 @@ class MPCLinear:
         for name, v in (("move_weight", move_weight), ("u_weight", u_weight)):
             if not (isinstance(v, (int, float)) and np.isfinite(v) and v > 0):
                 raise ValueError(f"{name} must be a positive finite number, got {v!r}")
-        params = json.dumps(getattr(u, "_params_overrides", {}) or {}, sort_keys=True)
+        params = json.dumps(getattr(u, "params_overrides", {}) or {}, sort_keys=True)
         self.d = d = design(plant.id, params)
         self.estimate_disturbances = bool(disturbance_model)
         self._weights = (float(move_weight), float(u_weight))

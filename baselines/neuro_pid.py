@@ -430,7 +430,7 @@ class NeuroPID:
             "load_rate",
         )
         self.proxies = [(p, names.index(p) if p in names else None) for p in prox]
-        params = json.dumps(getattr(u, "_params_overrides", {}) or {}, sort_keys=True)
+        params = json.dumps(getattr(u, "params_overrides", {}) or {}, sort_keys=True)
         if force_u is None and k0 is None:
             self.loads, table = np.array(GAIN_LOADS), commissioning_gains(plant.id, params)
         else:

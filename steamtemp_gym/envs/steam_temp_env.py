@@ -80,7 +80,8 @@ class SteamTempEnv(gym.Env):
 
     def __init__(self, plant_id: str, **options: Any) -> None:
         plant, self._scenario_spec, reward_cfg, self.render_mode = opts.build(plant_id, options)
-        self._params_overrides = dict(options.get("params") or {})
+        #: The plant parameters given in the ``params`` option (the rest are the defaults).
+        self.params_overrides = dict(options.get("params") or {})
         self.plant = plant
         self.core = opts.make_core(plant, 1, reward_cfg, options)
         self.signals = self.core.signals

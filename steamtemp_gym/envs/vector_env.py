@@ -87,7 +87,8 @@ class SteamTempVectorEnv(VectorEnv):
         if options.get("render_mode") is not None:
             raise ValueError("the native vector env does not render; use SteamTempEnv")
         plant, self._scenario_spec, reward_cfg, _ = opts.build(plant_id, options)
-        self._params_overrides = dict(options.get("params") or {})
+        #: The plant parameters given in the ``params`` option (the rest are the defaults).
+        self.params_overrides = dict(options.get("params") or {})
         self.plant = plant
         self.num_envs = int(num_envs)
         self.core = opts.make_core(plant, self.num_envs, reward_cfg, options)

@@ -214,6 +214,13 @@ class Plant:
         if self.setpoint_param:
             self.setpoint_C = float(getattr(self.params, self.setpoint_param))
 
+    @property
+    def rate_limits(self) -> tuple[float, ...]:
+        """Each action's valve rate limit (fraction of full stroke per second), ``inf`` for
+        an action without valve dynamics in the plant (:attr:`actuators`)."""
+        rates = [float(self.P[ir]) for _, _, ir in self.actuators[: self.n_u]]
+        return tuple(rates + [float("inf")] * (self.n_u - len(rates)))
+
     @classmethod
     def skeleton(cls) -> Plant:
         """An instance with the default parameters whose kernel arrays (P, jrow, jcol) are
