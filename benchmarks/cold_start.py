@@ -2,11 +2,11 @@
 
 For each env id, in a fresh Python process with an empty cache folder
 (``STEAMTEMP_GYM_CACHE_DIR``): the wall time of ``import steamtemp_gym`` +
-``gym.make`` + ``reset`` + one ``step`` (cold: everything compiles, the step path in the
-compile helper of steamtemp_gym/_prewarm.py if there are two CPUs), then the same in a
-second process (warm: everything loads from the cache), and the cache's size; then cold
-again in a third empty folder with the helper off (``STEAMTEMP_GYM_PREWARM=0``: all in
-one process). Then all ids in one folder: the whole cache of a user of every plant.
+``gym.make`` + ``reset`` + one ``step`` (cold: everything compiles), then the same in a
+second process (warm: everything loads from the cache), and the cache's size. Then all
+ids compiled into one empty folder by ``python -m steamtemp_gym.precompile`` (one process
+per plant, as many at once as there are CPUs): the whole cache of a user of every plant,
+and what the command costs after an install.
 
 Machines differ and this one is shared, so each figure is also given as a ratio to a
 reference measured in the same run: a fresh process compiling a fixed numba kernel
@@ -60,13 +60,15 @@ print(time.perf_counter() - t0)
 """
 
 
-def _run(code: str, cache: Path, helper: bool = True) -> float:
-    """Wall time reported by ``code`` run in a fresh interpreter with cache folder ``cache``
-    (and the compile helper on or off)."""
-    env = dict(os.environ, STEAMTEMP_GYM_CACHE_DIR=str(cache),
-               STEAMTEMP_GYM_PREWARM="1" if helper else "0")  # fmt: skip
+def _env(cache: Path) -> dict[str, str]:
+    env = dict(os.environ, STEAMTEMP_GYM_CACHE_DIR=str(cache))
     env.pop("NUMBA_CACHE_DIR", None)
-    out = subprocess.run([sys.executable, "-c", code], cwd=ROOT, env=env, check=True,
+    return env
+
+
+def _run(code: str, cache: Path) -> float:
+    """Wall time reported by ``code`` run in a fresh interpreter with cache folder ``cache``."""
+    out = subprocess.run([sys.executable, "-c", code], cwd=ROOT, env=_env(cache), check=True,
                          capture_output=True, text=True)  # fmt: skip
     return float(out.stdout.strip().splitlines()[-1])
 
@@ -92,24 +94,21 @@ def main(argv: list[str] | None = None) -> None:
         ref = min(_run(REFERENCE, Path(tmp) / "ref") for _ in range(2))
         cpus = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
         print(f"reference (fresh process compiling one numba kernel): {ref:.2f} s; {cpus} CPUs\n")
-        print("| id | cold start, s | x reference | warm start, s | x reference | cache, MB "
-              "| cold, helper off, s | x reference |")  # fmt: skip
-        print("|---|---|---|---|---|---|---|---|")
+        print("| id | cold start, s | x reference | warm start, s | x reference | cache, MB |")
+        print("|---|---|---|---|---|---|")
         for env_id in ids:
             cache = Path(tmp) / env_id.replace("/", "_")
             cold = _run(START.format(env_id=env_id), cache)
             warm = _run(START.format(env_id=env_id), cache)
-            alone = _run(START.format(env_id=env_id), cache.with_name(cache.name + "_alone"),
-                         helper=False)  # fmt: skip
             print(f"| {env_id.split('/')[-1]} | {cold:.1f} | {cold / ref:.1f} | {warm:.2f} | "
-                  f"{warm / ref:.1f} | {size_mb(cache):.1f} | {alone:.1f} | "
-                  f"{alone / ref:.1f} |")  # fmt: skip
+                  f"{warm / ref:.1f} | {size_mb(cache):.1f} |")  # fmt: skip
         shared = Path(tmp) / "all"
         t0 = time.perf_counter()
-        for env_id in ids:
-            _run(START.format(env_id=env_id), shared)
-        print(f"\nall {len(ids)} ids in one cache folder: {size_mb(shared):.1f} MB "
-              f"(compiled in {time.perf_counter() - t0:.0f} s)")  # fmt: skip
+        subprocess.run([sys.executable, "-m", "steamtemp_gym.precompile", *ids], cwd=ROOT,
+                       env=_env(shared), check=True, capture_output=True)  # fmt: skip
+        took = time.perf_counter() - t0
+        print(f"\nall {len(ids)} ids by python -m steamtemp_gym.precompile ({cpus} CPUs): "
+              f"{took:.0f} s ({took / ref:.1f} x reference), {size_mb(shared):.1f} MB")
 
 
 if __name__ == "__main__":

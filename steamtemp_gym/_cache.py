@@ -190,8 +190,6 @@ def _links(src: Path) -> Path | None:
     try:
         for dirpath, _, files in os.walk(src):
             rel = Path(dirpath).relative_to(src)
-            if rel.parts[:1] == ("prewarm",):
-                continue
             (root / rel).mkdir(exist_ok=True)
             for f in files:
                 if f.endswith((".nbi", ".nbc")):

@@ -105,7 +105,7 @@ def test_cached_steam_lookups_read_the_tables_of_the_process_that_loads_them():
 
     here = [T_ph(20e6, 3.2e6), rho_ph(20e6, 3.2e6), h_pT(16e6, 800.0), T_ph(1e6, 5e5)]
     out = subprocess.run([sys.executable, "-c", _LOOKUPS], capture_output=True, text=True,
-                         check=True, env=dict(os.environ, STEAMTEMP_GYM_PREWARM="0")).stdout
+                         check=True).stdout
     values, stats = json.loads(out.strip().splitlines()[-1])
     assert all(hits >= 1 and misses == 0 for hits, misses in stats), stats
     assert values == here
@@ -210,11 +210,9 @@ def test_kernels_defined_after_numba_reloads_its_configuration_cache_in_the_fold
         monkeypatch):  # fmt: skip
     """A NUMBA_* variable changed after import makes numba reload its configuration at the
     next compile, which resets numba.config.CACHE_DIR; kernels defined after that (a
-    plant's specialised integrator step, say) still cache in this code version's folder,
-    and the compile helper's files stay there too."""
+    plant's specialised integrator step, say) still cache in this code version's folder."""
     import numba
 
-    from steamtemp_gym import _prewarm
     from steamtemp_gym._jit import njit as project_njit
 
     monkeypatch.setenv("NUMBA_OPT", "2" if os.environ.get("NUMBA_OPT") == "3" else "3")
@@ -227,7 +225,6 @@ def test_kernels_defined_after_numba_reloads_its_configuration_cache_in_the_fold
     kernel = project_njit(cache=True)(late)
     where = Path(steamtemp_gym.CACHE_DIR)
     assert Path(kernel.stats.cache_path).is_relative_to(where), kernel.stats.cache_path
-    assert _prewarm._folder() == where / "prewarm"
     assert numba.config.CACHE_DIR == os.environ.get("NUMBA_CACHE_DIR", "")  # left as it was
 
 
@@ -269,8 +266,7 @@ def test_a_read_only_populated_cache_is_loaded_from(tmp_path):
     env.reset(seed=0)
     env.step(env.action_space.sample())
     cache = tmp_path / "cache"
-    shutil.copytree(steamtemp_gym.CACHE_DIR, cache / Path(steamtemp_gym.CACHE_DIR).name,
-                    ignore=shutil.ignore_patterns("prewarm"))  # fmt: skip
+    shutil.copytree(steamtemp_gym.CACHE_DIR, cache / Path(steamtemp_gym.CACHE_DIR).name)
     before = sorted(str(p) for p in cache.rglob("*"))
     run = _read_only_run(tmp_path, cache, _STEP)
     assert run.returncode == 0, run.stderr[-2000:]

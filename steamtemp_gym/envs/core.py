@@ -28,7 +28,6 @@ from typing import Any
 
 import numpy as np
 
-from steamtemp_gym import _prewarm
 from steamtemp_gym import scenarios as sc
 from steamtemp_gym._jit import entry_point, njit
 from steamtemp_gym.checks import is_real
@@ -361,7 +360,6 @@ class Core:
         #: compiled entry points of (plant kernel or None, advance) for those arguments
         self._entries: tuple | None = None
         self._no_trips = np.full(batch, TRIP_REASONS[0], dtype=_TRIP_NAMES.dtype)
-        _prewarm.share(self)  # on a cold cache: compile our part while the helper runs
 
     def _alloc_schedules(self, n_slots: int, k: int) -> None:
         """(Re)allocate the schedule tables for n_slots scenarios of k breakpoints, keeping
@@ -521,9 +519,8 @@ class Core:
     def compile_calls(self) -> list[tuple[Any, tuple]]:
         """(kernel, arguments) of the compiled calls of a reset and a step but the plant's
         steady state, with arguments of the types they really get (actions: float32 or
-        float64), the env's kernels first and the plant's step last.
-
-        What the compile helper (steamtemp_gym/_prewarm.py) compiles, from the types alone.
+        float64), the env's kernels first and the plant's step last: what an episode
+        compiles or loads from the cache (tests/test_precompile.py checks it loads them all).
         """
         actions = [np.zeros((self.B, self.plant.n_u), dtype=t) for t in (np.float32, np.float64)]
         return [(schedules, self._schedules_args(0)),

@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import importlib
 
-from steamtemp_gym import _prewarm
 from steamtemp_gym.plants.base import Plant
 
 #: env id -> "module:Class" of its plant (imported lazily).
@@ -36,6 +35,4 @@ def plant_class(plant_id: str) -> type[Plant]:
 
 def make(plant_id: str, **params) -> Plant:
     """A plant instance with parameter overrides (ValueError on unknown or impossible values)."""
-    cls = plant_class(plant_id)
-    _prewarm.start(cls)  # compiles its step path in parallel on a cold cache
-    return cls(**params)
+    return plant_class(plant_id)(**params)

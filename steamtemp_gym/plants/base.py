@@ -18,7 +18,6 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from steamtemp_gym import _prewarm
 from steamtemp_gym.checks import is_finite, is_integer, is_real, key_list
 from steamtemp_gym.plants.threads import MIN_SPLIT_ROWS, run_rows
 
@@ -226,7 +225,7 @@ class Plant:
         """An instance with the default parameters whose kernel arrays (P, jrow, jcol) are
         placeholders of the right types: nothing is calibrated or compiled.
 
-        For compiling kernels from argument types alone (steamtemp_gym/_prewarm.py); its
+        For reading a plant's layout without its numbers (steamtemp_gym/docs.py); its
         kernels must never run on its arrays.
         """
         from steamtemp_gym._jit import read_only
@@ -297,8 +296,6 @@ class Plant:
 
         ``dt = 0`` only evaluates the outputs of the current state.
         """
-        if _prewarm.pending:  # the first step: let the compile helper finish
-            _prewarm.wait(type(self))
         args = self.step_args(X, U, D, Z, dt)
         if X.shape[0] < MIN_SPLIT_ROWS:
             self.kernel()(*args)
