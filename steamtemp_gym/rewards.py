@@ -29,6 +29,13 @@ The trip (``terminated``) is the outlet leaving the plant's trip band,
 turbine's main-steam limits, steamtemp_gym/plants/base.py:TRIP_BAND_K).
 
 Options: ``gym.make(id, reward={"w_move": 0.0, ...})``; unknown keys raise ValueError.
+
+This module is the one place the reward is defined: :func:`row_reward` assembles the
+terms of one row's transition from the plant's outputs and commands (the env core calls
+it from its compiled step, steamtemp_gym/envs/core.py), :func:`reward` combines them. A
+different reward is either a Gymnasium wrapper over ``info`` (every term's inputs are
+there: temperatures, setpoint, spray flow, valve openings) or a change of these two
+functions.
 """
 
 from __future__ import annotations
@@ -39,6 +46,7 @@ import numpy as np
 
 from steamtemp_gym._jit import njit
 from steamtemp_gym.checks import is_finite, is_real, key_list
+from steamtemp_gym.slots import slots
 
 #: Largest weight accepted (every weight is >= 0): with the trip band and these ranges every
 #: per-step reward is finite (|e| is bounded by the steam tables' range, about 800 K).
@@ -90,14 +98,17 @@ class RewardConfig:
         return np.array(list(asdict(self).values()), dtype=np.float64)
 
 
-N_WEIGHTS = len(fields(RewardConfig))
+#: Index of each weight in :meth:`RewardConfig.to_array` (the dataclass's field order).
+W = slots("RewardWeights", *(f.name for f in fields(RewardConfig)))
+N_WEIGHTS = len(W)
 
 
 @njit(cache=True, error_model="numpy")
 def temperature_cost(e, w):
     """c(e) of the module docstring for a temperature error e (K)."""
-    a = abs(e) / w[0]
-    return w[1] * a + w[2] * a * a + w[4] * max(0.0, abs(e) - w[3]) / w[0]
+    a = abs(e) / w[W.T0_K]
+    return (w[W.w_abs] * a + w[W.w_sq] * a * a
+            + w[W.w_band] * max(0.0, abs(e) - w[W.band_K]) / w[W.T0_K])  # fmt: skip
 
 
 @njit(cache=True, error_model="numpy")
@@ -106,7 +117,45 @@ def reward(e, secondary_cost, spray_norm, move, terminated, w):
 
     ``secondary_cost`` is the sum of temperature_cost over the secondary errors.
     """
-    r = temperature_cost(e, w) + w[8] * secondary_cost + w[5] * spray_norm + w[6] * move
+    r = (temperature_cost(e, w) + w[W.w_secondary] * secondary_cost + w[W.w_spray] * spray_norm
+         + w[W.w_move] * move)  # fmt: skip
     if terminated:
-        r += w[7]
+        r += w[W.trip_penalty]
     return -r
+
+
+@njit(cache=True, error_model="numpy")
+def row_reward(b, Z, U, U_prev, e, terminated, sprays, i_design, spray_scale, secondary,
+               secondary_sp, w):  # fmt: skip
+    """Reward of row b's transition (module docstring) from its plant outputs ``Z[b]``, its
+    commands ``U[b]`` and the previous ones ``U_prev[b]`` (valve openings in [0, 1]).
+
+    Args:
+        e: Main-steam setpoint minus the true outlet temperature (K).
+        sprays: Columns of Z holding spray flows (kg/s); their sum is charged above the
+            design spray ``Z[b, i_design]`` (all of it if ``i_design < 0``), in units of
+            ``spray_scale``.
+        secondary: Columns of Z of the secondary controlled temperatures, with their
+            setpoints ``secondary_sp`` (C).
+        w: The weights, :meth:`RewardConfig.to_array`.
+    """
+    spray = 0.0
+    for j in range(sprays.shape[0]):
+        spray += Z[b, sprays[j]]
+    if i_design >= 0:  # only spray above the design spray of this operating point
+        spray = max(spray - Z[b, i_design], 0.0)
+    spray /= spray_scale
+    move = 0.0
+    for j in range(U.shape[1]):
+        move += abs(U[b, j] - U_prev[b, j])
+    sec = 0.0
+    for j in range(secondary.shape[0]):
+        sec += temperature_cost(secondary_sp[j] - Z[b, secondary[j]], w)
+    return reward(e, sec, spray, move, terminated, w)
+
+
+@njit(cache=True, error_model="numpy")
+def non_finite_reward(trip_below_K, w):
+    """Reward of a transition that left the plant's valid region (a non-finite state or
+    output): a trip at the lower edge of the trip band, no other term."""
+    return reward(trip_below_K, 0.0, 0.0, 0.0, True, w)

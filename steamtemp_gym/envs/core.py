@@ -24,6 +24,7 @@ batch size. Plants with internal random disturbances get the same key through
 from __future__ import annotations
 
 import dataclasses
+import inspect
 from typing import Any
 
 import numpy as np
@@ -41,9 +42,10 @@ from steamtemp_gym.plants.base import (
     Plant,
 )
 from steamtemp_gym.plants.threads import MIN_SPLIT_ROWS, run_rows
-from steamtemp_gym.rewards import N_WEIGHTS, RewardConfig, reward, temperature_cost
+from steamtemp_gym.rewards import N_WEIGHTS, RewardConfig, non_finite_reward, row_reward
 from steamtemp_gym.rng import gauss
 from steamtemp_gym.signals import OBS_LIMIT, T0_K, for_plant
+from steamtemp_gym.slots import slots
 
 N_CH = len(sc.CHANNELS)
 # channel indices (order of scenarios.CHANNELS)
@@ -51,8 +53,15 @@ C_LOAD, C_SP, C_BIAS, C_FOUL, C_SPRAYT = 0, 1, 2, 3, 4
 MIN_BREAKPOINTS = 64
 #: per-row episode values in Core.ep
 E_TIME, E_DUR, E_NOISE, E_OU_A, E_OU_B = 0, 1, 2, 3, 4
-#: length of the header of Core.ints (before the index lists)
-N_HEAD = 8
+#: Core.ints: the output indices of the outlet, its measurement and the design spray (-1:
+#: the plant declares none), then where each index list of ints starts (``end``: where the
+#: last one ends); the lists are output indices of the observed signals, valves, sprays,
+#: secondary temperatures and info values.
+H = slots("IntsHeader", "outlet", "measured", "design_spray", "obs", "valves", "sprays",
+          "secondary", "info", "end")  # fmt: skip
+#: Core.cfg: these scalars, then the reward weights (rewards.W) and the secondary setpoints.
+CFG = slots("Config", "dt", "setpoint", "trip_below_K", "trip_above_K", "spray_scale")
+N_CFG = len(CFG)
 #: Why an episode terminated (``info["trip_reason"]``; Core.out[:, 1] holds the index): the
 #: true outlet above or below the plant's trip band, or the plant left its valid region (a
 #: non-finite state or output; its observation is then 0 and its reward that of a trip at
@@ -67,8 +76,9 @@ START_BAND_K = 5.0
 #: counter-based random channel of the coloured heat-absorption disturbance (observation
 #: noise uses channels 0 .. n_obs - 1)
 OU_CHANNEL = 31
-#: Positions of advance's arguments whose first axis is the batch (the rest are shared).
-ADVANCE_ROWS = (0, 1, 2, 3, 4, 8, 9, 10, 11, 15, 16, 17, 18, 19, 20)
+#: advance's arguments whose first axis is the batch (the rest are shared by every row).
+ADVANCE_ROW_ARGS = ("X", "Z", "U", "U_prev", "slot", "ep", "ou", "key", "counter", "D", "sp",
+                    "obs", "meas", "out", "info")  # fmt: skip
 #: The values every info carries after the plant's own outputs (Core.info's last columns).
 INFO_TAIL = ("measured_temp_C", "time_s", "setpoint_C", "load", "spray_flow_kg_s")
 #: Unit and meaning of the info values every plant has (the others are plant outputs).
@@ -178,25 +188,21 @@ def advance(X, Z, U, U_prev, slot, bp_t, bp_v, bp_n, ep, ou, key, counter, ints,
         ep: (B, 5) per-row [time_s, duration_s, noise_std_C, ou_a, ou_b] (ou_coefficients);
             time advanced in place.
         ou: (B,) coloured heat-absorption disturbance, advanced in place.
-        ints: [i_outlet, i_measured, n_obs_plant, n_valves, n_sprays, n_secondary, i_design,
-            n_info, obs idx..., valve idx..., spray idx..., secondary idx..., info idx...]
-            (output indices; i_design < 0: the plant declares no design spray).
-        cfg: [dt, sp_nom, trip_below_K, trip_above_K, spray_scale, reward weights...,
-            secondary setpoints...].
+        ints: Output indices, laid out as :data:`H` says.
+        cfg: The scalars of :data:`CFG`, the reward weights, the secondary setpoints.
         meas: (B,) written: the outlet thermocouple's reading (noise included).
         out: (B, 3) written: [reward, trip code (TRIP_REASONS index; 0: running), truncated].
         info: (B, n_info + 5) written: the row's info values (:func:`fill_info`).
     """
-    i_out, i_meas, n_obs, n_v, n_s, n_sec = ints[0], ints[1], ints[2], ints[3], ints[4], ints[5]
-    i_design = ints[6]
-    o = N_HEAD
-    obs_idx = ints[o : o + n_obs]
-    s_idx = ints[o + n_obs + n_v : o + n_obs + n_v + n_s]
-    sec_idx = ints[o + n_obs + n_v + n_s : o + n_obs + n_v + n_s + n_sec]
-    info_idx = ints[o + n_obs + n_v + n_s + n_sec : o + n_obs + n_v + n_s + n_sec + ints[7]]
-    dt, sp_nom, trip_lo, trip_hi, s_scale = cfg[0], cfg[1], cfg[2], cfg[3], cfg[4]
-    w = cfg[5 : 5 + N_WEIGHTS]
-    sec_sp = cfg[5 + N_WEIGHTS :]
+    i_out, i_meas, i_design = ints[H.outlet], ints[H.measured], ints[H.design_spray]
+    obs_idx = ints[ints[H.obs] : ints[H.valves]]
+    s_idx = ints[ints[H.sprays] : ints[H.secondary]]
+    sec_idx = ints[ints[H.secondary] : ints[H.info]]
+    info_idx = ints[ints[H.info] : ints[H.end]]
+    dt, sp_nom, s_scale = cfg[CFG.dt], cfg[CFG.setpoint], cfg[CFG.spray_scale]
+    trip_lo, trip_hi = cfg[CFG.trip_below_K], cfg[CFG.trip_above_K]
+    w = cfg[N_CFG : N_CFG + N_WEIGHTS]
+    sec_sp = cfg[N_CFG + N_WEIGHTS :]
     for b in range(Z.shape[0]):
         counter[b] += 1
         ep[b, E_TIME] = counter[b] * dt  # counted, not summed: no drift over long episodes
@@ -212,25 +218,18 @@ def advance(X, Z, U, U_prev, slot, bp_t, bp_v, bp_n, ep, ou, key, counter, ints,
         term = code != 0
         out[b, 1] = code
         out[b, 2] = 1.0 if ep[b, E_TIME] >= ep[b, E_DUR] - 1e-9 else 0.0
-        if code == TRIP_NON_FINITE:  # charged as a trip at the band edge
-            out[b, 0] = reward(trip_lo, 0.0, 0.0, 0.0, True, w)
-            for j in range(U.shape[1]):
-                U_prev[b, j] = U[b, j]
-            continue
-        spray = 0.0
-        for j in range(n_s):
-            spray += Z[b, s_idx[j]]
-        if i_design >= 0:  # only spray above the design spray of this operating point
-            spray = max(spray - Z[b, i_design], 0.0)
-        spray /= s_scale
-        move = 0.0
+        if code == TRIP_NON_FINITE:
+            out[b, 0] = non_finite_reward(trip_lo, w)
+        else:
+            out[b, 0] = row_reward(b, Z, U, U_prev, e, term, s_idx, i_design, s_scale, sec_idx,
+                                   sec_sp, w)  # fmt: skip
         for j in range(U.shape[1]):
-            move += abs(U[b, j] - U_prev[b, j])
             U_prev[b, j] = U[b, j]
-        sec = 0.0
-        for j in range(n_sec):
-            sec += temperature_cost(sec_sp[j] - Z[b, sec_idx[j]], w)
-        out[b, 0] = reward(e, sec, spray, move, term, w)
+
+
+#: Positions of :data:`ADVANCE_ROW_ARGS` among advance's arguments (plants/threads.run_rows).
+ADVANCE_ROWS = tuple(i for i, name in enumerate(inspect.signature(advance.py_func).parameters)
+                     if name in ADVANCE_ROW_ARGS)  # fmt: skip
 
 
 @njit(cache=True, error_model="numpy")
@@ -321,15 +320,13 @@ class Core:
         self.spray_idx = [idx[s] for s in plant.sprays]
         self.scenario: list[sc.Scenario | None] = [None] * B
         info_idx = [(key, idx[source]) for key, source in info_sources(plant)]
+        lists = (observed, self.valve_idx, self.spray_idx,
+                 [idx[name] for name, _ in plant.secondary], [i for _, i in info_idx])  # fmt: skip
+        starts = np.cumsum([len(H)] + [len(v) for v in lists]).tolist()
         self.ints = np.array(
-            [self.i_out, idx[plant.outlet_measured], len(observed), len(plant.valves),
-             len(plant.sprays), len(plant.secondary),
-             idx[plant.design_spray] if plant.design_spray else -1, len(info_idx)]
-            + observed
-            + self.valve_idx
-            + self.spray_idx
-            + [idx[name] for name, _ in plant.secondary]
-            + [i for _, i in info_idx],
+            [self.i_out, idx[plant.outlet_measured],
+             idx[plant.design_spray] if plant.design_spray else -1, *starts]
+            + [i for v in lists for i in v],
             dtype=np.int64,
         )  # fmt: skip
         #: the info values of every row, written by advance and reset_row (fill_info); the
@@ -503,7 +500,8 @@ class Core:
 
     def _observe_args(self, b: int) -> tuple:
         """The arguments of ``observe`` for row b."""
-        return (b, self.Z, self.ints[N_HEAD : N_HEAD + self.ints[2]], self.obs_cs, self.ints[1],
+        ints = self.ints
+        return (b, self.Z, ints[ints[H.obs] : ints[H.valves]], self.obs_cs, ints[H.measured],
                 self.key, self.counter, self.ep[b, E_NOISE], self.sp, self.D, self.obs,
                 self.meas)  # fmt: skip
 
@@ -602,14 +600,9 @@ def non_finite_action(A: np.ndarray) -> ValueError:
 
 
 def dict_maker(keys: list[str]) -> Any:
-    """The function ``v -> {keys[0]: v[0], keys[1]: v[1], ...}``.
-
-    It is a dict display with constant keys, which CPython builds 1.7-2.5x faster than
-    ``dict(zip(keys, v))`` for the 12-15 info keys (0.36 against 0.64-1.0 us here): it
-    makes the info dict of every step.
-    """
-    body = ", ".join(f"{k!r}: v[{i}]" for i, k in enumerate(keys))
-    return eval(f"lambda v: {{{body}}}")  # the keys are repr'd: any string is safe
+    """The function ``v -> {keys[0]: v[0], keys[1]: v[1], ...}`` (the info dict of a step)."""
+    keys = tuple(keys)
+    return lambda v: dict(zip(keys, v, strict=False))  # v holds one value per key
 
 
 def check_action(action: Any, shape: tuple[int, ...], single: bool = False) -> np.ndarray:
