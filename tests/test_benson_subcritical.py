@@ -30,7 +30,7 @@ NO_OU = np.zeros(2)  # no coloured heat-absorption disturbance in these tests
 PLANT = bs.BensonSubcritical()
 #: open-loop plant for the step tests: the fuel/water-ratio trim frozen (as in a field step test)
 OPEN = bs.BensonSubcritical(fwr_ki_per_s=0.0)
-V = slice(bs.S_V1, bs.S_V2 + 1)
+V = slice(bs.IX.V1, bs.IX.V2 + 1)
 # section -> (inlet, outlet, inlet flow) columns of section_temperatures
 SECTIONS = {"eco": (0, 1, 11), "evap": (1, 2, 11), "sh1": (2, 3, 11), "sh2": (3, 4, 11),
             "sh3": (5, 6, 12), "sh4": (7, 8, 13), "rh": (9, 10, 14)}  # fmt: skip
@@ -53,26 +53,28 @@ def steady(plant, load, bias=0.0, fouling=1.0, dT=0.0, sp=535.0):
 def test_rated_steady_state_matches_the_paper():
     X, D, Z = steady(PLANT, 1.0)
     T = bs.section_temperatures(X[0], D[0], PLANT.P)
-    W_t, W_rh, p_rh, p_crh, _ = bs._reheat(PLANT.P, X[0, bs.S_P], 1.0)
-    assert Z[0, bs.Z_P] == pytest.approx(18.1, abs=0.01)
-    assert Z[0, bs.Z_TMS] == pytest.approx(535.0, abs=0.01)
-    assert Z[0, bs.Z_TRH] == pytest.approx(530.0, abs=2.0)
+    W_t, W_rh, p_rh, p_crh, _ = bs._reheat(PLANT.P, X[0, bs.IX.P], 1.0)
+    assert Z[0, bs.IZ.pressure_MPa] == pytest.approx(18.1, abs=0.01)
+    assert Z[0, bs.IZ.outlet_temp_C] == pytest.approx(535.0, abs=0.01)
+    assert Z[0, bs.IZ.reheat_temp_C] == pytest.approx(530.0, abs=2.0)
     assert p_rh * 1e-6 == pytest.approx(4.35, abs=0.01)
     assert T[0] - (PLANT.params.T_deaerator_C) == pytest.approx(80.0, abs=0.5)  # HP heaters
     assert 250.0 < T[9] < 400.0  # cold reheat by eq. (14)
-    assert Z[0, bs.Z_PWR] == pytest.approx(440.0, rel=0.02)  # eq. (16) vs the 440 MW rating
-    for v in (Z[0, bs.Z_V1], Z[0, bs.Z_V2]):
+    assert Z[0, bs.IZ.power_MW] == pytest.approx(440.0, rel=0.02)  # eq. (16) vs the 440 MW rating
+    for v in (Z[0, bs.IZ.spray_valve_1], Z[0, bs.IZ.spray_valve_2]):
         assert 0.05 < v < 0.95
-    assert Z[0, bs.Z_W] == pytest.approx(Z[0, bs.Z_WFW] + Z[0, bs.Z_WSP1] + Z[0, bs.Z_WSP2])
+    z = dict(zip(bs.IZ._fields, Z[0], strict=True))
+    assert z["steam_flow_kg_s"] == pytest.approx(
+        z["feedwater_flow_kg_s"] + z["spray_flow_1_kg_s"] + z["spray_flow_2_kg_s"])
     # subcooled economizer outlet, superheated evaporator outlet: once-through
-    assert 0.0 < Z[0, bs.Z_SGP] < 1.0
+    assert 0.0 < Z[0, bs.IZ.steam_generation_point] < 1.0
     # stationary: 20 control intervals change nothing measurable
     U = X[:, V].copy()
     for _ in range(20):
         PLANT.step(X, U, D, Z)
-    assert Z[0, bs.Z_TMS] == pytest.approx(535.0, abs=1e-3)
-    assert Z[0, bs.Z_TRH] == pytest.approx(530.0, abs=2.0)
-    assert Z[0, bs.Z_P] == pytest.approx(18.1, abs=1e-3)
+    assert Z[0, bs.IZ.outlet_temp_C] == pytest.approx(535.0, abs=1e-3)
+    assert Z[0, bs.IZ.reheat_temp_C] == pytest.approx(530.0, abs=2.0)
+    assert Z[0, bs.IZ.pressure_MPa] == pytest.approx(18.1, abs=1e-3)
 
 
 @pytest.mark.parametrize("load", [1.0, 0.75, 0.5])
@@ -81,12 +83,13 @@ def test_steady_state_holds_setpoint_with_both_valves_inside(load):
                  {"dT": 15.0}, {"dT": -15.0}, {"sp": 545.0}):  # fmt: skip
         X, D, Z = steady(PLANT, load, **dist)
         sp = dist.get("sp", 535.0)
-        assert Z[0, bs.Z_TMS] == pytest.approx(sp, abs=0.01), dist
-        assert 0.0 < Z[0, bs.Z_V1] < 1.0 and 0.0 < Z[0, bs.Z_V2] < 1.0, dist
-        assert Z[0, bs.Z_P] == pytest.approx(bs.p_setpoint(PLANT.P, load) * 1e-6, rel=0.05)
+        assert Z[0, bs.IZ.outlet_temp_C] == pytest.approx(sp, abs=0.01), dist
+        assert 0.0 < Z[0, bs.IZ.spray_valve_1] < 1.0 and 0.0 < Z[0, bs.IZ.spray_valve_2] < 1.0, dist
+        p_sp = bs.p_setpoint(PLANT.P, load) * 1e-6
+        assert Z[0, bs.IZ.pressure_MPa] == pytest.approx(p_sp, rel=0.05)
         U = X[:, V].copy()
         PLANT.step(X, U, D, Z)
-        assert Z[0, bs.Z_TMS] == pytest.approx(sp, abs=1e-3), dist
+        assert Z[0, bs.IZ.outlet_temp_C] == pytest.approx(sp, abs=1e-3), dist
 
 
 # --------------------------------------------------------------------- eq. (7) section fits
@@ -96,10 +99,10 @@ def _experiment(kind, steps=400):
     X, D, Z = steady(OPEN, 1.0)
     U = X[:, V].copy()
     rec = [bs.section_temperatures(X[0], D[0], P)]
-    sgp = [Z[0, bs.Z_SGP]]
-    p = [Z[0, bs.Z_P]]
+    sgp = [Z[0, bs.IZ.steam_generation_point]]
+    p = [Z[0, bs.IZ.pressure_MPa]]
     if kind == "fuel":
-        X[0, int(P[bs.I_STRIM])] += 0.05  # fuel demand +5 % (the trim is frozen)
+        X[0, int(P[bs.IP.STRIM])] += 0.05  # fuel demand +5 % (the trim is frozen)
     elif kind == "feedwater":
         D[0, 4] += 10.0  # deaerator/feedwater (and spray water) temperature
     elif kind == "spray1":
@@ -109,10 +112,10 @@ def _experiment(kind, steps=400):
     for _ in range(steps):
         OPEN.step(X, U, D, Z)
         rec.append(bs.section_temperatures(X[0], D[0], P))
-        sgp.append(Z[0, bs.Z_SGP])
-        p.append(Z[0, bs.Z_P])
+        sgp.append(Z[0, bs.IZ.steam_generation_point])
+        p.append(Z[0, bs.IZ.pressure_MPa])
     r = np.array(rec)
-    r[:, 15] *= P[bs.I_FNOM]
+    r[:, 15] *= P[bs.IP.FNOM]
     return r, np.array(sgp), np.array(p)
 
 
@@ -198,9 +201,9 @@ def test_radiant_section_inlet_gain_is_the_cp_ratio(experiments, sec):
     i_in, i_out, _ = SECTIONS[sec]
     X, D, _ = steady(OPEN, 1.0)
     r = experiments[INLET_STEP[sec]][0]
-    P, p = OPEN.P, X[0, bs.S_P]
+    P, p = OPEN.P, X[0, bs.IX.P]
     k_in, k_out = (bs.ECO, bs.EV) if sec == "evap" else (bs.SH1, bs.SH2)
-    p_in, p_out = (p + bs.P_SHARE[k] * P[bs.I_DPB] for k in (k_in, k_out))
+    p_in, p_out = (p + bs.P_SHARE[k] * P[bs.IP.DPB] for k in (k_in, k_out))
     T_in, T_out = (0.5 * (r[0, i] + r[-1, i]) + 273.15 for i in (i_in, i_out))  # mean states
     ratio = cp_pT(p_in, T_in) / cp_pT(p_out, T_out)
     assert g == pytest.approx(ratio, rel=0.05)
@@ -220,7 +223,7 @@ def test_pressure_follows_eq13(experiments):
     dp = p - p[0]
     t = 5.0 * np.arange(len(p))
     res = least_squares(lambda th: th[0] * (1 - np.exp(-t / th[1])) - dp, [dp[-1], 50.0])
-    tau_expected = p[0] * 1e6 / (P[bs.I_CSTOR] * P[bs.I_WNOM])
+    tau_expected = p[0] * 1e6 / (P[bs.IP.CSTOR] * P[bs.IP.WNOM])
     assert res.x[1] == pytest.approx(tau_expected, rel=0.05)
     W_in = r[-1, 13]  # economizer + sprays at the end = turbine flow at equilibrium
     assert p[-1] / p[0] == pytest.approx(W_in / r[0, 13], rel=1e-3)
@@ -265,12 +268,12 @@ def test_ros2_at_5s_matches_a_fine_solution_over_the_load_ramp():
         PLANT.step(X, U, D, Z)
         fine.step(Xf, U, D, Zf)
         e = err["smooth" if smooth else "steps"]
-        for j, i in enumerate((bs.Z_TMS, bs.Z_TMS_M, bs.Z_TRH)):
+        for j, i in enumerate((bs.IZ.outlet_temp_C, bs.IZ.outlet_temp_meas_C, bs.IZ.reheat_temp_C)):
             e[j] = max(e[j], abs(Z[0, i] - Zf[0, i]))
         if t < 1400.0:
 
             def rhs(tau, x, v=v_start, u=u_cmd, d=d_now):
-                tv, rv = P[bs.I_TAUV], P[bs.I_RATEV]
+                tv, rv = P[bs.IP.TAUV], P[bs.IP.RATEV]
                 ut = np.array([valve_travel(v[j], u[j], tv, rv, tau)[0] for j in range(2)])
                 bs.derivatives(x, ut, d, P, f)
                 return f.copy()
@@ -281,7 +284,7 @@ def test_ros2_at_5s_matches_a_fine_solution_over_the_load_ramp():
             x_ref = sol.y[:, -1]
             x_ref[V] = X[0, V]
             T_ref = bs.section_temperatures(x_ref, D[0], P)[16]  # turbine inlet
-            err_radau = max(err_radau, abs(Z[0, bs.Z_TMS] - T_ref))
+            err_radau = max(err_radau, abs(Z[0, bs.IZ.outlet_temp_C] - T_ref))
     for name, e in err.items():
         print(
             f"\nROS2 dt=5 s vs 40 substeps ({name} valves): main steam {e[0] * 1e3:.1f} mK, "
@@ -321,31 +324,32 @@ def test_design_spray_and_the_schedule_error():
     (fwr_schedule_error_kJ_kg) makes the steady spray differ from design, so a frozen
     valve drifts after a load change."""
     X, D, Z = steady(PLANT, 1.0)
-    w = Z[0, bs.Z_WSP1] + Z[0, bs.Z_WSP2]
-    assert Z[0, bs.Z_WDES] == pytest.approx(w, rel=0.01)
-    assert Z[0, bs.Z_WDES] == pytest.approx(0.05 * PLANT.params.W_nom_kg_s, rel=0.02)
+    w = Z[0, bs.IZ.spray_flow_1_kg_s] + Z[0, bs.IZ.spray_flow_2_kg_s]
+    assert Z[0, bs.IZ.design_spray_kg_s] == pytest.approx(w, rel=0.01)
+    assert Z[0, bs.IZ.design_spray_kg_s] == pytest.approx(0.05 * PLANT.params.W_nom_kg_s, rel=0.02)
     X, D, Z = steady(PLANT, 0.5)
-    w = Z[0, bs.Z_WSP1] + Z[0, bs.Z_WSP2]
-    print(f"\n50 %: design spray {Z[0, bs.Z_WDES]:.2f} kg/s, steady {w:.2f} kg/s")
-    assert abs(w - Z[0, bs.Z_WDES]) > 0.1 * Z[0, bs.Z_WDES]  # the documented mismatch
-    assert bs.h_ev_setpoint(PLANT.P, 0.5) - bs._table(PLANT.P, bs.TB_HEV, 0.5) == pytest.approx(
+    w = Z[0, bs.IZ.spray_flow_1_kg_s] + Z[0, bs.IZ.spray_flow_2_kg_s]
+    print(f"\n50 %: design spray {Z[0, bs.IZ.design_spray_kg_s]:.2f} kg/s, steady {w:.2f} kg/s")
+    design = Z[0, bs.IZ.design_spray_kg_s]
+    assert abs(w - design) > 0.1 * design  # the documented mismatch
+    assert bs.h_ev_setpoint(PLANT.P, 0.5) - bs._table(PLANT.P, bs.ITB.HEV, 0.5) == pytest.approx(
         PLANT.params.fwr_schedule_error_kJ_kg * 1e3
     )
     # a design-spray plant (no schedule error) holds the setpoint with design openings
     exact = bs.BensonSubcritical(fwr_schedule_error_kJ_kg=0.0)
     X, D, Z = steady(exact, 0.5)
-    w = Z[0, bs.Z_WSP1] + Z[0, bs.Z_WSP2]
-    assert w == pytest.approx(Z[0, bs.Z_WDES], rel=0.05)
+    w = Z[0, bs.IZ.spray_flow_1_kg_s] + Z[0, bs.IZ.spray_flow_2_kg_s]
+    assert w == pytest.approx(Z[0, bs.IZ.design_spray_kg_s], rel=0.05)
 
 
 def test_furnace_lag_delays_the_heat_release():
     """Fuel demand step: the heat release follows through the furnace lag tau_furnace_s."""
     X, D, Z = steady(OPEN, 1.0)
-    lf0 = X[0, bs.S_F]
-    X[0, int(OPEN.P[bs.I_STRIM])] += 0.05
+    lf0 = X[0, bs.IX.F]
+    X[0, int(OPEN.P[bs.IP.STRIM])] += 0.05
     n = int(round(OPEN.params.tau_furnace_s / OPEN.dt_s))
     U = X[:, V].copy()
     for _ in range(n):
         OPEN.step(X, U, D, Z)
-    frac = (X[0, bs.S_F] - lf0) / (0.05 * lf0 / (1.0 + X[0, int(OPEN.P[bs.I_STRIM])] - 0.05))
+    frac = (X[0, bs.IX.F] - lf0) / (0.05 * lf0 / (1.0 + X[0, int(OPEN.P[bs.IP.STRIM])] - 0.05))
     assert frac == pytest.approx(1.0 - np.exp(-1.0), abs=0.05)

@@ -25,8 +25,10 @@ from steamtemp_gym.plants import boiler_turbine_mimo as bt
 NO_OU = np.zeros(2)  # no coloured heat-absorption disturbance in these tests
 PLANT = bt.BoilerTurbineMIMO()
 ENV_ID = "steamtemp/BoilerTurbineMIMO-v0"
-ACT = [bt.S_V1, bt.S_V2, bt.S_G]
+ACT = [bt.IX.V1, bt.IX.V2, bt.IX.G]
 TABLE1 = {1.0: (6.5, 137.0), 0.5: (8.3, 217.0)}  # load: (fast, slow) time constants in s
+#: the columns of z of the main-steam and reheat temperatures
+STE_RTE = [bt.IZ.outlet_temp_C, bt.IZ.reheat_temp_C]
 
 
 def steady(loads, plant=PLANT, fouling=1.0, bias=0.0, spray_dT=0.0):
@@ -36,7 +38,7 @@ def steady(loads, plant=PLANT, fouling=1.0, bias=0.0, spray_dT=0.0):
     X = np.zeros((loads.size, plant.n_x))
     plant.steady_state(D, np.full(loads.size, plant.setpoint_C), X)
     Z = np.zeros((loads.size, plant.n_z))
-    U = X[:, [bt.S_V1, bt.S_V2, bt.S_G, bt.S_FB][: plant.n_u]].copy()
+    U = X[:, [bt.IX.V1, bt.IX.V2, bt.IX.G, bt.IX.FB][: plant.n_u]].copy()
     plant.kernel()(X, U, D, plant.P, plant.jrow, plant.jcol, 0.0, 1, Z)
     return X, D, Z, U
 
@@ -61,13 +63,14 @@ def section_jacobian(x, u, d):
 def test_table1_eigenvalues_of_the_heat_exchanger_section(load):
     assert PLANT.params.n_seg_platen == 1  # the section of eq. (1)-(3): one fluid, one metal
     X, D, Z, U = steady(load)
-    assert Z[0, bt.Z_W] * 3.6 == pytest.approx(2270.0 * load, rel=1e-9)  # t/h of Table 1
+    # t/h of Table 1
+    assert Z[0, bt.IZ.steam_flow_kg_s] * 3.6 == pytest.approx(2270.0 * load, rel=1e-9)
     eig = np.linalg.eigvals(section_jacobian(X[0], U[0], D[0]))
     assert np.all(np.abs(eig.imag) < 1e-12) and np.all(eig.real < 0)
     tau_fast, tau_slow = np.sort(-1.0 / eig.real)
     fast_ref, slow_ref = TABLE1[load]
     print(
-        f"\n{2270 * load:.0f} t/h at {Z[0, bt.Z_P]:.2f} MPa: tau = {tau_fast:.2f} s "
+        f"\n{2270 * load:.0f} t/h at {Z[0, bt.IZ.pressure_MPa]:.2f} MPa: tau = {tau_fast:.2f} s "
         f"({tau_fast / fast_ref - 1:+.1%}), {tau_slow:.1f} s ({tau_slow / slow_ref - 1:+.1%})"
     )
     assert tau_fast == pytest.approx(fast_ref, rel=0.10)
@@ -77,21 +80,21 @@ def test_table1_eigenvalues_of_the_heat_exchanger_section(load):
 @pytest.mark.parametrize("load", [0.25, 0.5, 0.9, 1.0])
 def test_steady_state_holds_both_setpoints_with_actuators_inside(load):
     X, D, Z, U = steady(load)
-    assert Z[0, bt.Z_STE] == pytest.approx(PLANT.params.T_ms_C, abs=0.01)
-    assert Z[0, bt.Z_RTE] == pytest.approx(PLANT.params.T_rh_C, abs=0.01)
-    for i in (bt.Z_V1, bt.Z_V2, bt.Z_G):
+    assert Z[0, bt.IZ.outlet_temp_C] == pytest.approx(PLANT.params.T_ms_C, abs=0.01)
+    assert Z[0, bt.IZ.reheat_temp_C] == pytest.approx(PLANT.params.T_rh_C, abs=0.01)
+    for i in (bt.IZ.sp1_valve, bt.IZ.sp2_valve, bt.IZ.rgd_damper):
         assert 0.02 < Z[0, i] < 0.98, (load, i, Z[0, i])
     # stationary: 200 s with the inputs held change nothing measurable
     Z0 = Z.copy()
     for _ in range(100):
         PLANT.step(X, U, D, Z)
-    temps = [bt.Z_STE, bt.Z_RTE, bt.Z_T1, bt.Z_T2]
+    temps = [bt.IZ.outlet_temp_C, bt.IZ.reheat_temp_C, bt.IZ.sp1_out_temp_C, bt.IZ.sp2_out_temp_C]
     np.testing.assert_allclose(Z[0, temps], Z0[0, temps], atol=1e-3)
     # the sprays absorb moderate disturbances (STE held, both valves inside their range)
     for dist in ({"bias": 0.05}, {"bias": -0.05}, {"fouling": 0.9}, {"spray_dT": 15.0}):
         _, _, Zd, _ = steady(load, **dist)
-        assert Zd[0, bt.Z_STE] == pytest.approx(PLANT.params.T_ms_C, abs=0.01), dist
-        assert 0.0 < Zd[0, bt.Z_V1] < 1.0 and 0.0 < Zd[0, bt.Z_V2] < 1.0, dist
+        assert Zd[0, bt.IZ.outlet_temp_C] == pytest.approx(PLANT.params.T_ms_C, abs=0.01), dist
+        assert 0.0 < Zd[0, bt.IZ.sp1_valve] < 1.0 and 0.0 < Zd[0, bt.IZ.sp2_valve] < 1.0, dist
 
 
 def step_responses(loads=(0.25, 0.9), du=0.05, steps=3000):
@@ -101,10 +104,10 @@ def step_responses(loads=(0.25, 0.9), du=0.05, steps=3000):
     PLANT.step(X, U, D, Z)
     for b, (_, k) in enumerate(rows):
         U[b, k] += du
-    y = [Z[:, [bt.Z_STE, bt.Z_RTE]].copy()]
+    y = [Z[:, STE_RTE].copy()]
     for _ in range(steps):
         PLANT.step(X, U, D, Z)
-        y.append(Z[:, [bt.Z_STE, bt.Z_RTE]].copy())
+        y.append(Z[:, STE_RTE].copy())
     y = np.array(y)
     t = np.arange(steps + 1) * PLANT.dt_s
     out = {}
@@ -145,8 +148,8 @@ def test_fuel_bias_option_adds_an_action_that_heats_both_outputs():
     U[1, 3] += 0.125  # bias = fuel_bias_max (2 u - 1): +2.5 % of rated firing
     for _ in range(600):
         plant.step(X, U, D, Z)
-    dT = Z[1, [bt.Z_STE, bt.Z_RTE]] - Z[0, [bt.Z_STE, bt.Z_RTE]]
-    assert Z[1, bt.Z_LF] - Z[0, bt.Z_LF] == pytest.approx(0.025, rel=1e-3)
+    dT = Z[1, STE_RTE] - Z[0, STE_RTE]
+    assert Z[1, bt.IZ.firing_rate] - Z[0, bt.IZ.firing_rate] == pytest.approx(0.025, rel=1e-3)
     print(f"\nFF +2.5 %, 20 min at 90 % load: STE {dT[0]:+.1f} K, RTE {dT[1]:+.1f} K")
     assert dT[0] > 2.0 and dT[1] > 1.0, dT
 
@@ -181,7 +184,7 @@ def test_ros2_at_the_control_interval_matches_16_substeps():
         U = U0 + 0.05 * np.sin(2 * np.pi * t / np.array([300.0, 420.0, 600.0]))
         PLANT.step(X[:1], U[:1], D[:1], Z[:1])
         fine.step(X[1:], U[1:], D[1:], Z[1:])
-        err = np.maximum(err, np.abs(Z[0, [bt.Z_STE, bt.Z_RTE]] - Z[1, [bt.Z_STE, bt.Z_RTE]]))
+        err = np.maximum(err, np.abs(Z[0, STE_RTE] - Z[1, STE_RTE]))
     print(f"\nROS2 dt = {PLANT.dt_s} s vs 16 substeps: max STE {err[0]:.3f} K, RTE {err[1]:.3f} K")
     assert np.all(err < 0.1), err
 
@@ -194,9 +197,9 @@ def test_heat_absorption_bias_reaches_the_evaporator_outlet():
     for load in (1.0, 0.5):
         X0, *_ = steady(load)
         X1, *_ = steady(load, bias=0.05)
-        rise = bt._tab(PLANT.P, bt.T_RISE, load)
+        rise = bt._tab(PLANT.P, bt.ITAB.RISE, load)
         expected = q.fwr_coupling * q.bias_upstream_share * 0.05 * rise
-        assert X1[0, bt.S_HUP] - X0[0, bt.S_HUP] == pytest.approx(expected, rel=1e-6)
+        assert X1[0, bt.IX.HUP] - X0[0, bt.IX.HUP] == pytest.approx(expected, rel=1e-6)
         assert expected > 10e3  # J/kg
 
 
@@ -207,10 +210,10 @@ def test_mill_and_furnace_lags_delay_the_firing():
     X, D, Z, U = steady([0.9], plant=plant)
     U[0, 3] += 0.125
     q = plant.params
-    lf0, n = X[0, bt.S_LF], int(round((q.tau_mill_s + q.tau_firing_s) / plant.dt_s))
+    lf0, n = X[0, bt.IX.LF], int(round((q.tau_mill_s + q.tau_firing_s) / plant.dt_s))
     for _ in range(n):
         plant.step(X, U, D, Z)
-    frac = (X[0, bt.S_LF] - lf0) / 0.025
+    frac = (X[0, bt.IX.LF] - lf0) / 0.025
     # two lags in series at t = T1 + T2 (T1 = 100 s, T2 = 15 s): 0.60
     t, a, b = q.tau_mill_s + q.tau_firing_s, q.tau_mill_s, q.tau_firing_s
     expected = 1.0 - (a * np.exp(-t / a) - b * np.exp(-t / b)) / (a - b)
@@ -222,14 +225,16 @@ def test_design_spray_and_the_schedule_error():
     the schedule error is zero); at half load the FWR schedule's commissioning error
     (fwr_schedule_error_kJ_kg) moves the steady spray away from design."""
     X, D, Z, U = steady([1.0, 0.5])
-    w = Z[:, bt.Z_W1] + Z[:, bt.Z_W2]
-    assert Z[0, bt.Z_WDES] == pytest.approx(w[0], rel=0.01)
+    w = Z[:, bt.IZ.sp1_flow_kg_s] + Z[:, bt.IZ.sp2_flow_kg_s]
+    assert Z[0, bt.IZ.design_spray_kg_s] == pytest.approx(w[0], rel=0.01)
     q = PLANT.params
-    assert Z[0, bt.Z_WDES] == pytest.approx(
+    assert Z[0, bt.IZ.design_spray_kg_s] == pytest.approx(
         (q.sp1_design_fraction + q.sp2_design_fraction) * q.W_nom_kg_s, rel=1e-6
     )
-    print(f"\n50 %: design spray {Z[1, bt.Z_WDES]:.1f} kg/s, steady {w[1]:.1f} kg/s")
-    assert abs(w[1] - Z[1, bt.Z_WDES]) > 0.1 * Z[1, bt.Z_WDES]  # the documented mismatch
+    print(f"\n50 %: design spray {Z[1, bt.IZ.design_spray_kg_s]:.1f} kg/s, steady {w[1]:.1f} kg/s")
+    design = Z[1, bt.IZ.design_spray_kg_s]
+    assert abs(w[1] - design) > 0.1 * design  # the documented mismatch
     exact = bt.BoilerTurbineMIMO(fwr_schedule_error_kJ_kg=0.0)
     X, D, Z, U = steady([0.5], plant=exact)
-    assert Z[0, bt.Z_W1] + Z[0, bt.Z_W2] == pytest.approx(Z[0, bt.Z_WDES], rel=0.02)
+    sprays = Z[0, bt.IZ.sp1_flow_kg_s] + Z[0, bt.IZ.sp2_flow_kg_s]
+    assert sprays == pytest.approx(Z[0, bt.IZ.design_spray_kg_s], rel=0.02)

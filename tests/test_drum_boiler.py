@@ -50,7 +50,7 @@ def steady(plant, load, **dist):
     X = np.zeros((1, plant.n_x))
     plant.steady_state(D, np.array([plant.setpoint_C]), X)
     Z = np.zeros((1, plant.n_z))
-    plant.kernel()(X.copy(), X[:, [db.S_V]].copy(), D, plant.P, plant.jrow, plant.jcol, 0.0, 1, Z)
+    plant.kernel()(X.copy(), X[:, [db.IX.V]].copy(), D, plant.P, plant.jrow, plant.jcol, 0.0, 1, Z)
     return X[0], D[0], Z[0]
 
 
@@ -78,17 +78,17 @@ def drum_open_loop(plant, load):
     x, d, _ = steady(plant, load)
     P = plant.P
     _, _, _, q_s, _, _, h_f, *_ = db._boundary(x, d, P)
-    u0 = np.array([q_s, q_s, x[db.S_LF] * P[db.I_QNOM]])
+    u0 = np.array([q_s, q_s, x[db.IX.LF] * P[db.IP.QNOM]])
     fd, jd = np.zeros(4), np.zeros(4)
 
     def G(xd, u):
-        dr.drum_rhs(xd, 0, P, db.I_DRUM, u[0], u[1], h_f, u[2], fd, jd, False)
+        dr.drum_rhs(xd, 0, P, db.IP.DRUM, u[0], u[1], h_f, u[2], fd, jd, False)
         return fd.copy()
 
     def Y(xd):
-        return np.array([xd[dr.PD], dr.drum_level(xd, 0, P, db.I_DRUM)])
+        return np.array([xd[dr.PD], dr.drum_level(xd, 0, P, db.IP.DRUM)])
 
-    return x[db.S_DRUM : db.S_DRUM + 4].copy(), u0, h_f, G, Y
+    return x[db.IX.DRUM : db.IX.DRUM + 4].copy(), u0, h_f, G, Y
 
 
 # ----------------------------------------------------------------------------- steady state
@@ -96,45 +96,46 @@ def test_rated_steady_state_matches_astrom_bell(plant):
     x, d, z = steady(plant, 1.0)
     P = plant.P
     Ts, rw, rs, hw, hs, dTs, drw, drs, dhw, dhs = sat_p(x[db.S_P])
-    av, _, _ = dr.void_fraction(rw, rs, drw, drs, x[db.S_DRUM + dr.AR])
+    av, _, _ = dr.void_fraction(rw, rs, drw, drs, x[db.IX.DRUM + dr.AR])
     got = {
-        "p_MPa": z[db.Z_PD],
-        "q_s": z[db.Z_QS],
-        "Q_MW": z[db.Z_QEV],
-        "q_dc": dr.circulation(rw, rs, av, P, db.I_DRUM),
-        "alpha_r": x[db.S_DRUM + dr.AR],
-        "V_wt": x[db.S_DRUM + dr.VWT],
+        "p_MPa": z[db.IZ.drum_pressure_MPa],
+        "q_s": z[db.IZ.drum_steam_flow_kg_s],
+        "Q_MW": z[db.IZ.evaporator_heat_MW],
+        "q_dc": dr.circulation(rw, rs, av, P, db.IP.DRUM),
+        "alpha_r": x[db.IX.DRUM + dr.AR],
+        "V_wt": x[db.IX.DRUM + dr.VWT],
     }
     print("rated steady state vs Astrom-Bell:", {k: (round(got[k], 4), AB[k]) for k in AB})
     for k, ref in AB.items():
         assert got[k] == pytest.approx(ref, rel=0.03), k
-    assert z[db.Z_QF] == pytest.approx(z[db.Z_QS], rel=1e-9)  # q_f = q_s (thesis eq. (22))
-    assert z[db.Z_LEVEL] == pytest.approx(0.0, abs=1e-9)
+    # q_f = q_s (thesis eq. (22))
+    assert z[db.IZ.feedwater_flow_kg_s] == pytest.approx(z[db.IZ.drum_steam_flow_kg_s], rel=1e-9)
+    assert z[db.IZ.drum_level_m] == pytest.approx(0.0, abs=1e-9)
     # the rated design: 505 C out, 440 C after the primary SH, spray valve mid-range
-    assert z[db.Z_TOUT] == pytest.approx(505.0, abs=1e-3)
-    assert z[db.Z_TPRI] == pytest.approx(440.0, abs=0.01)
-    assert 0.3 < z[db.Z_V] < 0.6
+    assert z[db.IZ.outlet_temp_C] == pytest.approx(505.0, abs=1e-3)
+    assert z[db.IZ.attemp_in_temp_C] == pytest.approx(440.0, abs=0.01)
+    assert 0.3 < z[db.IZ.spray_valve] < 0.6
 
 
 @pytest.mark.parametrize("load", LOADS)
 def test_steady_states_are_at_rest(plant, load):
     x, d, z = steady(plant, load)
-    f = rhs_of(plant, np.array([x[db.S_V]]), d)(x)
+    f = rhs_of(plant, np.array([x[db.IX.V]]), d)(x)
     assert np.max(np.abs(f) / np.maximum(1.0, np.abs(x))) < 1e-8
-    assert z[db.Z_TOUT] == pytest.approx(plant.setpoint_C, abs=1e-3)
-    assert z[db.Z_PD] == pytest.approx(8.5, abs=1e-9)
-    assert 0.1 < z[db.Z_V] < 0.9
-    assert z[db.Z_W] == pytest.approx(load * plant.P[db.I_WNOM])
+    assert z[db.IZ.outlet_temp_C] == pytest.approx(plant.setpoint_C, abs=1e-3)
+    assert z[db.IZ.drum_pressure_MPa] == pytest.approx(8.5, abs=1e-9)
+    assert 0.1 < z[db.IZ.spray_valve] < 0.9
+    assert z[db.IZ.steam_flow_kg_s] == pytest.approx(load * plant.P[db.IP.WNOM])
 
 
 def test_spray_need_and_firing_follow_load(plant):
     zs = [steady(plant, L)[2] for L in LOADS]
-    sprays = [z[db.Z_WSP] for z in zs]
-    firing = [z[db.Z_LF] for z in zs]
+    sprays = [z[db.IZ.spray_flow_kg_s] for z in zs]
+    firing = [z[db.IZ.firing_rate] for z in zs]
     assert sprays[0] < sprays[1] < sprays[2]  # convective superheaters
     assert firing[0] < firing[1] < firing[2] == pytest.approx(1.0)
     # heat to the risers per kg of steam grows at low load (colder feedwater)
-    per_kg = [z[db.Z_QEV] / z[db.Z_QS] for z in zs]
+    per_kg = [z[db.IZ.evaporator_heat_MW] / z[db.IZ.drum_steam_flow_kg_s] for z in zs]
     assert per_kg[0] > per_kg[2]
 
 
@@ -142,7 +143,7 @@ def test_spray_need_and_firing_follow_load(plant):
 def test_drum_descriptor_form_conserves_the_balances(plant):
     """The eliminated e_ij form against the balances it comes from, along a transient."""
     xd0, u0, h_f, G, _ = drum_open_loop(plant, 1.0)
-    P, o = plant.P, db.I_DRUM
+    P, o = plant.P, db.IP.DRUM
     u = u0 + np.array([10.0, -5.0, 5e6])  # steam +10 kg/s, feed -5 kg/s, heat +5 MW
     sol = solve_ivp(lambda t, y: G(y, u), (0.0, 120.0), xd0, method="Radau", rtol=1e-11,
                     atol=1e-12 * np.maximum(1.0, np.abs(xd0)), dense_output=True)  # fmt: skip
@@ -235,10 +236,10 @@ def test_shrink_and_swell_closed_loop():
 @pytest.mark.parametrize("load", LOADS)
 def test_linearization_stable_with_thesis_gain_signs(plant, load):
     x, d, _ = steady(plant, load)
-    F = rhs_of(plant, np.array([x[db.S_V]]), d)
+    F = rhs_of(plant, np.array([x[db.IX.V]]), d)
     A = fd_jacobian(F, x)
     ev_all = np.linalg.eigvals(A)
-    loops = [db.S_W, db.S_LF, db.S_IP, db.S_IL, db.S_QF] + list(range(db.S_DRUM, db.S_DRUM + 4))
+    loops = [db.IX.W, db.IX.LF, db.IX.IP, db.IX.IL, db.IX.QF, *range(db.IX.DRUM, db.IX.DRUM + 4)]
     loops.append(db.s_mill(plant.params.n_segments))
     ev_loops = np.linalg.eigvals(A[np.ix_(loops, loops)])
     print(f"load {load}: drum + PI eigenvalues {np.round(np.sort_complex(ev_loops), 5)}")
@@ -287,17 +288,17 @@ def spray_step(plant, load, dv=0.05, steps=600):
     X, d, z0 = steady(plant, load)
     X = X[None].copy()
     D = d[None].copy()
-    U = np.array([[X[0, db.S_V] + dv]])
+    U = np.array([[X[0, db.IX.V] + dv]])
     Z = np.zeros((1, plant.n_z))
     out = []
     for _ in range(steps):
         plant.step(X, U, D, Z)
         out.append(Z[0].copy())
     out = np.array(out)
-    dT = out[:, db.Z_TOUT] - z0[db.Z_TOUT]
-    gain = dT[-1] / (out[-1, db.Z_WSP] - z0[db.Z_WSP])
+    dT = out[:, db.IZ.outlet_temp_C] - z0[db.IZ.outlet_temp_C]
+    gain = dT[-1] / (out[-1, db.IZ.spray_flow_kg_s] - z0[db.IZ.spray_flow_kg_s])
     t63 = plant.dt_s * (1 + np.argmax(dT <= 0.632 * dT[-1]))
-    return dT, out[:, db.Z_TATT] - z0[db.Z_TATT], gain, t63
+    return dT, out[:, db.IZ.attemp_out_temp_C] - z0[db.IZ.attemp_out_temp_C], gain, t63
 
 
 def test_spray_step_lowers_outlet_with_load_dependent_gain(plant):
@@ -318,14 +319,14 @@ def test_true_outlet_step_has_field_tu_tg(plant):
     for load in (1.0, 0.5):
         X, d, z0 = steady(plant, load)
         X, D = X[None].copy(), d[None].copy()
-        U = np.array([[X[0, db.S_V] + 0.05]])
+        U = np.array([[X[0, db.IX.V] + 0.05]])
         Z = np.zeros((1, plant.n_z))
-        t, yt, ym = [0.0], [z0[db.Z_TOUT]], [z0[db.Z_TOUTM]]
+        t, yt, ym = [0.0], [z0[db.IZ.outlet_temp_C]], [z0[db.IZ.outlet_temp_meas_C]]
         for k in range(1200):
             plant.step(X, U, D, Z)
             t.append((k + 1) * plant.dt_s)
-            yt.append(Z[0, db.Z_TOUT])
-            ym.append(Z[0, db.Z_TOUTM])
+            yt.append(Z[0, db.IZ.outlet_temp_C])
+            ym.append(Z[0, db.IZ.outlet_temp_meas_C])
         mt = step_response_metrics(np.array(t), np.array(yt))
         mm = step_response_metrics(np.array(t), np.array(ym))
         rt, rm = mt["Tu_s"] / mt["Tg_s"], mm["Tu_s"] / mm["Tg_s"]
@@ -340,12 +341,12 @@ def test_design_spray_inside_the_valve_range(plant, load):
     stay inside the valve range at every load."""
     for fouling in (0.85, 1.0, 1.15):
         _, _, z = steady(plant, load, fouling=fouling)
-        assert z[db.Z_TOUT] == pytest.approx(plant.setpoint_C, abs=1e-3)
-        assert 0.05 < z[db.Z_V] < 0.9, fouling
+        assert z[db.IZ.outlet_temp_C] == pytest.approx(plant.setpoint_C, abs=1e-3)
+        assert 0.05 < z[db.IZ.spray_valve] < 0.9, fouling
     _, _, z = steady(plant, load)
     # the design spray (function generator) against the undisturbed steady spray
     tol = 1e-9 if load in db.DSP_LOADS else 0.03
-    assert z[db.Z_DSP] == pytest.approx(z[db.Z_WSP], rel=tol)
+    assert z[db.IZ.design_spray_kg_s] == pytest.approx(z[db.IZ.spray_flow_kg_s], rel=tol)
 
 
 @pytest.mark.parametrize("load", (0.5, 0.3))
@@ -361,10 +362,10 @@ def test_protection_keeps_attemperator_above_saturation(plant, load):
     for _ in range(300):
         plant.step(X, U, D, Z)
         W, lw, _, q_s, w_sp, _, _, _, _, p1, *_ = db._boundary(X[0], D[0], plant.P)
-        margin.append(Z[0, db.Z_TATT] - (Tsat_p(p1) - 273.15))
+        margin.append(Z[0, db.IZ.attemp_out_temp_C] - (Tsat_p(p1) - 273.15))
     assert min(margin) >= plant.params.attemp_margin_K - 1e-6
     assert margin[-1] == pytest.approx(plant.params.attemp_margin_K, abs=1e-6)  # it binds
-    assert Z[0, db.Z_WSP] < plant.params.spray_max_fraction * plant.P[db.I_WNOM]
+    assert Z[0, db.IZ.spray_flow_kg_s] < plant.params.spray_max_fraction * plant.P[db.IP.WNOM]
 
 
 # ----------------------------------------------------------------------------- integrator
@@ -379,7 +380,7 @@ def test_ros2_matches_radau_over_the_load_ramp(plant):
     schedules(0, 0, t0, bp_t, bp_v, bp_n, plant.setpoint_C, np.zeros(1), D, sp)
     X = np.zeros((1, plant.n_x))
     plant.steady_state(D, sp, X)
-    v0, x_ref = X[0, db.S_V], X[0].copy()
+    v0, x_ref = X[0, db.IX.V], X[0].copy()
     Z, Zr = np.zeros((1, plant.n_z)), np.zeros(plant.n_z)
     errs = []
     for k in range(int((t1 - t0) / dt)):
@@ -395,19 +396,20 @@ def test_ros2_matches_radau_over_the_load_ramp(plant):
         db.outputs(x_ref, U[0], D[0], P, Zr)
         errs.append(np.abs(Z[0] - Zr))
     e = np.max(errs, axis=0)
-    print(f"ROS2 dt = {dt} s: outlet {e[db.Z_TOUT] * 1e3:.1f} mK, attemperator "
-          f"{e[db.Z_TATT] * 1e3:.0f} mK, pressure {e[db.Z_PD] * 1e6:.0f} Pa, "
-          f"level {e[db.Z_LEVEL] * 1e3:.2f} mm")  # fmt: skip
-    assert e[db.Z_TOUT] < 0.06
-    assert e[db.Z_TOUTM] < 0.06
-    assert e[db.Z_TATT] < 0.4  # the 2 s valve lag at h = dt dominates here
-    assert e[db.Z_PD] < 1e-3 and e[db.Z_LEVEL] < 1e-3
+    print(f"ROS2 dt = {dt} s: outlet {e[db.IZ.outlet_temp_C] * 1e3:.1f} mK, attemperator "
+          f"{e[db.IZ.attemp_out_temp_C] * 1e3:.0f} mK, "
+          f"pressure {e[db.IZ.drum_pressure_MPa] * 1e6:.0f} Pa, "
+          f"level {e[db.IZ.drum_level_m] * 1e3:.2f} mm")  # fmt: skip
+    assert e[db.IZ.outlet_temp_C] < 0.06
+    assert e[db.IZ.outlet_temp_meas_C] < 0.06
+    assert e[db.IZ.attemp_out_temp_C] < 0.4  # the 2 s valve lag at h = dt dominates here
+    assert e[db.IZ.drum_pressure_MPa] < 1e-3 and e[db.IZ.drum_level_m] < 1e-3
 
 
 def test_jacobian_entries_of_the_plant_match_finite_differences(plant):
     """The drum, feedwater and thermowell rows and the firing columns of drum_boiler.rhs."""
     x, d, _ = steady(plant, 0.75)
-    u = np.array([x[db.S_V]])
+    u = np.array([x[db.IX.V]])
     n = plant.n_x
     f, jd, ju, jl = np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(len(plant.jrow))
     db.rhs(x, u, d, plant.P, f, jd, ju, jl, True)
@@ -415,15 +417,15 @@ def test_jacobian_entries_of_the_plant_match_finite_differences(plant):
     st = db.sensors(plant.params.n_segments, plant.params.n_line)
     n_seg = plant.params.n_segments
     mine = [c for c, (r, col) in enumerate(zip(plant.jrow, plant.jcol, strict=True))
-            if r < db.S_CHAIN1 or r >= db.s_mill(n_seg) or col == db.S_LF]  # fmt: skip
+            if r < db.IX.CHAIN1 or r >= db.s_mill(n_seg) or col == db.IX.LF]  # fmt: skip
     # feedwater 2, drum 16, firing columns 2n, mill 2, line n_line, thermowells 6
     assert len(mine) == 2 + 16 + 2 * n_seg + 2 + plant.params.n_line + 6
     for c in mine:
         r, col = plant.jrow[c], plant.jcol[c]
         # the attemperator thermowell's W entry leaves out the SH pressure drop (~5 %)
-        rel = 0.1 if (r, col) == (st + db.T_TA1, db.S_W) else 5e-3
+        rel = 0.1 if (r, col) == (st + db.IW.TA1, db.IX.W) else 5e-3
         assert jl[c] == pytest.approx(A[r, col], rel=rel, abs=1e-12), (r, col)
-    for j in (db.S_DRUM + dr.AR, db.S_DRUM + dr.VSD, db.S_QF):
+    for j in (db.IX.DRUM + dr.AR, db.IX.DRUM + dr.VSD, db.IX.QF):
         assert jd[j] == pytest.approx(A[j, j], rel=0.05)
 
 

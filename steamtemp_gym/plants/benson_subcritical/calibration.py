@@ -13,82 +13,16 @@ from steamtemp_gym._jit import read_only
 from steamtemp_gym.plants.attemperator import mix
 from steamtemp_gym.plants.benson_subcritical.kernel import _boundary, _reheat, _table, p_setpoint
 from steamtemp_gym.plants.benson_subcritical.layout import (
-    F_CM,
-    F_JOFF,
-    F_KA,
-    F_N,
-    F_OFF,
-    F_QRAD,
-    F_TGN,
-    F_UAG,
-    F_V,
-    F_WN,
-    I_BEV,
-    I_CPRAT,
-    I_CPT,
-    I_CSTOR,
-    I_CV1,
-    I_CV2,
-    I_DPB,
-    I_DPPUMP,
-    I_DPRH,
-    I_ETAHP,
-    I_ETAIP,
-    I_FNOM,
-    I_GCOEF,
-    I_GEXP,
-    I_HERR,
-    I_JLINE,
-    I_JSEN,
-    I_KE,
-    I_KI,
-    I_KP,
-    I_LCM,
-    I_LOFF,
-    I_LV,
-    I_NL,
-    I_NX,
-    I_PCOND,
-    I_PMIN,
-    I_PNOM,
-    I_PRH,
-    I_RATEV,
-    I_REXP,
-    I_RHF,
-    I_S0,
-    I_SEC,
-    I_SLL,
-    I_STRIM,
-    I_TAB,
-    I_TAUF,
-    I_TAUV,
-    I_TBIR,
-    I_TC1,
-    I_TC2,
-    I_V1D,
-    I_V2D,
-    I_WECO,
-    I_WNOM,
-    I_WRHN,
+    IF,
+    IP,
+    ITB,
+    IX,
     N_P,
     N_SENS,
     N_TAB,
     NF,
     PRESSURE_JAC,
-    S_CHAINS,
-    S_P,
-    S_V1,
-    S_V2,
     TAB_LOADS,
-    TB_CPFW,
-    TB_CPSP,
-    TB_FUEL,
-    TB_H3,
-    TB_HCRH,
-    TB_HEV,
-    TB_HFW,
-    TB_HSP,
-    TB_RHOSP,
 )
 from steamtemp_gym.plants.benson_subcritical.params import (
     ECO,
@@ -124,7 +58,7 @@ def _secant(fun, a: float, b: float, what: str, tol: float = 1e-4) -> float:
 
 def _calibrate(pr: BensonParams, P: np.ndarray) -> None:
     """Size gas sides, radiant heats, valves, fuel and the load schedules (P in place)."""
-    n_x = int(P[I_NX])
+    n_x = int(P[IP.NX])
     x = np.zeros(n_x)
     Pk = read_only(P)  # what the kernels read (see steamtemp_gym._jit.read_only)
     d = np.array([1.0, 0.0, 0.0, 1.0, 0.0])
@@ -133,58 +67,58 @@ def _calibrate(pr: BensonParams, P: np.ndarray) -> None:
         p = p_setpoint(Pk, L)
         T_da = pr.T_deaerator_C - pr.dT_deaerator_dload_K * (1.0 - L) + K0
         T_fw = T_da + pr.dT_hp_heaters_K - pr.dT_hp_dload_K * (1.0 - L)
-        p_eco = p + P_SHARE[ECO] * P[I_DPB] * L * L
-        p_pump = p + P[I_DPPUMP] * L * L
+        p_eco = p + P_SHARE[ECO] * P[IP.DPB] * L * L
+        p_pump = p + P[IP.DPPUMP] * L * L
         h_sp = h_pT(p_pump, T_da)
         vals = (h_pT(p_eco, T_fw), cp_pT(p_eco, T_fw), h_sp, cp_pT(p_pump, T_da),
                 rho_ph(p_pump, h_sp))  # fmt: skip
-        for tb, v in zip((TB_HFW, TB_CPFW, TB_HSP, TB_CPSP, TB_RHOSP), vals, strict=True):
-            P[I_TAB + tb * N_TAB + i] = v
-    p = P[I_PNOM]
-    dpb = P[I_DPB]
-    W_nom = P[I_WNOM]
-    W_eco = P[I_WECO]
-    sec = I_SEC
+        for tb, v in zip((ITB.HFW, ITB.CPFW, ITB.HSP, ITB.CPSP, ITB.RHOSP), vals, strict=True):
+            P[IP.TAB + tb * N_TAB + i] = v
+    p = P[IP.PNOM]
+    dpb = P[IP.DPB]
+    W_nom = P[IP.WNOM]
+    W_eco = P[IP.WECO]
+    sec = IP.SEC
 
     def setf(k: int, f: int, v: float) -> None:
         P[sec + NF * k + f] = v
 
     def conv(k: int, h0: float, W: float, pk: float, T_out: float) -> float:
         target = h_pT(pk, T_out + K0)
-        n = int(P[sec + NF * k + F_N])
+        n = int(P[sec + NF * k + IF.N])
         q0 = W * (target - h0) / n
 
         def resid(uag: float) -> float:
-            setf(k, F_UAG, uag)
+            setf(k, IF.UAG, uag)
             return (_section_steady(x, Pk, k, h0, W, pk, 1.0, d) - target) * 1e-3
 
-        Tg = P[sec + NF * k + F_TGN]
+        Tg = P[sec + NF * k + IF.TGN]
         T_mean = 0.5 * (T_out + K0 + T_ph(pk, h0))
         guess = q0 / max(Tg - T_mean, 50.0)
-        setf(k, F_UAG, _secant(resid, guess, 1.2 * guess, f"the {SECTIONS[k]} gas side"))
+        setf(k, IF.UAG, _secant(resid, guess, 1.2 * guess, f"the {SECTIONS[k]} gas side"))
         return target
 
     def rad(k: int, h0: float, W: float, pk: float, T_out: float) -> float:
         target = h_pT(pk, T_out + K0)
         if target <= h0:
             raise ValueError(f"BensonParams: the {SECTIONS[k]} design outlet is below its inlet")
-        setf(k, F_QRAD, W * (target - h0) / int(P[sec + NF * k + F_N]))
+        setf(k, IF.QRAD, W * (target - h0) / int(P[sec + NF * k + IF.N]))
         return _section_steady(x, Pk, k, h0, W, pk, 1.0, d)
 
-    h_fw = _table(Pk, TB_HFW, 1.0)
+    h_fw = _table(Pk, ITB.HFW, 1.0)
     h = conv(ECO, h_fw, W_eco, p + P_SHARE[ECO] * dpb, pr.T_eco_out_C)
     h = rad(EV, h, W_eco, p + P_SHARE[EV] * dpb, pr.T_evap_out_C)
     h_ev = h
     h = conv(SH1, h, W_eco, p + P_SHARE[SH1] * dpb, pr.T_sh1_out_C)
     h = rad(SH2, h, W_eco, p + P_SHARE[SH2] * dpb, pr.T_sh2_out_C)
     # spray valves: fully open passes spray*_max_fraction of W_nom at rated load
-    rho_sp = _table(Pk, TB_RHOSP, 1.0)
-    h_sp = _table(Pk, TB_HSP, 1.0)
-    for i_cv, share, smax in ((I_CV1, P_SHARE[SH2], pr.spray1_max_fraction),
-                              (I_CV2, P_SHARE[SH3], pr.spray2_max_fraction)):  # fmt: skip
-        P[i_cv] = smax * W_nom / math.sqrt(rho_sp * (P[I_DPPUMP] - share * dpb))
-    P[I_V1D] = pr.spray1_design_fraction / pr.spray1_max_fraction
-    P[I_V2D] = pr.spray2_design_fraction / pr.spray2_max_fraction
+    rho_sp = _table(Pk, ITB.RHOSP, 1.0)
+    h_sp = _table(Pk, ITB.HSP, 1.0)
+    for i_cv, share, smax in ((IP.CV1, P_SHARE[SH2], pr.spray1_max_fraction),
+                              (IP.CV2, P_SHARE[SH3], pr.spray2_max_fraction)):  # fmt: skip
+        P[i_cv] = smax * W_nom / math.sqrt(rho_sp * (P[IP.DPPUMP] - share * dpb))
+    P[IP.V1D] = pr.spray1_design_fraction / pr.spray1_max_fraction
+    P[IP.V2D] = pr.spray2_design_fraction / pr.spray2_max_fraction
     w1 = pr.spray1_design_fraction * W_nom
     w2 = pr.spray2_design_fraction * W_nom
     W3, h = mix(W_eco, h, w1, h_sp)
@@ -192,27 +126,27 @@ def _calibrate(pr: BensonParams, P: np.ndarray) -> None:
     W4, h = mix(W3, h, w2, h_sp)
     h_ms = conv(SH4, h, W4, p, pr.T_ms_C)
     W_t, W_rh, p_rh, p_crh, _ = _reheat(Pk, p, 1.0)
-    T_crh = (pr.T_ms_C + K0) * (p_crh / p) ** P[I_KE]
+    T_crh = (pr.T_ms_C + K0) * (p_crh / p) ** P[IP.KE]
     h_crh = h_pT(p_crh, T_crh)
     h_rh = conv(RH, h_crh, W_rh, p_rh, pr.T_rh_C)
-    P[I_CPRAT] = cp_pT(p_crh, T_crh) / cp_pT(p, pr.T_ms_C + K0)
+    P[IP.CPRAT] = cp_pT(p_crh, T_crh) / cp_pT(p, pr.T_ms_C + K0)
     absorbed = W_nom * h_ms - W_eco * h_fw - (w1 + w2) * h_sp + W_rh * (h_rh - h_crh)
-    P[I_FNOM] = absorbed / (pr.boiler_efficiency * pr.fuel_cv_MJ_kg * 1e6)
+    P[IP.FNOM] = absorbed / (pr.boiler_efficiency * pr.fuel_cv_MJ_kg * 1e6)
     # eq. (13): m_v = steam mass in SH1-SH4 at rated load
     m_v = 0.0
     for k in (SH1, SH2, SH3, SH4):
-        off, n = int(P[sec + NF * k + F_OFF]), int(P[sec + NF * k + F_N])
+        off, n = int(P[sec + NF * k + IF.OFF]), int(P[sec + NF * k + IF.N])
         pk = p + P_SHARE[k] * dpb
-        m_v += sum(rho_ph(pk, x[off + 2 * i + 1]) * P[sec + NF * k + F_V] for i in range(n))
-    P[I_CSTOR] = P[I_PNOM] / (pr.storage_tau * m_v)
+        m_v += sum(rho_ph(pk, x[off + 2 * i + 1]) * P[sec + NF * k + IF.V] for i in range(n))
+    P[IP.CSTOR] = P[IP.PNOM] / (pr.storage_tau * m_v)
     # load schedules: firing, evaporator outlet and SH3 outlet enthalpies at design sprays
     xs = np.zeros(n_x)
     for i, L in enumerate(TAB_LOADS):
         dL = np.array([L, 0.0, 0.0, 1.0, 0.0])
-        xs[S_V1], xs[S_V2] = P[I_V1D], P[I_V2D]
+        xs[IX.V1], xs[IX.V2] = P[IP.V1D], P[IP.V2D]
         _, _, W_e, w1, w2, *_ = _boundary(xs, dL, Pk)
         pL = p_setpoint(Pk, L) * (W_e + w1 + w2) / (W_nom * L)
-        xs[S_P] = pL
+        xs[IX.P] = pL
         target = h_pT(pL, pr.T_ms_C + K0)
 
         def resid(lf: float, dL=dL, pL=pL, target=target) -> float:
@@ -220,13 +154,13 @@ def _calibrate(pr: BensonParams, P: np.ndarray) -> None:
             return (_sh_steady(xs, dL, Pk, lf, pL, 4) - target) * 1e-3
 
         lf = _secant(resid, L, 1.02 * L, f"the firing schedule at {L:.2f} load")
-        P[I_TAB + TB_FUEL * N_TAB + i] = lf
-        P[I_TAB + TB_HEV * N_TAB + i] = _upstream_steady(xs, dL, Pk, lf, pL)
-        P[I_TAB + TB_H3 * N_TAB + i] = _sh_steady(xs, dL, Pk, lf, pL, 3)
+        P[IP.TAB + ITB.FUEL * N_TAB + i] = lf
+        P[IP.TAB + ITB.HEV * N_TAB + i] = _upstream_steady(xs, dL, Pk, lf, pL)
+        P[IP.TAB + ITB.H3 * N_TAB + i] = _sh_steady(xs, dL, Pk, lf, pL, 3)
         _, _, _, p_crh, _ = _reheat(Pk, pL, L)
-        T_crh = (pr.T_ms_C + K0) * (p_crh / pL) ** P[I_KE]
-        P[I_TAB + TB_HCRH * N_TAB + i] = h_pT(p_crh, T_crh)
-    if abs(_table(Pk, TB_HEV, 1.0) - h_ev) > 1.0:  # the schedule must pass the design point
+        T_crh = (pr.T_ms_C + K0) * (p_crh / pL) ** P[IP.KE]
+        P[IP.TAB + ITB.HCRH * N_TAB + i] = h_pT(p_crh, T_crh)
+    if abs(_table(Pk, ITB.HEV, 1.0) - h_ev) > 1.0:  # the schedule must pass the design point
         raise ValueError("BensonParams: inconsistent calibration at rated load")
 
 
@@ -235,77 +169,78 @@ def _pack(pr: BensonParams) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
     P = np.zeros(N_P)
     W_nom = pr.W_nom_kg_s
     s_des = pr.spray1_design_fraction + pr.spray2_design_fraction
-    P[I_WNOM] = W_nom
-    P[I_WECO] = W_nom * (1.0 - s_des)
-    P[I_PNOM] = pr.p_nom_MPa * 1e6
-    P[I_PMIN] = pr.p_min_MPa * 1e6
-    P[I_SLL] = pr.slide_low_load
-    P[I_DPB] = pr.dp_boiler_MPa * 1e6
-    P[I_DPPUMP] = (pr.p_pump_MPa - pr.p_nom_MPa) * 1e6
-    P[I_PRH] = pr.p_rh_nom_MPa * 1e6
-    P[I_DPRH] = pr.dp_reheater_MPa * 1e6
-    P[I_RHF] = pr.rh_flow_fraction
-    P[I_WRHN] = pr.rh_flow_fraction * W_nom
-    P[I_GCOEF] = pr.gas_temp_coeff
-    P[I_GEXP] = pr.gas_flow_exponent
-    P[I_REXP] = pr.radiant_exponent
-    P[I_KE] = (pr.k_expansion - 1.0) / pr.k_expansion
-    P[I_CPT] = pr.cp_turbine_J_kgK
-    P[I_ETAHP] = pr.eta_hp
-    P[I_ETAIP] = pr.eta_iplp
-    P[I_PCOND] = pr.p_condenser_kPa * 1e3
-    P[I_TBIR] = pr.T_bir_s
-    P[I_KP] = pr.fwr_kp
-    P[I_KI] = pr.fwr_ki_per_s
-    P[I_TAUV] = pr.tau_valve_s
-    P[I_RATEV] = pr.valve_rate_per_s
-    P[I_TC1] = pr.tau_tc1_s
-    P[I_TC2] = pr.tau_tc2_s
-    P[I_TAUF] = pr.tau_furnace_s
-    P[I_HERR] = pr.fwr_schedule_error_kJ_kg * 1e3
-    P[I_BEV] = pr.bias_evap_share
-    W_rated = (P[I_WECO], P[I_WECO], P[I_WECO], P[I_WECO],
-               W_nom * (1.0 - pr.spray2_design_fraction), W_nom, P[I_WRHN])  # fmt: skip
+    P[IP.WNOM] = W_nom
+    P[IP.WECO] = W_nom * (1.0 - s_des)
+    P[IP.PNOM] = pr.p_nom_MPa * 1e6
+    P[IP.PMIN] = pr.p_min_MPa * 1e6
+    P[IP.SLL] = pr.slide_low_load
+    P[IP.DPB] = pr.dp_boiler_MPa * 1e6
+    P[IP.DPPUMP] = (pr.p_pump_MPa - pr.p_nom_MPa) * 1e6
+    P[IP.PRH] = pr.p_rh_nom_MPa * 1e6
+    P[IP.DPRH] = pr.dp_reheater_MPa * 1e6
+    P[IP.RHF] = pr.rh_flow_fraction
+    P[IP.WRHN] = pr.rh_flow_fraction * W_nom
+    P[IP.GCOEF] = pr.gas_temp_coeff
+    P[IP.GEXP] = pr.gas_flow_exponent
+    P[IP.REXP] = pr.radiant_exponent
+    P[IP.KE] = (pr.k_expansion - 1.0) / pr.k_expansion
+    P[IP.CPT] = pr.cp_turbine_J_kgK
+    P[IP.ETAHP] = pr.eta_hp
+    P[IP.ETAIP] = pr.eta_iplp
+    P[IP.PCOND] = pr.p_condenser_kPa * 1e3
+    P[IP.TBIR] = pr.T_bir_s
+    P[IP.KP] = pr.fwr_kp
+    P[IP.KI] = pr.fwr_ki_per_s
+    P[IP.TAUV] = pr.tau_valve_s
+    P[IP.RATEV] = pr.valve_rate_per_s
+    P[IP.TC1] = pr.tau_tc1_s
+    P[IP.TC2] = pr.tau_tc2_s
+    P[IP.TAUF] = pr.tau_furnace_s
+    P[IP.HERR] = pr.fwr_schedule_error_kJ_kg * 1e3
+    P[IP.BEV] = pr.bias_evap_share
+    W_rated = (P[IP.WECO], P[IP.WECO], P[IP.WECO], P[IP.WECO],
+               W_nom * (1.0 - pr.spray2_design_fraction), W_nom, P[IP.WRHN])  # fmt: skip
     Tg = {ECO: pr.Tg_eco_C, SH1: pr.Tg_sh1_C, SH3: pr.Tg_sh3_C, SH4: pr.Tg_sh4_C, RH: pr.Tg_rh_C}
-    off = S_CHAINS
+    off = IX.CHAINS
     pat: list[tuple[int, int]] = []
     prev_h = -1
     for k, name in enumerate(SECTIONS):
         if k == RH:  # outlet header and main-steam line, between SH4 and the reheater
-            P[I_LOFF], P[I_NL], P[I_JLINE] = off, pr.n_line, len(pat)
-            P[I_LCM] = pr.line_metal_t * 1e3 * pr.c_metal_J_kgK / pr.n_line
-            P[I_LV] = pr.line_volume_m3 / pr.n_line
+            P[IP.LOFF], P[IP.NL], P[IP.JLINE] = off, pr.n_line, len(pat)
+            P[IP.LCM] = pr.line_metal_t * 1e3 * pr.c_metal_J_kgK / pr.n_line
+            P[IP.LV] = pr.line_volume_m3 / pr.n_line
             pat += pipe_pattern(off, pr.n_line, (prev_h,))
             prev_h = off + pr.n_line - 1
             off += pr.n_line
         n = getattr(pr, f"n_{name}")
-        b = I_SEC + NF * k
-        P[b + F_N] = n
-        P[b + F_OFF] = off
-        P[b + F_JOFF] = len(pat)
-        P[b + F_KA] = getattr(pr, f"kA_{name}_MW_K") * 1e6 / n
-        P[b + F_V] = getattr(pr, f"volume_{name}_m3") / n
-        P[b + F_CM] = getattr(pr, f"metal_{name}_t") * 1e3 * pr.c_metal_J_kgK / n
-        P[b + F_TGN] = Tg[k] + K0 if k in Tg else 0.0
-        P[b + F_WN] = W_rated[k]
+        b = IP.SEC + NF * k
+        P[b + IF.N] = n
+        P[b + IF.OFF] = off
+        P[b + IF.JOFF] = len(pat)
+        P[b + IF.KA] = getattr(pr, f"kA_{name}_MW_K") * 1e6 / n
+        P[b + IF.V] = getattr(pr, f"volume_{name}_m3") / n
+        P[b + IF.CM] = getattr(pr, f"metal_{name}_t") * 1e3 * pr.c_metal_J_kgK / n
+        P[b + IF.TGN] = Tg[k] + K0 if k in Tg else 0.0
+        P[b + IF.WN] = W_rated[k]
         inlet: tuple[int, ...] = ()
         if k != ECO:
             inlet = (prev_h,)
-        pat += chain_pattern(off, n, inlet, S_P if PRESSURE_JAC else -1)
+        pat += chain_pattern(off, n, inlet, IX.P if PRESSURE_JAC else -1)
         prev_h = off + 2 * n - 1
         off += 2 * n
     # thermowells: T1 from the measured enthalpy, T2 from T1; then the trim from h_evap
-    P[I_S0] = off
-    P[I_JSEN] = len(pat)
-    last_h = [int(P[I_SEC + NF * k + F_OFF] + 2 * P[I_SEC + NF * k + F_N] - 1) for k in range(7)]
-    last_h[SH4] = int(P[I_LOFF] + pr.n_line - 1)  # the main-steam thermocouple: turbine inlet
+    P[IP.S0] = off
+    P[IP.JSEN] = len(pat)
+    blk = [IP.SEC + NF * k for k in range(7)]
+    last_h = [int(P[b + IF.OFF] + 2 * P[b + IF.N] - 1) for b in blk]
+    last_h[SH4] = int(P[IP.LOFF] + pr.n_line - 1)  # the main-steam thermocouple: turbine inlet
     for j, k in enumerate((EV, SH1, SH2, SH2, SH3, SH3, SH4, RH)):
         pat += [(off + 2 * j, last_h[k]), (off + 2 * j + 1, off + 2 * j)]
     off += 2 * N_SENS
-    P[I_STRIM] = off
+    P[IP.STRIM] = off
     pat.append((off, last_h[EV]))
     n_x = off + 1
-    P[I_NX] = n_x
+    P[IP.NX] = n_x
     _calibrate(pr, P)
     jrow, jcol = pattern_arrays(pat)
     P.setflags(write=False)

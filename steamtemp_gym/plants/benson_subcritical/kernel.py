@@ -18,111 +18,16 @@ from steamtemp_gym._jit import njit
 from steamtemp_gym.plants.attemperator import mix, spray_flow
 from steamtemp_gym.plants.base import D_FOULING, D_HEAT_BIAS, D_LOAD, D_LOAD_RATE, D_SPRAY_T
 from steamtemp_gym.plants.benson_subcritical.layout import (
-    F_CM,
-    F_JOFF,
-    F_KA,
-    F_N,
-    F_OFF,
-    F_QRAD,
-    F_TGN,
-    F_UAG,
-    F_V,
-    F_WN,
-    I_BEV,
-    I_CPRAT,
-    I_CPT,
-    I_CSTOR,
-    I_CV1,
-    I_CV2,
-    I_DPB,
-    I_DPPUMP,
-    I_DPRH,
-    I_ETAHP,
-    I_ETAIP,
-    I_FNOM,
-    I_GCOEF,
-    I_GEXP,
-    I_HERR,
-    I_JLINE,
-    I_JSEN,
-    I_KE,
-    I_KI,
-    I_KP,
-    I_LCM,
-    I_LOFF,
-    I_LV,
-    I_NL,
-    I_PCOND,
-    I_PMIN,
-    I_PNOM,
-    I_PRH,
-    I_RATEV,
-    I_REXP,
-    I_RHF,
-    I_S0,
-    I_SEC,
-    I_SLL,
-    I_STRIM,
-    I_TAB,
-    I_TAUF,
-    I_TAUV,
-    I_TBIR,
-    I_TC1,
-    I_TC2,
-    I_V1D,
-    I_V2D,
-    I_WECO,
-    I_WNOM,
-    I_WRHN,
+    IF,
+    IP,
+    ISEN,
+    ITB,
+    IX,
+    IZ,
     N_SENS,
     N_TAB,
     NF,
     PRESSURE_JAC,
-    S_F,
-    S_P,
-    S_V1,
-    S_V2,
-    SEN_ATT1,
-    SEN_ATT2,
-    SEN_EV,
-    SEN_MS,
-    SEN_RH,
-    SEN_SH1,
-    SEN_SH2,
-    SEN_SH3,
-    TB_CPFW,
-    TB_CPSP,
-    TB_FUEL,
-    TB_HCRH,
-    TB_HEV,
-    TB_HFW,
-    TB_HSP,
-    TB_RHOSP,
-    Z_FUEL,
-    Z_P,
-    Z_PWR,
-    Z_Q,
-    Z_SGP,
-    Z_TATT1_M,
-    Z_TATT2,
-    Z_TATT2_M,
-    Z_TEV_M,
-    Z_TMMAX,
-    Z_TMS,
-    Z_TMS_M,
-    Z_TRH,
-    Z_TRH_M,
-    Z_TSH1_M,
-    Z_TSH2_M,
-    Z_TSH3_M,
-    Z_TSH4,
-    Z_V1,
-    Z_V2,
-    Z_W,
-    Z_WDES,
-    Z_WFW,
-    Z_WSP1,
-    Z_WSP2,
 )
 from steamtemp_gym.plants.benson_subcritical.params import (
     ECO,
@@ -145,7 +50,7 @@ from steamtemp_gym.steam import T_dTdh_ph, T_ph, sat_p
 @njit(cache=True)
 def _s(P, k, f):
     """Per-section parameter f of section k."""
-    return P[I_SEC + NF * k + f]
+    return P[IP.SEC + NF * k + f]
 
 
 @njit(cache=True)
@@ -154,26 +59,26 @@ def _table(P, tb, load):
     x = (min(max(load, 0.2), 1.2) - 0.2) / 0.05
     k = min(int(x), N_TAB - 2)
     a = x - k
-    off = I_TAB + tb * N_TAB
+    off = IP.TAB + tb * N_TAB
     return (1.0 - a) * P[off + k] + a * P[off + k + 1]
 
 
 @njit(cache=True)
 def p_setpoint(P, load):
     """Modified sliding pressure (Pa) at load demand fraction ``load``."""
-    r = min(max((load - P[I_SLL]) / (1.0 - P[I_SLL]), 0.0), 1.0)
-    return P[I_PMIN] + r * (P[I_PNOM] - P[I_PMIN])
+    r = min(max((load - P[IP.SLL]) / (1.0 - P[IP.SLL]), 0.0), 1.0)
+    return P[IP.PMIN] + r * (P[IP.PNOM] - P[IP.PMIN])
 
 
 @njit(cache=True)
 def _gas(P, k, lf, d):
     """(UA_g, T_g, Q_rad) per segment of section k at firing fraction lf, disturbances d."""
     bias = d[D_HEAT_BIAS]
-    mult = 1.0 + bias if k >= SH1 else (1.0 + P[I_BEV] * bias if k == EV else 1.0)
+    mult = 1.0 + bias if k >= SH1 else (1.0 + P[IP.BEV] * bias if k == EV else 1.0)
     mult = max(mult, 0.0)
-    UAg = _s(P, k, F_UAG) * lf ** P[I_GEXP] * max(d[D_FOULING], 0.0) * mult
-    Tg = _s(P, k, F_TGN) * (1.0 - P[I_GCOEF] * (1.0 - lf))
-    Qrad = _s(P, k, F_QRAD) * lf ** P[I_REXP] * mult
+    UAg = _s(P, k, IF.UAG) * lf ** P[IP.GEXP] * max(d[D_FOULING], 0.0) * mult
+    Tg = _s(P, k, IF.TGN) * (1.0 - P[IP.GCOEF] * (1.0 - lf))
+    Qrad = _s(P, k, IF.QRAD) * lf ** P[IP.REXP] * mult
     return UAg, Tg, Qrad
 
 
@@ -185,41 +90,41 @@ def _boundary_v(x, d, P, v1, v2):
     """
     L = min(max(d[D_LOAD], 0.05), 1.3)
     r2 = L * L
-    W_eco = P[I_WECO] * L
-    h_fw = _table(P, TB_HFW, L) + _table(P, TB_CPFW, L) * d[D_SPRAY_T]
-    h_sp = _table(P, TB_HSP, L) + _table(P, TB_CPSP, L) * d[D_SPRAY_T]
-    rho_sp = _table(P, TB_RHOSP, L)
-    w1 = spray_flow(v1, P[I_CV1], rho_sp, (P[I_DPPUMP] - P_SHARE[SH2] * P[I_DPB]) * r2)
-    w2 = spray_flow(v2, P[I_CV2], rho_sp, (P[I_DPPUMP] - P_SHARE[SH3] * P[I_DPB]) * r2)
-    p = x[S_P]
-    return (L, r2, W_eco, w1, w2, h_fw, h_sp, p + P_SHARE[SH2] * P[I_DPB] * r2,
-            p + P_SHARE[SH3] * P[I_DPB] * r2)  # fmt: skip
+    W_eco = P[IP.WECO] * L
+    h_fw = _table(P, ITB.HFW, L) + _table(P, ITB.CPFW, L) * d[D_SPRAY_T]
+    h_sp = _table(P, ITB.HSP, L) + _table(P, ITB.CPSP, L) * d[D_SPRAY_T]
+    rho_sp = _table(P, ITB.RHOSP, L)
+    w1 = spray_flow(v1, P[IP.CV1], rho_sp, (P[IP.DPPUMP] - P_SHARE[SH2] * P[IP.DPB]) * r2)
+    w2 = spray_flow(v2, P[IP.CV2], rho_sp, (P[IP.DPPUMP] - P_SHARE[SH3] * P[IP.DPB]) * r2)
+    p = x[IX.P]
+    return (L, r2, W_eco, w1, w2, h_fw, h_sp, p + P_SHARE[SH2] * P[IP.DPB] * r2,
+            p + P_SHARE[SH3] * P[IP.DPB] * r2)  # fmt: skip
 
 
 @njit(cache=True)
 def _boundary(x, d, P):
     """_boundary_v at the valve positions held in the state."""
-    return _boundary_v(x, d, P, x[S_V1], x[S_V2])
+    return _boundary_v(x, d, P, x[IX.V1], x[IX.V2])
 
 
 @njit(cache=True)
 def _reheat(P, p, L):
     """Turbine side: (W_t, W_rh, p_rh, p_crh, dW_t/dp) at main-steam pressure p, demand L."""
-    W_t = P[I_WNOM] * L * p / p_setpoint(P, L)
-    W_rh = P[I_RHF] * W_t
-    q = W_rh / P[I_WRHN]
-    p_rh = P[I_PRH] * q
-    return W_t, W_rh, p_rh, p_rh + P[I_DPRH] * q * q, W_t / p
+    W_t = P[IP.WNOM] * L * p / p_setpoint(P, L)
+    W_rh = P[IP.RHF] * W_t
+    q = W_rh / P[IP.WRHN]
+    p_rh = P[IP.PRH] * q
+    return W_t, W_rh, p_rh, p_rh + P[IP.DPRH] * q * q, W_t / p
 
 
 @njit(cache=True)
 def _section(x, P, k, h0, dh0, W, dW, p, dp, lf, d, f, jd, ju, jl, want_jac):
     """chain_rhs of section k (returns heat to steam W, outlet T K, max metal T K)."""
-    kA = steam_side_kA(_s(P, k, F_KA), W, _s(P, k, F_WN))
+    kA = steam_side_kA(_s(P, k, IF.KA), W, _s(P, k, IF.WN))
     UAg, Tg, Qrad = _gas(P, k, lf, d)
     return chain_rhs(
-        x, int(_s(P, k, F_OFF)), int(_s(P, k, F_N)), h0, dh0, W, dW, p, dp, kA[0], kA[1],
-        _s(P, k, F_V), _s(P, k, F_CM), UAg, Tg, Qrad, f, jd, ju, jl, int(_s(P, k, F_JOFF)),
+        x, int(_s(P, k, IF.OFF)), int(_s(P, k, IF.N)), h0, dh0, W, dW, p, dp, kA[0], kA[1],
+        _s(P, k, IF.V), _s(P, k, IF.CM), UAg, Tg, Qrad, f, jd, ju, jl, int(_s(P, k, IF.JOFF)),
         want_jac, PRESSURE_JAC,
     )  # fmt: skip
 
@@ -227,7 +132,7 @@ def _section(x, P, k, h0, dh0, W, dW, p, dp, lf, d, f, jd, ju, jl, want_jac):
 @njit(cache=True)
 def _last_h(x, P, k):
     """Outlet enthalpy state of section k."""
-    return x[int(_s(P, k, F_OFF)) + 2 * int(_s(P, k, F_N)) - 1]
+    return x[int(_s(P, k, IF.OFF)) + 2 * int(_s(P, k, IF.N)) - 1]
 
 
 @njit(cache=True)
@@ -238,13 +143,13 @@ def h_ev_setpoint(P, load):
     plus the commissioning error e_50 4 L (1 - L): zero at rated load, e_50 at half load.
     """
     L = min(max(load, 0.05), 1.3)
-    return _table(P, TB_HEV, L) + P[I_HERR] * 4.0 * L * (1.0 - L)
+    return _table(P, ITB.HEV, L) + P[IP.HERR] * 4.0 * L * (1.0 - L)
 
 
 @njit(cache=True)
 def firing(x, d, P):
     """Furnace heat release, fraction of rated (the lagged fuel demand, see fuel_demand)."""
-    return x[S_F]
+    return x[IX.F]
 
 
 @njit(cache=True)
@@ -255,12 +160,13 @@ def fuel_demand(x, d, P):
     (1 + trim - kp e): the fuel/water-ratio trim, PI on the evaporator outlet enthalpy
     error e (per 100 kJ/kg) against h_ev_setpoint. Gas/oil valves follow their demand
     within seconds; the heat release follows the fuel flow through the furnace lag
-    tau_furnace (state S_F).
+    tau_furnace (state IX.F).
     """
     L = min(max(d[D_LOAD], 0.05), 1.3)
     e = (_last_h(x, P, EV) - h_ev_setpoint(P, L)) * 1e-5
-    L_ff = min(max(L + P[I_TBIR] * d[D_LOAD_RATE], 0.05), 1.3)
-    return min(max(_table(P, TB_FUEL, L_ff) * (1.0 + x[int(P[I_STRIM])] - P[I_KP] * e), 0.02), 1.5)
+    L_ff = min(max(L + P[IP.TBIR] * d[D_LOAD_RATE], 0.05), 1.3)
+    demand = _table(P, ITB.FUEL, L_ff) * (1.0 + x[int(P[IP.STRIM])] - P[IP.KP] * e)
+    return min(max(demand, 0.02), 1.5)
 
 
 @njit(cache=True)
@@ -278,7 +184,7 @@ def cold_reheat(P, L, p_crh, T_crh):
     h_v = sat[4]
     if T_crh <= sat[0] + 0.01:
         return h_v, T_dTdh_ph(p_crh, h_v + 10.0)[1]
-    h = max(_table(P, TB_HCRH, L), h_v + 10.0)
+    h = max(_table(P, ITB.HCRH, L), h_v + 10.0)
     T, dTdh = T_dTdh_ph(p_crh, h)
     for _ in range(3):
         h = max(h + (T_crh - T) / dTdh, h_v)
@@ -290,12 +196,12 @@ def cold_reheat(P, L, p_crh, T_crh):
 def rhs(x, u, d, P, f, jd, ju, jl, want_jac):
     """dx/dt of the Benson boiler (see the package docstring); Jacobian pattern from pack()."""
     L, r2, W_eco, w1, w2, h_fw, h_sp, p_a1, p_a2 = _boundary_v(x, d, P, u[0], u[1])
-    p = x[S_P]
+    p = x[IX.P]
     # furnace heat release: given as the interval mean u[2] by the step kernel (exact lag,
-    # see step), else the state S_F with its ODE (reference integrators, tests)
+    # see step), else the state IX.F with its ODE (reference integrators, tests)
     held = u.shape[0] > 2
     lf = u[2] if held else firing(x, d, P)
-    dpb = P[I_DPB] * r2
+    dpb = P[IP.DPB] * r2
     dh0 = np.empty(4)  # inlet-enthalpy derivatives of the chains (one allocation)
     dh0[3] = 1.0
     none, one = dh0[0:0], dh0[3:4]
@@ -320,40 +226,41 @@ def rhs(x, u, d, P, f, jd, ju, jl, want_jac):
     _, T_4, _ = _section(x, P, SH4, h_a2, dh0[1:2], W4, 0.0, p, 1.0, lf, d,
                          f, jd, ju, jl, want_jac)  # fmt: skip
     # outlet header and main-steam line to the turbine (superheater.pipe_rhs)
-    loff, nl = int(P[I_LOFF]), int(P[I_NL])
-    T_ms, _ = pipe_rhs(x, loff, nl, _last_h(x, P, SH4), one, W4, 0.0, p, P[I_LV], P[I_LCM],
-                    f, jd, jl, int(P[I_JLINE]), want_jac, False)  # fmt: skip
+    loff, nl = int(P[IP.LOFF]), int(P[IP.NL])
+    T_ms, _ = pipe_rhs(x, loff, nl, _last_h(x, P, SH4), one, W4, 0.0, p, P[IP.LV], P[IP.LCM],
+                    f, jd, jl, int(P[IP.JLINE]), want_jac, False)  # fmt: skip
     # turbine and reheater (eq. 14)
     W_t, W_rh, p_rh, p_crh, dWt = _reheat(P, p, L)
-    ratio = (p_crh / p) ** P[I_KE]
+    ratio = (p_crh / p) ** P[IP.KE]
     h_crh, _ = cold_reheat(P, L, p_crh, T_ms * ratio)
-    dh0[2] = P[I_CPRAT] * ratio  # by h_ms (cp_crh / cp_ms at rated)
-    dWrh = P[I_RHF] * dWt
-    _, T_rh, _ = _section(x, P, RH, h_crh, dh0[2:3], W_rh, dWrh, p_rh, P[I_PRH] / P[I_WRHN] * dWrh,
-                          lf, d, f, jd, ju, jl, want_jac)  # fmt: skip
+    dh0[2] = P[IP.CPRAT] * ratio  # by h_ms (cp_crh / cp_ms at rated)
+    dWrh = P[IP.RHF] * dWt
+    dp_rh = P[IP.PRH] / P[IP.WRHN] * dWrh
+    _, T_rh, _ = _section(x, P, RH, h_crh, dh0[2:3], W_rh, dWrh, p_rh, dp_rh, lf, d, f, jd, ju, jl,
+                          want_jac)  # fmt: skip
     # pressure, eq. (13)
-    f[S_P] = P[I_CSTOR] * (W_eco + w1 + w2 - W_t)
+    f[IX.P] = P[IP.CSTOR] * (W_eco + w1 + w2 - W_t)
     # fuel/water-ratio trim (integral part; see fuel_demand)
-    f[int(P[I_STRIM])] = -P[I_KI] * (h_ev - h_ev_setpoint(P, L)) * 1e-5
-    f[S_V1] = 0.0  # valve travel is exact in the kernel (see step)
-    f[S_V2] = 0.0
+    f[int(P[IP.STRIM])] = -P[IP.KI] * (h_ev - h_ev_setpoint(P, L)) * 1e-5
+    f[IX.V1] = 0.0  # valve travel is exact in the kernel (see step)
+    f[IX.V2] = 0.0
     # furnace: heat release follows the fuel demand
-    f[S_F] = 0.0 if held else (fuel_demand(x, d, P) - x[S_F]) / P[I_TAUF]
+    f[IX.F] = 0.0 if held else (fuel_demand(x, d, P) - x[IX.F]) / P[IP.TAUF]
     # thermowells (Jacobian: their stiff couplings to the measured enthalpies)
     T_a1, dT_a1 = T_dTdh_ph(p_a1, h_a1)
     T_a2, dT_a2 = T_dTdh_ph(p_a2, h_a2)
-    s0 = int(P[I_S0])
-    tc1, tc2 = P[I_TC1], P[I_TC2]
+    s0 = int(P[IP.S0])
+    tc1, tc2 = P[IP.TC1], P[IP.TC2]
     j = s0
     for T in (T_ev, T_1, T_2, T_a1, T_3, T_a2, T_ms, T_rh):
         f[j], f[j + 1], _, _ = thermowell_rhs(T, x[j], x[j + 1], tc1, tc2)
         j += 2
     if want_jac:
-        jd[S_P] = -P[I_CSTOR] * dWt
-        jd[int(P[I_STRIM])] = 0.0
-        jd[S_V1] = 0.0
-        jd[S_V2] = 0.0
-        jd[S_F] = 0.0 if held else -1.0 / P[I_TAUF]
+        jd[IX.P] = -P[IP.CSTOR] * dWt
+        jd[int(P[IP.STRIM])] = 0.0
+        jd[IX.V1] = 0.0
+        jd[IX.V2] = 0.0
+        jd[IX.F] = 0.0 if held else -1.0 / P[IP.TAUF]
         for j in range(s0, s0 + 2 * N_SENS, 2):
             jd[j] = -1.0 / tc1
             jd[j + 1] = -1.0 / tc2
@@ -361,12 +268,12 @@ def rhs(x, u, d, P, f, jd, ju, jl, want_jac):
               _dTdh_out(x, P, SH1, p + P_SHARE[SH1] * dpb), _dTdh_out(x, P, SH2, p_a1),
               dT_a1 * W_eco / W3, _dTdh_out(x, P, SH3, p_a2), dT_a2 * W3 / W4,
               T_dTdh_ph(p, x[loff + nl - 1])[1], _dTdh_out(x, P, RH, p_rh))  # fmt: skip
-        jo = int(P[I_JSEN])
+        jo = int(P[IP.JSEN])
         for g in dT:
             jl[jo] = g / tc1
             jl[jo + 1] = 1.0 / tc2
             jo += 2
-        jl[jo] = -P[I_KI] * 1e-5
+        jl[jo] = -P[IP.KI] * 1e-5
 
 
 @njit(cache=True)
@@ -384,9 +291,9 @@ def _dTdh_out(x, P, k, p):
 @njit(cache=True)
 def _power(P, W_t, W_rh, p, p_rh, p_crh, T_ms, T_rh):
     """Turbine power (W), eq. (16) for the HP and the IP+LP turbines."""
-    ke = P[I_KE]
-    hp = P[I_ETAHP] * W_t * P[I_CPT] * T_ms * (1.0 - (p_crh / p) ** ke)
-    iplp = P[I_ETAIP] * W_rh * P[I_CPT] * T_rh * (1.0 - (P[I_PCOND] / p_rh) ** ke)
+    ke = P[IP.KE]
+    hp = P[IP.ETAHP] * W_t * P[IP.CPT] * T_ms * (1.0 - (p_crh / p) ** ke)
+    iplp = P[IP.ETAIP] * W_rh * P[IP.CPT] * T_rh * (1.0 - (P[IP.PCOND] / p_rh) ** ke)
     return hp + iplp
 
 
@@ -397,8 +304,8 @@ def _sections_heat(x, P, lf, d, first, last):
     tm_max = 0.0
     for k in range(first, last + 1):
         UAg, Tg, Qrad = _gas(P, k, lf, d)
-        off = int(_s(P, k, F_OFF))
-        for i in range(int(_s(P, k, F_N))):
+        off = int(_s(P, k, IF.OFF))
+        for i in range(int(_s(P, k, IF.N))):
             tm = x[off + 2 * i]
             q += UAg * (Tg - tm) + Qrad
             tm_max = max(tm_max, tm)
@@ -409,44 +316,44 @@ def _sections_heat(x, P, lf, d, first, last):
 def outputs(x, u, d, P, z):
     """Physical outputs (order of BensonSubcritical.outputs)."""
     L, r2, W_eco, w1, w2, h_fw, h_sp, p_a1, p_a2 = _boundary(x, d, P)
-    p = x[S_P]
+    p = x[IX.P]
     lf = firing(x, d, P)
-    T_ms = T_ph(p, x[int(P[I_LOFF]) + int(P[I_NL]) - 1])
+    T_ms = T_ph(p, x[int(P[IP.LOFF]) + int(P[IP.NL]) - 1])
     W_t, W_rh, p_rh, p_crh, _ = _reheat(P, p, L)
     T_rh = T_ph(p_rh, _last_h(x, P, RH))
     W3, _ = mix(W_eco, _last_h(x, P, SH2), w1, h_sp)
     _, h_a2 = mix(W3, _last_h(x, P, SH3), w2, h_sp)
-    s0 = int(P[I_S0])
-    z[Z_TMS] = T_ms - K0
-    z[Z_TMS_M] = x[s0 + 2 * SEN_MS + 1] - K0
-    z[Z_TEV_M] = x[s0 + 2 * SEN_EV + 1] - K0
-    z[Z_TSH1_M] = x[s0 + 2 * SEN_SH1 + 1] - K0
-    z[Z_TSH2_M] = x[s0 + 2 * SEN_SH2 + 1] - K0
-    z[Z_TATT1_M] = x[s0 + 2 * SEN_ATT1 + 1] - K0
-    z[Z_TSH3_M] = x[s0 + 2 * SEN_SH3 + 1] - K0
-    z[Z_TATT2_M] = x[s0 + 2 * SEN_ATT2 + 1] - K0
-    z[Z_TRH_M] = x[s0 + 2 * SEN_RH + 1] - K0
-    z[Z_TRH] = T_rh - K0
-    z[Z_TATT2] = T_ph(p_a2, h_a2) - K0
-    z[Z_P] = p * 1e-6
-    z[Z_W] = W_t
-    z[Z_PWR] = _power(P, W_t, W_rh, p, p_rh, p_crh, T_ms, T_rh) * 1e-6
-    z[Z_FUEL] = fuel_demand(x, d, P) * P[I_FNOM]
-    z[Z_WFW] = W_eco
-    z[Z_V1] = x[S_V1]
-    z[Z_V2] = x[S_V2]
-    z[Z_WSP1] = w1
-    z[Z_WSP2] = w2
+    s0 = int(P[IP.S0])
+    z[IZ.outlet_temp_C] = T_ms - K0
+    z[IZ.outlet_temp_meas_C] = x[s0 + 2 * ISEN.MS + 1] - K0
+    z[IZ.evap_out_temp_meas_C] = x[s0 + 2 * ISEN.EV + 1] - K0
+    z[IZ.sh1_out_temp_meas_C] = x[s0 + 2 * ISEN.SH1 + 1] - K0
+    z[IZ.sh2_out_temp_meas_C] = x[s0 + 2 * ISEN.SH2 + 1] - K0
+    z[IZ.attemp1_out_temp_meas_C] = x[s0 + 2 * ISEN.ATT1 + 1] - K0
+    z[IZ.sh3_out_temp_meas_C] = x[s0 + 2 * ISEN.SH3 + 1] - K0
+    z[IZ.attemp2_out_temp_meas_C] = x[s0 + 2 * ISEN.ATT2 + 1] - K0
+    z[IZ.reheat_temp_meas_C] = x[s0 + 2 * ISEN.RH + 1] - K0
+    z[IZ.reheat_temp_C] = T_rh - K0
+    z[IZ.attemp2_out_temp_C] = T_ph(p_a2, h_a2) - K0
+    z[IZ.pressure_MPa] = p * 1e-6
+    z[IZ.steam_flow_kg_s] = W_t
+    z[IZ.power_MW] = _power(P, W_t, W_rh, p, p_rh, p_crh, T_ms, T_rh) * 1e-6
+    z[IZ.fuel_flow_kg_s] = fuel_demand(x, d, P) * P[IP.FNOM]
+    z[IZ.feedwater_flow_kg_s] = W_eco
+    z[IZ.spray_valve_1] = x[IX.V1]
+    z[IZ.spray_valve_2] = x[IX.V2]
+    z[IZ.spray_flow_1_kg_s] = w1
+    z[IZ.spray_flow_2_kg_s] = w2
     q, tm_max = _sections_heat(x, P, lf, d, SH1, SH4)
-    z[Z_Q] = q * 1e-6
-    z[Z_TMMAX] = tm_max - K0
-    z[Z_WDES] = design_spray(P, L)
-    z[Z_TSH4] = T_ph(p, _last_h(x, P, SH4)) - K0
+    z[IZ.heat_absorption_MW] = q * 1e-6
+    z[IZ.metal_temp_max_C] = tm_max - K0
+    z[IZ.design_spray_kg_s] = design_spray(P, L)
+    z[IZ.sh4_out_temp_C] = T_ph(p, _last_h(x, P, SH4)) - K0
     # steam-generation point: where the evaporator enthalpy crosses h_l(p), 0..1 along it
-    p_ev = p + P_SHARE[EV] * P[I_DPB] * r2
+    p_ev = p + P_SHARE[EV] * P[IP.DPB] * r2
     h_l = sat_p(p_ev)[3]
-    n = int(_s(P, EV, F_N))
-    off = int(_s(P, EV, F_OFF))
+    n = int(_s(P, EV, IF.N))
+    off = int(_s(P, EV, IF.OFF))
     h_prev = _last_h(x, P, ECO)
     sgp = 1.0
     if h_prev >= h_l:
@@ -458,7 +365,7 @@ def outputs(x, u, d, P, z):
                 sgp = (i + (h_l - h_prev) / (h - h_prev)) / n
                 break
             h_prev = h
-    z[Z_SGP] = sgp
+    z[IZ.steam_generation_point] = sgp
 
 
 @njit(cache=True)
@@ -467,25 +374,25 @@ def design_spray(P, L):
     are designed for (without the schedule error, the undisturbed plant's steady spray)."""
     L = min(max(L, 0.05), 1.3)
     r2 = L * L
-    rho_sp = _table(P, TB_RHOSP, L)
-    return (spray_flow(P[I_V1D], P[I_CV1], rho_sp, (P[I_DPPUMP] - P_SHARE[SH2] * P[I_DPB]) * r2)
-            + spray_flow(P[I_V2D], P[I_CV2], rho_sp,
-                         (P[I_DPPUMP] - P_SHARE[SH3] * P[I_DPB]) * r2))  # fmt: skip
+    rho_sp = _table(P, ITB.RHOSP, L)
+    return (spray_flow(P[IP.V1D], P[IP.CV1], rho_sp, (P[IP.DPPUMP] - P_SHARE[SH2] * P[IP.DPB]) * r2)
+            + spray_flow(P[IP.V2D], P[IP.CV2], rho_sp,
+                         (P[IP.DPPUMP] - P_SHARE[SH3] * P[IP.DPB]) * r2))  # fmt: skip
 
 
 @njit(cache=True)
 def project(x, P):
     """Keep states inside their physical ranges after a step."""
-    x[S_P] = min(max(x[S_P], 2.0e6), 21.0e6)
-    x[int(P[I_STRIM])] = min(max(x[int(P[I_STRIM])], -0.5), 0.5)
-    x[S_V1] = min(max(x[S_V1], 0.0), 1.0)
-    x[S_V2] = min(max(x[S_V2], 0.0), 1.0)
-    x[S_F] = min(max(x[S_F], 0.02), 1.5)
-    s0 = int(P[I_S0])
-    loff, nl = int(P[I_LOFF]), int(P[I_NL])
+    x[IX.P] = min(max(x[IX.P], 2.0e6), 21.0e6)
+    x[int(P[IP.STRIM])] = min(max(x[int(P[IP.STRIM])], -0.5), 0.5)
+    x[IX.V1] = min(max(x[IX.V1], 0.0), 1.0)
+    x[IX.V2] = min(max(x[IX.V2], 0.0), 1.0)
+    x[IX.F] = min(max(x[IX.F], 0.02), 1.5)
+    s0 = int(P[IP.S0])
+    loff, nl = int(P[IP.LOFF]), int(P[IP.NL])
     for k in range(7):
-        off = int(_s(P, k, F_OFF))
-        for j in range(off, off + 2 * int(_s(P, k, F_N)), 2):
+        off = int(_s(P, k, IF.OFF))
+        for j in range(off, off + 2 * int(_s(P, k, IF.N)), 2):
             x[j] = min(max(x[j], 300.0), 1400.0)
             x[j + 1] = min(max(x[j + 1], 2.0e5), 4.2e6)
     for j in range(loff, loff + nl):
@@ -514,16 +421,16 @@ def step(X, U, D, P, jrow, jcol, dt, n_sub, Z):  # noqa: N803
     """
     Um = np.empty((U.shape[0], 3))
     lf_end = np.empty(X.shape[0])
-    a = math.exp(-dt / P[I_TAUF])
-    m = P[I_TAUF] / dt * (1.0 - a) if dt > 0.0 else 1.0
+    a = math.exp(-dt / P[IP.TAUF])
+    m = P[IP.TAUF] / dt * (1.0 - a) if dt > 0.0 else 1.0
     for b in range(X.shape[0]):
-        X[b, S_V1], Um[b, 0] = valve_travel(X[b, S_V1], U[b, 0], P[I_TAUV], P[I_RATEV], dt)
-        X[b, S_V2], Um[b, 1] = valve_travel(X[b, S_V2], U[b, 1], P[I_TAUV], P[I_RATEV], dt)
+        X[b, IX.V1], Um[b, 0] = valve_travel(X[b, IX.V1], U[b, 0], P[IP.TAUV], P[IP.RATEV], dt)
+        X[b, IX.V2], Um[b, 1] = valve_travel(X[b, IX.V2], U[b, 1], P[IP.TAUV], P[IP.RATEV], dt)
         fd = fuel_demand(X[b], D[b], P)  # held over the interval (the trim is slow)
-        e0 = X[b, S_F] - fd
+        e0 = X[b, IX.F] - fd
         lf_end[b] = fd + e0 * a
         Um[b, 2] = fd + e0 * m
     _ROS2(X, Um, D, P, jrow, jcol, dt, n_sub, Z)
     for b in range(X.shape[0]):
-        X[b, S_F] = lf_end[b]
+        X[b, IX.F] = lf_end[b]
         outputs(X[b], U[b], D[b], P, Z[b])

@@ -1,39 +1,98 @@
-"""Packed parameters of the Benson boiler: indices of the scalars, the per-section
-blocks and the load schedules in the flat vector P, of the states in x and of the
-outputs in z (frozen into the kernels as module constants)."""
+"""The Benson boiler's layout: its outputs, and the named slots of the packed parameters
+P (scalars, per-section blocks, load schedules), the states x and the outputs z
+(steamtemp_gym/slots.py)."""
 
 from __future__ import annotations
 
 import numpy as np
 
-# Scalars (indices into P; frozen into the kernels as module constants).
-(I_WNOM, I_WECO, I_PNOM, I_PMIN, I_SLL, I_DPB, I_DPPUMP, I_PRH, I_DPRH, I_WRHN, I_RHF,
- I_CSTOR, I_CV1, I_CV2, I_GCOEF, I_GEXP, I_REXP, I_KE, I_CPT, I_ETAHP, I_ETAIP, I_PCOND,
- I_CPRAT, I_TBIR, I_KP, I_KI, I_TAUV, I_RATEV, I_TC1, I_TC2, I_FNOM, I_V1D,
- I_V2D, I_NX, I_STRIM, I_S0, I_JSEN, I_TAUF, I_HERR, I_BEV, I_LOFF, I_NL, I_LCM, I_LV,
- I_JLINE) = range(45)  # fmt: skip
-# Per-section block: I_SEC + NF * k + field
-I_SEC = 50
-F_N, F_OFF, F_JOFF, F_KA, F_V, F_CM, F_UAG, F_TGN, F_QRAD, F_WN = range(10)
-NF = 10
-# Load schedules over TAB_LOADS
+from steamtemp_gym.plants.base import Signal
+from steamtemp_gym.slots import blocks, slots
+
+
+def _temp(name: str, center: float, scale: float, what: str) -> Signal:
+    return Signal(name, "C", center, scale, noisy=True, description=what)
+
+
+#: The physical outputs, in the order of z.
+OUTPUTS = (
+    Signal("outlet_temp_C", "C", 535.0, 20.0, observed=False, description="true main steam"),
+    _temp("outlet_temp_meas_C", 535.0, 20.0, "main steam (SH4 outlet) thermocouple"),
+    _temp("evap_out_temp_meas_C", 410.0, 30.0, "evaporator outlet"),
+    _temp("sh1_out_temp_meas_C", 450.0, 30.0, "SH1 outlet"),
+    _temp("sh2_out_temp_meas_C", 495.0, 30.0, "SH2 outlet (attemperator 1 inlet)"),
+    _temp("attemp1_out_temp_meas_C", 475.0, 30.0, "attemperator 1 outlet (SH3 inlet)"),
+    _temp("sh3_out_temp_meas_C", 515.0, 30.0, "SH3 outlet (attemperator 2 inlet)"),
+    _temp("attemp2_out_temp_meas_C", 500.0, 30.0, "attemperator 2 outlet (SH4 inlet)"),
+    _temp("reheat_temp_meas_C", 530.0, 20.0, "hot reheat thermocouple"),
+    Signal("reheat_temp_C", "C", 530.0, 20.0, observed=False, description="true hot reheat"),
+    Signal("attemp2_out_temp_C", "C", 500.0, 30.0, observed=False),
+    Signal("pressure_MPa", "MPa", 14.0, 5.0, description="main steam pressure"),
+    Signal("steam_flow_kg_s", "kg/s", 280.0, 120.0, description="turbine steam flow"),
+    Signal("power_MW", "MW", 330.0, 130.0, description="eq. (16)"),
+    Signal("fuel_flow_kg_s", "kg/s", 17.0, 7.0),
+    Signal("feedwater_flow_kg_s", "kg/s", 270.0, 110.0, description="economizer flow"),
+    Signal("spray_valve_1", "1", 0.5, 0.5, description="valve 1 position feedback"),
+    Signal("spray_valve_2", "1", 0.5, 0.5, description="valve 2 position feedback"),
+    Signal("spray_flow_1_kg_s", "kg/s", 11.0, 11.0),
+    Signal("spray_flow_2_kg_s", "kg/s", 7.5, 7.5),
+    Signal("heat_absorption_MW", "MW", 200.0, 80.0, observed=False, description="SH1-SH4"),
+    Signal(
+        "steam_generation_point",
+        "1",
+        0.5,
+        0.5,
+        observed=False,
+        description="evaporator length fraction where boiling starts",
+    ),
+    Signal("metal_temp_max_C", "C", 580.0, 40.0, observed=False, description="SH1-SH4"),
+    Signal(
+        "design_spray_kg_s",
+        "kg/s",
+        14.0,
+        10.0,
+        observed=False,
+        description="total spray of the design openings at this load",
+    ),
+    Signal(
+        "sh4_out_temp_C",
+        "C",
+        535.0,
+        20.0,
+        observed=False,
+        description="true SH4 outlet (header inlet)",
+    ),
+)
+#: Index of each output in z, by name.
+IZ = slots("BensonOutputs", *(s.name for s in OUTPUTS))
+
+#: The fields of a section's block in P (IP.SEC + NF * k + field for section k).
+IF = slots("BensonSectionFields", "N", "OFF", "JOFF", "KA", "V", "CM", "UAG", "TGN", "QRAD", "WN")
+NF = len(IF)
+#: The load schedules over TAB_LOADS: table k at IP.TAB + k * N_TAB.
 TAB_LOADS = np.linspace(0.2, 1.2, 21)
 N_TAB = TAB_LOADS.shape[0]
-I_TAB = I_SEC + NF * 7
-TB_FUEL, TB_HEV, TB_H3, TB_HFW, TB_CPFW, TB_HSP, TB_CPSP, TB_RHOSP, TB_HCRH = range(9)
-N_TB = 9
-N_P = I_TAB + N_TB * N_TAB
-# States: pressure, valves and furnace heat release, the chains from S_CHAINS on (economizer
-# .. SH4, the main-steam line cells from P[I_LOFF], the reheater), the 8 thermowells (from
-# P[I_S0]) and last the fuel/water-ratio trim (P[I_STRIM]), so that its coupling to the
-# evaporator outlet enthalpy is strictly lower (in the Jacobian pattern).
-S_P, S_V1, S_V2, S_F = range(4)
-S_CHAINS = 4
-N_SENS = 8
-SEN_EV, SEN_SH1, SEN_SH2, SEN_ATT1, SEN_SH3, SEN_ATT2, SEN_MS, SEN_RH = range(N_SENS)
+ITB = slots("BensonTables", "FUEL", "HEV", "H3", "HFW", "CPFW", "HSP", "CPSP", "RHOSP", "HCRH")
+N_TB = len(ITB)
+#: The flat parameter vector P: the scalars, five spare entries, the blocks of the seven
+#: sections (economizer .. SH4, reheater) and the load schedules. ``N_P`` is its length.
+IP, N_P = blocks(
+    "BensonParams",
+    *[(name, 1) for name in (
+        "WNOM", "WECO", "PNOM", "PMIN", "SLL", "DPB", "DPPUMP", "PRH", "DPRH", "WRHN", "RHF",
+        "CSTOR", "CV1", "CV2", "GCOEF", "GEXP", "REXP", "KE", "CPT", "ETAHP", "ETAIP", "PCOND",
+        "CPRAT", "TBIR", "KP", "KI", "TAUV", "RATEV", "TC1", "TC2", "FNOM", "V1D",
+        "V2D", "NX", "STRIM", "S0", "JSEN", "TAUF", "HERR", "BEV", "LOFF", "NL", "LCM", "LV",
+        "JLINE")],
+    ("spare", 5), ("SEC", NF * 7), ("TAB", N_TB * N_TAB),
+)  # fmt: skip
+#: The states: pressure, valves and furnace heat release, the chains from IX.CHAINS on
+#: (economizer .. SH4, the main-steam line cells from P[IP.LOFF], the reheater), the 8
+#: thermowells (from P[IP.S0]) and last the fuel/water-ratio trim (P[IP.STRIM]), so that
+#: its coupling to the evaporator outlet enthalpy is strictly lower (in the Jacobian pattern).
+IX = slots("BensonStates", "P", "V1", "V2", "F", "CHAINS")
+#: The thermowells, in the order of their states.
+ISEN = slots("BensonThermowells", "EV", "SH1", "SH2", "ATT1", "SH3", "ATT2", "MS", "RH")
+N_SENS = len(ISEN)
 #: Whether the chains' Jacobian pattern carries the pressure column (see integrator.py).
 PRESSURE_JAC = True
-# Output indices (order of BensonSubcritical.outputs)
-(Z_TMS, Z_TMS_M, Z_TEV_M, Z_TSH1_M, Z_TSH2_M, Z_TATT1_M, Z_TSH3_M, Z_TATT2_M, Z_TRH_M, Z_TRH,
- Z_TATT2, Z_P, Z_W, Z_PWR, Z_FUEL, Z_WFW, Z_V1, Z_V2, Z_WSP1, Z_WSP2, Z_Q, Z_SGP,
- Z_TMMAX, Z_WDES, Z_TSH4) = range(25)  # fmt: skip

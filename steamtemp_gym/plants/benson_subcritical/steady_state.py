@@ -20,28 +20,7 @@ from steamtemp_gym.plants.benson_subcritical.kernel import (
     h_ev_setpoint,
     p_setpoint,
 )
-from steamtemp_gym.plants.benson_subcritical.layout import (
-    F_KA,
-    F_N,
-    F_OFF,
-    F_WN,
-    I_DPB,
-    I_KE,
-    I_LOFF,
-    I_NL,
-    I_S0,
-    I_STRIM,
-    I_TBIR,
-    I_V1D,
-    I_V2D,
-    I_WNOM,
-    S_F,
-    S_P,
-    S_V1,
-    S_V2,
-    TB_FUEL,
-    TB_H3,
-)
+from steamtemp_gym.plants.benson_subcritical.layout import IF, IP, ITB, IX
 from steamtemp_gym.plants.benson_subcritical.params import (
     ECO,
     EV,
@@ -61,9 +40,9 @@ from steamtemp_gym.steam import T_ph, h_pT
 @njit(cache=True)
 def _section_steady(x, P, k, h0, W, p, lf, d):
     """Steady state of section k written into x; returns its outlet enthalpy."""
-    kA = steam_side_kA(_s(P, k, F_KA), W, _s(P, k, F_WN))[0]
+    kA = steam_side_kA(_s(P, k, IF.KA), W, _s(P, k, IF.WN))[0]
     UAg, Tg, Qrad = _gas(P, k, lf, d)
-    return chain_steady(x, int(_s(P, k, F_OFF)), int(_s(P, k, F_N)), h0, W, p, kA, UAg, Tg,
+    return chain_steady(x, int(_s(P, k, IF.OFF)), int(_s(P, k, IF.N)), h0, W, p, kA, UAg, Tg,
                         Qrad)  # fmt: skip
 
 
@@ -71,7 +50,7 @@ def _section_steady(x, P, k, h0, W, p, lf, d):
 def _upstream_steady(x, d, P, lf, p):
     """Economizer and evaporator steady at firing lf, pressure p; returns evaporator outlet h."""
     L, r2, W_eco, _, _, h_fw, _, _, _ = _boundary(x, d, P)
-    dpb = P[I_DPB] * r2
+    dpb = P[IP.DPB] * r2
     h = _section_steady(x, P, ECO, h_fw, W_eco, p + P_SHARE[ECO] * dpb, lf, d)
     return _section_steady(x, P, EV, h, W_eco, p + P_SHARE[EV] * dpb, lf, d)
 
@@ -80,7 +59,7 @@ def _upstream_steady(x, d, P, lf, p):
 def _sh_steady(x, d, P, lf, p, upto):
     """SH1..SH4 steady (x holds the evaporator and valves); SH3 outlet h (upto=3) or main h."""
     L, r2, W_eco, w1, w2, _, h_sp, p_a1, p_a2 = _boundary(x, d, P)
-    dpb = P[I_DPB] * r2
+    dpb = P[IP.DPB] * r2
     h = _section_steady(x, P, SH1, _last_h(x, P, EV), W_eco, p + P_SHARE[SH1] * dpb, lf, d)
     h = _section_steady(x, P, SH2, h, W_eco, p_a1, lf, d)
     W3, h = mix(W_eco, h, w1, h_sp)
@@ -134,30 +113,30 @@ def steady(D, sp_K, P, X):
         d = D[b]
         L = min(max(d[D_LOAD], 0.05), 1.3)
         p = p_setpoint(P, L)
-        lf = _table(P, TB_FUEL, L)
-        x[S_V1] = P[I_V1D]
-        x[S_V2] = P[I_V2D]
+        lf = _table(P, ITB.FUEL, L)
+        x[IX.V1] = P[IP.V1D]
+        x[IX.V2] = P[IP.V2D]
         for _ in range(4):
-            x[S_P] = p
+            x[IX.P] = p
             lf = _fuel_for_evap(x, d, P, p, h_ev_setpoint(P, L), lf)
             _upstream_steady(x, d, P, lf, p)
-            x[S_V1] = _opening_for(x, d, P, (lf, p, S_V1, 3), _table(P, TB_H3, L))
-            x[S_V2] = _opening_for(x, d, P, (lf, p, S_V2, 4), h_pT(p, sp_K[b]))
+            x[IX.V1] = _opening_for(x, d, P, (lf, p, IX.V1, 3), _table(P, ITB.H3, L))
+            x[IX.V2] = _opening_for(x, d, P, (lf, p, IX.V2, 4), h_pT(p, sp_K[b]))
             _, _, W_eco, w1, w2, _, _, _, _ = _boundary(x, d, P)
-            p = p_setpoint(P, L) * (W_eco + w1 + w2) / (P[I_WNOM] * L)
-        x[S_P] = p
+            p = p_setpoint(P, L) * (W_eco + w1 + w2) / (P[IP.WNOM] * L)
+        x[IX.P] = p
         _upstream_steady(x, d, P, lf, p)
         h_ms = _sh_steady(x, d, P, lf, p, 4)
-        pipe_steady(x, int(P[I_LOFF]), int(P[I_NL]), h_ms)
-        x[S_F] = lf
+        pipe_steady(x, int(P[IP.LOFF]), int(P[IP.NL]), h_ms)
+        x[IX.F] = lf
         W_t, W_rh, p_rh, p_crh, _ = _reheat(P, p, L)
         T_ms = T_ph(p, h_ms)
-        h_crh = cold_reheat(P, L, p_crh, T_ms * (p_crh / p) ** P[I_KE])[0]
+        h_crh = cold_reheat(P, L, p_crh, T_ms * (p_crh / p) ** P[IP.KE])[0]
         _section_steady(x, P, RH, h_crh, W_rh, p_rh, lf, d)
-        L_ff = min(max(L + P[I_TBIR] * d[D_LOAD_RATE], 0.05), 1.3)
-        x[int(P[I_STRIM])] = lf / _table(P, TB_FUEL, L_ff) - 1.0
+        L_ff = min(max(L + P[IP.TBIR] * d[D_LOAD_RATE], 0.05), 1.3)
+        x[int(P[IP.STRIM])] = lf / _table(P, ITB.FUEL, L_ff) - 1.0
         temps = section_temperatures(x, d, P)
-        s0 = int(P[I_S0])
+        s0 = int(P[IP.S0])
         for j, T in enumerate((temps[2], temps[3], temps[4], temps[5], temps[6], temps[7],
                                temps[8], temps[10])):  # fmt: skip
             x[s0 + 2 * j] = T + K0
@@ -168,7 +147,7 @@ def steady(D, sp_K, P, X):
 def section_enthalpies(x, d, P):
     """Enthalpies (J/kg) at the points of section_temperatures (feedwater ... hot reheat)."""
     L, r2, W_eco, w1, w2, h_fw, h_sp, p_a1, p_a2 = _boundary(x, d, P)
-    p = x[S_P]
+    p = x[IX.P]
     out = np.empty(11)
     out[0] = h_fw
     for i, k in ((1, ECO), (2, EV), (3, SH1), (4, SH2), (6, SH3), (8, SH4), (10, RH)):
@@ -176,8 +155,8 @@ def section_enthalpies(x, d, P):
     W3, out[5] = mix(W_eco, out[4], w1, h_sp)
     _, out[7] = mix(W3, out[6], w2, h_sp)
     _, _, _, p_crh, _ = _reheat(P, p, L)
-    h_t = x[int(P[I_LOFF]) + int(P[I_NL]) - 1]  # turbine inlet
-    out[9] = cold_reheat(P, L, p_crh, T_ph(p, h_t) * (p_crh / p) ** P[I_KE])[0]
+    h_t = x[int(P[IP.LOFF]) + int(P[IP.NL]) - 1]  # turbine inlet
+    out[9] = cold_reheat(P, L, p_crh, T_ph(p, h_t) * (p_crh / p) ** P[IP.KE])[0]
     return out
 
 
@@ -191,8 +170,8 @@ def section_temperatures(x, d, P):
     turbine inlet after the main-steam line, T_crh the HP exhaust by eq. (14)).
     """
     L, r2, W_eco, w1, w2, h_fw, h_sp, p_a1, p_a2 = _boundary(x, d, P)
-    p = x[S_P]
-    dpb = P[I_DPB] * r2
+    p = x[IX.P]
+    dpb = P[IP.DPB] * r2
     out = np.empty(17)
     out[0] = T_ph(p + P_SHARE[ECO] * dpb, h_fw)
     out[1] = T_ph(p + P_SHARE[ECO] * dpb, _last_h(x, P, ECO))
@@ -206,8 +185,8 @@ def section_temperatures(x, d, P):
     out[7] = T_ph(p_a2, h_a2)
     out[8] = T_ph(p, _last_h(x, P, SH4))
     W_t, W_rh, p_rh, p_crh, _ = _reheat(P, p, L)
-    out[16] = T_ph(p, x[int(P[I_LOFF]) + int(P[I_NL]) - 1])
-    out[9] = out[16] * (p_crh / p) ** P[I_KE]  # eq. (14), in K
+    out[16] = T_ph(p, x[int(P[IP.LOFF]) + int(P[IP.NL]) - 1])
+    out[9] = out[16] * (p_crh / p) ** P[IP.KE]  # eq. (14), in K
     out[10] = T_ph(p_rh, _last_h(x, P, RH))
     for i in range(11):
         out[i] -= K0

@@ -140,26 +140,12 @@ from steamtemp_gym.plants.boiler_turbine_mimo.kernel import (
     step,
 )
 from steamtemp_gym.plants.boiler_turbine_mimo.layout import (
-    S_FB,
-    S_G,
-    S_HUP,
-    S_LF,
-    S_V1,
-    S_V2,
-    T_RISE,
-    Z_G,
-    Z_LF,
-    Z_P,
-    Z_RTE,
-    Z_STE,
-    Z_T1,
-    Z_T2,
-    Z_V1,
-    Z_V2,
-    Z_W,
-    Z_W1,
-    Z_W2,
-    Z_WDES,
+    IP,
+    ITAB,
+    IX,
+    IZ,
+    N_TAB,
+    OUTPUTS,
     patterns,
 )
 from steamtemp_gym.plants.boiler_turbine_mimo.params import K0, BoilerTurbineParams
@@ -172,7 +158,6 @@ __all__ = [
     # kernels, steady state and packing
     "rhs", "outputs", "project", "step", "steady", "fuel_demand", "firing_travel",
     "design_spray", "KERNELS", "ACTUATORS", "N_U_HELD", "patterns", "_pack", "_offsets", "_tab",
-    # the indices the tests read (all of them: the layout module)
-    "S_FB", "S_G", "S_HUP", "S_LF", "S_V1", "S_V2", "T_RISE", "Z_G", "Z_LF", "Z_P", "Z_RTE",
-    "Z_STE", "Z_T1", "Z_T2", "Z_V1", "Z_V2", "Z_W", "Z_W1", "Z_W2", "Z_WDES",
+    # the layout: outputs and the named slots of P, x, z and the load schedules
+    "OUTPUTS", "IP", "IX", "IZ", "ITAB", "N_TAB",
 ]  # fmt: skip

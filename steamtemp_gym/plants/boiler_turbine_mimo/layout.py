@@ -1,45 +1,95 @@
-"""Packed parameters of the boiler-turbine unit: indices of the scalars and the load
-schedules in the flat vector P, of the states in x and of the outputs in z, and the
-Jacobian pattern the rhs fills."""
+"""The boiler-turbine unit's layout: its outputs, and the named slots of the packed
+parameters P (scalars and load schedules), the states x and the outputs z
+(steamtemp_gym/slots.py), with the Jacobian pattern the rhs fills."""
 
 from __future__ import annotations
 
 import numpy as np
 
+from steamtemp_gym.plants.base import Signal
 from steamtemp_gym.plants.boiler_turbine_mimo.params import BoilerTurbineParams
 from steamtemp_gym.plants.superheater import chain_pattern, pipe_pattern
+from steamtemp_gym.slots import blocks, slots
 
-# Indices into P (module constants, frozen into the kernels).
-I_N1, I_N2, I_N3, I_N4 = 0, 1, 2, 3  # segments: primary, platen, final, reheater
-I_WNOM, I_PNOM, I_PMIN, I_KNEE, I_LMIN = 4, 5, 6, 7, 8
-I_PRH, I_PRHMIN, I_FRH = 9, 10, 11
-I_KAF_P, I_KAW_P, I_V_P, I_CM_P, I_UAG_P, I_TG_P = 12, 13, 14, 15, 16, 17
-I_KAF_PL, I_KAW_PL, I_V_PL, I_CM_PL, I_Q_PL = 18, 19, 20, 21, 22
-I_KAF_F, I_KAW_F, I_V_F, I_CM_F, I_UAG_F, I_TG_F = 23, 24, 25, 26, 27, 28
-I_KAF_R, I_KAW_R, I_V_R, I_CM_R, I_UAG_R, I_TG_R = 29, 30, 31, 32, 33, 34
-I_DTG, I_GEXP, I_REXP, I_RMAX, I_RNOM, I_PLGR = 35, 36, 37, 38, 39, 40
-I_CV1, I_CV2, I_DPB = 41, 42, 43
-I_TAUF, I_TBIR, I_TAUW, I_TAUUP, I_FWR, I_TAUHP = 44, 45, 46, 47, 48, 49
-I_FBACT, I_FBMAX, I_TAUFB = 50, 51, 52
-I_TAUV, I_RATEV, I_TAUD, I_RATED, I_TC1, I_TC2 = 53, 54, 55, 56, 57, 58
-I_JOFF_PL, I_JOFF_F, I_JOFF_R = 59, 60, 61
-I_VD, I_GD, I_TRH, I_DTGR = 62, 63, 64, 65  # design spray and RGD openings, RTE set (K)
-I_TAUM, I_HERR, I_BUP, I_NL, I_LCM, I_LV, I_NRL, I_RLCM, I_RLV, I_JOFF_L, I_JOFF_RL = range(
-    66, 77)  # fmt: skip
-I_TAB = 80  # start of the load schedule tables
+#: The physical outputs, in the order of z.
+OUTPUTS = (
+    Signal("outlet_temp_C", "C", 538.0, 20.0, observed=False, description="true STE"),
+    Signal("outlet_temp_meas_C", "C", 538.0, 20.0, noisy=True, description="STE thermocouple"),
+    Signal("reheat_temp_C", "C", 566.0, 20.0, observed=False, description="true RTE"),
+    Signal("reheat_temp_meas_C", "C", 566.0, 20.0, noisy=True, description="RTE thermocouple"),
+    Signal("sp1_out_temp_C", "C", 440.0, 30.0, observed=False, description="platen inlet"),
+    Signal("sp1_out_temp_meas_C", "C", 440.0, 30.0, noisy=True),
+    Signal("sp2_out_temp_C", "C", 498.0, 30.0, observed=False, description="final SH inlet"),
+    Signal("sp2_out_temp_meas_C", "C", 498.0, 30.0, noisy=True),
+    Signal("cold_reheat_temp_C", "C", 310.0, 40.0, noisy=True, description="HP exhaust"),
+    Signal("steam_flow_kg_s", "kg/s", 400.0, 250.0),
+    Signal("pressure_MPa", "MPa", 20.0, 6.0),
+    Signal("sp1_valve", "1", 0.5, 0.5, description="SP1 position feedback"),
+    Signal("sp2_valve", "1", 0.5, 0.5, description="SP2 position feedback"),
+    Signal("rgd_damper", "1", 0.5, 0.5, description="RGD position feedback"),
+    Signal("fuel_bias", "1", 0.5, 0.5, observed=False, description="FF bias, 0.5 = none"),
+    Signal("sp1_flow_kg_s", "kg/s", 15.0, 15.0),
+    Signal("sp2_flow_kg_s", "kg/s", 12.0, 12.0),
+    Signal("firing_rate", "1", 0.65, 0.35, description="fuel flow, fraction of rated"),
+    Signal("heat_absorption_MW", "MW", 450.0, 200.0, observed=False, description="SH, hidden"),
+    Signal("reheat_heat_MW", "MW", 300.0, 150.0, observed=False, description="hidden"),
+    Signal("metal_temp_max_C", "C", 620.0, 40.0, observed=False),
+    Signal(
+        "design_spray_kg_s",
+        "kg/s",
+        30.0,
+        20.0,
+        observed=False,
+        description="total spray of the design openings at this steam flow",
+    ),  # fmt: skip
+    Signal(
+        "final_sh_out_temp_C",
+        "C",
+        538.0,
+        20.0,
+        observed=False,
+        description="true final SH outlet (header inlet)",
+    ),  # fmt: skip
+    Signal(
+        "reheater_out_temp_C",
+        "C",
+        566.0,
+        20.0,
+        observed=False,
+        description="true reheater outlet (hot-reheat line inlet)",
+    ),  # fmt: skip
+)
+#: Index of each output in z, by name.
+IZ = slots("MimoOutputs", *(s.name for s in OUTPUTS))
+
+#: The load schedules over TAB_LOADS: table k at IP.TAB + k * N_TAB.
 TAB_LOADS = np.linspace(0.2, 1.2, 21)
 N_TAB = TAB_LOADS.shape[0]
-# schedule tables (offset I_TAB + k * N_TAB)
-T_HUP, T_RISE, T_HSP, T_RHOSP, T_CPSP, T_CRHR, T_HCRH, T_CPCRH, T_TCRH = range(9)
-N_P = I_TAB + 9 * N_TAB
-# State indices (the chains follow from S_CHAIN: primary, platen, final, reheater)
-S_LF, S_LW, S_HUP, S_V1, S_V2, S_G, S_FB, S_CRH = range(8)
-S_TS1, S_TS2, S_TR1, S_TR2, S_A11, S_A12, S_A21, S_A22 = range(8, 16)
-S_MILL = 16  # coal flow out of the mills, fraction of rated firing
-S_CHAIN = 17  # then the chains, then the main-steam line and hot-reheat line cells
-# Output indices (order of BoilerTurbineMIMO.outputs)
-(Z_STE, Z_STEM, Z_RTE, Z_RTEM, Z_T1, Z_T1M, Z_T2, Z_T2M, Z_TCRH, Z_W, Z_P, Z_V1, Z_V2, Z_G,
- Z_FB, Z_W1, Z_W2, Z_LF, Z_Q, Z_QRH, Z_TMMAX, Z_WDES, Z_TFSH, Z_TRHO) = range(24)  # fmt: skip
+ITAB = slots("MimoTables", "HUP", "RISE", "HSP", "RHOSP", "CPSP", "CRHR", "HCRH", "CPCRH", "TCRH")
+#: The flat parameter vector P: the scalars (segments of the primary, platen, final and
+#: reheater; per-section heat transfer, volume, metal and gas; loops, valves, thermowells;
+#: the design spray and RGD openings and the RTE setpoint), three spare entries, then the
+#: load schedules. ``N_P`` is its length.
+IP, N_P = blocks(
+    "MimoParams",
+    *[(name, 1) for name in (
+        "N1", "N2", "N3", "N4", "WNOM", "PNOM", "PMIN", "KNEE", "LMIN", "PRH", "PRHMIN", "FRH",
+        "KAF_P", "KAW_P", "V_P", "CM_P", "UAG_P", "TG_P",
+        "KAF_PL", "KAW_PL", "V_PL", "CM_PL", "Q_PL",
+        "KAF_F", "KAW_F", "V_F", "CM_F", "UAG_F", "TG_F",
+        "KAF_R", "KAW_R", "V_R", "CM_R", "UAG_R", "TG_R",
+        "DTG", "GEXP", "REXP", "RMAX", "RNOM", "PLGR", "CV1", "CV2", "DPB",
+        "TAUF", "TBIR", "TAUW", "TAUUP", "FWR", "TAUHP", "FBACT", "FBMAX", "TAUFB",
+        "TAUV", "RATEV", "TAUD", "RATED", "TC1", "TC2", "JOFF_PL", "JOFF_F", "JOFF_R",
+        "VD", "GD", "TRH", "DTGR",
+        "TAUM", "HERR", "BUP", "NL", "LCM", "LV", "NRL", "RLCM", "RLV", "JOFF_L", "JOFF_RL")],
+    ("spare", 3), ("TAB", len(ITAB) * N_TAB),
+)  # fmt: skip
+#: The states; the chains follow from CHAIN (primary, platen, final, reheater), then the
+#: main-steam line and hot-reheat line cells. MILL: coal flow out of the mills, fraction
+#: of rated firing.
+IX = slots("MimoStates", "LF", "LW", "HUP", "V1", "V2", "G", "FB", "CRH",
+           "TS1", "TS2", "TR1", "TR2", "A11", "A12", "A21", "A22", "MILL", "CHAIN")  # fmt: skip
 
 
 def patterns(params: BoilerTurbineParams) -> list[tuple[int, int]]:
@@ -50,17 +100,17 @@ def patterns(params: BoilerTurbineParams) -> list[tuple[int, int]]:
         params.n_seg_final,
         params.n_seg_reheat,
     )
-    o_p = S_CHAIN
+    o_p = IX.CHAIN
     o_pl = o_p + 2 * n1
     o_f = o_pl + 2 * n2
     o_r = o_f + 2 * n3
     o_l = o_r + 2 * n4
     o_rl = o_l + params.n_line
     return (
-        chain_pattern(o_p, n1, (S_HUP,), S_LW)
-        + chain_pattern(o_pl, n2, (o_pl - 1, S_V1, S_V2), S_LW)
-        + chain_pattern(o_f, n3, (o_f - 1, S_V2), S_LW)
-        + chain_pattern(o_r, n4, (S_CRH,), S_LW)
-        + pipe_pattern(o_l, params.n_line, (o_r - 1,), S_LW)
-        + pipe_pattern(o_rl, params.n_rh_line, (o_l - 1,), S_LW)
+        chain_pattern(o_p, n1, (IX.HUP,), IX.LW)
+        + chain_pattern(o_pl, n2, (o_pl - 1, IX.V1, IX.V2), IX.LW)
+        + chain_pattern(o_f, n3, (o_f - 1, IX.V2), IX.LW)
+        + chain_pattern(o_r, n4, (IX.CRH,), IX.LW)
+        + pipe_pattern(o_l, params.n_line, (o_r - 1,), IX.LW)
+        + pipe_pattern(o_rl, params.n_rh_line, (o_l - 1,), IX.LW)
     )

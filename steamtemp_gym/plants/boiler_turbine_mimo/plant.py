@@ -7,6 +7,7 @@ import numpy as np
 from steamtemp_gym.plants.base import MAIN, SCHEDULED, Plant, Signal
 from steamtemp_gym.plants.boiler_turbine_mimo.calibration import _pack
 from steamtemp_gym.plants.boiler_turbine_mimo.kernel import ACTUATORS, KERNELS, step
+from steamtemp_gym.plants.boiler_turbine_mimo.layout import OUTPUTS
 from steamtemp_gym.plants.boiler_turbine_mimo.params import K0, BoilerTurbineParams
 from steamtemp_gym.plants.boiler_turbine_mimo.steady_state import steady
 
@@ -35,53 +36,7 @@ class BoilerTurbineMIMO(Plant):
         Signal("sp2_valve_cmd", "1", 0.5, 0.5, description="secondary spray SP2 valve command"),
         Signal("rgd_damper_cmd", "1", 0.5, 0.5, description="gas recirculation damper RGD"),
     )
-    outputs = (
-        Signal("outlet_temp_C", "C", 538.0, 20.0, observed=False, description="true STE"),
-        Signal("outlet_temp_meas_C", "C", 538.0, 20.0, noisy=True, description="STE thermocouple"),
-        Signal("reheat_temp_C", "C", 566.0, 20.0, observed=False, description="true RTE"),
-        Signal("reheat_temp_meas_C", "C", 566.0, 20.0, noisy=True, description="RTE thermocouple"),
-        Signal("sp1_out_temp_C", "C", 440.0, 30.0, observed=False, description="platen inlet"),
-        Signal("sp1_out_temp_meas_C", "C", 440.0, 30.0, noisy=True),
-        Signal("sp2_out_temp_C", "C", 498.0, 30.0, observed=False, description="final SH inlet"),
-        Signal("sp2_out_temp_meas_C", "C", 498.0, 30.0, noisy=True),
-        Signal("cold_reheat_temp_C", "C", 310.0, 40.0, noisy=True, description="HP exhaust"),
-        Signal("steam_flow_kg_s", "kg/s", 400.0, 250.0),
-        Signal("pressure_MPa", "MPa", 20.0, 6.0),
-        Signal("sp1_valve", "1", 0.5, 0.5, description="SP1 position feedback"),
-        Signal("sp2_valve", "1", 0.5, 0.5, description="SP2 position feedback"),
-        Signal("rgd_damper", "1", 0.5, 0.5, description="RGD position feedback"),
-        Signal("fuel_bias", "1", 0.5, 0.5, observed=False, description="FF bias, 0.5 = none"),
-        Signal("sp1_flow_kg_s", "kg/s", 15.0, 15.0),
-        Signal("sp2_flow_kg_s", "kg/s", 12.0, 12.0),
-        Signal("firing_rate", "1", 0.65, 0.35, description="fuel flow, fraction of rated"),
-        Signal("heat_absorption_MW", "MW", 450.0, 200.0, observed=False, description="SH, hidden"),
-        Signal("reheat_heat_MW", "MW", 300.0, 150.0, observed=False, description="hidden"),
-        Signal("metal_temp_max_C", "C", 620.0, 40.0, observed=False),
-        Signal(
-            "design_spray_kg_s",
-            "kg/s",
-            30.0,
-            20.0,
-            observed=False,
-            description="total spray of the design openings at this steam flow",
-        ),  # fmt: skip
-        Signal(
-            "final_sh_out_temp_C",
-            "C",
-            538.0,
-            20.0,
-            observed=False,
-            description="true final SH outlet (header inlet)",
-        ),  # fmt: skip
-        Signal(
-            "reheater_out_temp_C",
-            "C",
-            566.0,
-            20.0,
-            observed=False,
-            description="true reheater outlet (hot-reheat line inlet)",
-        ),  # fmt: skip
-    )
+    outputs = OUTPUTS
     setpoint_C = 538.0
     control_loops = (
         ("sp1_out_temp_meas_C", SCHEDULED),  # first stage: its outlet on a load schedule

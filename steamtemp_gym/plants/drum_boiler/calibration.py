@@ -18,53 +18,10 @@ from steamtemp_gym.plants.drum_boiler.layout import (
     DSP_LOADS,
     FW_DT_K,
     FW_T0_K,
-    I_CM1,
-    I_CM2,
-    I_CV,
-    I_DPSH,
-    I_DPSP,
-    I_DRUM,
-    I_DSP,
-    I_DTFW,
-    I_DTG1,
-    I_DTG2,
-    I_FW,
-    I_GEXP,
-    I_KA1,
-    I_KA2,
-    I_KPL,
-    I_KPP,
-    I_LCM,
-    I_LV,
-    I_MARG,
-    I_N,
-    I_NL,
-    I_PSP,
-    I_QNOM,
-    I_QSN,
-    I_RATEV,
-    I_TAUF,
-    I_TAUFW,
-    I_TAUM,
-    I_TAUV,
-    I_TAUW,
-    I_TBIR,
-    I_TC1,
-    I_TC2,
-    I_TFW,
-    I_TG1,
-    I_TG2,
-    I_TIL,
-    I_TIP,
-    I_UAG1,
-    I_UAG2,
-    I_V1,
-    I_V2,
-    I_WNOM,
+    IP,
+    IX,
     N_FW,
     N_P,
-    S_CHAIN1,
-    S_DRUM,
     SHARE_1,
     pattern,
 )
@@ -91,56 +48,57 @@ def _calibrate(params: DrumBoilerParams, P: np.ndarray, n_x: int) -> None:
     x = np.zeros(n_x)
     Pk = read_only(P)  # what the kernels read (see steamtemp_gym._jit.read_only)
     n = params.n_segments
-    c2 = S_CHAIN1 + 2 * n
+    c2 = IX.CHAIN1 + 2 * n
     p = params.p_drum_MPa * 1e6
     q_s = params.q_s_nom_kg_s
-    h_f, _, _ = _fw(Pk, P[I_TFW])
+    h_f, _, _ = _fw(Pk, P[IP.TFW])
     # level reference: l = 0 at V_wt = V_wt,nom in the rated steady state
-    P[I_DRUM + dr.D_L0] = 0.0
-    Q, _ = dr.drum_steady(p, q_s, h_f, 0.0, Pk, I_DRUM, x, S_DRUM)
-    P[I_QNOM] = Q
-    dV = params.V_wt_nom_m3 - x[S_DRUM + dr.VWT]
-    P[I_DRUM + dr.D_L0] = dV / params.A_d_m2
+    P[IP.DRUM + dr.D_L0] = 0.0
+    Q, _ = dr.drum_steady(p, q_s, h_f, 0.0, Pk, IP.DRUM, x, IX.DRUM)
+    P[IP.QNOM] = Q
+    dV = params.V_wt_nom_m3 - x[IX.DRUM + dr.VWT]
+    P[IP.DRUM + dr.D_L0] = dV / params.A_d_m2
     # gas side at rated firing
-    W = P[I_WNOM]
+    W = P[IP.WNOM]
     w_sp = W - q_s
-    dpsh = P[I_DPSH]
+    dpsh = P[IP.DPSH]
     p1, p2 = p - SHARE_1 * dpsh, p - dpsh
     h_s = float(sat_p(p)[4])
     h1_target = h_pT(p1, params.T_primary_out_C + K0)
-    kA1 = steam_side_kA(P[I_KA1], q_s, q_s)[0]
-    kA2 = steam_side_kA(P[I_KA2], W, W)[0]
+    kA1 = steam_side_kA(P[IP.KA1], q_s, q_s)[0]
+    kA2 = steam_side_kA(P[IP.KA2], W, W)[0]
     q1 = q_s * (h1_target - h_s) / n / 300.0
-    P[I_UAG1] = _secant(
-        lambda g: chain_steady(x, S_CHAIN1, n, h_s, q_s, p1, kA1, g, P[I_TG1], 0.0) - h1_target,
+    P[IP.UAG1] = _secant(
+        lambda g: chain_steady(x, IX.CHAIN1, n, h_s, q_s, p1, kA1, g, P[IP.TG1], 0.0) - h1_target,
         q1, 1.2 * q1,
     )  # fmt: skip
-    h_sp, rho_sp, _ = _fw(Pk, P[I_TFW])
+    h_sp, rho_sp, _ = _fw(Pk, P[IP.TFW])
     _, h_att = mix(q_s, h1_target, w_sp, h_sp)
     h_out = h_pT(p2, params.T_out_C + K0)
     q2 = W * (h_out - h_att) / n / 500.0
-    P[I_UAG2] = _secant(
-        lambda g: chain_steady(x, c2, n, h_att, W, p2, kA2, g, P[I_TG2], 0.0) - h_out,
+    P[IP.UAG2] = _secant(
+        lambda g: chain_steady(x, c2, n, h_att, W, p2, kA2, g, P[IP.TG2], 0.0) - h_out,
         q2, 1.2 * q2,
     )  # fmt: skip
-    P[I_CV] = params.spray_max_fraction * W / math.sqrt(rho_sp * P[I_DPSP])
+    P[IP.CV] = params.spray_max_fraction * W / math.sqrt(rho_sp * P[IP.DPSP])
 
 
 @functools.lru_cache(maxsize=32)
 def _pack(params: DrumBoilerParams) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
     n = params.n_segments
     P = np.zeros(N_P)
-    P[I_N] = n
+    P[IP.N] = n
     s = params.spray_design_fraction
-    P[I_WNOM] = params.q_s_nom_kg_s / (1.0 - s)
-    P[I_QSN] = params.q_s_nom_kg_s
-    P[I_PSP] = params.p_drum_MPa * 1e6
-    P[I_TFW] = params.T_fw_nom_C + K0
-    P[I_DTFW] = params.dT_fw_dload_K
-    P[I_DPSP] = params.dp_spray_MPa * 1e6
-    P[I_DPSH] = params.dp_sh_nom_MPa * 1e6
+    P[IP.WNOM] = params.q_s_nom_kg_s / (1.0 - s)
+    P[IP.QSN] = params.q_s_nom_kg_s
+    P[IP.PSP] = params.p_drum_MPa * 1e6
+    P[IP.TFW] = params.T_fw_nom_C + K0
+    P[IP.DTFW] = params.dT_fw_dload_K
+    P[IP.DPSP] = params.dp_spray_MPa * 1e6
+    P[IP.DPSH] = params.dp_sh_nom_MPa * 1e6
     for i, (ika, iv, icm, itg, idtg) in enumerate(
-        ((I_KA1, I_V1, I_CM1, I_TG1, I_DTG1), (I_KA2, I_V2, I_CM2, I_TG2, I_DTG2)), start=1
+        ((IP.KA1, IP.V1, IP.CM1, IP.TG1, IP.DTG1), (IP.KA2, IP.V2, IP.CM2, IP.TG2, IP.DTG2)),
+        start=1,
     ):
         nt = getattr(params, f"n_tubes_{i}")
         di, do = getattr(params, f"tube_id_{i}_m"), getattr(params, f"tube_od_{i}_m")
@@ -151,25 +109,25 @@ def _pack(params: DrumBoilerParams) -> tuple[np.ndarray, np.ndarray, np.ndarray,
                   * params.c_metal_J_kgK)  # fmt: skip
         P[itg] = getattr(params, f"Tg{i}_nom_C") + K0
         P[idtg] = getattr(params, f"dTg{i}_dload_K")
-    P[I_GEXP] = params.gas_flow_exponent
-    P[I_TAUW] = params.tau_steam_s
-    P[I_TAUF] = params.tau_firing_s
-    P[I_KPP] = params.Kp_pressure
-    P[I_TIP] = params.Ti_pressure_s
-    P[I_KPL] = params.Kp_level_kg_s_m
-    P[I_TIL] = params.Ti_level_s
-    P[I_TAUFW] = params.tau_fw_s
-    P[I_TAUV] = params.tau_valve_s
-    P[I_RATEV] = params.valve_rate_per_s
-    P[I_TC1] = params.tau_tc1_s
-    P[I_TC2] = params.tau_tc2_s
-    P[I_TAUM] = params.tau_mill_s
-    P[I_TBIR] = params.T_bir_s
-    P[I_NL] = params.n_line
-    P[I_LV] = params.line_volume_m3 / params.n_line
-    P[I_LCM] = params.line_metal_t * 1e3 * params.c_metal_J_kgK / params.n_line
-    P[I_MARG] = params.attemp_margin_K
-    P[I_DRUM : I_DRUM + dr.N_DRUM_P] = dr.drum_block(
+    P[IP.GEXP] = params.gas_flow_exponent
+    P[IP.TAUW] = params.tau_steam_s
+    P[IP.TAUF] = params.tau_firing_s
+    P[IP.KPP] = params.Kp_pressure
+    P[IP.TIP] = params.Ti_pressure_s
+    P[IP.KPL] = params.Kp_level_kg_s_m
+    P[IP.TIL] = params.Ti_level_s
+    P[IP.TAUFW] = params.tau_fw_s
+    P[IP.TAUV] = params.tau_valve_s
+    P[IP.RATEV] = params.valve_rate_per_s
+    P[IP.TC1] = params.tau_tc1_s
+    P[IP.TC2] = params.tau_tc2_s
+    P[IP.TAUM] = params.tau_mill_s
+    P[IP.TBIR] = params.T_bir_s
+    P[IP.NL] = params.n_line
+    P[IP.LV] = params.line_volume_m3 / params.n_line
+    P[IP.LCM] = params.line_metal_t * 1e3 * params.c_metal_J_kgK / params.n_line
+    P[IP.MARG] = params.attemp_margin_K
+    P[IP.DRUM : IP.DRUM + dr.N_DRUM_P] = dr.drum_block(
         params.V_d_m3, params.V_r_m3, params.V_dc_m3, params.m_t_kg, params.m_r_kg,
         params.m_d_kg, params.C_p_J_kgK, params.A_d_m2, params.A_dc_m2, params.k_friction,
         params.beta, params.T_d_s, params.V_sd0_m3,
@@ -177,9 +135,9 @@ def _pack(params: DrumBoilerParams) -> tuple[np.ndarray, np.ndarray, np.ndarray,
     p_fw = params.p_fw_MPa * 1e6
     for k in range(N_FW):
         h = h_pT(p_fw, FW_T0_K + FW_DT_K * k)
-        P[I_FW + k] = h
-        P[I_FW + N_FW + k] = rho_ph(p_fw, h)
-    n_x = S_CHAIN1 + 4 * n + 1 + params.n_line + 4
+        P[IP.FW + k] = h
+        P[IP.FW + N_FW + k] = rho_ph(p_fw, h)
+    n_x = IX.CHAIN1 + 4 * n + 1 + params.n_line + 4
     _calibrate(params, P, n_x)
     # design-spray function generator: the undisturbed steady sprays at DSP_LOADS
     D = np.zeros((len(DSP_LOADS), 5))
@@ -188,7 +146,7 @@ def _pack(params: DrumBoilerParams) -> tuple[np.ndarray, np.ndarray, np.ndarray,
     Pk = read_only(P)
     steady(D, np.full(len(DSP_LOADS), params.T_out_C + K0), Pk, X)
     for k in range(len(DSP_LOADS)):
-        P[I_DSP + k] = _boundary(X[k], D[k], Pk)[4]
+        P[IP.DSP + k] = _boundary(X[k], D[k], Pk)[4]
     pat = pattern(n, params.n_line)
     jrow, jcol = pattern_arrays(pat)
     P.setflags(write=False)

@@ -24,85 +24,14 @@ from steamtemp_gym.plants.drum_boiler.layout import (
     DSP_LOADS,
     FW_DT_K,
     FW_T0_K,
-    I_CM1,
-    I_CM2,
-    I_CV,
-    I_DPSH,
-    I_DPSP,
-    I_DRUM,
-    I_DSP,
-    I_DTFW,
-    I_DTG1,
-    I_DTG2,
-    I_FW,
-    I_GEXP,
-    I_KA1,
-    I_KA2,
-    I_KPL,
-    I_KPP,
-    I_LCM,
-    I_LV,
-    I_MARG,
-    I_N,
-    I_NL,
-    I_PSP,
-    I_QNOM,
-    I_QSN,
-    I_TAUF,
-    I_TAUFW,
-    I_TAUM,
-    I_TAUW,
-    I_TBIR,
-    I_TC1,
-    I_TC2,
-    I_TFW,
-    I_TG1,
-    I_TG2,
-    I_TIL,
-    I_TIP,
-    I_UAG1,
-    I_UAG2,
-    I_V1,
-    I_V2,
-    I_WNOM,
-    J_CHAIN1,
-    J_DRUM,
-    J_QF,
+    IJ,
+    IP,
+    IW,
+    IX,
+    IZ,
     N_FW,
-    S_CHAIN1,
-    S_DRUM,
-    S_IL,
-    S_IP,
-    S_LF,
     S_P,
-    S_QF,
-    S_V,
-    S_W,
     SHARE_1,
-    T_TA2,
-    T_TC2,
-    Z_AR,
-    Z_DSP,
-    Z_LEVEL,
-    Z_LF,
-    Z_MILL,
-    Z_PD,
-    Z_PMS,
-    Z_QDC,
-    Z_QEV,
-    Z_QF,
-    Z_QS,
-    Z_QSH,
-    Z_TATT,
-    Z_TATTM,
-    Z_TMMAX,
-    Z_TOUT,
-    Z_TOUTM,
-    Z_TPRI,
-    Z_TSH2,
-    Z_V,
-    Z_W,
-    Z_WSP,
     s_line,
     s_mill,
     sensors,
@@ -119,7 +48,7 @@ def _fw(P, T):
     x = (min(max(T, FW_T0_K), FW_T0_K + FW_DT_K * (N_FW - 1)) - FW_T0_K) / FW_DT_K
     k = min(int(x), N_FW - 2)
     a = x - k
-    o = I_FW + k
+    o = IP.FW + k
     h = (1.0 - a) * P[o] + a * P[o + 1]
     return h, (1.0 - a) * P[o + N_FW] + a * P[o + N_FW + 1], (P[o + 1] - P[o]) / FW_DT_K
 
@@ -132,29 +61,29 @@ def _boundary(x, d, P):
     with dWok = 1 if W is inside its bounds (else 0), dw_dv = d(w_sp)/dv and dp1, dp2 the
     derivatives of the SH pressures by W.
     """
-    Wn = P[I_WNOM]
-    W = min(max(x[S_W], 0.05 * Wn), 1.3 * Wn)
-    dWok = 1.0 if 0.05 * Wn < x[S_W] < 1.3 * Wn else 0.0
+    Wn = P[IP.WNOM]
+    W = min(max(x[IX.W], 0.05 * Wn), 1.3 * Wn)
+    dWok = 1.0 if 0.05 * Wn < x[IX.W] < 1.3 * Wn else 0.0
     lw = W / Wn
-    T_fw = P[I_TFW] - P[I_DTFW] * (1.0 - lw)
+    T_fw = P[IP.TFW] - P[IP.DTFW] * (1.0 - lw)
     h_f, _, cp_f = _fw(P, T_fw)
     h_sp, rho_sp, _ = _fw(P, T_fw + d[D_SPRAY_T])
-    v = min(max(x[S_V], 0.0), 1.0)
-    cap = spray_flow(1.0, P[I_CV], rho_sp, P[I_DPSP])
-    dpsh = P[I_DPSH] * lw * lw
+    v = min(max(x[IX.V], 0.0), 1.0)
+    cap = spray_flow(1.0, P[IP.CV], rho_sp, P[IP.DPSP])
+    dpsh = P[IP.DPSH] * lw * lw
     p = x[S_P]
     p1 = p - SHARE_1 * dpsh
     p2 = p - dpsh
     # attemperator protection (built-in interlock): outlet >= Tsat(p_1) + margin
-    h_min = h_pT(p1, Tsat_p(p1) + P[I_MARG])
-    w_max = protected_spray_out(0.5 * W, W, x[S_CHAIN1 + 2 * int(P[I_N]) - 1], h_sp, h_min)
+    h_min = h_pT(p1, Tsat_p(p1) + P[IP.MARG])
+    w_max = protected_spray_out(0.5 * W, W, x[IX.CHAIN1 + 2 * int(P[IP.N]) - 1], h_sp, h_min)
     w_sp = min(v * cap, w_max)
     dw_dv = cap if v * cap < w_max else 0.0
     q_s = W - w_sp
-    ddp = 2.0 * P[I_DPSH] * lw / Wn * dWok
-    L_f = min(max(x[S_LF], 0.02), 1.3)
-    mult = max(d[D_FOULING] * (1.0 + d[D_HEAT_BIAS]), 0.0) * L_f ** P[I_GEXP]
-    dhf = cp_f * P[I_DTFW] / Wn * dWok
+    ddp = 2.0 * P[IP.DPSH] * lw / Wn * dWok
+    L_f = min(max(x[IX.LF], 0.02), 1.3)
+    mult = max(d[D_FOULING] * (1.0 + d[D_HEAT_BIAS]), 0.0) * L_f ** P[IP.GEXP]
+    dhf = cp_f * P[IP.DTFW] / Wn * dWok
     return W, lw, dWok, q_s, w_sp, dw_dv, h_f, dhf, h_sp, p1, p2, -SHARE_1 * ddp, -ddp, L_f, mult
 
 
@@ -167,14 +96,15 @@ def _design_spray(P, lw):
     while k < len(DSP_LOADS) - 2 and lw > DSP_LOADS[k + 1]:
         k += 1
     a = (lw - DSP_LOADS[k]) / (DSP_LOADS[k + 1] - DSP_LOADS[k])
-    return max((1.0 - a) * P[I_DSP + k] + a * P[I_DSP + k + 1], 0.0)
+    return max((1.0 - a) * P[IP.DSP + k] + a * P[IP.DSP + k + 1], 0.0)
 
 
 @njit(cache=True)
 def _firing_demand(x, d, P):
     """Boiler-master firing demand (fraction) and the pressure error (relative)."""
-    e = (P[I_PSP] - x[S_P]) / P[I_PSP]
-    return min(max(d[D_LOAD] + P[I_TBIR] * d[D_LOAD_RATE] + P[I_KPP] * e + x[S_IP], 0.02), 1.3), e
+    e = (P[IP.PSP] - x[S_P]) / P[IP.PSP]
+    demand = d[D_LOAD] + P[IP.TBIR] * d[D_LOAD_RATE] + P[IP.KPP] * e + x[IX.IP]
+    return min(max(demand, 0.02), 1.3), e
 
 
 @njit(cache=True)
@@ -207,44 +137,44 @@ def _chain_fired(x, off, n, n_in, h0, dh0, W, dW, p, dp, kA, UAg, Tg, dUAg, dTg,
 @njit(cache=True)
 def rhs(x, u, d, P, f, jd, ju, jl, want_jac):
     """dx/dt of the drum boiler plant (see package docstring); pattern from :func:`pattern`."""
-    n = int(P[I_N])
-    c2 = S_CHAIN1 + 2 * n
+    n = int(P[IP.N])
+    c2 = IX.CHAIN1 + 2 * n
     W, lw, dWok, q_s, w_sp, dw_dv, h_f, dhf, h_sp, p1, p2, dp1, dp2, L_f, mult = _boundary(x, d, P)
     # turbine load controller, boiler master, feedwater
-    f[S_W] = (min(max(d[D_LOAD], 0.0), 1.3) * P[I_WNOM] - x[S_W]) / P[I_TAUW]
+    f[IX.W] = (min(max(d[D_LOAD], 0.0), 1.3) * P[IP.WNOM] - x[IX.W]) / P[IP.TAUW]
     u_f, e_p = _firing_demand(x, d, P)
     sm = s_mill(n)
-    f[sm] = (u_f - x[sm]) / P[I_TAUM]
-    f[S_LF] = (x[sm] - x[S_LF]) / P[I_TAUF]
-    f[S_IP] = P[I_KPP] / P[I_TIP] * e_p
-    dLf = 1.0 if 0.02 < x[S_LF] < 1.3 else 0.0
-    Qn = P[I_QNOM]
+    f[sm] = (u_f - x[sm]) / P[IP.TAUM]
+    f[IX.LF] = (x[sm] - x[IX.LF]) / P[IP.TAUF]
+    f[IX.IP] = P[IP.KPP] / P[IP.TIP] * e_p
+    dLf = 1.0 if 0.02 < x[IX.LF] < 1.3 else 0.0
+    Qn = P[IP.QNOM]
     level, qdc, q_r, h_s, dh_s, sens = dr.drum_rhs(
-        x, S_DRUM, P, I_DRUM, q_s, x[S_QF], h_f, L_f * Qn, f, jd, want_jac
+        x, IX.DRUM, P, IP.DRUM, q_s, x[IX.QF], h_f, L_f * Qn, f, jd, want_jac
     )
     if want_jac:
         # drum rows on (W, L_f, q_f, v) = DRUM_INPUT_COLS: q_s = W - w_sp(v), Q = L_f Q_nom
         for r in range(4):
             s_qs, s_qf, s_q, s_hf = sens[4 * r], sens[4 * r + 1], sens[4 * r + 2], sens[4 * r + 3]
-            j = J_DRUM + 4 * r
+            j = IJ.DRUM + 4 * r
             jl[j] = s_qs * dWok + s_hf * dhf
             jl[j + 1] = s_q * Qn * dLf
             jl[j + 2] = s_qf
             jl[j + 3] = -s_qs * dw_dv
-    f[S_IL] = -P[I_KPL] / P[I_TIL] * level
-    q_fd = q_s - P[I_KPL] * level + x[S_IL]
-    f[S_QF] = (max(q_fd, 0.0) - x[S_QF]) / P[I_TAUFW]
-    f[S_V], jv = u[0], 0.0  # exact chord velocity of the valve (plants/integrator.py)
+    f[IX.IL] = -P[IP.KPL] / P[IP.TIL] * level
+    q_fd = q_s - P[IP.KPL] * level + x[IX.IL]
+    f[IX.QF] = (max(q_fd, 0.0) - x[IX.QF]) / P[IP.TAUFW]
+    f[IX.V], jv = u[0], 0.0  # exact chord velocity of the valve (plants/integrator.py)
     # primary superheater: saturated steam at q_s
-    gex = P[I_GEXP] * dLf / L_f
-    UAg1 = P[I_UAG1] * mult
-    Tg1 = P[I_TG1] - P[I_DTG1] * (1.0 - L_f)
+    gex = P[IP.GEXP] * dLf / L_f
+    UAg1 = P[IP.UAG1] * mult
+    Tg1 = P[IP.TG1] - P[IP.DTG1] * (1.0 - L_f)
     # inlet derivatives (arrays only in the Jacobian call; chain_rhs reads them only then)
     dh0 = np.array([dh_s]) if want_jac else f[0:1]
     _chain_fired(
-        x, S_CHAIN1, n, 1, h_s, dh0, q_s, dWok, p1, dp1,
-        steam_side_kA(P[I_KA1], q_s, P[I_QSN]), UAg1, Tg1, gex * UAg1, P[I_DTG1] * dLf,
-        P[I_CM1], P[I_V1], f, jd, ju, jl, J_CHAIN1, want_jac,
+        x, IX.CHAIN1, n, 1, h_s, dh0, q_s, dWok, p1, dp1,
+        steam_side_kA(P[IP.KA1], q_s, P[IP.QSN]), UAg1, Tg1, gex * UAg1, P[IP.DTG1] * dLf,
+        P[IP.CM1], P[IP.V1], f, jd, ju, jl, IJ.CHAIN1, want_jac,
     )  # fmt: skip
     # attemperator and final superheater at W
     h1 = x[c2 - 1]
@@ -253,37 +183,37 @@ def rhs(x, u, d, P, f, jd, ju, jl, want_jac):
         dh_att = np.array([w_sp * (h1 - h_sp) / (W * W) * dWok, (h_sp - h1) * dw_dv / W, q_s / W])
     else:
         dh_att = f[0:3]
-    UAg2 = P[I_UAG2] * mult
-    Tg2 = P[I_TG2] - P[I_DTG2] * (1.0 - L_f)
+    UAg2 = P[IP.UAG2] * mult
+    Tg2 = P[IP.TG2] - P[IP.DTG2] * (1.0 - L_f)
     _chain_fired(
-        x, c2, n, 3, h_att, dh_att, W, dWok, p2, dp2, steam_side_kA(P[I_KA2], W, P[I_WNOM]),
-        UAg2, Tg2, gex * UAg2, P[I_DTG2] * dLf, P[I_CM2], P[I_V2], f, jd, ju, jl,
-        J_CHAIN1 + 5 * n, want_jac,
+        x, c2, n, 3, h_att, dh_att, W, dWok, p2, dp2, steam_side_kA(P[IP.KA2], W, P[IP.WNOM]),
+        UAg2, Tg2, gex * UAg2, P[IP.DTG2] * dLf, P[IP.CM2], P[IP.V2], f, jd, ju, jl,
+        IJ.CHAIN1 + 5 * n, want_jac,
     )  # fmt: skip
     # outlet header and main-steam line (superheater.pipe_rhs; package docstring)
-    nl = int(P[I_NL])
-    j_line = J_CHAIN1 + 10 * n + 4  # after the mill's two entries
-    T_out, dT_out = pipe_rhs(x, s_line(n), nl, x[c2 + 2 * n - 1], (1.0,), W, 0.0, p2, P[I_LV],
-                             P[I_LCM], f, jd, jl, j_line, want_jac, False)  # fmt: skip
+    nl = int(P[IP.NL])
+    j_line = IJ.CHAIN1 + 10 * n + 4  # after the mill's two entries
+    T_out, dT_out = pipe_rhs(x, s_line(n), nl, x[c2 + 2 * n - 1], (1.0,), W, 0.0, p2, P[IP.LV],
+                             P[IP.LCM], f, jd, jl, j_line, want_jac, False)  # fmt: skip
     T_att, dT_att = T_dTdh_ph(p1, h_att)
     st = sensors(n, nl)
-    tc1, tc2 = P[I_TC1], P[I_TC2]
+    tc1, tc2 = P[IP.TC1], P[IP.TC2]
     f[st], f[st + 1], j1, j2 = thermowell_rhs(T_out, x[st], x[st + 1], tc1, tc2)
     f[st + 2], f[st + 3], j3, j4 = thermowell_rhs(T_att, x[st + 2], x[st + 3], tc1, tc2)
     if want_jac:
-        jd[S_W] = -1.0 / P[I_TAUW]
-        jd[S_LF] = -1.0 / P[I_TAUF]
-        jd[S_IP] = 0.0
-        jd[S_IL] = 0.0
-        jd[S_QF] = -1.0 / P[I_TAUFW]
-        jd[S_V] = jv
+        jd[IX.W] = -1.0 / P[IP.TAUW]
+        jd[IX.LF] = -1.0 / P[IP.TAUF]
+        jd[IX.IP] = 0.0
+        jd[IX.IL] = 0.0
+        jd[IX.QF] = -1.0 / P[IP.TAUFW]
+        jd[IX.V] = jv
         jd[st], jd[st + 1], jd[st + 2], jd[st + 3] = j1, j2, j3, j4
-        jd[sm] = -1.0 / P[I_TAUM]
+        jd[sm] = -1.0 / P[IP.TAUM]
         # the mill on the boiler master's pressure integrator and pressure
-        j = J_CHAIN1 + 10 * n + 2
+        j = IJ.CHAIN1 + 10 * n + 2
         ok = 1.0 if 0.02 < u_f < 1.3 else 0.0
-        jl[j] = ok / P[I_TAUM]
-        jl[j + 1] = -ok * P[I_KPP] / P[I_PSP] / P[I_TAUM]
+        jl[j] = ok / P[IP.TAUM]
+        jl[j + 1] = -ok * P[IP.KPP] / P[IP.PSP] / P[IP.TAUM]
         # thermowells on the main-steam line outlet and on the attemperator's inputs
         j = j_line + nl
         jl[j] = dT_out / tc1
@@ -292,81 +222,81 @@ def rhs(x, u, d, P, f, jd, ju, jl, want_jac):
             jl[j + 2 + k] = dT_att * dh_att[k] / tc1
         jl[j + 5] = 1.0 / tc2
         ok = 1.0 if q_fd > 0.0 else 0.0
-        jl[J_QF] = ok * dWok / P[I_TAUFW]
-        jl[J_QF + 1] = ok / P[I_TAUFW]
+        jl[IJ.QF] = ok * dWok / P[IP.TAUFW]
+        jl[IJ.QF + 1] = ok / P[IP.TAUFW]
 
 
 @njit(cache=True)
 def outputs(x, u, d, P, z):
     """Physical outputs (order of DrumBoilerSH.outputs)."""
-    n = int(P[I_N])
-    c2 = S_CHAIN1 + 2 * n
+    n = int(P[IP.N])
+    c2 = IX.CHAIN1 + 2 * n
     W, lw, dWok, q_s, w_sp, dw_dv, h_f, dhf, h_sp, p1, p2, dp1, dp2, L_f, mult = _boundary(x, d, P)
     h1 = x[c2 - 1]
     _, h_att = mix(q_s, h1, w_sp, h_sp)
-    nl = int(P[I_NL])
+    nl = int(P[IP.NL])
     T_sh2, _ = T_dTdh_ph(p2, x[c2 + 2 * n - 1])
     T_out, _ = T_dTdh_ph(p2, x[s_line(n) + nl - 1])
     T_att, _ = T_dTdh_ph(p1, h_att)
     T_pri, _ = T_dTdh_ph(p1, h1)
-    UAg1 = P[I_UAG1] * mult
-    Tg1 = P[I_TG1] - P[I_DTG1] * (1.0 - L_f)
-    UAg2 = P[I_UAG2] * mult
-    Tg2 = P[I_TG2] - P[I_DTG2] * (1.0 - L_f)
+    UAg1 = P[IP.UAG1] * mult
+    Tg1 = P[IP.TG1] - P[IP.DTG1] * (1.0 - L_f)
+    UAg2 = P[IP.UAG2] * mult
+    Tg2 = P[IP.TG2] - P[IP.DTG2] * (1.0 - L_f)
     q = 0.0
     tm_max = 0.0
     for i in range(n):
-        tm1 = x[S_CHAIN1 + 2 * i]
+        tm1 = x[IX.CHAIN1 + 2 * i]
         tm2 = x[c2 + 2 * i]
         q += UAg1 * (Tg1 - tm1) + UAg2 * (Tg2 - tm2)
         tm_max = max(tm_max, tm1, tm2)
     Ts, rw, rs, hw, hs, dTs, drw, drs, dhw, dhs = sat_p(x[S_P])
-    av, _, _ = dr.void_fraction(rw, rs, drw, drs, x[S_DRUM + dr.AR])
-    z[Z_TOUT] = T_out - K0
-    z[Z_TOUTM] = x[sensors(n, nl) + T_TC2] - K0
-    z[Z_TATT] = T_att - K0
-    z[Z_TATTM] = x[sensors(n, nl) + T_TA2] - K0
-    z[Z_TPRI] = T_pri - K0
-    z[Z_W] = W
-    z[Z_PD] = x[S_P] * 1e-6
-    z[Z_LEVEL] = dr.drum_level(x, S_DRUM, P, I_DRUM)
-    z[Z_QF] = x[S_QF]
-    z[Z_LF] = x[S_LF]
-    z[Z_V] = min(max(x[S_V], 0.0), 1.0)
-    z[Z_WSP] = w_sp
-    z[Z_PMS] = p2 * 1e-6
-    z[Z_QS] = q_s
-    z[Z_QSH] = q * 1e-6
-    z[Z_QEV] = L_f * P[I_QNOM] * 1e-6
-    z[Z_TMMAX] = tm_max - K0
-    z[Z_AR] = x[S_DRUM + dr.AR]
-    z[Z_QDC] = dr.circulation(rw, rs, av, P, I_DRUM)
-    z[Z_DSP] = _design_spray(P, lw)
-    z[Z_TSH2] = T_sh2 - K0
-    z[Z_MILL] = x[s_mill(n)]
+    av, _, _ = dr.void_fraction(rw, rs, drw, drs, x[IX.DRUM + dr.AR])
+    z[IZ.outlet_temp_C] = T_out - K0
+    z[IZ.outlet_temp_meas_C] = x[sensors(n, nl) + IW.TC2] - K0
+    z[IZ.attemp_out_temp_C] = T_att - K0
+    z[IZ.attemp_out_temp_meas_C] = x[sensors(n, nl) + IW.TA2] - K0
+    z[IZ.attemp_in_temp_C] = T_pri - K0
+    z[IZ.steam_flow_kg_s] = W
+    z[IZ.drum_pressure_MPa] = x[S_P] * 1e-6
+    z[IZ.drum_level_m] = dr.drum_level(x, IX.DRUM, P, IP.DRUM)
+    z[IZ.feedwater_flow_kg_s] = x[IX.QF]
+    z[IZ.firing_rate] = x[IX.LF]
+    z[IZ.spray_valve] = min(max(x[IX.V], 0.0), 1.0)
+    z[IZ.spray_flow_kg_s] = w_sp
+    z[IZ.main_steam_pressure_MPa] = p2 * 1e-6
+    z[IZ.drum_steam_flow_kg_s] = q_s
+    z[IZ.heat_absorption_MW] = q * 1e-6
+    z[IZ.evaporator_heat_MW] = L_f * P[IP.QNOM] * 1e-6
+    z[IZ.metal_temp_max_C] = tm_max - K0
+    z[IZ.riser_exit_quality] = x[IX.DRUM + dr.AR]
+    z[IZ.downcomer_flow_kg_s] = dr.circulation(rw, rs, av, P, IP.DRUM)
+    z[IZ.design_spray_kg_s] = _design_spray(P, lw)
+    z[IZ.sh2_outlet_temp_C] = T_sh2 - K0
+    z[IZ.mill_output] = x[s_mill(n)]
 
 
 @njit(cache=True)
 def project(x, P):
     """Keep states inside their physical ranges after a step."""
-    n = int(P[I_N])
-    Wn = P[I_WNOM]
-    x[S_W] = min(max(x[S_W], 0.0), 1.3 * Wn)
-    x[S_LF] = min(max(x[S_LF], 0.02), 1.3)
+    n = int(P[IP.N])
+    Wn = P[IP.WNOM]
+    x[IX.W] = min(max(x[IX.W], 0.0), 1.3 * Wn)
+    x[IX.LF] = min(max(x[IX.LF], 0.02), 1.3)
     x[s_mill(n)] = min(max(x[s_mill(n)], 0.02), 1.3)
-    for k in range(int(P[I_NL])):
+    for k in range(int(P[IP.NL])):
         x[s_line(n) + k] = min(max(x[s_line(n) + k], 1.5e6), 4.2e6)
-    x[S_IP] = min(max(x[S_IP], -0.6), 0.6)
-    x[S_IL] = min(max(x[S_IL], -0.5 * Wn), 0.5 * Wn)
-    x[S_QF] = min(max(x[S_QF], 0.0), 2.0 * Wn)
-    x[S_V] = min(max(x[S_V], 0.0), 1.0)
-    vt = P[I_DRUM + dr.D_VT]
-    x[S_DRUM + dr.VWT] = min(max(x[S_DRUM + dr.VWT], 0.3 * vt), 0.97 * vt)
+    x[IX.IP] = min(max(x[IX.IP], -0.6), 0.6)
+    x[IX.IL] = min(max(x[IX.IL], -0.5 * Wn), 0.5 * Wn)
+    x[IX.QF] = min(max(x[IX.QF], 0.0), 2.0 * Wn)
+    x[IX.V] = min(max(x[IX.V], 0.0), 1.0)
+    vt = P[IP.DRUM + dr.D_VT]
+    x[IX.DRUM + dr.VWT] = min(max(x[IX.DRUM + dr.VWT], 0.3 * vt), 0.97 * vt)
     x[S_P] = min(max(x[S_P], 1.0e6), 18.0e6)
-    x[S_DRUM + dr.AR] = min(max(x[S_DRUM + dr.AR], 1e-4), 0.8)
-    x[S_DRUM + dr.VSD] = min(max(x[S_DRUM + dr.VSD], 0.0), 0.5 * vt)
+    x[IX.DRUM + dr.AR] = min(max(x[IX.DRUM + dr.AR], 1e-4), 0.8)
+    x[IX.DRUM + dr.VSD] = min(max(x[IX.DRUM + dr.VSD], 0.0), 0.5 * vt)
     for i in range(4 * n):
-        j = S_CHAIN1 + i
+        j = IX.CHAIN1 + i
         if i % 2 == 0:
             x[j] = min(max(x[j], 400.0), 1300.0)
         else:
