@@ -146,7 +146,7 @@ from steamtemp_gym.metrics import step_response_metrics
 from steamtemp_gym.plants.attemperator import mix, protected_spray_out
 from steamtemp_gym.plants.base import MAIN
 from steamtemp_gym.plants.ndivision import feedback_gains, state_space
-from steamtemp_gym.plants.supercritical_fsh import I_MARG, SupercriticalFSH, spray_water
+from steamtemp_gym.plants.supercritical_fsh import IP, SupercriticalFSH, spray_water
 from steamtemp_gym.steam import P_MAX, P_MIN, T_MAX, T_MIN, T_dTdh_ph, T_ph, Tsat_p, h_pT, rho_ph
 
 K0 = 273.15
@@ -211,7 +211,7 @@ def _fsh_inlet(T_up_C, w_sp, W, p, W_nom, P):
         h_up = h_pT(p[b], T_up_C[b] + K0)
         # the plant's attemperator protection: a measured spray flow that would wet the
         # steam (only from a faulty signal) is capped as the interlock caps the real one
-        h_min = h_pT(p[b], Tsat_p(p[b]) + P[I_MARG])
+        h_min = h_pT(p[b], Tsat_p(p[b]) + P[IP.MARG])
         ws = protected_spray_out(min(max(w_sp[b], 0.0), 0.5 * W[b]), W[b], h_up, h_sp, h_min)
         h0[b] = mix(W[b] - ws, h_up, ws, h_sp)[1]
     return h0

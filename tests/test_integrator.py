@@ -21,13 +21,13 @@ def radau_reference(plant, x0, commands, D_of_k):
     P, dt = plant.P, plant.dt_s
     f, jd, ju = np.empty(plant.n_x), np.empty(plant.n_x), np.zeros(plant.n_x)
     jl = np.empty(len(plant.jrow))
-    n = int(P[fsh.I_N])
+    n = int(P[fsh.IP.N])
     x_ref, out = x0.copy(), []
     for k, cmd in enumerate(commands):
         d = D_of_k(k)
 
         def rhs(_t, x, cmd=cmd, d=d):
-            vdot = valve_rhs(x[fsh.S_V], cmd, P[fsh.I_TAUV], P[fsh.I_RATEV])[0]
+            vdot = valve_rhs(x[fsh.IX.V], cmd, P[fsh.IP.TAUV], P[fsh.IP.RATEV])[0]
             fsh.rhs(x, np.array([vdot]), d, P, f, jd, ju, jl, False)
             return f.copy()
 
@@ -35,10 +35,10 @@ def radau_reference(plant, x0, commands, D_of_k):
         sol = solve_ivp(rhs, (0.0, dt), x_ref, method="Radau", rtol=1e-8, atol=atol)
         assert sol.success
         x_ref = sol.y[:, -1]
-        p = fsh._pressure(P, x_ref[fsh.S_LW])
+        p = fsh._pressure(P, x_ref[fsh.IX.LW])
         # (FSH outlet, turbine inlet after the main-steam line) in C
-        out.append((T_ph(p, x_ref[fsh.S_CHAIN + 2 * n - 1]) - 273.15,
-                    T_ph(p, x_ref[fsh.s_line(n) + int(P[fsh.I_NL]) - 1]) - 273.15))  # fmt: skip
+        out.append((T_ph(p, x_ref[fsh.IX.CHAIN + 2 * n - 1]) - 273.15,
+                    T_ph(p, x_ref[fsh.s_line(n) + int(P[fsh.IP.NL]) - 1]) - 273.15))  # fmt: skip
     return np.array(out)
 
 
@@ -47,7 +47,7 @@ def run_kernel(plant, X, commands, D_of_k):
     out = []
     for k, cmd in enumerate(commands):
         plant.step(X, np.array([[cmd]]), D_of_k(k)[None, :], Z)
-        out.append((Z[0, fsh.Z_TFSH], Z[0, fsh.Z_TOUT]))
+        out.append((Z[0, fsh.IZ.fsh_outlet_temp_C], Z[0, fsh.IZ.outlet_temp_C]))
     return np.array(out)
 
 
@@ -66,7 +66,7 @@ def test_ros2_matches_radau_over_the_load_ramp():
 
     X = np.zeros((1, plant.n_x))
     plant.steady_state(D_of_k(0)[None, :], np.array([593.0]), X)
-    v0 = X[0, fsh.S_V]
+    v0 = X[0, fsh.IX.V]
     steps = int((t1 - t0) / dt)
     commands = v0 + 0.04 * np.sin(2 * np.pi * (t0 + dt * np.arange(steps)) / 300.0)
     ref = radau_reference(plant, X[0], commands, D_of_k)
@@ -87,7 +87,7 @@ def test_random_valve_steps_are_integrated_accurately():
     X = np.zeros((1, plant.n_x))
     plant.steady_state(D[None, :], np.array([593.0]), X)
     rng = np.random.default_rng(0)
-    commands = np.clip(X[0, fsh.S_V] + rng.uniform(-0.3, 0.3, size=150), 0.0, 1.0)
+    commands = np.clip(X[0, fsh.IX.V] + rng.uniform(-0.3, 0.3, size=150), 0.0, 1.0)
     ref = radau_reference(plant, X[0], commands, lambda k: D)
     got = run_kernel(plant, X, commands, lambda k: D)
     err_fsh, err = np.max(np.abs(got - ref), axis=0)

@@ -33,50 +33,52 @@ def steady(load, **dist):
     PLANT.steady_state(D, np.array([PLANT.setpoint_C]), X)
     Z = np.zeros((1, PLANT.n_z))
     PLANT.kernel()(
-        X, X[:, fsh.S_V : fsh.S_V + 1].copy(), D, PLANT.P, PLANT.jrow, PLANT.jcol, 0.0, 1, Z
+        X, X[:, fsh.IX.V : fsh.IX.V + 1].copy(), D, PLANT.P, PLANT.jrow, PLANT.jcol, 0.0, 1, Z
     )
     return X, D, Z
 
 
 def test_rated_balance_matches_the_paper():
     X, D, Z = steady(1.0)
-    p = Z[0, fsh.Z_P] * 1e6
+    p = Z[0, fsh.IZ.pressure_MPa] * 1e6
     n = PLANT.params.n_segments
-    h_out = X[0, fsh.S_CHAIN + 2 * n - 1]
+    h_out = X[0, fsh.IX.CHAIN + 2 * n - 1]
     W, _, w_sp, h0, *_ = fsh._boundary(X[0], X[0, 3:4], D[0], PLANT.P)
     assert (h_out - h0) / 1e3 == pytest.approx(217.8, abs=0.5)
-    assert Z[0, fsh.Z_TOUT] - Z[0, fsh.Z_TATT] == pytest.approx(68.5, abs=0.3)
+    rise = Z[0, fsh.IZ.outlet_temp_C] - Z[0, fsh.IZ.attemp_out_temp_C]
+    assert rise == pytest.approx(68.5, abs=0.3)
     assert T_ph(p, h_out) - 273.15 == pytest.approx(593.0, abs=0.01)
 
 
 @pytest.mark.parametrize("load", [1.0, 0.75, 0.5])
 def test_steady_state_holds_setpoint_with_valve_in_range(load):
     X, D, Z = steady(load)
-    assert Z[0, fsh.Z_TOUT] == pytest.approx(593.0, abs=0.01)
-    assert 0.1 < Z[0, fsh.Z_V] < 0.9
+    assert Z[0, fsh.IZ.outlet_temp_C] == pytest.approx(593.0, abs=0.01)
+    assert 0.1 < Z[0, fsh.IZ.spray_valve] < 0.9
     # and the state is stationary: one control interval changes nothing measurable
-    U = X[:, fsh.S_V : fsh.S_V + 1].copy()
+    U = X[:, fsh.IX.V : fsh.IX.V + 1].copy()
     PLANT.step(X, U, D, Z)
-    assert Z[0, fsh.Z_TOUT] == pytest.approx(593.0, abs=1e-3)
+    assert Z[0, fsh.IZ.outlet_temp_C] == pytest.approx(593.0, abs=1e-3)
     # disturbed steady states stay controllable (valve inside its range)
     for dist in ({"bias": 0.08}, {"fouling": 0.85}, {"spray_dT": 15.0}):
         _, _, Zd = steady(load, **dist)
-        assert 0.0 < Zd[0, fsh.Z_V] < 1.0 and Zd[0, fsh.Z_TOUT] == pytest.approx(593.0, abs=0.01)
+        assert 0.0 < Zd[0, fsh.IZ.spray_valve] < 1.0
+        assert Zd[0, fsh.IZ.outlet_temp_C] == pytest.approx(593.0, abs=0.01)
 
 
 def spray_step(load, dv=0.05, steps=1500):
     X, D, Z = steady(load)
-    U = X[:, fsh.S_V : fsh.S_V + 1].copy()
+    U = X[:, fsh.IX.V : fsh.IX.V + 1].copy()
     PLANT.step(X, U, D, Z)
-    w0 = Z[0, fsh.Z_WSP]
+    w0 = Z[0, fsh.IZ.spray_flow_kg_s]
     U += dv
-    t, y_true, y_meas = [0.0], [Z[0, fsh.Z_TOUT]], [Z[0, fsh.Z_TOUTM]]
+    t, y_true, y_meas = [0.0], [Z[0, fsh.IZ.outlet_temp_C]], [Z[0, fsh.IZ.outlet_temp_meas_C]]
     for k in range(steps):
         PLANT.step(X, U, D, Z)
         t.append((k + 1) * PLANT.dt_s)
-        y_true.append(Z[0, fsh.Z_TOUT])
-        y_meas.append(Z[0, fsh.Z_TOUTM])
-    dw = Z[0, fsh.Z_WSP] - w0
+        y_true.append(Z[0, fsh.IZ.outlet_temp_C])
+        y_meas.append(Z[0, fsh.IZ.outlet_temp_meas_C])
+    dw = Z[0, fsh.IZ.spray_flow_kg_s] - w0
     t = np.array(t)
     return (
         dw,
@@ -111,31 +113,31 @@ def test_heat_absorption_bias_reaches_the_upstream_enthalpy():
     X0, _, Z0 = steady(1.0)
     X1, _, Z1 = steady(1.0, bias=0.05)
     # share bias_upstream_share of the enthalpy rise from the feedwater
-    dh = X1[0, fsh.S_HUP] - X0[0, fsh.S_HUP]
-    rise = fsh._table(PLANT.P, fsh.T_DHUP, 1.0)
+    dh = X1[0, fsh.IX.HUP] - X0[0, fsh.IX.HUP]
+    rise = fsh._table(PLANT.P, fsh.IP.DHUP, 1.0)
     assert dh == pytest.approx(0.05 * PLANT.params.bias_upstream_share * rise, rel=1e-6)
-    assert Z1[0, fsh.Z_TUP] > Z0[0, fsh.Z_TUP] + 5.0
+    assert Z1[0, fsh.IZ.attemp_in_temp_C] > Z0[0, fsh.IZ.attemp_in_temp_C] + 5.0
 
 
 def test_design_spray_is_the_schedule_and_differs_by_the_documented_mismatch():
     for load in (1.0, 0.75, 0.5):
         _, _, Z = steady(load)
-        design = PLANT.params.spray_design_fraction * Z[0, fsh.Z_W]
-        assert Z[0, fsh.Z_DSP] == pytest.approx(design, rel=1e-12)
+        design = PLANT.params.spray_design_fraction * Z[0, fsh.IZ.steam_flow_kg_s]
+        assert Z[0, fsh.IZ.design_spray_kg_s] == pytest.approx(design, rel=1e-12)
         if load == 1.0:  # commissioned at rated load: the schedule is exact there
-            assert Z[0, fsh.Z_WSP] == pytest.approx(design, rel=0.01)
+            assert Z[0, fsh.IZ.spray_flow_kg_s] == pytest.approx(design, rel=0.01)
         else:  # FWR schedule error m(L) > 0: more spray than designed, within +30 %
-            assert 1.05 * design < Z[0, fsh.Z_WSP] < 1.3 * design
+            assert 1.05 * design < Z[0, fsh.IZ.spray_flow_kg_s] < 1.3 * design
 
 
 def test_frozen_valve_drifts_after_a_load_change():
     """The FWR schedule is not perfect: steady offset at 50 % load with the rated valve."""
     X, D, Z = steady(1.0)
-    U = X[:, fsh.S_V : fsh.S_V + 1].copy()
+    U = X[:, fsh.IX.V : fsh.IX.V + 1].copy()
     D[0, 0] = 0.5
     for _ in range(2000):
         PLANT.step(X, U, D, Z)
-    assert Z[0, fsh.Z_TOUT] - 593.0 > 3.0
+    assert Z[0, fsh.IZ.outlet_temp_C] - 593.0 > 3.0
 
 
 def test_protection_keeps_the_attemperator_above_saturation_at_low_load():
@@ -145,8 +147,8 @@ def test_protection_keeps_the_attemperator_above_saturation_at_low_load():
     U = np.ones((1, 1))
     for _ in range(300):
         PLANT.step(X, U, D, Z)
-        tsat = Tsat_p(Z[0, fsh.Z_P] * 1e6) - 273.15
-        assert Z[0, fsh.Z_TATT] >= tsat + PLANT.params.attemp_margin_K - 1e-6
+        tsat = Tsat_p(Z[0, fsh.IZ.pressure_MPa] * 1e6) - 273.15
+        assert Z[0, fsh.IZ.attemp_out_temp_C] >= tsat + PLANT.params.attemp_margin_K - 1e-6
     # and with a margin so large it must bind, it holds exactly there
     plant = fsh.SupercriticalFSH(attemp_margin_K=45.0)
     D = np.zeros((1, 5))
@@ -156,8 +158,8 @@ def test_protection_keeps_the_attemperator_above_saturation_at_low_load():
     Z = np.zeros((1, plant.n_z))
     for _ in range(200):
         plant.step(X, U, D, Z)
-    tsat = Tsat_p(Z[0, fsh.Z_P] * 1e6) - 273.15
-    assert Z[0, fsh.Z_TATT] >= tsat + 45.0 - 1e-6
+    tsat = Tsat_p(Z[0, fsh.IZ.pressure_MPa] * 1e6) - 273.15
+    assert Z[0, fsh.IZ.attemp_out_temp_C] >= tsat + 45.0 - 1e-6
 
 
 def test_heat_to_flow_ratio_is_disturbed_by_a_load_ramp():
@@ -167,7 +169,7 @@ def test_heat_to_flow_ratio_is_disturbed_by_a_load_ramp():
     band: the frozen valve's excursion reaches the env's trip limit).
     """
     X, D, Z = steady(1.0)
-    U = X[:, fsh.S_V : fsh.S_V + 1].copy()
+    U = X[:, fsh.IX.V : fsh.IX.V + 1].copy()
     rate = -0.5 / 600.0
     ratio = []
     for k in range(1800):
@@ -176,7 +178,8 @@ def test_heat_to_flow_ratio_is_disturbed_by_a_load_ramp():
         D[0, 0] = 1.0 if t < 1200.0 else max(1.0 + rate * (t - 1200.0), 0.5)
         D[0, 1] = rate if ramp else 0.0
         PLANT.step(X, U, D, Z)
-        ratio.append((t + PLANT.dt_s, Z[0, fsh.Z_Q] / Z[0, fsh.Z_W]))
+        q = Z[0, fsh.IZ.heat_absorption_MW] / Z[0, fsh.IZ.steam_flow_kg_s]
+        ratio.append((t + PLANT.dt_s, q))
     t, q = np.array(ratio).T
     before = q[(t > 1000) & (t < 1200)].mean()
     during = q[(t > 1500) & (t < 1900)]

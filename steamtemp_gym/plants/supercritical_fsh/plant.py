@@ -1,0 +1,36 @@
+"""The plant class of ``steamtemp/SupercriticalFSH-v0``."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from steamtemp_gym.plants.base import (
+    Plant,
+    Signal,
+)
+from steamtemp_gym.plants.supercritical_fsh.calibration import _pack
+from steamtemp_gym.plants.supercritical_fsh.kernel import KERNELS
+from steamtemp_gym.plants.supercritical_fsh.layout import IP, IX, OUTPUTS
+from steamtemp_gym.plants.supercritical_fsh.params import K0, FSHParams
+from steamtemp_gym.plants.supercritical_fsh.steady_state import steady
+
+
+class SupercriticalFSH(Plant):
+    """Plant of ``steamtemp/SupercriticalFSH-v0`` (Sagara et al. 1998)."""
+
+    id = "steamtemp/SupercriticalFSH-v0"
+    source = "Sagara et al., JSME Int. J. Ser. C, 1998"
+    Params = FSHParams
+    actions = (Signal("spray_valve_cmd", "1", 0.5, 0.5, description="spray valve command"),)
+    outputs = OUTPUTS
+    setpoint_C = 593.0
+    design_spray = "design_spray_kg_s"
+    extra_info = ("attemp_out_temp_C", "heat_absorption_MW", "pressure_MPa", "steam_flow_kg_s")
+
+    pack = staticmethod(_pack)
+    kernels = KERNELS
+    actuators = ((IX.V, IP.TAUV, IP.RATEV),)
+    setpoint_param = "T_out_C"
+
+    def steady_state(self, D: np.ndarray, setpoint_C: np.ndarray, X: np.ndarray) -> None:
+        steady(D, setpoint_C + K0, self.P, X)
