@@ -40,7 +40,8 @@ from typing import Any
 
 import numpy as np
 
-from steamtemp_gym.envs.core import E_DUR, E_TIME, Core
+from steamtemp_gym.envs.core import Core
+from steamtemp_gym.envs.kernels import E_DUR, E_TIME
 from steamtemp_gym.envs.snapshot import copy_rows
 from steamtemp_gym.rewards import RewardConfig
 

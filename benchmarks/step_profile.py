@@ -53,7 +53,7 @@ import numpy as np
 
 import steamtemp_gym
 from steamtemp_gym._jit import njit
-from steamtemp_gym.envs.core import advance, schedules, to_commands
+from steamtemp_gym.envs.kernels import advance, schedules, to_commands
 from steamtemp_gym.plants import threads
 from steamtemp_gym.plants.integrator import block_solve
 from steamtemp_gym.plants.specialize import specialize
@@ -139,7 +139,7 @@ ASM = r"""
 import json, re, sys
 import gymnasium as gym
 import steamtemp_gym
-from steamtemp_gym.envs.core import advance
+from steamtemp_gym.envs.kernels import advance
 env = gym.make(sys.argv[1])
 env.reset(seed=0)
 env.step(env.action_space.sample())

@@ -21,7 +21,7 @@ from scipy.integrate import solve_ivp
 from scipy.optimize import least_squares
 
 from steamtemp_gym import scenarios
-from steamtemp_gym.envs.core import schedules
+from steamtemp_gym.envs.kernels import schedules
 from steamtemp_gym.plants import benson_subcritical as bs
 from steamtemp_gym.plants.valve import valve_travel
 from steamtemp_gym.steam import cp_pT

@@ -18,7 +18,7 @@ import pytest
 
 import steamtemp_gym  # noqa: F401  (registers the ids)
 from steamtemp_gym import scenarios
-from steamtemp_gym.envs.core import schedules
+from steamtemp_gym.envs.kernels import schedules
 from steamtemp_gym.metrics import step_response_metrics
 from steamtemp_gym.plants import boiler_turbine_mimo as bt
 

@@ -24,7 +24,7 @@ from scipy.integrate import solve_ivp
 
 import steamtemp_gym  # noqa: F401  (registers the ids)
 from steamtemp_gym import scenarios
-from steamtemp_gym.envs.core import schedules
+from steamtemp_gym.envs.kernels import schedules
 from steamtemp_gym.plants import drum as dr
 from steamtemp_gym.plants import drum_boiler as db
 from steamtemp_gym.scenarios import Scenario

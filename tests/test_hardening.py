@@ -13,7 +13,7 @@ import pytest
 
 import steamtemp_gym
 from steamtemp_gym import plants
-from steamtemp_gym.envs.core import TRIP_REASONS
+from steamtemp_gym.envs.kernels import TRIP_REASONS
 from steamtemp_gym.rewards import RewardConfig
 from steamtemp_gym.scenarios import Scenario
 from steamtemp_gym.scenarios.stress import run_corners

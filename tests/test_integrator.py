@@ -10,7 +10,7 @@ import numpy as np
 from scipy.integrate import solve_ivp
 
 from steamtemp_gym import scenarios
-from steamtemp_gym.envs.core import schedules
+from steamtemp_gym.envs.kernels import schedules
 from steamtemp_gym.plants import supercritical_fsh as fsh
 from steamtemp_gym.plants.valve import valve_rhs
 from steamtemp_gym.steam import T_ph

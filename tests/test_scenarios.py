@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from steamtemp_gym import scenarios
-from steamtemp_gym.envs.core import schedules
+from steamtemp_gym.envs.kernels import schedules
 from steamtemp_gym.scenarios import RANDOM_DISTRIBUTION as DIST
 from steamtemp_gym.scenarios import Scenario
 

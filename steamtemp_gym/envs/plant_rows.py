@@ -20,7 +20,8 @@ from collections.abc import Mapping
 from typing import Any
 
 from steamtemp_gym._jit import entry_point
-from steamtemp_gym.envs.core import Core, advance, non_finite_action, to_commands
+from steamtemp_gym.envs.core import Core, non_finite_action
+from steamtemp_gym.envs.kernels import advance, to_commands
 from steamtemp_gym.plants import perturb
 from steamtemp_gym.plants.base import Plant
 from steamtemp_gym.rewards import RewardConfig

@@ -74,7 +74,8 @@ def run_corners(env_id: str, num_envs: int = 16, steps: int = 500, seed: int = 0
     outside [0, 1]: must be 0) and ``trips`` by reason.
     """
     from steamtemp_gym import plants
-    from steamtemp_gym.envs.core import TRIP_REASONS, Core
+    from steamtemp_gym.envs.core import Core
+    from steamtemp_gym.envs.kernels import TRIP_REASONS
     from steamtemp_gym.rewards import RewardConfig
     from steamtemp_gym.signals import OBS_LIMIT
 

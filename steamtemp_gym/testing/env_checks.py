@@ -17,7 +17,7 @@ import gymnasium as gym
 import numpy as np
 
 from steamtemp_gym import scenarios
-from steamtemp_gym.envs.core import TRIP_REASONS
+from steamtemp_gym.envs.kernels import TRIP_REASONS
 from steamtemp_gym.scenarios.stress import corner_scenario
 from steamtemp_gym.signals import OBS_LIMIT
 from steamtemp_gym.testing.subjects import CheckSkipped, EnvTarget, env_check, resolve_policy

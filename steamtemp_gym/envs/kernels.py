@@ -1,0 +1,230 @@
+"""The compiled per-row work of an env step, for every row of the batched core
+(envs/core.py). The env composes plant + scenario + sensors + reward; per control step:
+
+1. the plant kernel advances every row by dt with the commands held (ZOH) and
+   the disturbances evaluated at the start of the step, and fills its outputs;
+2. :func:`advance` (one compiled call) moves time, evaluates the scenario
+   schedules at the new time (disturbances for the next step, setpoint, noise
+   level), adds sensor noise, builds the normalized observation, the reward
+   (rewards.py), ``terminated`` (trip band) and ``truncated`` (scenario end).
+
+The coloured heat-absorption disturbance of the scenario (an Ornstein-Uhlenbeck
+process, scenarios/__init__.py) is a per-row state ``ou`` advanced by its exact
+discretization, x_k+1 = a x_k + s sqrt(1 - a^2) n_k with a = exp(-dt/tau), and added
+to the heat-absorption bias the plant receives.
+
+Sensor noise is counter-based (steamtemp_gym/rng.py: a pure function of the
+row's key, the step counter and the channel), so a row's noise depends only on
+its seed: the vector env reproduces the single env bit for bit, whatever the
+batch size. Plants with internal random disturbances get the same key through
+``Plant.seed_rows``.
+"""
+
+from __future__ import annotations
+
+import inspect
+
+import numpy as np
+
+from steamtemp_gym import scenarios as sc
+from steamtemp_gym._jit import njit
+from steamtemp_gym.plants.base import D_FOULING, D_HEAT_BIAS, D_LOAD, D_LOAD_RATE, D_SPRAY_T
+from steamtemp_gym.rewards import N_WEIGHTS, non_finite_reward, row_reward
+from steamtemp_gym.rng import gauss
+from steamtemp_gym.signals import OBS_LIMIT, T0_K
+from steamtemp_gym.slots import slots
+
+N_CH = len(sc.CHANNELS)
+# channel indices (order of scenarios.CHANNELS)
+C_LOAD, C_SP, C_BIAS, C_FOUL, C_SPRAYT = 0, 1, 2, 3, 4
+MIN_BREAKPOINTS = 64
+#: per-row episode values in Core.ep
+E_TIME, E_DUR, E_NOISE, E_OU_A, E_OU_B = 0, 1, 2, 3, 4
+#: Core.ints: the output indices of the outlet, its measurement and the design spray (-1:
+#: the plant declares none), then where each index list of ints starts (``end``: where the
+#: last one ends); the lists are output indices of the observed signals, valves, sprays,
+#: secondary temperatures and info values.
+H = slots("IntsHeader", "outlet", "measured", "design_spray", "obs", "valves", "sprays",
+          "secondary", "info", "end")  # fmt: skip
+#: Core.cfg: these scalars, then the reward weights (rewards.W) and the secondary setpoints.
+CFG = slots("Config", "dt", "setpoint", "trip_below_K", "trip_above_K", "spray_scale")
+N_CFG = len(CFG)
+#: Why an episode terminated (``info["trip_reason"]``; Core.out[:, 1] holds the index): the
+#: true outlet above or below the plant's trip band, or the plant left its valid region (a
+#: non-finite state or output; its observation is then 0 and its reward that of a trip at
+#: the lower band edge).
+TRIP_REASONS = ("", "outlet_above_trip_band", "outlet_below_trip_band", "non_finite_state")
+TRIP_ABOVE, TRIP_BELOW, TRIP_NON_FINITE = 1, 2, 3
+#: counter-based random channel of the coloured heat-absorption disturbance (observation
+#: noise uses channels 0 .. n_obs - 1)
+OU_CHANNEL = 31
+#: advance's arguments whose first axis is the batch (the rest are shared by every row).
+ADVANCE_ROW_ARGS = ("X", "Z", "U", "U_prev", "slot", "ep", "ou", "key", "counter", "D", "sp",
+                    "obs", "meas", "out", "info")  # fmt: skip
+
+
+@njit(cache=True, error_model="numpy")
+def _interp(bt, bv, n, t):
+    """Piecewise-linear schedule value and slope at t (held constant at the ends)."""
+    if t <= bt[0] or n == 1:
+        return bv[0], 0.0
+    if t >= bt[n - 1]:
+        return bv[n - 1], 0.0
+    k = 1
+    while bt[k] < t:
+        k += 1
+    # bt[k-1] < t <= bt[k]; a jump (equal times) is taken at its time
+    dt = bt[k] - bt[k - 1]
+    if dt <= 0.0:
+        return bv[k], 0.0
+    slope = (bv[k] - bv[k - 1]) / dt
+    return bv[k - 1] + slope * (t - bt[k - 1]), slope
+
+
+@njit(cache=True, error_model="numpy")
+def schedules(b, s, t, bp_t, bp_v, bp_n, sp_nom, ou, D, sp):
+    """Disturbances D[b] and setpoint sp[b] of row b at time t from schedule table slot s
+    (ou: coloured heat-absorption bias, added)."""
+    load, rate = _interp(bp_t[s, C_LOAD], bp_v[s, C_LOAD], bp_n[s, C_LOAD], t)
+    D[b, D_LOAD] = load
+    D[b, D_LOAD_RATE] = rate
+    D[b, D_HEAT_BIAS] = _interp(bp_t[s, C_BIAS], bp_v[s, C_BIAS], bp_n[s, C_BIAS], t)[0] + ou[b]
+    D[b, D_FOULING] = _interp(bp_t[s, C_FOUL], bp_v[s, C_FOUL], bp_n[s, C_FOUL], t)[0]
+    D[b, D_SPRAY_T] = _interp(bp_t[s, C_SPRAYT], bp_v[s, C_SPRAYT], bp_n[s, C_SPRAYT], t)[0]
+    sp[b] = sp_nom + _interp(bp_t[s, C_SP], bp_v[s, C_SP], bp_n[s, C_SP], t)[0]
+
+
+@njit(cache=True, error_model="numpy")
+def observe(b, Z, obs_idx, obs_cs, i_meas, key, counter, noise, sp, D, obs, meas_out):
+    """Write the normalized observation of row b (noisy measurements, setpoint, error, load).
+
+    ``noise`` is row b's noise standard deviation (K).
+
+    ``meas_out[b]`` receives what the outlet thermocouple reported (noise included). A
+    non-finite value (a plant that left its valid region; the step then trips) is observed
+    as 0 (the signal's centre), so no NaN ever reaches an agent.
+    """
+    n = obs_idx.shape[0]
+    meas = 0.0
+    for j in range(n):
+        v = Z[b, obs_idx[j]]
+        if obs_cs[j, 2] > 0.0 and noise > 0.0:
+            v += noise * gauss(key[b], counter[b], j)
+        if obs_idx[j] == i_meas:
+            meas = v
+        obs[b, j] = _normalized(v, obs_cs[j, 0], obs_cs[j, 1])
+    meas_out[b] = meas
+    obs[b, n] = _normalized(sp[b], obs_cs[n, 0], obs_cs[n, 1])
+    obs[b, n + 1] = _normalized(sp[b] - meas, 0.0, T0_K)
+    obs[b, n + 2] = _normalized(D[b, D_LOAD], 0.75, 0.25)
+
+
+@njit(cache=True, error_model="numpy")
+def _normalized(v, center, scale):
+    """(v - center) / scale clipped to the transmitter range; 0 for a non-finite v."""
+    o = (v - center) / scale
+    if not np.isfinite(o):
+        return 0.0
+    return min(max(o, -OBS_LIMIT), OBS_LIMIT)
+
+
+def ou_coefficients(std: float, tau_s: float, dt: float) -> tuple[float, float]:
+    """(a, b) of the exact OU step x_k+1 = a x_k + b n_k (stationary std, correlation tau)."""
+    a = float(np.exp(-dt / tau_s))
+    return a, std * float(np.sqrt(1.0 - a * a))
+
+
+@njit(cache=True, error_model="numpy", nogil=True)  # threads: plants/threads.py
+def advance(X, Z, U, U_prev, slot, bp_t, bp_v, bp_n, ep, ou, key, counter, ints, cfg, obs_cs, D,
+            sp, obs, meas, out, info):  # fmt: skip
+    """Everything after the plant step, for every row (see module docstring).
+
+    Args:
+        slot: (B,) schedule-table slot of each row (rows running the same scenario share one).
+        ep: (B, 5) per-row [time_s, duration_s, noise_std_C, ou_a, ou_b] (ou_coefficients);
+            time advanced in place.
+        ou: (B,) coloured heat-absorption disturbance, advanced in place.
+        ints: Output indices, laid out as :data:`H` says.
+        cfg: The scalars of :data:`CFG`, the reward weights, the secondary setpoints.
+        meas: (B,) written: the outlet thermocouple's reading (noise included).
+        out: (B, 3) written: [reward, trip code (TRIP_REASONS index; 0: running), truncated].
+        info: (B, n_info + 5) written: the row's info values (:func:`fill_info`).
+    """
+    i_out, i_meas, i_design = ints[H.outlet], ints[H.measured], ints[H.design_spray]
+    obs_idx = ints[ints[H.obs] : ints[H.valves]]
+    s_idx = ints[ints[H.sprays] : ints[H.secondary]]
+    sec_idx = ints[ints[H.secondary] : ints[H.info]]
+    info_idx = ints[ints[H.info] : ints[H.end]]
+    dt, sp_nom, s_scale = cfg[CFG.dt], cfg[CFG.setpoint], cfg[CFG.spray_scale]
+    trip_lo, trip_hi = cfg[CFG.trip_below_K], cfg[CFG.trip_above_K]
+    w = cfg[N_CFG : N_CFG + N_WEIGHTS]
+    sec_sp = cfg[N_CFG + N_WEIGHTS :]
+    for b in range(Z.shape[0]):
+        counter[b] += 1
+        ep[b, E_TIME] = counter[b] * dt  # counted, not summed: no drift over long episodes
+        if ep[b, E_OU_B] > 0.0:
+            ou[b] = ep[b, E_OU_A] * ou[b] + ep[b, E_OU_B] * gauss(key[b], counter[b], OU_CHANNEL)
+        schedules(b, slot[b], ep[b, E_TIME], bp_t, bp_v, bp_n, sp_nom, ou, D, sp)
+        observe(b, Z, obs_idx, obs_cs, i_meas, key, counter, ep[b, E_NOISE], sp, D, obs, meas)
+        fill_info(b, Z, info_idx, s_idx, meas, ep, sp, D, info)
+        e = sp[b] - Z[b, i_out]
+        code = TRIP_ABOVE if e < -trip_hi else (TRIP_BELOW if e > trip_lo else 0)
+        if not (_finite(X, b) and _finite(Z, b)):
+            code = TRIP_NON_FINITE
+        term = code != 0
+        out[b, 1] = code
+        out[b, 2] = 1.0 if ep[b, E_TIME] >= ep[b, E_DUR] - 1e-9 else 0.0
+        if code == TRIP_NON_FINITE:
+            out[b, 0] = non_finite_reward(trip_lo, w)
+        else:
+            out[b, 0] = row_reward(b, Z, U, U_prev, e, term, s_idx, i_design, s_scale, sec_idx,
+                                   sec_sp, w)  # fmt: skip
+        for j in range(U.shape[1]):
+            U_prev[b, j] = U[b, j]
+
+
+#: Positions of :data:`ADVANCE_ROW_ARGS` among advance's arguments (plants/threads.run_rows).
+ADVANCE_ROWS = tuple(i for i, name in enumerate(inspect.signature(advance.py_func).parameters)
+                     if name in ADVANCE_ROW_ARGS)  # fmt: skip
+
+
+@njit(cache=True, error_model="numpy")
+def _finite(A, b):
+    """True if every entry of row b of A is finite."""
+    for i in range(A.shape[1]):
+        if not np.isfinite(A[b, i]):
+            return False
+    return True
+
+
+@njit(cache=True, error_model="numpy")
+def fill_info(b, Z, cols, sprays, meas, ep, sp, D, info):
+    """Fill info[b]: Z's columns ``cols`` of row b, then (:data:`INFO_TAIL`) the measured
+    temperature, time, setpoint, load and the sum of the spray columns ``sprays``."""
+    k = cols.shape[0]
+    for j in range(k):
+        info[b, j] = Z[b, cols[j]]
+    info[b, k] = meas[b]
+    info[b, k + 1] = ep[b, E_TIME]
+    info[b, k + 2] = sp[b]
+    info[b, k + 3] = D[b, D_LOAD]
+    spray = 0.0
+    for j in range(sprays.shape[0]):
+        spray += Z[b, sprays[j]]
+    info[b, k + 4] = spray
+
+
+@njit(cache=True, error_model="numpy")
+def to_commands(A, U):
+    """Actuator commands U = (clip(A, -1, 1) + 1) / 2 (openings in [0, 1]).
+
+    Returns False, leaving U untouched, if A holds a NaN or an infinity.
+    """
+    for b in range(A.shape[0]):
+        for j in range(A.shape[1]):
+            if not np.isfinite(A[b, j]):
+                return False
+    for b in range(A.shape[0]):
+        for j in range(A.shape[1]):
+            U[b, j] = 0.5 * (min(max(A[b, j], -1.0), 1.0) + 1.0)
+    return True
