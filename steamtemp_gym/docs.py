@@ -24,6 +24,7 @@ import sys
 import textwrap
 import tokenize
 from pathlib import Path
+from typing import Any
 
 #: Where the pages go in a source tree.
 DOCS_DIR = Path(__file__).resolve().parents[1] / "docs" / "envs"
@@ -125,10 +126,7 @@ def _loops(plant) -> list[list[object]]:
 
 def page(env_id: str) -> str:
     """The reference page of one env id (module docstring)."""
-    from steamtemp_gym import plants, scenarios, signals
-    from steamtemp_gym.envs.core import INFO_DOC, INFO_TAIL, info_sources
-    from steamtemp_gym.scenarios import heldout
-    from steamtemp_gym.signals import OBS_LIMIT
+    from steamtemp_gym import plants, signals
 
     cls = plants.plant_class(env_id)
     plant = cls.skeleton()
@@ -151,7 +149,18 @@ def page(env_id: str) -> str:
     facts += [[f"also scored: `{n}`", f"setpoint {sp:g} C"] for n, sp in cls.secondary]
     out += _table(["", ""], facts) + ["", "Conventional loops (`baselines.cascade_pi`):", ""]
     out += _table(["actuator", "loop"], _loops(plant)) + [""]
-    out += ["## Observation", "",
+    out += _signal_sections(sig)
+    out += _info_section(plant)
+    out += _scenario_section(env_id)
+    out += _parameter_section(cls)
+    return "\n".join(out) + "\n"
+
+
+def _signal_sections(sig: Any) -> list[str]:
+    """The observation and action sections of a page."""
+    from steamtemp_gym.signals import OBS_LIMIT
+
+    out = ["## Observation", "",
             f"Entry `i` is `(value - center) / scale`, clipped to [-{OBS_LIMIT:g}, "
             f"{OBS_LIMIT:g}] (a transmitter's range); `env.unwrapped.signals.decode(obs)` "
             "gives the physical values. Noisy entries carry the scenario's thermocouple "
@@ -166,16 +175,33 @@ def page(env_id: str) -> str:
     out += _table(["#", "name", "unit", "description"],
                   [[i, f"`{s.name}`", s.unit, s.description]
                    for i, s in enumerate(sig.action)])  # fmt: skip
+    return out
+
+
+def _info_section(plant: Any) -> list[str]:
+    """The info section of a page."""
+    from steamtemp_gym.envs.core import INFO_DOC, INFO_TAIL, info_sources
+
+    out: list[str] = []
     outputs = {s.name: s for s in plant.outputs}
     info = [[f"`{key}`", *INFO_DOC.get(key, (outputs[src].unit, outputs[src].description
                                               or f"plant output `{src}`"))]
             for key, src in info_sources(plant)]  # fmt: skip
-    valves = ", ".join(f"`{v}`" for v in cls.valves)
-    info[2][1:] = ["1", f"openings of {valves} (an array)" if len(cls.valves) > 1 else
-                   f"opening of `{cls.valves[0]}`"]  # fmt: skip
+    valves = ", ".join(f"`{v}`" for v in plant.valves)
+    info[2][1:] = ["1", f"openings of {valves} (an array)" if len(plant.valves) > 1 else
+                   f"opening of `{plant.valves[0]}`"]  # fmt: skip
     info += [[f"`{k}`", *INFO_DOC[k]] for k in (*INFO_TAIL, "trip_reason")]
     out += ["", "## Info", "", "Every `info` (reset and step) has these keys, in "
             "engineering units:", ""] + _table(["key", "unit", "meaning"], info)  # fmt: skip
+    return out
+
+
+def _scenario_section(env_id: str) -> list[str]:
+    """The scenario section of a page: named and held-out."""
+    from steamtemp_gym import scenarios
+    from steamtemp_gym.scenarios import heldout
+
+    out: list[str] = []
     named = [n for n in scenarios.names(env_id) if n != scenarios.RANDOM]
     out += ["", "## Scenarios", "",
             "`gym.make(id, scenario=...)`, `reset(options={\"scenario\": ...})`, "
@@ -189,6 +215,12 @@ def page(env_id: str) -> str:
     out += _table(["name", "duration", "description"],
                   [[f"`{heldout.PREFIX}{n}`", f"{heldout.load(n).duration_s:g} s",
                     heldout.load(n).description] for n in heldout.NAMES])  # fmt: skip
+    return out
+
+
+def _parameter_section(cls: Any) -> list[str]:
+    """The parameter section of a page: every field of the plant's Params."""
+    out: list[str] = []
     notes, sections = field_notes(cls.Params)
     params_path = Path(inspect.getsourcefile(cls.Params)).resolve().relative_to(
         Path(__file__).resolve().parents[1]).as_posix()  # fmt: skip
@@ -206,7 +238,7 @@ def page(env_id: str) -> str:
         rows.append([f"`{f.name}`", f.type if isinstance(f.type, str) else f.type.__name__,
                      repr(f.default), unit_of(f.name), notes.get(f.name, "")])  # fmt: skip
     out += _table(["name", "type", "default", "unit", "note and source"], rows)
-    return "\n".join(out) + "\n"
+    return out
 
 
 def index() -> str:

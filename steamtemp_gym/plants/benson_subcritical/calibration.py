@@ -61,8 +61,18 @@ def _calibrate(pr: BensonParams, P: np.ndarray) -> None:
     n_x = int(P[IP.NX])
     x = np.zeros(n_x)
     Pk = read_only(P)  # what the kernels read (see steamtemp_gym._jit.read_only)
-    d = np.array([1.0, 0.0, 0.0, 1.0, 0.0])
-    # feedwater / spray tables over load (sliding pressure at design sprays)
+    _feedwater_tables(pr, P, Pk)
+    h_ev = _rated_design(pr, P, Pk, x)
+    _storage(pr, P, x)
+    _load_schedules(pr, P, Pk, n_x)
+    if abs(_table(Pk, ITB.HEV, 1.0) - h_ev) > 1.0:  # the schedule must pass the design point
+        raise ValueError("BensonParams: inconsistent calibration at rated load")
+
+
+
+
+def _feedwater_tables(pr: BensonParams, P: np.ndarray, Pk: np.ndarray) -> None:
+    """Feedwater and spray-water tables over load (sliding pressure at design sprays)."""
     for i, L in enumerate(TAB_LOADS):
         p = p_setpoint(Pk, L)
         T_da = pr.T_deaerator_C - pr.dT_deaerator_dload_K * (1.0 - L) + K0
@@ -74,6 +84,13 @@ def _calibrate(pr: BensonParams, P: np.ndarray) -> None:
                 rho_ph(p_pump, h_sp))  # fmt: skip
         for tb, v in zip((ITB.HFW, ITB.CPFW, ITB.HSP, ITB.CPSP, ITB.RHOSP), vals, strict=True):
             P[IP.TAB + tb * N_TAB + i] = v
+
+
+def _rated_design(pr: BensonParams, P: np.ndarray, Pk: np.ndarray, x: np.ndarray) -> float:
+    """Size every section's gas side or radiant heat, the spray valves and the rated fuel
+    flow on the rated design balance (the steady sections written into x); the rated
+    evaporator outlet enthalpy (J/kg)."""
+    d = np.array([1.0, 0.0, 0.0, 1.0, 0.0])
     p = P[IP.PNOM]
     dpb = P[IP.DPB]
     W_nom = P[IP.WNOM]
@@ -132,6 +149,15 @@ def _calibrate(pr: BensonParams, P: np.ndarray) -> None:
     P[IP.CPRAT] = cp_pT(p_crh, T_crh) / cp_pT(p, pr.T_ms_C + K0)
     absorbed = W_nom * h_ms - W_eco * h_fw - (w1 + w2) * h_sp + W_rh * (h_rh - h_crh)
     P[IP.FNOM] = absorbed / (pr.boiler_efficiency * pr.fuel_cv_MJ_kg * 1e6)
+    return h_ev
+
+
+def _storage(pr: BensonParams, P: np.ndarray, x: np.ndarray) -> None:
+    """The pressure's storage constant from the steam mass in SH1-SH4 at rated load (x: the
+    rated steady sections)."""
+    p = P[IP.PNOM]
+    dpb = P[IP.DPB]
+    sec = IP.SEC
     # eq. (13): m_v = steam mass in SH1-SH4 at rated load
     m_v = 0.0
     for k in (SH1, SH2, SH3, SH4):
@@ -139,7 +165,12 @@ def _calibrate(pr: BensonParams, P: np.ndarray) -> None:
         pk = p + P_SHARE[k] * dpb
         m_v += sum(rho_ph(pk, x[off + 2 * i + 1]) * P[sec + NF * k + IF.V] for i in range(n))
     P[IP.CSTOR] = P[IP.PNOM] / (pr.storage_tau * m_v)
-    # load schedules: firing, evaporator outlet and SH3 outlet enthalpies at design sprays
+
+
+def _load_schedules(pr: BensonParams, P: np.ndarray, Pk: np.ndarray, n_x: int) -> None:
+    """Load schedules: firing, evaporator outlet and SH3 outlet enthalpies at design sprays,
+    and the cold-reheat enthalpy."""
+    W_nom = P[IP.WNOM]
     xs = np.zeros(n_x)
     for i, L in enumerate(TAB_LOADS):
         dL = np.array([L, 0.0, 0.0, 1.0, 0.0])
@@ -160,8 +191,6 @@ def _calibrate(pr: BensonParams, P: np.ndarray) -> None:
         _, _, _, p_crh, _ = _reheat(Pk, pL, L)
         T_crh = (pr.T_ms_C + K0) * (p_crh / pL) ** P[IP.KE]
         P[IP.TAB + ITB.HCRH * N_TAB + i] = h_pT(p_crh, T_crh)
-    if abs(_table(Pk, ITB.HEV, 1.0) - h_ev) > 1.0:  # the schedule must pass the design point
-        raise ValueError("BensonParams: inconsistent calibration at rated load")
 
 
 @functools.lru_cache(maxsize=32)

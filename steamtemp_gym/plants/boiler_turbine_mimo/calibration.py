@@ -57,11 +57,31 @@ def _calibrate(params: BoilerTurbineParams, P: np.ndarray, n_x: int) -> None:
     """
     x = np.zeros(n_x)
     Pk = read_only(P)  # what the kernels read (see steamtemp_gym._jit.read_only)
-    o_p, o_pl, o_f, o_r = _offsets(Pk)
-    n1, n2, n3, n4 = (int(P[i]) for i in (IP.N1, IP.N2, IP.N3, IP.N4))
-    W = params.W_nom_kg_s
     T_ms = params.T_ms_C + K0
-    p_nom = params.p_nom_MPa * 1e6
+    _water_and_reheat_tables(params, P, Pk)
+    h_up = _rated_design(params, P, Pk, x)
+    d = np.array([1.0, 0.0, 0.0, 1.0, 0.0])
+    # evaporator-outlet schedule: design sprays hold T_ms where RGD holds T_rh
+    for k, L in enumerate(TAB_LOADS):
+        d[D_LOAD] = L
+        x[IX.LF] = x[IX.LW] = L
+        x[IX.FB] = 0.5
+        x[IX.CRH] = _h_crh_target(Pk, T_ms, L)
+        x[IX.G] = _bisect_rgd(x, d, Pk, P[IP.TRH])
+        p, _ = _pressure(Pk, L)
+
+        def ste(h, L=L, p=p):
+            x[IX.HUP] = h
+            return T_ph(p, _sh_steady(x, P[IP.VD], d, Pk)) - T_ms
+
+        h = _secant(ste, h_up, h_up + 50e3, f"the evaporator-outlet schedule at load {L:.2f}")
+        P[IP.TAB + ITAB.HUP * N_TAB + k] = h
+        P[IP.TAB + ITAB.RISE * N_TAB + k] = h - _tab(Pk, ITAB.HSP, L)
+
+
+def _water_and_reheat_tables(params: BoilerTurbineParams, P: np.ndarray, Pk: np.ndarray) -> None:
+    """Spray-water and cold-reheat tables over TAB_LOADS."""
+    T_ms = params.T_ms_C + K0
     kappa = math.log((params.T_crh_nom_C + K0) / T_ms) / math.log(
         params.p_rh_nom_MPa / params.p_nom_MPa
     )
@@ -79,6 +99,18 @@ def _calibrate(params: BoilerTurbineParams, P: np.ndarray, n_x: int) -> None:
         P[IP.TAB + ITAB.TCRH * N_TAB + k] = T_ms * ratio
         P[IP.TAB + ITAB.HCRH * N_TAB + k] = h_pT(prh, T_ms * ratio)
         P[IP.TAB + ITAB.CPCRH * N_TAB + k] = cp_pT(prh, T_ms * ratio)
+
+
+def _rated_design(params: BoilerTurbineParams, P: np.ndarray, Pk: np.ndarray,
+                  x: np.ndarray) -> float:  # fmt: skip
+    """Size the spray valves, the platen's radiant heat and the convective UA_g of the
+    primary SH, final SH and reheater on the rated design balance; the design evaporator
+    outlet enthalpy (J/kg)."""
+    o_p, o_pl, o_f, o_r = _offsets(Pk)
+    n1, n2, n3, n4 = (int(P[i]) for i in (IP.N1, IP.N2, IP.N3, IP.N4))
+    W = params.W_nom_kg_s
+    T_ms = params.T_ms_C + K0
+    p_nom = params.p_nom_MPa * 1e6
     # spray valves: the design opening passes the design fraction at rated load
     h_sp = _tab(Pk, ITAB.HSP, 1.0)
     s = math.sqrt(_tab(Pk, ITAB.RHOSP, 1.0) * P[IP.DPB])
@@ -99,7 +131,6 @@ def _calibrate(params: BoilerTurbineParams, P: np.ndarray, n_x: int) -> None:
             "platen or the primary SH"
         )
     P[IP.Q_PL] = Wpl * (h_plo - h_pli)
-    d = np.array([1.0, 0.0, 0.0, 1.0, 0.0])
 
     def stage(i_uag, off, n, h_in, w, p, kA, tg, h_out, what):
         def out(uag):
@@ -118,22 +149,7 @@ def _calibrate(params: BoilerTurbineParams, P: np.ndarray, n_x: int) -> None:
     kA_r = _kA(P[IP.KAF_R], P[IP.KAW_R], Wr, Wr)[0]
     stage(IP.UAG_R, o_r, n4, _tab(Pk, ITAB.HCRH, 1.0), Wr, prh, kA_r, P[IP.TG_R],
           h_pT(prh, P[IP.TRH]), "the reheater gas side")  # fmt: skip
-    # evaporator-outlet schedule: design sprays hold T_ms where RGD holds T_rh
-    for k, L in enumerate(TAB_LOADS):
-        d[D_LOAD] = L
-        x[IX.LF] = x[IX.LW] = L
-        x[IX.FB] = 0.5
-        x[IX.CRH] = _h_crh_target(Pk, T_ms, L)
-        x[IX.G] = _bisect_rgd(x, d, Pk, P[IP.TRH])
-        p, _ = _pressure(Pk, L)
-
-        def ste(h, L=L, p=p):
-            x[IX.HUP] = h
-            return T_ph(p, _sh_steady(x, P[IP.VD], d, Pk)) - T_ms
-
-        h = _secant(ste, h_up, h_up + 50e3, f"the evaporator-outlet schedule at load {L:.2f}")
-        P[IP.TAB + ITAB.HUP * N_TAB + k] = h
-        P[IP.TAB + ITAB.RISE * N_TAB + k] = h - _tab(Pk, ITAB.HSP, L)
+    return h_up
 
 
 def _conductances(n_tubes: int, length: float, d_i: float, d_o: float, alpha: float, k: float,
