@@ -14,7 +14,7 @@ controller design scores STE and RTE together).
 
 T0 = 20 K is the normalizing temperature of Sagara et al. 1998 (its
 |Delta T_a| <= 20 K maps to [-1, 1]); band_K = 5 K is the inner band plant
-engineers read (REFERENCE_DATA.md: +-5 / +-8 K). The spray term charges spray
+engineers read (+-5 K; +-8 K during load changes of drum units). The spray term charges spray
 water above the plant's design spray at the current operating point
 (``Plant.design_spray``: what the boiler's schedules are designed to need; spray
 beyond it bypasses heating surfaces and costs cycle efficiency), so a controller

@@ -1,8 +1,8 @@
-"""Validation of steamtemp/Cascade300MW-v0 against Zhang et al. 2012 and REFERENCE_DATA.md.
+"""Validation of steamtemp/Cascade300MW-v0 against Zhang et al. 2012.
 
 The plant is the paper's pair -2.01/(1+16 s)^2 (spray -> intermediate) and
 2.09/(1+22.3 s)^4 (intermediate -> outlet) at 1 s sampling. Analytic step
-characteristics of K/(1+Ts)^n are REFERENCE_DATA.md's "Transfer-function forms";
+characteristics of K/(1+Ts)^n are the analytic values (TABLE, to 3 digits);
 those of the series are computed here from the exact continuous response.
 """
 
@@ -22,7 +22,7 @@ from steamtemp_gym.plants import make
 from steamtemp_gym.plants.cascade_300mw import S_CNT, S_SEED, S_V, CascadeParams
 
 ID = "steamtemp/Cascade300MW-v0"
-# REFERENCE_DATA.md, Transfer-function forms: (Tu/T, Tg/T, t90/T) of K/(1+Ts)^n
+# analytic (Tu/T, Tg/T, t90/T) of K/(1+Ts)^n: Tu from the inflection tangent, Tg balance time
 TABLE = {2: (0.282, 2.718, 3.890), 4: (1.425, 4.463, 6.681)}
 QUIET = {"omega_halfwidth_K": 0.0, "omega2_scale_kg_s": 0.0}
 N_STEPS = 3000  # 3000 s: every response settled to < 1e-6 of its gain
@@ -143,7 +143,7 @@ def test_step_metrics_within_1pct(plant, section):
     assert m["gain"] / unit == pytest.approx(exact["gain"], rel=1e-6)
     for key in ("Tu_s", "Tg_s", "t90_s"):
         assert m[key] == pytest.approx(exact[key], rel=0.01), key
-    if published is not None:  # REFERENCE_DATA.md table values (3 digits)
+    if published is not None:  # the analytic values of TABLE (3 digits)
         for got, want in zip(
             (m["gain"] / unit, m["Tu_s"], m["Tg_s"], m["t90_s"]), published, strict=True
         ):
@@ -175,7 +175,7 @@ def test_load_table_monotone_and_paper_pair_at_full_load():
     for col in (k2, t2, t1):
         assert np.all(np.diff(col) > 0)  # strictly growing as load falls
     assert np.all(np.diff(k1) >= 0)
-    # published trend (REFERENCE_DATA.md): spray-to-outlet gain and time constants ~ 1/load
+    # observed trend of superheaters: spray-to-outlet gain and time constants ~ 1/load
     K2, T2, K1, T1 = p.section_model(0.37)
     assert abs(K2 * K1) / (2.01 * 2.09) == pytest.approx(1 / 0.37, rel=1e-9)
     assert T1 / 22.3 == pytest.approx(1 / 0.37, rel=1e-9)

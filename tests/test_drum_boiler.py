@@ -1,6 +1,6 @@
 """Validation of steamtemp/DrumBoilerSH-v0 (Kim (Inha Univ.) with Astrom-Bell 2000).
 
-- rated steady state against Astrom and Bell's nominal values (REFERENCE_DATA.md), within 3 %;
+- rated steady state against Astrom and Bell's nominal values (2000), within 3 %;
 - the drum's descriptor form against the balances it was derived from (mass and energy of the
   whole boiler and of the risers, steam under the level) along a transient;
 - shrink and swell: a steam-flow step first raises the level (open loop, as Astrom-Bell) and a
@@ -32,7 +32,7 @@ from steamtemp_gym.steam import sat_p
 
 ENV_ID = "steamtemp/DrumBoilerSH-v0"
 LOADS = (0.5, 0.75, 1.0)
-# Astrom and Bell (2000) nominal operating point (REFERENCE_DATA.md)
+# Astrom and Bell (2000) nominal operating point
 AB = {"p_MPa": 8.5, "q_s": 50.0, "Q_MW": 86.0, "q_dc": 1195.0, "alpha_r": 0.051, "V_wt": 57.2}
 
 
@@ -207,7 +207,7 @@ def test_shrink_and_swell_open_loop(plant):
 def test_shrink_and_swell_closed_loop():
     """A +10 % load step under the built-in pressure and level loops.
 
-    2400 s: the pressure loop retuned for the two-lag coal firing (K_p 1.5, T_i 500 s,
+    2400 s: the pressure loop tuned for the two-lag coal firing (K_p 1.5, T_i 500 s,
     slowest closed-loop mode ~400 s) needs longer than the 1200 s of the one-lag plant.
     """
     sc = Scenario(name="load_step", duration_s=2400.0, load=((0.0, 0.8), (60.0, 0.8), (60.0, 0.9)))
@@ -308,7 +308,7 @@ def test_spray_step_lowers_outlet_with_load_dependent_gain(plant):
         assert dTa[0] < -0.5  # the attemperator outlet drops at once
         assert dT[-1] < -3.0 and dT.max() < 0.05  # the outlet follows, no inverse response
     g100, g50 = res[1.0][2], res[0.5][2]
-    assert g50 < 1.3 * g100 < 0  # gain grows as load falls (REFERENCE_DATA.md: ~1/load)
+    assert g50 < 1.3 * g100 < 0  # gain grows as load falls (roughly as 1/load)
     assert res[0.5][3] > 1.3 * res[1.0][3]  # and so does the time constant
 
 

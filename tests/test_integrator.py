@@ -1,7 +1,7 @@
 """The ROS2 integrator at the control interval against a fine Radau solution of the same rhs.
 
-Issue 2: over the 100 -> 50 % ramp (Sagara et al. 1998's test), max outlet error <= 0.05 K,
-both at the FSH outlet and at the turbine inlet after the main-steam line (issue 6).
+Over the 100 -> 50 % ramp (Sagara et al. 1998's test), max outlet error <= 0.05 K, both at
+the FSH outlet and at the turbine inlet after the main-steam line.
 The inputs are the same zero-order-hold sequences for both: disturbances from the scenario at
 the start of each interval, a valve command that moves every interval.
 """

@@ -3,7 +3,7 @@
 - rated balance across the FSH: h_a0 - h_e0 = 217.8 kJ/kg and T_a0 - T_e0 = 68.5 K (eq. 9);
 - steady state at 100/75/50 % load holds the setpoint with the spray valve inside its range;
 - spray-to-outlet step responses: gain and dominant time constant larger at 50 % than at 100 %
-  load (REFERENCE_DATA.md: both grow roughly as 1/load), Tu/Tg of the thermocouple reading
+  load (both grow roughly as 1/load), Tu/Tg of the thermocouple reading
   between 0.1 and 0.6 (field step tests ~0.3);
 - the true (turbine-inlet) outlet's Tu/Tg of a spray step in the field range 0.2-0.4;
 - heat-absorption bias reaches the upstream enthalpy; the design-spray output is the schedule

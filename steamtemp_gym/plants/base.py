@@ -1,4 +1,4 @@
-"""What every plant provides to the generic env (the plant side of DESIGN.md).
+"""What every plant provides to the generic env (the plant side of docs/architecture.md).
 
 A plant is pure physics: a frozen parameter dataclass, a packed parameter
 vector ``P`` for the kernels, and a compiled batched step

@@ -52,10 +52,10 @@ dp/dt, row 3 d alpha_r/dt, row 4 dV_sd/dt):
 Steady state (thesis eq. (22)): q_f = q_s, Q = q_s h_s - q_f h_f, Q = alpha_r h_c q_dc,
 V_sd = V_sd0 + T_d (h_f - h_w) q_f/(rho_s h_c).
 
-Parameters (Astrom-Bell 2000 via REFERENCE_DATA.md): V_d 40 m3, V_r 37 m3, V_dc 11 m3,
+Parameters (Astrom and Bell 2000, docs/references.md): V_d 40 m3, V_r 37 m3, V_dc 11 m3,
 m_t 300 t, m_r 160 t, C_p 550 J/(kg K), A_d 20 m2, A_dc 0.38 m2, k 25, beta 0.3,
 T_d 12 s, V_sd0 4.9 m3. The drum metal mass m_d in the condensation flow is not in
-REFERENCE_DATA.md: 40 t is a plausible default, unverified (it only scales a small
+the paper: 40 t is a plausible default, unverified (it only scales a small
 storage term of q_cd).
 
 The thesis's level, eq. (9)-(15), uses the wet surface of a horizontal cylinder and no

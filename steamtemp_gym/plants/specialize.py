@@ -4,7 +4,7 @@ The shared kernels (the ROS2 step of plants/integrator.py) call plant functions
 (``rhs``, ``outputs``, ...) that differ per plant. Numba cannot cache a closure over
 compiled functions (the index key pickles them with a per-process id) nor a kernel
 taking compiled functions as arguments (their addresses are "dynamic globals"), so
-such kernels used to be compiled again in every process (4 s per plant).
+such kernels would compile again in every process (4 s per plant).
 
 :func:`specialize` instead copies a plain Python template with the plant functions
 bound as *globals* of the copy and a qualified name of its own, so numba compiles and

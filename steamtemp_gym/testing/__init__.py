@@ -1,4 +1,4 @@
-"""Contract checks for plants, variants, scenarios and controllers (issue 13).
+"""Contract checks for plants, variants, scenarios and controllers.
 
 Every contract the suite promises is a named check function taking an env id (or an env
 factory), or a policy and an env id, and raising an AssertionError that says what failed

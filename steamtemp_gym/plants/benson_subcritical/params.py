@@ -8,7 +8,7 @@ at these steam conditions (~1020 MW to the steam), plausible default, unverified
 Section temperatures, metal masses, volumes, conductances, gas temperatures, pressure
 drops, deaerator temperature, spray fractions, controller settings and the natural-gas
 calorific value: plausible defaults, unverified (sized with the IDAES 320 MW and ClaRa
-figures of REFERENCE_DATA.md). The gas-side conductances and radiant heats are
+figures, docs/references.md). The gas-side conductances and radiant heats are
 calibrated so that the rated steady state hits the design temperatures.
 """
 

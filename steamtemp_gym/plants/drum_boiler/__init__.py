@@ -53,7 +53,7 @@ Plant (states in SI; the env acts on the spray valve only):
   superheater.py (pipe_rhs: n_line = 3 mixing cells of steam plus wall metal at the
   steam temperature), 2 m3 of steam and 5.5 t of effective metal: about 24 s of storage
   at rated flow, growing as 1/flow (plausible defaults, unverified, set so that the true
-  outlet's Tu/Tg for a spray step is ~0.3 as in field step tests, REFERENCE_DATA.md).
+  outlet's Tu/Tg for a spray step is ~0.3 as in field step tests; VDI/VDE 3503).
   outlet_temp_C is the turbine-inlet temperature after it; the final SH's own outlet is
   sh2_outlet_temp_C.
 - design spray (output design_spray_kg_s): the commissioning function generator,

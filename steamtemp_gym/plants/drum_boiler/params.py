@@ -4,7 +4,7 @@ docstring.
 
 Parameters and their sources:
 
-- drum: Astrom-Bell 2000 (REFERENCE_DATA.md); V_wt,nom = 57.2 m3 at 8.5 MPa /
+- drum: Astrom and Bell 2000 (docs/references.md); V_wt,nom = 57.2 m3 at 8.5 MPa /
   50 kg/s defines the normal water level (level 0). Drum metal m_d 40 t: plausible
   default, unverified (drum.py).
 - operating point: drum pressure 8.5 MPa, drum steam flow 50 kg/s and feedwater
@@ -16,20 +16,21 @@ Parameters and their sources:
   steam 52.6 kg/s (189 t/h: 50 kg/s from the drum plus 5 % spray), 8.1 MPa / 505 C at
   the SH outlet (the usual 500-510 C of ~9 MPa non-reheat units; 0.4 MPa drum-to-outlet
   pressure drop at rated flow). Heat to the steam at rated load: 85 MW in the risers
-  plus 41 MW in the superheaters (~126 MW, a ~40-45 MWe non-reheat unit; the issue's
-  "~60 MW class" is the nearest round class). Primary SH 96 tubes 34/42 mm x 70 m
+  plus 41 MW in the superheaters (~126 MW, a ~40-45 MWe non-reheat unit, the nearest
+  round class being ~60 MW). Primary SH 96 tubes 34/42 mm x 70 m
   designed to deliver 440 C; final SH 72 tubes 32/42 mm x 60 m; steel 7800 kg/m3,
   550 J/(kg K); steam-side coefficient 3500 W/(m2 K) at rated flow, exponent 0.8
-  (REFERENCE_DATA.md); 5 segments each. The gas-side conductances UA_g1, UA_g2 are
-  calibrated so that the rated design holds: 440 C after the primary SH, 5 % spray
+  (IDAES 320 MW figures, docs/references.md); 5 segments each. The gas-side
+  conductances UA_g1, UA_g2 are calibrated so that the rated design holds: 440 C after
+  the primary SH, 5 % spray
   (valve 0.50 of its 10 % capacity, 1.5 MPa across it; attemperator capacities of
   8-10 % of rated steam flow are usual), 400 C after the attemperator, 505 C out. Gas
   temperatures 750 C / 1050 C at the two SH at rated firing, falling 200 / 300 K per
   unit of firing: the spray need falls with load (valve 0.50, 0.37, 0.26 at 100, 75,
   50 %) and stays inside the valve range for fouling 0.85-1.15 (0.07-0.85).
 - controls: tau_steam 10 s, tau_mill 60 s, tau_firing 60 s, T_bir 45 s, pressure PI
-  K_p 1.5 (firing per relative pressure error), T_i 500 s (retuned for the two-lag
-  firing: with K_p 3, T_i 300 s the pressure loop's damping fell to 0.14); level PI
+  K_p 1.5 (firing per relative pressure error), T_i 500 s (for the two-lag firing: with
+  K_p 3, T_i 300 s the pressure loop's damping would be 0.14); level PI
   200 kg/s per m, T_i 200 s; tau_fw 5 s; valve 2 s lag and 10 %/s rate; thermocouple
   lags 5 s and 20 s (as the FSH plant). Plausible defaults, unverified, tuned on the
   linearized drum with its loops (slowest closed-loop mode ~400 s, damping >= 0.5).

@@ -70,7 +70,7 @@ Model (states in SI):
   growing as 1/flow. The true outlet temperature outlet_temp_C is the turbine-inlet
   temperature after it (the FSH's own outlet is fsh_outlet_temp_C). Volume and metal are
   plausible defaults, unverified, set so that the true outlet's Tu/Tg for a spray step
-  is about 0.3 (field step tests, REFERENCE_DATA.md).
+  is about 0.3 (field step tests; VDI/VDE 3503, docs/references.md).
 - actuator: valve lag, rate limit and saturation (valve.py); thermocouples in
   thermowells, two lags each, on the turbine-inlet main steam and the attemperator
   outlet (sensors.py).
@@ -86,7 +86,7 @@ hold together at 24.8 MPa and 593 C outlet (inlet 524.5 C): the FSH of a
 24.1 MPa after the main-steam-line drop). Rated flow 2270 t/h (the rated flow of
 Toyoda and Wada 1999 Table 1, a unit of the same class). Tube geometry,
 metal mass and gas-side figures are plausible defaults sized from the IDAES
-320 MW platen and ClaRa figures in REFERENCE_DATA.md (unverified for this unit);
+320 MW platen and ClaRa figures (docs/references.md; unverified for this unit);
 the gas-side conductance is sized so that the rated balance above holds.
 
 Validation (tests/test_supercritical_fsh.py): rated steady state reproduces
