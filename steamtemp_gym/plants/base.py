@@ -19,7 +19,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from steamtemp_gym.checks import is_finite, is_integer, is_real, key_list
-from steamtemp_gym.plants.threads import MIN_SPLIT_ROWS, run_rows
+from steamtemp_gym.plants.threads import run_rows
 
 #: Disturbance vector entries handed to every plant kernel, in order.
 DIST: tuple[str, ...] = (
@@ -44,6 +44,8 @@ SCHEDULED = "scheduled"
 #: swings of at most 15 min); below: -50 K, the low-main-steam-temperature protection of
 #: turbines against loss of superheat (plausible default, unverified).
 TRIP_BAND_K = (50.0, 28.0)
+#: Positions of X, U, D and Z (a row per batch entry) among :meth:`Plant.step_args`.
+STEP_ROWS = (0, 1, 2, 8)
 
 
 @dataclass(frozen=True)
@@ -296,11 +298,7 @@ class Plant:
 
         ``dt = 0`` only evaluates the outputs of the current state.
         """
-        args = self.step_args(X, U, D, Z, dt)
-        if X.shape[0] < MIN_SPLIT_ROWS:
-            self.kernel()(*args)
-        else:
-            run_rows(self.kernel(), args, per_row=(0, 1, 2, 8))
+        run_rows(self.kernel(), self.step_args(X, U, D, Z, dt), per_row=STEP_ROWS)
 
     def step_args(
         self, X: np.ndarray, U: np.ndarray, D: np.ndarray, Z: np.ndarray, dt: float | None = None
