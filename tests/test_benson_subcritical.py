@@ -202,7 +202,7 @@ def test_radiant_section_inlet_gain_is_the_cp_ratio(experiments, sec):
     X, D, _ = steady(OPEN, 1.0)
     r = experiments[INLET_STEP[sec]][0]
     P, p = OPEN.P, X[0, bs.IX.P]
-    k_in, k_out = (bs.ECO, bs.EV) if sec == "evap" else (bs.SH1, bs.SH2)
+    k_in, k_out = (bs.SEC.ECO, bs.SEC.EV) if sec == "evap" else (bs.SEC.SH1, bs.SEC.SH2)
     p_in, p_out = (p + bs.P_SHARE[k] * P[bs.IP.DPB] for k in (k_in, k_out))
     T_in, T_out = (0.5 * (r[0, i] + r[-1, i]) + 273.15 for i in (i_in, i_out))  # mean states
     ratio = cp_pT(p_in, T_in) / cp_pT(p_out, T_out)

@@ -66,6 +66,9 @@ def test_the_two_commands_are_the_ones_ci_runs():
     install = _blocks(_section("Install"), "bash")[0]
     assert "pip install torch==2.13.0 --index-url https://download.pytorch.org/whl/cpu" in install
     assert 'pip install -e ".[test]"' in install
+    # the install compiles the plants ahead, as CI does before the tests
+    assert "python -m steamtemp_gym.precompile" in install
+    assert "\npython -m steamtemp_gym.precompile\npython -m pytest -n 2 -q\n" in ci
 
 
 def test_readme_is_a_guide():

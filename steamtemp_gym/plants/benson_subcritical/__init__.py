@@ -168,19 +168,7 @@ from steamtemp_gym.plants.benson_subcritical.layout import (
     NF,
     OUTPUTS,
 )
-from steamtemp_gym.plants.benson_subcritical.params import (
-    ECO,
-    EV,
-    K0,
-    P_SHARE,
-    RH,
-    SECTIONS,
-    SH1,
-    SH2,
-    SH3,
-    SH4,
-    BensonParams,
-)
+from steamtemp_gym.plants.benson_subcritical.params import K0, P_SHARE, SEC, SECTIONS, BensonParams
 from steamtemp_gym.plants.benson_subcritical.plant import BensonSubcritical
 from steamtemp_gym.plants.benson_subcritical.steady_state import (
     section_enthalpies,
@@ -190,8 +178,7 @@ from steamtemp_gym.plants.benson_subcritical.steady_state import (
 
 __all__ = [
     # the plant, its parameters and sections
-    "BensonSubcritical", "BensonParams", "K0", "SECTIONS", "ECO", "EV", "SH1", "SH2", "SH3",
-    "SH4", "RH", "P_SHARE",
+    "BensonSubcritical", "BensonParams", "K0", "SECTIONS", "SEC", "P_SHARE",
     # kernels and steady state
     "rhs", "derivatives", "outputs", "project", "step", "steady", "firing", "fuel_demand",
     "p_setpoint", "h_ev_setpoint", "cold_reheat", "design_spray", "section_enthalpies",

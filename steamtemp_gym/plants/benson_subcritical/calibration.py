@@ -24,19 +24,7 @@ from steamtemp_gym.plants.benson_subcritical.layout import (
     PRESSURE_JAC,
     TAB_LOADS,
 )
-from steamtemp_gym.plants.benson_subcritical.params import (
-    ECO,
-    EV,
-    K0,
-    P_SHARE,
-    RH,
-    SECTIONS,
-    SH1,
-    SH2,
-    SH3,
-    SH4,
-    BensonParams,
-)
+from steamtemp_gym.plants.benson_subcritical.params import K0, P_SHARE, SEC, SECTIONS, BensonParams
 from steamtemp_gym.plants.benson_subcritical.steady_state import (
     _section_steady,
     _sh_steady,
@@ -77,7 +65,7 @@ def _feedwater_tables(pr: BensonParams, P: np.ndarray, Pk: np.ndarray) -> None:
         p = p_setpoint(Pk, L)
         T_da = pr.T_deaerator_C - pr.dT_deaerator_dload_K * (1.0 - L) + K0
         T_fw = T_da + pr.dT_hp_heaters_K - pr.dT_hp_dload_K * (1.0 - L)
-        p_eco = p + P_SHARE[ECO] * P[IP.DPB] * L * L
+        p_eco = p + P_SHARE[SEC.ECO] * P[IP.DPB] * L * L
         p_pump = p + P[IP.DPPUMP] * L * L
         h_sp = h_pT(p_pump, T_da)
         vals = (h_pT(p_eco, T_fw), cp_pT(p_eco, T_fw), h_sp, cp_pT(p_pump, T_da),
@@ -123,29 +111,29 @@ def _rated_design(pr: BensonParams, P: np.ndarray, Pk: np.ndarray, x: np.ndarray
         return _section_steady(x, Pk, k, h0, W, pk, 1.0, d)
 
     h_fw = _table(Pk, ITB.HFW, 1.0)
-    h = conv(ECO, h_fw, W_eco, p + P_SHARE[ECO] * dpb, pr.T_eco_out_C)
-    h = rad(EV, h, W_eco, p + P_SHARE[EV] * dpb, pr.T_evap_out_C)
+    h = conv(SEC.ECO, h_fw, W_eco, p + P_SHARE[SEC.ECO] * dpb, pr.T_eco_out_C)
+    h = rad(SEC.EV, h, W_eco, p + P_SHARE[SEC.EV] * dpb, pr.T_evap_out_C)
     h_ev = h
-    h = conv(SH1, h, W_eco, p + P_SHARE[SH1] * dpb, pr.T_sh1_out_C)
-    h = rad(SH2, h, W_eco, p + P_SHARE[SH2] * dpb, pr.T_sh2_out_C)
+    h = conv(SEC.SH1, h, W_eco, p + P_SHARE[SEC.SH1] * dpb, pr.T_sh1_out_C)
+    h = rad(SEC.SH2, h, W_eco, p + P_SHARE[SEC.SH2] * dpb, pr.T_sh2_out_C)
     # spray valves: fully open passes spray*_max_fraction of W_nom at rated load
     rho_sp = _table(Pk, ITB.RHOSP, 1.0)
     h_sp = _table(Pk, ITB.HSP, 1.0)
-    for i_cv, share, smax in ((IP.CV1, P_SHARE[SH2], pr.spray1_max_fraction),
-                              (IP.CV2, P_SHARE[SH3], pr.spray2_max_fraction)):  # fmt: skip
+    for i_cv, share, smax in ((IP.CV1, P_SHARE[SEC.SH2], pr.spray1_max_fraction),
+                              (IP.CV2, P_SHARE[SEC.SH3], pr.spray2_max_fraction)):  # fmt: skip
         P[i_cv] = smax * W_nom / math.sqrt(rho_sp * (P[IP.DPPUMP] - share * dpb))
     P[IP.V1D] = pr.spray1_design_fraction / pr.spray1_max_fraction
     P[IP.V2D] = pr.spray2_design_fraction / pr.spray2_max_fraction
     w1 = pr.spray1_design_fraction * W_nom
     w2 = pr.spray2_design_fraction * W_nom
     W3, h = mix(W_eco, h, w1, h_sp)
-    h = conv(SH3, h, W3, p + P_SHARE[SH3] * dpb, pr.T_sh3_out_C)
+    h = conv(SEC.SH3, h, W3, p + P_SHARE[SEC.SH3] * dpb, pr.T_sh3_out_C)
     W4, h = mix(W3, h, w2, h_sp)
-    h_ms = conv(SH4, h, W4, p, pr.T_ms_C)
+    h_ms = conv(SEC.SH4, h, W4, p, pr.T_ms_C)
     W_t, W_rh, p_rh, p_crh, _ = _reheat(Pk, p, 1.0)
     T_crh = (pr.T_ms_C + K0) * (p_crh / p) ** P[IP.KE]
     h_crh = h_pT(p_crh, T_crh)
-    h_rh = conv(RH, h_crh, W_rh, p_rh, pr.T_rh_C)
+    h_rh = conv(SEC.RH, h_crh, W_rh, p_rh, pr.T_rh_C)
     P[IP.CPRAT] = cp_pT(p_crh, T_crh) / cp_pT(p, pr.T_ms_C + K0)
     absorbed = W_nom * h_ms - W_eco * h_fw - (w1 + w2) * h_sp + W_rh * (h_rh - h_crh)
     P[IP.FNOM] = absorbed / (pr.boiler_efficiency * pr.fuel_cv_MJ_kg * 1e6)
@@ -160,7 +148,7 @@ def _storage(pr: BensonParams, P: np.ndarray, x: np.ndarray) -> None:
     sec = IP.SEC
     # eq. (13): m_v = steam mass in SH1-SH4 at rated load
     m_v = 0.0
-    for k in (SH1, SH2, SH3, SH4):
+    for k in (SEC.SH1, SEC.SH2, SEC.SH3, SEC.SH4):
         off, n = int(P[sec + NF * k + IF.OFF]), int(P[sec + NF * k + IF.N])
         pk = p + P_SHARE[k] * dpb
         m_v += sum(rho_ph(pk, x[off + 2 * i + 1]) * P[sec + NF * k + IF.V] for i in range(n))
@@ -229,12 +217,13 @@ def _pack(pr: BensonParams) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
     P[IP.BEV] = pr.bias_evap_share
     W_rated = (P[IP.WECO], P[IP.WECO], P[IP.WECO], P[IP.WECO],
                W_nom * (1.0 - pr.spray2_design_fraction), W_nom, P[IP.WRHN])  # fmt: skip
-    Tg = {ECO: pr.Tg_eco_C, SH1: pr.Tg_sh1_C, SH3: pr.Tg_sh3_C, SH4: pr.Tg_sh4_C, RH: pr.Tg_rh_C}
+    Tg = {SEC.ECO: pr.Tg_eco_C, SEC.SH1: pr.Tg_sh1_C, SEC.SH3: pr.Tg_sh3_C, SEC.SH4: pr.Tg_sh4_C,
+          SEC.RH: pr.Tg_rh_C}  # fmt: skip
     off = IX.CHAINS
     pat: list[tuple[int, int]] = []
     prev_h = -1
     for k, name in enumerate(SECTIONS):
-        if k == RH:  # outlet header and main-steam line, between SH4 and the reheater
+        if k == SEC.RH:  # outlet header and main-steam line, between SH4 and the reheater
             P[IP.LOFF], P[IP.NL], P[IP.JLINE] = off, pr.n_line, len(pat)
             P[IP.LCM] = pr.line_metal_t * 1e3 * pr.c_metal_J_kgK / pr.n_line
             P[IP.LV] = pr.line_volume_m3 / pr.n_line
@@ -252,7 +241,7 @@ def _pack(pr: BensonParams) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
         P[b + IF.TGN] = Tg[k] + K0 if k in Tg else 0.0
         P[b + IF.WN] = W_rated[k]
         inlet: tuple[int, ...] = ()
-        if k != ECO:
+        if k != SEC.ECO:
             inlet = (prev_h,)
         pat += chain_pattern(off, n, inlet, IX.P if PRESSURE_JAC else -1)
         prev_h = off + 2 * n - 1
@@ -262,12 +251,12 @@ def _pack(pr: BensonParams) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
     P[IP.JSEN] = len(pat)
     blk = [IP.SEC + NF * k for k in range(7)]
     last_h = [int(P[b + IF.OFF] + 2 * P[b + IF.N] - 1) for b in blk]
-    last_h[SH4] = int(P[IP.LOFF] + pr.n_line - 1)  # the main-steam thermocouple: turbine inlet
-    for j, k in enumerate((EV, SH1, SH2, SH2, SH3, SH3, SH4, RH)):
+    last_h[SEC.SH4] = int(P[IP.LOFF] + pr.n_line - 1)  # the main-steam thermocouple: turbine inlet
+    for j, k in enumerate((SEC.EV, SEC.SH1, SEC.SH2, SEC.SH2, SEC.SH3, SEC.SH3, SEC.SH4, SEC.RH)):
         pat += [(off + 2 * j, last_h[k]), (off + 2 * j + 1, off + 2 * j)]
     off += 2 * N_SENS
     P[IP.STRIM] = off
-    pat.append((off, last_h[EV]))
+    pat.append((off, last_h[SEC.EV]))
     n_x = off + 1
     P[IP.NX] = n_x
     _calibrate(pr, P)

@@ -29,17 +29,7 @@ from steamtemp_gym.plants.benson_subcritical.layout import (
     NF,
     PRESSURE_JAC,
 )
-from steamtemp_gym.plants.benson_subcritical.params import (
-    ECO,
-    EV,
-    K0,
-    P_SHARE,
-    RH,
-    SH1,
-    SH2,
-    SH3,
-    SH4,
-)
+from steamtemp_gym.plants.benson_subcritical.params import K0, P_SHARE, SEC
 from steamtemp_gym.plants.integrator import make_batched_step
 from steamtemp_gym.plants.sensors import thermowell_rhs
 from steamtemp_gym.plants.superheater import chain_rhs, pipe_rhs, steam_side_kA
@@ -74,7 +64,7 @@ def p_setpoint(P, load):
 def _gas(P, k, lf, d):
     """(UA_g, T_g, Q_rad) per segment of section k at firing fraction lf, disturbances d."""
     bias = d[D_HEAT_BIAS]
-    mult = 1.0 + bias if k >= SH1 else (1.0 + P[IP.BEV] * bias if k == EV else 1.0)
+    mult = 1.0 + bias if k >= SEC.SH1 else (1.0 + P[IP.BEV] * bias if k == SEC.EV else 1.0)
     mult = max(mult, 0.0)
     UAg = _s(P, k, IF.UAG) * lf ** P[IP.GEXP] * max(d[D_FOULING], 0.0) * mult
     Tg = _s(P, k, IF.TGN) * (1.0 - P[IP.GCOEF] * (1.0 - lf))
@@ -94,11 +84,11 @@ def _boundary_v(x, d, P, v1, v2):
     h_fw = _table(P, ITB.HFW, L) + _table(P, ITB.CPFW, L) * d[D_SPRAY_T]
     h_sp = _table(P, ITB.HSP, L) + _table(P, ITB.CPSP, L) * d[D_SPRAY_T]
     rho_sp = _table(P, ITB.RHOSP, L)
-    w1 = spray_flow(v1, P[IP.CV1], rho_sp, (P[IP.DPPUMP] - P_SHARE[SH2] * P[IP.DPB]) * r2)
-    w2 = spray_flow(v2, P[IP.CV2], rho_sp, (P[IP.DPPUMP] - P_SHARE[SH3] * P[IP.DPB]) * r2)
+    w1 = spray_flow(v1, P[IP.CV1], rho_sp, (P[IP.DPPUMP] - P_SHARE[SEC.SH2] * P[IP.DPB]) * r2)
+    w2 = spray_flow(v2, P[IP.CV2], rho_sp, (P[IP.DPPUMP] - P_SHARE[SEC.SH3] * P[IP.DPB]) * r2)
     p = x[IX.P]
-    return (L, r2, W_eco, w1, w2, h_fw, h_sp, p + P_SHARE[SH2] * P[IP.DPB] * r2,
-            p + P_SHARE[SH3] * P[IP.DPB] * r2)  # fmt: skip
+    return (L, r2, W_eco, w1, w2, h_fw, h_sp, p + P_SHARE[SEC.SH2] * P[IP.DPB] * r2,
+            p + P_SHARE[SEC.SH3] * P[IP.DPB] * r2)  # fmt: skip
 
 
 @njit(cache=True)
@@ -163,7 +153,7 @@ def fuel_demand(x, d, P):
     tau_furnace (state IX.F).
     """
     L = min(max(d[D_LOAD], 0.05), 1.3)
-    e = (_last_h(x, P, EV) - h_ev_setpoint(P, L)) * 1e-5
+    e = (_last_h(x, P, SEC.EV) - h_ev_setpoint(P, L)) * 1e-5
     L_ff = min(max(L + P[IP.TBIR] * d[D_LOAD_RATE], 0.05), 1.3)
     demand = _table(P, ITB.FUEL, L_ff) * (1.0 + x[int(P[IP.STRIM])] - P[IP.KP] * e)
     return min(max(demand, 0.02), 1.5)
@@ -206,28 +196,29 @@ def rhs(x, u, d, P, f, jd, ju, jl, want_jac):
     dh0[3] = 1.0
     none, one = dh0[0:0], dh0[3:4]
     # water/steam path
-    _section(x, P, ECO, h_fw, none, W_eco, 0.0, p + P_SHARE[ECO] * dpb, 1.0, lf, d,
+    _section(x, P, SEC.ECO, h_fw, none, W_eco, 0.0, p + P_SHARE[SEC.ECO] * dpb, 1.0, lf, d,
              f, jd, ju, jl, want_jac)  # fmt: skip
-    _, T_ev, _ = _section(x, P, EV, _last_h(x, P, ECO), one, W_eco, 0.0,
-                          p + P_SHARE[EV] * dpb, 1.0, lf, d, f, jd, ju, jl, want_jac)  # fmt: skip
-    h_ev = _last_h(x, P, EV)
-    _, T_1, _ = _section(x, P, SH1, h_ev, one, W_eco, 0.0, p + P_SHARE[SH1] * dpb, 1.0, lf, d,
+    _, T_ev, _ = _section(x, P, SEC.EV, _last_h(x, P, SEC.ECO), one, W_eco, 0.0,
+                          p + P_SHARE[SEC.EV] * dpb, 1.0, lf, d, f, jd, ju, jl,
+                          want_jac)  # fmt: skip
+    h_ev = _last_h(x, P, SEC.EV)
+    _, T_1, _ = _section(x, P, SEC.SH1, h_ev, one, W_eco, 0.0, p + P_SHARE[SEC.SH1] * dpb, 1.0,
+                         lf, d, f, jd, ju, jl, want_jac)  # fmt: skip
+    _, T_2, _ = _section(x, P, SEC.SH2, _last_h(x, P, SEC.SH1), one, W_eco, 0.0, p_a1, 1.0, lf, d,
                          f, jd, ju, jl, want_jac)  # fmt: skip
-    _, T_2, _ = _section(x, P, SH2, _last_h(x, P, SH1), one, W_eco, 0.0, p_a1, 1.0, lf, d,
-                         f, jd, ju, jl, want_jac)  # fmt: skip
-    h2 = _last_h(x, P, SH2)
+    h2 = _last_h(x, P, SEC.SH2)
     W3, h_a1 = mix(W_eco, h2, w1, h_sp)
     dh0[0] = W_eco / W3  # by h2
-    _, T_3, _ = _section(x, P, SH3, h_a1, dh0[0:1], W3, 0.0, p_a2, 1.0, lf, d,
+    _, T_3, _ = _section(x, P, SEC.SH3, h_a1, dh0[0:1], W3, 0.0, p_a2, 1.0, lf, d,
                          f, jd, ju, jl, want_jac)  # fmt: skip
-    h3 = _last_h(x, P, SH3)
+    h3 = _last_h(x, P, SEC.SH3)
     W4, h_a2 = mix(W3, h3, w2, h_sp)
     dh0[1] = W3 / W4  # by h3
-    _, T_4, _ = _section(x, P, SH4, h_a2, dh0[1:2], W4, 0.0, p, 1.0, lf, d,
+    _, T_4, _ = _section(x, P, SEC.SH4, h_a2, dh0[1:2], W4, 0.0, p, 1.0, lf, d,
                          f, jd, ju, jl, want_jac)  # fmt: skip
     # outlet header and main-steam line to the turbine (superheater.pipe_rhs)
     loff, nl = int(P[IP.LOFF]), int(P[IP.NL])
-    T_ms, _ = pipe_rhs(x, loff, nl, _last_h(x, P, SH4), one, W4, 0.0, p, P[IP.LV], P[IP.LCM],
+    T_ms, _ = pipe_rhs(x, loff, nl, _last_h(x, P, SEC.SH4), one, W4, 0.0, p, P[IP.LV], P[IP.LCM],
                     f, jd, jl, int(P[IP.JLINE]), want_jac, False)  # fmt: skip
     # turbine and reheater (eq. 14)
     W_t, W_rh, p_rh, p_crh, dWt = _reheat(P, p, L)
@@ -236,8 +227,8 @@ def rhs(x, u, d, P, f, jd, ju, jl, want_jac):
     dh0[2] = P[IP.CPRAT] * ratio  # by h_ms (cp_crh / cp_ms at rated)
     dWrh = P[IP.RHF] * dWt
     dp_rh = P[IP.PRH] / P[IP.WRHN] * dWrh
-    _, T_rh, _ = _section(x, P, RH, h_crh, dh0[2:3], W_rh, dWrh, p_rh, dp_rh, lf, d, f, jd, ju, jl,
-                          want_jac)  # fmt: skip
+    _, T_rh, _ = _section(x, P, SEC.RH, h_crh, dh0[2:3], W_rh, dWrh, p_rh, dp_rh, lf, d, f, jd,
+                          ju, jl, want_jac)  # fmt: skip
     # pressure, eq. (13)
     f[IX.P] = P[IP.CSTOR] * (W_eco + w1 + w2 - W_t)
     # fuel/water-ratio trim (integral part; see fuel_demand)
@@ -264,10 +255,10 @@ def rhs(x, u, d, P, f, jd, ju, jl, want_jac):
         for j in range(s0, s0 + 2 * N_SENS, 2):
             jd[j] = -1.0 / tc1
             jd[j + 1] = -1.0 / tc2
-        dT = (_dTdh_out(x, P, EV, p + P_SHARE[EV] * dpb),
-              _dTdh_out(x, P, SH1, p + P_SHARE[SH1] * dpb), _dTdh_out(x, P, SH2, p_a1),
-              dT_a1 * W_eco / W3, _dTdh_out(x, P, SH3, p_a2), dT_a2 * W3 / W4,
-              T_dTdh_ph(p, x[loff + nl - 1])[1], _dTdh_out(x, P, RH, p_rh))  # fmt: skip
+        dT = (_dTdh_out(x, P, SEC.EV, p + P_SHARE[SEC.EV] * dpb),
+              _dTdh_out(x, P, SEC.SH1, p + P_SHARE[SEC.SH1] * dpb), _dTdh_out(x, P, SEC.SH2, p_a1),
+              dT_a1 * W_eco / W3, _dTdh_out(x, P, SEC.SH3, p_a2), dT_a2 * W3 / W4,
+              T_dTdh_ph(p, x[loff + nl - 1])[1], _dTdh_out(x, P, SEC.RH, p_rh))  # fmt: skip
         jo = int(P[IP.JSEN])
         for g in dT:
             jl[jo] = g / tc1
@@ -320,9 +311,9 @@ def outputs(x, u, d, P, z):
     lf = firing(x, d, P)
     T_ms = T_ph(p, x[int(P[IP.LOFF]) + int(P[IP.NL]) - 1])
     W_t, W_rh, p_rh, p_crh, _ = _reheat(P, p, L)
-    T_rh = T_ph(p_rh, _last_h(x, P, RH))
-    W3, _ = mix(W_eco, _last_h(x, P, SH2), w1, h_sp)
-    _, h_a2 = mix(W3, _last_h(x, P, SH3), w2, h_sp)
+    T_rh = T_ph(p_rh, _last_h(x, P, SEC.RH))
+    W3, _ = mix(W_eco, _last_h(x, P, SEC.SH2), w1, h_sp)
+    _, h_a2 = mix(W3, _last_h(x, P, SEC.SH3), w2, h_sp)
     s0 = int(P[IP.S0])
     z[IZ.outlet_temp_C] = T_ms - K0
     z[IZ.outlet_temp_meas_C] = x[s0 + 2 * ISEN.MS + 1] - K0
@@ -344,17 +335,17 @@ def outputs(x, u, d, P, z):
     z[IZ.spray_valve_2] = x[IX.V2]
     z[IZ.spray_flow_1_kg_s] = w1
     z[IZ.spray_flow_2_kg_s] = w2
-    q, tm_max = _sections_heat(x, P, lf, d, SH1, SH4)
+    q, tm_max = _sections_heat(x, P, lf, d, SEC.SH1, SEC.SH4)
     z[IZ.heat_absorption_MW] = q * 1e-6
     z[IZ.metal_temp_max_C] = tm_max - K0
     z[IZ.design_spray_kg_s] = design_spray(P, L)
-    z[IZ.sh4_out_temp_C] = T_ph(p, _last_h(x, P, SH4)) - K0
+    z[IZ.sh4_out_temp_C] = T_ph(p, _last_h(x, P, SEC.SH4)) - K0
     # steam-generation point: where the evaporator enthalpy crosses h_l(p), 0..1 along it
-    p_ev = p + P_SHARE[EV] * P[IP.DPB] * r2
+    p_ev = p + P_SHARE[SEC.EV] * P[IP.DPB] * r2
     h_l = sat_p(p_ev)[3]
-    n = int(_s(P, EV, IF.N))
-    off = int(_s(P, EV, IF.OFF))
-    h_prev = _last_h(x, P, ECO)
+    n = int(_s(P, SEC.EV, IF.N))
+    off = int(_s(P, SEC.EV, IF.OFF))
+    h_prev = _last_h(x, P, SEC.ECO)
     sgp = 1.0
     if h_prev >= h_l:
         sgp = 0.0
@@ -375,9 +366,10 @@ def design_spray(P, L):
     L = min(max(L, 0.05), 1.3)
     r2 = L * L
     rho_sp = _table(P, ITB.RHOSP, L)
-    return (spray_flow(P[IP.V1D], P[IP.CV1], rho_sp, (P[IP.DPPUMP] - P_SHARE[SH2] * P[IP.DPB]) * r2)
+    return (spray_flow(P[IP.V1D], P[IP.CV1], rho_sp,
+                       (P[IP.DPPUMP] - P_SHARE[SEC.SH2] * P[IP.DPB]) * r2)
             + spray_flow(P[IP.V2D], P[IP.CV2], rho_sp,
-                         (P[IP.DPPUMP] - P_SHARE[SH3] * P[IP.DPB]) * r2))  # fmt: skip
+                         (P[IP.DPPUMP] - P_SHARE[SEC.SH3] * P[IP.DPB]) * r2))  # fmt: skip
 
 
 @njit(cache=True)

@@ -17,12 +17,14 @@ from __future__ import annotations
 from dataclasses import dataclass, fields
 
 from steamtemp_gym.plants.base import validate_params
+from steamtemp_gym.slots import slots
 
 K0 = 273.15
 
 #: Sections in flow order; index k of the per-section parameter block in P.
 SECTIONS = ("eco", "evap", "sh1", "sh2", "sh3", "sh4", "rh")
-ECO, EV, SH1, SH2, SH3, SH4, RH = range(7)
+#: Index of each section, in the order of SECTIONS.
+SEC = slots("BensonSections", "ECO", "EV", "SH1", "SH2", "SH3", "SH4", "RH")
 #: Outlet pressure of each water/steam section as a share of the boiler pressure drop
 #: (economizer inlet = 1, main steam = 0) at rated flow (plausible default, unverified;
 #: Benson evaporators with rifled tubes carry a large share). The reheater has its own.
@@ -178,7 +180,7 @@ class BensonParams:
         name = type(self).__name__
         if self.p_min_MPa >= self.p_nom_MPa:
             raise ValueError(f"{name}.p_min_MPa must be below p_nom_MPa")
-        if self.p_nom_MPa + self.dp_boiler_MPa * P_SHARE[EV] * 1.44 >= 21.5:
+        if self.p_nom_MPa + self.dp_boiler_MPa * P_SHARE[SEC.EV] * 1.44 >= 21.5:
             raise ValueError(f"{name}.dp_boiler_MPa: the evaporator must stay subcritical")
         if self.p_pump_MPa <= self.p_nom_MPa + self.dp_boiler_MPa:
             raise ValueError(f"{name}.p_pump_MPa must exceed the economizer inlet pressure")

@@ -21,17 +21,7 @@ from steamtemp_gym.plants.benson_subcritical.kernel import (
     p_setpoint,
 )
 from steamtemp_gym.plants.benson_subcritical.layout import IF, IP, ITB, IX
-from steamtemp_gym.plants.benson_subcritical.params import (
-    ECO,
-    EV,
-    K0,
-    P_SHARE,
-    RH,
-    SH1,
-    SH2,
-    SH3,
-    SH4,
-)
+from steamtemp_gym.plants.benson_subcritical.params import K0, P_SHARE, SEC
 from steamtemp_gym.plants.superheater import chain_steady, pipe_steady, steam_side_kA
 from steamtemp_gym.plants.valve import steady_opening
 from steamtemp_gym.steam import T_ph, h_pT
@@ -51,8 +41,8 @@ def _upstream_steady(x, d, P, lf, p):
     """Economizer and evaporator steady at firing lf, pressure p; returns evaporator outlet h."""
     L, r2, W_eco, _, _, h_fw, _, _, _ = _boundary(x, d, P)
     dpb = P[IP.DPB] * r2
-    h = _section_steady(x, P, ECO, h_fw, W_eco, p + P_SHARE[ECO] * dpb, lf, d)
-    return _section_steady(x, P, EV, h, W_eco, p + P_SHARE[EV] * dpb, lf, d)
+    h = _section_steady(x, P, SEC.ECO, h_fw, W_eco, p + P_SHARE[SEC.ECO] * dpb, lf, d)
+    return _section_steady(x, P, SEC.EV, h, W_eco, p + P_SHARE[SEC.EV] * dpb, lf, d)
 
 
 @njit(cache=True)
@@ -60,14 +50,15 @@ def _sh_steady(x, d, P, lf, p, upto):
     """SH1..SH4 steady (x holds the evaporator and valves); SH3 outlet h (upto=3) or main h."""
     L, r2, W_eco, w1, w2, _, h_sp, p_a1, p_a2 = _boundary(x, d, P)
     dpb = P[IP.DPB] * r2
-    h = _section_steady(x, P, SH1, _last_h(x, P, EV), W_eco, p + P_SHARE[SH1] * dpb, lf, d)
-    h = _section_steady(x, P, SH2, h, W_eco, p_a1, lf, d)
+    h_ev = _last_h(x, P, SEC.EV)
+    h = _section_steady(x, P, SEC.SH1, h_ev, W_eco, p + P_SHARE[SEC.SH1] * dpb, lf, d)
+    h = _section_steady(x, P, SEC.SH2, h, W_eco, p_a1, lf, d)
     W3, h = mix(W_eco, h, w1, h_sp)
-    h = _section_steady(x, P, SH3, h, W3, p_a2, lf, d)
+    h = _section_steady(x, P, SEC.SH3, h, W3, p_a2, lf, d)
     if upto == 3:
         return h
     W4, h = mix(W3, h, w2, h_sp)
-    return _section_steady(x, P, SH4, h, W4, p, lf, d)
+    return _section_steady(x, P, SEC.SH4, h, W4, p, lf, d)
 
 
 @njit(cache=True)
@@ -132,7 +123,7 @@ def steady(D, sp_K, P, X):
         W_t, W_rh, p_rh, p_crh, _ = _reheat(P, p, L)
         T_ms = T_ph(p, h_ms)
         h_crh = cold_reheat(P, L, p_crh, T_ms * (p_crh / p) ** P[IP.KE])[0]
-        _section_steady(x, P, RH, h_crh, W_rh, p_rh, lf, d)
+        _section_steady(x, P, SEC.RH, h_crh, W_rh, p_rh, lf, d)
         L_ff = min(max(L + P[IP.TBIR] * d[D_LOAD_RATE], 0.05), 1.3)
         x[int(P[IP.STRIM])] = lf / _table(P, ITB.FUEL, L_ff) - 1.0
         temps = section_temperatures(x, d, P)
@@ -150,7 +141,8 @@ def section_enthalpies(x, d, P):
     p = x[IX.P]
     out = np.empty(11)
     out[0] = h_fw
-    for i, k in ((1, ECO), (2, EV), (3, SH1), (4, SH2), (6, SH3), (8, SH4), (10, RH)):
+    for i, k in ((1, SEC.ECO), (2, SEC.EV), (3, SEC.SH1), (4, SEC.SH2), (6, SEC.SH3),
+                 (8, SEC.SH4), (10, SEC.RH)):  # fmt: skip
         out[i] = _last_h(x, P, k)
     W3, out[5] = mix(W_eco, out[4], w1, h_sp)
     _, out[7] = mix(W3, out[6], w2, h_sp)
@@ -173,21 +165,21 @@ def section_temperatures(x, d, P):
     p = x[IX.P]
     dpb = P[IP.DPB] * r2
     out = np.empty(17)
-    out[0] = T_ph(p + P_SHARE[ECO] * dpb, h_fw)
-    out[1] = T_ph(p + P_SHARE[ECO] * dpb, _last_h(x, P, ECO))
-    out[2] = T_ph(p + P_SHARE[EV] * dpb, _last_h(x, P, EV))
-    out[3] = T_ph(p + P_SHARE[SH1] * dpb, _last_h(x, P, SH1))
-    out[4] = T_ph(p_a1, _last_h(x, P, SH2))
-    W3, h_a1 = mix(W_eco, _last_h(x, P, SH2), w1, h_sp)
+    out[0] = T_ph(p + P_SHARE[SEC.ECO] * dpb, h_fw)
+    out[1] = T_ph(p + P_SHARE[SEC.ECO] * dpb, _last_h(x, P, SEC.ECO))
+    out[2] = T_ph(p + P_SHARE[SEC.EV] * dpb, _last_h(x, P, SEC.EV))
+    out[3] = T_ph(p + P_SHARE[SEC.SH1] * dpb, _last_h(x, P, SEC.SH1))
+    out[4] = T_ph(p_a1, _last_h(x, P, SEC.SH2))
+    W3, h_a1 = mix(W_eco, _last_h(x, P, SEC.SH2), w1, h_sp)
     out[5] = T_ph(p_a1, h_a1)
-    out[6] = T_ph(p_a2, _last_h(x, P, SH3))
-    W4, h_a2 = mix(W3, _last_h(x, P, SH3), w2, h_sp)
+    out[6] = T_ph(p_a2, _last_h(x, P, SEC.SH3))
+    W4, h_a2 = mix(W3, _last_h(x, P, SEC.SH3), w2, h_sp)
     out[7] = T_ph(p_a2, h_a2)
-    out[8] = T_ph(p, _last_h(x, P, SH4))
+    out[8] = T_ph(p, _last_h(x, P, SEC.SH4))
     W_t, W_rh, p_rh, p_crh, _ = _reheat(P, p, L)
     out[16] = T_ph(p, x[int(P[IP.LOFF]) + int(P[IP.NL]) - 1])
     out[9] = out[16] * (p_crh / p) ** P[IP.KE]  # eq. (14), in K
-    out[10] = T_ph(p_rh, _last_h(x, P, RH))
+    out[10] = T_ph(p_rh, _last_h(x, P, SEC.RH))
     for i in range(11):
         out[i] -= K0
     out[16] -= K0
