@@ -365,11 +365,7 @@ class Plant:
         C, D = np.zeros((p, n)), np.zeros((p, m))
         for i in range(n):
             h = rel_step * max(abs(float(x0[0, i])), 1.0)
-            xp, xm = x0.copy(), x0.copy()
-            xp[0, i] += h
-            xm[0, i] -= h
-            A[:, i] = (run(xp, u0, d, None)[0] - run(xm, u0, d, None)[0]) / (2.0 * h)
-            C[:, i] = (run(xp, u0, d, 0.0)[1] - run(xm, u0, d, 0.0)[1]) / (2.0 * h)
+            A[:, i], C[:, i] = _central_difference(run, (x0, u0, d), 0, i, h)
         for j in range(m):
             lo, hi = max(u0[0, j] - du, 0.0), min(u0[0, j] + du, 1.0)
             up, um = u0.copy(), u0.copy()
@@ -409,11 +405,7 @@ class Plant:
         for j, name in enumerate(channels):
             c = DIST.index(name)
             h = rel_step * max(abs(float(d0[0, c])), 1.0)
-            dp, dm = d0.copy(), d0.copy()
-            dp[0, c] += h
-            dm[0, c] -= h
-            Bd[:, j] = (run(x0, u0, dp, None)[0] - run(x0, u0, dm, None)[0]) / (2.0 * h)
-            Dd[:, j] = (run(x0, u0, dp, 0.0)[1] - run(x0, u0, dm, 0.0)[1]) / (2.0 * h)
+            Bd[:, j], Dd[:, j] = _central_difference(run, (x0, u0, d0), 2, c, h)
         return Bd, Dd
 
     def _linear_point(
@@ -440,3 +432,15 @@ class Plant:
             return X[0], Z[0, rows]
 
         return x[None, :], u0, d0, run
+
+
+def _central_difference(run: Callable, point: tuple[np.ndarray, ...], which: int, i: int,
+                        h: float) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+    """Derivatives of the next state and of the outputs of ``run`` (a one-row step, as
+    :meth:`Plant._linear_point` makes it) in entry i of point[which] (x, u or d), by central
+    differences of step h."""
+    hi, lo = [a.copy() for a in point], [a.copy() for a in point]
+    hi[which][0, i] += h
+    lo[which][0, i] -= h
+    return ((run(*hi, None)[0] - run(*lo, None)[0]) / (2.0 * h),
+            (run(*hi, 0.0)[1] - run(*lo, 0.0)[1]) / (2.0 * h))  # fmt: skip
