@@ -13,8 +13,9 @@ import pytest
 
 import agents
 import steamtemp_gym
-from agents import leaderboard, train
+from agents import train
 from agents.evaluation import run_episode
+from agents.leaderboard.plan import _available
 
 
 def test_every_plant_has_a_shipped_agent_with_three_training_runs():
@@ -34,7 +35,7 @@ def test_shipped_agent_runs_a_named_scenario_deterministically(env_id, algo):
     # the leaderboard scores it, once per training run where the zoo holds several
     from agents import specs
 
-    named = [specs.split_run(n)[0] for n in leaderboard._available(env_id)]
+    named = [specs.split_run(n)[0] for n in _available(env_id)]
     assert f"sb3:{algo}" in named
 
 
