@@ -13,7 +13,7 @@ import pytest
 
 import agents
 import steamtemp_gym
-from agents import train
+from agents import files, train
 from agents.evaluation import run_episode
 from agents.leaderboard.plan import _available
 
@@ -25,7 +25,7 @@ def test_every_plant_has_a_shipped_agent_with_three_training_runs():
 
 @pytest.mark.parametrize(("env_id", "algo"), agents.shipped())
 def test_shipped_agent_runs_a_named_scenario_deterministically(env_id, algo):
-    meta = json.loads((agents.ZOO / f"{train.stem(env_id, algo)}.json").read_text())
+    meta = json.loads(files.steamtemp_paths(agents.ZOO, env_id, algo)[1].read_text())
     assert meta["env_id"] == env_id and meta["algo"] == algo
     pol = agents.load(env_id, algo)
     env = gym.make(env_id, scenario="setpoint_step")
