@@ -10,7 +10,8 @@ Two layouts:
   ``<env>`` is the env id with ``/`` written ``__``. Independent training runs of one
   agent (``python -m agents.train --zoo --runs K``) are ``<env>__<algo>__run<k>``,
   k = 0..K-1; a file without the run index is read as run 0 (where ``__run0`` is absent).
-  :func:`stem` builds these names and :func:`parse_stem` reads them.
+  :func:`stem` builds these names, :func:`steamtemp_paths` the two files' paths, and
+  :func:`parse_stem` reads them.
 - an RL Zoo run (``python -m rl_zoo3.train --algo A --env ID --log-folder LOGS``):
   ``LOGS/A/<name>_<n>/`` holding ``<name>.zip`` (the last model), ``best_model.zip``
   (with evaluation) and ``<name>/`` with ``args.yml`` (``algo``, ``env``), ``config.yml``
@@ -114,6 +115,18 @@ def stem(env_id: str, algo: str, run: int | None = None) -> str:
     return name
 
 
+def steamtemp_paths(directory: str | Path, env_id: str, algo: str,
+                    run: int | None = None) -> tuple[Path, Path]:  # fmt: skip
+    """The model ``.zip`` and the metadata ``.json`` of run ``run`` of (env_id, algo) in
+    ``directory``, as steamtemp-train writes them (their stem: :func:`stem`).
+
+    Raises:
+        ValueError: parts :func:`stem` refuses.
+    """
+    base = stem(env_id, algo, run)
+    return Path(directory) / f"{base}.zip", Path(directory) / f"{base}.json"
+
+
 def parse_stem(name: str, check: bool = True) -> tuple[str, str, int | None]:
     """``(env_id, algo, run)`` of a stem :func:`stem` builds; ``run`` is None for a stem
     without a run index (read as run 0).
@@ -157,14 +170,13 @@ def steamtemp_files(directory: Path, env_id: str, algo: str, run: int = 0) -> Ag
     Raises:
         ValueError: the .zip or the .json is missing.
     """
-    for k in (run, None) if run == 0 else (run,):
-        base = Path(directory) / stem(env_id, algo, k)
-        model, meta = base.with_suffix(".zip"), base.with_suffix(".json")
+    tried = [steamtemp_paths(directory, env_id, algo, k)
+             for k in ((run, None) if run == 0 else (run,))]  # fmt: skip
+    for model, meta in tried:
         if model.is_file() and meta.is_file():
             return AgentFiles(env_id, algo, model, (meta,), STEAMTEMP)
-    raise ValueError(f"no trained agent {Path(directory) / stem(env_id, algo, run)}.zip/.json"
-                     + (f" nor {Path(directory) / stem(env_id, algo)}.zip/.json" if run == 0
-                        else ""))  # fmt: skip
+    names = [f"{model.parent / model.stem}.zip/.json" for model, _ in tried]
+    raise ValueError(f"no trained agent {' nor '.join(names)}")
 
 
 def find(path: str | Path) -> list[AgentFiles]:

@@ -31,8 +31,9 @@ import gymnasium as gym
 import numpy as np
 
 import steamtemp_gym
-from agents import leaderboard
 from agents.evaluation import run_batch
+from agents.leaderboard.episodes import _make_policy
+from agents.leaderboard.plan import _env_id, _items, _policies, parse_seeds
 from steamtemp_gym import scenarios
 from steamtemp_gym.plants import perturb
 
@@ -67,7 +68,7 @@ def make_parser() -> argparse.ArgumentParser:
 def _envs(ap: argparse.ArgumentParser, name: str | None) -> list[str]:
     if name is None:
         return [e for e in steamtemp_gym.ENV_IDS if e in perturb.MISMATCH]
-    env_id = leaderboard._env_id(name)
+    env_id = _env_id(name)
     if env_id not in perturb.MISMATCH:
         ap.error(f"argument --env: {name[:100]!r} is not a plant with mismatch variants; "
                  f"valid: {sorted(perturb.MISMATCH)}")  # fmt: skip
@@ -94,7 +95,7 @@ def evaluate(env_id: str, policy: str, scenario: str, seeds: list[int]) -> dict[
                             scenario=scenario, params=params or {})  # fmt: skip
 
     nominal = venv()
-    pol = leaderboard._make_policy(policy, env_id, nominal)  # commissioned on the model
+    pol = _make_policy(policy, env_id, nominal)  # commissioned on the model
     out = {}
     for name, params in [(NOMINAL, None), *perturb.MISMATCH[env_id].items()]:
         rows = run_batch(nominal if params is None else venv(params), pol, seeds)
@@ -130,9 +131,9 @@ def main(argv: list[str] | None = None) -> None:
     ap = make_parser()
     args = ap.parse_args(argv)
     envs = _envs(ap, args.env)
-    seeds = leaderboard.parse_seeds(ap, args.seeds)
-    requested = leaderboard._items(ap, "--policies", args.policies)
-    available = leaderboard._policies(ap, envs, args.policies, oracle=False)
+    seeds = parse_seeds(ap, args.seeds)
+    requested = _items(ap, "--policies", args.policies)
+    available = _policies(ap, envs, args.policies, oracle=False)
     heldout = _heldout(ap, args.heldout, envs)
     scenario_names = [RAMP, heldout]
     if args.out is not None:

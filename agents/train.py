@@ -63,7 +63,7 @@ import yaml
 
 import steamtemp_gym
 from agents import ray_backend, shipped
-from agents.files import stem
+from agents.files import steamtemp_paths, stem
 from agents.moves import check_max_move
 from agents.policy import model_class
 from agents.wrappers import memory_options
@@ -329,6 +329,7 @@ def train(env_id: str, algo: str, hyperparams: Path | None = None, timesteps: in
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     name = stem(env_id, algo, run)
+    model_path, meta_path = steamtemp_paths(out, env_id, algo, run)
     import baselines
     from agents.stats import TRAVEL_BUDGET
 
@@ -372,7 +373,7 @@ def train(env_id: str, algo: str, hyperparams: Path | None = None, timesteps: in
             curve.append({"timesteps": steps, "fraction": steps / total, "wall_s": wall, **score})
             if better_checkpoint(score, best, TRAVEL_BUDGET):
                 best.update(score, timesteps=steps, obs_norm=_obs_stats(venv))
-                model.save(out / f"{name}.zip")
+                model.save(model_path)
 
     model.learn(total_timesteps=total, callback=Progress(), progress_bar=False)
     if not curve:  # a budget below the first mark's granularity
@@ -393,7 +394,7 @@ def train(env_id: str, algo: str, hyperparams: Path | None = None, timesteps: in
         "residual_scale": hp.get("residual_scale"), "max_move": hp.get("max_move"),
         "train_reward": hp.get("train_reward"),
     }  # fmt: skip
-    (out / f"{name}.json").write_text(json.dumps(meta, indent=1), encoding="utf-8")
+    meta_path.write_text(json.dumps(meta, indent=1), encoding="utf-8")
     venv.close()
     return meta
 

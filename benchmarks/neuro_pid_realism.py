@@ -22,7 +22,7 @@ import numpy as np
 import baselines
 import steamtemp_gym
 from agents.evaluation import run_batch
-from agents.leaderboard import DEFAULT_SCENARIOS
+from agents.leaderboard.plan import DEFAULT_SCENARIOS
 from steamtemp_gym import scenarios
 
 OWN = {"steamtemp/Cascade300MW-v0": ("setpoint_step_535_545", "load_ramp_100_50_100_2pct")}

@@ -22,7 +22,7 @@ import numpy as np
 
 import steamtemp_gym  # noqa: F401  (registers the ids)
 from agents.evaluation import run_batch
-from agents.leaderboard import _resolve, parse_seeds
+from agents.leaderboard.plan import _resolve, parse_seeds
 from agents.oracle import Budget, Oracle
 from baselines.cascade_pi import CascadePIFF
 

@@ -20,7 +20,7 @@ Reads ``<out>/leaderboard.json`` (the current schema version) and writes, betwee
 - docs/baselines.md ``realism:start`` / ``realism:end``: the baseline-plant pairs with
   episodes a plant engineer would reject, with the first of them (``realism_markdown``);
 - docs/robustness.md ``mismatch:start`` / ``mismatch:end``: every policy on the
-  model-mismatch variants (agents/leaderboard_mismatch.py ``markdown``); the README's
+  model-mismatch variants (agents/leaderboard/mismatch.py ``markdown``); the README's
   leaderboard section also gets the robustness column (``worst_markdown``).
 
 Nothing is typed by hand.
@@ -33,8 +33,8 @@ import json
 import shutil
 from pathlib import Path
 
-from agents import leaderboard_mismatch as mismatch
-from agents import leaderboard_report as report
+from agents.leaderboard import mismatch, report
+from agents.leaderboard.summary import SCHEMA_VERSION, ZERO
 
 ROOT = Path(__file__).resolve().parents[1]
 README = ROOT / "README.md"
@@ -108,9 +108,9 @@ def main(argv: list[str] | None = None) -> None:
         doc = json.loads((out / "leaderboard.json").read_text())
     except (OSError, ValueError) as exc:
         ap.error(f"argument --out: cannot read {out / 'leaderboard.json'}: {exc}")
-    if doc.get("schema_version") != report.SCHEMA_VERSION:
+    if doc.get("schema_version") != SCHEMA_VERSION:
         ap.error(f"argument --out: schema_version {doc.get('schema_version')!r}, "
-                 f"expected {report.SCHEMA_VERSION}")  # fmt: skip
+                 f"expected {SCHEMA_VERSION}")  # fmt: skip
     plots = sorted(p.name for p in (out / "plots").glob("*__*.png"))
     if args.plot not in plots:
         ap.error(f"argument --plot: {args.plot!r} not in {out / 'plots'}; valid: {plots}")
@@ -125,7 +125,7 @@ def main(argv: list[str] | None = None) -> None:
                              BASELINES_PAGE.name)  # fmt: skip
     real = f"{REAL_START} {_GEN}\n\n" + report.realism_markdown(doc) + "\n" + REAL_END
     baselines_text = replace(baselines_text, REAL_START, REAL_END, real, BASELINES_PAGE.name)
-    robust = f"{MIS_START} {_GEN}\n\n" + mismatch.markdown(doc, report.ZERO) + "\n" + MIS_END
+    robust = f"{MIS_START} {_GEN}\n\n" + mismatch.markdown(doc, ZERO) + "\n" + MIS_END
     robustness_text = replace(ROBUSTNESS_PAGE.read_text(), MIS_START, MIS_END, robust,
                               ROBUSTNESS_PAGE.name)  # fmt: skip
     IMAGE.parent.mkdir(parents=True, exist_ok=True)

@@ -15,6 +15,7 @@ import yaml
 import agents
 from agents import train
 from agents.evaluation import run_episode
+from agents.files import steamtemp_paths
 from steamtemp_gym.rewards import RewardConfig
 
 ENV_ID = "steamtemp/BensonSubcritical-v0"  # 5 s control interval: short validation episodes
@@ -60,9 +61,9 @@ def trained(tmp_path_factory) -> dict[str, Path]:
 @pytest.mark.parametrize("algo", ALGOS)
 def test_smoke_training_writes_model_and_metadata(trained, algo):
     d = trained[algo]
-    stem = d / train.stem(ENV_ID, algo)
-    meta = json.loads(stem.with_suffix(".json").read_text())
-    assert stem.with_suffix(".zip").exists()
+    model, meta_path = steamtemp_paths(d, ENV_ID, algo)
+    meta = json.loads(meta_path.read_text())
+    assert model.exists()
     assert meta["env_id"] == ENV_ID and meta["algo"] == algo and meta["seed"] == 1
     assert meta["timesteps_trained"] >= STEPS[algo]
     assert [c["fraction"] for c in meta["validation"]["curve"]][-1] >= 1.0
@@ -89,7 +90,7 @@ def test_smoke_training_writes_model_and_metadata(trained, algo):
 @pytest.mark.parametrize("algo", ["ppo", "sac", "recurrentppo"])
 def test_loaded_policy_reproduces_validation_and_is_deterministic(trained, algo):
     pol = agents.load(ENV_ID, algo, zoo=trained[algo])
-    meta = json.loads((trained[algo] / f"{train.stem(ENV_ID, algo)}.json").read_text())
+    meta = json.loads(steamtemp_paths(trained[algo], ENV_ID, algo)[1].read_text())
     env = gym.make(ENV_ID, scenario="random")
     rets = [run_episode(env, pol, train.VALIDATION_SEED + k)["metrics"]["return"]
             for k in range(train.N_VALIDATION)]  # fmt: skip

@@ -13,8 +13,9 @@ import pytest
 
 import agents
 import steamtemp_gym
-from agents import leaderboard, train
+from agents import files, train
 from agents.evaluation import run_episode
+from agents.leaderboard.plan import _available
 
 
 @pytest.mark.parametrize("env_id", steamtemp_gym.ENV_IDS)
@@ -29,7 +30,7 @@ def test_every_plant_has_a_shipped_agent_with_three_training_runs(env_id):
 
 @pytest.mark.parametrize(("env_id", "algo"), agents.shipped())
 def test_shipped_agent_runs_a_named_scenario_deterministically(env_id, algo):
-    meta = json.loads((agents.ZOO / f"{train.stem(env_id, algo)}.json").read_text())
+    meta = json.loads(files.steamtemp_paths(agents.ZOO, env_id, algo)[1].read_text())
     assert meta["env_id"] == env_id and meta["algo"] == algo
     pol = agents.load(env_id, algo)
     env = gym.make(env_id, scenario="setpoint_step")
@@ -39,7 +40,7 @@ def test_shipped_agent_runs_a_named_scenario_deterministically(env_id, algo):
     # the leaderboard scores it, once per training run where the zoo holds several
     from agents import specs
 
-    named = [specs.split_run(n)[0] for n in leaderboard._available(env_id)]
+    named = [specs.split_run(n)[0] for n in _available(env_id)]
     assert f"sb3:{algo}" in named
 
 

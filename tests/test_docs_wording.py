@@ -35,7 +35,8 @@ def test_docs_have_no_history_words(path):
 
 
 def _package_helps() -> dict[str, str]:
-    from agents import leaderboard, train, tune
+    from agents import train, tune
+    from agents.leaderboard import cli as leaderboard
     from steamtemp_gym import __main__ as listing
     from steamtemp_gym import docs
     from steamtemp_gym.testing import cli

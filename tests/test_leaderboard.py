@@ -1,4 +1,4 @@
-"""The leaderboard CLI (agents/leaderboard.py): flags checked before anything runs, the
+"""The leaderboard CLI (agents/leaderboard/): flags checked before anything runs, the
 per-episode record, --resume after a crash, failed episodes, strict JSON that follows
 docs/leaderboard_schema.json, batched and parallel runs identical to serial ones.
 
@@ -23,6 +23,9 @@ from agents import leaderboard as lb
 from agents import specs
 from agents.difficulty import FrozenValves
 from agents.evaluation import run_batch, run_episode
+from agents.leaderboard import backends, cli, episodes, mismatch, records, trends
+from agents.leaderboard.plan import DEFAULT_SCENARIOS, REFERENCE, build_plan
+from agents.leaderboard.summary import REFERENCES, SCHEMA_VERSION, ZERO
 
 SCHEMA = Path(__file__).parents[1] / "docs" / "leaderboard_schema.json"
 
@@ -62,12 +65,12 @@ class Scripted(FrozenValves):
 def fake_policies(monkeypatch):
     """Policies ``frozen`` and ``flaky`` (Scripted) next to the baselines."""
     monkeypatch.setattr(baselines, "NAMES", (*baselines.NAMES, "frozen", "flaky"))
-    real = lb._make_policy
+    real = episodes._make_policy
 
     def make(name, env_id, env):
         return Scripted(env, name) if name in ("frozen", "flaky") else real(name, env_id, env)
 
-    monkeypatch.setattr(lb, "_make_policy", make)
+    monkeypatch.setattr(episodes, "_make_policy", make)
     monkeypatch.setattr(Scripted, "FAIL", {})
     return Scripted.FAIL
 
@@ -180,7 +183,7 @@ def test_bad_out_is_an_argparse_error(tiny, tmp_path, fake_policies, capsys):
     afile = tmp_path / "afile"
     afile.write_text("x")
     record_dir = tmp_path / "recdir"
-    (record_dir / lb.EPISODES).mkdir(parents=True)
+    (record_dir / records.EPISODES).mkdir(parents=True)
     cases = [
         (afile, "not a directory"),
         (afile / "sub", "not a directory"),
@@ -200,20 +203,20 @@ def test_bad_out_is_an_argparse_error(tiny, tmp_path, fake_policies, capsys):
 def test_existing_record_needs_resume(tiny, tmp_path, fake_policies, capsys):
     out = tmp_path / "out"
     lb.main(_args(tiny, out))
-    before = (out / lb.EPISODES).read_text()
+    before = (out / records.EPISODES).read_text()
     with pytest.raises(SystemExit) as exc:
         lb.main(_args(tiny, out))
     assert exc.value.code == 2
     err = capsys.readouterr().err
     assert "--resume" in err and "--out" in err
-    assert (out / lb.EPISODES).read_text() == before
+    assert (out / records.EPISODES).read_text() == before
 
 
 def test_corrupt_record_line_is_an_error_on_resume(tiny, tmp_path, fake_policies, capsys):
     out = tmp_path / "out"
     lb.main(_args(tiny, out, **{"--seeds": "0,1"}))
-    lines = (out / lb.EPISODES).read_text().splitlines()
-    (out / lb.EPISODES).write_text("\n".join(["{not json", *lines]) + "\n")
+    lines = (out / records.EPISODES).read_text().splitlines()
+    (out / records.EPISODES).write_text("\n".join(["{not json", *lines]) + "\n")
     with pytest.raises(SystemExit) as exc:
         lb.main([*_args(tiny, out, **{"--seeds": "0,1"}), "--resume"])
     assert exc.value.code == 2
@@ -222,7 +225,7 @@ def test_corrupt_record_line_is_an_error_on_resume(tiny, tmp_path, fake_policies
 
 
 def test_duplicates_are_dropped_in_order(tiny, tmp_path, fake_policies, capsys):
-    ap = lb.make_parser()
+    ap = cli.make_parser()
     flags = {
         "--envs": f"{ENV}, {ENV}",
         "--policies": "frozen,frozen, flaky",
@@ -230,9 +233,9 @@ def test_duplicates_are_dropped_in_order(tiny, tmp_path, fake_policies, capsys):
         "--seeds": " 3, 0-2,1,,2 ",
     }
     args = ap.parse_args(_args(tiny, tmp_path / "out", **flags))
-    plan = lb.build_plan(ap, args)
+    plan = build_plan(ap, args)
     assert plan.envs == [ENV]
-    assert plan.policies == {ENV: ["frozen", "flaky", "cascade_pi_ff", lb.REFERENCE]}
+    assert plan.policies == {ENV: ["frozen", "flaky", "cascade_pi_ff", REFERENCE]}
     assert plan.scenarios == [str(tiny)]
     assert plan.seeds == [3, 0, 1, 2]
     assert "duplicates dropped" in capsys.readouterr().err
@@ -242,20 +245,20 @@ def test_duplicates_are_dropped_in_order(tiny, tmp_path, fake_policies, capsys):
 def test_default_run_is_valid_without_running(monkeypatch, tmp_path):
     """The README's main job: every default env, policy, scenario and seed resolves."""
     monkeypatch.chdir(tmp_path)
-    ap = lb.make_parser()
-    plan = lb.build_plan(ap, ap.parse_args([]))
+    ap = cli.make_parser()
+    plan = build_plan(ap, ap.parse_args([]))
     assert plan.envs == list(IDS) and plan.seeds == [0, 1, 2, 3, 4]
-    assert plan.scenarios == list(lb.DEFAULT_SCENARIOS)
+    assert plan.scenarios == list(DEFAULT_SCENARIOS)
     assert {f"heldout:{n}" for n in steamtemp_gym.scenarios.heldout.NAMES} <= set(plan.scenarios)
     for env_id in IDS:  # every baseline, every shipped agent, the references
         shipped = [n for e, a in agents.shipped() if e == env_id  # one name per training run
                    for n in specs.training_runs(f"sb3:{a}", env_id)]  # fmt: skip
-        assert plan.policies[env_id] == [*baselines.NAMES, *shipped, "oracle", lb.REFERENCE]
+        assert plan.policies[env_id] == [*baselines.NAMES, *shipped, "oracle", REFERENCE]
     n = sum(len(p) for p in plan.policies.values())
-    variants = {e: len(lb.mismatch.labels(e)) for e in IDS}  # but the two references
+    variants = {e: len(mismatch.labels(e)) for e in IDS}  # but the two references
     m = sum((len(plan.policies[e]) - 2) * variants[e] for e in IDS)
     assert min(variants.values()) == 4
-    assert len(list(plan.grid())) == (n * len(lb.DEFAULT_SCENARIOS) + m) * 5
+    assert len(list(plan.grid())) == (n * len(DEFAULT_SCENARIOS) + m) * 5
     assert not (tmp_path / "leaderboard_out").exists()
 
 
@@ -283,27 +286,27 @@ def test_resume_after_a_crash_completes_without_duplicates(tiny, tmp_path, fake_
     with pytest.raises(SystemExit) as exc:
         lb.main(argv)
     assert exc.value.code == 130
-    rows = _jsonl(out / lb.EPISODES)
+    rows = _jsonl(out / records.EPISODES)
     assert [(r["env"], r["policy"], r["seed"]) for r in rows] == [
         (ENV, "frozen", 0), (ENV, "frozen", 1)]  # fmt: skip
     assert len(_board(out)) == 2  # what finished, rebuilt
-    with (out / lb.EPISODES).open("a") as f:  # a crash in the middle of a write
+    with (out / records.EPISODES).open("a") as f:  # a crash in the middle of a write
         f.write(json.dumps(rows[-1])[:25])
     fake_policies.clear()
     lb.main([*argv, "--resume"])
-    rows = _jsonl(out / lb.EPISODES)
+    rows = _jsonl(out / records.EPISODES)
     keys = [(r["env"], r["scenario"], r["policy"], r["seed"]) for r in rows]
     assert len(keys) == len(set(keys)) == 16
     board = _board(out)
     assert [(r["env"], r["policy"], r["seed"]) for r in board] == [
-        (e, p, s) for e in (ENV, ENV2) for p in ("frozen", "flaky", "cascade_pi_ff", lb.REFERENCE)
+        (e, p, s) for e in (ENV, ENV2) for p in ("frozen", "flaky", "cascade_pi_ff", REFERENCE)
         for s in (0, 1)]  # fmt: skip
     assert all(r["metrics"] is not None and "error" not in r for r in board)
     assert {p.name for p in (out / "plots").glob("*__*.png")} == {
         "Cascade300MW-v0__tiny.png", "DrumBoilerSH-v0__tiny.png"}  # fmt: skip
     # a finished run resumed again runs nothing and rebuilds the same board
     lb.main([*argv, "--resume"])
-    assert len(_jsonl(out / lb.EPISODES)) == 16
+    assert len(_jsonl(out / records.EPISODES)) == 16
     assert _board(out) == board
 
 
@@ -316,7 +319,7 @@ def test_trend_plots_name_the_scenario_and_show_the_selection(tmp_path, fake_pol
     path = tmp_path / "some_file.yaml"
     path.write_text(TINY)
     calls = []
-    monkeypatch.setattr(lb.plots, "trend", lambda p, env, env_id, sc, traces, seed, **kw:
+    monkeypatch.setattr(trends, "trend", lambda p, env, env_id, sc, traces, seed, **kw:
                         calls.append((p.name, env_id, sc, list(traces), kw["colors"])))
     argv = _args(path, tmp_path / "out", **{"--policies": "frozen,flaky",
                                             "--envs": f"{ENV},{ENV2}"})  # fmt: skip
@@ -338,7 +341,7 @@ def test_failed_episode_is_recorded_and_the_run_goes_on(tiny, tmp_path, fake_pol
     assert exc.value.code == 1
     err = capsys.readouterr().err
     assert "1 of 8 episodes failed" in err and "controller diverged" in err and "--resume" in err
-    rows = _jsonl(out / lb.EPISODES)
+    rows = _jsonl(out / records.EPISODES)
     assert len(rows) == 8
     (bad,) = [r for r in rows if "error" in r]
     assert (bad["policy"], bad["seed"], bad["metrics"]) == ("flaky", 0, None)
@@ -351,7 +354,7 @@ def test_failed_episode_is_recorded_and_the_run_goes_on(tiny, tmp_path, fake_pol
     # the cause fixed, --resume runs only the failed episode
     fake_policies.clear()
     lb.main([*argv, "--resume"])
-    rows = _jsonl(out / lb.EPISODES)
+    rows = _jsonl(out / records.EPISODES)
     assert len(rows) == 9 and (rows[-1]["policy"], rows[-1]["seed"]) == ("flaky", 0)
     board = _board(out)
     assert len(board) == 8 and not any("error" in r for r in board)
@@ -361,14 +364,14 @@ def test_failed_episode_is_recorded_and_the_run_goes_on(tiny, tmp_path, fake_pol
 def test_policy_that_cannot_be_built_fails_its_episodes_only(
     tiny, tmp_path, fake_policies, monkeypatch
 ):
-    make = lb._make_policy
+    make = episodes._make_policy
 
     def broken(name, env_id, env):
         if name == "flaky":
             raise ValueError("no such tuning")
         return make(name, env_id, env)
 
-    monkeypatch.setattr(lb, "_make_policy", broken)
+    monkeypatch.setattr(episodes, "_make_policy", broken)
     out = tmp_path / "out"
     with pytest.raises(SystemExit) as exc:
         lb.main(_args(tiny, out, **{"--seeds": "0,1", "--policies": "flaky,frozen"}))
@@ -376,8 +379,8 @@ def test_policy_that_cannot_be_built_fails_its_episodes_only(
     board = _board(out)
     assert [("error" in r, r["policy"]) for r in board] == [
         (True, "flaky"), (True, "flaky"), (False, "frozen"), (False, "frozen"),
-        (False, "cascade_pi_ff"), (False, "cascade_pi_ff"), (False, lb.REFERENCE),
-        (False, lb.REFERENCE)]  # fmt: skip
+        (False, "cascade_pi_ff"), (False, "cascade_pi_ff"), (False, REFERENCE),
+        (False, REFERENCE)]  # fmt: skip
     assert list((out / "plots").glob("*.png"))
 
 
@@ -385,10 +388,10 @@ def test_changed_scenario_runs_again_on_resume(tiny, tmp_path, fake_policies):
     out = tmp_path / "out"
     argv = _args(tiny, out)
     lb.main(argv)
-    fps = {r["fingerprint"] for r in _jsonl(out / lb.EPISODES)}
+    fps = {r["fingerprint"] for r in _jsonl(out / records.EPISODES)}
     tiny.write_text(TINY.replace("0.95", "0.9"))
     lb.main([*argv, "--resume"])
-    rows = _jsonl(out / lb.EPISODES)
+    rows = _jsonl(out / records.EPISODES)
     assert len(rows) == 6 and not {r["fingerprint"] for r in rows[3:]} & fps
     assert [r["fingerprint"] for r in _board(out)] == [r["fingerprint"] for r in rows[3:]]
 
@@ -401,19 +404,19 @@ def test_outputs_are_strict_json_that_follows_the_schema(tiny, tmp_path, fake_po
     lb.main(_args(tiny, out, **{"--seeds": "0-1"}))
     doc = _strict_load(out / "leaderboard.json")
     jsonschema.validate(doc, json.loads(SCHEMA.read_text()))
-    assert doc["schema_version"] == lb.report.SCHEMA_VERSION
+    assert doc["schema_version"] == SCHEMA_VERSION
     board = doc["episodes"]
     assert len(board) == 6
     for r in board:
         assert r["metrics"]["settling_time_s"] is None
         assert set(r) == {"env", "scenario", "policy", "seed", "fingerprint", "metrics"}
         assert all(v is None or np.isfinite(v) for v in r["metrics"].values())
-    assert _jsonl(out / lb.EPISODES) == board
+    assert _jsonl(out / records.EPISODES) == board
     cells = doc["plants"][ENV]["scenarios"][str(tiny)]
     assert all("settling_time_s" not in c for c in cells.values())
     md = (out / "leaderboard.md").read_text()
     assert "nan" not in md.lower().replace("tanh", "")
-    assert lb.dumps({"a": float("inf"), "b": np.float32("nan"), "c": [np.int64(3)]}) == (
+    assert records.dumps({"a": float("inf"), "b": np.float32("nan"), "c": [np.int64(3)]}) == (
         '{"a": null, "b": null, "c": [3]}'
     )
     with pytest.raises(jsonschema.ValidationError):  # the schema is not vacuous
@@ -428,9 +431,9 @@ def test_run_batch_is_identical_to_run_episode():
     env_id = "steamtemp/SupercriticalFSH-v0"
     env = gym.make(env_id, scenario=sc)
     venv = gym.make_vec(env_id, num_envs=2, vectorization_mode="vector_entry_point", scenario=sc)
-    for name in (*baselines.NAMES, lb.REFERENCE):
-        serial = [run_episode(env, lb._make_policy(name, env_id, env), s) for s in (3, 7)]
-        batch = run_batch(venv, lb._make_policy(name, env_id, venv), [3, 7])
+    for name in (*baselines.NAMES, REFERENCE):
+        serial = [run_episode(env, episodes._make_policy(name, env_id, env), s) for s in (3, 7)]
+        batch = run_batch(venv, episodes._make_policy(name, env_id, venv), [3, 7])
         for a, b in zip(serial, batch, strict=True):
             assert a["metrics"] == b["metrics"], name
             for k in a["trace"]:
@@ -486,11 +489,11 @@ def test_leaderboard_cli_with_the_baseline(tmp_path):
     assert len(rows) == 2 * 2 * (len(baselines.NAMES) + runs + 2)  # a row per training run
     assert all(np.isfinite(r["metrics"]["iae_K_s"]) for r in rows)
     pols = doc["plants"][IDS[0]]["policies"]
-    refs = lb.report.REFERENCES
+    refs = REFERENCES
     ranks = sorted(e["rank"] for p, e in pols.items() if p not in refs)
     assert ranks[0] == 1 and len(ranks) == len(baselines.NAMES) + len(trained)
     assert all("rank" not in pols[r] for r in refs)
-    zero = lb.report.ZERO
+    zero = ZERO
     assert f"p_improvement_over_{zero}" not in pols[zero]
     assert all(0 <= e[f"p_improvement_over_{zero}"]["value"] <= 1
                for p, e in pols.items() if p != zero)  # fmt: skip
@@ -527,9 +530,9 @@ def test_resume_refuses_a_hand_edited_row_without_metrics(tiny, tmp_path, fake_p
     argparse error naming the line and what it lacks, not a KeyError traceback."""
     out = tmp_path / "out"
     lb.main(_args(tiny, out, **{"--seeds": "0,1"}))
-    rows = _jsonl(out / lb.EPISODES)
+    rows = _jsonl(out / records.EPISODES)
     rows[0]["metrics"] = {}
-    (out / lb.EPISODES).write_text("".join(json.dumps(r) + "\n" for r in rows))
+    (out / records.EPISODES).write_text("".join(json.dumps(r) + "\n" for r in rows))
     with pytest.raises(SystemExit) as exc:
         lb.main([*_args(tiny, out, **{"--seeds": "0,1"}), "--resume"])
     assert exc.value.code == 2
@@ -581,7 +584,7 @@ def test_workers_end_with_the_leaderboard(tmp_path, sig):
     try:
         proc.send_signal(getattr(signal, sig))
         assert proc.wait(timeout=30) == (143 if sig == "SIGTERM" else -signal.SIGKILL)
-        deadline = time.monotonic() + 5 * lb.PARENT_POLL_S + 3
+        deadline = time.monotonic() + 5 * backends.PARENT_POLL_S + 3
         while any(_alive(w) for w in workers) and time.monotonic() < deadline:
             time.sleep(0.1)
         assert not any(_alive(w) for w in workers), f"workers {workers} outlived the run"
@@ -601,13 +604,13 @@ def test_a_second_run_on_the_same_out_is_refused(tmp_path, capsys):
     out = tmp_path / "out"
     proc, workers = _start_cli(out)
     try:
-        before = (out / lb.EPISODES).read_bytes()
+        before = (out / records.EPISODES).read_bytes()
         with pytest.raises(SystemExit) as exc:
             lb.main(["--envs", ENV, "--policies", "cascade_pi", "--scenarios", "setpoint_step",
                      "--seeds", "0", "--jobs", "1", "--out", str(out), "--resume"])  # fmt: skip
         assert exc.value.code == 2
         assert "in use by another steamtemp-leaderboard run" in capsys.readouterr().err
-        assert (out / lb.EPISODES).read_bytes()[:len(before)] == before
+        assert (out / records.EPISODES).read_bytes()[:len(before)] == before
         assert proc.poll() is None
     finally:
         proc.send_signal(signal.SIGTERM)
@@ -623,7 +626,7 @@ def test_library_log_writes_to_the_stderr_of_the_moment(monkeypatch):
     monkeypatch.setattr(logging.getLogger("steamtemp_gym"), "handlers", [])
     first = io.StringIO()
     monkeypatch.setattr("sys.stderr", first)
-    lb._show_library_log()
+    cli._show_library_log()
     first.close()
     now = io.StringIO()
     monkeypatch.setattr("sys.stderr", now)

@@ -1,5 +1,5 @@
 """The leaderboard's model-mismatch rows and robustness column
-(agents/leaderboard_mismatch.py): each policy commissioned on the nominal plant and run on
+(agents/leaderboard/mismatch.py): each policy commissioned on the nominal plant and run on
 the variants, kept out of the scores, summarized against its nominal return."""
 
 from __future__ import annotations
@@ -11,14 +11,15 @@ import gymnasium as gym
 import pytest
 
 from agents import leaderboard as lb
-from agents import leaderboard_mismatch as mismatch
 from agents.evaluation import run_episode
+from agents.leaderboard import cli, episodes, mismatch
+from agents.leaderboard.plan import DEFAULT_SCENARIOS, Plan, build_plan
+from agents.leaderboard.summary import ZERO
 from steamtemp_gym.plants import perturb
 
 SCHEMA = Path(__file__).parents[1] / "docs" / "leaderboard_schema.json"
 ENV = "steamtemp/Cascade300MW-v0"  # the cheapest plant to build
 FSH = "steamtemp/SupercriticalFSH-v0"
-ZERO = lb.report.ZERO
 
 
 def _run(out: Path, *extra: str) -> dict:
@@ -44,9 +45,9 @@ def test_a_mismatch_row_is_the_model_commissioned_policy_on_the_variant(runs):
     params = perturb.MISMATCH[ENV][variant]
     unit = gym.make(ENV, scenario=mismatch.SCENARIO, params=params)
     model = gym.make(ENV, scenario=mismatch.SCENARIO)
-    want = run_episode(unit, lb._make_policy(ZERO, ENV, model), 0)["metrics"]["return"]
+    want = run_episode(unit, episodes._make_policy(ZERO, ENV, model), 0)["metrics"]["return"]
     assert row["metrics"]["return"] == want
-    retuned = run_episode(unit, lb._make_policy(ZERO, ENV, unit), 0)["metrics"]["return"]
+    retuned = run_episode(unit, episodes._make_policy(ZERO, ENV, unit), 0)["metrics"]["return"]
     assert retuned != want
 
 
@@ -150,10 +151,10 @@ def test_summary_by_hand():
 def test_flags_decide_the_mismatch_rows(tmp_path):
     """Mismatch rows only with load_ramp_100_50 among the scenarios and without
     --no-mismatch; never for the references."""
-    ap = lb.make_parser()
+    ap = cli.make_parser()
 
-    def plan(*argv: str) -> lb.Plan:
-        return lb.build_plan(
+    def plan(*argv: str) -> Plan:
+        return build_plan(
             ap,
             ap.parse_args(
                 ["--envs", ENV, "--policies", "cascade_pi", "--out", str(tmp_path / "o"), *argv]
@@ -166,6 +167,6 @@ def test_flags_decide_the_mismatch_rows(tmp_path):
     assert p.policies_of(ENV, labels[0]) == ["cascade_pi", ZERO]
     assert "oracle" in p.policies_of(ENV, "load_ramp_100_50")
     assert plan("--scenarios", "setpoint_step").scenarios_of(ENV) == ["setpoint_step"]
-    assert plan("--no-mismatch").scenarios_of(ENV) == list(lb.DEFAULT_SCENARIOS)
+    assert plan("--no-mismatch").scenarios_of(ENV) == list(DEFAULT_SCENARIOS)
     with pytest.raises(SystemExit):  # a label is not a scenario one can ask for
         plan("--scenarios", labels[0])

@@ -1,8 +1,9 @@
-"""The leaderboard's figures (agents/leaderboard_plots.py) and leaderboard.md's numbers:
-colours unique per figure and by kind, the trend plots' policy selection, the profiles'
-focused axis with the clipped runs marked, display precision and units in the markdown.
+"""The leaderboard's figures (agents/leaderboard/plots.py, agents/leaderboard/trends.py) and
+leaderboard.md's numbers: colours unique per figure and by kind, the trend plots' policy
+selection, the profiles' focused axis with the clipped runs marked, display precision and units
+in the markdown.
 
-Figures are inspected before they are written (``_save`` replaced); synthetic traces and
+Figures are inspected before they are written (``plots.save`` replaced); synthetic traces and
 scores keep these in seconds.
 """
 
@@ -16,8 +17,8 @@ import pytest
 from matplotlib.colors import to_rgb
 
 import baselines
-from agents import leaderboard_plots as plots
-from agents import leaderboard_report as report
+from agents.leaderboard import plots, report, trends
+from agents.leaderboard.summary import REFERENCES, TABLE_METRICS, ZERO, summarize
 
 AGENTS = ("sb3:ppo", "sb3:sac", "sb3:sac_caps", "zoo:runs/a", "mine:make")
 
@@ -30,7 +31,7 @@ def figures(monkeypatch):
     def keep(fig, path, **kw):
         out.append(fig)
 
-    monkeypatch.setattr(plots, "_save", keep)
+    monkeypatch.setattr(plots, "save", keep)
     yield out
     import matplotlib.pyplot as plt
 
@@ -55,7 +56,7 @@ def test_colours_are_unique_and_by_family(monkeypatch):
     extra = tuple(f"my_baseline_{k}" for k in range(6))  # beyond the listed colours
     monkeypatch.setattr(baselines, "NAMES", (*baselines.NAMES, *extra))
     agents = (*AGENTS, *(f"zoo:runs/{k}" for k in range(12)))
-    names = [*baselines.NAMES, *agents, *report.REFERENCES]
+    names = [*baselines.NAMES, *agents, *REFERENCES]
     colors = plots.policy_colors(names)
     assert list(colors) == names
     assert len({to_rgb(c) for c in colors.values()}) == len(names)
@@ -63,11 +64,11 @@ def test_colours_are_unique_and_by_family(monkeypatch):
         assert _in(_hue(colors[name]), plots.BASELINE_HUES), (name, colors[name])
     for name in agents:
         assert _in(_hue(colors[name]), plots.AGENT_HUES), (name, colors[name])
-    for name in report.REFERENCES:  # grey: no hue at all
+    for name in REFERENCES:  # grey: no hue at all
         r, g, b = to_rgb(colors[name])
         assert r == g == b
     # the reference keeps its colour wherever it stands
-    assert plots.policy_colors(["sb3:ppo", "mpc_linear", report.ZERO])[report.ZERO] == \
+    assert plots.policy_colors(["sb3:ppo", "mpc_linear", ZERO])[ZERO] == \
         plots.BASELINE_COLORS[0]
 
 
@@ -76,7 +77,7 @@ def _plant(ranks: dict[str, int]) -> dict:
 
 
 def test_trend_shows_the_reference_the_oracle_cascade_pi_and_the_top_three():
-    available = [*baselines.NAMES, *AGENTS[:3], *report.REFERENCES]
+    available = [*baselines.NAMES, *AGENTS[:3], *REFERENCES]
     ranks = {p: k for k, p in enumerate(
         ["mpc_linear", "cascade_pi_ff", "sb3:ppo", "lqi", "fao_fac", "cascade_pi", "sb3:sac"], 1)}
     shown = plots.trend_policies(_plant(ranks), available)
@@ -117,8 +118,8 @@ def test_trend_colours_are_unique_and_the_title_names_the_scenario(figures, tmp_
     names = ["cascade_pi_ff", "oracle", "cascade_pi", "mpc_linear", "sb3:ppo", "lqi",
              "sb3:sac", "frozen_valve"]  # fmt: skip
     traces = {n: _trace(50, 1.0 + k, 3, True) for k, n in enumerate(names)}
-    plots.trend(tmp_path / "x.png", _env(3, True), "steamtemp/BoilerTurbineMIMO-v0",
-                "my_test", traces, 0, notes={"mpc_linear": "#1, score 0.75"})  # fmt: skip
+    trends.trend(tmp_path / "x.png", _env(3, True), "steamtemp/BoilerTurbineMIMO-v0",
+                 "my_test", traces, 0, notes={"mpc_linear": "#1, score 0.75"})  # fmt: skip
     (fig,) = figures
     main = fig.axes[0]
     lines = [ln for ln in main.get_lines() if ln.get_label().endswith(": true")]
@@ -208,7 +209,7 @@ def _rows() -> list[dict]:
 def test_markdown_has_no_exponents_and_carries_units():
     run = {"envs": ["steamtemp/A-v0"], "scenarios": ["s"], "seeds": [0, 1, 2],
            "policies": {"steamtemp/A-v0": ["cascade_pi_ff", "oracle", "mpc_linear"]}}
-    summary, _ = report.summarize(_rows(), run)
+    summary, _ = summarize(_rows(), run)
     text = report.markdown(summary, [])
     import re
 
@@ -222,7 +223,7 @@ def test_markdown_has_no_exponents_and_carries_units():
 
 
 def test_report_columns_cover_the_tables():
-    assert set(report.TABLE_METRICS) <= set(report.COLUMNS)
+    assert set(TABLE_METRICS) <= set(report.COLUMNS)
     assert set(report.RANK_METRICS) <= set(report.COLUMNS)
 
 

@@ -5,8 +5,9 @@ from __future__ import annotations
 
 import pytest
 
-from agents import leaderboard_report as report
 from agents import stats
+from agents.leaderboard import report
+from agents.leaderboard.summary import ONE, ZERO, summarize
 
 ENV = "steamtemp/SupercriticalFSH-v0"
 SCENARIOS = ("a", "b")
@@ -25,8 +26,8 @@ def _rows(policies: dict[str, tuple[float, float, bool]]) -> list[dict]:
 
 
 POLICIES = {
-    report.ZERO: (-100.0, 2.0, False),
-    report.ONE: (-20.0, 3.0, False),
+    ZERO: (-100.0, 2.0, False),
+    ONE: (-20.0, 3.0, False),
     "cascade_pi": (-110.0, 1.5, False),
     "chatter": (-40.0, 6.0, False),  # best score, travel 3x the reference's
     "fine": (-60.0, 3.8, False),  # within 2x
@@ -39,7 +40,7 @@ def _summary(budget: float | None = None) -> dict:
            "seeds": [0, 1, 2]}  # fmt: skip
     if budget is not None:
         run["travel_budget"] = budget
-    return report.summarize(_rows(POLICIES), run)[0]
+    return summarize(_rows(POLICIES), run)[0]
 
 
 def test_admissible_policies_rank_first_and_the_others_are_marked():
@@ -48,11 +49,11 @@ def test_admissible_policies_rank_first_and_the_others_are_marked():
     assert pols["fine"]["admissible"] and pols["cascade_pi"]["admissible"]
     assert pols["chatter"]["admissible"] is False  # travel over 2x
     assert pols["tripper"]["admissible"] is False  # a trip
-    assert "admissible" not in pols[report.ONE] and "rank" not in pols[report.ONE]
-    ranks = {p: pols[p]["rank"] for p in ("fine", report.ZERO, "cascade_pi", "chatter",
+    assert "admissible" not in pols[ONE] and "rank" not in pols[ONE]
+    ranks = {p: pols[p]["rank"] for p in ("fine", ZERO, "cascade_pi", "chatter",
                                           "tripper")}  # fmt: skip
     # chatter has the best score and tripper the second best: both after every admissible one
-    assert ranks == {"fine": 1, report.ZERO: 2, "cascade_pi": 3, "chatter": 4, "tripper": 5}
+    assert ranks == {"fine": 1, ZERO: 2, "cascade_pi": 3, "chatter": 4, "tripper": 5}
 
 
 def test_the_budget_is_the_run_s_and_the_tables_show_ratio_and_mark():
@@ -61,7 +62,7 @@ def test_the_budget_is_the_run_s_and_the_tables_show_ratio_and_mark():
     assert s["plants"][ENV]["policies"]["chatter"]["rank"] == 1
     md = report.markdown(_summary(), [])
     assert f"travel 3.0x {report.INADMISSIBLE}" in md
-    assert f"above {stats.TRAVEL_BUDGET:g}x {report.ZERO}'s" in md
+    assert f"above {stats.TRAVEL_BUDGET:g}x {ZERO}'s" in md
     assert "| no †" in md and "| yes |" in md
 
 

@@ -12,7 +12,7 @@ import pytest
 
 import steamtemp_gym
 from agents.evaluation import run_batch, run_episode
-from agents.leaderboard import DEFAULT_SCENARIOS
+from agents.leaderboard.plan import DEFAULT_SCENARIOS
 from baselines.mpc_linear import MPCLinear
 from steamtemp_gym.scenarios import NAMED_DISTURBANCES, Scenario, heldout
 

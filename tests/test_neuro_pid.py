@@ -15,7 +15,7 @@ import pytest
 import baselines
 import steamtemp_gym
 from agents.evaluation import run_batch
-from agents.leaderboard import DEFAULT_SCENARIOS
+from agents.leaderboard.plan import DEFAULT_SCENARIOS
 from baselines import neuro_pid as npid
 from steamtemp_gym import scenarios
 from steamtemp_gym.metrics import limit_cycles

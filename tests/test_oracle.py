@@ -11,7 +11,7 @@ import agents
 import baselines
 import steamtemp_gym
 from agents.evaluation import run_batch, run_episode
-from agents.leaderboard import _make_policy
+from agents.leaderboard.episodes import _make_policy
 from agents.oracle import Budget, Oracle
 from steamtemp_gym.scenarios import Scenario
 

@@ -26,6 +26,9 @@ import baselines
 from agents import files, specs
 from agents import leaderboard as lb
 from agents.evaluation import run_episode
+from agents.leaderboard import episodes
+from agents.leaderboard.plan import REFERENCE, _policy_digest
+from agents.leaderboard.records import strict
 from steamtemp_gym import scenarios
 from steamtemp_gym.scenarios import Scenario
 from steamtemp_gym.testing import cli
@@ -62,7 +65,7 @@ def _run(tmp_path: Path, tiny: Path, policies: str, *extra: str) -> list[dict]:
 def _alone(policy_of_env, seed: int) -> dict:
     """The metrics of one episode run by agents.evaluation, as the leaderboard stores them."""
     env = gym.make(ENV, scenario=TINY)
-    return lb.strict(run_episode(env, policy_of_env(env), seed)["metrics"])
+    return strict(run_episode(env, policy_of_env(env), seed)["metrics"])
 
 
 # --------------------------------------------------------------------------- example
@@ -97,10 +100,10 @@ def test_factory_is_fingerprinted_by_its_file(tmp_path):
     mod = tmp_path / "ctl.py"
     mod.write_text(EXAMPLE.read_text())
     name = f"{mod}:make_controller"
-    first = lb._policy_digest(ENV, name)
+    first = _policy_digest(ENV, name)
     assert first.startswith(name + ":") and len(first) == len(name) + 65
     mod.write_text(EXAMPLE.read_text() + "\n# another version\n")
-    assert lb._policy_digest(ENV, name) != first
+    assert _policy_digest(ENV, name) != first
 
 
 # --------------------------------------------------------------------------- agent files
@@ -126,7 +129,7 @@ def test_trained_agent_files_score_as_the_shipped_agent(tmp_path, tiny):
     for name in names:
         for seed in (0, 1):
             assert by[name, seed]["metrics"] == by[shipped, seed]["metrics"], name
-    digests = {n: lb._policy_digest(ENV, n) for n in [shipped, *names]}
+    digests = {n: _policy_digest(ENV, n) for n in [shipped, *names]}
     assert len({d.rsplit(":", 1)[1] for d in digests.values()}) == 1  # the same files' hash
 
 
@@ -308,8 +311,8 @@ def test_registered_baseline_reaches_a_worker_through_import(registry, tmp_path,
     monkeypatch.setattr(baselines, "_REGISTRY", dict(baselines._REGISTRY))
     del baselines._REGISTRY["single_loop_pi"]
     monkeypatch.delitem(__import__("sys").modules, "my_registry")
-    unit = lb.Unit(ENV, "tiny", TINY, "single_loop_pi", [0], "fp", None, ("my_registry",))
-    (row,), _ = lb.run_unit(unit)
+    unit = episodes.Unit(ENV, "tiny", TINY, "single_loop_pi", [0], "fp", None, ("my_registry",))
+    (row,), _ = episodes.run_unit(unit)
     assert row.get("error") is None and np.isfinite(row["metrics"]["iae_K_s"])
 
 
@@ -336,15 +339,15 @@ def test_a_new_tuning_changes_only_its_controllers_fingerprints(tmp_path, monkey
     from baselines import tuning
 
     other = "steamtemp/SupercriticalFSH-v0"
-    names = ["cascade_pi", "cascade_pi_tuned", "cascade_pi_ff", "lqi", "oracle", lb.REFERENCE]
-    before = {(e, n): lb._policy_digest(e, n) for e in (ENV, other) for n in names}
+    names = ["cascade_pi", "cascade_pi_tuned", "cascade_pi_ff", "lqi", "oracle", REFERENCE]
+    before = {(e, n): _policy_digest(e, n) for e in (ENV, other) for n in names}
     stored = tuning.TUNED
     monkeypatch.setattr(tuning, "TUNED", tmp_path)
     for f in stored.glob("*.json"):
         shutil.copy(f, tmp_path)
-    assert {(e, n): lb._policy_digest(e, n) for e, n in before} == before
+    assert {(e, n): _policy_digest(e, n) for e, n in before} == before
     src = json.loads(tuning.path("cascade_pi").read_text())
     src["plants"][ENV]["knobs"]["outer_gain"] *= 1.5
     tuning.path("cascade_pi").write_text(json.dumps(src))
-    changed = [k for k in before if lb._policy_digest(*k) != before[k]]
+    changed = [k for k in before if _policy_digest(*k) != before[k]]
     assert changed == [(ENV, "cascade_pi"), (ENV, "cascade_pi_tuned")]

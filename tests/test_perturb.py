@@ -117,7 +117,7 @@ def test_groups_ranges_and_variants_are_consistent():
 def test_every_variant_passes_the_start_check(env_id):
     """Every variant holds the steady start of every named and held-out scenario (the
     check of every reset) and of a few random ones."""
-    from agents.leaderboard import DEFAULT_SCENARIOS
+    from agents.leaderboard.plan import DEFAULT_SCENARIOS
 
     for v, p in perturb.MISMATCH[env_id].items():
         env = gym.make(env_id, params=p)

@@ -100,7 +100,7 @@ def _script(path: Path):
 
 
 def test_leaderboard_generator_rewrites_readme_and_agents_page(tmp_path, monkeypatch):
-    from agents import leaderboard_report as report
+    from agents.leaderboard.summary import summarize
 
     gen = _script(ROOT / "scripts" / "update_readme_leaderboard.py")
     readme, agents_page = tmp_path / "README.md", tmp_path / "agents.md"
@@ -123,7 +123,7 @@ def test_leaderboard_generator_rewrites_readme_and_agents_page(tmp_path, monkeyp
         for s in range(2)]  # fmt: skip
     run = {"envs": [env], "scenarios": ["s"], "seeds": [0, 1], "steamtemp_gym_version": "x",
            "policies": {env: ["cascade_pi_ff", "oracle", "sb3:ppo", "lqi"]}}  # fmt: skip
-    doc, _ = report.summarize(rows, run)
+    doc, _ = summarize(rows, run)
     out = tmp_path / "out"
     (out / "plots").mkdir(parents=True)
     (out / "leaderboard.json").write_text(json.dumps(dict(doc, episodes=rows)))

@@ -1,6 +1,6 @@
 """A trained agent over several training runs on the leaderboard: the two-level bootstrap
 of agents/stats.py (training runs, then episodes within each) on hand-computable cases,
-and the report's one row per agent over run x scenario x seed (agents/leaderboard_report.py)
+and the report's one row per agent over run x scenario x seed (agents/leaderboard/summary.py)
 on hand-made records; with one run the summary is the one-run report's, number for number
 (tests/data/one_run_summary.json: the summary and markdown the report wrote before it
 knew training runs, on the record of tests/run_records.py)."""
@@ -14,9 +14,10 @@ import numpy as np
 import pytest
 from run_records import ENV, FIXED, rows, run_info
 
-from agents import leaderboard_report as report
 from agents import stats
-from agents.leaderboard import strict
+from agents.leaderboard import report
+from agents.leaderboard.records import strict
+from agents.leaderboard.summary import summarize
 
 GOLDEN = Path(__file__).with_name("data") / "one_run_summary.json"
 AGENT = "sb3:ppo"
@@ -89,7 +90,7 @@ def test_bad_runs_are_refused(runs, match):
 def _summary(offsets: dict, spread: bool = True) -> tuple[dict, list[dict]]:
     names = [AGENT if k is None else f"{AGENT}@run{k}" for k in offsets]
     r = rows(AGENT, offsets, spread)
-    s, _ = report.summarize(r, run_info([*FIXED, *names]))
+    s, _ = summarize(r, run_info([*FIXED, *names]))
     return json.loads(json.dumps(strict(s))), r
 
 
@@ -143,7 +144,7 @@ def test_three_runs_with_spread_the_ci_resamples_the_runs():
     assert est["per_run"] == pytest.approx([a["value"] for a in alone], abs=1e-15)
     lo, hi = est["ci95"]
     assert lo < min(est["per_run"]) + 0.02 and hi > max(est["per_run"]) - 0.02
-    pooled = report.summarize(rows("pooled", {None: 0.0}), run_info([*FIXED, "pooled"]))
+    pooled = summarize(rows("pooled", {None: 0.0}), run_info([*FIXED, "pooled"]))
     assert hi - lo > 3 * np.diff(pooled[0]["plants"][ENV]["policies"]["pooled"][
         "normalized_score"]["iqm"]["ci95"])[0]  # fmt: skip
 
@@ -152,7 +153,7 @@ def test_failed_episodes_of_a_run_count_for_the_agent():
     r = rows(AGENT, {0: 0.0, 1: 8.0})
     bad = next(x for x in r if x["policy"] == f"{AGENT}@run1")
     bad.update(metrics=None, error="RuntimeError: x")
-    s, _ = report.summarize(r, run_info([*FIXED, f"{AGENT}@run0", f"{AGENT}@run1"]))
+    s, _ = summarize(r, run_info([*FIXED, f"{AGENT}@run0", f"{AGENT}@run1"]))
     e = s["plants"][ENV]["policies"][AGENT]
     assert e["failed"] == 1 and e["episodes"] == 23 and e["admissible"] is False
     assert e["normalized_score"]["runs"] == 23 and len(e["normalized_score"]["iqm"]["per_run"]) == 2
@@ -165,7 +166,7 @@ def test_a_run_without_scored_episodes_is_left_out_of_the_score_s_runs():
          if not (x["policy"] == f"{AGENT}@run2" and x["scenario"] != "c")
          and not (x["policy"] == "cascade_pi_ff" and x["scenario"] == "c")]  # fmt: skip
     names = [f"{AGENT}@run{k}" for k in range(3)]
-    s, _ = report.summarize(r, run_info([*FIXED, *names]))
+    s, _ = summarize(r, run_info([*FIXED, *names]))
     e = s["plants"][ENV]["policies"][AGENT]
     assert e["training_runs"] == [0, 1, 2] and len(e["return"]["iqm"]["per_run"]) == 3
     assert len(e["normalized_score"]["iqm"]["per_run"]) == 2 and e["normalized_score"]["tasks"] == 2
@@ -184,7 +185,7 @@ def test_realism_counts_the_episodes_a_plant_engineer_would_reject():
         row["metrics"]["quiet_p2p_K"] = 1.0
         if row["policy"] == "cascade_pi" and row["scenario"] == "a" and row["seed"] == 2:
             row["metrics"]["quiet_p2p_K"] = 2.5
-    s, _ = report.summarize(r, run_info([*FIXED, AGENT]))
+    s, _ = summarize(r, run_info([*FIXED, AGENT]))
     pol = s["plants"][ENV]["policies"]
     assert pol["cascade_pi"]["realism"] == {
         "episodes": 12, "breaches": 1,

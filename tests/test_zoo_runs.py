@@ -218,7 +218,7 @@ def local_zoo(tmp_path_factory) -> Path:
 
 
 def _meta(zoo: Path, run: int) -> dict:
-    return json.loads((zoo / f"{files.stem(ENV, 'ppo', run)}.json").read_text())
+    return json.loads(files.steamtemp_paths(zoo, ENV, "ppo", run)[1].read_text())
 
 
 def _outcome(meta: dict) -> dict:
@@ -240,7 +240,7 @@ def test_local_runs_write_run_indexed_files_with_their_seeds(local_zoo, tmp_path
     again = train.train(ENV, "ppo", local_zoo.parent / "ppo.yml", timesteps=256, seed=1000,
                         out=tmp_path, max_minutes=30, quiet=True, run=1)  # fmt: skip
     assert _outcome(again) == _outcome(m1)  # same seed, same run
-    assert (tmp_path / f"{files.stem(ENV, 'ppo', 1)}.zip").is_file()
+    assert files.steamtemp_paths(tmp_path, ENV, "ppo", 1)[0].is_file()
 
 
 def test_ray_runs_equal_local_runs(local_zoo, tmp_path):

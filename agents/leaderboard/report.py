@@ -1,272 +1,34 @@
-"""leaderboard.json's summary and leaderboard.md from the episode rows.
-
-The statistics (agents/stats.py) per plant and policy, over scenario x seed: the mean and
-IQM of the normalized score (0 = the industrial reference ``cascade_pi_ff``'s mean return
-on that scenario, 1 = the clairvoyant ``oracle``'s; agents/stats.py ``normalize``) and of
-the return, with 95 % stratified-bootstrap CIs; the probability of improvement over
-``cascade_pi_ff``; the rank per plant (by the IQM of the normalized score; the references
-``oracle`` and ``frozen_valve`` are listed, never ranked) and overall (the mean of the
-per-plant ranks). A trained agent scored over several training runs (policy names
-``sb3:<algo>@run<k>``, agents/specs.py) is one policy, ``sb3:<algo>``, over training run x
-scenario x seed: its normalized score's and return's CIs resample the training runs and,
-within each, the episodes (agents/stats.py ``training_run_bootstrap_ci``), and each
-statistic also gives its value per run and their range. The engineering metrics are means over
-scenario x seed of the episodes where they apply (a metric that does not apply, e.g.
-settling time without a setpoint step, is left out, never NaN; ``max_abs_dev_K`` is left
-out of an episode with a setpoint step, where it measures the step). Each plant's
-``robustness`` entry summarizes the model-mismatch rows (agents/leaderboard_mismatch.py),
-which take no part in the scores. The format is
-docs/leaderboard_schema.json, described in docs/leaderboard.md.
+"""leaderboard.md and the console's headline table from leaderboard.json's summary
+(agents/leaderboard/summary.py): the headline table (policy x plant), the trained agents
+against the baselines, the robustness to model mismatch (agents/leaderboard/mismatch.py),
+the ranking and per-scenario tables of each plant and the failed episodes; also the README's
+and docs' generated tables (scripts/update_readme_leaderboard.py). Described in
+docs/leaderboard.md.
 """
 
 from __future__ import annotations
 
-from collections import defaultdict
 from typing import Any
 
 import numpy as np
 
 import baselines
-from agents import leaderboard_mismatch as mismatch
-from agents import specs, stats
+from agents import stats
+from agents.leaderboard import mismatch
+from agents.leaderboard.summary import (
+    ONE,
+    REFERENCE,
+    REFERENCES,
+    TABLE_METRICS,
+    VERSUS,
+    ZERO,
+)
 from steamtemp_gym.checks import head
 
-#: Version of leaderboard.json's format (docs/leaderboard_schema.json).
-SCHEMA_VERSION = 7
-#: The 0 of the normalized score: the cascade as a commissioned unit runs it.
-ZERO = baselines.INDUSTRIAL_REFERENCE
-#: The 1: the clairvoyant NMPC on the true plant (agents/oracle.py).
-ONE = "oracle"
-#: Policies listed and plotted but never ranked (not admissible controllers).
-REFERENCES = ("oracle", "frozen_valve")
-REFERENCE = "frozen_valve"
-#: The policy the probability of improvement compares against.
-VERSUS = ZERO
-TABLE_METRICS = ("iae_K_s", "max_abs_dev_K", "time_outside_5K_s", "overshoot_pct",
-                 "settling_time_s", "spray_used_kg", "valve_travel", "valve_reversals",
-                 "quiet_p2p_K", "return")  # fmt: skip
 #: The metrics of the ranking tables of leaderboard.md, in column order.
 RANK_METRICS = ("iae_K_s", "max_abs_dev_K", "time_outside_5K_s", "valve_travel")
-SUMMARY_METRICS = ("iae_K_s", "max_abs_dev_K", "time_outside_5K_s", "time_outside_8K_s",
-                   "spray_used_kg", "valve_travel", "valve_reversals", "return")  # fmt: skip
 
 
-def _applicable(m: dict[str, Any]) -> dict[str, float]:
-    """The metrics of one episode that apply to it (finite, not a step's own size)."""
-    out = {k: float(v) for k, v in m.items() if v is not None and np.isfinite(v)}
-    if "overshoot_pct" in out:
-        out.pop("max_abs_dev_K", None)
-    return out
-
-
-def _means(ms: list[dict[str, float]], keys) -> dict[str, float]:
-    out = {}
-    for k in keys:
-        v = [m[k] for m in ms if k in m]
-        if v:
-            out[k] = float(np.mean(v))
-    return out
-
-
-def _estimate(tasks: list[np.ndarray], by_run: list[list[np.ndarray]] | None = None,
-              ) -> dict[str, Any]:  # fmt: skip
-    """Mean and IQM with CIs over ``tasks`` (scores per task); with ``by_run`` (per training
-    run, its scores per task; several runs) the CIs resample the runs too and each
-    statistic gets ``per_run`` and ``run_range``."""
-    out: dict[str, Any] = {}
-    for name, f in stats.AGGREGATES.items():
-        if by_run is None:
-            point, lo, hi = stats.stratified_bootstrap_ci(tasks, f)
-            out[name] = {"value": point, "ci95": [lo, hi]}
-        else:
-            point, lo, hi = stats.training_run_bootstrap_ci(by_run, f)
-            each = stats.per_run(by_run, f)
-            out[name] = {"value": point, "ci95": [lo, hi], "per_run": each,
-                         "run_range": [min(each), max(each)]}  # fmt: skip
-    out["tasks"] = len(tasks)
-    out["runs"] = int(sum(len(t) for t in tasks))
-    return out
-
-
-def agent_names(policies: list[str]) -> list[str]:
-    """The policies a summary lists for the names that ran: one per trained agent scored
-    over several training runs (specs.split_run), in order of first appearance."""
-    return list(dict.fromkeys(specs.split_run(p)[0] for p in policies))
-
-
-def _by_run(values: dict[str, np.ndarray], runs: dict[str, np.ndarray], ks: list[int],
-            ) -> list[list[np.ndarray]] | None:  # fmt: skip
-    """Per training run in ``ks`` with values, its part of each task's ``values`` (``runs``:
-    the run of each value); None for fewer than two such runs."""
-    parts = [[v[runs[sc] == k] for sc, v in values.items()] for k in ks]
-    parts = [p for p in parts if any(v.size for v in p)]
-    return parts if len(parts) > 1 else None
-
-
-#: Breaches listed per policy and plant in the summary's ``realism`` entry.
-REALISM_LISTED = 3
-
-
-def _realism(rows: list[dict]) -> dict[tuple[str, str], dict[str, Any]]:
-    """Per (env, policy): the episodes compared with the industrial reference's on the same
-    scenario and seed, how many of them a plant engineer would reject
-    (:func:`agents.stats.realism_breach`: a trip, travel above 3x the reference's, a limit
-    cycle in the quiet stretch) and the first :data:`REALISM_LISTED` of those."""
-    ref = {(r["env"], r["scenario"], r["seed"]): r["metrics"] for r in rows
-           if r["policy"] == ZERO and not r.get("error")}  # fmt: skip
-    out: dict[tuple[str, str], dict[str, Any]] = {}
-    for r in rows:
-        name = specs.split_run(r["policy"])[0]
-        m0 = ref.get((r["env"], r["scenario"], r["seed"]))
-        if r.get("error") or m0 is None or name in (ZERO, *REFERENCES):
-            continue
-        e = out.setdefault((r["env"], name), {"episodes": 0, "breaches": 0, "listed": []})
-        e["episodes"] += 1
-        why = stats.realism_breach(r["metrics"], m0)
-        if why:
-            e["breaches"] += 1
-            if len(e["listed"]) < REALISM_LISTED:
-                e["listed"].append(f"{r['policy']} {r['scenario']} seed {r['seed']}: {why}")
-    return out
-
-
-def summarize(rows: list[dict], run: dict[str, Any]) -> dict[str, Any]:
-    """The summary of leaderboard.json (rows: this run's grid, failed ones included). The
-    model-mismatch rows go to each plant's ``robustness`` entry only
-    (agents/leaderboard_mismatch.py)."""
-    all_rows, rows = rows, [r for r in rows if not mismatch.is_label(r["scenario"])]
-    realism = _realism(rows)
-    by = defaultdict(lambda: defaultdict(lambda: defaultdict(list)))  # env, scenario, policy
-    run_of = defaultdict(lambda: defaultdict(lambda: defaultdict(list)))  # training run of each
-    failed = defaultdict(int)
-    for r in rows:
-        name, k = specs.split_run(r["policy"])
-        if r.get("error"):
-            failed[r["env"], name] += 1
-        else:
-            by[r["env"]][r["scenario"]][name].append(r["metrics"])
-            run_of[r["env"]][r["scenario"]][name].append(0 if k is None else k)
-    plants: dict[str, Any] = {}
-    norm_scores: dict[str, dict[str, list[np.ndarray]]] = {}
-    for env_id in run["envs"]:
-        scs = [s for s in run["scenarios"] if s in by[env_id]]
-        policies = [p for p in agent_names(run["policies"][env_id])
-                    if any(p in by[env_id][s] for s in scs)]  # fmt: skip
-        runs_of = {p: {s: np.array(run_of[env_id][s][p], dtype=int) for s in scs
-                       if p in by[env_id][s]} for p in policies}  # fmt: skip
-        ks = {p: sorted({int(k) for v in runs_of[p].values() for k in v}) for p in policies}
-        refs, tasks_norm = {}, {}
-        for sc in scs:
-            ret = {p: np.array([m["return"] for m in by[env_id][sc][p]]) for p in by[env_id][sc]}
-            base = {p: float(v.mean()) for p, v in ret.items() if p in baselines.NAMES}
-            ref: dict[str, Any] = {}
-            if ZERO in ret:
-                ref.update(zero_policy=ZERO, zero_return=float(ret[ZERO].mean()))
-            if ONE in ret:
-                ref.update(one_policy=ONE, one_return=float(ret[ONE].mean()))
-            if base:
-                ref["best_baseline"] = max(base, key=base.get)
-            ref["normalized"] = False
-            if "zero_return" in ref and "one_return" in ref:
-                ref["headroom"] = ref["one_return"] - ref["zero_return"]
-                ref["span"] = stats.score_span(ref["zero_return"], ref["one_return"])
-                ref["normalized"] = True
-                tasks_norm[sc] = {p: stats.normalize(v, ref["zero_return"], ref["one_return"])
-                                  for p, v in ret.items()}  # fmt: skip
-            refs[sc] = ref
-        pol_out: dict[str, Any] = {}
-        norm_scores[env_id] = {}
-        for p in policies:
-            ms = [m for s in scs for m in by[env_id][s].get(p, [])]
-            rets = {s: np.array([m["return"] for m in by[env_id][s][p]]) for s in scs
-                    if by[env_id][s].get(p)}  # fmt: skip
-            norm = {s: tasks_norm[s][p] for s in tasks_norm if p in tasks_norm[s]}
-            entry: dict[str, Any] = {
-                "episodes": len(ms),
-                "failed": failed[env_id, p],
-                "trips": int(sum(m["tripped"] for m in ms)),
-                "return": _estimate(list(rets.values()), _by_run(rets, runs_of[p], ks[p])),
-                "metrics": _means([_applicable(m) for m in ms], SUMMARY_METRICS),
-            }
-            if len(ks[p]) > 1:
-                entry["training_runs"] = ks[p]
-            if (env_id, p) in realism:
-                entry["realism"] = realism[env_id, p]
-            if norm:
-                entry["normalized_score"] = _estimate(list(norm.values()),
-                                                      _by_run(norm, runs_of[p], ks[p]))
-                norm_scores[env_id][p] = list(norm.values())
-            if p != VERSUS:
-                common = [s for s in scs if by[env_id][s].get(p) and by[env_id][s].get(VERSUS)]
-                if common:
-                    x = [np.array([m["return"] for m in by[env_id][s][p]]) for s in common]
-                    y = [np.array([m["return"] for m in by[env_id][s][VERSUS]]) for s in common]
-                    point, lo, hi = stats.probability_of_improvement(x, y)
-                    entry[f"p_improvement_over_{VERSUS}"] = {"value": point, "ci95": [lo, hi],
-                                                            "tasks": len(common)}  # fmt: skip
-            pol_out[p] = entry
-        _admissibility(pol_out, float(run.get("travel_budget", stats.TRAVEL_BUDGET)))
-        ranked = {p: e["normalized_score"]["iqm"]["value"] for p, e in pol_out.items()
-                  if p not in REFERENCES and "normalized_score" in e}  # fmt: skip
-        first = {p: v for p, v in ranked.items() if pol_out[p].get("admissible")}
-        for group, offset in ((first, 0), ({p: v for p, v in ranked.items() if p not in first},
-                                           len(first))):  # fmt: skip
-            for p, k in stats.ranks(group).items():
-                pol_out[p]["rank"] = offset + k
-        per_sc = {}
-        for sc in scs:
-            per_sc[sc] = {}
-            for p in policies:
-                ms = by[env_id][sc].get(p)
-                if not ms:
-                    continue
-                cell: dict[str, Any] = {"seeds": len(ms)}
-                if len(ks[p]) > 1:
-                    cell["training_runs"] = len(set(runs_of[p][sc].tolist()))
-                cell.update(_means([_applicable(m) for m in ms], TABLE_METRICS))
-                cell["trips"] = int(sum(m["tripped"] for m in ms))
-                if sc in tasks_norm and p in tasks_norm[sc]:
-                    cell["normalized_score"] = float(np.mean(tasks_norm[sc][p]))
-                per_sc[sc][p] = cell
-        plants[env_id] = {"reference": refs, "policies": pol_out, "scenarios": per_sc}
-        robust = mismatch.summarize(all_rows, env_id, pol_out, ZERO, REFERENCES)
-        if robust is not None:
-            plants[env_id]["robustness"] = robust
-    return {"schema_version": SCHEMA_VERSION, "run": run, "plants": plants,
-            "ranking": _overall(plants)}, norm_scores  # fmt: skip
-
-
-def _admissibility(pol_out: dict[str, Any], budget: float) -> None:
-    """Each policy's ``travel_ratio`` (its mean valve travel over the reference's) and
-    ``admissible``: ratio <= ``budget``, no trip and no failed episode (references and runs
-    without the reference get no verdict)."""
-    zero = pol_out.get(ZERO, {}).get("metrics", {}).get("valve_travel")
-    for p, e in pol_out.items():
-        travel = e["metrics"].get("valve_travel")
-        if not zero or travel is None:
-            continue
-        e["travel_ratio"] = travel / zero
-        if p not in REFERENCES:
-            e["admissible"] = bool(e["travel_ratio"] <= budget and e["trips"] == 0
-                                   and e["failed"] == 0)  # fmt: skip
-
-
-def _overall(plants: dict[str, Any]) -> list[dict[str, Any]]:
-    """Mean per-plant rank of each policy; policies ranked on more plants first."""
-    ranks = defaultdict(list)
-    for p in plants.values():
-        for name, e in p["policies"].items():
-            if "rank" in e:
-                ranks[name].append(e["rank"])
-    out = [{"policy": n, "mean_rank": float(np.mean(r)), "plants": len(r)}
-           for n, r in ranks.items()]  # fmt: skip
-    out.sort(key=lambda e: (-e["plants"], e["mean_rank"]))
-    for i, e in enumerate(out):
-        e["position"] = i + 1
-    return out
-
-
-# --------------------------------------------------------------------------- markdown
 #: How leaderboard.md shows each metric: column header (with its unit), scale from the
 #: metric's unit to the shown one, decimals.
 COLUMNS: dict[str, tuple[str, float, int]] = {
@@ -320,9 +82,11 @@ def _run_range(est: dict[str, Any] | None, decimals: int = 2) -> str:
 
 
 #: How the tables describe a trained agent over several training runs.
-RUNS_NOTE = ("A trained agent with several training runs is one row over training run × "
-             "scenario × seed; its CIs resample the runs and, within each, the episodes; "
-             "runs: the range of its per-run IQM.")
+RUNS_NOTE = (
+    "A trained agent with several training runs is one row over training run × "
+    "scenario × seed; its CIs resample the runs and, within each, the episodes; "
+    "runs: the range of its per-run IQM."
+)
 
 
 def stat_label(n_seeds: int) -> str:
@@ -516,15 +280,25 @@ def realism_markdown(summary: dict[str, Any]) -> str:
             rows.append([f"`{name}`", env_id.split("/")[-1], f"{r['breaches']}/{r['episodes']}",
                          listed + more])  # fmt: skip
     n = len(summary["run"]["seeds"])
-    head = (f"Over every scenario and seed ({n} seeds) of the run, {clean} of "
-            f"{clean + len(rows)} baseline-plant pairs have no episode a plant engineer would "
-            f"reject against `cascade_pi_ff`'s on the same scenario and seed (a trip, valve "
-            f"travel above {num(stats.REALISM_TRAVEL_MAX, 0)}x, or a limit cycle in the quiet "
-            f"stretch: the quiet peak-to-peak above max(2x the reference's, 1.5 K)).")
+    head = (
+        f"Over every scenario and seed ({n} seeds) of the run, {clean} of "
+        f"{clean + len(rows)} baseline-plant pairs have no episode a plant engineer would "
+        f"reject against `cascade_pi_ff`'s on the same scenario and seed (a trip, valve "
+        f"travel above {num(stats.REALISM_TRAVEL_MAX, 0)}x, or a limit cycle in the quiet "
+        f"stretch: the quiet peak-to-peak above max(2x the reference's, 1.5 K))."
+    )
     if not rows:
         return head + "\n"
-    return "\n".join([head + " The others:", "",
-                      *_table(["baseline", "plant", "rejected", "first episodes"], rows)]) + "\n"
+    return (
+        "\n".join(
+            [
+                head + " The others:",
+                "",
+                *_table(["baseline", "plant", "rejected", "first episodes"], rows),
+            ]
+        )
+        + "\n"
+    )
 
 
 #: The columns of :func:`comparison_markdown`, in order.

@@ -1,12 +1,9 @@
-"""The leaderboard's figures (150 dpi, 10-11 pt text), written by agents/leaderboard.py.
+"""The leaderboard's figures (150 dpi, 10-11 pt text), written by
+agents/leaderboard/outputs.py, with the colours, line styles and text sizes they and the
+trend plots (agents/leaderboard/trends.py) share.
 
-- :func:`trend`: one plant and scenario, one episode (seed stated in the title) of each
-  policy shown (:func:`trend_policies`: by default the reference ``cascade_pi_ff``, the
-  oracle, ``cascade_pi`` and the plant's three best-scoring policies): the true outlet
-  temperature against the setpoint with the +-5 / +-8 K bands (and the thermocouple reading
-  of the first policy, labelled as such), the plant's secondary temperatures (reheat), one
-  panel per actuator (names from ``env.unwrapped.signals.action``), the load demand and the
-  disturbances that act in the scenario.
+- :func:`trend_policies`: the policies a trend plot shows (by default the reference
+  ``cascade_pi_ff``, the oracle, ``cascade_pi`` and the plant's three best-scoring policies).
 - :func:`bars`: per plant, the IQM of the normalized score of each policy with its 95 %
   stratified-bootstrap confidence interval.
 - :func:`profiles`: per plant, performance profiles (fraction of runs above a normalized
@@ -29,21 +26,12 @@ import numpy as np
 
 import baselines
 from agents import stats
-from agents.leaderboard_report import INADMISSIBLE, ONE, REFERENCES, ZERO, agent_names
-from steamtemp_gym.envs.render import BANDS_K
+from agents.leaderboard.report import INADMISSIBLE
+from agents.leaderboard.summary import ONE, REFERENCES, ZERO, agent_names
 
 DPI = 150
-_RC = {"font.size": 10, "axes.titlesize": 11, "axes.labelsize": 10, "legend.fontsize": 9,
-       "xtick.labelsize": 9, "ytick.labelsize": 9}  # fmt: skip
-_BAND_ALPHA = (0.22, 0.10)
-#: Disturbances shown when they vary: key -> (label, scale to the plotted unit, offset).
-_DIST = {
-    "heat_absorption_bias": ("heat-absorption\ndisturbance [%]", 100.0, 0.0),
-    "fouling": ("gas-side heat-transfer multiplier - 1 [%]", 100.0, -1.0),
-    "spray_water_temp_offset_C": ("spray-water temperature offset [K]", 1.0, 0.0),
-}
-#: Colours of the disturbances (yellows and browns, outside both policy families).
-_DIST_COLORS = ("#b8860b", "#808000", "#d4a017")
+RC = {"font.size": 10, "axes.titlesize": 11, "axes.labelsize": 10, "legend.fontsize": 9,
+      "xtick.labelsize": 9, "ytick.labelsize": 9}  # fmt: skip
 #: The baselines' colours (blues, greens, teals; the first is the reference's), in order.
 BASELINE_COLORS = ("#08306b", "#1f77b4", "#2ca02c", "#17becf", "#74c476", "#00695c", "#6baed6",
                    "#00a087", "#1b5e20", "#4dd0e1", "#80cbc4")  # fmt: skip
@@ -107,7 +95,7 @@ def policy_colors(names: Sequence[str]) -> dict[str, str]:
     return out
 
 
-def _style(name: str, color: str) -> dict[str, Any]:
+def line_style(name: str, color: str) -> dict[str, Any]:
     """Line style of a policy: the reference bold, the oracle dash-dot, the frozen valve
     dotted."""
     if name == ZERO:
@@ -150,7 +138,8 @@ def trend_policies(plant: dict[str, Any], available: Sequence[str],
     return fixed + [p for p in rest if pols.get(p, {}).get("admissible") is not False][:TREND_TOP]
 
 
-def _plt():
+def pyplot():
+    """matplotlib.pyplot on the Agg backend (files only, no display)."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -159,127 +148,16 @@ def _plt():
     return plt
 
 
-def _save(fig: Any, path: Path, **kw: Any) -> None:
+def save(fig: Any, path: Path, **kw: Any) -> None:
     """Write ``fig`` to ``path`` (its folder made if missing) at :data:`DPI` and close it."""
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, dpi=DPI, **kw)
-    _plt().close(fig)
+    pyplot().close(fig)
 
 
-def _short(env_id: str) -> str:
+def short_env(env_id: str) -> str:
+    """An env id without its namespace (figure titles)."""
     return env_id.split("/")[-1]
-
-
-def actuator_labels(env: Any) -> list[str]:
-    """The description of each action signal (e.g. 'secondary spray SP2 valve')."""
-    out = []
-    for s in env.unwrapped.signals.action:
-        text = (getattr(s, "description", "") or s.name).removesuffix(" command")
-        out.append(text)
-    return out
-
-
-def trend(
-    path: Path, env: Any, env_id: str, scenario: str, traces: dict[str, dict], seed: int,
-    colors: dict[str, str] | None = None, notes: dict[str, str] | None = None,
-) -> Path:
-    """The trend overlay of one plant and scenario (see the module docstring).
-
-    Args:
-        path: The PNG to write.
-        env: The env (its plant's secondary temperatures and actuators label the panels).
-        env_id: The env id (title).
-        scenario: The scenario's name (title).
-        traces: Policy name -> the trace of its episode (``run_episode``), in legend order.
-        seed: The episode's seed (title).
-        colors: Policy name -> colour (default: :func:`policy_colors` of ``traces``).
-        notes: Policy name -> a note for its legend entry (e.g. its score).
-    """
-    plt = _plt()
-    plant = env.unwrapped.plant
-    acts = actuator_labels(env)
-    colors = colors or policy_colors(list(traces))
-    notes = notes or {}
-    styles = {name: _style(name, colors[name]) for name in traces}
-    first = next(iter(traces.values()))
-    varying = [k for k in _DIST if k != "heat_absorption_bias" and np.ptp(first[k]) > 1e-9]
-    n = 1 + len(plant.secondary) + len(acts) + 1 + (1 if varying else 0)
-    ratios = [2.4] + [1.2] * (n - 1)
-    # y ranges: the controllers and the bands; the frozen valve may leave the axes
-    ranged = [name for name in traces if name != "frozen_valve"] or list(traces)
-    with plt.rc_context(_RC):
-        fig, axes = plt.subplots(n, 1, figsize=(10, 2.0 + 1.7 * n), sharex=True,
-                                 gridspec_kw={"height_ratios": ratios})  # fmt: skip
-        ax = axes[0]
-        t = first["time_s"] / 60.0
-        sp = first["setpoint_C"]
-        for band, alpha in zip(BANDS_K, _BAND_ALPHA, strict=True):
-            ax.fill_between(t, sp - band, sp + band, color="tab:green", alpha=alpha, lw=0,
-                            label=f"setpoint ±{band:g} K band")  # fmt: skip
-        ax.plot(t, sp, "k--", lw=1.2, label="setpoint")
-        for name, tr in traces.items():
-            note = f" ({notes[name]})" if notes.get(name) else ""
-            ax.plot(tr["time_s"] / 60, tr["outlet_temp_C"], label=f"{name}{note}: true",
-                    **styles[name])  # fmt: skip
-        dev = max(BANDS_K[-1] + 2.0, 1.1 * max(
-            float(np.max(np.abs(traces[k]["outlet_temp_C"] - traces[k]["setpoint_C"])))
-            for k in ranged))  # fmt: skip
-        ax.set_ylim(float(sp.min()) - dev, float(sp.max()) + dev)
-        name0 = next(iter(traces))
-        ax.plot(first["time_s"] / 60, first["measured_temp_C"], color=colors[name0], lw=0.6,
-                alpha=0.5, label=f"{name0}: measured (thermocouple)")  # fmt: skip
-        ax.set_ylabel("main steam outlet [°C]")
-        # outside the axes and out of tight_layout (a tall legend would spread the panels);
-        # savefig is told to keep it in the image
-        legends = [ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0)]
-        ax.set_title(f"{_short(env_id)} - {scenario}: one episode per policy (seed {seed})")
-        i = 1
-        for (key, sp2), axk in zip(plant.secondary, axes[1:], strict=False):
-            for band, alpha in zip(BANDS_K, _BAND_ALPHA, strict=True):
-                axk.axhspan(sp2 - band, sp2 + band, color="tab:green", alpha=alpha, lw=0)
-            axk.axhline(sp2, color="k", ls="--", lw=1)
-            for name, tr in traces.items():
-                axk.plot(tr["time_s"] / 60, tr[key], **dict(styles[name], lw=1.2))
-            axk.set_ylabel(key.replace("_temp_C", "").replace("_", " ") + " (true) [°C]")
-            d2 = max(BANDS_K[-1] + 2.0, 1.1 * max(float(np.max(np.abs(traces[k][key] - sp2)))
-                                                  for k in ranged))  # fmt: skip
-            axk.set_ylim(sp2 - d2, sp2 + d2)
-            i += 1
-        for j, label in enumerate(acts):
-            axk = axes[i + j]
-            for name, tr in traces.items():
-                v = np.asarray(tr["spray_valve"]).reshape(len(tr["time_s"]), -1)
-                axk.plot(tr["time_s"] / 60, 100 * v[:, j], **dict(styles[name], lw=1.1))
-            axk.set_ylabel("opening [%]")
-            axk.text(0.01, 0.95, label, transform=axk.transAxes, va="top", fontsize=10,
-                     bbox={"facecolor": "white", "alpha": 0.8, "lw": 0})  # fmt: skip
-            axk.set_ylim(-5, 105)
-        i += len(acts)
-        axk = axes[i]
-        axk.plot(t, 100 * first["load"], color="0.25", lw=1.4, label="load demand [%]")
-        axk.set_ylabel("load demand [%]", color="0.25")
-        axk.set_ylim(0, 110)
-        lab, scale, off = _DIST["heat_absorption_bias"]
-        axd = axk.twinx()
-        axd.plot(t, scale * (first["heat_absorption_bias"] + off), color=_DIST_COLORS[0], lw=0.9)
-        axd.set_ylabel(lab, color=_DIST_COLORS[0])
-        if varying:
-            axv = axes[i + 1]
-            for k, color in zip(varying, _DIST_COLORS[1:], strict=False):
-                lab, scale, off = _DIST[k]
-                axv.plot(t, scale * (first[k] + off), lw=1.4, color=color, label=lab)
-            axv.set_ylabel("disturbance")
-            legends.append(axv.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0),
-                                      borderaxespad=0))  # fmt: skip
-        for a in axes:
-            a.grid(alpha=0.3)
-        axes[-1].set_xlabel("time [min]")
-        fig.align_ylabels(axes)
-        for leg in legends:
-            leg.set_in_layout(False)
-        fig.tight_layout()
-        _save(fig, path, bbox_inches="tight", bbox_extra_artists=legends)
-    return path
 
 
 def figure_order(summary: dict[str, Any]) -> list[str]:
@@ -304,7 +182,7 @@ LABEL_CHARS = 28
 def short_name(name: str, n: int = LABEL_CHARS) -> str:
     """``name`` in at most ``n`` characters: a longer one (an agent's path, a factory)
     keeps its last ``n - 1`` characters after an ellipsis."""
-    return name if len(name) <= n else "…" + name[-(n - 1):]
+    return name if len(name) <= n else "…" + name[-(n - 1) :]
 
 
 def _bar_label(name: str, pe: dict[str, Any]) -> str:
@@ -320,11 +198,11 @@ def bars(path: Path, summary: dict[str, Any]) -> Path:
     ones first), each labelled with its valve travel over the reference's and the
     inadmissible mark; the axis spans :data:`PROFILE_RANGE` and the scores of the ranked
     policies down to -1, a bar beyond it ends at the edge with its value written there."""
-    plt = _plt()
+    plt = pyplot()
     plants = list(summary["plants"])
     rows, cols = _grid(len(plants))
     colors = policy_colors(figure_order(summary))
-    with plt.rc_context(_RC):
+    with plt.rc_context(RC):
         width = max(5.2 * cols, 8.0)  # one plant: room for the title and the labels
         fig, axes = plt.subplots(rows, cols, figsize=(width, 3.6 * rows), squeeze=False)
         for ax, env_id in zip(axes.flat, plants, strict=False):
@@ -349,27 +227,38 @@ def bars(path: Path, summary: dict[str, Any]) -> Path:
             ax.invert_yaxis()
             ax.axvline(0, color="k", lw=0.8)
             ax.axvline(1, color="k", lw=0.8, ls="--")
-            ax.set_title(_short(env_id))
+            ax.set_title(short_env(env_id))
             ax.set_xlabel(f"IQM normalized score\n(0 = {ZERO}, 1 = {ONE})")
             ax.grid(axis="x", alpha=0.3)
-        for ax in list(axes.flat)[len(plants):]:
+        for ax in list(axes.flat)[len(plants) :]:
             ax.axis("off")
         n_seeds = summary["run"]["seeds"]
         budget = summary["run"].get("travel_budget")
-        note = (f"\nlabels: valve travel over {ZERO}'s; {INADMISSIBLE}: not admissible "
-                f"(travel above {budget:g}x, a trip or a failure), ranked last") if budget else ""
-        title = (f"IQM over scenario × seed ({len(n_seeds)} seeds), 95 % stratified-bootstrap "
-                 f"CI; blue/green: baselines, orange/red/purple: trained agents{note}")
+        note = (
+            (
+                f"\nlabels: valve travel over {ZERO}'s; {INADMISSIBLE}: not admissible "
+                f"(travel above {budget:g}x, a trip or a failure), ranked last"
+            )
+            if budget
+            else ""
+        )
+        title = (
+            f"IQM over scenario × seed ({len(n_seeds)} seeds), 95 % stratified-bootstrap "
+            f"CI; blue/green: baselines, orange/red/purple: trained agents{note}"
+        )
         fig.suptitle("\n".join(textwrap.fill(line, int(width * 13))
                                for line in title.split("\n")))  # fmt: skip
         fig.tight_layout()
-        _save(fig, path)
+        save(fig, path)
     return path
 
 
 def profiles(
-    path: Path, scores: dict[str, dict[str, list[np.ndarray]]], n_seeds: int,
-    order: Sequence[str] | None = None, highlight: dict[str, Sequence[str]] | None = None,
+    path: Path,
+    scores: dict[str, dict[str, list[np.ndarray]]],
+    n_seeds: int,
+    order: Sequence[str] | None = None,
+    highlight: dict[str, Sequence[str]] | None = None,
 ) -> Path:
     """Performance profiles: ``scores[env][policy]`` = normalized scores per scenario.
 
@@ -378,7 +267,7 @@ def profiles(
     the edge). ``order`` gives the colour order (default: as in ``scores``); the policies of
     ``highlight[env]`` (e.g. those of the trend plots) are drawn bold, the others thin.
     """
-    plt = _plt()
+    plt = pyplot()
     plants = list(scores)
     rows, cols = _grid(len(plants))
     names = list(dict.fromkeys([*(order or []), *(p for e in scores.values() for p in e)]))
@@ -386,7 +275,7 @@ def profiles(
     lo, hi = PROFILE_RANGE
     taus = np.linspace(lo, hi, 351)
     handles: dict[str, Any] = {}
-    with plt.rc_context(_RC):
+    with plt.rc_context(RC):
         fig, axes = plt.subplots(rows, cols, figsize=(5.6 * cols, 4.0 * rows), squeeze=False)
         for ax, env_id in zip(axes.flat, plants, strict=False):
             bold = set(highlight[env_id]) if highlight and env_id in highlight else set(names)
@@ -394,7 +283,7 @@ def profiles(
                 tasks = scores[env_id][pol]
                 if not any(len(t) for t in tasks):
                     continue
-                style = _style(pol, colors[pol])
+                style = line_style(pol, colors[pol])
                 if pol not in bold:
                     style.update(lw=0.8, alpha=0.6)
                 prof = stats.performance_profile(tasks, taus)
@@ -403,21 +292,29 @@ def profiles(
                 for x, y, edge, marker in ((lo, prof[0], prof[0] < 1.0, "<"),
                                            (hi, prof[-1], prof[-1] > 0.0, ">")):  # fmt: skip
                     if edge:
-                        ax.plot([x], [y], marker=marker, ms=6, ls="none", clip_on=False,
-                                color=style["color"], alpha=style.get("alpha", 1.0))
+                        ax.plot(
+                            [x],
+                            [y],
+                            marker=marker,
+                            ms=6,
+                            ls="none",
+                            clip_on=False,
+                            color=style["color"],
+                            alpha=style.get("alpha", 1.0),
+                        )
             ax.set_xlim(lo, hi)
             ax.set_ylim(0.0, 1.02)
             ax.axvline(0, color="k", lw=0.8)
             ax.axvline(1, color="k", lw=0.8, ls="--")
-            ax.set_title(_short(env_id))
+            ax.set_title(short_env(env_id))
             ax.set_xlabel("normalized score τ")
             ax.set_ylabel("fraction of runs > τ")
             ax.grid(alpha=0.3)
         from matplotlib.lines import Line2D
 
         labels = [p for p in names if p in handles]
-        proxies = [Line2D([], [], **_style(p, colors[p])) for p in labels]
-        spare = list(axes.flat)[len(plants):]
+        proxies = [Line2D([], [], **line_style(p, colors[p])) for p in labels]
+        spare = list(axes.flat)[len(plants) :]
         for ax in spare:
             ax.axis("off")
         legend_args = {"handles": proxies, "labels": labels}
@@ -429,5 +326,5 @@ def profiles(
         fig.suptitle(f"Performance profiles over scenario × seed ({n_seeds} seeds); "
                      f"0 = {ZERO}, 1 = {ONE}; ◀ ▶: the curve goes on beyond the axis")  # fmt: skip
         fig.tight_layout()
-        _save(fig, path, bbox_inches="tight")
+        save(fig, path, bbox_inches="tight")
     return path

@@ -1,0 +1,125 @@
+"""Where the units of a leaderboard run execute: ``--jobs`` local worker processes (or this
+process), or one Ray task per unit (``--backend ray``, agents/ray_backend.py); the rows are
+appended to the record as units finish, with a progress bar on stderr.
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import sys
+import threading
+import time
+
+from agents import ray_backend
+from agents.leaderboard.episodes import Unit, run_unit
+from agents.leaderboard.plan import Plan
+from agents.leaderboard.records import Record
+
+
+class Progress:
+    """A progress bar with ETA over episodes on stderr (a line per 10 % when not a tty)."""
+
+    def __init__(self, total: int, stream=sys.stderr) -> None:
+        self.total, self.done, self.stream = total, 0, stream
+        self.t0 = time.time()
+        self.tty = stream.isatty()
+        self.last_pct = -10
+
+    def update(self, n: int) -> None:
+        self.done += n
+        el = time.time() - self.t0
+        eta = el / self.done * (self.total - self.done) if self.done else 0.0
+        pct = 100 * self.done / max(self.total, 1)
+        bar = "#" * int(pct / 4) + "." * (25 - int(pct / 4))
+        text = (f"[{bar}] {self.done}/{self.total} episodes {pct:3.0f} %  "
+                f"elapsed {_mmss(el)}  ETA {_mmss(eta)}")  # fmt: skip
+        if self.tty:
+            end = "\n" if self.done >= self.total else ""
+            print("\r" + text, end=end, file=self.stream, flush=True)
+        elif pct >= self.last_pct + 10 or self.done >= self.total:
+            self.last_pct = pct
+            print(text, file=self.stream, flush=True)
+
+
+def _mmss(s: float) -> str:
+    return f"{int(s // 60)}:{int(s % 60):02d}"
+
+
+def _pool(jobs: int):
+    """A process pool: fork where available (workers start with the compiled kernels),
+    but spawn once torch is loaded here: a child forked after torch started its thread
+    pools deadlocks in its first torch operation (seen in the test suite, loading a PPO
+    agent in a worker). Spawned workers load the kernels from the disk cache."""
+    import multiprocessing as mp
+    from concurrent.futures import ProcessPoolExecutor
+
+    fork = "fork" in mp.get_all_start_methods() and "torch" not in sys.modules
+    return ProcessPoolExecutor(max_workers=jobs, mp_context=mp.get_context(
+        "fork" if fork else "spawn"), initializer=_worker_start,
+        initargs=(os.getpid(),))  # fmt: skip
+
+
+#: How often a pool worker checks that the process that started it is alive (s).
+PARENT_POLL_S = 0.5
+
+
+def _worker_start(parent: int) -> None:
+    """In a pool worker: SIGTERM ends it (not the handler a forked worker inherits), and it
+    ends itself within :data:`PARENT_POLL_S` of its parent's death, SIGKILL included."""
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+
+    def watch() -> None:
+        while os.getppid() == parent:
+            time.sleep(PARENT_POLL_S)
+        os._exit(1)
+
+    threading.Thread(target=watch, name="parent-watch", daemon=True).start()
+
+
+def _local_results(units: list[Unit], jobs: int):
+    """(unit, run_unit's result) as they finish, in ``jobs`` local processes."""
+    if jobs <= 1 or len(units) <= 1:
+        for u in units:
+            yield u, run_unit(u)
+        return
+    import multiprocessing as mp
+    from concurrent.futures import as_completed
+
+    with _pool(jobs) as pool:
+        futures = {pool.submit(run_unit, u): u for u in units}
+        try:
+            for fut in as_completed(futures):
+                yield futures[fut], fut.result()
+        except BaseException:
+            for f in futures:
+                f.cancel()
+            for worker in mp.active_children():  # the pool's: stop their units now
+                worker.terminate()
+            raise
+
+
+def _ray_results(units: list[Unit], jobs: int, address: str | None):
+    """(unit, run_unit's result) as they finish, each unit a Ray task (one CPU): on a new
+    local Ray with ``jobs`` CPUs, or on the cluster at ``address``."""
+    return ray_backend.results(run_unit, units, jobs, address)
+
+
+def _execute(plan: Plan, units: list[Unit], jobs: int, record: Record, on_trace,
+             backend: str = "local", address: str | None = None) -> int:  # fmt: skip
+    """Run the units (in ``jobs`` processes or as Ray tasks), appending rows as they
+    finish. Failed count."""
+    progress = Progress(sum(len(u.seeds) for u in units))
+    failed = 0
+    results = (_ray_results(units, jobs, address) if backend == "ray"
+               else _local_results(units, jobs))  # fmt: skip
+    for u, (rows, trace) in results:
+        for row in rows:
+            record.write(row)
+            if row.get("error"):
+                failed += 1
+                print(f"\nFAILED {u.env_id} {u.spec} {u.policy} seed {row['seed']}: "
+                      f"{row['error']}", file=sys.stderr)  # fmt: skip
+        on_trace(u, trace)
+        progress.update(len(rows))
+    return failed

@@ -1,0 +1,354 @@
+"""The plan of a leaderboard run: every flag checked (argparse errors, exit code 2) and the
+envs built before anything runs, and the fingerprint of each env, scenario and policy (a hash
+of everything but the seed that decides an episode's result).
+"""
+
+from __future__ import annotations
+
+import argparse
+import functools
+import hashlib
+import importlib
+import json
+import math
+import os
+import re
+import sys
+from collections import Counter
+from collections.abc import Iterable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import gymnasium as gym
+
+import agents
+import baselines
+import steamtemp_gym
+from agents import specs, stats
+from agents.leaderboard import mismatch, summary
+from agents.leaderboard.records import EPISODES, SCHEMA, Key
+from steamtemp_gym import envs as envs_
+from steamtemp_gym import scenarios
+from steamtemp_gym.checks import head, tail
+from steamtemp_gym.scenarios import heldout
+
+#: The named scenarios every plant has, then the held-out set (steamtemp_gym/scenarios/heldout).
+NAMED_SCENARIOS = ("load_ramp_100_50", "load_ramp_50_100", "load_cycle", "setpoint_step",
+                   "heat_imbalance_step", "load_following")  # fmt: skip
+DEFAULT_SCENARIOS = NAMED_SCENARIOS + tuple(heldout.PREFIX + n for n in heldout.NAMES)
+DEFAULT_SEEDS = "0-4"
+#: The frozen-valve reference run on every plant (agents/difficulty.py).
+REFERENCE = summary.REFERENCE
+#: Policies that join every run: the score's 0, its 1 and the frozen valve.
+ALWAYS = (summary.ZERO, summary.ONE, REFERENCE)
+#: Upper bound on the number of seeds (a range such as ``0-1000000000`` is a typo).
+MAX_SEEDS = 10_000
+MAX_SEED = 2**63 - 1
+#: Longest excerpt of an exception message quoted in an argparse error.
+_EXCERPT = 400
+_SEED_ITEM = re.compile(r"^(\d+)(?:-(\d+))?$")
+
+
+@dataclass
+class Plan:
+    """What a run does, checked before anything runs."""
+
+    envs: list[str]
+    scenarios: list[str]
+    seeds: list[int]
+    policies: dict[str, list[str]]  # env -> policy names available for it
+    envs_made: dict[tuple[str, str], Any] = field(default_factory=dict)  # (env, scenario) -> env
+    resolved: dict[tuple[str, str], Any] = field(default_factory=dict)  # -> Scenario
+    fingerprints: dict[tuple[str, str, str], str] = field(default_factory=dict)
+    imports: tuple[str, ...] = ()  # --import: modules every worker imports first
+    travel_budget: float = stats.TRAVEL_BUDGET  # --travel-budget
+    #: env -> mismatch label -> the variant's params (agents/leaderboard/mismatch.py)
+    variants: dict[str, dict[str, dict]] = field(default_factory=dict)
+
+    def scenarios_of(self, env_id: str) -> list[str]:
+        """The run's scenarios on ``env_id``, then its mismatch labels."""
+        return [*self.scenarios, *self.variants.get(env_id, {})]
+
+    def policies_of(self, env_id: str, sc: str) -> list[str]:
+        """The policies run on ``env_id`` under ``sc``: all but the references on a
+        mismatch variant."""
+        if sc in self.variants.get(env_id, {}):
+            return [p for p in self.policies[env_id] if p not in summary.REFERENCES]
+        return self.policies[env_id]
+
+    def grid(self) -> Iterable[Key]:
+        """Every episode of the run, in run order."""
+        for env_id in self.envs:
+            for sc in self.scenarios_of(env_id):
+                for name in self.policies_of(env_id, sc):
+                    for seed in self.seeds:
+                        yield env_id, sc, name, seed
+
+
+def _items(ap: argparse.ArgumentParser, flag: str, text: str, key=None) -> list[str]:
+    """Comma list: stripped, empty items ignored, duplicates dropped (first kept)."""
+    items = [s.strip() for s in text.split(",")]
+    items = [s for s in items if s]
+    if not items:
+        ap.error(f"argument {flag}: empty list {text!r}; give at least one comma-separated value")
+    seen: dict[Any, str] = {}
+    dups = []
+    for s in items:
+        k = key(s) if key else s
+        if k in seen:
+            dups.append(s)
+        else:
+            seen[k] = s
+    if dups:
+        print(f"note: {flag}: duplicates dropped: {dups}", file=sys.stderr)
+    return list(seen.values())
+
+
+def parse_seeds(ap: argparse.ArgumentParser, text: str) -> list[int]:
+    """``--seeds``: integers >= 0 and inclusive ranges ``a-b``, comma separated, deduplicated."""
+    seeds: list[int] = []
+    for item in _items(ap, "--seeds", text):
+        m = _SEED_ITEM.match(item)
+        if not m:
+            ap.error(
+                f"argument --seeds: invalid seed {head(item, 40)!r}: seeds are integers >= 0 "
+                "or inclusive ranges a-b, comma separated (e.g. '0,1,2' or '0-4')"
+            )
+        lo = int(m.group(1))
+        hi = int(m.group(2)) if m.group(2) is not None else lo
+        if hi < lo:
+            ap.error(f"argument --seeds: empty range {item!r} (write a-b with a <= b)")
+        if hi > MAX_SEED:
+            ap.error(f"argument --seeds: seed {hi} is larger than {MAX_SEED}")
+        if hi - lo + 1 + len(seeds) > MAX_SEEDS:
+            ap.error(f"argument --seeds: more than {MAX_SEEDS} seeds ({item!r})")
+        seeds.extend(range(lo, hi + 1))
+    unique = list(dict.fromkeys(seeds))
+    if len(unique) < len(seeds):
+        dups = sorted(s for s, n in Counter(seeds).items() if n > 1)
+        print(f"note: --seeds: duplicates dropped: {dups[:20]}", file=sys.stderr)
+    return unique
+
+
+def _available(env_id: str) -> list[str]:
+    trained = (
+        [
+            r
+            for e, a in agents.shipped()
+            if e == env_id
+            for r in specs.training_runs(f"{specs.SB3_PREFIX}{a}", e)
+        ]
+        if _sb3()
+        else []
+    )
+    return list(baselines.NAMES) + trained + [summary.ONE, REFERENCE]
+
+
+@functools.lru_cache(maxsize=1)
+def _sb3() -> bool:
+    """Whether the trained agents can run (the agents extra); a note on stderr if not."""
+    import importlib.util
+
+    if importlib.util.find_spec("stable_baselines3") is not None:
+        return True
+    if agents.shipped():
+        print("note: the trained agents (sb3:*) are left out: they need the agents extra, "
+              "pip install 'steamtemp-gym[agents]'", file=sys.stderr)  # fmt: skip
+    return False
+
+
+def _resolve(spec: str, env_id: str) -> Any:
+    """A scenario name, ``heldout:<name>``, ``random`` or a YAML file as a Scenario (or
+    ``random``): steamtemp_gym.scenarios.resolve, as gym.make takes them."""
+    return scenarios.resolve(spec, env_id)
+
+
+def _policies(ap: argparse.ArgumentParser, envs: list[str], text: str | None,
+              oracle: bool = True) -> dict:  # fmt: skip
+    """Policies per env; every requested name must parse (agents/specs.py) and be available
+    for at least one env, and a factory's policy is built once on each env and checked.
+    :data:`ALWAYS` joins every env (the oracle only with ``oracle``)."""
+    always = [p for p in ALWAYS if oracle or p != summary.ONE]
+    if text is None:
+        return {e: [p for p in _available(e) if oracle or p != summary.ONE] for e in envs}
+    names = _items(ap, "--policies", text)
+    if not oracle and summary.ONE in names:
+        ap.error(f"argument --policies: {summary.ONE} is listed but --no-oracle is given")
+    parsed = {}
+    for n in names:
+        if n in (summary.ONE, REFERENCE):
+            continue
+        try:
+            parsed[n] = specs.parse(n)
+        except ValueError as exc:
+            ap.error(f"argument --policies: {head(str(exc), 1000)}")
+        if parsed[n].kind in (specs.SHIPPED, specs.FILES) and not _sb3():
+            ap.error(f"argument --policies: {head(n, 60)!r} is a trained agent: it needs the "
+                     "agents extra, pip install 'steamtemp-gym[agents]'")  # fmt: skip
+
+    def here(n: str, e: str) -> bool:
+        return n not in parsed or parsed[n].available(e)
+
+    nowhere = [n for n in names if not any(here(n, e) for e in envs)]
+    if nowhere:
+        ap.error(
+            f"argument --policies: {[head(n, 60) for n in nowhere]} not available for envs "
+            f"{envs}: only for {[sorted(parsed[n].envs) for n in nowhere]}"
+        )
+    out = {e: [n for n in names if here(n, e)] for e in envs}
+    for e, pols in out.items():
+        missing = [n for n in names if n not in pols]
+        pols[:] = list(dict.fromkeys(r for n in pols for r in specs.training_runs(n, e)))
+        if missing:
+            print(f"note: {missing} not available for {e}; skipped there", file=sys.stderr)
+        factories = [n for n in pols if n in parsed and parsed[n].kind == specs.FACTORY]
+        env = gym.make(e) if factories else None
+        for n in factories:
+            try:
+                parsed[n].make(e, env)
+            except Exception as exc:  # noqa: BLE001 - any failure is a bad --policies value
+                ap.error(f"argument --policies: {head(n, 60)!r} on {e}: "
+                         f"{type(exc).__name__}: {head(str(exc), _EXCERPT)}")  # fmt: skip
+        pols += [p for p in always if p not in pols]
+    return out
+
+
+def _env_id(name: str) -> str:
+    """The id an --envs item names (with or without the namespace); itself if none."""
+    try:
+        return envs_.resolve_id(name)
+    except ValueError:
+        return name
+
+
+def _scenario_key(spec: str) -> str:
+    """Two spellings of one YAML file are one scenario."""
+    if spec.endswith((".yaml", ".yml")):
+        return os.path.realpath(spec)
+    return spec
+
+
+def _check_out(ap: argparse.ArgumentParser, out: Path, resume: bool) -> None:
+    """The output directory can be created (or exists) and is writable; no stale record."""
+    if out.exists() and not out.is_dir():
+        ap.error(f"argument --out: {str(out)!r} exists and is not a directory")
+    parent = out
+    while not parent.exists():
+        parent = parent.parent
+    if not parent.is_dir():
+        ap.error(f"argument --out: {str(parent)!r} (in {str(out)!r}) is not a directory")
+    if not os.access(parent, os.W_OK | os.X_OK):
+        ap.error(f"argument --out: {str(out)!r} is not writable (no write access to {parent})")
+    record = out / EPISODES
+    if record.exists() and not record.is_file():
+        ap.error(f"argument --out: {str(record)!r} is not a file")
+    if not resume and record.is_file() and record.stat().st_size > 0:
+        ap.error(
+            f"argument --out: {str(record)!r} already holds episodes; pass --resume to "
+            "continue that run, choose another --out, or move the file aside"
+        )
+
+
+def _source_digest() -> str:
+    """Hash of the code that produces a row (physics, scenarios, metrics, baselines). The
+    baselines' stored tunings are part of their rows' policy digests (agents/specs.py), so
+    a new tuning reruns that controller's rows, not the oracle's or the agents'."""
+    h = hashlib.sha256()
+    roots = [Path(steamtemp_gym.__file__).parent, Path(baselines.__file__).parent]
+    files = [f for r in roots for f in sorted(r.rglob("*.py"))]
+    files += [Path(agents.__file__).with_name(f)
+              for f in ("evaluation.py", "difficulty.py", "oracle.py")]  # fmt: skip
+    for f in files:
+        h.update(f.read_bytes())
+    return h.hexdigest()
+
+
+def _policy_digest(env_id: str, name: str) -> str:
+    """The policy's part of the fingerprint: the name, with the hash of a trained agent's
+    files or of a factory's module (agents/specs.py)."""
+    if name in (summary.ONE, REFERENCE):
+        return name
+    return specs.parse(name).digest(env_id)
+
+
+def fingerprint(env_id: str, scenario: Any, policy_digest: str, source_digest: str,
+                params: dict | None = None) -> str:  # fmt: skip
+    """Short hash of everything but the seed that decides an episode's result (``params``:
+    a mismatch variant's plant parameters)."""
+    sc = scenario.to_dict() if isinstance(scenario, scenarios.Scenario) else str(scenario)
+    payload = {"schema": SCHEMA, "env": env_id, "scenario": sc, "policy": policy_digest,
+               "source": source_digest}  # fmt: skip
+    if params:
+        payload["params"] = params
+    text = json.dumps(payload, sort_keys=True, allow_nan=False, default=str)
+    return hashlib.sha256(text.encode()).hexdigest()[:16]
+
+
+def build_plan(ap: argparse.ArgumentParser, args: argparse.Namespace) -> Plan:
+    """Check every flag (argparse errors, exit code 2) and build the envs; runs nothing."""
+    imports = tuple(getattr(args, "modules", None) or ())
+    for module in imports:  # first: they may register env ids, baselines and scenarios
+        try:
+            importlib.import_module(module)
+        except Exception as exc:  # noqa: BLE001 - any failure is a bad --import value
+            ap.error(f"argument --import: cannot import {head(module, 100)!r}: "
+                     f"{type(exc).__name__}: {head(str(exc), _EXCERPT)}")  # fmt: skip
+    envs = _items(ap, "--envs", args.envs, key=_env_id)
+    unknown = [e for e in envs if _env_id(e) not in envs_.ids()]
+    if unknown:
+        ap.error(
+            f"argument --envs: unknown {[head(e, 60) for e in unknown]}; "
+            f"valid choices: {envs_.ids()} (the name after 'steamtemp/' is enough)"
+        )
+    envs = [_env_id(e) for e in envs]
+    seeds = parse_seeds(ap, args.seeds)
+    try:
+        budget = float(args.travel_budget)
+    except (TypeError, ValueError):
+        budget = math.nan
+    if not (math.isfinite(budget) and budget > 0.0):
+        ap.error(
+            f"argument --travel-budget: must be a finite number > 0 (a multiple of "
+            f"{summary.ZERO}'s valve travel), got {head(str(args.travel_budget), 60)!r}"
+        )
+    pols = _policies(ap, envs, args.policies, oracle=not args.no_oracle)
+    scs = _items(ap, "--scenarios", args.scenarios, key=_scenario_key)
+    if args.out is None or str(args.out).strip() == "":
+        ap.error("argument --out: empty path")
+    _check_out(ap, Path(args.out), args.resume)
+    resolved = {}
+    for env_id in envs:  # cheap pass first: names and YAML files
+        for sc in scs:
+            try:
+                resolved[env_id, sc] = _resolve(sc, env_id)
+            except Exception as exc:  # noqa: BLE001 - any failure is a bad --scenarios value
+                ap.error(
+                    f"argument --scenarios: {tail(sc, 80)!r} for {env_id}: "
+                    f"{head(str(exc), 1000)}"  # the message lists every form
+                )
+    plan = Plan(envs=envs, scenarios=scs, seeds=seeds, policies=pols, resolved=resolved,
+                imports=imports, travel_budget=budget)  # fmt: skip
+    if not args.no_mismatch and mismatch.SCENARIO in scs:
+        for env_id in envs:
+            plan.variants[env_id] = mismatch.labels(env_id)
+            for label in plan.variants[env_id]:
+                resolved[env_id, label] = resolved[env_id, mismatch.SCENARIO]
+    source = _source_digest()
+    for env_id in envs:
+        digests = {name: _policy_digest(env_id, name) for name in pols[env_id]}  # once per env
+        for sc in scs:
+            try:
+                plan.envs_made[env_id, sc] = gym.make(env_id, scenario=resolved[env_id, sc])
+            except Exception as exc:  # noqa: BLE001
+                ap.error(
+                    f"argument --scenarios: {tail(sc, 80)!r} for {env_id}: "
+                    f"{type(exc).__name__}: {head(str(exc), _EXCERPT)}"
+                )
+        for sc in plan.scenarios_of(env_id):
+            params = plan.variants.get(env_id, {}).get(sc)
+            for name in plan.policies_of(env_id, sc):
+                plan.fingerprints[env_id, sc, name] = fingerprint(
+                    env_id, resolved[env_id, sc], digests[name], source, params
+                )
+    return plan
