@@ -76,7 +76,7 @@ against cascade_pi on most scenarios of every plant (not on setpoint_step of Ben
 drum); SF + FAC helps further on the FSH, Benson and drum load changes but is worse than
 cascade_pi on Cascade300MW (e.g. heat_imbalance_step peak 7.9 vs 5.3 K) and on the drum's
 heat_imbalance_step and setpoint_step IAE: there the identified linear section and the
-paper's KK1 (not retuned) over-compensate.
+paper's KK1 (its published value) over-compensate.
 
 Validation (tests/test_fao.py): the inference against a direct discretized evaluation of
 eq. (12)-(13) with scikit-fuzzy's membership and centroid functions; the FAM bank's
