@@ -13,7 +13,7 @@ import pytest
 
 import agents
 import steamtemp_gym
-from agents import leaderboard, train
+from agents import files, leaderboard, train_config, train_runs
 from agents.evaluation import run_episode
 
 
@@ -24,7 +24,7 @@ def test_every_plant_has_a_shipped_agent_with_three_training_runs():
 
 @pytest.mark.parametrize(("env_id", "algo"), agents.shipped())
 def test_shipped_agent_runs_a_named_scenario_deterministically(env_id, algo):
-    meta = json.loads((agents.ZOO / f"{train.stem(env_id, algo)}.json").read_text())
+    meta = json.loads((agents.ZOO / f"{files.stem(env_id, algo)}.json").read_text())
     assert meta["env_id"] == env_id and meta["algo"] == algo
     pol = agents.load(env_id, algo)
     env = gym.make(env_id, scenario="setpoint_step")
@@ -51,9 +51,10 @@ RL_ZOO_ALGO = {"ppo": "ppo", "sac": "sac", "td3": "td3", "recurrentppo": "ppo_ls
 @pytest.mark.parametrize("algo", sorted(RL_ZOO_ALGO))
 def test_rl_zoo_trains_with_the_shipped_yaml(tmp_path, algo):
     pytest.importorskip("rl_zoo3")
-    env_id = train.zoo_entries_of(algo)[0]
+    env_id = train_runs.zoo_entries_of(algo)[0]
+    yml = train_config.HYPERPARAMS / f"{algo}.yml"
     cmd = [sys.executable, "-m", "rl_zoo3.train", "--algo", RL_ZOO_ALGO[algo], "--env", env_id,
-           "--gym-packages", "steamtemp_gym", "--conf-file", str(train.HYPERPARAMS / f"{algo}.yml"),
+           "--gym-packages", "steamtemp_gym", "--conf-file", str(yml),
            "-n", "4096", "--log-folder", str(tmp_path), "--eval-freq", "-1"]  # fmt: skip
     done = subprocess.run(cmd, capture_output=True, text=True, timeout=900)
     assert done.returncode == 0, done.stderr[-2000:]

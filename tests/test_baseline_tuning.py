@@ -156,8 +156,10 @@ def test_every_tunable_baseline_declares_knobs_with_defaults_in_their_boxes():
 
 def test_cascade_knobs_scale_the_simc_tuning_and_bad_values_are_refused():
     env = gym.make(FSH)
-    base, p = baselines.factory("cascade_pi")(env), baselines.factory("cascade_pi")(
-        env, outer_gain=2.0, inner_reset=0.5)
+    base, p = (
+        baselines.factory("cascade_pi")(env),
+        baselines.factory("cascade_pi")(env, outer_gain=2.0, inner_reset=0.5),
+    )
     np.testing.assert_allclose(p.gains[:, 0], 2.0 * base.gains[:, 0])
     np.testing.assert_allclose(p.gains[:, 3], 0.5 * base.gains[:, 3])
     np.testing.assert_array_equal(p.gains[:, [1, 2]], base.gains[:, [1, 2]])
@@ -201,8 +203,10 @@ def test_every_stored_tuning_passes_the_commissioning_check(name, env_id):
     not, limit-cycles not and strokes the valve at most 3x the reference's on each check."""
     rec = json.loads(tuning.path(name).read_text())
     terms = rec["terms"].get("commissioning_checks", {})
-    assert (terms.get("loads"), terms.get("seeds")) == (list(tt.CHECK_LOADS), list(
-        tt.CHECK_SEEDS)), "tuned under other commissioning checks: rerun the tuning"
+    assert (terms.get("loads"), terms.get("seeds")) == (
+        list(tt.CHECK_LOADS),
+        list(tt.CHECK_SEEDS),
+    ), "tuned under other commissioning checks: rerun the tuning"
     knobs = rec["plants"][env_id]["knobs"]
     ms = tt.check_metrics(env_id, lambda env: baselines.make(name, env, **knobs))
     breach, ratio = tt.check_breach(ms, _check_reference(env_id))
