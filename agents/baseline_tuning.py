@@ -42,141 +42,39 @@ per env; the ends (the oracle's episodes) take a few minutes per env the first t
 from __future__ import annotations
 
 import argparse
-import hashlib
 import json
 import sys
 import time
 from dataclasses import dataclass, replace
-from pathlib import Path
 from typing import Any
 
-import gymnasium as gym
 import numpy as np
 
 import baselines
 import steamtemp_gym
 from agents import stats
-from agents.evaluation import run_batch
-from agents.oracle import Oracle
+from agents.tuning_terms import (
+    CHECK_LOADS,
+    CHECK_SEEDS,
+    EPISODES,
+    TRAVEL_BUDGET,
+    TUNING_SEED,
+    ZERO,
+    check_breach,
+    check_metrics,
+    code_digest,
+    ends,
+    run_episodes,
+    seeds,
+)
 from baselines import tuning
-from steamtemp_gym.scenarios import Scenario
 
 #: The baselines with knobs, tuned by default.
 TUNABLE = ("cascade_pi", "cascade_pi_ff", "fuzzy_p2id", "mpc_linear", "lqi", "fao_sf", "fao_fac",
            "neuro_pid_mee", "neuro_pid_mse", "mpc_evarx", "mpc_arx")  # fmt: skip
-#: The industrial reference: the score's 0 and the travel budget's unit.
-ZERO = baselines.INDUSTRIAL_REFERENCE
-#: First seed of the training episodes (``random`` scenario); far from the agents' training
-#: seeds and the leaderboard's evaluation seeds.
-TUNING_SEED = 2_000_000
-EPISODES = 8
 EVALUATIONS = 48
 STEP0 = 0.25
 MIN_STEP = 1.0 / 64.0
-#: Largest mean valve travel, as a multiple of the reference's on the same episodes.
-TRAVEL_BUDGET = stats.TRAVEL_BUDGET
-#: Loads of the commissioning checks: the bottom of the load range the suite's scenarios
-#: reach, and rated load.
-CHECK_LOADS = (0.35, 1.0)
-_MIN = 60.0
-
-
-def commissioning_check(load: float) -> Scenario:
-    """The commissioning check at ``load``: held there, a +5 K setpoint step at minute 5 and
-    a +5 % heat-absorption step at minute 20, with the training episodes' noise; the quiet
-    stretch (minutes 31-50) shows a limit cycle. Not a scenario of the leaderboard."""
-    return Scenario(
-        name=f"commissioning_check_{round(100 * load)}",
-        duration_s=50 * _MIN,
-        load=((0.0, load),),
-        setpoint_offset_C=((0.0, 0.0), (5 * _MIN, 0.0), (5 * _MIN, 5.0)),
-        heat_absorption_bias=((0.0, 0.0), (20 * _MIN, 0.0), (21 * _MIN, 0.05)),
-        noise_std_C=0.25,
-        heat_absorption_noise_std=0.02,
-        heat_absorption_noise_tau_s=300.0,
-        description=f"commissioning check of the baseline tuner: {round(100 * load)} % load, "
-        "setpoint and heat-absorption steps",
-    )
-
-
-#: The commissioning checks, one per load of :data:`CHECK_LOADS`.
-COMMISSIONING_CHECKS = tuple(commissioning_check(load) for load in CHECK_LOADS)
-#: Seeds of the check episodes: each check runs once per seed and must pass on all (a loop
-#: near its stability limit oscillates in some noise realizations and not in others).
-CHECK_SEEDS = tuple(TUNING_SEED - 1 - k for k in range(5))
-
-
-#: Modules of steamtemp_gym that no trajectory depends on (drawing, docs, the command line),
-#: left out of the code digests with the testing package.
-NO_DYNAMICS = ("render.py", "docs.py", "__main__.py")
-
-
-def seeds() -> list[int]:
-    """The training episodes' seeds."""
-    return [TUNING_SEED + k for k in range(EPISODES)]
-
-
-def _venv(env_id: str) -> Any:
-    return gym.make_vec(env_id, num_envs=EPISODES, scenario="random",
-                        vectorization_mode="vector_entry_point")  # fmt: skip
-
-
-def _episodes(env_id: str, make_policy: Any) -> dict[str, np.ndarray]:
-    """Returns, valve travels and trips of one policy on the training episodes."""
-    venv = _venv(env_id)
-    res = run_batch(venv, make_policy(venv), seeds())
-    m = [r["metrics"] for r in res]
-    return {k: np.array([x[key] for x in m], dtype=float)
-            for k, key in (("return", "return"), ("travel", "valve_travel"),
-                           ("tripped", "tripped"))}  # fmt: skip
-
-
-def ends(env_id: str, compute: bool = True) -> dict[str, Any]:
-    """The score's ends on the training episodes of ``env_id``: ``zero`` and ``one`` (returns
-    per episode) and ``travel`` (the reference's mean valve travel), stored in
-    ``baselines/tuned/ends.json`` and recomputed when the episodes or the code behind them
-    changed (``compute=False``: a ValueError instead)."""
-    f = tuning.TUNED / "ends.json"
-    table = json.loads(f.read_text()) if f.is_file() else {}
-    key = {"seeds": seeds(), "scenario": "random", "code": _code_digest(ends=True)}
-    got = table.get(env_id)
-    if got is not None and got.get("episodes") == key:
-        return got
-    if not compute:
-        raise ValueError(f"the stored score ends of {env_id} are missing or stale; run: "
-                         f"python -m agents.baseline_tuning --ends --env {env_id}")  # fmt: skip
-    zero = _episodes(env_id, lambda v: baselines.make(ZERO, v))
-    one = _episodes(env_id, Oracle)
-    got = {"episodes": key, "zero": zero["return"].tolist(), "one": one["return"].tolist(),
-           "travel": float(zero["travel"].mean())}  # fmt: skip
-    table[env_id] = got
-    tuning.TUNED.mkdir(exist_ok=True)
-    f.write_text(json.dumps(table, indent=1, sort_keys=True) + "\n")
-    return got
-
-
-def check_metrics(env_id: str, make_policy: Any) -> list[dict[str, Any]]:
-    """Metrics of one policy on each commissioning check (:data:`COMMISSIONING_CHECKS`) and
-    seed (:data:`CHECK_SEEDS`), checks outer, seeds inner; each check's seeds run side by
-    side in the native vector env."""
-    out = []
-    for sc in COMMISSIONING_CHECKS:
-        venv = gym.make_vec(env_id, num_envs=len(CHECK_SEEDS), scenario=sc,
-                            vectorization_mode="vector_entry_point")  # fmt: skip
-        out += [r["metrics"] for r in run_batch(venv, make_policy(venv), list(CHECK_SEEDS))]
-    return out
-
-
-def check_breach(ms: list[dict[str, Any]], refs: list[dict[str, Any]]) -> tuple[str, float]:
-    """What broke on the commissioning checks ("" if none), against the reference's metrics
-    ``refs`` on the same episodes (:func:`check_metrics`), and the largest valve-travel ratio
-    to the reference's over them."""
-    where = [(load, seed) for load in CHECK_LOADS for seed in CHECK_SEEDS]
-    broke = [f"at {round(100 * load)} % load, seed {seed}: {b}"
-             for (load, seed), m, r in zip(where, ms, refs, strict=True)
-             if (b := stats.realism_breach(m, r))]  # fmt: skip
-    ratio = max(m["valve_travel"] / r["valve_travel"] for m, r in zip(ms, refs, strict=True))
-    return "; ".join(broke), float(ratio)
 
 
 @dataclass(frozen=True)
@@ -209,9 +107,10 @@ class Evaluation:
 def evaluate(name: str, env_id: str, values: dict[str, float], e: dict[str, Any]) -> Evaluation:
     """Score controller ``name`` with knob ``values`` on the training episodes of ``env_id``
     against the ends ``e``."""
-    r = _episodes(env_id, lambda v: baselines.make(name, v, **values))
-    score = np.mean([stats.normalize(x, z, o) for x, z, o in zip(r["return"], e["zero"],
-                                                                  e["one"], strict=True)])
+    r = run_episodes(env_id, lambda v: baselines.make(name, v, **values))
+    score = np.mean(
+        [stats.normalize(x, z, o) for x, z, o in zip(r["return"], e["zero"], e["one"], strict=True)]
+    )
     return Evaluation(dict(values), float(score), float(r["travel"].mean() / e["travel"]),
                       int(r["tripped"].sum()))  # fmt: skip
 
@@ -224,9 +123,14 @@ def defaults(factory: Any, env_id: str) -> dict[str, float]:
     return {k.name: float(given[k.name]) if k.name in given else k.from_unit(0.5) for k in ks}
 
 
-def compass(x0: np.ndarray, evaluate_at: Any, budget: int = EVALUATIONS,
-            step0: float = STEP0, min_step: float = MIN_STEP,
-            confirm: Any = None) -> list[tuple[np.ndarray, Any]]:
+def compass(
+    x0: np.ndarray,
+    evaluate_at: Any,
+    budget: int = EVALUATIONS,
+    step0: float = STEP0,
+    min_step: float = MIN_STEP,
+    confirm: Any = None,
+) -> list[tuple[np.ndarray, Any]]:
     """Deterministic compass search on the unit cube (module docstring).
 
     Args:
@@ -274,8 +178,9 @@ def best_of(history: list[tuple[np.ndarray, Any]]) -> Any:
     return max(judged, key=lambda r: r.merit)
 
 
-def search(name: str, env_id: str, log: Any = None,
-           replay: list[dict[str, Any]] | None = None) -> dict[str, Any]:
+def search(
+    name: str, env_id: str, log: Any = None, replay: list[dict[str, Any]] | None = None
+) -> dict[str, Any]:
     """Compass search of controller ``name``'s knobs on ``env_id`` (module docstring).
 
     ``replay``: the ``history`` of an earlier search of the same controller and env. Where
@@ -308,14 +213,19 @@ def search(name: str, env_id: str, log: Any = None,
         if np.array_equal(u, x0) and stored:
             r = stored.get(_key(values))
             same = r is not None and (r["score"], r["travel_ratio"], r["trips"]) == (
-                res.score, res.travel_ratio, res.trips)
+                res.score,
+                res.travel_ratio,
+                res.trips,
+            )
             if not same:
                 stored.clear()
             if log:
                 log(f"{name} {env_id}: replay {'valid' if same else 'refused: start differs'}")
         if log:
-            log(f"{name} {env_id}: score {res.score:.4f} travel x{res.travel_ratio:.2f} "
-                f"trips {res.trips}")
+            log(
+                f"{name} {env_id}: score {res.score:.4f} travel x{res.travel_ratio:.2f} "
+                f"trips {res.trips}"
+            )
         return res
 
     def confirm(u: np.ndarray, res: Evaluation) -> Evaluation:
@@ -327,10 +237,18 @@ def search(name: str, env_id: str, log: Any = None,
 
     history = compass(x0, evaluate_at, confirm=confirm)
     best = best_of(history)
-    return {"knobs": best.knobs, "score": best.score, "travel_ratio": best.travel_ratio,
-            "trips": best.trips, "feasible": best.feasible, "evaluations": len(history),
-            "replayed": replayed, "check_travel_ratio": best.check_travel_ratio,
-            "start": history[0][1].__dict__, "history": [_row(r) for _, r in history]}
+    return {
+        "knobs": best.knobs,
+        "score": best.score,
+        "travel_ratio": best.travel_ratio,
+        "trips": best.trips,
+        "feasible": best.feasible,
+        "evaluations": len(history),
+        "replayed": replayed,
+        "check_travel_ratio": best.check_travel_ratio,
+        "start": history[0][1].__dict__,
+        "history": [_row(r) for _, r in history],
+    }
 
 
 def _key(knobs: dict[str, float]) -> tuple[tuple[str, float], ...]:
@@ -341,26 +259,6 @@ def _row(r: Evaluation) -> dict[str, Any]:
     """One evaluation as stored: its knobs, score, travel ratio, trips and check."""
     return {"knobs": r.knobs, "score": r.score, "travel_ratio": r.travel_ratio,
             "trips": r.trips, "check": r.check}  # fmt: skip
-
-
-def _code_digest(ends: bool = False) -> str:
-    """Hash of the code a tuning depends on: the plants, scenarios and metrics, the
-    evaluation, and the baselines (for the ends only the reference and the oracle)."""
-    h = hashlib.sha256()
-    here = Path(__file__).parent
-    pkg = Path(steamtemp_gym.__file__).parent
-    files = [f for f in sorted(pkg.rglob("*.py")) if f.name not in NO_DYNAMICS
-             and "testing" not in f.relative_to(pkg).parts]  # fmt: skip
-    files += [here / "evaluation.py"]
-    if ends:
-        files += [Path(baselines.__file__).with_name(f) for f in ("cascade_pi.py", "loops.py",
-                                                                    "identification.py")]
-        files += [here / "oracle.py"]
-    else:
-        files += sorted(Path(baselines.__file__).parent.rglob("*.py"))
-    for f in files:
-        h.update(f.read_bytes())
-    return h.hexdigest()[:16]
 
 
 def write(name: str, env_ids: list[str], log: Any = None, replay: bool = False) -> dict[str, Any]:
@@ -380,7 +278,7 @@ def write(name: str, env_ids: list[str], log: Any = None, replay: bool = False) 
                          "commissioning_checks": {
                              "loads": list(CHECK_LOADS), "seeds": list(CHECK_SEEDS),
                              "travel_max": stats.REALISM_TRAVEL_MAX}}  # fmt: skip
-        data["code"] = _code_digest()
+        data["code"] = code_digest()
         tuning.TUNED.mkdir(exist_ok=True)
         f.write_text(json.dumps(data, indent=1, sort_keys=True) + "\n")  # after every env
     return data
@@ -411,17 +309,31 @@ def main(argv: list[str] | None = None) -> int:
         "travel budget) and write baselines/tuned/<name>.json. Takes minutes to an hour "
         "per controller and env.")  # fmt: skip
     ap.add_argument("names", nargs="*", help=f"baselines to tune (default: {', '.join(TUNABLE)})")
-    ap.add_argument("--env", action="append", dest="envs", metavar="ID",
-                    help="env id (repeatable; default: every registered env)")
-    ap.add_argument("--ends", action="store_true",
-                    help="only (re)compute the score's ends on the training episodes "
-                    "(baselines/tuned/ends.json; the oracle's episodes: minutes per env)")
-    ap.add_argument("--replay", action="store_true",
-                    help="reuse the stored searches' evaluations on the training episodes "
-                    "where the new search meets the same knobs (after a change of the "
-                    "constraints only; refused per search if its start does not reproduce)")
-    ap.add_argument("--markdown", action="store_true",
-                    help="print the stored tunings as a markdown table and exit")
+    ap.add_argument(
+        "--env",
+        action="append",
+        dest="envs",
+        metavar="ID",
+        help="env id (repeatable; default: every registered env)",
+    )
+    ap.add_argument(
+        "--ends",
+        action="store_true",
+        help="only (re)compute the score's ends on the training episodes "
+        "(baselines/tuned/ends.json; the oracle's episodes: minutes per env)",
+    )
+    ap.add_argument(
+        "--replay",
+        action="store_true",
+        help="reuse the stored searches' evaluations on the training episodes "
+        "where the new search meets the same knobs (after a change of the "
+        "constraints only; refused per search if its start does not reproduce)",
+    )
+    ap.add_argument(
+        "--markdown",
+        action="store_true",
+        help="print the stored tunings as a markdown table and exit",
+    )
     args = ap.parse_args(argv)
     if args.markdown:
         print(markdown(tuple(args.names) or TUNABLE), end="")

@@ -13,10 +13,10 @@ function of the leaderboard (agents/evaluation.py):
   ``CascadePIFF``: load-scheduled gains and the identified load feed-forward; what a
   better-informed controller can gain: the load demand is in the observation).
 
-The difficulty targets (issue tracker, "benchmark with headroom"; the field
-tolerances of REFERENCE_DATA.md: about +-10 K once-through, +-8 K drum during
-load changes) are :data:`TARGETS`; tests/test_difficulty.py checks them and
-benchmarks/difficulty.py prints the table and regenerates docs/difficulty.md's.
+The difficulty targets (a benchmark with headroom against field tolerances of about
++-10 K once-through and +-8 K drum during load changes) are :data:`TARGETS`;
+tests/test_difficulty.py checks them and benchmarks/difficulty.py prints the table and
+regenerates docs/difficulty.md's.
 """
 
 from __future__ import annotations
@@ -51,8 +51,8 @@ KIND = {
     "steamtemp/DrumBoilerSH-v0": "drum",
 }
 RAMPS = ("load_ramp_100_50", "load_ramp_50_100")
-#: Field range of Tu/Tg of the true outlet after a last-stage spray step (REFERENCE_DATA.md:
-#: field step tests about 0.3), and the largest the thermocouple reading may show.
+#: Field range of Tu/Tg of the true outlet after a last-stage spray step (field step tests:
+#: about 0.3), and the largest the thermocouple reading may show.
 TU_TG_TRUE = (0.2, 0.4)
 TU_TG_MEASURED_MAX = 0.55
 

@@ -1,5 +1,5 @@
 """Hyperparameter search for the zoo: a seeded Optuna search over a small space per
-algorithm, each trial a short ``agents.train.train`` run scored by its best validation
+algorithm, each trial a short ``agents.training.train`` run scored by its best validation
 return (``random`` scenario, the validation seeds; never the leaderboard's scenarios).
 
     python -m agents.tune --env steamtemp/SupercriticalFSH-v0 --algo sac \\
@@ -28,15 +28,9 @@ from typing import Any
 import yaml
 
 import steamtemp_gym
-from agents.train import (
-    ALGOS,
-    HYPERPARAMS,
-    ConfigError,
-    _dict_string,
-    read_hyperparams,
-    stem,
-    train,
-)
+from agents.files import stem
+from agents.train_config import ALGOS, HYPERPARAMS, ConfigError, _dict_string, read_hyperparams
+from agents.training import train
 
 #: The search space per algorithm: key -> categorical choices. ``train_ratio`` is SAC/TD3's
 #: (train_freq, gradient_steps) pair; ``log_std_init`` and ``net`` go to policy_kwargs.

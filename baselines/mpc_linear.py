@@ -7,44 +7,27 @@ target is computed from the estimated disturbances and the regulator tracks it, 
 constant disturbance leaves no offset. The QP is solved by OSQP (Stellato et al. 2020),
 the model reduced by square-root balanced truncation (Moore 1981; Laub et al. 1987).
 
-Model. ``Plant.linearize`` and ``Plant.linearize_disturbances`` (the plant's own compiled
-step, finite differences) at ``GRID_LOADS`` = 40, 60, 80, 100 % load: commands, the load
-demand, its rate (the plants' boiler feed-forwards use it) and the heat-absorption bias
-as inputs; the observed signals and the scored temperatures (``plant.outlet`` and the
-``secondary`` ones, e.g. the MIMO reheat) as outputs. States no input reaches are dropped
-(the plant-internal random generators of Cascade300MW); those of them that act on the rest
-and are read directly by an observed signal (Cascade300MW's omega and omega_2) are
-measured disturbances, known inputs over the coming interval. The states are scaled by
-their peak response to steps of every input of its typical size, then balanced and
-truncated (Hankel singular values below ``HSV_TOL`` of the largest) on the summed
-Gramians of the four models, so the reduced models share one basis (16, 25, 27, 21 and 7
-states for FSH, Benson, MIMO, Drum and Cascade; step responses within 0.2 % of the full
-models). The local model at load L is the linear interpolation of the neighbouring grid
-models at L rounded to ``LOAD_QUANTUM`` (held outside the grid), its QP matrices built
-once per rounded load; the operating point (steady state, valve openings and outputs of
-the undisturbed plant on ``OP_LOADS``) is interpolated at the exact load. The model works
-in deviations from the operating point at the current load; when the load moves, the
-state estimate is shifted by the change of the operating point.
+Model and estimation (baselines/mpc_linear_design.py): ``Plant.linearize`` and
+``Plant.linearize_disturbances`` at ``GRID_LOADS`` = 40, 60, 80, 100 % load, reduced by
+balanced truncation to one basis and augmented with integrating disturbances (the
+heat-absorption bias and an output disturbance on every observed signal but the
+main-steam thermocouple) estimated by a steady-state Kalman filter. The local model at
+load L is the linear interpolation of the neighbouring grid models at L rounded to
+``LOAD_QUANTUM`` (held outside the grid), its QP matrices built once per rounded load;
+the operating point is interpolated at the exact load, and the state estimate is
+shifted by its change when the load moves. Bumpless start: at an episode start the
+plant is taken as steady and its disturbances solved from the first observation and
+valve openings.
 
-Estimation. Augmented state [xi; q; p]: the reduced plant state xi, the heat-absorption
-bias q (an input disturbance entering where the plant's own bias enters, a random walk
-with the increments of an OU process of HEAT_STD and HEAT_TAU_S) and a random-walk output
-disturbance p on every observed signal but the main-steam thermocouple (n_d = n_y; the
-augmented model is detectable since q moves the main steam at steady state). Known
-inputs: the applied commands, the load rate (differences of the observed load demand) and
-the measured disturbances. Steady-state Kalman gain (filtered form, DARE) per grid model;
-measurement noise NOISE_K on the thermocouples, V_REL of the scale on the other signals.
-Bumpless start: at an episode start the plant is taken as steady and (xi, q, p) solved
-from the first observation and valve openings.
-
-Prediction and target. Over a horizon of HORIZON_T63 times the slowest 63 % time of an
-actuator's effect on a scored temperature (clipped to [HORIZON_MIN_S, HORIZON_MAX_S]),
-read at N_POINTS points; the measured load rate is assumed to continue RATE_HOLD_S (inside
-[lowest op load, rated load]), then the load holds. Target: the steady commands that hold
-every scored temperature at its setpoint with the estimated disturbances at the end of
-that load path, the least change from the scheduled openings weighted by each actuator's
-steady effect (on Benson and MIMO, with more actuators than scored temperatures, the
-steady split between the sprays is that of the schedules).
+Prediction and target (the horizon's constants in baselines/mpc_linear_design.py). Over a
+horizon of HORIZON_T63 times the slowest 63 % time of an actuator's effect on a scored
+temperature (clipped to [HORIZON_MIN_S, HORIZON_MAX_S]), read at N_POINTS points; the
+measured load rate is assumed to continue RATE_HOLD_S (inside [lowest op load, rated
+load]), then the load holds. Target: the steady commands that hold every scored
+temperature at its setpoint with the estimated disturbances at the end of that load path,
+the least change from the scheduled openings weighted by each actuator's steady effect (on
+Benson and MIMO, with more actuators than scored temperatures, the steady split between
+the sprays is that of the schedules).
 
 QP (condensed; decision variables: command moves at ``MOVE_T63`` fractions of the 63 %
 time, one slack per scored temperature)::
@@ -86,7 +69,6 @@ every plant, 1-5 K with ``disturbance_model=False``.
 
 from __future__ import annotations
 
-import functools
 import json
 from typing import Any
 
@@ -94,37 +76,12 @@ import numpy as np
 import scipy.sparse as sp
 
 from baselines import tuning
-from baselines.linear_models import balanced_basis, kalman_gain, reachable, steady_point
 from baselines.loops import observation_layout, restart_rows
+from baselines.mpc_linear_design import GRID_LOADS, design
 from baselines.tuning import Knob
-from steamtemp_gym import plants
 
-#: Loads of the local models (fraction of rated) and of the steady operating-point tables.
-GRID_LOADS = (0.4, 0.6, 0.8, 1.0)
-OP_LOADS = tuple(np.round(np.arange(0.3, 1.101, 0.05), 2))
 #: The local model and its QP are those of the load rounded to this (fraction of rated).
 LOAD_QUANTUM = 0.01
-#: Disturbance channels of the model: two known inputs (load, its rate), one estimated.
-CHANNELS = ("load", "load_rate_per_s", "heat_absorption_bias")
-#: Typical sizes of the inputs (valve stroke, load, load rate 1/s, heat-absorption bias):
-#: the input weights of the balanced truncation and of the state process noise.
-SIZE_U, SIZE_LOAD, SIZE_RATE, SIZE_HEAT = 0.1, 0.1, 1e-3, 0.02
-HSV_TOL, MAX_ORDER = 1e-4, 40
-#: Kalman filter: thermocouple noise (K; the named scenarios' noise_std_C) and the other
-#: signals' (fraction of their scale); the heat-absorption bias a random walk with the
-#: increments of an OU process of std HEAT_STD and correlation time HEAT_TAU_S (the named
-#: scenarios' coloured disturbance); output disturbances drifting P_REL of their scale per
-#: step; state process noise W_REL times the inputs' typical sizes.
-NOISE_K, V_REL = 0.25, 0.002
-HEAT_STD, HEAT_TAU_S = 0.02, 300.0
-P_REL = 0.002
-W_REL = 0.1
-#: Horizon: multiples of the slowest 63 % time, clipped (s); points; move instants.
-HORIZON_T63, HORIZON_MIN_S, HORIZON_MAX_S = 4.0, 300.0, 1800.0
-N_POINTS = 40
-MOVE_T63 = (0.0, 0.1, 0.25, 0.5, 1.0, 2.0)
-#: The measured load rate is assumed to continue this long (s), then the load holds.
-RATE_HOLD_S = 300.0
 #: Move suppression per plant (module docstring: the commissioning rule; benchmarks/
 #: mpc_linear_tuning.py measures it) and the weight of the steady target.
 MOVE_WEIGHTS = {
@@ -145,192 +102,6 @@ SOFT_EVERY = 4
 OSQP_SETTINGS = {"verbose": False, "adaptive_rho": True, "adaptive_rho_interval": 25,
                  "rho": 0.1, "eps_abs": 1e-6, "eps_rel": 1e-6, "max_iter": 400,
                  "polishing": False, "warm_starting": True}  # fmt: skip
-
-
-# -- design --------------------------------------------------------------------------------
-def _measured_disturbances(A: np.ndarray, C: np.ndarray, keep: np.ndarray) -> tuple[list, list]:
-    """(states, rows): states outside ``keep`` that act on it and are read directly by an
-    observed output row (a plant-internal disturbance the plant measures), and the rows."""
-    states, rows = [], []
-    for i in np.flatnonzero(~keep):
-        if not np.any(A[keep, i] != 0.0):
-            continue
-        for j in range(C.shape[0]):
-            if C[j, i] != 0.0 and np.count_nonzero(C[j]) == 1:
-                states.append(int(i))
-                rows.append(j)
-                break
-    return states, rows
-
-
-def _t63(A: np.ndarray, b: np.ndarray, c: np.ndarray, n_steps: int) -> int:
-    """Steps to 63 % of the final value of output row c's response to a step of input b."""
-    x, ys = np.zeros(A.shape[0]), np.empty(n_steps)
-    for k in range(n_steps):
-        x = A @ x + b
-        ys[k] = c @ x
-    ys = np.abs(ys)
-    return 1 + int(np.argmax(ys >= 0.632 * ys[-1]))
-
-
-def _local_models(plant: Any, outs: list[str], n_y: int) -> tuple:
-    """Grid models in scaled coordinates of the states the inputs reach, the mask and scale
-    of those states and the measured disturbances (states, rows, gains)."""
-    raw = []
-    for L in GRID_LOADS:
-        A, B, C, D = plant.linearize(L, outputs=outs)
-        Bd, Dd = plant.linearize_disturbances(L, CHANNELS, outputs=outs)
-        if np.any(D[n_y:] != 0.0) or np.any(Dd[n_y:] != 0.0):
-            raise ValueError(f"{plant.id}: scored outputs with direct feed-through")
-        raw.append((A, np.hstack([B, Bd]), C, D[:n_y], Dd[:n_y]))
-    keep = np.zeros(plant.n_x, dtype=bool)
-    for A, B, *_ in raw:
-        keep |= reachable(A, B)
-    md, md_rows = _measured_disturbances(raw[-1][0], raw[-1][2][:n_y], keep)
-    md_gain = np.array([raw[-1][2][j, i] for i, j in zip(md, md_rows, strict=True)])
-    size_in = np.array([SIZE_U] * plant.n_u + [SIZE_LOAD, SIZE_RATE, SIZE_HEAT])
-    A, B = raw[-1][0][np.ix_(keep, keep)], raw[-1][1][keep] @ size_in
-    x, peak = np.zeros(A.shape[0]), np.zeros(A.shape[0])
-    for _ in range(1500):
-        x = A @ x + B
-        peak = np.maximum(peak, np.abs(x))
-    sx = np.maximum(peak, 1e-9 * peak.max())
-    scaled = [(A[np.ix_(keep, keep)] / sx[:, None] * sx[None, :], B[keep] / sx[:, None],
-               A[np.ix_(keep, md)] / sx[:, None], C[:, keep] * sx[None, :], D, Dd)
-              for A, B, C, D, Dd in raw]  # fmt: skip
-    return scaled, keep, sx, size_in, (md_rows, md_gain)
-
-
-def _pairs(plant: Any, G: np.ndarray, n_y: int, ctrl: list[str]) -> list[int]:
-    """Per scored temperature, the observed signal with the same steady response (its
-    thermocouple); the main steam's must be the plant's ``outlet_measured``."""
-    pair = []
-    for c, name in enumerate(ctrl):
-        g = G[n_y + c]
-        err = np.abs(G[:n_y] - g).max(axis=1) / np.abs(g).max()
-        j = int(np.argmin(err))
-        if err[j] > 1e-3:
-            raise ValueError(f"{plant.id}: no observed signal measures {name}")
-        pair.append(j)
-    observed = [s.name for s in plant.outputs if s.observed]
-    if observed[pair[0]] != plant.outlet_measured:
-        raise ValueError(f"{plant.id}: {plant.outlet_measured} does not measure {plant.outlet}")
-    return pair
-
-
-def _responses(Az, Ccz, Ar, Bu, bL, br, Bmd, Cc, Nh) -> tuple[np.ndarray, ...]:  # noqa: ANN001
-    """Over 0..Nh steps: free response of the augmented state, step responses of the
-    commands and the load, pulse responses of the load rate and the measured disturbances
-    (scored outputs)."""
-    n_c, n_u, r = Cc.shape[0], Bu.shape[1], Ar.shape[0]
-    Phi = np.zeros((Nh + 1, n_c, Az.shape[0]))
-    Su, sL, hr = np.zeros((Nh + 1, n_c, n_u)), np.zeros((Nh + 1, n_c)), np.zeros((Nh + 1, n_c))
-    Pm = np.zeros((Nh + 1, n_c, Bmd.shape[1]))
-    Ak = np.eye(Az.shape[0])
-    xu, xl, xr, xm = np.zeros((r, n_u)), np.zeros(r), br.copy(), Bmd.copy()
-    for j in range(1, Nh + 1):
-        Ak = Az @ Ak
-        Phi[j] = Ccz @ Ak
-        xu, xl = Ar @ xu + Bu, Ar @ xl + bL
-        Su[j], sL[j], hr[j], Pm[j] = Cc @ xu, Cc @ xl, Cc @ xr, Cc @ xm
-        xr, xm = Ar @ xr, Ar @ xm
-    return Phi, Su, sL, hr, Pm
-
-
-def _load_path(sL: np.ndarray, hr: np.ndarray, pts: np.ndarray, n_hold: int,
-               dt: float) -> np.ndarray:  # fmt: skip
-    """(n_hold + 1, points, n_c): the scored outputs' response per unit load rate to a load
-    that ramps for n steps, then holds (rate pulses plus the steps of the ramp)."""
-    f = np.zeros((n_hold + 1, len(pts), sL.shape[1]))
-    for n in range(1, n_hold + 1):
-        i_r, i_l = pts - (n - 1), pts - n
-        f[n] = (f[n - 1] + np.where((i_r > 0)[:, None], hr[np.maximum(i_r, 0)], 0.0)
-                + dt * np.where((i_l > 0)[:, None], sL[np.maximum(i_l, 0)], 0.0))  # fmt: skip
-    return f
-
-
-@functools.lru_cache(maxsize=16)
-def design(env_id: str, params_json: str) -> dict[str, Any]:
-    """The MPC of a plant (cached): per grid load the reduced augmented model, Kalman gain,
-    prediction matrices and steady gains; horizon, points, moves; operating-point tables."""
-    plant = plants.make(env_id, **json.loads(params_json))
-    observed = [s for s in plant.outputs if s.observed]
-    ctrl = [plant.outlet] + [n for n, _ in plant.secondary]
-    n_y, n_c, n_u, dt = len(observed), len(ctrl), plant.n_u, plant.dt_s
-    scaled, keep, sx, size_in, (md_rows, md_gain) = _local_models(
-        plant, [s.name for s in observed] + ctrl, n_y)  # fmt: skip
-    scale_y = np.array([s.scale for s in observed] + [1.0] * n_c)
-    T, Ti, hsv = balanced_basis([(A, B * size_in, C / scale_y[:, None])
-                                 for A, B, _, C, *_ in scaled], HSV_TOL, MAX_ORDER)  # fmt: skip
-    r = T.shape[1]
-    As, Bs, _, Cs, *_ = scaled[-1]
-    pair = _pairs(plant, Cs @ np.linalg.solve(np.eye(len(As)) - As, Bs), n_y, ctrl)
-    i_meas = pair[0]
-    p_rows = [j for j in range(n_y) if j != i_meas]  # output disturbances
-    n_p, n_md = len(p_rows), len(md_rows)
-    n_z = r + 1 + n_p
-    E = np.zeros((n_y, n_p))
-    E[p_rows, np.arange(n_p)] = 1.0
-    Ec = np.zeros((n_c, n_p))
-    for c, j in enumerate(pair[1:], start=1):
-        Ec[c, p_rows.index(j)] = 1.0
-    Ar, Br, Cr = Ti @ As @ T, Ti @ Bs, Cs @ T
-    t63 = max(_t63(Ar, Br[:, m], Cr[n_y + c], int(HORIZON_MAX_S / dt))
-              for m in range(n_u) for c in range(n_c))  # fmt: skip
-    Nh = int(np.clip(HORIZON_T63 * t63 * dt, HORIZON_MIN_S, HORIZON_MAX_S) / dt)
-    pts = np.unique(np.round(np.linspace(Nh / N_POINTS, Nh, N_POINTS)).astype(int))
-    moves = np.unique(np.round(np.array(MOVE_T63) * t63).astype(int))
-    moves = moves[moves < Nh]
-    n_hold = int(round(RATE_HOLD_S / dt))
-    V = np.diag([(NOISE_K if s.noisy else V_REL * s.scale) ** 2 for s in observed])
-    W = np.zeros((n_z, n_z))
-    W[r, r] = (HEAT_STD * np.sqrt(1.0 - np.exp(-2.0 * dt / HEAT_TAU_S))) ** 2
-    W[r + 1:, r + 1:] = np.diag([(P_REL * observed[j].scale) ** 2 for j in p_rows])
-    grid = []
-    for As, Bs, Bm, Cs, Dm, Dd in scaled:
-        Ar, Bu, Bmd = Ti @ As @ T, Ti @ Bs[:, :n_u], Ti @ Bm
-        bL, br, bq = (Ti @ Bs[:, n_u + k] for k in range(3))
-        Cm = Cs[:n_y] @ T
-        Cc = Cm[pair]  # the scored temperatures as their thermocouples read them
-        Az = np.eye(n_z)
-        Az[:r, :r], Az[:r, r] = Ar, bq
-        Bz = np.zeros((n_z, n_u + 1 + n_md))  # known inputs: commands, load rate, measured
-        Bz[:r, :n_u], Bz[:r, n_u], Bz[:r, n_u + 1:] = Bu, br, Bmd
-        Cmz = np.hstack([Cm, Dd[:, 2:3], E])
-        Ccz = np.hstack([Cc, np.zeros((n_c, 1)), Ec])
-        Gx = W_REL * np.hstack([Bu * SIZE_U, bL[:, None] * SIZE_LOAD, bq[:, None] * SIZE_HEAT])
-        W[:r, :r] = Gx @ Gx.T + 1e-12 * np.eye(r)
-        M = kalman_gain(Az, Cmz, W, V)
-        Phi, Su, sL, hr, Pm = _responses(Az, Ccz, Ar, Bu, bL, br, Bmd, Cc, Nh)
-        Sd = np.zeros((len(pts), n_c, len(moves), n_u))  # the moves' dynamic matrix
-        for i, t0 in enumerate(moves):
-            Sd[pts > t0, :, i, :] = Su[pts[pts > t0] - t0]
-        inv = np.linalg.inv(np.eye(r) - Ar)
-        init = np.hstack([(Cm @ inv @ bq + Dd[:, 2])[:, None], E])
-        if np.linalg.cond(init) > 1e12:
-            raise ValueError(f"{env_id}: the disturbance model is not detectable")
-        grid.append({
-            "Az": Az, "Bz": Bz, "Cmz": Cmz, "M": M, "Dm": Dm, "DdL": Dd[:, 0], "Ddr": Dd[:, 1],
-            "Phi": Phi[pts], "Gam": Su[pts], "Pm": Pm[pts], "f": _load_path(sL, hr, pts,
-                                                                             n_hold, dt),
-            "Sd": Sd.reshape(len(pts) * n_c, len(moves) * n_u),
-            "Gu": Cc @ inv @ Bu, "Gq": Cc @ inv @ bq, "GL": Cc @ inv @ bL,
-            "Init": init, "InitU": Cm @ inv @ Bu + Dm, "InitM": Cm @ inv @ Bmd,
-            "inv": inv, "Bu": Bu, "bq": bq, "Bmd": Bmd,
-        })  # fmt: skip
-    ops = [steady_point(plant, L, [s.name for s in observed] + ctrl) for L in OP_LOADS]
-    ok = [k for k, (_, _, y) in enumerate(ops) if np.all(np.isfinite(y))]
-    rates = np.array(plant.rate_limits)
-    return {
-        "grid": grid, "r": r, "n_p": n_p, "n_y": n_y, "n_c": n_c, "n_md": n_md,
-        "md_rows": md_rows, "md_gain": md_gain, "Ec": Ec, "pts": pts, "moves": moves,
-        "Nh": Nh, "n_hold": n_hold, "t63_s": t63 * dt, "hsv": hsv, "rates": rates,
-        "op_loads": np.array(OP_LOADS)[ok],
-        "op": np.array([np.concatenate([Ti @ (ops[k][0][keep] / sx), ops[k][1], ops[k][2]])
-                        for k in ok]),
-        "op_cols": np.cumsum([0, r, n_u, n_y, n_c]),
-        "secondary_sp": np.array([s for _, s in plant.secondary]),
-    }  # fmt: skip
 
 
 # -- the QP of one row ---------------------------------------------------------------------
@@ -417,11 +188,11 @@ class MPCLinear:
         # constraint rows: openings at the moves, moves, soft bounds (two sides), slacks
         self._A0 = np.zeros((2 * nv + 2 * n_s + n_c, nv + n_c))
         self._A0[:nv, :nv] = np.kron(np.tril(np.ones((n_mv, n_mv))), np.eye(n_u))
-        self._A0[nv:2 * nv, :nv] = np.eye(nv)
+        self._A0[nv : 2 * nv, :nv] = np.eye(nv)
         Es = np.tile(np.eye(n_c), (len(self.soft), 1))
-        self._A0[2 * nv:2 * nv + n_s, nv:] = -Es
-        self._A0[2 * nv + n_s:2 * nv + 2 * n_s, nv:] = Es
-        self._A0[2 * nv + 2 * n_s:, nv:] = np.eye(n_c)
+        self._A0[2 * nv : 2 * nv + n_s, nv:] = -Es
+        self._A0[2 * nv + n_s : 2 * nv + 2 * n_s, nv:] = Es
+        self._A0[2 * nv + 2 * n_s :, nv:] = np.eye(n_c)
         seg = np.diff(np.append(d["moves"], d["Nh"]))
         seg[0] = 1  # the first move happens in one interval, later ones over their block
         self.max_move = np.kron(seg, d["rates"] * self.dt)
@@ -465,8 +236,8 @@ class MPCLinear:
         n_s = len(self.soft) * n_c
         Ssoft = Sd.reshape(n_pts, n_c, nv)[self.soft].reshape(n_s, nv)
         A = self._A0.copy()
-        A[2 * nv:2 * nv + n_s, :nv] = Ssoft
-        A[2 * nv + n_s:2 * nv + 2 * n_s, :nv] = Ssoft
+        A[2 * nv : 2 * nv + n_s, :nv] = Ssoft
+        A[2 * nv + n_s : 2 * nv + 2 * n_s, :nv] = Ssoft
         G, Wi = m["Gu"], 1.0 / gu2  # target: least change, weighted by the steady effects
         m.update(H=H, A=A, SdT2=2.0 * Sd.T, CbS=CbS,
                  Gpinv=Wi[:, None] * (G.T @ np.linalg.inv((G * Wi) @ G.T)))  # fmt: skip
@@ -479,7 +250,7 @@ class MPCLinear:
         i = min(max(int(np.searchsorted(xp, L)) - 1, 0), len(xp) - 2)
         a = min(max((L - xp[i]) / (xp[i + 1] - xp[i]), 0.0), 1.0)
         row = (1.0 - a) * table[i] + a * table[i + 1]
-        return [row[c[k]:c[k + 1]] for k in range(4)]
+        return [row[c[k] : c[k + 1]] for k in range(4)]
 
     def _md(self, y: np.ndarray, ym_op: np.ndarray) -> np.ndarray:
         """The measured disturbance states' deviations from the operating point."""
@@ -532,7 +303,7 @@ class MPCLinear:
         dL_end = rate * self.dt * n_eff
         # target: the steady commands holding the references at the end of the load path
         ref = np.concatenate([[y[self.i_sp]], d["secondary_sp"]])
-        b = ref - yc_op - m["Gq"] * z[r] - d["Ec"] @ z[r + 1:] - m["GL"] * dL_end
+        b = ref - yc_op - m["Gq"] * z[r] - d["Ec"] @ z[r + 1 :] - m["GL"] * dL_end
         du_ref = self._op(L + dL_end)[1] - u_op
         du_s = du_ref + m["Gpinv"] @ (b - m["Gu"] @ du_ref)
         # free response and the QP
@@ -548,8 +319,8 @@ class MPCLinear:
         esoft = e0.reshape(n_pts, n_c)[self.soft].reshape(n_s)
         lo, hi = self._lo0.copy(), self._hi0.copy()
         lo[:nv], hi[:nv] = np.tile(-u_prev, n_mv), np.tile(1.0 - u_prev, n_mv)
-        lo[2 * nv + n_s:2 * nv + 2 * n_s] -= esoft
-        hi[2 * nv:2 * nv + n_s] -= esoft
+        lo[2 * nv + n_s : 2 * nv + 2 * n_s] -= esoft
+        hi[2 * nv : 2 * nv + n_s] -= esoft
         qp = st["qp"] or _QP(m["H"], m["A"])
         res = qp.solve(key, m["H"], m["A"], g, lo, hi, st["warm"])
         self.stats["solves"] += 1
@@ -573,8 +344,11 @@ class MPCLinear:
         rows = [None if fresh or restart[b] else self._rows[b] for b in range(n)]
         with np.errstate(invalid="ignore", over="ignore"):  # non-finite rows are refused below
             new = [self._row(rows[b], y[b]) for b in range(n)]
-        bad = [b for b, s in enumerate(new) if not (np.all(np.isfinite(s["z"]))
-                                                    and np.all(np.isfinite(s["u"])))]
+        bad = [
+            b
+            for b, s in enumerate(new)
+            if not (np.all(np.isfinite(s["z"])) and np.all(np.isfinite(s["u"])))
+        ]
         if bad:
             raise ValueError(f"mpc_linear: non-finite estimate for rows {bad} of the "
                              f"observation; the policy's state is unchanged")  # fmt: skip

@@ -12,45 +12,10 @@ Mechanism (paper Section 3, equation numbers of the paper):
   e = setpoint - measured outlet (through the 5 s DCS input filter of cascade_pi, so
   the derivative term does not differentiate raw sensor noise; the paper's plant has
   none). u is the setpoint deviation (K) of the inner loop.
-- Gains from a three-layer perceptron, eq. (5)-(8): inputs O^(1) = (e_k, e_(k-1),
-  e_(k-2), omega, omega_2) plus a bias, Q = 4 hidden units f = tanh, three outputs
-  g(x) = e^x / (e^x + e^-x) (section 5: five inputs, four hidden nodes). Errors enter
-  the net normalized as in the observation (by T0 = 20 K, steamtemp_gym.signals), the
-  disturbances normalized by their signals' scales. g maps to (0, 1); gain l is
-  k_l = k_l0 (1 - r + 2 r g_l) with r = GAIN_RANGE = 0.5 and k_l0 its commissioning value
-  (below), so the net starts at g's midpoint (steepest slope) exactly on the commissioning
-  PID and every gain stays within k_l0 (1 -+ 1/2) whatever the training does. That bound
-  keeps the loops stable on every plant and scenario (tests/test_neuro_pid.py): gains free
-  to grow to g's unscaled range (k_i up to 1 per step against ~0.01) drove the MSE net
-  unstable on the fast deep load ramp, and even gains up to twice the commissioning values,
-  reached when a large eta drives the outputs to their ends, limit-cycle there and under
-  high sensor noise. The paper's unscaled outputs in (0, 1) could not hold an integral
-  gain of ~0.01 per step at their midpoint, and its initial weights are not given.
-- Online training during the episode, one update per sample, procedure of Section 4
-  steps (4)-(6): weights updated first (eq. (9), (13)), then the PID output computed
-  with the updated net. Sensitivities eq. (11), (12), (15)-(18) with the plant
-  Jacobian replaced by its sign (the paper's option under eq. (11)); the sign is that
-  of the identified outer process gain, so de_k/dO_l = -dU_l (dU = (e_k - e_(k-1),
-  e_k, e_k - 2 e_(k-1) + e_(k-2)), eq. (12)'s du/dO).
-- ``mee``: information potential with the Gaussian kernel of variance 2 sigma^2 over
-  the receding window of L past errors with forgetting lambda, eq. (3); its gradient
-  by eq. (10)/(14): -(lambda / (2 L sigma^2)) sum_(i=k-L)^(k-1) (e_i - e_k)
-  kappa(e_i - e_k, 2 sigma^2) (de_i/dw - de_k/dw) + (1 - lambda) dV_(k-1)/dw, and
-  gradient ascent on V (eq. (9), (13), (19)). The sensitivities de_i/dw are those
-  computed at sample i (stored with e_i in a ring buffer of L), as eq. (10) reads;
-  the recursion makes the exact per-step cost O(L n_w) (n_w = 39 weights), not
-  O(L^2). Constants (Section 5): sigma = 2 (K), L = 200, lambda = 0.04, eta = 1e-4.
-  The window holds fewer than L samples during the first L steps of an episode (the
-  sum runs over those; the 1/L factor stays). V_0 of step (2) is the single-sample
-  potential kappa(0, 2 sigma^2) with zero gradient.
-- ``mse``: the same net, the same eta and lambda; the criterion is the mean squared
-  error estimated by the same forgetting recursion as eq. (2)-(3),
-  M_k = (1 - lambda) M_(k-1) + lambda e_k^2, with gradient descent on M_k / 2:
-  G_k = (1 - lambda) G_(k-1) + lambda e_k de_k/dw, w <- w - eta G_k. The paper gives
-  no equation for its MSE comparison; this is the conventional BP neuro-PID
-  criterion (its refs. [13], [25]-[27]) written with the MEE variant's forgetting so
-  that the two differ only in the criterion (the long-run step size equals the
-  instantaneous e_k de_k/dw rule's).
+- Gains from a three-layer perceptron, eq. (5)-(8), trained online during the episode
+  by minimum error entropy (``mee``) or mean squared error (``mse``), eq. (2)-(19), each
+  gain held within k_l0 (1 -+ 1/2) of its commissioning value k_l0:
+  baselines/neuro_pid_net.py.
 
 Learning rate (the one knob, ``KNOBS``; default the paper's eta = 1e-4 for both nets, as
 Section 5 gives "same structure and parameters"). With it neither net learns much in an
@@ -94,27 +59,8 @@ damper) and actuators without a loop are cascade_pi_ff's loops without its feed-
 (the paper's mechanism concerns the main-steam cascade only).
 
 Commissioning PID (the net's starting point and the centre of the gains' bounds) and
-initial weights.
-The outer process (inner setpoint -> measured outlet, inner loop closed as above, other
-loops as above) is identified at each load of cascade_pi's GAIN_LOADS (50, 75, 100 %) by
-a closed-loop step of the inner setpoint (+2 K, at most a quarter of the valve stroke
-through a P secondary; constant load, no noise, a scenario built in code,
-:func:`outer_models`), read as FOPDT (Tu, Tg by steamtemp_gym.metrics.step_response_metrics)
-with the 5 s filter added to the dead time. SIMC PI (Skogestad, J. Process Control 13,
-2003, tau_c = theta) gives K_c and T_i; in eq. (4)'s increments k_p0 = K_c,
-k_i0 = K_c T_s / T_i, and k_d0 = KD0 = 0.05 (the commissioning tuning is a PI; g cannot
-output 0; a model-based derivative gain, e.g. the IMC-PID's T_d = tau theta / (2 tau +
-theta), is k_d ~ 10 on the claim plant and would put the 0.25 K sensor noise on the
-valve), all divided by the number of MAIN loops (as cascade_pi shares the main-steam loop
-gain). The commissioning gains, and with them the gains' bounds, are interpolated
-linearly in the load demand between those loads (held beyond them), as cascade_pi_ff
-schedules its PI: a tuning read at rated load alone limit-cycles at 35 % load (the
-held-out deep ramp). Weights are drawn once, uniform on [-0.5, 0.5] with numpy's
-default_rng(INIT_SEED = 0) (the same for every loop, plant and episode), and the
-output-layer biases are then set so that the net outputs g = 1/2, i.e. exactly
-(k_p0, k_i0, k_d0), at zero input (the same weights at every load). ``reset()`` and
-``episode_start`` restore these weights: the net relearns every episode, as the paper's
-online training does.
+initial weights, from closed-loop steps of the inner setpoint at cascade_pi's GAIN_LOADS,
+SIMC PI and load-scheduled: baselines/neuro_pid_commissioning.py.
 
 Disturbance inputs. Cascade300MW-v0 measures the paper's omega (outer, K) and omega_2
 (inner, kg/s): the observation entries ``omega_K`` and ``omega2_kg_s``. The other plants
@@ -142,32 +88,29 @@ benchmarks/neuro_pid_realism.py.
 
 from __future__ import annotations
 
-import functools
 import json
 import math
 from typing import Any
 
 import numpy as np
 
-from baselines.cascade_pi import FILTER_S, GAIN_LOADS, CascadePI, simc_pi
-from baselines.identification import FOPDT
+from baselines.cascade_pi import FILTER_S, GAIN_LOADS, CascadePI
 from baselines.loops import input_filter, into_stop, observation_layout, pi_position, restart_rows
+from baselines.neuro_pid_commissioning import commissioning_gains, inner_p_valve_per_K
+from baselines.neuro_pid_net import (
+    ETA,
+    LAMBDA,
+    N_IN,
+    N_W,
+    SIGMA_K,
+    WINDOW,
+    gain_bounds,
+    initial_weights,
+    npid_step,
+)
 from baselines.tuning import Knob
-from steamtemp_gym._jit import njit
-from steamtemp_gym.metrics import step_response_metrics
 from steamtemp_gym.plants.base import MAIN
-from steamtemp_gym.scenarios import Scenario
 
-#: Paper, Section 5: kernel size (K), window, forgetting factor, learning rate, hidden units.
-SIGMA_K, WINDOW, LAMBDA, ETA, N_HIDDEN = 2.0, 200, 0.04, 1e-4, 4
-N_IN = 5  # e_k, e_(k-1), e_(k-2), omega, omega_2 (Section 5: P = 5)
-N_W2 = N_HIDDEN * (N_IN + 1)  # input -> hidden weights (with bias), row p: (bias, inputs)
-N_W = N_W2 + 3 * (N_HIDDEN + 1)  # plus hidden -> output weights (with bias)
-#: Seed and half-width of the uniform initial weights (documented, reproducible).
-INIT_SEED, INIT_HALFWIDTH = 0, 0.5
-#: Paper's secondary P controller G_C2 = 8 (Section 5), read as % of valve stroke per K of
-#: the (filtered) intermediate temperature, on its own plant (module docstring).
-INNER_P_PCT_PER_K = {"steamtemp/Cascade300MW-v0": 8.0}
 #: Measured disturbance inputs (omega, omega_2) per plant; see the module docstring.
 PROXIES = {
     "steamtemp/Cascade300MW-v0": ("omega_K", "omega2_kg_s"),
@@ -178,208 +121,11 @@ PROXIES = {
 }
 LOAD_RATE_FILTER_S, LOAD_RATE_UNIT = 60.0, 0.05 / 60.0  # 5 %/min -> 1
 ERR_SCALE_K = 20.0  # the observation's error scale (steamtemp_gym.signals.T0_K)
-#: Initial derivative gain of eq. (4) (K per K): the commissioning tuning is a PI, g cannot
-#: output 0; 0.05 is a derivative time of ~0.1 s at the claim plant's k_p0 (negligible).
-KD0 = 0.05
 #: Learning rates at which the nets adapt alike without saturating (training episodes move
 #: k_i by 23 % and 26 %; the MEE gradient is ~100 times smaller): benchmarks/neuro_pid_eta.py.
 ADAPTING_ETA = {"mee": 1.0, "mse": 1e-2}
-#: Every PID gain of eq. (4) stays within (1 -+ GAIN_RANGE) times its commissioning value.
-GAIN_RANGE = 0.5
-#: Inner-setpoint step (K) of the commissioning test, and its length (s).
-STEP_K, STEP_DURATION_S = 2.0, 2400.0
 
 
-# --------------------------------------------------------------------- the net (numba)
-@njit(cache=True)
-def _forward(w, x, h, g):
-    """Eq. (5)-(8): hidden tanh outputs h (N_HIDDEN), output g(net) in (0, 1) (3)."""
-    for p in range(N_HIDDEN):
-        a = w[p * (N_IN + 1)]
-        for q in range(N_IN):
-            a += w[p * (N_IN + 1) + 1 + q] * x[q]
-        h[p] = math.tanh(a)
-    for m in range(3):
-        o = N_W2 + m * (N_HIDDEN + 1)
-        a = w[o]
-        for p in range(N_HIDDEN):
-            a += w[o + 1 + p] * h[p]
-        g[m] = 1.0 / (1.0 + math.exp(-2.0 * a))  # e^a / (e^a + e^-a)
-
-
-@njit(cache=True)
-def _sensitivity(w, x, h, g, du, scale, s):
-    """de_k/dw of every weight (eq. (11), (12), (15)-(18)), plant Jacobian by its sign (+1
-    after the loop's direction): de/dO_l = -dU_l, O_l = s_l g(net_l)."""
-    c = np.empty(3)
-    for m in range(3):
-        c[m] = -du[m] * scale[m] * 2.0 * g[m] * (1.0 - g[m])  # de/dnet_l
-        o = N_W2 + m * (N_HIDDEN + 1)
-        s[o] = c[m]
-        for p in range(N_HIDDEN):
-            s[o + 1 + p] = c[m] * h[p]
-    for p in range(N_HIDDEN):
-        cp = 0.0
-        for m in range(3):
-            cp += c[m] * w[N_W2 + m * (N_HIDDEN + 1) + 1 + p]
-        cp *= 1.0 - h[p] * h[p]
-        s[p * (N_IN + 1)] = cp
-        for q in range(N_IN):
-            s[p * (N_IN + 1) + 1 + q] = cp * x[q]
-
-
-@njit(cache=True)
-def npid_step(X, E, W, G, V, Ebuf, Sbuf, nbuf, head, base, scale, mee, sigma, lam, L, eta,
-              gains):
-    """One sample of every unit (row x MAIN loop): train (Section 4 step (4)), then gains.
-
-    Args (per unit b): X (n, N_IN) net inputs; E (n, 3) = (e_k, e_(k-1), e_(k-2)) in K;
-    W, G (n, N_W) weights and the recursive criterion gradient; V (n,) the criterion
-    estimate (information potential eq. (3), or the forgotten mean squared error); Ebuf
-    (n, L), Sbuf (n, L, N_W), nbuf, head (n,) the receding window of past errors and
-    their sensitivities (MEE only); base, scale (n, 3) the gains' lower bounds b_l and the
-    output scales s_l. Writes the gains b_l + s_l g_l (n, 3).
-    """
-    h = np.empty(N_HIDDEN)
-    g = np.empty(3)
-    du = np.empty(3)
-    s = np.empty(N_W)
-    kfac = 1.0 / (math.sqrt(2.0 * math.pi) * math.sqrt(2.0) * sigma)  # kappa(., 2 sigma^2)
-    inv = 1.0 / (4.0 * sigma * sigma)
-    c_mee = -lam / (2.0 * L * sigma * sigma)
-    for b in range(X.shape[0]):
-        e = E[b, 0]
-        du[0] = E[b, 0] - E[b, 1]
-        du[1] = E[b, 0]
-        du[2] = E[b, 0] - 2.0 * E[b, 1] + E[b, 2]
-        w = W[b]
-        _forward(w, X[b], h, g)
-        _sensitivity(w, X[b], h, g, du, scale[b], s)
-        if mee:  # eq. (3), (10), (14); ascent eq. (9), (13)
-            vsum = 0.0
-            for j in range(N_W):
-                G[b, j] *= 1.0 - lam
-            for i in range(nbuf[b]):
-                d = Ebuf[b, i] - e
-                k = kfac * math.exp(-d * d * inv)
-                vsum += k
-                a = c_mee * d * k
-                for j in range(N_W):
-                    G[b, j] += a * (Sbuf[b, i, j] - s[j])
-            V[b] = (1.0 - lam) * V[b] + lam / L * vsum
-            for j in range(N_W):
-                w[j] += eta * G[b, j]
-            i = head[b]
-            Ebuf[b, i] = e
-            for j in range(N_W):
-                Sbuf[b, i, j] = s[j]
-            head[b] = (i + 1) % L
-            if nbuf[b] < L:
-                nbuf[b] += 1
-        else:  # forgotten mean squared error, descent
-            V[b] = (1.0 - lam) * V[b] + lam * e * e
-            for j in range(N_W):
-                G[b, j] = (1.0 - lam) * G[b, j] + lam * e * s[j]
-                w[j] -= eta * G[b, j]
-        _forward(w, X[b], h, g)  # Section 4 step (5): the PID gains of the updated net
-        for m in range(3):
-            gains[b, m] = base[b, m] + scale[b, m] * g[m]
-
-
-def initial_weights(k0: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(weights, lower bounds b_l, output scales s_l) whose net gives exactly the gains
-    ``k0`` at zero input: b_l + s_l g with b_l = (1 - GAIN_RANGE) k_l0, s_l = 2 GAIN_RANGE
-    k_l0, the net at g's midpoint (module docstring).
-    """
-    k0 = np.asarray(k0, dtype=float)
-    if not np.all(k0 > 0.0):
-        raise ValueError(f"commissioning gains must be positive, got {k0}")
-    base, scale = gain_bounds(k0)
-    w = np.random.default_rng(INIT_SEED).uniform(-INIT_HALFWIDTH, INIT_HALFWIDTH, N_W)
-    h = np.tanh(w[: N_W2 : N_IN + 1])  # hidden outputs at zero input: tanh(bias)
-    for m in range(3):
-        o = N_W2 + m * (N_HIDDEN + 1)
-        r = (k0[m] - base[m]) / scale[m]  # wanted g in (0, 1)
-        w[o] = 0.5 * math.log(r / (1.0 - r)) - float(w[o + 1 : o + 1 + N_HIDDEN] @ h)
-    return w, base, scale
-
-
-def gain_bounds(k0: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(b, s): the gains b + s g of commissioning gains ``k0`` span k0 (1 -+ GAIN_RANGE)."""
-    k0 = np.asarray(k0, dtype=float)
-    return (1.0 - GAIN_RANGE) * k0, 2.0 * GAIN_RANGE * k0
-
-
-# ------------------------------------------------------------------ commissioning
-def _inner_p_valve_per_K(plant: Any) -> float | None:
-    """The paper's G_C2 in valve stroke (fraction) per K on its plant, None elsewhere."""
-    pct = INNER_P_PCT_PER_K.get(plant.id)
-    return None if pct is None else pct / 100.0
-
-
-@functools.lru_cache(maxsize=48)
-def outer_models(env_id: str, params_json: str, load: float = 1.0) -> tuple[FOPDT | None, ...]:
-    """Per action: FOPDT of inner setpoint -> measured outlet (MAIN loops) at ``load``, else
-    None.
-
-    Closed-loop step of the inner setpoint by STEP_K at a constant ``load`` without noise (a
-    scenario built here, not an evaluation one), run twice with the same seed, with and
-    without the step, so the plant's own seeded disturbances cancel (as in step_test).
-    """
-    import gymnasium as gym
-
-    sc = Scenario(name="npid_commissioning", duration_s=STEP_DURATION_S, load=((0.0, load),))
-    env = gym.make(env_id, scenario=sc, params=json.loads(params_json))
-    plant = env.unwrapped.plant
-    out: list[FOPDT | None] = [None] * len(plant.control_loops)
-    for j, (inner, outer) in enumerate(plant.control_loops):
-        if outer != MAIN:
-            continue
-        p_in = _inner_p_valve_per_K(plant)
-        # the step stays linear: at most a quarter of the valve stroke through a P secondary
-        step = (STEP_K if p_in is None else min(STEP_K, 0.25 / p_in)) if inner else 0.05
-        recs = []
-        for du in (0.0, step):
-            pol = NeuroPID(env, force_u=du, k0=np.full((len(plant.control_loops), 3), 0.5))
-            obs, _ = env.reset(seed=0)
-            t, y = [0.0], [float(env.unwrapped.signals.decode(obs)[plant.outlet_measured])]
-            while True:
-                a, _ = pol.predict(obs)
-                obs, _, term, trunc, info = env.step(a)
-                t.append(info["time_s"])
-                y.append(float(env.unwrapped.signals.decode(obs)[plant.outlet_measured]))
-                if term or trunc:
-                    break
-            recs.append(np.array(y))
-        m = step_response_metrics(np.array(t), recs[1] - recs[0])
-        out[j] = FOPDT(m["gain"] / step, m["Tg_s"], m["Tu_s"] + FILTER_S)
-    return tuple(out)
-
-
-@functools.lru_cache(maxsize=16)
-def commissioning_gains(env_id: str, params_json: str) -> np.ndarray:
-    """(len(GAIN_LOADS), actions, 4) table: (k_p0, k_i0, k_d0) of eq. (4) per action at each
-    load of :data:`GAIN_LOADS` (zeros off MAIN), and the loop direction (sign of the outer
-    gain) as a 4th column; see the module docstring."""
-    from steamtemp_gym import plants
-
-    dt = plants.make(env_id, **json.loads(params_json)).dt_s
-    table = []
-    for load in GAIN_LOADS:
-        models = outer_models(env_id, params_json, load)
-        n_main = sum(m is not None for m in models)
-        out = np.zeros((len(models), 4))
-        for j, m in enumerate(models):
-            if m is None:
-                continue
-            kc, ti = simc_pi(m)
-            kc = abs(kc) / n_main
-            out[j] = (kc, kc * dt / ti, KD0, np.sign(m.K))
-        table.append(out)
-    return np.array(table)
-
-
-# ----------------------------------------------------------------------- the policy
 class NeuroPID:
     """Neuro-PID on every MAIN loop over its inner loop; cascade_pi_ff's loops elsewhere.
 
@@ -424,7 +170,7 @@ class NeuroPID:
         self.main = [j for j, (_, o) in enumerate(plant.control_loops) if o == MAIN]
         self.inner = [names.index(plant.control_loops[j][0]) if plant.control_loops[j][0]
                       else None for j in self.main]  # fmt: skip
-        self.p_inner = _inner_p_valve_per_K(plant)
+        self.p_inner = inner_p_valve_per_K(plant)
         prox = PROXIES.get(plant.id) or (
             "firing_minus_load" if self.i_fire is not None else "load_rate",
             "load_rate",

@@ -32,7 +32,8 @@ import numpy as np
 
 import baselines
 from agents.evaluation import run_batch
-from baselines.neuro_pid import ETA, GAIN_RANGE, N_HIDDEN, N_IN, NeuroPID, Recorder, _forward
+from baselines.neuro_pid import NeuroPID, Recorder
+from baselines.neuro_pid_net import ETA, GAIN_RANGE, N_HIDDEN, N_IN, _forward
 
 TRAVEL_MAX, ADAPT_MIN = 2.0, 0.10
 
@@ -95,10 +96,14 @@ def ladder(args: argparse.Namespace, etas: list[float]) -> dict[str, float]:
     ref, _ = run(args.env, "random", train, None, 0.0)
     r_ref = np.array([r["metrics"]["return"] for r in ref])
     t_ref = np.array([r["metrics"]["valve_travel"] for r in ref])
-    print(f"training: {args.env} random seeds {train[0]}-{train[-1]}; cascade_pi_ff return "
-          f"{r_ref.mean():.1f}, travel {t_ref.mean():.2f}")
-    print("| criterion | eta | return - ff | travel ratio | trips | |kp/kp0-1| | |ki/ki0-1| | "
-          "ki near bound | learned kp | ki | kd |\n|---|---|---|---|---|---|---|---|---|---|---|")
+    print(
+        f"training: {args.env} random seeds {train[0]}-{train[-1]}; cascade_pi_ff return "
+        f"{r_ref.mean():.1f}, travel {t_ref.mean():.2f}"
+    )
+    print(
+        "| criterion | eta | return - ff | travel ratio | trips | |kp/kp0-1| | |ki/ki0-1| | "
+        "ki near bound | learned kp | ki | kd |\n|---|---|---|---|---|---|---|---|---|---|---|"
+    )
     chosen = {}
     for crit in ("mee", "mse"):
         best = None
@@ -140,8 +145,10 @@ def compare(args: argparse.Namespace, chosen: dict[str, float]) -> None:
                   flush=True)  # fmt: skip
         d = stats[label, "mee"] - stats[label, "mse"]
         se = d.std(axis=0, ddof=1) / np.sqrt(len(step))
-        print(f"paired MEE - MSE ({label}): mean {d[:, 0].mean():+.4f} +- {se[0]:.4f} K, "
-              f"std {d[:, 1].mean():+.4f} +- {se[1]:.4f} K (paper: -0.0641, -0.0104)")
+        print(
+            f"paired MEE - MSE ({label}): mean {d[:, 0].mean():+.4f} +- {se[0]:.4f} K, "
+            f"std {d[:, 1].mean():+.4f} +- {se[1]:.4f} K (paper: -0.0641, -0.0104)"
+        )
 
 
 if __name__ == "__main__":

@@ -144,9 +144,9 @@ def test_an_incremental_agent_trains_and_acts_within_its_move_bound(tmp_path):
     import gymnasium as gym
 
     import agents
-    from agents import train
+    from agents import training
 
-    train.train(ENV, "ppo", _ppo_yaml(tmp_path, max_move=MAX_MOVE), timesteps=128, seed=0,
+    training.train(ENV, "ppo", _ppo_yaml(tmp_path, max_move=MAX_MOVE), timesteps=128, seed=0,
                 out=tmp_path, quiet=True)  # fmt: skip
     meta = json.loads((tmp_path / "steamtemp__Cascade300MW-v0__ppo.json").read_text())
     assert meta["max_move"] == MAX_MOVE
@@ -169,8 +169,9 @@ def test_an_incremental_agent_trains_and_acts_within_its_move_bound(tmp_path):
                                               ({"max_move": "fast"}, "max_move"),
                                               ({"max_move": 0.1, "residual_scale": 0.2},
                                                "exclude each other")])  # fmt: skip
-def test_bad_max_move_in_the_hyperparameters_is_refused_before_training(tmp_path, capsys,
-                                                                         extra, match):
+def test_bad_max_move_in_the_hyperparameters_is_refused_before_training(
+    tmp_path, capsys, extra, match
+):
     from agents import train
 
     algo = "ppo_residual" if "residual_scale" in extra else "ppo"

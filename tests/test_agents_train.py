@@ -13,7 +13,7 @@ import pytest
 import yaml
 
 import agents
-from agents import train
+from agents import train, train_config, train_runs, training
 from agents.evaluation import run_episode
 from agents.files import steamtemp_paths
 from steamtemp_gym.rewards import RewardConfig
@@ -30,8 +30,14 @@ SMALL = {
     "recurrentppo": {"n_steps": 128, "batch_size": 64, "n_epochs": 2, "policy": "MlpLstmPolicy",
                      "policy_kwargs": "dict(lstm_hidden_size=8, net_arch=dict(pi=[16], vf=[16]))"},
 }  # fmt: skip
-STEPS = {"ppo": 2048, "sac": 1200, "td3": 1200, "ppo_residual": 1024, "recurrentppo": 1024,
-         "sac_caps": 1200}
+STEPS = {
+    "ppo": 2048,
+    "sac": 1200,
+    "td3": 1200,
+    "ppo_residual": 1024,
+    "recurrentppo": 1024,
+    "sac_caps": 1200,
+}
 ALGOS = list(STEPS)
 MEMORY = [{"agents.wrappers.ControllerMemory": {"integral_time_s": 60.0, "history": 1}}]
 
@@ -52,7 +58,7 @@ def trained(tmp_path_factory) -> dict[str, Path]:
     out = {}
     for algo in ALGOS:
         d = tmp_path_factory.mktemp(algo)
-        train.train(ENV_ID, algo, _yaml(d, algo), timesteps=STEPS[algo], seed=1, out=d,
+        training.train(ENV_ID, algo, _yaml(d, algo), timesteps=STEPS[algo], seed=1, out=d,
                     quiet=True)  # fmt: skip
         out[algo] = d
     return out
@@ -67,7 +73,7 @@ def test_smoke_training_writes_model_and_metadata(trained, algo):
     assert meta["env_id"] == ENV_ID and meta["algo"] == algo and meta["seed"] == 1
     assert meta["timesteps_trained"] >= STEPS[algo]
     assert [c["fraction"] for c in meta["validation"]["curve"]][-1] >= 1.0
-    assert len(meta["validation"]["curve"]) == len(train.EVAL_FRACTIONS)
+    assert len(meta["validation"]["curve"]) == len(training.EVAL_FRACTIONS)
     n_obs = gym.make(ENV_ID).observation_space.shape[0]
     if algo == "recurrentppo":
         assert meta["memory"] is None and meta["sb3_class"] == "RecurrentPPO"
@@ -78,7 +84,7 @@ def test_smoke_training_writes_model_and_metadata(trained, algo):
     assert meta["residual_scale"] == (0.2 if algo == "ppo_residual" else None)
     chosen: dict = {}
     for c in meta["validation"]["curve"]:
-        if train.better_checkpoint(c, chosen, meta["validation"]["travel_budget"]):
+        if training.better_checkpoint(c, chosen, meta["validation"]["travel_budget"]):
             chosen = c
     assert meta["validation"]["best"]["return"] == chosen["return"]
     ref = meta["validation"]["reference"]
@@ -92,11 +98,11 @@ def test_loaded_policy_reproduces_validation_and_is_deterministic(trained, algo)
     pol = agents.load(ENV_ID, algo, zoo=trained[algo])
     meta = json.loads(steamtemp_paths(trained[algo], ENV_ID, algo)[1].read_text())
     env = gym.make(ENV_ID, scenario="random")
-    rets = [run_episode(env, pol, train.VALIDATION_SEED + k)["metrics"]["return"]
-            for k in range(train.N_VALIDATION)]  # fmt: skip
+    rets = [run_episode(env, pol, training.VALIDATION_SEED + k)["metrics"]["return"]
+            for k in range(training.N_VALIDATION)]  # fmt: skip
     # validation ran the episodes as one batch: torch's batched matmuls round differently
     assert np.mean(rets) == pytest.approx(meta["validation"]["best"]["return"], rel=1e-6)
-    again = run_episode(env, pol, train.VALIDATION_SEED)["metrics"]["return"]
+    again = run_episode(env, pol, training.VALIDATION_SEED)["metrics"]["return"]
     assert again == rets[0]
 
 
@@ -159,11 +165,11 @@ def test_bad_input_fails_before_training(tmp_path, capsys, args, match):
 
 
 def test_shipped_hyperparams_are_valid_for_every_entry():
-    entries = train.zoo_entries()
+    entries = train_runs.zoo_entries()
     assert {e for e, _ in entries} <= set(__import__("steamtemp_gym").ENV_IDS)
     assert set(agents.shipped()) <= set(entries)  # every shipped agent can be rebuilt
     for env_id, algo in entries:
-        hp = train.read_hyperparams(train.HYPERPARAMS / f"{algo}.yml", env_id, algo)
+        hp = train_config.read_hyperparams(train_config.HYPERPARAMS / f"{algo}.yml", env_id, algo)
         assert hp["normalize"]
         # the LSTM learns its memory; every other agent gets the controller memory
         assert (hp["env_wrapper"] is None) == (algo == "recurrentppo")
@@ -193,22 +199,22 @@ def test_checkpoints_within_the_travel_budget_come_first():
     b = {"return": -80.0, "travel_ratio": 1.5}
     c = {"return": -70.0, "travel_ratio": 1.9}
     d = {"return": -40.0, "travel_ratio": 2.5}
-    assert train.better_checkpoint(a, {}, 2.0)
-    assert train.better_checkpoint(b, a, 2.0) and not train.better_checkpoint(a, b, 2.0)
-    assert train.better_checkpoint(c, b, 2.0) and not train.better_checkpoint(d, c, 2.0)
-    assert train.better_checkpoint(d, a, 2.0)  # both over: the lower travel
+    assert training.better_checkpoint(a, {}, 2.0)
+    assert training.better_checkpoint(b, a, 2.0) and not training.better_checkpoint(a, b, 2.0)
+    assert training.better_checkpoint(c, b, 2.0) and not training.better_checkpoint(d, c, 2.0)
+    assert training.better_checkpoint(d, a, 2.0)  # both over: the lower travel
 
 
 def test_train_reward_is_checked_and_applies_to_the_training_envs_only(tmp_path):
     path = tmp_path / "ppo.yml"
     path.write_text(yaml.safe_dump({ENV_ID: {"policy": "MlpPolicy", "train_reward": {"w_mov": 1}}}))
-    with pytest.raises(train.ConfigError, match="train_reward: unknown reward option"):
-        train.read_hyperparams(path, ENV_ID, "ppo")
+    with pytest.raises(train_config.ConfigError, match="train_reward: unknown reward option"):
+        train_config.read_hyperparams(path, ENV_ID, "ppo")
     path.write_text(yaml.safe_dump({ENV_ID: {"policy": "MlpPolicy",
                                              "train_reward": {"w_move": 5.0}}}))  # fmt: skip
-    hp = train.read_hyperparams(path, ENV_ID, "ppo")
-    charged, _ = train.make_training_env(ENV_ID, 2, 0, hp)
-    plain, _ = train.make_training_env(ENV_ID, 2, 0, {**hp, "train_reward": None})
+    hp = train_config.read_hyperparams(path, ENV_ID, "ppo")
+    charged, _ = training.make_training_env(ENV_ID, 2, 0, hp)
+    plain, _ = training.make_training_env(ENV_ID, 2, 0, {**hp, "train_reward": None})
     stroke = np.ones((2, charged.action_space.shape[0]))  # open every valve fully
     rewards = []
     for venv in (charged, plain):
@@ -220,24 +226,27 @@ def test_train_reward_is_checked_and_applies_to_the_training_envs_only(tmp_path)
 
 def test_plant_randomization_is_checked_and_draws_the_training_plants(tmp_path):
     path = tmp_path / "ppo.yml"
-    path.write_text(yaml.safe_dump({ENV_ID: {"policy": "MlpPolicy",
-                                             "plant_randomization": {"heat_transfr": [0.8, 1.2]}}}))
-    with pytest.raises(train.ConfigError, match="unknown group"):
-        train.read_hyperparams(path, ENV_ID, "ppo")
+    path.write_text(
+        yaml.safe_dump(
+            {ENV_ID: {"policy": "MlpPolicy", "plant_randomization": {"heat_transfr": [0.8, 1.2]}}}
+        )
+    )
+    with pytest.raises(train_config.ConfigError, match="unknown group"):
+        train_config.read_hyperparams(path, ENV_ID, "ppo")
     path.write_text(yaml.safe_dump({ENV_ID: {"policy": "MlpPolicy", "plant_randomization": True}}))
-    hp = train.read_hyperparams(path, ENV_ID, "ppo")
-    drawn, base = train.make_training_env(ENV_ID, 2, 0, hp)
+    hp = train_config.read_hyperparams(path, ENV_ID, "ppo")
+    drawn, base = training.make_training_env(ENV_ID, 2, 0, hp)
     drawn.reset()
     plants = base.core.plants
     assert plants[0].params != plants[1].params  # each row its own unit
-    _, nominal = train.make_training_env(ENV_ID, 2, 0, {**hp, "plant_randomization": None})
+    _, nominal = training.make_training_env(ENV_ID, 2, 0, {**hp, "plant_randomization": None})
     assert not hasattr(nominal.core, "plants")
 
 
 def test_zoo_env_takes_the_short_name_and_refuses_an_empty_selection(tmp_path, capsys):
     """``--zoo --env`` resolves the id as ``--env`` does elsewhere; a selection without any
     YAML entry is an error, not a run that trains nothing."""
-    assert train._zoo_env("Cascade300MW-v0") == "steamtemp/Cascade300MW-v0"
+    assert train_runs.zoo_env("Cascade300MW-v0") == "steamtemp/Cascade300MW-v0"
     for args, match in ((["--env", "Nope-v0"], "unknown env id"),
                         (["--env", "BensonSubcritical-v0", "--algo", "recurrentppo"],
                          "no entry for")):  # fmt: skip

@@ -8,7 +8,7 @@ import json
 import pytest
 import yaml
 
-from agents import train, tune
+from agents import files, train_config, train_runs, tune
 
 ENV_ID = "steamtemp/Cascade300MW-v0"
 
@@ -25,12 +25,12 @@ def test_trial_entry_maps_the_sampled_keys_onto_the_shipped_entry():
 @pytest.mark.parametrize("algo", sorted(tune.SPACES))
 def test_every_space_key_is_a_valid_hyperparameter(algo, tmp_path):
     """A trial built from the first choice of every key passes steamtemp-train's checks."""
-    env_id = train.zoo_entries_of(algo)[0]  # the first env its shipped YAML has
-    raw = yaml.safe_load((train.HYPERPARAMS / f"{algo}.yml").read_text())[env_id]
+    env_id = train_runs.zoo_entries_of(algo)[0]  # the first env its shipped YAML has
+    raw = yaml.safe_load((train_config.HYPERPARAMS / f"{algo}.yml").read_text())[env_id]
     params = {k: v[0] for k, v in tune.SPACES[algo].items()}
     path = tmp_path / f"{algo}.yml"
     path.write_text(yaml.safe_dump({env_id: tune.trial_entry(raw, params)}))
-    train.read_hyperparams(path, env_id, algo)
+    train_config.read_hyperparams(path, env_id, algo)
 
 
 @pytest.mark.parametrize(("argv", "match"), [
@@ -49,7 +49,7 @@ def test_a_short_search_records_every_trial_and_the_best(tmp_path):
     pytest.importorskip("optuna")
     record = tune.search(ENV_ID, "ppo", trials=2, timesteps=2048, max_minutes=1.0, seed=0,
                          out=tmp_path)  # fmt: skip
-    saved = json.loads((tmp_path / f"{train.stem(ENV_ID, 'ppo')}__tuning.json").read_text())
+    saved = json.loads((tmp_path / f"{files.stem(ENV_ID, 'ppo')}__tuning.json").read_text())
     assert saved == json.loads(json.dumps(record))
     assert len(record["results"]) == 2
     assert record["best"]["return"] == max(r["return"] for r in record["results"])

@@ -13,7 +13,7 @@ import pytest
 
 import agents
 import steamtemp_gym
-from agents import files, train
+from agents import files, train_config, train_runs
 from agents.evaluation import run_episode
 from agents.leaderboard.plan import _available
 
@@ -57,9 +57,10 @@ RL_ZOO_ALGO = {"ppo": "ppo", "sac": "sac", "td3": "td3", "recurrentppo": "ppo_ls
 @pytest.mark.parametrize("algo", sorted(RL_ZOO_ALGO))
 def test_rl_zoo_trains_with_the_shipped_yaml(tmp_path, algo):
     pytest.importorskip("rl_zoo3")
-    env_id = train.zoo_entries_of(algo)[0]
+    env_id = train_runs.zoo_entries_of(algo)[0]
+    yml = train_config.HYPERPARAMS / f"{algo}.yml"
     cmd = [sys.executable, "-m", "rl_zoo3.train", "--algo", RL_ZOO_ALGO[algo], "--env", env_id,
-           "--gym-packages", "steamtemp_gym", "--conf-file", str(train.HYPERPARAMS / f"{algo}.yml"),
+           "--gym-packages", "steamtemp_gym", "--conf-file", str(yml),
            "-n", "4096", "--log-folder", str(tmp_path), "--eval-freq", "-1"]  # fmt: skip
     done = subprocess.run(cmd, capture_output=True, text=True, timeout=900)
     assert done.returncode == 0, done.stderr[-2000:]

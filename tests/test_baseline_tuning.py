@@ -13,6 +13,7 @@ import pytest
 
 import baselines
 from agents import baseline_tuning as bt
+from agents import tuning_terms as tt
 from baselines import tuning
 from baselines.tuning import Knob
 
@@ -97,13 +98,13 @@ def test_the_commissioning_checks_are_no_leaderboard_scenarios():
     from steamtemp_gym import scenarios
     from steamtemp_gym.scenarios import heldout
 
-    assert [c.value("load", 0.0) for c in bt.COMMISSIONING_CHECKS] == list(bt.CHECK_LOADS)
-    assert min(bt.CHECK_LOADS) == 0.35 and max(bt.CHECK_LOADS) == 1.0
+    assert [c.value("load", 0.0) for c in tt.COMMISSIONING_CHECKS] == list(tt.CHECK_LOADS)
+    assert min(tt.CHECK_LOADS) == 0.35 and max(tt.CHECK_LOADS) == 1.0
     named = [scenarios.get(n) for n in scenarios.names(None) if n != "random"]
-    for c in bt.COMMISSIONING_CHECKS:
+    for c in tt.COMMISSIONING_CHECKS:
         assert c.name not in scenarios.names(None) + list(heldout.NAMES)
         assert all(c != heldout.load(n) for n in heldout.NAMES) and c not in named
-    assert not set(bt.CHECK_SEEDS) & set(bt.seeds())
+    assert not set(tt.CHECK_SEEDS) & set(tt.seeds())
 
 
 def test_a_replayed_search_runs_only_what_it_has_not_stored(monkeypatch):
@@ -155,8 +156,10 @@ def test_every_tunable_baseline_declares_knobs_with_defaults_in_their_boxes():
 
 def test_cascade_knobs_scale_the_simc_tuning_and_bad_values_are_refused():
     env = gym.make(FSH)
-    base, p = baselines.factory("cascade_pi")(env), baselines.factory("cascade_pi")(
-        env, outer_gain=2.0, inner_reset=0.5)
+    base, p = (
+        baselines.factory("cascade_pi")(env),
+        baselines.factory("cascade_pi")(env, outer_gain=2.0, inner_reset=0.5),
+    )
     np.testing.assert_allclose(p.gains[:, 0], 2.0 * base.gains[:, 0])
     np.testing.assert_allclose(p.gains[:, 3], 0.5 * base.gains[:, 3])
     np.testing.assert_array_equal(p.gains[:, [1, 2]], base.gains[:, [1, 2]])
@@ -173,7 +176,7 @@ def test_the_stored_tuning_reproduces_its_recorded_result(name):
     trips (a change of the dynamics shows here: rerun the tuning command)."""
     env_id = "steamtemp/Cascade300MW-v0"
     rec = json.loads(tuning.path(name).read_text())["plants"][env_id]
-    again = bt.evaluate(name, env_id, rec["knobs"], bt.ends(env_id, compute=False))
+    again = bt.evaluate(name, env_id, rec["knobs"], tt.ends(env_id, compute=False))
     assert again.score == pytest.approx(rec["score"], abs=1e-9)
     assert again.travel_ratio == pytest.approx(rec["travel_ratio"], abs=1e-9)
     assert again.trips == rec["trips"] and rec["feasible"]
@@ -191,7 +194,7 @@ def _stored_pairs() -> list:
 
 @functools.cache
 def _check_reference(env_id: str) -> list[dict]:
-    return bt.check_metrics(env_id, lambda env: baselines.make(bt.ZERO, env))
+    return tt.check_metrics(env_id, lambda env: baselines.make(tt.ZERO, env))
 
 
 @pytest.mark.parametrize(("name", "env_id"), _stored_pairs())
@@ -200,11 +203,13 @@ def test_every_stored_tuning_passes_the_commissioning_check(name, env_id):
     not, limit-cycles not and strokes the valve at most 3x the reference's on each check."""
     rec = json.loads(tuning.path(name).read_text())
     terms = rec["terms"].get("commissioning_checks", {})
-    assert (terms.get("loads"), terms.get("seeds")) == (list(bt.CHECK_LOADS), list(
-        bt.CHECK_SEEDS)), "tuned under other commissioning checks: rerun the tuning"
+    assert (terms.get("loads"), terms.get("seeds")) == (
+        list(tt.CHECK_LOADS),
+        list(tt.CHECK_SEEDS),
+    ), "tuned under other commissioning checks: rerun the tuning"
     knobs = rec["plants"][env_id]["knobs"]
-    ms = bt.check_metrics(env_id, lambda env: baselines.make(name, env, **knobs))
-    breach, ratio = bt.check_breach(ms, _check_reference(env_id))
+    ms = tt.check_metrics(env_id, lambda env: baselines.make(name, env, **knobs))
+    breach, ratio = tt.check_breach(ms, _check_reference(env_id))
     assert breach == ""
     # Library versions (scipy's Riccati and least-squares solvers, BLAS) move the last
     # digits: the stored ratio is reproduced to 1e-6, not bit for bit, across them.

@@ -28,20 +28,9 @@ import baselines
 import steamtemp_gym  # noqa: F401  (registers the ids)
 from agents.evaluation import run_batch
 from baselines.cascade_pi import inner_schedule
-from baselines.fao import (
-    CENTRES,
-    DH0_J_KG,
-    F_GAINS,
-    FAM,
-    HALF_WIDTH,
-    KK1,
-    KK2,
-    LABELS,
-    FaoFAC,
-    FaoSF,
-    _fsh_unit_K,
-    fac_output,
-)
+from baselines.fao import F_GAINS, KK1, KK2, FaoFAC, FaoSF
+from baselines.fao_fuzzy import CENTRES, FAM, HALF_WIDTH, LABELS, fac_output
+from baselines.fao_observer import DH0_J_KG, _fsh_unit_K
 from steamtemp_gym.scenarios import Scenario
 from steamtemp_gym.steam import h_pT
 

@@ -16,17 +16,19 @@ import baselines
 import steamtemp_gym  # noqa: F401  (registers the ids)
 from agents.evaluation import run_episode
 from baselines import evarx as E
+from baselines import evarx_identification as EI
 from baselines import tuning
-from baselines.mpc_evarx import _QP, DEFAULTS, MOVE_STEPS, MPCEVARX, expected_signs
+from baselines.mpc_evarx import MPCEVARX, expected_signs
+from baselines.mpc_evarx_qp import DEFAULTS, MOVE_STEPS, BiasQP
 
 BTM = "steamtemp/BoilerTurbineMIMO-v0"
 
 
 def test_prbs_is_a_maximal_length_sequence():
-    s = E.prbs(511, 1, 0)
+    s = EI.prbs(511, 1, 0)
     assert (s == 1).sum() == 256 and (s == -1).sum() == 255  # m-sequence balance
-    np.testing.assert_array_equal(E.prbs(1022, 1, 0)[511:], s)  # period 511
-    assert np.all(E.prbs(30, 3, 0).reshape(10, 3).std(1) == 0)  # each bit held `clock`
+    np.testing.assert_array_equal(EI.prbs(1022, 1, 0)[511:], s)  # period 511
+    assert np.all(EI.prbs(30, 3, 0).reshape(10, 3).std(1) == 0)  # each bit held `clock`
 
 
 def _synthetic(kind: str, noise: float, seed: int = 0) -> tuple:
@@ -100,7 +102,7 @@ def test_one_step_fit_is_biased_where_the_simulation_fit_is_not():
     x = phi[E.N_Y :].copy()  # the measured (noisy) output lags in the regressors
     for lag in range(E.N_Y):
         x[:, :, 2 * lag : 2 * lag + 2] = y[E.N_Y - 1 - lag : K - 1 - lag]
-    ee = np.array([E._lstsq_scaled(x.reshape(-1, p), y[E.N_Y :, :, j].ravel())
+    ee = np.array([E.lstsq_scaled(x.reshape(-1, p), y[E.N_Y :, :, j].ravel())
                    for j in (0, 1)])  # fmt: skip
     oe = E.fit_output_error(ee[:, None], gamma, phi, w, y)[0][:, 0]
     assert abs(ee[0, 0] - 0.7) > 0.15 and abs(ee[1, 3] - 0.5) > 0.15  # biased to zero
@@ -109,12 +111,12 @@ def test_one_step_fit_is_biased_where_the_simulation_fit_is_not():
 
 @pytest.fixture(scope="module")
 def ident():
-    return E.identify(BTM, "{}")
+    return EI.identify(BTM, "{}")
 
 
 @pytest.fixture(scope="module")
 def steps():
-    return E.closed_loop_steps(BTM, "{}")
+    return EI.closed_loop_steps(BTM, "{}")
 
 
 @pytest.mark.parametrize("kind", [pytest.param("evarx", marks=pytest.mark.xfail(
@@ -130,7 +132,7 @@ def test_model_gains_match_closed_loop_step_tests_at_three_loads(ident, steps, k
     model = ident[kind]
     exp = expected_signs(steps)
     assert np.count_nonzero(exp) >= 3  # SP2 -> STE, RGD -> STE and RGD -> RTE at least
-    for li, L in enumerate(E.STEP_LOADS):
+    for li, L in enumerate(EI.STEP_LOADS):
         assert np.all(np.abs(steps[li, -1]) < 0.5)
         np.testing.assert_allclose(E.steady_gains(model, L), 0.0, atol=1e-9)
         cl = E.first_lobe(steps[li])
@@ -141,13 +143,13 @@ def test_model_gains_match_closed_loop_step_tests_at_three_loads(ident, steps, k
         assert np.all((ratio > 1 / 2.5) & (ratio < 2.5)), (L, np.round(ratio, 2))
 
 
-def _toy_qp(rate: float, **weights: float) -> tuple[_QP, dict, int]:
+def _toy_qp(rate: float, **weights: float) -> tuple[BiasQP, dict, int]:
     N, no, na = 30, 2, 2
     t = np.arange(1, N + 1)[:, None, None]
     G = (1.0 - np.exp(-t / np.array([[5.0, 9.0], [7.0, 4.0]]))) * np.array(
         [[-2.0, 0.5], [0.3, 3.0]]
     )
-    qp = _QP(no, na, N, rates=np.full(na, rate), weights=weights)
+    qp = BiasQP(no, na, N, rates=np.full(na, rate), weights=weights)
     return qp, qp.matrices(G), na
 
 

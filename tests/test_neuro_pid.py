@@ -17,41 +17,43 @@ import steamtemp_gym
 from agents.evaluation import run_batch
 from agents.leaderboard.plan import DEFAULT_SCENARIOS
 from baselines import neuro_pid as npid
+from baselines import neuro_pid_commissioning as commissioning
+from baselines import neuro_pid_net as npnet
 from steamtemp_gym import scenarios
 from steamtemp_gym.metrics import limit_cycles
 
 ID = "steamtemp/Cascade300MW-v0"
-LAM, SIG = npid.LAMBDA, npid.SIGMA_K
+LAM, SIG = npnet.LAMBDA, npnet.SIGMA_K
 #: The realism bound on valve travel against cascade_pi_ff's (tests/test_baseline_realism.py).
 TRAVEL_MAX = 3.0
 
 
 def _net(w, x, scale, base=0.0):
     """Reference forward pass of eq. (5)-(8) in plain numpy: gains b_l + s_l g(net_l)."""
-    W2 = w[: npid.N_W2].reshape(npid.N_HIDDEN, npid.N_IN + 1)
-    W3 = w[npid.N_W2 :].reshape(3, npid.N_HIDDEN + 1)
+    W2 = w[: npnet.N_W2].reshape(npnet.N_HIDDEN, npnet.N_IN + 1)
+    W3 = w[npnet.N_W2 :].reshape(3, npnet.N_HIDDEN + 1)
     h = np.tanh(W2 @ np.r_[1.0, x])
     net = W3 @ np.r_[1.0, h]
     return base + scale * np.exp(net) / (np.exp(net) + np.exp(-net))
 
 
 def _sens(w, x, E, scale):
-    h, g, s = np.empty(npid.N_HIDDEN), np.empty(3), np.empty(npid.N_W)
+    h, g, s = np.empty(npnet.N_HIDDEN), np.empty(3), np.empty(npnet.N_W)
     du = np.array([E[0] - E[1], E[0], E[0] - 2 * E[1] + E[2]])
-    npid._forward(w, x, h, g)
-    npid._sensitivity(w, x, h, g, du, scale, s)
+    npnet._forward(w, x, h, g)
+    npnet._sensitivity(w, x, h, g, du, scale, s)
     return s, du
 
 
 def test_sensitivity_is_minus_du_dw_by_finite_differences():
     """Eq. (11), (15) with the Jacobian sign +1: de_k/dw = -d(sum_l dU_l k_l)/dw."""
     rng = np.random.default_rng(1)
-    w = rng.uniform(-1, 1, npid.N_W)
-    x, E, scale = rng.normal(size=npid.N_IN), rng.normal(size=3), np.array([1.2, 1.0, 1.0])
+    w = rng.uniform(-1, 1, npnet.N_W)
+    x, E, scale = rng.normal(size=npnet.N_IN), rng.normal(size=3), np.array([1.2, 1.0, 1.0])
     s, du = _sens(w, x, E, scale)
-    fd = np.empty(npid.N_W)
-    for j in range(npid.N_W):
-        dw = np.zeros(npid.N_W)
+    fd = np.empty(npnet.N_W)
+    for j in range(npnet.N_W):
+        dw = np.zeros(npnet.N_W)
         dw[j] = 1e-6
         fd[j] = -(du @ (_net(w + dw, x, scale) - _net(w - dw, x, scale))) / 2e-6
     np.testing.assert_allclose(s, fd, rtol=1e-6, atol=1e-9)
@@ -59,14 +61,14 @@ def test_sensitivity_is_minus_du_dw_by_finite_differences():
 
 def _run_kernel(mee, es, xs, w, L, eta=0.0):
     n = 1
-    W, G, V = w[None].copy(), np.zeros((n, npid.N_W)), np.zeros(n)
-    Eb, Sb = np.zeros((n, L)), np.zeros((n, L, npid.N_W))
+    W, G, V = w[None].copy(), np.zeros((n, npnet.N_W)), np.zeros(n)
+    Eb, Sb = np.zeros((n, L)), np.zeros((n, L, npnet.N_W))
     nb, hd, gains = np.zeros(n, np.int64), np.zeros(n, np.int64), np.zeros((n, 3))
     base, scale = np.zeros((n, 3)), np.ones((n, 3))
     Gs, Vs = [], []
     for k in range(len(es)):
         E = np.array([[es[k], es[k - 1] if k else es[0], es[k - 2] if k > 1 else es[0]]])
-        npid.npid_step(xs[k][None], E, W, G, V, Eb, Sb, nb, hd, base, scale, mee, SIG, LAM, L,
+        npnet.npid_step(xs[k][None], E, W, G, V, Eb, Sb, nb, hd, base, scale, mee, SIG, LAM, L,
                        eta, gains)  # fmt: skip
         Gs.append(G[0].copy())
         Vs.append(V[0])
@@ -78,11 +80,11 @@ def test_mee_gradient_is_eq_10_over_the_receding_window():
     directly over the stored errors and sensitivities, weights frozen (eta = 0)."""
     rng = np.random.default_rng(2)
     L, K = 5, 23
-    w = rng.uniform(-0.5, 0.5, npid.N_W)
-    es, xs = rng.normal(0, 2, K), rng.normal(size=(K, npid.N_IN))
+    w = rng.uniform(-0.5, 0.5, npnet.N_W)
+    es, xs = rng.normal(0, 2, K), rng.normal(size=(K, npnet.N_IN))
     G_k, V_k = _run_kernel(True, es, xs, w, L)
     S = []
-    G, V = np.zeros(npid.N_W), 0.0
+    G, V = np.zeros(npnet.N_W), 0.0
     kap = lambda d: np.exp(-d * d / (4 * SIG**2)) / (math.sqrt(2 * math.pi) * math.sqrt(2) * SIG)  # noqa: E731
     for k in range(K):
         E = [es[k], es[k - 1] if k else es[0], es[k - 2] if k > 1 else es[0]]
@@ -100,10 +102,10 @@ def test_mee_gradient_is_eq_10_over_the_receding_window():
 def test_mse_gradient_is_the_forgotten_mean_of_e_de_dw():
     rng = np.random.default_rng(3)
     K = 30
-    w = rng.uniform(-0.5, 0.5, npid.N_W)
-    es, xs = rng.normal(0, 2, K), rng.normal(size=(K, npid.N_IN))
+    w = rng.uniform(-0.5, 0.5, npnet.N_W)
+    es, xs = rng.normal(0, 2, K), rng.normal(size=(K, npnet.N_IN))
     G_k, V_k = _run_kernel(False, es, xs, w, 5)
-    G, M = np.zeros(npid.N_W), 0.0
+    G, M = np.zeros(npnet.N_W), 0.0
     for k in range(K):
         E = [es[k], es[k - 1] if k else es[0], es[k - 2] if k > 1 else es[0]]
         s, _ = _sens(w, xs[k], np.array(E), np.ones(3))
@@ -116,8 +118,8 @@ def test_update_directions():
     """MEE ascends V (eq. (9)): a tiny step along eta G raises the window's information
     potential with the stored sensitivities; MSE descends e^2."""
     rng = np.random.default_rng(4)
-    w = rng.uniform(-0.5, 0.5, npid.N_W)
-    es, xs = rng.normal(0, 2, 40), rng.normal(size=(40, npid.N_IN))
+    w = rng.uniform(-0.5, 0.5, npnet.N_W)
+    es, xs = rng.normal(0, 2, 40), rng.normal(size=(40, npnet.N_IN))
     G_mee, _ = _run_kernel(True, es, xs, w, 200)
     G_mse, _ = _run_kernel(False, es, xs, w, 200)
     assert np.linalg.norm(G_mee[-1]) > 0 and np.linalg.norm(G_mse[-1]) > 0
@@ -126,30 +128,30 @@ def test_update_directions():
 
 
 def test_initial_net_gives_the_commissioning_gains_at_the_midpoint_of_their_bounds():
-    table = npid.commissioning_gains(ID, "{}")
+    table = commissioning.commissioning_gains(ID, "{}")
     assert table.shape == (len(npid.GAIN_LOADS), 1, 4)
     k0 = table[-1, 0]  # rated load
-    w, base, scale = npid.initial_weights(k0[:3])
-    np.testing.assert_allclose(_net(w, np.zeros(npid.N_IN), scale, base), k0[:3], rtol=1e-12)
+    w, base, scale = npnet.initial_weights(k0[:3])
+    np.testing.assert_allclose(_net(w, np.zeros(npnet.N_IN), scale, base), k0[:3], rtol=1e-12)
     # the gains can move within k0 (1 -+ 0.5) whatever the training does
     np.testing.assert_allclose(base, 0.5 * k0[:3])
     np.testing.assert_allclose(base + scale, 1.5 * k0[:3])
     assert k0[3] == 1.0
     # SIMC PI on the identified outer process with the inner P loop closed: loop gain
     # G_C2 |K2| = 0.08 stroke/K x 9 kg/s x 2.01 K s/kg = 1.447, so K = 2.09 * 1.447/2.447
-    m = npid.outer_models(ID, "{}")[0]
+    m = commissioning.outer_models(ID, "{}")[0]
     assert m.K == pytest.approx(2.09 * 1.4472 / 2.4472, rel=0.01)
-    w2, _, _ = npid.initial_weights(k0[:3])
+    w2, _, _ = npnet.initial_weights(k0[:3])
     np.testing.assert_array_equal(w, w2)  # reproducible
     with pytest.raises(ValueError, match="positive"):
-        npid.initial_weights(np.array([0.5, 0.0, 0.05]))
+        npnet.initial_weights(np.array([0.5, 0.0, 0.05]))
 
 
 def test_commissioning_gains_follow_the_load_schedule():
     """k_l0(L) linear between the commissioning loads, held beyond them."""
     env = gym.make(ID)
     pol = npid.NeuroPIDMEE(env)
-    table = npid.commissioning_gains(ID, "{}")[:, 0, :3]
+    table = commissioning.commissioning_gains(ID, "{}")[:, 0, :3]
     k = pol.commissioning(np.array([0.3, 0.5, 0.625, 1.0, 1.1]))[:, 0]
     np.testing.assert_allclose(k[[0, 1]], table[[0, 0]])
     np.testing.assert_allclose(k[2], table[:2].mean(axis=0))
@@ -364,24 +366,33 @@ def check_std_smaller(setting: str, seeds: int) -> None:
     assert 2.0 * paper <= _paired(rel)[0] <= 0.5 * paper, _paired(rel)
 
 
-@pytest.mark.xfail(strict=True, reason="MEE - MSE error mean +0.18 % (+0.0012 K) at the "
-                   "paper's eta (20 seeds; paper -12.6 %): the nets barely learn")
+@pytest.mark.xfail(
+    strict=True,
+    reason="MEE - MSE error mean +0.18 % (+0.0012 K) at the "
+    "paper's eta (20 seeds; paper -12.6 %): the nets barely learn",
+)
 @SEEDS
 def test_claim_mee_smaller_error_mean_paper_eta(seeds):
     check_mean_smaller("paper", seeds)
 
 
-@pytest.mark.xfail(strict=True, reason="MEE - MSE error mean +9.2 % (+0.050 K) between "
-                   "adapting nets (20 seeds; paper -12.6 %): MEE is shift-invariant, it does "
-                   "not act on the mean, MSE does")
+@pytest.mark.xfail(
+    strict=True,
+    reason="MEE - MSE error mean +9.2 % (+0.050 K) between "
+    "adapting nets (20 seeds; paper -12.6 %): MEE is shift-invariant, it does "
+    "not act on the mean, MSE does",
+)
 @SEEDS
 def test_claim_mee_smaller_error_mean_adapting(seeds):
     check_mean_smaller("adapting", seeds)
 
 
-@pytest.mark.xfail(strict=True, reason="MEE - MSE error std -0.023 % (-0.0007 K) at the "
-                   "paper's eta (20 seeds; paper -0.61 %): right direction, a 26th of the "
-                   "size, the nets barely learn")
+@pytest.mark.xfail(
+    strict=True,
+    reason="MEE - MSE error std -0.023 % (-0.0007 K) at the "
+    "paper's eta (20 seeds; paper -0.61 %): right direction, a 26th of the "
+    "size, the nets barely learn",
+)
 @SEEDS
 def test_claim_mee_smaller_error_std_paper_eta(seeds):
     check_std_smaller("paper", seeds)
@@ -407,10 +418,13 @@ def test_claim_step_tracked_around_the_setpoint(seeds):
         assert np.abs(r[crit]["e"]).max() < 28.0, crit
 
 
-@pytest.mark.xfail(strict=True, reason="error mean / std 0.70 / 2.86 K (MEE), 0.70 / 2.86 K "
-                   "(MSE) at the paper's eta (20 seeds; paper 0.445 / 1.705, 0.509 / 1.715): "
-                   "the plant's omega (uniform +-3 K, 150 s) is larger than the paper's, and "
-                   "the inner P at 8 %/K tracks the step more slowly than a loop gain of 16")
+@pytest.mark.xfail(
+    strict=True,
+    reason="error mean / std 0.70 / 2.86 K (MEE), 0.70 / 2.86 K "
+    "(MSE) at the paper's eta (20 seeds; paper 0.445 / 1.705, 0.509 / 1.715): "
+    "the plant's omega (uniform +-3 K, 150 s) is larger than the paper's, and "
+    "the inner P at 8 %/K tracks the step more slowly than a loop gain of 16",
+)
 @SEEDS
 def test_claim_error_mean_and_std_of_the_papers_size(seeds):
     """Claim: error mean / std 0.4452 / 1.7049 K (MEE), 0.5093 / 1.7153 K (MSE), each within
@@ -428,10 +442,13 @@ def _gain_spread(run: dict) -> np.ndarray:
     return (g[late] / g[0]).std(axis=0)
 
 
-@pytest.mark.xfail(strict=True, reason="gain std over time / k0 (20 seeds, paper's eta), MEE "
-                   "vs MSE: k_p 0.0906 vs 0.0906, k_i 0.0516 vs 0.0510, k_d 0.0392 vs 0.0393: "
-                   "k_i varies more under MEE; the spread is the inputs' modulation through the "
-                   "initial weights, not training")
+@pytest.mark.xfail(
+    strict=True,
+    reason="gain std over time / k0 (20 seeds, paper's eta), MEE "
+    "vs MSE: k_p 0.0906 vs 0.0906, k_i 0.0516 vs 0.0510, k_d 0.0392 vs 0.0393: "
+    "k_i varies more under MEE; the spread is the inputs' modulation through the "
+    "initial weights, not training",
+)
 @SEEDS
 def test_claim_mee_gains_less_uncertain(seeds):
     """Claim (Fig. 7): the MEE-trained PID gains have smaller uncertainties than the MSE
@@ -471,10 +488,13 @@ def test_claim_mee_pdf_narrows_along_time(seeds):
     _assert_negative(fall["mee"] - fall["mse"], seeds)
 
 
-@pytest.mark.xfail(strict=True, reason="mean-square weight increment of the MEE net, "
-                   "1400-2000 s over 800-1400 s: x1.16 (20 seeds, paper's eta; x1.10 adapting): "
-                   "with forgetting lambda = 0.04 the gradient follows the current errors, "
-                   "which the plant's disturbances keep alive")
+@pytest.mark.xfail(
+    strict=True,
+    reason="mean-square weight increment of the MEE net, "
+    "1400-2000 s over 800-1400 s: x1.16 (20 seeds, paper's eta; x1.10 adapting): "
+    "with forgetting lambda = 0.04 the gradient follows the current errors, "
+    "which the plant's disturbances keep alive",
+)
 @SEEDS
 def test_claim_mee_weights_converge(seeds):
     """Claim (Section 3.3, eq. (24)-(25)): with 0 < eta < 1 / max |lambda_i| the weight
@@ -488,9 +508,12 @@ def test_claim_mee_weights_converge(seeds):
     assert late < early, late / early
 
 
-@pytest.mark.xfail(strict=True, reason="MEE error std with - without the measured "
-                   "disturbance inputs +0.0014 +- 0.0056 K (20 seeds): through eq. (4) they "
-                   "only modulate gains that multiply errors, no additive feed-forward")
+@pytest.mark.xfail(
+    strict=True,
+    reason="MEE error std with - without the measured "
+    "disturbance inputs +0.0014 +- 0.0056 K (20 seeds): through eq. (4) they "
+    "only modulate gains that multiply errors, no additive feed-forward",
+)
 @SEEDS
 def test_claim_disturbance_inputs_act_as_feedforward(seeds):
     """Claim (abstract, Section 4): with the measurable disturbances omega, omega_2 as net

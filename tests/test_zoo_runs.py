@@ -15,12 +15,20 @@ import pytest
 import yaml
 
 import agents
-from agents import files, specs, stats, train
+from agents import files, specs, stats, train, train_config, train_runs, training
 from agents import leaderboard as lb
 
 ENV = "steamtemp/BensonSubcritical-v0"  # 5 s control interval: short validation episodes
-TINY_PPO = {ENV: {"n_envs": 2, "policy": "MlpPolicy", "n_steps": 64, "batch_size": 64,
-                  "n_epochs": 1, "policy_kwargs": "dict(net_arch=dict(pi=[8], vf=[8]))"}}
+TINY_PPO = {
+    ENV: {
+        "n_envs": 2,
+        "policy": "MlpPolicy",
+        "n_steps": 64,
+        "batch_size": 64,
+        "n_epochs": 1,
+        "policy_kwargs": "dict(net_arch=dict(pi=[8], vf=[8]))",
+    }
+}
 TINY_SCENARIO = "name: tiny\nduration_s: 60\nload: [[0, 1.0], [30, 0.95]]\n"
 
 
@@ -185,26 +193,41 @@ def test_every_entry_is_checked_before_the_first_run(tmp_path, capsys):
 
 
 def test_run_seeds_never_share_a_training_env_seed(tmp_path):
-    assert [train.run_seed(5, k) for k in range(3)] == [5, 1005, 2005]
-    jobs = train.zoo_jobs([(ENV, "ppo"), (ENV, "sac")], tmp_path, 7, 3, 2.0, timesteps=None)
+    assert [train_runs.run_seed(5, k) for k in range(3)] == [5, 1005, 2005]
+    jobs = train_runs.zoo_jobs([(ENV, "ppo"), (ENV, "sac")], tmp_path, 7, 3, 2.0, timesteps=None)
     assert [(j["algo"], j["run"], j["seed"]) for j in jobs] == [
         ("ppo", 0, 7), ("ppo", 1, 1007), ("ppo", 2, 2007),
         ("sac", 0, 7), ("sac", 1, 1007), ("sac", 2, 2007)]  # fmt: skip
     assert all(j["max_minutes"] == 2.0 and "timesteps" not in j for j in jobs)
-    (one,) = train.zoo_jobs([(ENV, "ppo")], tmp_path, 7, None, 2.0, timesteps=300)
+    (one,) = train_runs.zoo_jobs([(ENV, "ppo")], tmp_path, 7, None, 2.0, timesteps=300)
     assert (one["run"], one["seed"], one["timesteps"]) == (None, 7, 300)
-    n_envs = [hp.get("n_envs", 1) for f in train.HYPERPARAMS.glob("*.yml")
+    n_envs = [hp.get("n_envs", 1) for f in train_config.HYPERPARAMS.glob("*.yml")
               for hp in (yaml.safe_load(f.read_text()) or {}).values()]  # fmt: skip
-    assert n_envs and max(n_envs) < train.RUN_SEED_STRIDE
-    assert train.run_seed(0, train.MAX_RUNS) < train.VALIDATION_SEED
+    assert n_envs and max(n_envs) < train_runs.RUN_SEED_STRIDE
+    assert train_runs.run_seed(0, train_runs.MAX_RUNS) < training.VALIDATION_SEED
 
 
 # --------------------------------------------------------------------------- tiny runs
 def _zoo_args(tmp: Path, out: Path) -> list[str]:
     yml = tmp / "ppo.yml"
     yml.write_text(yaml.safe_dump(TINY_PPO))
-    return ["--zoo", "--env", ENV, "--algo", "ppo", "--runs", "2", "--timesteps", "256",
-            "--hyperparams", str(yml), "--out", str(out), "--max-minutes", "30"]
+    return [
+        "--zoo",
+        "--env",
+        ENV,
+        "--algo",
+        "ppo",
+        "--runs",
+        "2",
+        "--timesteps",
+        "256",
+        "--hyperparams",
+        str(yml),
+        "--out",
+        str(out),
+        "--max-minutes",
+        "30",
+    ]
     # the cap is passed on to every run but never binds: a run stopped by the wall clock on
     # a busy machine would train fewer steps than its twin
 
@@ -224,20 +247,26 @@ def _meta(zoo: Path, run: int) -> dict:
 def _outcome(meta: dict) -> dict:
     """What a run's result is, without its wall times."""
     curve = [{k: v for k, v in c.items() if k != "wall_s"} for c in meta["validation"]["curve"]]
-    return {"seed": meta["seed"], "run": meta["run"], "steps": meta["timesteps_trained"],
-            "curve": curve, "normalization": meta["normalization"]}
+    return {
+        "seed": meta["seed"],
+        "run": meta["run"],
+        "steps": meta["timesteps_trained"],
+        "curve": curve,
+        "normalization": meta["normalization"],
+    }
 
 
 def test_local_runs_write_run_indexed_files_with_their_seeds(local_zoo, tmp_path):
     assert sorted(f.name for f in local_zoo.iterdir()) == [
-        f"{files.stem(ENV, 'ppo', k)}{ext}" for k in (0, 1) for ext in (".json", ".zip")]
+        f"{files.stem(ENV, 'ppo', k)}{ext}" for k in (0, 1) for ext in (".json", ".zip")
+    ]
     m0, m1 = _meta(local_zoo, 0), _meta(local_zoo, 1)
-    assert (m0["run"], m0["seed"], m1["run"], m1["seed"]) == (0, 0, 1, train.RUN_SEED_STRIDE)
+    assert (m0["run"], m0["seed"], m1["run"], m1["seed"]) == (0, 0, 1, train_runs.RUN_SEED_STRIDE)
     assert m0["validation"]["curve"] != m1["validation"]["curve"]  # independent runs
     assert agents.runs(ENV, "ppo", zoo=local_zoo) == [0, 1]
     pol = agents.load(ENV, "ppo", zoo=local_zoo, run=1)
     assert pol.predict(np.zeros(pol.n_obs))[0].shape == (2,)
-    again = train.train(ENV, "ppo", local_zoo.parent / "ppo.yml", timesteps=256, seed=1000,
+    again = training.train(ENV, "ppo", local_zoo.parent / "ppo.yml", timesteps=256, seed=1000,
                         out=tmp_path, max_minutes=30, quiet=True, run=1)  # fmt: skip
     assert _outcome(again) == _outcome(m1)  # same seed, same run
     assert files.steamtemp_paths(tmp_path, ENV, "ppo", 1)[0].is_file()
@@ -260,8 +289,22 @@ def test_the_leaderboard_scores_each_run_and_reports_the_agent(local_zoo, tmp_pa
     monkeypatch.setattr(agents, "ZOO", local_zoo)
     tiny = tmp_path / "tiny.yaml"
     tiny.write_text(TINY_SCENARIO)
-    lb.main(["--envs", ENV, "--policies", "cascade_pi,sb3:ppo", "--scenarios", str(tiny),
-             "--seeds", "0-2", "--jobs", "1", "--out", str(tmp_path / "lb")])
+    lb.main(
+        [
+            "--envs",
+            ENV,
+            "--policies",
+            "cascade_pi,sb3:ppo",
+            "--scenarios",
+            str(tiny),
+            "--seeds",
+            "0-2",
+            "--jobs",
+            "1",
+            "--out",
+            str(tmp_path / "lb"),
+        ]
+    )
     doc = json.loads((tmp_path / "lb" / "leaderboard.json").read_text())
     assert doc["run"]["policies"][ENV][:3] == ["cascade_pi", "sb3:ppo@run0", "sb3:ppo@run1"]
     by_run = {k: [r["metrics"]["return"] for r in doc["episodes"]
@@ -271,7 +314,8 @@ def test_the_leaderboard_scores_each_run_and_reports_the_agent(local_zoo, tmp_pa
     assert "sb3:ppo@run0" not in doc["plants"][ENV]["policies"]
     assert e["training_runs"] == [0, 1] and e["episodes"] == 6
     assert len(e["normalized_score"]["iqm"]["per_run"]) == 2
-    assert e["return"]["iqm"]["per_run"] == pytest.approx([stats.iqm(np.array(v))
-                                                           for v in by_run.values()])
+    assert e["return"]["iqm"]["per_run"] == pytest.approx(
+        [stats.iqm(np.array(v)) for v in by_run.values()]
+    )
     md = (tmp_path / "lb" / "leaderboard.md").read_text()
     assert "| sb3:ppo |" in md and "(2 runs)" in md

@@ -1,0 +1,132 @@
+"""The input of a training run: the algorithms and RL Zoo's hyperparameter files, read and
+checked before anything trains (agents/train.py's module docstring gives the keys).
+"""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from agents.moves import check_max_move
+from agents.policy import model_class
+from agents.wrappers import memory_options
+
+#: Algorithm names: SB3's PPO, SAC, TD3, PPO as a residual on cascade_pi_ff (its own YAML
+#: file, whose entries need ``residual_scale``) and sb3-contrib's RecurrentPPO (an LSTM
+#: policy: the memory is learned instead of given by agents.wrappers).
+ALGOS = ("ppo", "sac", "td3", "ppo_residual", "recurrentppo", "sac_caps")
+HYPERPARAMS = Path(__file__).with_name("hyperparams")
+#: RL Zoo keys with a meaning of their own (the rest go to the algorithm's constructor).
+SPECIAL = ("n_timesteps", "n_envs", "policy", "normalize", "env_wrapper", "policy_kwargs",
+           "noise_type", "noise_std", "residual_scale", "max_move", "train_reward",
+           "plant_randomization")  # fmt: skip
+
+
+class ConfigError(ValueError):
+    """Bad training input (env, algo, YAML, hyperparameter keys)."""
+
+
+def algo_class(algo: str):
+    if algo not in ALGOS:
+        raise ConfigError(f"unknown algo {algo!r}; valid: {list(ALGOS)}")
+    names = {"recurrentppo": "RecurrentPPO", "sac_caps": "SACCAPS"}
+    try:
+        return model_class(names.get(algo, algo.split("_")[0].upper()))
+    except ValueError as exc:
+        raise ConfigError(str(exc)) from None
+
+
+def _literal(node: ast.AST) -> Any:
+    """A literal, or a ``dict(key=literal, ...)`` call of literals (nested)."""
+    if isinstance(node, ast.Call) and getattr(node.func, "id", None) == "dict" and not node.args:
+        return {kw.arg: _literal(kw.value) for kw in node.keywords}
+    return ast.literal_eval(node)
+
+
+def _dict_string(key: str, value: Any) -> dict:
+    """RL Zoo's "dict(a=1, b=dict(c=[2]))" strings (literals only; no code is run)."""
+    if isinstance(value, dict):
+        return dict(value)
+    try:
+        out = _literal(ast.parse(str(value), mode="eval").body)
+        if not isinstance(out, dict):
+            raise ValueError
+        return out
+    except (SyntaxError, ValueError):
+        raise ConfigError(
+            f"{key} must be a mapping or a 'dict(key=literal, ...)' string, got {value!r}"
+        ) from None
+
+
+def read_hyperparams(path: Path, env_id: str, algo: str) -> dict[str, Any]:
+    """The checked hyperparameters of env_id in an RL-Zoo YAML file.
+
+    Raises:
+        ConfigError: unreadable or malformed YAML, no entry for env_id, unknown keys.
+    """
+    cls = algo_class(algo)
+    try:
+        doc = yaml.safe_load(Path(path).read_text(encoding="utf-8"))
+    except (OSError, yaml.YAMLError) as exc:
+        raise ConfigError(f"--hyperparams {path}: cannot read it as YAML: {exc}") from None
+    if not isinstance(doc, dict):
+        raise ConfigError(f"--hyperparams {path}: expected a mapping of env ids")
+    if env_id not in doc:
+        raise ConfigError(f"--hyperparams {path}: no entry for {env_id}; has {sorted(doc)}")
+    hp = doc[env_id]
+    if not isinstance(hp, dict):
+        raise ConfigError(f"--hyperparams {path}: {env_id} must map to a mapping")
+    import inspect
+
+    ctor = set()
+    for c in cls.__mro__:  # a subclass taking **kwargs (agents/caps.py) passes them on
+        params = inspect.signature(c.__init__).parameters
+        ctor |= {n for n, p in params.items() if p.kind not in (p.VAR_POSITIONAL, p.VAR_KEYWORD)}
+        if not any(p.kind == p.VAR_KEYWORD for p in params.values()):
+            break
+    ctor -= {"self", "env", "policy"}
+    unknown = sorted(set(hp) - set(SPECIAL) - ctor)
+    if unknown:
+        raise ConfigError(
+            f"--hyperparams {path}: unknown key(s) {unknown} for {algo}; valid: "
+            f"{sorted(ctor | set(SPECIAL))}"
+        )
+    if ("residual_scale" in hp) != algo.endswith("_residual"):
+        raise ConfigError(f"--hyperparams {path}: residual_scale is required for a *_residual "
+                          f"algo and only there (algo {algo!r})")  # fmt: skip
+    if "max_move" in hp:
+        if "residual_scale" in hp:
+            raise ConfigError(f"--hyperparams {path}: residual_scale and max_move exclude each "
+                              "other (an agent is residual or incremental)")  # fmt: skip
+        try:
+            check_max_move(hp["max_move"])
+        except ValueError as exc:
+            raise ConfigError(f"--hyperparams {path}: {exc}") from None
+    if "train_reward" in hp:
+        from steamtemp_gym.rewards import RewardConfig
+
+        try:
+            RewardConfig.from_options(hp["train_reward"])
+        except ValueError as exc:
+            raise ConfigError(f"--hyperparams {path}: train_reward: {exc}") from None
+    if "plant_randomization" in hp:
+        from steamtemp_gym.plants import perturb
+
+        try:
+            perturb.parse(env_id, hp["plant_randomization"])
+        except ValueError as exc:
+            raise ConfigError(f"--hyperparams {path}: {exc}") from None
+    hp = dict(hp)
+    hp["policy_kwargs"] = _dict_string("policy_kwargs", hp.get("policy_kwargs", {}))
+    norm = hp.get("normalize", False)
+    hp["normalize"] = norm if isinstance(norm, bool) else _dict_string("normalize", norm)
+    try:
+        hp["env_wrapper"] = memory_options(hp["env_wrapper"]) if "env_wrapper" in hp else None
+    except ValueError as exc:
+        raise ConfigError(str(exc)) from None
+    if hp.get("noise_type") not in (None, "normal"):
+        raise ConfigError(f"noise_type: only 'normal' is supported, got {hp['noise_type']!r}")
+    return hp

@@ -1,0 +1,277 @@
+"""One training run of steamtemp-train: the training envs, the SB3 model, validation at
+every eighth of the budget with the best checkpoint kept, and the run's metadata (module
+docstring of agents/train.py).
+"""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+import time
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+import steamtemp_gym
+from agents.files import steamtemp_paths, stem
+from agents.train_config import HYPERPARAMS, SPECIAL, ConfigError, algo_class, read_hyperparams
+
+#: Seeds of the validation episodes (``random`` scenario); training uses --seed + i.
+VALIDATION_SEED = 1_000_000
+N_VALIDATION = 3
+#: Where in the budget the agent is validated (and the best kept): every eighth.
+EVAL_FRACTIONS = tuple(k / 8 for k in range(1, 9))
+
+
+def _schedule(value: Any):
+    if isinstance(value, str) and value.startswith("lin_"):
+        v0 = float(value[4:])
+        return lambda progress_remaining: progress_remaining * v0
+    return value
+
+
+def _git_revision() -> str:
+    try:
+        done = subprocess.run(["git", "rev-parse", "HEAD"], cwd=Path(__file__).parent,
+                              capture_output=True, text=True, check=True)  # fmt: skip
+        return done.stdout.strip()
+    except (OSError, subprocess.CalledProcessError):
+        return "unknown"
+
+
+def make_training_env(env_id: str, n_envs: int, seed: int, hp: dict[str, Any]):
+    """(VecEnv for training, the native vector env under it)."""
+    from stable_baselines3.common.vec_env import VecMonitor, VecNormalize
+
+    from agents.moves import VecMoves
+    from agents.vec_env import NativeVecEnv
+    from agents.wrappers import VecControllerMemory, VecResidual
+
+    base = NativeVecEnv(env_id, n_envs, scenario="random", reward=hp.get("train_reward"),
+                        plant_randomization=hp.get("plant_randomization"))  # fmt: skip
+    venv = base
+    if hp.get("residual_scale") is not None:
+        venv = VecResidual(venv, base.venv, hp["residual_scale"])
+    if hp.get("max_move") is not None:
+        venv = VecMoves(venv, base.venv, hp["max_move"])
+    if hp["env_wrapper"] is not None:
+        venv = VecControllerMemory(venv, base.venv, **hp["env_wrapper"])
+    venv = VecMonitor(venv)
+    if hp["normalize"]:
+        kw = hp["normalize"] if isinstance(hp["normalize"], dict) else {}
+        venv = VecNormalize(venv, gamma=hp.get("gamma", 0.99), **kw)
+    venv.seed(seed)
+    return venv, base.venv
+
+
+def _shown_path(path: Path) -> str:
+    """``path`` as recorded in the metadata: relative to the project for a shipped file (no
+    machine's directory in the zoo's metadata), as given otherwise."""
+    try:
+        return Path(path).resolve().relative_to(HYPERPARAMS.parent.parent).as_posix()
+    except ValueError:
+        return str(path)
+
+
+def _obs_stats(venv) -> dict[str, Any] | None:
+    from stable_baselines3.common.vec_env import VecNormalize
+
+    from agents.policy import frozen_stats
+
+    return frozen_stats(venv) if isinstance(venv, VecNormalize) else None
+
+
+def validate(env_id: str, policy, n: int = N_VALIDATION) -> dict[str, float]:
+    """Mean return, IAE and valve travel of ``policy`` over the validation episodes (default
+    reward), run as one batch in the native vector env by agents.evaluation.run_batch (row k
+    is ``gym.make(env_id, scenario="random")`` reset with seed VALIDATION_SEED + k, bit for
+    bit). ``policy``: a Policy, or a factory ``venv -> Policy``."""
+    import gymnasium as gym
+
+    from agents.evaluation import run_batch
+
+    venv = gym.make_vec(env_id, num_envs=n, vectorization_mode="vector_entry_point",
+                        scenario="random")  # fmt: skip
+    if not hasattr(policy, "predict"):
+        policy = policy(venv)
+    runs = run_batch(venv, policy, [VALIDATION_SEED + k for k in range(n)])
+    venv.close()
+    return {key: float(np.mean([r["metrics"][key] for r in runs]))
+            for key in ("return", "iae_K_s", "valve_travel")}  # fmt: skip
+
+
+def better_checkpoint(new: dict[str, float], best: dict[str, float], budget: float) -> bool:
+    """Whether validation result ``new`` beats ``best`` (both with ``return`` and
+    ``travel_ratio``): within the travel budget first, then the higher return; outside it,
+    the lower travel."""
+    if not best:
+        return True
+    ok_new, ok_best = new["travel_ratio"] <= budget, best["travel_ratio"] <= budget
+    if ok_new != ok_best:
+        return ok_new
+    return new["return"] > best["return"] if ok_new else new["travel_ratio"] < best["travel_ratio"]
+
+
+def _checked_input(env_id: str, algo: str, hyperparams: Path | None, timesteps: int | None,
+                   n_envs: int | None, max_minutes: float | None) -> tuple:  # fmt: skip
+    """(env id, algorithm class, hyperparameter file, checked hyperparameters, timesteps,
+    n_envs) of a run, or a ConfigError naming what is wrong."""
+    from steamtemp_gym.envs import resolve_id
+
+    try:
+        env_id = resolve_id(env_id)  # the namespace may be left out
+    except ValueError:
+        pass  # refused below, with the valid ids
+    if env_id not in steamtemp_gym.ENV_IDS:
+        raise ConfigError(f"unknown env {env_id!r}; valid: {list(steamtemp_gym.ENV_IDS)}")
+    cls = algo_class(algo)
+    path = Path(hyperparams) if hyperparams else HYPERPARAMS / f"{algo}.yml"
+    hp = read_hyperparams(path, env_id, algo)
+    total = int(timesteps if timesteps is not None else hp.get("n_timesteps", 100_000))
+    n_envs = int(n_envs if n_envs is not None else hp.get("n_envs", 1))
+    if total < 1 or n_envs < 1:
+        raise ConfigError(f"timesteps and n_envs must be >= 1, got {total} and {n_envs}")
+    if max_minutes is not None and max_minutes <= 0:
+        raise ConfigError(f"--max-minutes must be > 0, got {max_minutes}")
+    return env_id, cls, path, hp, total, n_envs
+
+
+def _sb3_model(cls: Any, hp: dict[str, Any], venv: Any, seed: int,
+               tensorboard: str | None) -> Any:  # fmt: skip
+    """The SB3 model of ``cls`` on ``venv``: the constructor's hyperparameters, the learning
+    rate schedule and, where configured, SAC/TD3's Gaussian action noise."""
+    from stable_baselines3.common.noise import NormalActionNoise
+
+    kwargs = {k: v for k, v in hp.items() if k not in SPECIAL}
+    kwargs["learning_rate"] = _schedule(kwargs.get("learning_rate", 3e-4))
+    if hp.get("noise_type") == "normal":
+        n_u = venv.action_space.shape[0]
+        kwargs["action_noise"] = NormalActionNoise(np.zeros(n_u), hp.get("noise_std", 0.1)
+                                                   * np.ones(n_u))  # fmt: skip
+    return cls(hp.get("policy", "MlpPolicy"), venv, seed=seed, device="cpu", verbose=0,
+               policy_kwargs=hp["policy_kwargs"] or None, tensorboard_log=tensorboard,
+               **kwargs)  # fmt: skip
+
+
+def _checkpointing(model: Any, venv: Any, native: Any, hp: dict[str, Any], env_id: str,
+                   reference: dict[str, float], total: int, curve: list, best: dict,
+                   save_to: Path) -> Callable[[int, float], None]:  # fmt: skip
+    """``evaluate(steps, wall)``: validate the model as it is, add the result to ``curve``,
+    and where it beats ``best`` (:func:`better_checkpoint`) keep it there and save the model
+    to ``save_to``."""
+    from agents.policy import AgentPolicy
+    from agents.stats import TRAVEL_BUDGET
+
+    def evaluate(steps: int, wall: float) -> None:
+        policy = AgentPolicy(model, native, memory=hp["env_wrapper"], obs_norm=_obs_stats(venv),
+                             residual_scale=hp.get("residual_scale"),
+                             max_move=hp.get("max_move"))  # fmt: skip
+        score = validate(env_id, policy)
+        score["travel_ratio"] = score["valve_travel"] / reference["valve_travel"]
+        curve.append({"timesteps": steps, "fraction": steps / total, "wall_s": wall, **score})
+        if better_checkpoint(score, best, TRAVEL_BUDGET):
+            best.update(score, timesteps=steps, obs_norm=_obs_stats(venv))
+            model.save(save_to)
+
+    return evaluate
+
+
+def _progress(evaluate: Callable[[int, float], None], curve: list, total: int, t0: float,
+              name: str, quiet: bool, max_minutes: float | None) -> Any:  # fmt: skip
+    """The SB3 callback of a run: ``evaluate`` at every mark of :data:`EVAL_FRACTIONS` and at
+    a ``max_minutes`` stop (which ends the training), a progress line on stderr every 10 s
+    unless ``quiet``."""
+    from stable_baselines3.common.callbacks import BaseCallback
+
+    class Progress(BaseCallback):
+        def __init__(self) -> None:
+            super().__init__()
+            self.marks = [int(f * total) for f in EVAL_FRACTIONS]
+            self.last_line = 0.0
+
+        def _on_step(self) -> bool:
+            steps, wall = self.num_timesteps, time.monotonic() - t0
+            if self.marks and steps >= self.marks[0]:
+                self.marks.pop(0)
+                evaluate(steps, wall)
+            if not quiet and wall - self.last_line > 10.0:
+                self.last_line = wall
+                eta = wall / max(steps, 1) * (total - steps)
+                last = f", validation return {curve[-1]['return']:.1f}" if curve else ""
+                print(f"[{name}] {steps:,}/{total:,} steps ({100 * steps / total:.0f} %), "
+                      f"{steps / max(wall, 1e-9):,.0f} steps/s, ETA {eta / 60:.1f} min{last}",
+                      file=sys.stderr, flush=True)  # fmt: skip
+            if max_minutes is not None and wall > 60.0 * max_minutes:
+                evaluate(steps, wall)
+                return False
+            return True
+
+    return Progress()
+
+
+def _metadata(env_id: str, algo: str, cls: Any, revision: str, path: Path,
+              hp: dict[str, Any], seed: int, run: int | None, n_envs: int, total: int,
+              model: Any, best: dict[str, Any], wall_s: float, reference: dict[str, float],
+              curve: list) -> dict[str, Any]:  # fmt: skip
+    """The run's ``<stem>.json``: everything ``agents.load`` needs and how the run went."""
+    import baselines
+    from agents.stats import TRAVEL_BUDGET
+
+    return {
+        "env_id": env_id, "algo": algo, "sb3_class": cls.__name__,
+        "package_version": steamtemp_gym.__version__, "git_revision": revision,
+        "hyperparams_file": _shown_path(path),
+        "hyperparameters": json.loads(json.dumps(hp, default=str)), "seed": seed, "run": run,
+        "n_envs": n_envs, "timesteps_budget": total, "timesteps_trained": model.num_timesteps,
+        "timesteps_of_best": best["timesteps"], "wall_time_s": wall_s,
+        "validation": {"scenario": "random", "seeds": [VALIDATION_SEED + k
+                       for k in range(N_VALIDATION)], "best": {k: best[k] for k in
+                       ("return", "iae_K_s", "valve_travel", "travel_ratio")},
+                       "reference": {"policy": baselines.INDUSTRIAL_REFERENCE, **reference},
+                       "travel_budget": TRAVEL_BUDGET, "curve": curve},
+        "normalization": best["obs_norm"], "memory": hp["env_wrapper"],
+        "residual_scale": hp.get("residual_scale"), "max_move": hp.get("max_move"),
+        "train_reward": hp.get("train_reward"),
+    }  # fmt: skip
+
+
+def train(env_id: str, algo: str, hyperparams: Path | None = None, timesteps: int | None = None,
+          seed: int = 0, n_envs: int | None = None, out: Path = Path("trained"),
+          max_minutes: float | None = None, tensorboard: str | None = None,
+          quiet: bool = False, run: int | None = None) -> dict[str, Any]:  # fmt: skip
+    """Train one agent (agents/train.py's module docstring); returns its metadata. Input is
+    checked first. ``run``: the training run's index in the file names (None: names without
+    one)."""
+    env_id, cls, path, hp, total, n_envs = _checked_input(env_id, algo, hyperparams, timesteps,
+                                                          n_envs, max_minutes)  # fmt: skip
+    import torch
+
+    torch.set_num_threads(1)  # one core per run (a shared machine; small networks)
+    venv, native = make_training_env(env_id, n_envs, seed, hp)
+    model = _sb3_model(cls, hp, venv, seed, tensorboard)
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    name = stem(env_id, algo, run)
+    model_path, meta_path = steamtemp_paths(out, env_id, algo, run)
+    import baselines
+
+    reference = validate(env_id, lambda v: baselines.make(baselines.INDUSTRIAL_REFERENCE, v))
+    revision = _git_revision()  # the code this run trains with
+    t0 = time.monotonic()
+    curve: list[dict[str, Any]] = []
+    best: dict[str, Any] = {}
+    evaluate = _checkpointing(model, venv, native, hp, env_id, reference, total, curve, best,
+                              model_path)  # fmt: skip
+    model.learn(total_timesteps=total, callback=_progress(evaluate, curve, total, t0, name,
+                                                          quiet, max_minutes),
+                progress_bar=False)  # fmt: skip
+    if not curve:  # a budget below the first mark's granularity
+        evaluate(model.num_timesteps, time.monotonic() - t0)
+    meta = _metadata(env_id, algo, cls, revision, path, hp, seed, run, n_envs, total, model,
+                     best, time.monotonic() - t0, reference, curve)  # fmt: skip
+    meta_path.write_text(json.dumps(meta, indent=1), encoding="utf-8")
+    venv.close()
+    return meta

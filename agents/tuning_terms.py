@@ -1,0 +1,156 @@
+"""The terms every baseline is tuned on by agents/baseline_tuning.py: the training
+episodes, the score's ends on them (the reference's and the oracle's returns, stored in
+``baselines/tuned/ends.json``) and the commissioning checks at both ends of the load range
+(that module's docstring gives the whole set of terms).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from pathlib import Path
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+
+import baselines
+import steamtemp_gym
+from agents import stats
+from agents.evaluation import run_batch
+from agents.oracle import Oracle
+from baselines import tuning
+from steamtemp_gym.scenarios import Scenario
+
+#: The industrial reference: the score's 0 and the travel budget's unit.
+ZERO = baselines.INDUSTRIAL_REFERENCE
+#: First seed of the training episodes (``random`` scenario); far from the agents' training
+#: seeds and the leaderboard's evaluation seeds.
+TUNING_SEED = 2_000_000
+EPISODES = 8
+#: Largest mean valve travel, as a multiple of the reference's on the same episodes.
+TRAVEL_BUDGET = stats.TRAVEL_BUDGET
+#: Loads of the commissioning checks: the bottom of the load range the suite's scenarios
+#: reach, and rated load.
+CHECK_LOADS = (0.35, 1.0)
+_MIN = 60.0
+
+
+def commissioning_check(load: float) -> Scenario:
+    """The commissioning check at ``load``: held there, a +5 K setpoint step at minute 5 and
+    a +5 % heat-absorption step at minute 20, with the training episodes' noise; the quiet
+    stretch (minutes 31-50) shows a limit cycle. Not a scenario of the leaderboard."""
+    return Scenario(
+        name=f"commissioning_check_{round(100 * load)}",
+        duration_s=50 * _MIN,
+        load=((0.0, load),),
+        setpoint_offset_C=((0.0, 0.0), (5 * _MIN, 0.0), (5 * _MIN, 5.0)),
+        heat_absorption_bias=((0.0, 0.0), (20 * _MIN, 0.0), (21 * _MIN, 0.05)),
+        noise_std_C=0.25,
+        heat_absorption_noise_std=0.02,
+        heat_absorption_noise_tau_s=300.0,
+        description=f"commissioning check of the baseline tuner: {round(100 * load)} % load, "
+        "setpoint and heat-absorption steps",
+    )
+
+
+#: The commissioning checks, one per load of :data:`CHECK_LOADS`.
+COMMISSIONING_CHECKS = tuple(commissioning_check(load) for load in CHECK_LOADS)
+#: Seeds of the check episodes: each check runs once per seed and must pass on all (a loop
+#: near its stability limit oscillates in some noise realizations and not in others).
+CHECK_SEEDS = tuple(TUNING_SEED - 1 - k for k in range(5))
+
+
+#: Modules of steamtemp_gym that no trajectory depends on (drawing, docs, the command line),
+#: left out of the code digests with the testing package.
+NO_DYNAMICS = ("render.py", "docs.py", "__main__.py")
+
+
+def seeds() -> list[int]:
+    """The training episodes' seeds."""
+    return [TUNING_SEED + k for k in range(EPISODES)]
+
+
+def _venv(env_id: str) -> Any:
+    return gym.make_vec(env_id, num_envs=EPISODES, scenario="random",
+                        vectorization_mode="vector_entry_point")  # fmt: skip
+
+
+def run_episodes(env_id: str, make_policy: Any) -> dict[str, np.ndarray]:
+    """Returns, valve travels and trips of one policy on the training episodes."""
+    venv = _venv(env_id)
+    res = run_batch(venv, make_policy(venv), seeds())
+    m = [r["metrics"] for r in res]
+    return {k: np.array([x[key] for x in m], dtype=float)
+            for k, key in (("return", "return"), ("travel", "valve_travel"),
+                           ("tripped", "tripped"))}  # fmt: skip
+
+
+def ends(env_id: str, compute: bool = True) -> dict[str, Any]:
+    """The score's ends on the training episodes of ``env_id``: ``zero`` and ``one`` (returns
+    per episode) and ``travel`` (the reference's mean valve travel), stored in
+    ``baselines/tuned/ends.json`` and recomputed when the episodes or the code behind them
+    changed (``compute=False``: a ValueError instead)."""
+    f = tuning.TUNED / "ends.json"
+    table = json.loads(f.read_text()) if f.is_file() else {}
+    key = {"seeds": seeds(), "scenario": "random", "code": code_digest(ends=True)}
+    got = table.get(env_id)
+    if got is not None and got.get("episodes") == key:
+        return got
+    if not compute:
+        raise ValueError(f"the stored score ends of {env_id} are missing or stale; run: "
+                         f"python -m agents.baseline_tuning --ends --env {env_id}")  # fmt: skip
+    zero = run_episodes(env_id, lambda v: baselines.make(ZERO, v))
+    one = run_episodes(env_id, Oracle)
+    got = {"episodes": key, "zero": zero["return"].tolist(), "one": one["return"].tolist(),
+           "travel": float(zero["travel"].mean())}  # fmt: skip
+    table[env_id] = got
+    tuning.TUNED.mkdir(exist_ok=True)
+    f.write_text(json.dumps(table, indent=1, sort_keys=True) + "\n")
+    return got
+
+
+def check_metrics(env_id: str, make_policy: Any) -> list[dict[str, Any]]:
+    """Metrics of one policy on each commissioning check (:data:`COMMISSIONING_CHECKS`) and
+    seed (:data:`CHECK_SEEDS`), checks outer, seeds inner; each check's seeds run side by
+    side in the native vector env."""
+    out = []
+    for sc in COMMISSIONING_CHECKS:
+        venv = gym.make_vec(env_id, num_envs=len(CHECK_SEEDS), scenario=sc,
+                            vectorization_mode="vector_entry_point")  # fmt: skip
+        out += [r["metrics"] for r in run_batch(venv, make_policy(venv), list(CHECK_SEEDS))]
+    return out
+
+
+def check_breach(ms: list[dict[str, Any]], refs: list[dict[str, Any]]) -> tuple[str, float]:
+    """What broke on the commissioning checks ("" if none), against the reference's metrics
+    ``refs`` on the same episodes (:func:`check_metrics`), and the largest valve-travel ratio
+    to the reference's over them."""
+    where = [(load, seed) for load in CHECK_LOADS for seed in CHECK_SEEDS]
+    broke = [f"at {round(100 * load)} % load, seed {seed}: {b}"
+             for (load, seed), m, r in zip(where, ms, refs, strict=True)
+             if (b := stats.realism_breach(m, r))]  # fmt: skip
+    ratio = max(m["valve_travel"] / r["valve_travel"] for m, r in zip(ms, refs, strict=True))
+    return "; ".join(broke), float(ratio)
+
+
+def code_digest(ends: bool = False) -> str:
+    """Hash of the code a tuning depends on: the plants, scenarios and metrics, the
+    evaluation, and the baselines (for the ends only the reference and the oracle)."""
+    h = hashlib.sha256()
+    here = Path(__file__).parent
+    pkg = Path(steamtemp_gym.__file__).parent
+    files = [f for f in sorted(pkg.rglob("*.py")) if f.name not in NO_DYNAMICS
+             and "testing" not in f.relative_to(pkg).parts]  # fmt: skip
+    files += [here / "evaluation.py"]
+    if ends:
+        files += [
+            Path(baselines.__file__).with_name(f)
+            for f in ("cascade_pi.py", "loops.py", "identification.py")
+        ]
+        files += [here / "oracle.py"]
+    else:
+        files += sorted(Path(baselines.__file__).parent.rglob("*.py"))
+    for f in files:
+        h.update(f.read_bytes())
+    return h.hexdigest()[:16]
