@@ -79,11 +79,11 @@ converts to SI).
 from __future__ import annotations
 
 import argparse
-import hashlib
+import importlib.util
 import math
 import re
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
@@ -523,23 +523,21 @@ def zones_array(zones: Sequence[tuple[float, float, int]]) -> np.ndarray:
     return np.asarray(zones, dtype=np.float64)
 
 
-def tables_digest(data: dict[str, np.ndarray]) -> str:
-    """SHA-256 over the array names, dtypes, shapes and bytes (file-format independent).
-
-    ``steamtemp_gym.steam`` recomputes it at import and compares with ``_TABLES_SHA256``.
-    """
-    h = hashlib.sha256()
-    for key in sorted(data):
-        a = np.ascontiguousarray(data[key])
-        h.update(f"{key}|{a.dtype.str}|{a.shape}|".encode())
-        h.update(a.tobytes())
-    return h.hexdigest()
+def _tables_digest() -> Callable[[dict[str, np.ndarray]], str]:
+    """``tables_digest`` of steamtemp_gym/steam/digest.py, the one the run-time module checks
+    (loaded from its file: the package does not import while the tables and their hash
+    disagree, as they do between writing the file and updating the hash)."""
+    path = Path(__file__).resolve().parents[1] / "steamtemp_gym" / "steam" / "digest.py"
+    spec = importlib.util.spec_from_file_location("_steam_tables_digest", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module.tables_digest
 
 
 def update_module_hash(module: Path, digest: str) -> None:
     """Write the new table digest into ``_TABLES_SHA256`` of the run-time module.
 
-    Editing the module also changes its source stamp, so numba drops stale caches.
+    Editing the module changes the package code, and with it the folder of cached kernels.
     """
     src = module.read_text()
     new, n = re.subn(r"^_TABLES_SHA256 = \"[0-9A-Za-z]*\"$", f'_TABLES_SHA256 = "{digest}"', src,
@@ -557,7 +555,7 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--out", type=Path, default=pkg / "if97_tables.npz")
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--no-hash-update", action="store_true",
-                    help="do not write the table digest into steamtemp_gym/steam/__init__.py")
+                    help="do not write the table digest into steamtemp_gym/steam/tables.py")
     args = ap.parse_args(argv)
     t0 = time.time()
     data: dict[str, np.ndarray] = {}
@@ -586,9 +584,9 @@ def main(argv: list[str] | None = None) -> None:
             raise RuntimeError(f"{name} tables take {nbytes} bytes > 1 MB; coarsen the grids")
     args.out.parent.mkdir(parents=True, exist_ok=True)
     np.savez_compressed(args.out, **data)
-    digest = tables_digest(data)
+    digest = _tables_digest()(data)
     if not args.no_hash_update and args.out.resolve() == (pkg / "if97_tables.npz").resolve():
-        update_module_hash(pkg / "__init__.py", digest)
+        update_module_hash(pkg / "tables.py", digest)
     n_nodes = sum(v.size // 4 for k, v in data.items() if k.startswith("T_"))
     print(f"wrote {args.out} ({args.out.stat().st_size / 1e6:.2f} MB, {n_nodes} patch nodes, "
           f"sha256 {digest[:16]}..., {time.time() - t0:.0f} s)")
