@@ -112,7 +112,7 @@ def test_coloured_heat_absorption_is_an_ornstein_uhlenbeck_process():
         assert acf == pytest.approx(np.exp(-lag / tau), abs=0.06)
 
 
-# --------------------------------------------------------------------------- hardening (issue 7)
+# --------------------------------------------------------------------------------- hardening
 GOOD = "name: x\nduration_s: 60\nload: [[0, 1.0], [30, 0.9]]\n"
 
 
