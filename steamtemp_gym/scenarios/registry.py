@@ -1,10 +1,11 @@
 """The registry of named scenarios, and :func:`resolve`, which turns any scenario argument
 into a Scenario.
 
-Names are looked up in the named scenarios of the plant first (``Plant.scenarios``, found
-through the lookup that ``steamtemp_gym.plants`` installs with :func:`use_plant_scenarios`,
-so this package never imports the plants), then in the registry (:func:`register`), which
-holds the scenarios shared by every plant (``library.py``) and those users register.
+For a plant id, names are looked up first in the named scenarios the plant declares (the
+``scenarios`` attribute of its class, found through the lookup that ``steamtemp_gym.plants``
+installs with :func:`use_plant_scenarios`, so this package never imports the plants), then
+in the registry (:func:`register`), which holds the scenarios shared by every plant
+(``library.py``) and those users register.
 
 ``resolve`` takes a name, ``heldout:<name>``, ``"random"``, a :class:`Scenario` or a file: any
 ``os.PathLike`` is a file (it must end in ``.yaml`` or ``.yml``), and so is a ``str``
