@@ -17,7 +17,7 @@ import sys
 import time
 
 import steamtemp_gym
-from steamtemp_gym.scenarios.stress import run_corners
+from steamtemp_gym.envs.corners import run_corners
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -10,7 +10,7 @@ states (10-25 MPa, 3000-3400 kJ/kg):
 
 - ``scalar``: the plants' way, one ``steam.T_rho_ph`` call per row;
 - ``batch``: one loop over the rows with the fast table's Hermite bicubic written
-  branch-free (the steam module's own ``_hermite`` and ``_fcol``), as numba compiles it;
+  branch-free (the steam package's own ``_hermite`` and ``_fcol``), as numba compiles it;
 - ``batch, noalias``: the same loop compiled with numba's internal ``noalias`` flag (the
   arrays declared not to overlap), which is what lets LLVM vectorize its table reads into
   gathers. The flag is not a public numba option; the script sets it for this one compile.
@@ -31,7 +31,10 @@ import numba.core.cpu as _cpu
 import numpy as np
 from numba import carray, float64, njit
 
-from steamtemp_gym.steam import (
+from steamtemp_gym.steam import T_rho_ph
+from steamtemp_gym.steam.cubic import _hermite
+from steamtemp_gym.steam.fast import _fcol
+from steamtemp_gym.steam.tables import (
     _FH0,
     _FHINV,
     _FNH,
@@ -41,9 +44,6 @@ from steamtemp_gym.steam import (
     _FR_PTR,
     _FT_PTR,
     _FT_SHAPE,
-    T_rho_ph,
-    _fcol,
-    _hermite,
 )
 
 SIG = (float64[::1],) * 5

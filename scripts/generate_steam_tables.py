@@ -4,6 +4,9 @@ Offline generator for the compiled steam-property lookups of :mod:`steamtemp_gym
 Rerunnable: ``python scripts/generate_steam_tables.py [--workers N] [--out PATH]``
 (about 30 s on two cores). Requires ``iapws`` (the ``tables`` extra); the run-time
 package never imports it.
+The forward IF97 states are in ``scripts/steam_tables/if97.py``, the fast-path tables in
+``scripts/steam_tables/fast.py``; this script lays out and builds the patch tables and
+writes the file.
 
 Source and method
 -----------------
@@ -79,38 +82,40 @@ converts to SI).
 from __future__ import annotations
 
 import argparse
-import hashlib
+import importlib.util
 import math
 import re
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 from iapws import iapws97 as if97
+from steam_tables.fast import build_fast
+from steam_tables.if97 import (
+    FD_STEP,
+    P13,
+    PC,
+    PMAX,
+    PMIN,
+    T13,
+    TC,
+    TMAX,
+    TMIN,
+    State,
+    curve_state,
+    region3_pT,
+    region12_pT,
+    sat_state,
+    state_ph,
+)
 
 LAYOUT_VERSION = 2
 
-PC = float(if97.Pc)  # 22.064 MPa
-TC = float(if97.Tc)  # 647.096 K
-P13 = float(if97.Ps_623)  # psat(623.15 K) = 16.5291642526 MPa
-T13 = 623.15  # region 1 / 3 boundary temperature (K)
-TMIN = 283.15  # lower table edge: 10 C compressed liquid
-TMAX = 1073.15  # upper table edge: 800 C (upper limit of IF97 region 2)
-PMIN = 0.2  # MPa
-PMAX = 35.0  # MPa
 S_MIN = 0.01  # segment 1 ends at p = pc - S_MIN**2 (100 Pa below the critical point)
 MARGIN = 1.0  # kJ/kg overlap of region-3 patches beyond the 1/3 and 2/3 boundaries
-FD_STEP = 1e-4  # finite-difference step in q (MPa for q = p, sqrt(MPa) for q = sqrt(pc - p))
-
-# Fast path: uniform (p, h) rectangle inside IF97 region 2, as (start, end, n_cells).
-# max_p h_v(p) = 2803 kJ/kg, h23(p) <= 2623 kJ/kg and h(35 MPa, 800 C) = 3996 kJ/kg, so no
-# saturation or region boundary and no table edge crosses it (``build_fast`` checks).
-FAST_P = (2.0, 35.0, 66)  # MPa
-FAST_H = (2850.0, 3950.0, 55)  # kJ/kg
-FAST_TAU = 32  # cells of the h(p, tau) start table of h_pT on the fast rectangle
 
 # Curve indices per segment (the run-time module checks these names).
 CURVES = {
@@ -123,8 +128,14 @@ CURVES = {
 SEGMENTS: dict[int, dict] = {
     0: {
         "coord": "p",
-        "zones": [(0.2, 0.5, 15), (0.5, 1.0, 10), (1.0, 2.0, 10), (2.0, 4.0, 10),
-                  (4.0, 8.0, 10), (8.0, P13, 15)],
+        "zones": [
+            (0.2, 0.5, 15),
+            (0.5, 1.0, 10),
+            (1.0, 2.0, 10),
+            (2.0, 4.0, 10),
+            (4.0, 8.0, 10),
+            (8.0, P13, 15),
+        ],
     },
     1: {
         "coord": "s",  # q = sqrt(pc - p), decreasing in p; zones in increasing q
@@ -132,8 +143,13 @@ SEGMENTS: dict[int, dict] = {
     },
     2: {
         "coord": "p",
-        "zones": [(PC, 22.3, 12), (22.3, 23.0, 18), (23.0, 25.0, 20), (25.0, 28.0, 15),
-                  (28.0, PMAX, 14)],
+        "zones": [
+            (PC, 22.3, 12),
+            (22.3, 23.0, 18),
+            (23.0, 25.0, 20),
+            (25.0, 28.0, 15),
+            (28.0, PMAX, 14),
+        ],
     },
 }
 
@@ -172,141 +188,7 @@ BLOCKS: tuple[Block, ...] = (
           ((0.0, 0.3, 15), (0.3, 0.7, 80), (0.7, 1.0, 15))),
     Block("s2_V2", 2, 2, "h23", "hmax", 0.0, 0.0, "vapour",
           ((0.0, 0.1, 10), (0.1, 0.3, 10), (0.3, 1.0, 18))),
-)
-
-
-# ---------------------------------------------------------------------------------------
-# Forward IF97 states (p in MPa, T in K, h in kJ/kg, rho in kg/m3)
-# ---------------------------------------------------------------------------------------
-
-
-@dataclass
-class State:
-    """Thermodynamic state with the derivatives the tables need."""
-
-    p: float
-    T: float
-    h: float
-    rho: float
-    cp: float  # kJ/(kg K)
-    alpha: float  # cubic expansion coefficient (1/K)
-    kt: float  # isothermal compressibility (1/MPa)
-
-
-def _state_from(d: dict, p: float) -> State:
-    return State(p=p, T=float(d["T"]), h=float(d["h"]), rho=1.0 / float(d["v"]),
-                 cp=float(d["cp"]), alpha=float(d["alfav"]), kt=float(d["kt"]))
-
-
-def region12_pT(region: int, p: float, T: float) -> State:
-    """State from the region-1 or region-2 Gibbs equation at (p, T)."""
-    d = if97._Region1(T, p) if region == 1 else if97._Region2(T, p)
-    return _state_from(d, p)
-
-
-def region3_rho_pT(p: float, T: float, rho: float) -> float:
-    """Density root of the region-3 equation p(rho, T) = p by Newton from ``rho``."""
-    for it in range(200):
-        d = if97._Region3(rho, T)
-        # dp/drho|T = 1 / (rho kt)
-        res = d["P"] - p
-        step = res * rho * d["kt"]
-        step = max(min(step, 0.2 * rho), -0.2 * rho)
-        rho -= step
-        if abs(step) < 1e-13 * rho or (it > 20 and abs(res) < 1e-13 * p):
-            return rho
-    raise RuntimeError(f"region-3 density did not converge at p={p}, T={T}")
-
-
-def region3_pT(p: float, T: float, rho_guess: float) -> State:
-    """Region-3 state at (p, T) on the density root nearest ``rho_guess``."""
-    rho = region3_rho_pT(p, T, rho_guess)
-    d = if97._Region3(rho, T)
-    return _state_from(d, p)
-
-
-def state_ph(region: int, p: float, h: float, guess: State) -> State:
-    """Solve the forward equation of ``region`` for T (and rho) at (p, h) by Newton."""
-    T = guess.T
-    if region in (1, 2):
-        for _ in range(100):
-            st = region12_pT(region, p, T)
-            step = (st.h - h) / st.cp
-            step = max(min(step, 50.0), -50.0)
-            T -= step
-            if abs(step) < 1e-12 * T:
-                return region12_pT(region, p, T)
-        raise RuntimeError(f"region {region} T(p,h) did not converge at p={p}, h={h}")
-    rho = guess.rho
-    for it in range(200):
-        d = if97._Region3(rho, T)
-        kt = d["kt"]
-        p_rho = 1.0 / (rho * kt)  # MPa per kg/m3
-        p_T = d["alfav"] / kt  # MPa/K
-        h_T = d["cv"] + 1e3 * p_T / rho  # kJ/(kg K) at constant rho
-        h_rho = 1e3 * (-T * p_T / rho**2 + p_rho / rho)  # kJ/kg per kg/m3 at constant T
-        fp = d["P"] - p
-        fh = d["h"] - h
-        det = p_rho * h_T - p_T * h_rho
-        d_rho = (fp * h_T - p_T * fh) / det
-        d_T = (p_rho * fh - h_rho * fp) / det
-        lim = 0.1 * rho
-        if abs(d_rho) > lim:  # damp large steps (stay on the branch)
-            f = lim / abs(d_rho)
-            d_rho *= f
-            d_T *= f
-        if abs(d_T) > 5.0:
-            f = 5.0 / abs(d_T)
-            d_rho *= f
-            d_T *= f
-        rho -= d_rho
-        T -= d_T
-        small = abs(d_rho) < 1e-12 * rho and abs(d_T) < 1e-12 * T
-        tiny_residual = abs(fp) < 1e-12 * p and abs(fh) < 1e-12 * abs(h)
-        if small or (it > 40 and tiny_residual):
-            d = if97._Region3(rho, T)
-            return _state_from(d, p)
-    raise RuntimeError(f"region-3 T(p,h) did not converge at p={p}, h={h}")
-
-
-def t_b23(p: float) -> float:
-    """B23 boundary temperature (K) at p (MPa)."""
-    return float(if97._t_P(p))
-
-
-def tsat(p: float) -> float:
-    """Region-4 saturation temperature (K) at p (MPa)."""
-    return float(if97._TSat_P(p))
-
-
-def sat_state(p: float, phase: int, region3: bool) -> State:
-    """Saturated liquid (phase 0) or vapour (phase 1) state at p, as ``IAPWS97(P=, x=)``.
-
-    ``region3`` selects the region-3 branch (p > P13) rather than regions 1 / 2; it is
-    passed explicitly so that finite-difference stencils never switch branch.
-    """
-    T = tsat(p)
-    if not region3:
-        return region12_pT(1 if phase == 0 else 2, p, T)
-    rho0 = 1.0 / float(if97._Backward3_sat_v_P(max(p, P13), T, phase))
-    return region3_pT(p, T, rho0)
-
-
-def curve_state(name: str, p: float, seg: int) -> State:
-    """State on a named boundary curve of segment ``seg`` at p."""
-    if name == "hmin":
-        return region12_pT(1, p, TMIN)
-    if name == "h13":
-        return region12_pT(1, p, T13)
-    if name == "h23":
-        return region12_pT(2, p, t_b23(p))
-    if name == "hmax":
-        return region12_pT(2, p, TMAX)
-    if name == "hl":
-        return sat_state(p, 0, seg == 1)
-    if name == "hv":
-        return sat_state(p, 1, seg == 1)
-    raise KeyError(name)
+)  # fmt: skip
 
 
 def curve_values(seg: int, p: float) -> dict[str, float]:
@@ -438,112 +320,34 @@ def build_segment(seg: int, pool: ProcessPoolExecutor) -> dict[str, np.ndarray]:
     return out
 
 
-# ---------------------------------------------------------------------------------------
-# Fast path: uniform (p, h) tables in region 2
-# ---------------------------------------------------------------------------------------
-
-
-def fast_row(p: float) -> dict[str, np.ndarray]:
-    """Fast-path node data along one pressure (no cross derivatives yet).
-
-    Returns (n, 3) arrays of value, d/dp and d/dh (d/dtau for "h"): "T" and "rho" at the
-    h nodes of ``FAST_H``, and "h" at the tau nodes of the h_pT start table, where
-    T = T(p, h_0) + tau (T(p, h_n) - T(p, h_0)) spans the rectangle's h range at p.
-    The p-derivatives (at constant h, resp. tau) are analytic:
-    (dT/dp)_h = v (T alpha_v - 1) / cp, (drho/dp)_h = rho (kappa_T - alpha_v (dT/dp)_h),
-    (dh/dp)_T = v (1 - T alpha_v); the factor 1e3 converts MPa m3/kg to kJ/kg.
-    """
-    hn = np.linspace(*FAST_H[:2], FAST_H[2] + 1)
-    T = np.empty((hn.size, 3))
-    rho = np.empty((hn.size, 3))
-    guess = region12_pT(2, p, float(if97._Backward2_T_Ph(p, hn[0])))
-    for j, h in enumerate(hn):
-        st = state_ph(2, p, h, guess)
-        guess = st
-        dTdp = 1e3 * (st.T * st.alpha - 1.0) / (st.rho * st.cp)
-        T[j] = st.T, dTdp, 1.0 / st.cp
-        rho[j] = st.rho, st.rho * (st.kt - st.alpha * dTdp), -st.rho * st.alpha / st.cp
-    tau = np.linspace(0.0, 1.0, FAST_TAU + 1)
-    hg = np.empty((tau.size, 3))
-    span = T[-1, 0] - T[0, 0]
-    dspan = T[-1, 1] - T[0, 1]
-    for k, x in enumerate(tau):
-        st = region12_pT(2, p, T[0, 0] + x * span)
-        hg[k] = (st.h, 1e3 * (1.0 - st.T * st.alpha) / st.rho + st.cp * (T[0, 1] + x * dspan),
-                 st.cp * span)
-    return {"T": T, "rho": rho, "h": hg}
-
-
-def check_fast_rectangle() -> None:
-    """Raise unless the fast rectangle lies strictly inside region 2 and the table domain."""
-    p0, p1 = FAST_P[:2]
-    h0, h1 = FAST_H[:2]
-    ps = np.linspace(p0, p1, 331)
-    h_v = max(sat_state(p, 1, False).h for p in ps if p <= P13)
-    h_23 = max(curve_state("h23", p, 2).h for p in ps if p >= P13)
-    h_max = min(curve_state("hmax", p, 2).h for p in ps)
-    if not (p0 >= PMIN and p1 <= PMAX and h_v < h0 and h_23 < h0 and h1 < h_max):
-        raise RuntimeError(
-            f"fast rectangle {FAST_P[:2]} MPa x {FAST_H[:2]} kJ/kg leaves region 2 or the "
-            f"table domain (max h_v {h_v:.1f}, max h23 {h_23:.1f}, min hmax {h_max:.1f})"
-        )
-
-
-def build_fast(pool: ProcessPoolExecutor) -> dict[str, np.ndarray]:
-    """Fast-path Hermite tables: (n_p, n, 4) of value, d/dp, d/dx and d2/(dp dx).
-
-    x is h for "fast_T" and "fast_rho", tau for "fast_h". The cross derivative is the
-    central difference (step ``FD_STEP`` MPa, at constant h or tau) of the analytic d/dx;
-    the same stencil checks the analytic d/dp against a difference of the values.
-    """
-    check_fast_rectangle()
-    pn = np.linspace(*FAST_P[:2], FAST_P[2] + 1)
-    d = FD_STEP
-    jobs = [x for p in pn for x in (p - d, p, p + d)]
-    res = list(pool.map(fast_row, jobs, chunksize=3))
-    out: dict[str, np.ndarray] = {}
-    for key, name in (("T", "fast_T"), ("rho", "fast_rho"), ("h", "fast_h")):
-        lo = np.stack([r[key] for r in res[0::3]])
-        mid = np.stack([r[key] for r in res[1::3]])
-        hi = np.stack([r[key] for r in res[2::3]])
-        tab = np.empty(mid.shape[:2] + (4,))
-        tab[..., :3] = mid
-        tab[..., 3] = (hi[..., 2] - lo[..., 2]) / (2 * d)
-        fd = (hi[..., 0] - lo[..., 0]) / (2 * d)
-        err = np.abs(fd - mid[..., 1]).max() / np.abs(mid[..., 1]).max()
-        if err > 1e-6:
-            raise RuntimeError(f"{name}: analytic d/dp differs from finite differences ({err:.2g})")
-        out[name] = tab
-    out["fast_axes"] = np.array([FAST_P, FAST_H, (0.0, 1.0, FAST_TAU)], dtype=np.float64)
-    return out
-
-
 def zones_array(zones: Sequence[tuple[float, float, int]]) -> np.ndarray:
     """(n_zones, 3) array of (start, end, n_cells)."""
     return np.asarray(zones, dtype=np.float64)
 
 
-def tables_digest(data: dict[str, np.ndarray]) -> str:
-    """SHA-256 over the array names, dtypes, shapes and bytes (file-format independent).
-
-    ``steamtemp_gym.steam`` recomputes it at import and compares with ``_TABLES_SHA256``.
-    """
-    h = hashlib.sha256()
-    for key in sorted(data):
-        a = np.ascontiguousarray(data[key])
-        h.update(f"{key}|{a.dtype.str}|{a.shape}|".encode())
-        h.update(a.tobytes())
-    return h.hexdigest()
+def _tables_digest() -> Callable[[dict[str, np.ndarray]], str]:
+    """``tables_digest`` of steamtemp_gym/steam/digest.py, the one the run-time module checks
+    (loaded from its file: the package does not import while the tables and their hash
+    disagree, as they do between writing the file and updating the hash)."""
+    path = Path(__file__).resolve().parents[1] / "steamtemp_gym" / "steam" / "digest.py"
+    spec = importlib.util.spec_from_file_location("_steam_tables_digest", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module.tables_digest
 
 
 def update_module_hash(module: Path, digest: str) -> None:
     """Write the new table digest into ``_TABLES_SHA256`` of the run-time module.
 
-    Editing the module also changes its source stamp, so numba drops stale caches.
+    Editing the module changes the package code, and with it the folder of cached kernels.
     """
     src = module.read_text()
-    new, n = re.subn(r"^_TABLES_SHA256 = \"[0-9A-Za-z]*\"$", f'_TABLES_SHA256 = "{digest}"', src,
-                     flags=re.MULTILINE)
+    new, n = re.subn(
+        r"^_TABLES_SHA256 = \"[0-9A-Za-z]*\"$",
+        f'_TABLES_SHA256 = "{digest}"',
+        src,
+        flags=re.MULTILINE,
+    )
     if n != 1:
         raise RuntimeError(f"could not find the _TABLES_SHA256 line in {module}")
     if new != src:
@@ -556,8 +360,11 @@ def main(argv: list[str] | None = None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", type=Path, default=pkg / "if97_tables.npz")
     ap.add_argument("--workers", type=int, default=2)
-    ap.add_argument("--no-hash-update", action="store_true",
-                    help="do not write the table digest into steamtemp_gym/steam/__init__.py")
+    ap.add_argument(
+        "--no-hash-update",
+        action="store_true",
+        help="do not write the table digest into steamtemp_gym/steam/tables.py",
+    )
     args = ap.parse_args(argv)
     t0 = time.time()
     data: dict[str, np.ndarray] = {}
@@ -578,20 +385,24 @@ def main(argv: list[str] | None = None) -> None:
     data["constants"] = np.array([PC, TC, P13, T13, TMIN, TMAX, PMIN, PMAX, S_MIN])
     data["layout_version"] = np.array(LAYOUT_VERSION)
     # run-time arrays (patch tables concatenated per quantity); numba freezes <= 1 MB
-    sizes = {f"{qty}_*": sum(v.nbytes for k, v in data.items() if k.startswith(f"{qty}_"))
-             for qty in ("T", "rho")}
+    sizes = {
+        f"{qty}_*": sum(v.nbytes for k, v in data.items() if k.startswith(f"{qty}_"))
+        for qty in ("T", "rho")
+    }
     sizes.update({k: data[k].nbytes for k in ("fast_T", "fast_rho", "fast_h")})
     for name, nbytes in sizes.items():
         if nbytes > 10**6:
             raise RuntimeError(f"{name} tables take {nbytes} bytes > 1 MB; coarsen the grids")
     args.out.parent.mkdir(parents=True, exist_ok=True)
     np.savez_compressed(args.out, **data)
-    digest = tables_digest(data)
+    digest = _tables_digest()(data)
     if not args.no_hash_update and args.out.resolve() == (pkg / "if97_tables.npz").resolve():
-        update_module_hash(pkg / "__init__.py", digest)
+        update_module_hash(pkg / "tables.py", digest)
     n_nodes = sum(v.size // 4 for k, v in data.items() if k.startswith("T_"))
-    print(f"wrote {args.out} ({args.out.stat().st_size / 1e6:.2f} MB, {n_nodes} patch nodes, "
-          f"sha256 {digest[:16]}..., {time.time() - t0:.0f} s)")
+    print(
+        f"wrote {args.out} ({args.out.stat().st_size / 1e6:.2f} MB, {n_nodes} patch nodes, "
+        f"sha256 {digest[:16]}..., {time.time() - t0:.0f} s)"
+    )
 
 
 if __name__ == "__main__":

@@ -13,10 +13,10 @@ import pytest
 
 import steamtemp_gym
 from steamtemp_gym import plants
+from steamtemp_gym.envs.corners import run_corners
 from steamtemp_gym.envs.kernels import TRIP_REASONS
 from steamtemp_gym.rewards import RewardConfig
 from steamtemp_gym.scenarios import Scenario
-from steamtemp_gym.scenarios.stress import run_corners
 
 IDS = steamtemp_gym.ENV_IDS
 BENSON = "steamtemp/BensonSubcritical-v0"

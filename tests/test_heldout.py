@@ -18,7 +18,7 @@ REQUIRED = {"deep_fast_ramp", "mill_trip", "sootblowing", "hp_heater_out",
             "setpoint_ramp_during_load_ramp", "high_noise"}  # fmt: skip
 
 
-def test_the_issue_s_six_kinds_are_shipped_and_not_registered():
+def test_the_six_held_out_kinds_are_shipped_and_not_registered():
     assert REQUIRED <= set(heldout.NAMES)
     assert not set(heldout.NAMES) & set(scenarios.names())  # training sees names() only
     for name in heldout.NAMES:

@@ -390,7 +390,7 @@ def test_other_bad_inputs_raise() -> None:
 # ------------------------------------------------------------------- step response
 
 
-TABLE = {  # REFERENCE_DATA.md, "Transfer-function forms": Tu/T, Tg/T, t50/T, t90/T
+TABLE = {  # Tu/T, Tg/T, t50/T, t90/T of 1 / (1 + T s)^n (tabulated values of the lags)
     2: (0.282, 2.718, 1.679, 3.890),
     3: (0.805, 3.695, 2.675, 5.323),
     4: (1.425, 4.463, 3.673, 6.681),
@@ -431,7 +431,8 @@ def test_step_response_ptn_table(n: int) -> None:
 def test_step_response_reference_examples(
     gain: float, T: float, n: int, tu: float, tg: float, t90: float
 ) -> None:
-    # REFERENCE_DATA.md examples, with an offset, pre-step samples and t_step off the grid
+    # the sections of Zhang et al. 2012 at rated load (docs/references.md, Cascade300MW-v0),
+    # with an offset, pre-step samples and t_step off the grid
     t_step = 100.3
     t = np.arange(0.0, t_step + 40 * T, 0.25)
     y = 480.0 + _ptn(t, gain, T, n, t_step)

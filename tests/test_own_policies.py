@@ -269,7 +269,7 @@ def registry(monkeypatch):
     """baselines' and scenarios' registries restored after the test."""
     monkeypatch.setattr(baselines, "_REGISTRY", dict(baselines._REGISTRY))
     monkeypatch.setattr(baselines, "NAMES", baselines.NAMES)
-    monkeypatch.setattr(scenarios, "_REGISTRY", dict(scenarios._REGISTRY))
+    monkeypatch.setattr(scenarios.registry, "_REGISTRY", dict(scenarios.registry._REGISTRY))
 
 
 def test_register_a_baseline(registry, at_root):

@@ -112,7 +112,7 @@ def test_coloured_heat_absorption_is_an_ornstein_uhlenbeck_process():
         assert acf == pytest.approx(np.exp(-lag / tau), abs=0.06)
 
 
-# --------------------------------------------------------------------------- hardening (issue 7)
+# --------------------------------------------------------------------------------- hardening
 GOOD = "name: x\nduration_s: 60\nload: [[0, 1.0], [30, 0.9]]\n"
 
 
@@ -411,3 +411,66 @@ def test_last_change_is_the_end_of_the_last_ramp_or_step_of_any_channel():
     assert Scenario(name="flat", duration_s=60.0).last_change_s() == 0.0
     assert Scenario(name="held", duration_s=60.0,
                     load=((0.0, 0.8), (30.0, 0.8))).last_change_s() == 0.0
+
+
+# ----------------------------------------------------------------- plants' own scenarios
+CASCADE = "steamtemp/Cascade300MW-v0"
+ID_FSH = "steamtemp/SupercriticalFSH-v0"
+CASCADE_OWN = ("load_ramp_100_50_100_2pct", "setpoint_step_535_545")
+
+
+def test_scenarios_never_import_the_plants_or_the_envs():
+    """The package is data and its checks: plants declare scenarios, never the reverse."""
+    import ast
+    from pathlib import Path
+
+    root = Path(scenarios.__file__).parent
+    for path in sorted(root.rglob("*.py")):
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.ImportFrom):
+                names = [f"{node.module}.{a.name}" for a in node.names]
+            elif isinstance(node, ast.Import):
+                names = [a.name for a in node.names]
+            else:
+                continue
+            for name in names:
+                assert not name.startswith(("steamtemp_gym.plants", "steamtemp_gym.envs")), (
+                    f"{path.name}:{node.lineno} imports {name}"
+                )
+
+
+def test_a_plant_declares_its_named_scenarios_as_data():
+    from steamtemp_gym.plants import own_scenarios, plant_class
+
+    own = plant_class(CASCADE).scenarios
+    assert tuple(sorted(own)) == CASCADE_OWN and own is own_scenarios(CASCADE)
+    with pytest.raises(TypeError):
+        own["x"] = own[CASCADE_OWN[0]]  # read-only
+    for name in CASCADE_OWN:
+        s = scenarios.get(name, CASCADE)
+        assert s is own[name] and scenarios.resolve(name, CASCADE) is s
+        assert (s.noise_std_C, s.heat_absorption_noise_std) == (0.25, 0.02)
+        assert name in scenarios.names(CASCADE)
+        assert name not in scenarios.names() and name not in scenarios.names(ID_FSH)
+        for plant_id in (None, ID_FSH):
+            with pytest.raises(ValueError, match=f"unknown scenario '{name}'"):
+                scenarios.resolve(name, plant_id)
+    assert own_scenarios(ID_FSH) == {}
+    assert scenarios.names(CASCADE) == sorted({*CASCADE_OWN, *scenarios.names()[:-1]}) + [
+        scenarios.RANDOM
+    ]
+    with pytest.raises(ValueError, match="unknown plant id"):
+        scenarios.names("steamtemp/NoSuchPlant-v0")
+
+
+
+def test_declare_checks_names_and_switches_the_disturbances_on():
+    s = Scenario(name="mine", duration_s=60.0)
+    (declared,) = scenarios.declare(s).values()
+    assert declared.noise_std_C == scenarios.NAMED_DISTURBANCES["noise_std_C"]
+    for bad, word in [((s, s), "twice"), (("mine",), "Scenario"),
+                      ((Scenario(name="random", duration_s=1.0),), "reserved"),
+                      ((Scenario(name="heldout:x", duration_s=1.0),), "held-out"),
+                      ((Scenario(name="a.yml", duration_s=1.0),), "file")]:  # fmt: skip
+        with pytest.raises(ValueError, match=word):
+            scenarios.declare(*bad)

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import dataclasses
 import typing
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
@@ -184,6 +184,8 @@ class Plant:
         ("attemp_out_temp_meas_C", MAIN),
     )
     secondary: ClassVar[tuple[tuple[str, float], ...]] = ()
+    #: The plant's own named scenarios, name -> Scenario (``steamtemp_gym.scenarios.declare``).
+    scenarios: ClassVar[Mapping[str, Any]] = {}
     extra_info: ClassVar[tuple[str, ...]] = ()
     design_spray: ClassVar[str | None] = None
     trip_band_K: ClassVar[tuple[float, float]] = TRIP_BAND_K

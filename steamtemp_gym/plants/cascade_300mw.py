@@ -167,7 +167,7 @@ from steamtemp_gym.plants.base import (
     validate_params,
 )
 from steamtemp_gym.rng import gauss, splitmix64, uniform
-from steamtemp_gym.scenarios.library import register as register_named
+from steamtemp_gym.scenarios.library import declare
 from steamtemp_gym.steam import cp_pT, h_pT
 
 K0 = 273.15
@@ -555,17 +555,14 @@ class Cascade300MW(Plant):
 
 # ------------------------------------------------------------------ named scenarios
 MIN = 60.0
-register_named(
+_RAMP = 0.5 / (2.0 / 100.0 / MIN)  # 100 -> 50 % at 2 %/min: 1500 s
+Cascade300MW.scenarios = declare(
     sc.Scenario(
         name="setpoint_step_535_545",
         duration_s=2000.0,
         setpoint_offset_C=((0.0, 0.0), (500.0, 0.0), (500.0, 10.0)),
         description="setpoint 535 C, step to 545 C at 500 s, rated load (Zhang et al. 2012)",
     ),
-    plants=[PLANT_ID],
-)
-_RAMP = 0.5 / (2.0 / 100.0 / MIN)  # 100 -> 50 % at 2 %/min: 1500 s
-register_named(
     sc.Scenario(
         name="load_ramp_100_50_100_2pct",
         duration_s=500.0 + 2 * _RAMP + 20 * MIN + 15 * MIN,
@@ -579,5 +576,4 @@ register_named(
         description="100 -> 50 % at 2 %/min after 500 s, hold 20 min, back at 2 %/min, "
         "hold 15 min (an AGC-rate ramp: 1-2 %/min; load-dependent dynamics)",
     ),
-    plants=[PLANT_ID],
 )

@@ -15,24 +15,56 @@
 Every named scenario carries the disturbances of real operation
 (``NAMED_DISTURBANCES``: thermocouple noise and the coloured heat-absorption
 disturbance), so each seed of a named scenario is a different realization of them.
+A plant's own named scenarios carry them too: the plant declares them with
+:func:`declare` as its ``scenarios`` class attribute.
 """
 
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
+from types import MappingProxyType
 
 import numpy as np
 
-from steamtemp_gym.scenarios import NAMED_DISTURBANCES, Scenario
-from steamtemp_gym.scenarios import register as _register
+from steamtemp_gym.scenarios.model import Scenario, _describe
+from steamtemp_gym.scenarios.registry import check_name
+from steamtemp_gym.scenarios.registry import register as _register
 
 MIN = 60.0
+
+#: Disturbances on in every named scenario: thermocouple noise 0.25 K (real units:
+#: 0.2-0.3 K) and a coloured heat-absorption disturbance of 2 % std with a 5 min
+#: correlation time (slagging, coal quality and mill changes; plausible default, unverified).
+NAMED_DISTURBANCES = {
+    "noise_std_C": 0.25,
+    "heat_absorption_noise_std": 0.02,
+    "heat_absorption_noise_tau_s": 300.0,
+}
 
 
 def register(scenario: Scenario, plants: Sequence[str] | None = None) -> Scenario:
     """Register a named scenario with the disturbances of real operation switched on."""
     return _register(dataclasses.replace(scenario, **NAMED_DISTURBANCES), plants)
+
+
+def declare(*scenarios: Scenario) -> Mapping[str, Scenario]:
+    """A plant's own named scenarios, for its ``scenarios`` class attribute: each with the
+    disturbances of real operation switched on, keyed by name (read-only).
+
+    Raises:
+        ValueError: not a Scenario, a name the command lines cannot spell (as for
+            :func:`~steamtemp_gym.scenarios.registry.register`) or a name given twice.
+    """
+    out: dict[str, Scenario] = {}
+    for scenario in scenarios:
+        if not isinstance(scenario, Scenario):
+            raise ValueError(f"declare() needs Scenarios, got {_describe(scenario)}")
+        check_name(scenario.name)
+        if scenario.name in out:
+            raise ValueError(f"scenario {scenario.name!r} is declared twice")
+        out[scenario.name] = dataclasses.replace(scenario, **NAMED_DISTURBANCES)
+    return MappingProxyType(out)
 
 
 def _load_following() -> Scenario:

@@ -1,6 +1,6 @@
 """The held-out evaluation scenarios: YAML files in this folder, never trained or tuned on.
 
-Each file is an ordinary scenario file (format: ``steamtemp_gym.scenarios``), read by
+Each file is an ordinary scenario file (format: ``steamtemp_gym.scenarios.yaml_loader``), read by
 :func:`load`; the leaderboard names them ``heldout:<name>`` (:data:`PREFIX`). They are not
 in the scenario registry, so nothing that iterates ``scenarios.names()`` (training
 curricula, the difficulty table) sees them.

@@ -1,0 +1,123 @@
+"""The fast path: plain Hermite bicubics of T and rho on the uniform (p, h) rectangle in
+region 2 (``FAST_RECT``), and the exact inverse h(p, T) there. Internal units: MPa, kJ/kg, K."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import carray
+
+from steamtemp_gym._jit import njit
+from steamtemp_gym.steam.cubic import _cell_root, _hermite
+from steamtemp_gym.steam.tables import (
+    _FDH,
+    _FG_PTR,
+    _FG_SHAPE,
+    _FH0,
+    _FHINV,
+    _FNG,
+    _FNH,
+    _FNP,
+    _FP0,
+    _FPINV,
+    _FR_PTR,
+    _FT_PTR,
+    _FT_SHAPE,
+)
+
+
+@njit(cache=True, error_model="numpy")
+def _ucell(x: float, n: int) -> tuple[int, float]:
+    """Cell index in [0, n - 1] and local coordinate of x (in cell units) on a uniform axis.
+
+    x is clamped to [0, n] (NaN to 0).
+    """
+    if not x > 0.0:
+        x = 0.0
+    elif x > n:
+        x = float(n)
+    i = int(x)
+    if i > n - 1:
+        i = n - 1
+    return i, x - i
+
+
+@njit(cache=True, error_model="numpy")
+def _fcol(
+    tab: np.ndarray, i: int, j: int, a0: float, a1: float, a2: float, a3: float
+) -> tuple[float, float]:
+    """Value and d/(cell coordinate) at node j of a fast table, Hermite in p in p-cell i."""
+    g = (a0 * tab[i, j, 0] + a1 * tab[i, j, 1]) + (a2 * tab[i + 1, j, 0] + a3 * tab[i + 1, j, 1])
+    gu = (a0 * tab[i, j, 2] + a1 * tab[i, j, 3]) + (a2 * tab[i + 1, j, 2] + a3 * tab[i + 1, j, 3])
+    return g, gu
+
+
+@njit(cache=True, error_model="numpy")
+def _fast(pm: float, hk: float, want: int) -> tuple[float, float, float, float]:
+    """``_lookup`` on the fast rectangle: plain Hermite bicubic on the uniform (p, h) grid.
+
+    The caller ensures _FP0 <= pm <= _FP1 and _FH0 <= hk <= _FH1.
+    """
+    ft = carray(_FT_PTR(), _FT_SHAPE)
+    fr = carray(_FR_PTR(), _FT_SHAPE)
+    i, t = _ucell((pm - _FP0) * _FPINV, _FNP)
+    j, u = _ucell((hk - _FH0) * _FHINV, _FNH)
+    a0, a1, a2, a3 = _hermite(t)
+    b0, b1, b2, b3 = _hermite(u)
+    u2 = u * u
+    e0 = (6.0 * u2 - 6.0 * u) * _FHINV  # d/dh of the basis (e2 = -e0)
+    e1 = (3.0 * u2 - 4.0 * u + 1.0) * _FHINV
+    e3 = (3.0 * u2 - 2.0 * u) * _FHINV
+    T = 0.0
+    dT = 0.0
+    rho = 0.0
+    drho = 0.0
+    if want != 1:
+        g0, gu0 = _fcol(ft, i, j, a0, a1, a2, a3)
+        g1, gu1 = _fcol(ft, i, j + 1, a0, a1, a2, a3)
+        T = (b0 * g0 + b1 * gu0) + (b2 * g1 + b3 * gu1)
+        dT = e0 * (g0 - g1) + (e1 * gu0 + e3 * gu1)
+    if want != 0:
+        g0, gu0 = _fcol(fr, i, j, a0, a1, a2, a3)
+        g1, gu1 = _fcol(fr, i, j + 1, a0, a1, a2, a3)
+        rho = (b0 * g0 + b1 * gu0) + (b2 * g1 + b3 * gu1)
+        drho = e0 * (g0 - g1) + (e1 * gu0 + e3 * gu1)
+    return T, dT, rho, drho
+
+
+@njit(cache=True, error_model="numpy")
+def _fast_h_of_T(pm: float, T: float) -> float:
+    """h (kJ/kg) inverting the fast T table at (MPa, K), NaN if T lies outside its range.
+
+    Start value from the h(p, tau) table, tau = (T - T_lo(p)) / (T_hi(p) - T_lo(p)) with
+    T_lo, T_hi the T table at the rectangle's h edges; then a walk to the h-cell whose
+    node temperatures bracket T and a safeguarded Halley solve of its cubic. The caller
+    ensures _FP0 <= pm <= _FP1.
+    """
+    ft = carray(_FT_PTR(), _FT_SHAPE)
+    fg = carray(_FG_PTR(), _FG_SHAPE)
+    i, t = _ucell((pm - _FP0) * _FPINV, _FNP)
+    a0, a1, a2, a3 = _hermite(t)
+    t_lo = _fcol(ft, i, 0, a0, a1, a2, a3)[0]
+    t_hi = _fcol(ft, i, _FNH, a0, a1, a2, a3)[0]
+    if not t_lo <= T <= t_hi:
+        return math.nan
+    k, w = _ucell((T - t_lo) / (t_hi - t_lo) * _FNG, _FNG)
+    g0, gw0 = _fcol(fg, i, k, a0, a1, a2, a3)
+    g1, gw1 = _fcol(fg, i, k + 1, a0, a1, a2, a3)
+    c0, c1, c2, c3 = _hermite(w)
+    j, u = _ucell(((c0 * g0 + c1 * gw0) + (c2 * g1 + c3 * gw1) - _FH0) * _FHINV, _FNH)
+    g0, gu0 = _fcol(ft, i, j, a0, a1, a2, a3)
+    g1, gu1 = _fcol(ft, i, j + 1, a0, a1, a2, a3)
+    while T < g0 and j > 0:  # rarely taken: the start value is within ~0.01 kJ/kg
+        j -= 1
+        u = 1.0
+        g1, gu1 = g0, gu0
+        g0, gu0 = _fcol(ft, i, j, a0, a1, a2, a3)
+    while T > g1 and j < _FNH - 1:
+        j += 1
+        u = 0.0
+        g0, gu0 = g1, gu1
+        g1, gu1 = _fcol(ft, i, j + 1, a0, a1, a2, a3)
+    return _FH0 + (j + _cell_root(g0 - T, g1 - T, gu0, gu1, u)) * _FDH
