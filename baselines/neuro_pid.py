@@ -178,7 +178,8 @@ class NeuroPID:
         self.proxies = [(p, names.index(p) if p in names else None) for p in prox]
         params = json.dumps(getattr(u, "params_overrides", {}) or {}, sort_keys=True)
         if force_u is None and k0 is None:
-            self.loads, table = np.array(GAIN_LOADS), commissioning_gains(plant.id, params)
+            self.loads = np.array(GAIN_LOADS)
+            table = commissioning_gains(NeuroPID, plant.id, params)
         else:
             k = np.asarray(k0, float)
             if k.shape[1] == 3:

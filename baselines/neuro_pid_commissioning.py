@@ -57,17 +57,16 @@ def inner_p_valve_per_K(plant: Any) -> float | None:
 
 
 @functools.lru_cache(maxsize=48)
-def outer_models(env_id: str, params_json: str, load: float = 1.0) -> tuple[FOPDT | None, ...]:
+def outer_models(controller: type, env_id: str, params_json: str,
+                 load: float = 1.0) -> tuple[FOPDT | None, ...]:  # fmt: skip
     """Per action: FOPDT of inner setpoint -> measured outlet (MAIN loops) at ``load``, else
-    None.
+    None. ``controller`` is the NeuroPID class, which runs the step tests (``force_u``).
 
     Closed-loop step of the inner setpoint by STEP_K at a constant ``load`` without noise (a
     scenario built here, not an evaluation one), run twice with the same seed, with and
     without the step, so the plant's own seeded disturbances cancel (as in step_test).
     """
     import gymnasium as gym
-
-    from baselines.neuro_pid import NeuroPID  # the controller runs the step tests
 
     sc = Scenario(name="npid_commissioning", duration_s=STEP_DURATION_S, load=((0.0, load),))
     env = gym.make(env_id, scenario=sc, params=json.loads(params_json))
@@ -81,7 +80,7 @@ def outer_models(env_id: str, params_json: str, load: float = 1.0) -> tuple[FOPD
         step = (STEP_K if p_in is None else min(STEP_K, 0.25 / p_in)) if inner else 0.05
         recs = []
         for du in (0.0, step):
-            pol = NeuroPID(env, force_u=du, k0=np.full((len(plant.control_loops), 3), 0.5))
+            pol = controller(env, force_u=du, k0=np.full((len(plant.control_loops), 3), 0.5))
             obs, _ = env.reset(seed=0)
             t, y = [0.0], [float(env.unwrapped.signals.decode(obs)[plant.outlet_measured])]
             while True:
@@ -98,16 +97,17 @@ def outer_models(env_id: str, params_json: str, load: float = 1.0) -> tuple[FOPD
 
 
 @functools.lru_cache(maxsize=16)
-def commissioning_gains(env_id: str, params_json: str) -> np.ndarray:
+def commissioning_gains(controller: type, env_id: str, params_json: str) -> np.ndarray:
     """(len(GAIN_LOADS), actions, 4) table: (k_p0, k_i0, k_d0) of eq. (4) per action at each
     load of :data:`GAIN_LOADS` (zeros off MAIN), and the loop direction (sign of the outer
-    gain) as a 4th column; see the module docstring."""
+    gain) as a 4th column; see the module docstring. ``controller``: as for
+    :func:`outer_models`."""
     from steamtemp_gym import plants
 
     dt = plants.make(env_id, **json.loads(params_json)).dt_s
     table = []
     for load in GAIN_LOADS:
-        models = outer_models(env_id, params_json, load)
+        models = outer_models(controller, env_id, params_json, load)
         n_main = sum(m is not None for m in models)
         out = np.zeros((len(models), 4))
         for j, m in enumerate(models):

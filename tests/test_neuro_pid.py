@@ -128,7 +128,7 @@ def test_update_directions():
 
 
 def test_initial_net_gives_the_commissioning_gains_at_the_midpoint_of_their_bounds():
-    table = commissioning.commissioning_gains(ID, "{}")
+    table = commissioning.commissioning_gains(npid.NeuroPID, ID, "{}")
     assert table.shape == (len(npid.GAIN_LOADS), 1, 4)
     k0 = table[-1, 0]  # rated load
     w, base, scale = npnet.initial_weights(k0[:3])
@@ -139,7 +139,7 @@ def test_initial_net_gives_the_commissioning_gains_at_the_midpoint_of_their_boun
     assert k0[3] == 1.0
     # SIMC PI on the identified outer process with the inner P loop closed: loop gain
     # G_C2 |K2| = 0.08 stroke/K x 9 kg/s x 2.01 K s/kg = 1.447, so K = 2.09 * 1.447/2.447
-    m = commissioning.outer_models(ID, "{}")[0]
+    m = commissioning.outer_models(npid.NeuroPID, ID, "{}")[0]
     assert m.K == pytest.approx(2.09 * 1.4472 / 2.4472, rel=0.01)
     w2, _, _ = npnet.initial_weights(k0[:3])
     np.testing.assert_array_equal(w, w2)  # reproducible
@@ -151,7 +151,7 @@ def test_commissioning_gains_follow_the_load_schedule():
     """k_l0(L) linear between the commissioning loads, held beyond them."""
     env = gym.make(ID)
     pol = npid.NeuroPIDMEE(env)
-    table = commissioning.commissioning_gains(ID, "{}")[:, 0, :3]
+    table = commissioning.commissioning_gains(npid.NeuroPID, ID, "{}")[:, 0, :3]
     k = pol.commissioning(np.array([0.3, 0.5, 0.625, 1.0, 1.1]))[:, 0]
     np.testing.assert_allclose(k[[0, 1]], table[[0, 0]])
     np.testing.assert_allclose(k[2], table[:2].mean(axis=0))
