@@ -19,7 +19,7 @@ import steamtemp_gym  # noqa: F401  (registers the ids)
 from steamtemp_gym import scenarios
 from steamtemp_gym.metrics import step_response_metrics
 from steamtemp_gym.plants import make
-from steamtemp_gym.plants.cascade_300mw import S_CNT, S_SEED, S_V, CascadeParams
+from steamtemp_gym.plants.cascade_300mw import IX, CascadeParams
 
 ID = "steamtemp/Cascade300MW-v0"
 # analytic (Tu/T, Tg/T, t90/T) of K/(1+Ts)^n: Tu from the inflection tangent, Tg balance time
@@ -37,8 +37,8 @@ def simulate(plant, load=1.0, dv=0.0, bias=0.0, spray_dT=0.0, n=N_STEPS):
     X = np.zeros((1, plant.n_x))
     Z = np.zeros((1, plant.n_z))
     plant.steady_state(D, np.array([plant.setpoint_C]), X)
-    plant.kernel()(X, X[:, [S_V]].copy(), D, plant.P, plant.jrow, plant.jcol, 0.0, 1, Z)
-    U = X[:, [S_V]] + dv
+    plant.kernel()(X, X[:, [IX.V]].copy(), D, plant.P, plant.jrow, plant.jcol, 0.0, 1, Z)
+    U = X[:, [IX.V]] + dv
     D[0, 2], D[0, 4] = bias, spray_dT
     out = [Z[0].copy()]
     for _ in range(n):
@@ -216,7 +216,7 @@ def test_steady_state_holds_setpoint_valve_inside():
     Z = np.zeros((len(D), plant.n_z))
     sp = np.full(len(D), 535.0)
     plant.steady_state(D, sp, X)
-    U = X[:, [S_V]].copy()
+    U = X[:, [IX.V]].copy()
     assert np.all((U > 0.0) & (U < 1.0))
     for _ in range(50):
         plant.step(X, U, D, Z)  # an equilibrium: nothing moves
@@ -251,7 +251,7 @@ def run_rows(plant, D, n, keys):
     Z = np.zeros((len(D), plant.n_z))
     plant.seed_rows(X, np.asarray(keys, dtype=np.uint64))
     plant.steady_state(D, np.full(len(D), 535.0), X)
-    U = X[:, [S_V]].copy()
+    U = X[:, [IX.V]].copy()
     om = np.empty((n, len(D), 2))
     for k in range(n):
         plant.step(X, U, D, Z)
@@ -292,9 +292,9 @@ def test_nongaussian_disturbances_statistics_and_determinism():
     Xs = np.zeros((3, plant.n_x))
     plant.seed_rows(Xs, np.array([7, 8, 7], dtype=np.uint64))
     plant.steady_state(D[[0, 0, 0]], np.full(3, 535.0), Xs)
-    assert Xs[0, S_SEED] == Xs[2, S_SEED] != Xs[1, S_SEED] and np.all(Xs[:, S_CNT] == 0)
+    assert Xs[0, IX.SEED] == Xs[2, IX.SEED] != Xs[1, IX.SEED] and np.all(Xs[:, IX.CNT] == 0)
     Z = np.zeros((3, plant.n_z))
-    U = Xs[:, [S_V]].copy()
+    U = Xs[:, [IX.V]].copy()
     seq = []
     for _ in range(50):
         plant.step(Xs, U, D[[0, 0, 0]], Z)

@@ -1,0 +1,59 @@
+"""The plant class of ``steamtemp/Cascade300MW-v0``."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from steamtemp_gym.plants.base import (
+    MAIN,
+    Plant,
+    Signal,
+)
+from steamtemp_gym.plants.cascade_300mw.discretization import _pack
+from steamtemp_gym.plants.cascade_300mw.kernel import SEED_SALT, steady, step
+from steamtemp_gym.plants.cascade_300mw.layout import IX, OUTPUTS
+from steamtemp_gym.plants.cascade_300mw.params import (
+    PLANT_ID,
+    CascadeParams,
+)
+from steamtemp_gym.rng import splitmix64
+
+
+class Cascade300MW(Plant):
+    """Plant of ``steamtemp/Cascade300MW-v0`` (Zhang et al. 2012)."""
+
+    id = PLANT_ID
+    source = "Zhang et al., ISA Transactions 51, 2012"
+    Params = CascadeParams
+    actions = (
+        Signal("spray_valve_cmd", "1", 0.5, 0.5, description="secondary spray valve command"),
+    )
+    outputs = OUTPUTS
+    setpoint_C = 535.0
+    control_loops = (("intermediate_temp_C", MAIN),)
+    design_spray = "design_spray_kg_s"
+    extra_info = ("intermediate_temp_C", "omega_K", "omega2_kg_s", "outer_disturbance_K")
+    default_duration_s = 3600.0
+
+    pack = staticmethod(_pack)
+    setpoint_param = "T_out_C"
+
+    def kernel(self):
+        return step
+
+    def steady_state(self, D: np.ndarray, setpoint_C: np.ndarray, X: np.ndarray) -> None:
+        """Equilibrium holding the setpoint with the rows' step-0 omega values (the omega
+        generators seeded by :meth:`seed_rows` before; seed 0 if never seeded)."""
+        sp = np.asarray(setpoint_C, dtype=np.float64)
+        steady(D, sp.copy(), self.P, X)
+
+    def seed_rows(self, X: np.ndarray, keys: np.ndarray) -> None:
+        """Seed the omega generators of rows X from the episodes' keys (uint64).
+
+        The seed (kept in the float64 state, hence 52 bits) is the key mixed with a
+        plant-specific salt, so omega is independent of the env's sensor noise. Called
+        before :meth:`steady_state`, which draws the step-0 values.
+        """
+        for b in range(X.shape[0]):
+            X[b, IX.SEED] = float(int(splitmix64(np.uint64(keys[b]) ^ SEED_SALT)) >> 12)
+            X[b, IX.CNT] = 0.0
