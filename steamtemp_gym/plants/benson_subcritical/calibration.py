@@ -184,6 +184,29 @@ def _load_schedules(pr: BensonParams, P: np.ndarray, Pk: np.ndarray, n_x: int) -
 @functools.lru_cache(maxsize=32)
 def _pack(pr: BensonParams) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
     P = np.zeros(N_P)
+    _pack_scalars(pr, P)
+    pat, off = _pack_sections(pr, P)
+    # thermowells: T1 from the measured enthalpy, T2 from T1; then the trim from h_evap
+    P[IP.S0] = off
+    P[IP.JSEN] = len(pat)
+    blk = [IP.SEC + NF * k for k in range(7)]
+    last_h = [int(P[b + IF.OFF] + 2 * P[b + IF.N] - 1) for b in blk]
+    last_h[SEC.SH4] = int(P[IP.LOFF] + pr.n_line - 1)  # the main-steam thermocouple: turbine inlet
+    for j, k in enumerate((SEC.EV, SEC.SH1, SEC.SH2, SEC.SH2, SEC.SH3, SEC.SH3, SEC.SH4, SEC.RH)):
+        pat += [(off + 2 * j, last_h[k]), (off + 2 * j + 1, off + 2 * j)]
+    off += 2 * N_SENS
+    P[IP.STRIM] = off
+    pat.append((off, last_h[SEC.EV]))
+    n_x = off + 1
+    P[IP.NX] = n_x
+    _calibrate(pr, P)
+    jrow, jcol = pattern_arrays(pat)
+    P.setflags(write=False)
+    return P, jrow, jcol, n_x
+
+
+def _pack_scalars(pr: BensonParams, P: np.ndarray) -> None:
+    """The scalar parameters of P (flows, pressures, turbine, loops, valves, thermowells)."""
     W_nom = pr.W_nom_kg_s
     s_des = pr.spray1_design_fraction + pr.spray2_design_fraction
     P[IP.WNOM] = W_nom
@@ -215,6 +238,12 @@ def _pack(pr: BensonParams) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
     P[IP.TAUF] = pr.tau_furnace_s
     P[IP.HERR] = pr.fwr_schedule_error_kJ_kg * 1e3
     P[IP.BEV] = pr.bias_evap_share
+
+
+def _pack_sections(pr: BensonParams, P: np.ndarray) -> tuple[list[tuple[int, int]], int]:
+    """Each section's block of P and its states (economizer .. SH4, the main-steam line,
+    the reheater): the Jacobian pattern so far and the next free state index."""
+    W_nom = pr.W_nom_kg_s
     W_rated = (P[IP.WECO], P[IP.WECO], P[IP.WECO], P[IP.WECO],
                W_nom * (1.0 - pr.spray2_design_fraction), W_nom, P[IP.WRHN])  # fmt: skip
     Tg = {SEC.ECO: pr.Tg_eco_C, SEC.SH1: pr.Tg_sh1_C, SEC.SH3: pr.Tg_sh3_C, SEC.SH4: pr.Tg_sh4_C,
@@ -246,20 +275,5 @@ def _pack(pr: BensonParams) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
         pat += chain_pattern(off, n, inlet, IX.P if PRESSURE_JAC else -1)
         prev_h = off + 2 * n - 1
         off += 2 * n
-    # thermowells: T1 from the measured enthalpy, T2 from T1; then the trim from h_evap
-    P[IP.S0] = off
-    P[IP.JSEN] = len(pat)
-    blk = [IP.SEC + NF * k for k in range(7)]
-    last_h = [int(P[b + IF.OFF] + 2 * P[b + IF.N] - 1) for b in blk]
-    last_h[SEC.SH4] = int(P[IP.LOFF] + pr.n_line - 1)  # the main-steam thermocouple: turbine inlet
-    for j, k in enumerate((SEC.EV, SEC.SH1, SEC.SH2, SEC.SH2, SEC.SH3, SEC.SH3, SEC.SH4, SEC.RH)):
-        pat += [(off + 2 * j, last_h[k]), (off + 2 * j + 1, off + 2 * j)]
-    off += 2 * N_SENS
-    P[IP.STRIM] = off
-    pat.append((off, last_h[SEC.EV]))
-    n_x = off + 1
-    P[IP.NX] = n_x
-    _calibrate(pr, P)
-    jrow, jcol = pattern_arrays(pat)
-    P.setflags(write=False)
-    return P, jrow, jcol, n_x
+    return pat, off
+
