@@ -14,10 +14,11 @@ without the ``steamtemp/`` prefix.
 from __future__ import annotations
 
 import argparse
-import os
 import time
 from concurrent.futures import ProcessPoolExecutor
 from multiprocessing import get_context
+
+from steamtemp_gym.plants.threads import usable_cpus
 
 
 def compile_plant(env_id: str) -> float:
@@ -37,13 +38,6 @@ def compile_plant(env_id: str) -> float:
     return time.perf_counter() - t0
 
 
-def _cpus() -> int:
-    try:
-        return len(os.sched_getaffinity(0))
-    except AttributeError:  # not on Linux
-        return os.cpu_count() or 1
-
-
 def main(argv: list[str] | None = None) -> None:
     import steamtemp_gym
     from steamtemp_gym.envs import resolve_id
@@ -52,7 +46,7 @@ def main(argv: list[str] | None = None) -> None:
                                  description=__doc__.split("\n\n")[0])  # fmt: skip
     ap.add_argument("env_ids", nargs="*", metavar="ENV_ID",
                     help=f"envs to compile (default: all of {', '.join(steamtemp_gym.ENV_IDS)})")
-    ap.add_argument("--jobs", type=int, default=_cpus(),
+    ap.add_argument("--jobs", type=int, default=usable_cpus(),
                     help="plants compiled at once, one process each (default: the CPUs)")
     args = ap.parse_args(argv)
     if args.jobs < 1:

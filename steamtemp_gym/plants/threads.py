@@ -38,6 +38,11 @@ def _default_threads() -> int:
         if n < 1:
             raise ValueError(f"STEAMTEMP_GYM_THREADS must be a positive integer, got {raw!r}")
         return n
+    return usable_cpus()
+
+
+def usable_cpus() -> int:
+    """The CPUs this process may run on."""
     try:
         return len(os.sched_getaffinity(0))
     except AttributeError:  # not on Linux

@@ -11,6 +11,7 @@ import numpy as np
 
 from steamtemp_gym._jit import read_only
 from steamtemp_gym.plants.attemperator import mix
+from steamtemp_gym.plants.base import nominal_disturbances
 from steamtemp_gym.plants.benson_subcritical.kernel import _boundary, _reheat, _table, p_setpoint
 from steamtemp_gym.plants.benson_subcritical.layout import (
     IF,
@@ -78,7 +79,7 @@ def _rated_design(pr: BensonParams, P: np.ndarray, Pk: np.ndarray, x: np.ndarray
     """Size every section's gas side or radiant heat, the spray valves and the rated fuel
     flow on the rated design balance (the steady sections written into x); the rated
     evaporator outlet enthalpy (J/kg)."""
-    d = np.array([1.0, 0.0, 0.0, 1.0, 0.0])
+    d = nominal_disturbances(1.0)[0]
     p = P[IP.PNOM]
     dpb = P[IP.DPB]
     W_nom = P[IP.WNOM]
@@ -161,7 +162,7 @@ def _load_schedules(pr: BensonParams, P: np.ndarray, Pk: np.ndarray, n_x: int) -
     W_nom = P[IP.WNOM]
     xs = np.zeros(n_x)
     for i, L in enumerate(TAB_LOADS):
-        dL = np.array([L, 0.0, 0.0, 1.0, 0.0])
+        dL = nominal_disturbances(L)[0]
         xs[IX.V1], xs[IX.V2] = P[IP.V1D], P[IP.V2D]
         _, _, W_e, w1, w2, *_ = _boundary(xs, dL, Pk)
         pL = p_setpoint(Pk, L) * (W_e + w1 + w2) / (W_nom * L)

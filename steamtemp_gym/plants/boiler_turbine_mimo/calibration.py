@@ -10,7 +10,7 @@ import math
 import numpy as np
 
 from steamtemp_gym._jit import read_only
-from steamtemp_gym.plants.base import D_LOAD
+from steamtemp_gym.plants.base import D_LOAD, nominal_disturbances
 from steamtemp_gym.plants.boiler_turbine_mimo.kernel import (
     _h_crh_target,
     _kA,
@@ -60,7 +60,7 @@ def _calibrate(params: BoilerTurbineParams, P: np.ndarray, n_x: int) -> None:
     T_ms = params.T_ms_C + K0
     _water_and_reheat_tables(params, P, Pk)
     h_up = _rated_design(params, P, Pk, x)
-    d = np.array([1.0, 0.0, 0.0, 1.0, 0.0])
+    d = nominal_disturbances(1.0)[0]
     # evaporator-outlet schedule: design sprays hold T_ms where RGD holds T_rh
     for k, L in enumerate(TAB_LOADS):
         d[D_LOAD] = L
