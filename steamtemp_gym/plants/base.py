@@ -11,14 +11,13 @@ inputs. U holds actuator commands in [0, 1] (the env maps actions in [-1, 1]).
 from __future__ import annotations
 
 import dataclasses
-import typing
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
 import numpy as np
 
-from steamtemp_gym.checks import is_finite, is_integer, is_real, key_list
+from steamtemp_gym.checks import key_list
 from steamtemp_gym.plants.threads import run_rows
 
 #: Disturbance vector entries handed to every plant kernel, in order.
@@ -62,77 +61,6 @@ class Signal:
     observed: bool = True
     noisy: bool = False
     description: str = ""
-
-
-#: Control interval and integrator sub-steps every plant accepts (s; count): beyond them a
-#: step either loses the plant's dynamics or costs seconds.
-DT_RANGE_S = (0.01, 60.0)
-SUBSTEP_RANGE = (1, 50)
-#: A parameter without a physical range of its own must stay within this factor of its
-#: default (calibrated plants are not valid orders of magnitude away from their design).
-DEFAULT_SPAN = 1e3
-
-
-def _check_type(cls_name: str, name: str, kind: Any, v: Any) -> None:
-    """Raise ValueError unless v is a value of the declared field type (bool, int or float)."""
-    if kind is bool:
-        ok = isinstance(v, (bool, np.bool_))
-    elif kind is int:
-        ok = is_integer(v)
-    elif kind is float:
-        ok = is_real(v)
-    else:
-        return
-    if not ok:
-        raise ValueError(
-            f"{cls_name}.{name} must be of type {kind.__name__}, got {type(v).__name__} "
-            f"{str(v)[:50]!r}"
-        )
-
-
-def validate_params(
-    params: Any, positive: tuple[str, ...] = (), bounds: dict | None = None
-) -> None:
-    """Raise ValueError naming the field for a value of the wrong type, non-finite,
-    non-positive (``positive``) or outside its range.
-
-    Ranges: ``bounds`` (physical ranges), :data:`DT_RANGE_S` and :data:`SUBSTEP_RANGE` for
-    ``dt_s`` and ``n_substeps``, and for every other number a factor :data:`DEFAULT_SPAN`
-    either side of its default (a default of 0: |value| <= DEFAULT_SPAN).
-    """
-    cls = type(params)
-    name_cls = cls.__name__
-    hints = typing.get_type_hints(cls)
-    bounds = dict(bounds or {})
-    bounds.setdefault("dt_s", DT_RANGE_S)
-    bounds.setdefault("n_substeps", SUBSTEP_RANGE)
-    for f in dataclasses.fields(params):
-        v = getattr(params, f.name)
-        _check_type(name_cls, f.name, hints.get(f.name), v)
-        if not is_real(v):
-            continue
-        if not is_finite(v):
-            raise ValueError(f"{name_cls}.{f.name} must be finite, got {str(v)[:50]}")
-        if f.name not in bounds and isinstance(f.default, (int, float)):
-            d = abs(float(f.default))
-            lo, hi = (d / DEFAULT_SPAN, d * DEFAULT_SPAN) if d > 0 else (0.0, DEFAULT_SPAN)
-            if not lo <= abs(v) <= hi:
-                raise ValueError(
-                    f"{name_cls}.{f.name} = {v!r} is more than a factor {DEFAULT_SPAN:g} away "
-                    f"from its default {f.default!r} (allowed |value| in [{lo:g}, {hi:g}])"
-                )
-    for name in positive:
-        v = getattr(params, name)
-        if not v > 0:
-            raise ValueError(f"{name_cls}.{name} must be > 0, got {v!r}")
-    for name, (lo, hi) in bounds.items():
-        if not hasattr(params, name):
-            continue
-        v = getattr(params, name)
-        if not lo <= v <= hi:
-            raise ValueError(
-                f"{name_cls}.{name} = {v!r} is outside the physical range [{lo}, {hi}]"
-            )
 
 
 def nominal_disturbances(load: float) -> np.ndarray:

@@ -65,15 +65,26 @@ GROUPS: dict[str, dict[str, tuple[str, ...]]] = {
         "sensor_lag": ("tau_tc1_s", "tau_tc2_s"),
     },
     BENSON: {
-        "heat_transfer": ("kA_eco_MW_K", "kA_evap_MW_K", "kA_sh1_MW_K", "kA_sh2_MW_K",
-                          "kA_sh3_MW_K", "kA_sh4_MW_K", "kA_rh_MW_K"),  # fmt: skip
+        "heat_transfer": (
+            "kA_eco_MW_K",
+            "kA_evap_MW_K",
+            "kA_sh1_MW_K",
+            "kA_sh2_MW_K",
+            "kA_sh3_MW_K",
+            "kA_sh4_MW_K",
+            "kA_rh_MW_K",
+        ),  # fmt: skip
         "metal_heat_capacity": ("c_metal_J_kgK",),
         "firing_lag": ("tau_furnace_s",),
         "sensor_lag": ("tau_tc1_s", "tau_tc2_s"),
     },
     BTM: {
-        "heat_transfer": ("alpha_sh_W_m2K", "alpha_rh_W_m2K", "platen_kA_film_MW_K",
-                          "platen_kA_wall_MW_K"),  # fmt: skip
+        "heat_transfer": (
+            "alpha_sh_W_m2K",
+            "alpha_rh_W_m2K",
+            "platen_kA_film_MW_K",
+            "platen_kA_wall_MW_K",
+        ),  # fmt: skip
         "metal_heat_capacity": ("c_metal_J_kgK", "platen_metal_MJ_K"),
         "firing_lag": ("tau_mill_s", "tau_firing_s"),
         "sensor_lag": ("tau_tc1_s", "tau_tc2_s"),

@@ -58,8 +58,6 @@ def _calibrate(pr: BensonParams, P: np.ndarray) -> None:
         raise ValueError("BensonParams: inconsistent calibration at rated load")
 
 
-
-
 def _feedwater_tables(pr: BensonParams, P: np.ndarray, Pk: np.ndarray) -> None:
     """Feedwater and spray-water tables over load (sliding pressure at design sprays)."""
     for i, L in enumerate(TAB_LOADS):
@@ -277,4 +275,3 @@ def _pack_sections(pr: BensonParams, P: np.ndarray) -> tuple[list[tuple[int, int
         prev_h = off + 2 * n - 1
         off += 2 * n
     return pat, off
-

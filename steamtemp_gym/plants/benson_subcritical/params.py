@@ -16,7 +16,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, fields
 
-from steamtemp_gym.plants.base import validate_params
+from steamtemp_gym.plants.param_ranges import ranged, validate_params
 from steamtemp_gym.slots import slots
 
 K0 = 273.15
@@ -37,20 +37,22 @@ class BensonParams:
 
     # --- rating (Ghaffari et al. section IV unless noted)
     W_nom_kg_s: float = 375.0  # main-steam flow at 440 MW (heat balance, unverified)
-    p_nom_MPa: float = 18.1  # main steam pressure (paper)
-    T_ms_C: float = 535.0  # main steam temperature (paper)
-    p_rh_nom_MPa: float = 4.35  # hot reheat pressure (paper)
-    T_rh_C: float = 530.0  # hot reheat temperature (paper)
-    p_pump_MPa: float = 28.0  # feed-pump discharge (paper)
-    dT_hp_heaters_K: float = 80.0  # feedwater rise in the HP heaters (paper)
-    T_deaerator_C: float = 170.0  # feed-pump suction / spray water at rated load
-    dT_deaerator_dload_K: float = 20.0  # deaerator temperature drop per unit load drop
-    dT_hp_dload_K: float = 40.0  # HP-heater rise drop per unit load drop
+    p_nom_MPa: float = ranged(18.1, 10.0, 19.5)  # main steam pressure (paper)
+    T_ms_C: float = ranged(535.0, 450.0, 600.0)  # main steam temperature (paper)
+    p_rh_nom_MPa: float = ranged(4.35, 1.0, 8.0)  # hot reheat pressure (paper)
+    T_rh_C: float = ranged(530.0, 450.0, 600.0)  # hot reheat temperature (paper)
+    p_pump_MPa: float = ranged(28.0, 20.0, 35.0)  # feed-pump discharge (paper)
+    dT_hp_heaters_K: float = ranged(80.0, 0.0, 150.0)  # feedwater rise in the HP heaters (paper)
+    # feed-pump suction / spray water at rated load
+    T_deaerator_C: float = ranged(170.0, 100.0, 200.0)
+    # deaerator temperature drop per unit load drop
+    dT_deaerator_dload_K: float = ranged(20.0, 0.0, 80.0)
+    dT_hp_dload_K: float = ranged(40.0, 0.0, 100.0)  # HP-heater rise drop per unit load drop
     # --- pressure (eq. 13) and sliding pressure
-    p_min_MPa: float = 8.0  # sliding-pressure floor at slide_low_load
-    slide_low_load: float = 0.3
-    dp_boiler_MPa: float = 3.0  # economizer inlet minus main steam at rated flow
-    dp_reheater_MPa: float = 0.3  # cold minus hot reheat pressure at rated flow
+    p_min_MPa: float = ranged(8.0, 3.0, 19.5)  # sliding-pressure floor at slide_low_load
+    slide_low_load: float = ranged(0.3, 0.1, 0.9)
+    dp_boiler_MPa: float = ranged(3.0, 0.1, 4.0)  # economizer inlet minus main steam at rated flow
+    dp_reheater_MPa: float = ranged(0.3, 0.01, 1.0)  # cold minus hot reheat pressure at rated flow
     storage_tau: float = 4.0  # the paper's tau in eq. (13), dimensionless (see the package doc)
     # --- design temperatures at rated load (define the calibration)
     T_eco_out_C: float = 320.0
@@ -58,19 +60,19 @@ class BensonParams:
     T_sh1_out_C: float = 450.0
     T_sh2_out_C: float = 495.0
     T_sh3_out_C: float = 515.0
-    spray1_design_fraction: float = 0.03  # of main-steam flow
-    spray2_design_fraction: float = 0.02
-    spray1_max_fraction: float = 0.06  # valve fully open, rated pressures
-    spray2_max_fraction: float = 0.04
+    spray1_design_fraction: float = ranged(0.03, 0.0, 0.15)  # of main-steam flow
+    spray2_design_fraction: float = ranged(0.02, 0.0, 0.15)
+    spray1_max_fraction: float = ranged(0.06, 0.005, 0.3)  # valve fully open, rated pressures
+    spray2_max_fraction: float = ranged(0.04, 0.005, 0.3)
     # --- sections: segments, metal mass (t), steam/water volume (m3),
     #     steam-side conductance at rated flow (MW/K), effective gas temperature (C)
-    n_eco: int = 1
-    n_evap: int = 3
-    n_sh1: int = 2
-    n_sh2: int = 2
-    n_sh3: int = 2
-    n_sh4: int = 3
-    n_rh: int = 2
+    n_eco: int = ranged(1, 1, 12)
+    n_evap: int = ranged(3, 1, 12)
+    n_sh1: int = ranged(2, 1, 12)
+    n_sh2: int = ranged(2, 1, 12)
+    n_sh3: int = ranged(2, 1, 12)
+    n_sh4: int = ranged(3, 1, 12)
+    n_rh: int = ranged(2, 1, 12)
     metal_eco_t: float = 350.0
     metal_evap_t: float = 600.0
     metal_sh1_t: float = 160.0
@@ -98,33 +100,38 @@ class BensonParams:
     Tg_sh4_C: float = 1100.0
     Tg_rh_C: float = 950.0
     c_metal_J_kgK: float = 550.0
-    gas_temp_coeff: float = 0.2  # T_g(K) = T_g,nom (1 - coeff (1 - firing))
-    gas_flow_exponent: float = 0.6  # convective UA_g ~ firing^0.6
-    radiant_exponent: float = 0.9  # radiant heat ~ firing^0.9
+    gas_temp_coeff: float = ranged(0.2, 0.0, 0.6)  # T_g(K) = T_g,nom (1 - coeff (1 - firing))
+    gas_flow_exponent: float = ranged(0.6, 0.0, 1.5)  # convective UA_g ~ firing^0.6
+    radiant_exponent: float = ranged(0.9, 0.0, 2.0)  # radiant heat ~ firing^0.9
     # --- fuel and turbine (eq. 14, 16)
     fuel_cv_MJ_kg: float = 47.0  # natural gas (unverified)
-    boiler_efficiency: float = 0.92
-    rh_flow_fraction: float = 0.9
-    k_expansion: float = 1.27  # eq. (14)/(16) index of expansion
+    boiler_efficiency: float = ranged(0.92, 0.5, 1.0)
+    rh_flow_fraction: float = ranged(0.9, 0.5, 1.0)
+    k_expansion: float = ranged(1.27, 1.01, 1.7)  # eq. (14)/(16) index of expansion
     cp_turbine_J_kgK: float = 2600.0  # eq. (16) C_p
-    eta_hp: float = 0.35  # eq. (16), paper 0.30-0.40
-    eta_iplp: float = 0.70  # eq. (16), paper 0.65-0.75
-    p_condenser_kPa: float = 7.0
+    eta_hp: float = ranged(0.35, 0.05, 1.0)  # eq. (16), paper 0.30-0.40
+    eta_iplp: float = ranged(0.70, 0.05, 1.0)  # eq. (16), paper 0.65-0.75
+    p_condenser_kPa: float = ranged(7.0, 1.0, 30.0)
     # --- unit controllers and actuators
-    T_bir_s: float = 135.0  # boiler-input-rate lead on the fuel demand (package doc)
+    # boiler-input-rate lead on the fuel demand (package doc)
+    T_bir_s: float = ranged(135.0, 0.0, 600.0)
     # fuel/water-ratio trim on the evaporator outlet enthalpy: fuel fraction per 100 kJ/kg
     # error (P) and per 100 kJ/kg and s (I). Integral only by default: a P part makes the
     # firing an algebraic function of a fast enthalpy state, which ROS2 at 5 s integrates
     # with 0.08 K instead of 0.01 K error over the load ramp.
-    fwr_kp: float = 0.0
-    fwr_ki_per_s: float = 5e-4
+    fwr_kp: float = ranged(0.0, 0.0, 1.0)
+    fwr_ki_per_s: float = ranged(5e-4, 0.0, 0.05)
     # --- load-change physics (package doc, "Load changes")
-    tau_furnace_s: float = 20.0  # heat release behind the gas/oil fuel demand
-    fwr_schedule_error_kJ_kg: float = -30.0  # evaporator-outlet schedule error at half load
-    bias_evap_share: float = 0.5  # share of the heat-absorption bias on the furnace walls
-    n_line: int = 3  # mixing cells of the outlet header + main-steam line
-    line_metal_t: float = 50.0  # effective header/line/valve-chest metal at steam temperature
-    line_volume_m3: float = 15.0  # steam volume of the header and the two main-steam lines
+    tau_furnace_s: float = ranged(20.0, 0.5, 300.0)  # heat release behind the gas/oil fuel demand
+    # evaporator-outlet schedule error at half load
+    fwr_schedule_error_kJ_kg: float = ranged(-30.0, -80.0, 80.0)
+    # share of the heat-absorption bias on the furnace walls
+    bias_evap_share: float = ranged(0.5, 0.0, 1.0)
+    n_line: int = ranged(3, 1, 12)  # mixing cells of the outlet header + main-steam line
+    # effective header/line/valve-chest metal at steam temperature
+    line_metal_t: float = ranged(50.0, 0.1, 500.0)
+    # steam volume of the header and the two main-steam lines
+    line_volume_m3: float = ranged(15.0, 0.1, 200.0)
     tau_valve_s: float = 2.0
     valve_rate_per_s: float = 0.1  # full stroke in 10 s
     tau_tc1_s: float = 5.0  # thermocouple ("a few seconds", Ghaffari et al. section II)
@@ -138,44 +145,6 @@ class BensonParams:
         validate_params(
             self,
             positive=tuple(f.name for f in fields(self) if f.name not in zero_ok),
-            bounds={
-                "p_nom_MPa": (10.0, 19.5),
-                "p_min_MPa": (3.0, 19.5),
-                "p_rh_nom_MPa": (1.0, 8.0),
-                "p_pump_MPa": (20.0, 35.0),
-                "slide_low_load": (0.1, 0.9),
-                "dp_boiler_MPa": (0.1, 4.0),
-                "dp_reheater_MPa": (0.01, 1.0),
-                "T_ms_C": (450.0, 600.0),
-                "T_rh_C": (450.0, 600.0),
-                "T_deaerator_C": (100.0, 200.0),
-                "dT_hp_heaters_K": (0.0, 150.0),
-                "dT_deaerator_dload_K": (0.0, 80.0),
-                "dT_hp_dload_K": (0.0, 100.0),
-                "spray1_design_fraction": (0.0, 0.15),
-                "spray2_design_fraction": (0.0, 0.15),
-                "spray1_max_fraction": (0.005, 0.3),
-                "spray2_max_fraction": (0.005, 0.3),
-                **{f"n_{s}": (1, 12) for s in SECTIONS},
-                "gas_temp_coeff": (0.0, 0.6),
-                "gas_flow_exponent": (0.0, 1.5),
-                "radiant_exponent": (0.0, 2.0),
-                "boiler_efficiency": (0.5, 1.0),
-                "rh_flow_fraction": (0.5, 1.0),
-                "k_expansion": (1.01, 1.7),
-                "eta_hp": (0.05, 1.0),
-                "eta_iplp": (0.05, 1.0),
-                "p_condenser_kPa": (1.0, 30.0),
-                "fwr_kp": (0.0, 1.0),
-                "fwr_ki_per_s": (0.0, 0.05),
-                "T_bir_s": (0.0, 600.0),
-                "tau_furnace_s": (0.5, 300.0),
-                "fwr_schedule_error_kJ_kg": (-80.0, 80.0),
-                "bias_evap_share": (0.0, 1.0),
-                "n_line": (1, 12),
-                "line_metal_t": (0.1, 500.0),
-                "line_volume_m3": (0.1, 200.0),
-            },
         )
         name = type(self).__name__
         if self.p_min_MPa >= self.p_nom_MPa:

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from steamtemp_gym.plants.base import validate_params
+from steamtemp_gym.plants.param_ranges import ranged, validate_params
 
 K0 = 273.15
 
@@ -30,26 +30,32 @@ class BoilerTurbineParams:
 
     # unit and operating program
     W_nom_kg_s: float = 2270e3 / 3600.0  # rated main-steam flow, 2270 t/h (Table 1)
-    p_nom_MPa: float = 25.0  # superheater outlet at rated load (24.1 MPa throttle)
-    p_min_MPa: float = 14.0  # at slide_min_load and below
-    slide_knee_load: float = 0.9  # constant pressure above this load
-    slide_min_load: float = 0.25
-    T_ms_C: float = 538.0  # main-steam (STE) setpoint
-    T_rh_C: float = 566.0  # reheat (RTE) setpoint
-    p_rh_nom_MPa: float = 4.3  # reheater pressure at rated flow (~ proportional to flow)
-    p_rh_min_MPa: float = 0.6
-    T_crh_nom_C: float = 330.0  # HP-turbine exhaust (cold reheat) at rated load
-    reheat_flow_fraction: float = 0.88  # reheat / main-steam flow (HP-heater extraction)
+    # superheater outlet at rated load (24.1 MPa throttle)
+    p_nom_MPa: float = ranged(25.0, 15.0, 31.0)
+    p_min_MPa: float = ranged(14.0, 1.0, 31.0)  # at slide_min_load and below
+    slide_knee_load: float = ranged(0.9, 0.3, 1.2)  # constant pressure above this load
+    slide_min_load: float = ranged(0.25, 0.1, 0.9)
+    T_ms_C: float = ranged(538.0, 450.0, 650.0)  # main-steam (STE) setpoint
+    T_rh_C: float = ranged(566.0, 450.0, 650.0)  # reheat (RTE) setpoint
+    # reheater pressure at rated flow (~ proportional to flow)
+    p_rh_nom_MPa: float = ranged(4.3, 1.0, 10.0)
+    p_rh_min_MPa: float = ranged(0.6, 0.3, 5.0)
+    # HP-turbine exhaust (cold reheat) at rated load
+    T_crh_nom_C: float = ranged(330.0, 200.0, 450.0)
+    # reheat / main-steam flow (HP-heater extraction)
+    reheat_flow_fraction: float = ranged(0.88, 0.5, 1.0)
     # rated design temperatures and sprays
     T_up_design_C: float = 410.0  # evaporator/separator outlet = primary SH inlet
     T_sp1_out_design_C: float = 440.0  # platen inlet
     T_sp2_out_design_C: float = 498.0  # final SH inlet
-    sp1_design_fraction: float = 0.04  # of main-steam flow
-    sp2_design_fraction: float = 0.03
-    valve_design_opening: float = 0.5  # spray valves are sized to pass the design at this
+    sp1_design_fraction: float = ranged(0.04, 0.0, 0.15)  # of main-steam flow
+    sp2_design_fraction: float = ranged(0.03, 0.0, 0.15)
+    # spray valves are sized to pass the design at this
+    valve_design_opening: float = ranged(0.5, 0.1, 0.9)
     dp_boiler_nom_MPa: float = 4.0  # feed-pump discharge minus SH outlet, rated flow
-    T_fw_nom_C: float = 290.0  # feedwater after the HP heaters, rated load
-    dT_fw_dload_K: float = 70.0  # feedwater temperature drop per unit load reduction
+    T_fw_nom_C: float = ranged(290.0, 100.0, 350.0)  # feedwater after the HP heaters, rated load
+    # feedwater temperature drop per unit load reduction
+    dT_fw_dload_K: float = ranged(70.0, 0.0, 200.0)
     # tube metal (all convective stages) and steam-side film, eq. (4)-(5)
     rho_metal_kg_m3: float = 7800.0
     c_metal_J_kgK: float = 600.0  # alloy steel near 500 C
@@ -57,25 +63,25 @@ class BoilerTurbineParams:
     alpha_sh_W_m2K: float = 6000.0  # supercritical steam film at rated flow (Dittus-Boelter)
     alpha_rh_W_m2K: float = 1500.0  # reheat steam film at rated flow
     # primary SH (convective, rear pass)
-    n_seg_primary: int = 3
+    n_seg_primary: int = ranged(3, 1, 20)
     primary_n_tubes: int = 500
     primary_length_m: float = 70.0
     primary_id_m: float = 0.038
     primary_od_m: float = 0.048
     # secondary SH = platen: the eq. (1)-(6) section of Table 1 (effective lumped values)
-    n_seg_platen: int = 1
+    n_seg_platen: int = ranged(1, 1, 20)
     platen_volume_m3: float = 85.0
     platen_metal_MJ_K: float = 121.0  # M_m c_m
     platen_kA_film_MW_K: float = 4.4  # film UA at rated flow (scales as w^0.8)
     platen_kA_wall_MW_K: float = 2.75  # wall term of eq. (4), flow independent
     # final SH (convective, furnace exit)
-    n_seg_final: int = 3
+    n_seg_final: int = ranged(3, 1, 20)
     final_n_tubes: int = 300
     final_length_m: float = 60.0
     final_id_m: float = 0.038
     final_od_m: float = 0.0508
     # reheater (convective, rear pass)
-    n_seg_reheat: int = 4
+    n_seg_reheat: int = ranged(4, 1, 20)
     reheat_n_tubes: int = 450
     reheat_length_m: float = 80.0
     reheat_id_m: float = 0.050
@@ -84,31 +90,38 @@ class BoilerTurbineParams:
     Tg_primary_C: float = 750.0  # gas at the primary SH, rated firing
     Tg_final_C: float = 1100.0  # furnace exit gas at the final SH
     Tg_reheat_C: float = 950.0  # gas at the reheater
-    dTg_dload_K: float = 250.0  # SH gas temperature drop per unit firing reduction
-    dTg_reheat_dload_K: float = 200.0  # the same at the reheater (rear pass)
+    # SH gas temperature drop per unit firing reduction
+    dTg_dload_K: float = ranged(250.0, 0.0, 600.0)
+    dTg_reheat_dload_K: float = ranged(200.0, 0.0, 600.0)  # the same at the reheater (rear pass)
     gas_flow_exponent: float = 0.6  # convective UA_g ~ gas flow^0.6
     radiant_exponent: float = 0.85  # platen radiant heat ~ firing^0.85
-    recirc_max_fraction: float = 0.5  # recirculated / combustion gas with RGD fully open
-    rgd_design_opening: float = 0.25  # RGD opening of the rated design balance
-    platen_recirc_sensitivity: float = 0.3  # relative platen heat loss per unit recirculation
+    # recirculated / combustion gas with RGD fully open
+    recirc_max_fraction: float = ranged(0.5, 0.0, 1.0)
+    rgd_design_opening: float = ranged(0.25, 0.05, 0.95)  # RGD opening of the rated design balance
+    # relative platen heat loss per unit recirculation
+    platen_recirc_sensitivity: float = ranged(0.3, 0.0, 2.0)
     # existing controllers and lags
-    tau_mill_s: float = 100.0  # coal mills: grinding, pulverised-coal inventory, transport
+    # coal mills: grinding, pulverised-coal inventory, transport
+    tau_mill_s: float = ranged(100.0, 1.0, 900.0)
     tau_firing_s: float = 15.0  # furnace heat release behind the mills
-    T_bir_s: float = 30.0  # boiler-input-rate lead
+    T_bir_s: float = ranged(30.0, 0.0, 600.0)  # boiler-input-rate lead
     tau_steam_s: float = 20.0  # steam flow following MWD
     tau_upstream_s: float = 120.0  # evaporator outlet enthalpy lag
-    fwr_coupling: float = 0.3  # share of a firing/flow ratio error reaching h_up
-    fwr_schedule_error_kJ_kg: float = -30.0  # evaporator-outlet schedule error at half load
-    bias_upstream_share: float = 0.5  # share of the heat-absorption bias on the evaporator
-    n_line: int = 3  # mixing cells of the SH outlet header + main-steam line
-    line_metal_t: float = 100.0  # effective header/line/valve-chest metal (package doc)
-    line_volume_m3: float = 20.0  # steam volume of header and main-steam lines
-    n_rh_line: int = 2  # mixing cells of the hot-reheat line
-    rh_line_metal_t: float = 30.0  # effective hot-reheat header/line metal
-    rh_line_volume_m3: float = 60.0  # steam volume of the hot-reheat lines
+    fwr_coupling: float = ranged(0.3, 0.0, 1.0)  # share of a firing/flow ratio error reaching h_up
+    # evaporator-outlet schedule error at half load
+    fwr_schedule_error_kJ_kg: float = ranged(-30.0, -80.0, 80.0)
+    # share of the heat-absorption bias on the evaporator
+    bias_upstream_share: float = ranged(0.5, 0.0, 1.0)
+    n_line: int = ranged(3, 1, 12)  # mixing cells of the SH outlet header + main-steam line
+    # effective header/line/valve-chest metal (package doc)
+    line_metal_t: float = ranged(100.0, 0.1, 500.0)
+    line_volume_m3: float = ranged(20.0, 0.1, 300.0)  # steam volume of header and main-steam lines
+    n_rh_line: int = ranged(2, 1, 12)  # mixing cells of the hot-reheat line
+    rh_line_metal_t: float = ranged(30.0, 0.1, 500.0)  # effective hot-reheat header/line metal
+    rh_line_volume_m3: float = ranged(60.0, 0.1, 500.0)  # steam volume of the hot-reheat lines
     tau_hp_s: float = 15.0  # HP turbine and cold-reheat line
     fuel_bias_action: bool = False  # FF bias as a fourth action
-    fuel_bias_max: float = 0.1  # FF bias range, fraction of rated firing
+    fuel_bias_max: float = ranged(0.1, 0.0, 0.5)  # FF bias range, fraction of rated firing
     tau_fuel_bias_s: float = 1.0
     tau_valve_s: float = 2.0
     valve_rate_per_s: float = 0.1  # full stroke in 10 s
@@ -128,44 +141,6 @@ class BoilerTurbineParams:
             positive=tuple(
                 n for n in self.__dataclass_fields__ if n not in signed and n != "fuel_bias_action"
             ),
-            bounds={
-                "p_nom_MPa": (15.0, 31.0),
-                "p_min_MPa": (1.0, 31.0),
-                "slide_knee_load": (0.3, 1.2),
-                "slide_min_load": (0.1, 0.9),
-                "T_ms_C": (450.0, 650.0),
-                "T_rh_C": (450.0, 650.0),
-                "p_rh_nom_MPa": (1.0, 10.0),
-                "p_rh_min_MPa": (0.3, 5.0),
-                "T_crh_nom_C": (200.0, 450.0),
-                "reheat_flow_fraction": (0.5, 1.0),
-                "sp1_design_fraction": (0.0, 0.15),
-                "sp2_design_fraction": (0.0, 0.15),
-                "valve_design_opening": (0.1, 0.9),
-                "T_fw_nom_C": (100.0, 350.0),
-                "dT_fw_dload_K": (0.0, 200.0),
-                "dTg_dload_K": (0.0, 600.0),
-                "dTg_reheat_dload_K": (0.0, 600.0),
-                "recirc_max_fraction": (0.0, 1.0),
-                "rgd_design_opening": (0.05, 0.95),
-                "platen_recirc_sensitivity": (0.0, 2.0),
-                "fwr_coupling": (0.0, 1.0),
-                "T_bir_s": (0.0, 600.0),
-                "fuel_bias_max": (0.0, 0.5),
-                "n_seg_primary": (1, 20),
-                "n_seg_platen": (1, 20),
-                "n_seg_final": (1, 20),
-                "n_seg_reheat": (1, 20),
-                "tau_mill_s": (1.0, 900.0),
-                "fwr_schedule_error_kJ_kg": (-80.0, 80.0),
-                "bias_upstream_share": (0.0, 1.0),
-                "n_line": (1, 12),
-                "n_rh_line": (1, 12),
-                "line_metal_t": (0.1, 500.0),
-                "rh_line_metal_t": (0.1, 500.0),
-                "line_volume_m3": (0.1, 300.0),
-                "rh_line_volume_m3": (0.1, 500.0),
-            },
         )
         name = type(self).__name__
         for stage in ("primary", "final", "reheat"):

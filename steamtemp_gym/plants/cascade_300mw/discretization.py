@@ -83,6 +83,6 @@ def _pack(params: CascadeParams) -> tuple[np.ndarray, np.ndarray, np.ndarray, in
     else:  # never read: the exact 100 % block is used at every load
         blocks = [np.zeros(nb)] * N_GRID
     exact = _block(params, 1.0)
-    P[IP.GRID:] = np.concatenate(blocks + [exact, exact])
+    P[IP.GRID :] = np.concatenate(blocks + [exact, exact])
     P.setflags(write=False)
     return P, np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64), IX.X + n

@@ -9,9 +9,7 @@ from steamtemp_gym.slots import slots
 
 #: The physical outputs, in the order of z.
 OUTPUTS = (
-    Signal(
-        "outlet_temp_C", "C", 535.0, 20.0, observed=False, description="superheated steam y"
-    ),
+    Signal("outlet_temp_C", "C", 535.0, 20.0, observed=False, description="superheated steam y"),
     Signal("outlet_temp_meas_C", "C", 535.0, 20.0, noisy=True, description="measured y"),
     Signal(
         "intermediate_temp_C",
@@ -23,9 +21,7 @@ OUTPUTS = (
     ),
     Signal("spray_valve", "1", 0.5, 0.5, description="valve position feedback"),
     Signal("spray_flow_kg_s", "kg/s", 4.0, 4.0, description="secondary spray water flow"),
-    Signal(
-        "omega_K", "K", 0.0, 4.0, description="measured outer disturbance omega (next step)"
-    ),
+    Signal("omega_K", "K", 0.0, 4.0, description="measured outer disturbance omega (next step)"),
     Signal(
         "omega2_kg_s",
         "kg/s",

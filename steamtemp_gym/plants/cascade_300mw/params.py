@@ -5,9 +5,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from steamtemp_gym.plants.base import (
-    validate_params,
-)
+from steamtemp_gym.plants.param_ranges import ranged, validate_params
 
 K0 = 273.15
 PLANT_ID = "steamtemp/Cascade300MW-v0"
@@ -20,26 +18,32 @@ class CascadeParams:
 
     lead_gain_K_s_kg: float = 2.01  # |K2| at 100 % load, K per kg/s (sign: spray cools)
     lead_time_s: float = 16.0  # T2 at 100 % load
-    lead_order: int = 2
+    lead_order: int = ranged(2, 1, 6)
     inertia_gain: float = 2.09  # K1 at 100 % load, K per K
     inertia_time_s: float = 22.3  # T1 at 100 % load
-    inertia_order: int = 4
+    inertia_order: int = ranged(4, 1, 6)
     load_dependent: bool = True  # gains and time constants vary with load (table in module doc)
-    load_gain_exponent_lead: float = 1.0  # K2 ~ L^-a (attemperator balance ~ 1/W)
-    load_gain_exponent_inertia: float = 0.0  # K1 ~ L^-a
-    load_time_exponent: float = 1.0  # T1, T2 ~ L^-a (~1/load, IDAES 320 MW geometry; unverified)
-    T_out_C: float = 535.0  # outlet operating point and setpoint (paper, Section 5)
-    ht_rise_K: float = 65.0  # outlet minus intermediate temperature at rated load (unverified)
+    load_gain_exponent_lead: float = ranged(1.0, 0.0, 3.0)  # K2 ~ L^-a (attemperator balance ~ 1/W)
+    load_gain_exponent_inertia: float = ranged(0.0, 0.0, 3.0)  # K1 ~ L^-a
+    # T1, T2 ~ L^-a (~1/load, IDAES 320 MW geometry; unverified)
+    load_time_exponent: float = ranged(1.0, 0.0, 3.0)
+    # outlet operating point and setpoint (paper, Section 5)
+    T_out_C: float = ranged(535.0, 450.0, 650.0)
+    # outlet minus intermediate temperature at rated load (unverified)
+    ht_rise_K: float = ranged(65.0, 1.0, 200.0)
     spray_max_kg_s: float = 9.0  # spray flow with the valve fully open (unverified)
     spray_rated_kg_s: float = 4.5  # spray holding T_out at 100 % load (unverified)
-    spray_half_load_kg_s: float = 2.0  # spray holding T_out at 50 % load (unverified)
-    attemp_pressure_MPa: float = 17.5  # secondary attemperator, 300 MW drum unit (unverified)
-    spray_water_temp_C: float = 175.0  # feed-pump discharge (units: 170-290 C; unverified)
-    omega_halfwidth_K: float = 3.0  # outer disturbance omega, marginal U(-a, a)
-    omega_corr_time_s: float = 150.0  # correlation time of omega (0: white)
-    omega2_scale_kg_s: float = 0.8  # inner disturbance omega_2 ~ b (Exp(1) - 1)
-    dt_s: float = 1.0  # sampling period T_s (paper, Section 5)
-    n_substeps: int = 1  # the discretization is exact: one step per interval
+    # spray holding T_out at 50 % load (unverified)
+    spray_half_load_kg_s: float = ranged(2.0, 0.0, 1000.0)
+    # secondary attemperator, 300 MW drum unit (unverified)
+    attemp_pressure_MPa: float = ranged(17.5, 5.0, 22.0)
+    # feed-pump discharge (units: 170-290 C; unverified)
+    spray_water_temp_C: float = ranged(175.0, 100.0, 300.0)
+    omega_halfwidth_K: float = ranged(3.0, 0.0, 50.0)  # outer disturbance omega, marginal U(-a, a)
+    omega_corr_time_s: float = ranged(150.0, 0.0, 3600.0)  # correlation time of omega (0: white)
+    omega2_scale_kg_s: float = ranged(0.8, 0.0, 10.0)  # inner disturbance omega_2 ~ b (Exp(1) - 1)
+    dt_s: float = ranged(1.0, 0.01, 60.0)  # sampling period T_s (paper, Section 5)
+    n_substeps: int = ranged(1, 1, 1)  # the discretization is exact: one step per interval
 
     def __post_init__(self) -> None:
         validate_params(
@@ -56,23 +60,6 @@ class CascadeParams:
                 "spray_water_temp_C",
                 "dt_s",
             ),
-            bounds={
-                "lead_order": (1, 6),
-                "inertia_order": (1, 6),
-                "load_gain_exponent_lead": (0.0, 3.0),
-                "load_gain_exponent_inertia": (0.0, 3.0),
-                "load_time_exponent": (0.0, 3.0),
-                "T_out_C": (450.0, 650.0),
-                "ht_rise_K": (1.0, 200.0),
-                "spray_half_load_kg_s": (0.0, 1e3),
-                "attemp_pressure_MPa": (5.0, 22.0),
-                "spray_water_temp_C": (100.0, 300.0),
-                "omega_halfwidth_K": (0.0, 50.0),
-                "omega2_scale_kg_s": (0.0, 10.0),
-                "omega_corr_time_s": (0.0, 3600.0),
-                "dt_s": (0.01, 60.0),
-                "n_substeps": (1, 1),
-            },
         )
         for name in ("spray_rated_kg_s", "spray_half_load_kg_s"):
             if not getattr(self, name) < self.spray_max_kg_s:

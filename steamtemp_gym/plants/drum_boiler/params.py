@@ -40,7 +40,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from steamtemp_gym.plants.base import validate_params
+from steamtemp_gym.plants.param_ranges import ranged, validate_params
 from steamtemp_gym.steam import sat_p
 
 K0 = 273.15
@@ -61,25 +61,29 @@ class DrumBoilerParams:
     A_d_m2: float = 20.0
     A_dc_m2: float = 0.38
     k_friction: float = 25.0
-    beta: float = 0.3
+    beta: float = ranged(0.3, 0.0, 2.0)
     T_d_s: float = 12.0
     V_sd0_m3: float = 4.9
     V_wt_nom_m3: float = 57.2  # total water volume at the normal level, rated load
     # operating point
-    p_drum_MPa: float = 8.5
+    p_drum_MPa: float = ranged(8.5, 2.0, 16.0)
     q_s_nom_kg_s: float = 50.0  # drum steam flow at rated load
-    T_fw_nom_C: float = 242.0
-    dT_fw_dload_K: float = 40.0  # feedwater temperature drop per unit load reduction
-    p_fw_MPa: float = 9.5  # feedwater pressure for its properties
-    T_out_C: float = 505.0  # main steam temperature setpoint
+    T_fw_nom_C: float = ranged(242.0, 100.0, 300.0)
+    # feedwater temperature drop per unit load reduction
+    dT_fw_dload_K: float = ranged(40.0, 0.0, 100.0)
+    p_fw_MPa: float = ranged(9.5, 2.0, 30.0)  # feedwater pressure for its properties
+    T_out_C: float = ranged(505.0, 400.0, 600.0)  # main steam temperature setpoint
     T_primary_out_C: float = 440.0  # primary SH outlet at the rated design point
-    spray_design_fraction: float = 0.05  # spray / main-steam flow at the rated design
-    spray_max_fraction: float = 0.10  # spray / rated main-steam flow, valve fully open
-    attemp_margin_K: float = 12.0  # protection: attemperator outlet >= Tsat(p_1) + margin
+    # spray / main-steam flow at the rated design
+    spray_design_fraction: float = ranged(0.05, 0.005, 0.2)
+    # spray / rated main-steam flow, valve fully open
+    spray_max_fraction: float = ranged(0.10, 0.01, 0.3)
+    # protection: attemperator outlet >= Tsat(p_1) + margin
+    attemp_margin_K: float = ranged(12.0, 1.0, 50.0)
     dp_spray_MPa: float = 1.5  # pressure drop across the spray valve
     dp_sh_nom_MPa: float = 0.4  # drum to SH outlet at rated flow
     # superheaters
-    n_segments: int = 5  # per superheater
+    n_segments: int = ranged(5, 1, 40)  # per superheater
     n_tubes_1: int = 96
     tube_length_1_m: float = 70.0
     tube_id_1_m: float = 0.034
@@ -95,15 +99,17 @@ class DrumBoilerParams:
     dTg1_dload_K: float = 200.0
     Tg2_nom_C: float = 1050.0
     dTg2_dload_K: float = 300.0
-    gas_flow_exponent: float = 0.6
+    gas_flow_exponent: float = ranged(0.6, 0.0, 1.0)
     # controls and actuators
     tau_steam_s: float = 10.0
-    tau_mill_s: float = 60.0  # coal mill: grinding and pulverized-coal inventory lag
-    tau_firing_s: float = 60.0  # furnace heat release behind the mills
-    T_bir_s: float = 45.0  # boiler-input-rate feed-forward lead of the boiler master
-    n_line: int = 3  # mixing cells of the outlet header and main-steam line
-    line_volume_m3: float = 2.0  # their steam volume
-    line_metal_t: float = 5.5  # their effective metal at steam temperature
+    # coal mill: grinding and pulverized-coal inventory lag
+    tau_mill_s: float = ranged(60.0, 1.0, 600.0)
+    tau_firing_s: float = ranged(60.0, 1.0, 900.0)  # furnace heat release behind the mills
+    # boiler-input-rate feed-forward lead of the boiler master
+    T_bir_s: float = ranged(45.0, 0.0, 600.0)
+    n_line: int = ranged(3, 1, 8)  # mixing cells of the outlet header and main-steam line
+    line_volume_m3: float = ranged(2.0, 0.01, 50.0)  # their steam volume
+    line_metal_t: float = ranged(5.5, 0.01, 100.0)  # their effective metal at steam temperature
     Kp_pressure: float = 1.5  # firing fraction per relative pressure error
     Ti_pressure_s: float = 500.0
     Kp_level_kg_s_m: float = 200.0
@@ -122,25 +128,6 @@ class DrumBoilerParams:
             positive=tuple(
                 n for n in self.__dataclass_fields__ if n not in ("dT_fw_dload_K", "T_bir_s")
             ),
-            bounds={
-                "n_segments": (1, 40),
-                "p_drum_MPa": (2.0, 16.0),
-                "p_fw_MPa": (2.0, 30.0),
-                "beta": (0.0, 2.0),
-                "T_fw_nom_C": (100.0, 300.0),
-                "dT_fw_dload_K": (0.0, 100.0),
-                "T_out_C": (400.0, 600.0),
-                "spray_design_fraction": (0.005, 0.2),
-                "spray_max_fraction": (0.01, 0.3),
-                "gas_flow_exponent": (0.0, 1.0),
-                "attemp_margin_K": (1.0, 50.0),
-                "tau_mill_s": (1.0, 600.0),
-                "tau_firing_s": (1.0, 900.0),
-                "T_bir_s": (0.0, 600.0),
-                "n_line": (1, 8),
-                "line_volume_m3": (0.01, 50.0),
-                "line_metal_t": (0.01, 100.0),
-            },
         )
         for i in (1, 2):
             if getattr(self, f"tube_od_{i}_m") <= getattr(self, f"tube_id_{i}_m"):
