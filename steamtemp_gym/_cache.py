@@ -2,7 +2,8 @@
 
 The plants' numba kernels are compiled on first use and cached on disk
 (``cache=True``), so that later processes load them in about a second instead of
-compiling for 5-25 s per plant.
+compiling for 10-30 s per plant (``python -m steamtemp_gym.precompile`` compiles them
+ahead, several plants at once).
 
 Location: ``$STEAMTEMP_GYM_CACHE_DIR`` if set, else ``$NUMBA_CACHE_DIR``, else
 ``$XDG_CACHE_HOME/steamtemp_gym`` (default ``~/.cache/steamtemp_gym``). Inside it,
@@ -265,11 +266,12 @@ class _CompileNotice(event.Listener if event is not None else object):
         if where is None or where.writable:
             log.warning(
                 "steamtemp_gym: compiling kernels on first use (once per code version, about "
-                "5-25 s per plant; cached in %s)", where.path if where else "numba's cache")
+                "10-30 s per plant; cached in %s; `python -m steamtemp_gym.precompile` "
+                "compiles every plant ahead)", where.path if where else "numba's cache")
         elif not self.warned:
             self.warned = True
             log.warning(
-                "steamtemp_gym: compiling kernels that are not kept (about 5-25 s per plant, "
+                "steamtemp_gym: compiling kernels that are not kept (about 10-30 s per plant, "
                 "again in every process): the cache folder %s is not writable%s; point "
                 "STEAMTEMP_GYM_CACHE_DIR at a writable folder to keep them", where.path,
                 "" if where.numba_dir is None else " (the kernels it holds are used)")
