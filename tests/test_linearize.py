@@ -68,13 +68,11 @@ def linear_step_response(A, B, C, j: int) -> np.ndarray:
 #: default run: the claim plant and the plant with internal random generators (their states
 #: must cancel); every id under ``-m slow`` (about 2 min: the large plants' numba compiles)
 DEFAULT_IDS = ("steamtemp/DrumBoilerSH-v0", "steamtemp/Cascade300MW-v0")
+ENV_ID_PARAMS = [i if i in DEFAULT_IDS else pytest.param(i, marks=pytest.mark.slow)
+                 for i in steamtemp_gym.ENV_IDS]  # fmt: skip
 
 
-@pytest.mark.parametrize(
-    "env_id",
-    [i if i in DEFAULT_IDS else pytest.param(i, marks=pytest.mark.slow)
-     for i in steamtemp_gym.ENV_IDS],
-)  # fmt: skip
+@pytest.mark.parametrize("env_id", ENV_ID_PARAMS)
 def test_linear_model_matches_env_step_response(env_id):
     A, B, C, D = _model(env_id, 1.0)
     plant = plants.make(env_id)
@@ -138,11 +136,7 @@ def env_disturbance_response(env_id: str, channel: str, size: float) -> np.ndarr
     return (runs[1] - runs[0]) * scale, scale
 
 
-@pytest.mark.parametrize(
-    "env_id",
-    [i if i in DEFAULT_IDS else pytest.param(i, marks=pytest.mark.slow)
-     for i in steamtemp_gym.ENV_IDS],
-)  # fmt: skip
+@pytest.mark.parametrize("env_id", ENV_ID_PARAMS)
 def test_disturbance_columns_match_env_step_response(env_id):
     """linearize_disturbances: the linear response to a 1 % heat-absorption step and a
     -0.4 % load step matches the env's (the step acts from the second interval: x_1 = 0)."""

@@ -175,21 +175,15 @@ def test_bad_runs_are_argparse_errors(value, match, capsys):
     (["--zoo", "--backend", "dask"], "invalid choice: 'dask'"),
     (["--zoo", "--max-minutes", "0"], "--max-minutes must be > 0"),
 ])  # fmt: skip
-def test_zoo_flags_are_checked_before_training(argv, match, capsys, tmp_path):
-    with pytest.raises(SystemExit) as exc:
-        train.main([*argv, "--out", str(tmp_path / "zoo")])
-    assert exc.value.code == 2 and match in capsys.readouterr().err
-    assert not (tmp_path / "zoo").exists()
+def test_zoo_flags_are_checked_before_training(argv, match, argparse_error):
+    assert match in argparse_error(train.main, argv)
 
 
-def test_every_entry_is_checked_before_the_first_run(tmp_path, capsys):
+def test_every_entry_is_checked_before_the_first_run(tmp_path, argparse_error):
     yml = tmp_path / "ppo.yml"
-    yml.write_text(yaml.safe_dump({ENV: TINY_PPO[ENV]}))
-    with pytest.raises(SystemExit) as exc:  # the file has no entry for the other plants
-        train.main(["--zoo", "--algo", "ppo", "--runs", "2", "--hyperparams", str(yml),
-                    "--out", str(tmp_path / "zoo")])  # fmt: skip
-    assert exc.value.code == 2 and "no entry for steamtemp/" in capsys.readouterr().err
-    assert not (tmp_path / "zoo").exists()
+    yml.write_text(yaml.safe_dump({ENV: TINY_PPO[ENV]}))  # no entry for the other plants
+    argv = ["--zoo", "--algo", "ppo", "--runs", "2", "--hyperparams", str(yml)]
+    assert "no entry for steamtemp/" in argparse_error(train.main, argv)
 
 
 def test_run_seeds_never_share_a_training_env_seed(tmp_path):
