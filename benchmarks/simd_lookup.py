@@ -9,8 +9,9 @@ ns per lookup of T, dT/dh and rho on the fast table for ``--batch`` random super
 states (10-25 MPa, 3000-3400 kJ/kg):
 
 - ``scalar``: the plants' way, one ``steam.T_rho_ph`` call per row;
-- ``batch``: one loop over the rows with the fast table's Hermite bicubic written
-  branch-free (the steam package's own ``_hermite`` and ``_fcol``), as numba compiles it;
+- ``batch``: one loop over the rows that locates each row's cell branch-free and
+  evaluates it with the steam package's own Hermite bicubic (``_hermite``, ``_fbasis_h``
+  and ``_fval``, as ``steam.T_rho_ph`` does), as numba compiles it;
 - ``batch, noalias``: the same loop compiled with numba's internal ``noalias`` flag (the
   arrays declared not to overlap), which is what lets LLVM vectorize its table reads into
   gathers. The flag is not a public numba option; the script sets it for this one compile.
@@ -33,7 +34,7 @@ from numba import carray, float64, njit
 
 from steamtemp_gym.steam import T_rho_ph
 from steamtemp_gym.steam.cubic import _hermite
-from steamtemp_gym.steam.fast import _fcol
+from steamtemp_gym.steam.fast import _fbasis_h, _fval
 from steamtemp_gym.steam.tables import (
     _FH0,
     _FHINV,
@@ -50,28 +51,20 @@ SIG = (float64[::1],) * 5
 
 
 def _batch(P, H, T, dT, R):  # noqa: N803
-    """T, dT/dh and rho of every row (P Pa, H J/kg) on the fast table, branch-free."""
+    """T, dT/dh and rho of every row (P Pa, H J/kg) on the fast table, cells located
+    branch-free."""
     ft = carray(_FT_PTR(), _FT_SHAPE)
     fr = carray(_FR_PTR(), _FT_SHAPE)
     for k in range(P.shape[0]):
         x = min(max((min(P[k] * 1e-6, 35.0) - _FP0) * _FPINV, 0.0), float(_FNP))
         i = min(int(x), _FNP - 1)
-        a0, a1, a2, a3 = _hermite(x - i)
-        x = min(max((H[k] * 1e-3 - _FH0) * _FHINV, 0.0), float(_FNH))
-        j = min(int(x), _FNH - 1)
-        u = x - j
-        b0, b1, b2, b3 = _hermite(u)
-        u2 = u * u
-        e0 = (6.0 * u2 - 6.0 * u) * _FHINV
-        e1 = (3.0 * u2 - 4.0 * u + 1.0) * _FHINV
-        e3 = (3.0 * u2 - 2.0 * u) * _FHINV
-        g0, gu0 = _fcol(ft, i, j, a0, a1, a2, a3)
-        g1, gu1 = _fcol(ft, i, j + 1, a0, a1, a2, a3)
-        T[k] = (b0 * g0 + b1 * gu0) + (b2 * g1 + b3 * gu1)
-        dT[k] = (e0 * (g0 - g1) + (e1 * gu0 + e3 * gu1)) * 1e-3
-        g0, gu0 = _fcol(fr, i, j, a0, a1, a2, a3)
-        g1, gu1 = _fcol(fr, i, j + 1, a0, a1, a2, a3)
-        R[k] = (b0 * g0 + b1 * gu0) + (b2 * g1 + b3 * gu1)
+        y = min(max((H[k] * 1e-3 - _FH0) * _FHINV, 0.0), float(_FNH))
+        j = min(int(y), _FNH - 1)
+        a = _hermite(x - i)
+        b, e = _fbasis_h(y - j)
+        T[k], dT_kJ = _fval(ft, i, j, a, b, e)
+        dT[k] = dT_kJ * 1e-3
+        R[k] = _fval(fr, i, j, a, b, e)[0]
 
 
 @njit(error_model="numpy")

@@ -45,6 +45,8 @@ SCHEDULED = "scheduled"
 TRIP_BAND_K = (50.0, 28.0)
 #: Positions of X, U, D and Z (a row per batch entry) among :meth:`Plant.step_args`.
 STEP_ROWS = (0, 1, 2, 8)
+#: 0 C in kelvin.
+K0 = 273.15
 
 
 @dataclass(frozen=True)
@@ -126,6 +128,10 @@ class Plant:
     #: (valve state index, P index of its time constant, P index of its rate limit) for
     #: the first actions; integrated exactly by the shared kernel (plants/integrator.py).
     actuators: ClassVar[tuple[tuple[int, int, int], ...]] = ()
+    #: Compiled steady-state solver ``steady(D, setpoint_K, P, X)`` (setpoints in kelvin)
+    #: that :meth:`steady_state` calls; a plant whose solver takes other arguments
+    #: overrides :meth:`steady_state` instead.
+    steady: ClassVar[Callable | None] = None
     _compiled: ClassVar[dict[type, Callable]] = {}
 
     def __init__(self, **overrides: Any) -> None:
@@ -192,7 +198,9 @@ class Plant:
 
     def steady_state(self, D: np.ndarray, setpoint_C: np.ndarray, X: np.ndarray) -> None:
         """Write into X the steady state at the disturbances D holding ``setpoint_C``."""
-        raise NotImplementedError
+        if self.steady is None:
+            raise NotImplementedError
+        self.steady(D, setpoint_C + K0, self.P, X)
 
     def seed_rows(self, X: np.ndarray, keys: np.ndarray) -> None:
         """Seed the plant's own random disturbances of rows X from the episodes' keys (uint64).

@@ -180,6 +180,13 @@ def chain_steady(x, off, n, h0, W, p, kA, UAg, Tg, Qrad):
 # of a plant is an effective value (see the plants' docstrings).
 
 
+def pipe_cells(n: int, volume_m3: float, metal_t: float, c_metal_J_kgK: float
+               ) -> tuple[float, float]:  # fmt: skip
+    """Steam volume V_k (m3) and wall heat capacity C_m,k (J/K) of each of the n equal
+    cells of a line of the given volume and wall metal mass (t)."""
+    return volume_m3 / n, metal_t * 1e3 * c_metal_J_kgK / n
+
+
 def pipe_pattern(off: int, n: int, inlet_cols: tuple[int, ...] = (),
                  flow_col: int = -1) -> list[tuple[int, int]]:  # fmt: skip
     """Strictly-lower Jacobian couplings of an n-cell pipe at ``off`` (one h state per cell)."""

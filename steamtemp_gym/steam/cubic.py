@@ -1,4 +1,5 @@
-"""Cubic Hermite cells: the basis on a unit cell and the safeguarded root of a cell's cubic."""
+"""Cubic Hermite cells: the basis on a unit cell and on a cell of any width, its slope,
+and the safeguarded root of a cell's cubic."""
 
 from __future__ import annotations
 
@@ -11,6 +12,22 @@ def _hermite(t: float) -> tuple[float, float, float, float]:
     t2 = t * t
     t3 = t2 * t
     return 2.0 * t3 - 3.0 * t2 + 1.0, t3 - 2.0 * t2 + t, 3.0 * t2 - 2.0 * t3, t3 - t2
+
+
+@njit(cache=True, error_model="numpy")
+def _hermite_cell(t: float, w: float) -> tuple[float, float, float, float]:
+    """Cubic Hermite basis at local coordinate t of a cell of width w: weights of f(0),
+    f'(0), f(1), f'(1) with the derivatives per unit of the axis (not of the cell)."""
+    a0, a1, a2, a3 = _hermite(t)
+    return a0, a1 * w, a2, a3 * w
+
+
+@njit(cache=True, error_model="numpy")
+def _hermite_slope(t: float, w: float) -> tuple[float, float, float, float]:
+    """d/dx of the weights of :func:`_hermite_cell` (x = w t along the axis)."""
+    t2 = t * t
+    d0 = (6.0 * t2 - 6.0 * t) / w
+    return d0, 3.0 * t2 - 4.0 * t + 1.0, -d0, 3.0 * t2 - 2.0 * t
 
 
 @njit(cache=True, error_model="numpy")

@@ -9,7 +9,7 @@ import numpy as np
 from numba import carray
 
 from steamtemp_gym._jit import njit
-from steamtemp_gym.steam.cubic import _cell_root, _hermite
+from steamtemp_gym.steam.cubic import _cell_root, _hermite, _hermite_slope
 from steamtemp_gym.steam.tables import (
     _FDH,
     _FG_PTR,
@@ -54,6 +54,33 @@ def _fcol(
 
 
 @njit(cache=True, error_model="numpy")
+def _fbasis_h(u: float) -> tuple[tuple[float, float, float, float], tuple[float, float, float]]:
+    """Hermite weights in h at local coordinate u of a fast-table cell: those of the value
+    (:func:`_hermite`) and those of d/dh per kJ/kg, for f(0), f'(0), f'(1) (that of f(1) is
+    minus the first)."""
+    d0, d1, _, d3 = _hermite_slope(u, 1.0)
+    return _hermite(u), (d0 * _FHINV, d1 * _FHINV, d3 * _FHINV)
+
+
+@njit(cache=True, error_model="numpy")
+def _fval(
+    tab: np.ndarray,
+    i: int,
+    j: int,
+    a: tuple[float, float, float, float],
+    b: tuple[float, float, float, float],
+    e: tuple[float, float, float],
+) -> tuple[float, float]:
+    """Value and d/dh of a fast table in cell (i, j): Hermite weights a in p, b and e in h
+    (:func:`_fbasis_h`)."""
+    g0, gu0 = _fcol(tab, i, j, a[0], a[1], a[2], a[3])
+    g1, gu1 = _fcol(tab, i, j + 1, a[0], a[1], a[2], a[3])
+    value = (b[0] * g0 + b[1] * gu0) + (b[2] * g1 + b[3] * gu1)
+    slope = e[0] * (g0 - g1) + (e[1] * gu0 + e[2] * gu1)
+    return value, slope
+
+
+@njit(cache=True, error_model="numpy")
 def _fast(pm: float, hk: float, want: int) -> tuple[float, float, float, float]:
     """``_lookup`` on the fast rectangle: plain Hermite bicubic on the uniform (p, h) grid.
 
@@ -63,26 +90,13 @@ def _fast(pm: float, hk: float, want: int) -> tuple[float, float, float, float]:
     fr = carray(_FR_PTR(), _FT_SHAPE)
     i, t = _ucell((pm - _FP0) * _FPINV, _FNP)
     j, u = _ucell((hk - _FH0) * _FHINV, _FNH)
-    a0, a1, a2, a3 = _hermite(t)
-    b0, b1, b2, b3 = _hermite(u)
-    u2 = u * u
-    e0 = (6.0 * u2 - 6.0 * u) * _FHINV  # d/dh of the basis (e2 = -e0)
-    e1 = (3.0 * u2 - 4.0 * u + 1.0) * _FHINV
-    e3 = (3.0 * u2 - 2.0 * u) * _FHINV
-    T = 0.0
-    dT = 0.0
-    rho = 0.0
-    drho = 0.0
+    a = _hermite(t)
+    b, e = _fbasis_h(u)
+    T = dT = rho = drho = 0.0
     if want != 1:
-        g0, gu0 = _fcol(ft, i, j, a0, a1, a2, a3)
-        g1, gu1 = _fcol(ft, i, j + 1, a0, a1, a2, a3)
-        T = (b0 * g0 + b1 * gu0) + (b2 * g1 + b3 * gu1)
-        dT = e0 * (g0 - g1) + (e1 * gu0 + e3 * gu1)
+        T, dT = _fval(ft, i, j, a, b, e)
     if want != 0:
-        g0, gu0 = _fcol(fr, i, j, a0, a1, a2, a3)
-        g1, gu1 = _fcol(fr, i, j + 1, a0, a1, a2, a3)
-        rho = (b0 * g0 + b1 * gu0) + (b2 * g1 + b3 * gu1)
-        drho = e0 * (g0 - g1) + (e1 * gu0 + e3 * gu1)
+        rho, drho = _fval(fr, i, j, a, b, e)
     return T, dT, rho, drho
 
 

@@ -10,7 +10,7 @@ import numpy as np
 from numba import carray
 
 from steamtemp_gym._jit import njit
-from steamtemp_gym.steam.cubic import _cell_root
+from steamtemp_gym.steam.cubic import _cell_root, _hermite_cell, _hermite_slope
 from steamtemp_gym.steam.tables import (
     _AX_DX,
     _AX_INV,
@@ -89,18 +89,8 @@ def _qcell(pm: float) -> tuple[int, int, float, float, float, float, float, floa
         seg = 2
         q = pm
     i, t, dq = _locate(seg, q)
-    t2 = t * t
-    t3 = t2 * t
-    return (
-        seg,
-        i,
-        2.0 * t3 - 3.0 * t2 + 1.0,
-        (t3 - 2.0 * t2 + t) * dq,
-        3.0 * t2 - 2.0 * t3,
-        (t3 - t2) * dq,
-        t,
-        dq,
-    )
+    a0, a1, a2, a3 = _hermite_cell(t, dq)
+    return seg, i, a0, a1, a2, a3, t, dq
 
 
 @njit(cache=True, error_model="numpy")
@@ -194,15 +184,11 @@ def _patch_lookup(pm: float, hk: float, want: int) -> tuple[float, float, float,
         return T, dT, rho, drho
     iw = 1.0 / (hi - lo)
     j, u, dxi = _locate(3 + b, (hk - lo) * iw)
-    u2 = u * u
-    u3 = u2 * u
-    b0 = 2.0 * u3 - 3.0 * u2 + 1.0
-    b1 = (u3 - 2.0 * u2 + u) * dxi
-    b2 = 3.0 * u2 - 2.0 * u3
-    b3 = (u3 - u2) * dxi
-    e0 = (6.0 * u2 - 6.0 * u) / dxi * iw
-    e1 = (3.0 * u2 - 4.0 * u + 1.0) * iw
-    e3 = (3.0 * u2 - 2.0 * u) * iw
+    b0, b1, b2, b3 = _hermite_cell(u, dxi)
+    d0, d1, _, d3 = _hermite_slope(u, dxi)
+    e0 = d0 * iw  # d/dh of the basis (e2 = -e0)
+    e1 = d1 * iw
+    e3 = d3 * iw
     if want != 1:
         g0, gx0 = _column(tdat, b, i, j, a0, a1, a2, a3)
         g1, gx1 = _column(tdat, b, i, j + 1, a0, a1, a2, a3)
@@ -304,16 +290,8 @@ def _sat(pm: float) -> tuple[float, float, float, float, float, float, float, fl
         dpdq = -2.0 * max(q, _SMIN)  # dp/dq at the (clamped) point
         cs = (6, 7, 8, 2, 3)
     i, t, dq = _locate(seg, q)
-    t2 = t * t
-    t3 = t2 * t
-    a0 = 2.0 * t3 - 3.0 * t2 + 1.0
-    a1 = (t3 - 2.0 * t2 + t) * dq
-    a2 = 3.0 * t2 - 2.0 * t3
-    a3 = (t3 - t2) * dq
-    d0 = (6.0 * t2 - 6.0 * t) / dq
-    d1 = 3.0 * t2 - 4.0 * t + 1.0
-    d2 = -d0
-    d3 = 3.0 * t2 - 2.0 * t
+    a0, a1, a2, a3 = _hermite_cell(t, dq)
+    d0, d1, d2, d3 = _hermite_slope(t, dq)
     v0 = _curve(seg, i, cs[0], a0, a1, a2, a3)
     v1 = _curve(seg, i, cs[1], a0, a1, a2, a3)
     v2 = _curve(seg, i, cs[2], a0, a1, a2, a3)

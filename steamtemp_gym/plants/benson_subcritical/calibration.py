@@ -33,7 +33,7 @@ from steamtemp_gym.plants.benson_subcritical.steady_state import (
 )
 from steamtemp_gym.plants.integrator import pattern_arrays
 from steamtemp_gym.plants.roots import secant
-from steamtemp_gym.plants.superheater import chain_pattern, pipe_pattern
+from steamtemp_gym.plants.superheater import chain_pattern, pipe_cells, pipe_pattern
 from steamtemp_gym.steam import T_ph, cp_pT, h_pT, rho_ph
 
 
@@ -253,8 +253,9 @@ def _pack_sections(pr: BensonParams, P: np.ndarray) -> tuple[list[tuple[int, int
     for k, name in enumerate(SECTIONS):
         if k == SEC.RH:  # outlet header and main-steam line, between SH4 and the reheater
             P[IP.LOFF], P[IP.NL], P[IP.JLINE] = off, pr.n_line, len(pat)
-            P[IP.LCM] = pr.line_metal_t * 1e3 * pr.c_metal_J_kgK / pr.n_line
-            P[IP.LV] = pr.line_volume_m3 / pr.n_line
+            P[IP.LV], P[IP.LCM] = pipe_cells(
+                pr.n_line, pr.line_volume_m3, pr.line_metal_t, pr.c_metal_J_kgK
+            )
             pat += pipe_pattern(off, pr.n_line, (prev_h,))
             prev_h = off + pr.n_line - 1
             off += pr.n_line

@@ -2,14 +2,12 @@
 
 from __future__ import annotations
 
-import numpy as np
-
 from steamtemp_gym.plants.base import MAIN, SCHEDULED, Plant, Signal
 from steamtemp_gym.plants.benson_subcritical.calibration import _pack
 from steamtemp_gym.plants.benson_subcritical.kernel import step
 from steamtemp_gym.plants.benson_subcritical.layout import OUTPUTS
-from steamtemp_gym.plants.benson_subcritical.params import K0, BensonParams
-from steamtemp_gym.plants.benson_subcritical.steady_state import steady
+from steamtemp_gym.plants.benson_subcritical.params import BensonParams
+from steamtemp_gym.plants.benson_subcritical.steady_state import steady as _steady
 
 
 class BensonSubcritical(Plant):
@@ -30,6 +28,7 @@ class BensonSubcritical(Plant):
                   "power_MW", "heat_absorption_MW")  # fmt: skip
 
     pack = staticmethod(_pack)
+    steady = staticmethod(_steady)
     setpoint_param = "T_ms_C"
     control_loops = (
         ("attemp1_out_temp_meas_C", SCHEDULED),  # first stage: its outlet on a load schedule
@@ -39,6 +38,3 @@ class BensonSubcritical(Plant):
 
     def kernel(self):
         return step
-
-    def steady_state(self, D: np.ndarray, setpoint_C: np.ndarray, X: np.ndarray) -> None:
-        steady(D, setpoint_C + K0, self.P, X)

@@ -2,14 +2,12 @@
 
 from __future__ import annotations
 
-import numpy as np
-
 from steamtemp_gym.plants.base import MAIN, SCHEDULED, Plant, Signal
 from steamtemp_gym.plants.boiler_turbine_mimo.calibration import _pack
 from steamtemp_gym.plants.boiler_turbine_mimo.kernel import ACTUATORS, KERNELS, step
 from steamtemp_gym.plants.boiler_turbine_mimo.layout import OUTPUTS
-from steamtemp_gym.plants.boiler_turbine_mimo.params import K0, BoilerTurbineParams
-from steamtemp_gym.plants.boiler_turbine_mimo.steady_state import steady
+from steamtemp_gym.plants.boiler_turbine_mimo.params import BoilerTurbineParams
+from steamtemp_gym.plants.boiler_turbine_mimo.steady_state import steady as _steady
 
 _FUEL_BIAS_ACTION = Signal(
     "fuel_bias_cmd",
@@ -56,6 +54,7 @@ class BoilerTurbineMIMO(Plant):
     )
 
     pack = staticmethod(_pack)
+    steady = staticmethod(_steady)
     kernels = KERNELS
     actuators = ACTUATORS
     setpoint_param = "T_ms_C"
@@ -76,6 +75,3 @@ class BoilerTurbineMIMO(Plant):
 
     def kernel(self):
         return step
-
-    def steady_state(self, D: np.ndarray, setpoint_C: np.ndarray, X: np.ndarray) -> None:
-        steady(D, setpoint_C + K0, self.P, X)

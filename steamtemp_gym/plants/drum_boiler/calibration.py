@@ -29,7 +29,7 @@ from steamtemp_gym.plants.drum_boiler.params import K0, DrumBoilerParams
 from steamtemp_gym.plants.drum_boiler.steady_state import steady
 from steamtemp_gym.plants.integrator import pattern_arrays
 from steamtemp_gym.plants.roots import secant
-from steamtemp_gym.plants.superheater import chain_steady, steam_side_kA
+from steamtemp_gym.plants.superheater import chain_steady, pipe_cells, steam_side_kA
 from steamtemp_gym.steam import h_pT, rho_ph, sat_p
 
 
@@ -124,8 +124,9 @@ def _pack(params: DrumBoilerParams) -> tuple[np.ndarray, np.ndarray, np.ndarray,
     P[IP.TAUM] = params.tau_mill_s
     P[IP.TBIR] = params.T_bir_s
     P[IP.NL] = params.n_line
-    P[IP.LV] = params.line_volume_m3 / params.n_line
-    P[IP.LCM] = params.line_metal_t * 1e3 * params.c_metal_J_kgK / params.n_line
+    P[IP.LV], P[IP.LCM] = pipe_cells(
+        params.n_line, params.line_volume_m3, params.line_metal_t, params.c_metal_J_kgK
+    )
     P[IP.MARG] = params.attemp_margin_K
     P[IP.DRUM : IP.DRUM + dr.N_DRUM_P] = dr.drum_block(
         params.V_d_m3, params.V_r_m3, params.V_dc_m3, params.m_t_kg, params.m_r_kg,

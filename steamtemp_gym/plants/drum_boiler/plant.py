@@ -2,14 +2,12 @@
 
 from __future__ import annotations
 
-import numpy as np
-
 from steamtemp_gym.plants.base import Plant, Signal
 from steamtemp_gym.plants.drum_boiler.calibration import _pack
 from steamtemp_gym.plants.drum_boiler.kernel import KERNELS
 from steamtemp_gym.plants.drum_boiler.layout import IP, IX, OUTPUTS
-from steamtemp_gym.plants.drum_boiler.params import K0, DrumBoilerParams
-from steamtemp_gym.plants.drum_boiler.steady_state import steady
+from steamtemp_gym.plants.drum_boiler.params import DrumBoilerParams
+from steamtemp_gym.plants.drum_boiler.steady_state import steady as _steady
 
 
 class DrumBoilerSH(Plant):
@@ -28,9 +26,7 @@ class DrumBoilerSH(Plant):
     )  # fmt: skip
 
     pack = staticmethod(_pack)
+    steady = staticmethod(_steady)
     kernels = KERNELS
     actuators = ((IX.V, IP.TAUV, IP.RATEV),)
     setpoint_param = "T_out_C"
-
-    def steady_state(self, D: np.ndarray, setpoint_C: np.ndarray, X: np.ndarray) -> None:
-        steady(D, setpoint_C + K0, self.P, X)

@@ -19,6 +19,7 @@ from steamtemp_gym.plants.supercritical_fsh.params import K0, FSHParams
 from steamtemp_gym.plants.superheater import (
     chain_pattern,
     chain_steady,
+    pipe_cells,
     pipe_pattern,
     steam_side_kA,
 )
@@ -125,8 +126,9 @@ def _pack(params: FSHParams) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
     P[IP.MIS] = params.fwr_mismatch
     P[IP.BUP] = params.bias_upstream_share
     P[IP.NL] = params.n_line
-    P[IP.LV] = params.line_volume_m3 / params.n_line
-    P[IP.LCM] = params.line_metal_t * 1e3 * params.c_metal_J_kgK / params.n_line
+    P[IP.LV], P[IP.LCM] = pipe_cells(
+        params.n_line, params.line_volume_m3, params.line_metal_t, params.c_metal_J_kgK
+    )
     P[IP.SPD] = params.spray_design_fraction
     P[IP.MARG] = params.attemp_margin_K
     n_x = IX.CHAIN + 2 * n + 1 + params.n_line

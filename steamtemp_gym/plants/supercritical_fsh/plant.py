@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import numpy as np
-
 from steamtemp_gym.plants.base import (
     Plant,
     Signal,
@@ -11,8 +9,8 @@ from steamtemp_gym.plants.base import (
 from steamtemp_gym.plants.supercritical_fsh.calibration import _pack
 from steamtemp_gym.plants.supercritical_fsh.kernel import KERNELS
 from steamtemp_gym.plants.supercritical_fsh.layout import IP, IX, OUTPUTS
-from steamtemp_gym.plants.supercritical_fsh.params import K0, FSHParams
-from steamtemp_gym.plants.supercritical_fsh.steady_state import steady
+from steamtemp_gym.plants.supercritical_fsh.params import FSHParams
+from steamtemp_gym.plants.supercritical_fsh.steady_state import steady as _steady
 
 
 class SupercriticalFSH(Plant):
@@ -28,9 +26,7 @@ class SupercriticalFSH(Plant):
     extra_info = ("attemp_out_temp_C", "heat_absorption_MW", "pressure_MPa", "steam_flow_kg_s")
 
     pack = staticmethod(_pack)
+    steady = staticmethod(_steady)
     kernels = KERNELS
     actuators = ((IX.V, IP.TAUV, IP.RATEV),)
     setpoint_param = "T_out_C"
-
-    def steady_state(self, D: np.ndarray, setpoint_C: np.ndarray, X: np.ndarray) -> None:
-        steady(D, setpoint_C + K0, self.P, X)
