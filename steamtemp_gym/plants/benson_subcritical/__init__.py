@@ -141,6 +141,7 @@ integration notes), ``steady_state`` (steady state under the unit controllers),
 point) and ``plant`` (the Plant class).
 """
 
+from steamtemp_gym.plants.base import K0
 from steamtemp_gym.plants.benson_subcritical.calibration import _pack
 from steamtemp_gym.plants.benson_subcritical.kernel import (
     _reheat,
@@ -168,7 +169,7 @@ from steamtemp_gym.plants.benson_subcritical.layout import (
     NF,
     OUTPUTS,
 )
-from steamtemp_gym.plants.benson_subcritical.params import K0, P_SHARE, SEC, SECTIONS, BensonParams
+from steamtemp_gym.plants.benson_subcritical.params import P_SHARE, SEC, SECTIONS, BensonParams
 from steamtemp_gym.plants.benson_subcritical.plant import BensonSubcritical
 from steamtemp_gym.plants.benson_subcritical.steady_state import (
     section_enthalpies,

@@ -11,7 +11,7 @@ import numpy as np
 
 from steamtemp_gym._jit import read_only
 from steamtemp_gym.plants.attemperator import mix
-from steamtemp_gym.plants.base import nominal_disturbances
+from steamtemp_gym.plants.base import K0, nominal_disturbances
 from steamtemp_gym.plants.benson_subcritical.kernel import _boundary, _reheat, _table, p_setpoint
 from steamtemp_gym.plants.benson_subcritical.layout import (
     IF,
@@ -25,7 +25,7 @@ from steamtemp_gym.plants.benson_subcritical.layout import (
     PRESSURE_JAC,
     TAB_LOADS,
 )
-from steamtemp_gym.plants.benson_subcritical.params import K0, P_SHARE, SEC, SECTIONS, BensonParams
+from steamtemp_gym.plants.benson_subcritical.params import P_SHARE, SEC, SECTIONS, BensonParams
 from steamtemp_gym.plants.benson_subcritical.steady_state import (
     _section_steady,
     _sh_steady,

@@ -16,7 +16,7 @@ import numpy as np
 
 from steamtemp_gym._jit import njit
 from steamtemp_gym.plants.attemperator import mix, spray_flow
-from steamtemp_gym.plants.base import D_FOULING, D_HEAT_BIAS, D_LOAD, D_LOAD_RATE, D_SPRAY_T
+from steamtemp_gym.plants.base import D_FOULING, D_HEAT_BIAS, D_LOAD, D_LOAD_RATE, D_SPRAY_T, K0
 from steamtemp_gym.plants.benson_subcritical.layout import (
     IF,
     IP,
@@ -29,7 +29,7 @@ from steamtemp_gym.plants.benson_subcritical.layout import (
     NF,
     PRESSURE_JAC,
 )
-from steamtemp_gym.plants.benson_subcritical.params import K0, P_SHARE, SEC
+from steamtemp_gym.plants.benson_subcritical.params import P_SHARE, SEC
 from steamtemp_gym.plants.integrator import make_batched_step
 from steamtemp_gym.plants.sensors import thermowell_rhs
 from steamtemp_gym.plants.superheater import chain_rhs, pipe_rhs, steam_side_kA

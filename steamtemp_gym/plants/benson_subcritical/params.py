@@ -19,8 +19,6 @@ from dataclasses import dataclass, fields
 from steamtemp_gym.plants.param_ranges import ranged, validate_params
 from steamtemp_gym.slots import slots
 
-K0 = 273.15
-
 #: Sections in flow order; index k of the per-section parameter block in P.
 SECTIONS = ("eco", "evap", "sh1", "sh2", "sh3", "sh4", "rh")
 #: Index of each section, in the order of SECTIONS.

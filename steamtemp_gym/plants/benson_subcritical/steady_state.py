@@ -7,7 +7,7 @@ import numpy as np
 
 from steamtemp_gym._jit import njit
 from steamtemp_gym.plants.attemperator import mix
-from steamtemp_gym.plants.base import D_LOAD, D_LOAD_RATE
+from steamtemp_gym.plants.base import D_LOAD, D_LOAD_RATE, K0
 from steamtemp_gym.plants.benson_subcritical.kernel import (
     _boundary,
     _gas,
@@ -21,7 +21,7 @@ from steamtemp_gym.plants.benson_subcritical.kernel import (
     p_setpoint,
 )
 from steamtemp_gym.plants.benson_subcritical.layout import IF, IP, ITB, IX
-from steamtemp_gym.plants.benson_subcritical.params import K0, P_SHARE, SEC
+from steamtemp_gym.plants.benson_subcritical.params import P_SHARE, SEC
 from steamtemp_gym.plants.superheater import chain_steady, pipe_steady, steam_side_kA
 from steamtemp_gym.plants.valve import steady_opening
 from steamtemp_gym.steam import T_ph, h_pT

@@ -124,6 +124,7 @@ Jacobian pattern), ``kernel`` (rhs, outputs, projection and the compiled step),
 (the Plant class).
 """
 
+from steamtemp_gym.plants.base import K0
 from steamtemp_gym.plants.boiler_turbine_mimo.calibration import _pack
 from steamtemp_gym.plants.boiler_turbine_mimo.kernel import (
     ACTUATORS,
@@ -148,7 +149,7 @@ from steamtemp_gym.plants.boiler_turbine_mimo.layout import (
     OUTPUTS,
     patterns,
 )
-from steamtemp_gym.plants.boiler_turbine_mimo.params import K0, BoilerTurbineParams
+from steamtemp_gym.plants.boiler_turbine_mimo.params import BoilerTurbineParams
 from steamtemp_gym.plants.boiler_turbine_mimo.plant import BoilerTurbineMIMO
 from steamtemp_gym.plants.boiler_turbine_mimo.steady_state import steady
 

@@ -10,7 +10,7 @@ import math
 import numpy as np
 
 from steamtemp_gym._jit import read_only
-from steamtemp_gym.plants.base import D_LOAD, nominal_disturbances
+from steamtemp_gym.plants.base import D_LOAD, K0, nominal_disturbances
 from steamtemp_gym.plants.boiler_turbine_mimo.kernel import (
     _h_crh_target,
     _kA,
@@ -28,7 +28,7 @@ from steamtemp_gym.plants.boiler_turbine_mimo.layout import (
     TAB_LOADS,
     patterns,
 )
-from steamtemp_gym.plants.boiler_turbine_mimo.params import K0, BoilerTurbineParams
+from steamtemp_gym.plants.boiler_turbine_mimo.params import BoilerTurbineParams
 from steamtemp_gym.plants.boiler_turbine_mimo.steady_state import _bisect_rgd, _sh_steady
 from steamtemp_gym.plants.integrator import pattern_arrays
 from steamtemp_gym.plants.roots import secant

@@ -10,9 +10,8 @@ import numpy as np
 
 from steamtemp_gym._jit import njit
 from steamtemp_gym.plants.attemperator import spray_flow
-from steamtemp_gym.plants.base import D_FOULING, D_HEAT_BIAS, D_LOAD, D_LOAD_RATE, D_SPRAY_T
+from steamtemp_gym.plants.base import D_FOULING, D_HEAT_BIAS, D_LOAD, D_LOAD_RATE, D_SPRAY_T, K0
 from steamtemp_gym.plants.boiler_turbine_mimo.layout import IP, ITAB, IX, IZ, N_TAB
-from steamtemp_gym.plants.boiler_turbine_mimo.params import K0
 from steamtemp_gym.plants.integrator import make_batched_step
 from steamtemp_gym.plants.sensors import thermowell_rhs
 from steamtemp_gym.plants.superheater import chain_rhs, pipe_rhs, steam_side_kA

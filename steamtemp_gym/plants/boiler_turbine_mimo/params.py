@@ -17,8 +17,6 @@ from dataclasses import dataclass
 
 from steamtemp_gym.plants.param_ranges import ranged, validate_params
 
-K0 = 273.15
-
 
 @dataclass(frozen=True)
 class BoilerTurbineParams:

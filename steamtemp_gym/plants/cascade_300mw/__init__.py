@@ -152,12 +152,12 @@ packed into P), ``kernel`` (the compiled step and steady state), ``plant`` (the 
 class) and ``scenarios`` (the paper's named scenarios, declared on the class).
 """
 
+from steamtemp_gym.plants.base import K0
 from steamtemp_gym.plants.cascade_300mw import scenarios as _scenarios  # noqa: F401 (declares them)
 from steamtemp_gym.plants.cascade_300mw.discretization import _block, _pack, continuous_model, zoh
 from steamtemp_gym.plants.cascade_300mw.kernel import SEED_SALT, steady, step
 from steamtemp_gym.plants.cascade_300mw.layout import IP, IX, IZ, LOAD_STEP, N_GRID, OUTPUTS
 from steamtemp_gym.plants.cascade_300mw.params import (
-    K0,
     LOAD_MAX,
     LOAD_MIN,
     PLANT_ID,

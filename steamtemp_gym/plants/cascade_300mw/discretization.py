@@ -9,9 +9,9 @@ import math
 import numpy as np
 from scipy.linalg import expm
 
+from steamtemp_gym.plants.base import K0
 from steamtemp_gym.plants.cascade_300mw.layout import IP, IX, N_GRID
 from steamtemp_gym.plants.cascade_300mw.params import (
-    K0,
     LOAD_MAX,
     LOAD_MIN,
     CascadeParams,

@@ -7,7 +7,6 @@ from dataclasses import dataclass
 
 from steamtemp_gym.plants.param_ranges import ranged, validate_params
 
-K0 = 273.15
 PLANT_ID = "steamtemp/Cascade300MW-v0"
 LOAD_MIN, LOAD_MAX = 0.2, 1.2  # the load range of the section models (fraction)
 

@@ -90,6 +90,7 @@ calibrating it against the rated design) and ``plant`` (the Plant class). The dr
 itself is plants/drum.py.
 """
 
+from steamtemp_gym.plants.base import K0
 from steamtemp_gym.plants.drum_boiler.calibration import _pack
 from steamtemp_gym.plants.drum_boiler.kernel import KERNELS, _boundary, outputs, project, rhs
 from steamtemp_gym.plants.drum_boiler.layout import (
@@ -105,7 +106,7 @@ from steamtemp_gym.plants.drum_boiler.layout import (
     s_mill,
     sensors,
 )
-from steamtemp_gym.plants.drum_boiler.params import K0, DrumBoilerParams
+from steamtemp_gym.plants.drum_boiler.params import DrumBoilerParams
 from steamtemp_gym.plants.drum_boiler.plant import DrumBoilerSH
 from steamtemp_gym.plants.drum_boiler.steady_state import steady
 

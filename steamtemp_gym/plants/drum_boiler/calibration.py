@@ -12,7 +12,7 @@ import numpy as np
 from steamtemp_gym._jit import read_only
 from steamtemp_gym.plants import drum as dr
 from steamtemp_gym.plants.attemperator import mix
-from steamtemp_gym.plants.base import D_FOULING, D_LOAD
+from steamtemp_gym.plants.base import D_FOULING, D_LOAD, K0
 from steamtemp_gym.plants.drum_boiler.kernel import _boundary, _fw
 from steamtemp_gym.plants.drum_boiler.layout import (
     DSP_LOADS,
@@ -25,7 +25,7 @@ from steamtemp_gym.plants.drum_boiler.layout import (
     SHARE_1,
     pattern,
 )
-from steamtemp_gym.plants.drum_boiler.params import K0, DrumBoilerParams
+from steamtemp_gym.plants.drum_boiler.params import DrumBoilerParams
 from steamtemp_gym.plants.drum_boiler.steady_state import steady
 from steamtemp_gym.plants.integrator import pattern_arrays
 from steamtemp_gym.plants.roots import secant

@@ -19,7 +19,7 @@ import numpy as np
 from steamtemp_gym._jit import njit
 from steamtemp_gym.plants import drum as dr
 from steamtemp_gym.plants.attemperator import mix, protected_spray_out, spray_flow
-from steamtemp_gym.plants.base import D_FOULING, D_HEAT_BIAS, D_LOAD, D_LOAD_RATE, D_SPRAY_T
+from steamtemp_gym.plants.base import D_FOULING, D_HEAT_BIAS, D_LOAD, D_LOAD_RATE, D_SPRAY_T, K0
 from steamtemp_gym.plants.drum_boiler.layout import (
     DSP_LOADS,
     FW_DT_K,
@@ -36,7 +36,6 @@ from steamtemp_gym.plants.drum_boiler.layout import (
     s_mill,
     sensors,
 )
-from steamtemp_gym.plants.drum_boiler.params import K0
 from steamtemp_gym.plants.sensors import thermowell_rhs
 from steamtemp_gym.plants.superheater import chain_rhs, pipe_rhs, steam_side_kA
 from steamtemp_gym.steam import T_dTdh_ph, Tsat_p, h_pT, sat_p

@@ -40,10 +40,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from steamtemp_gym.plants.base import K0
 from steamtemp_gym.plants.param_ranges import ranged, validate_params
 from steamtemp_gym.steam import sat_p
-
-K0 = 273.15
 
 
 @dataclass(frozen=True)

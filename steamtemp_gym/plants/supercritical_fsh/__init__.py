@@ -105,6 +105,7 @@ outputs), ``kernel`` (rhs, outputs and projection), ``steady_state`` (steady sta
 schedule) and ``plant`` (the Plant class).
 """
 
+from steamtemp_gym.plants.base import K0
 from steamtemp_gym.plants.supercritical_fsh.calibration import _pack
 from steamtemp_gym.plants.supercritical_fsh.kernel import (
     KERNELS,
@@ -128,7 +129,7 @@ from steamtemp_gym.plants.supercritical_fsh.layout import (
     s_line,
     s_mill,
 )
-from steamtemp_gym.plants.supercritical_fsh.params import K0, P_CRIT_PA, FSHParams
+from steamtemp_gym.plants.supercritical_fsh.params import P_CRIT_PA, FSHParams
 from steamtemp_gym.plants.supercritical_fsh.plant import SupercriticalFSH
 from steamtemp_gym.plants.supercritical_fsh.steady_state import steady
 

@@ -9,13 +9,14 @@ import math
 import numpy as np
 
 from steamtemp_gym._jit import read_only
+from steamtemp_gym.plants.base import K0
 from steamtemp_gym.plants.integrator import pattern_arrays
 from steamtemp_gym.plants.roots import secant
 from steamtemp_gym.plants.supercritical_fsh.kernel import (
     _pressure,
 )
 from steamtemp_gym.plants.supercritical_fsh.layout import INLET_COLS, IP, IX, N_P, TAB_LOADS
-from steamtemp_gym.plants.supercritical_fsh.params import K0, FSHParams
+from steamtemp_gym.plants.supercritical_fsh.params import FSHParams
 from steamtemp_gym.plants.superheater import (
     chain_pattern,
     chain_steady,

@@ -12,10 +12,11 @@ from steamtemp_gym.plants.base import (
     D_LOAD,
     D_LOAD_RATE,
     D_SPRAY_T,
+    K0,
 )
 from steamtemp_gym.plants.sensors import thermowell_rhs
 from steamtemp_gym.plants.supercritical_fsh.layout import IP, IX, IZ, N_TAB, s_line, s_mill
-from steamtemp_gym.plants.supercritical_fsh.params import K0, P_CRIT_PA
+from steamtemp_gym.plants.supercritical_fsh.params import P_CRIT_PA
 from steamtemp_gym.plants.superheater import (
     chain_rhs,
     pipe_rhs,

@@ -7,7 +7,6 @@ from dataclasses import dataclass
 
 from steamtemp_gym.plants.param_ranges import ranged, validate_params
 
-K0 = 273.15
 P_CRIT_PA = 22.064e6  # critical pressure of water (IAPWS-IF97)
 
 
