@@ -16,6 +16,7 @@ import functools
 
 import gymnasium as gym
 import pytest
+from tunings import skip_without_tuning
 
 import baselines
 import steamtemp_gym
@@ -41,6 +42,7 @@ def _cases() -> list:
 
 @pytest.mark.parametrize(("env_id", "name"), _cases())
 def test_travel_within_three_times_the_reference_and_no_limit_cycle(env_id, name):
+    skip_without_tuning(name, env_id)
     for scenario in SCENARIOS:
         ref, m = _metrics(env_id, scenario, REFERENCE), _metrics(env_id, scenario, name)
         breach = realism_breach(m, ref)

@@ -10,6 +10,7 @@ import pickle
 import gymnasium as gym
 import numpy as np
 import pytest
+from tunings import skip_without_tuning
 
 import agents
 import baselines
@@ -26,6 +27,7 @@ IDS = steamtemp_gym.ENV_IDS
 @pytest.mark.parametrize("env_id", IDS)
 @pytest.mark.parametrize("name", baselines.NAMES)
 def test_baseline_is_a_policy_and_beats_open_loop(env_id, name):
+    skip_without_tuning(name, env_id)
     env = gym.make(env_id, scenario="heat_imbalance_step")
     policy = baselines.make(name, env)
     assert isinstance(policy, Policy)
@@ -51,6 +53,7 @@ KNOWN_BREAKS: set[tuple[str, str, str]] = set()
 
 
 def _run_contract(request, env_id, check):
+    skip_without_tuning(check.policy_label, env_id)
     if (env_id, check.policy_label, check.name) in KNOWN_BREAKS:
         request.applymarker(pytest.mark.xfail(strict=True, reason="known break, see docs"))
     check(env_id)

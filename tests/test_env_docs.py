@@ -16,11 +16,14 @@ ENV = "steamtemp/Cascade300MW-v0"
 
 
 def test_pages_are_up_to_date():
-    """Run ``python -m steamtemp_gym.docs`` after changing a plant, a signal, a scenario or a
-    parameter's note."""
+    """Run ``python -m steamtemp_gym.docs`` after adding or changing a plant, a signal, a
+    scenario or a parameter's note: a plant's page is part of adding it."""
     generated = docs.pages()
     on_disk = {p.name: p.read_text(encoding="utf-8") for p in docs.DOCS_DIR.glob("*.md")}
-    assert sorted(on_disk) == sorted(generated)
+    missing = sorted(set(generated) - set(on_disk))
+    extra = sorted(set(on_disk) - set(generated))
+    assert not missing and not extra, (f"missing pages {missing}, pages of no env id {extra}; "
+                                       f"run python -m steamtemp_gym.docs")  # fmt: skip
     stale = [n for n in generated if on_disk[n] != generated[n]]
     assert not stale, f"out of date: {stale}; run python -m steamtemp_gym.docs"
     assert docs.main(["--check"]) == 0

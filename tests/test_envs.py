@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 import steamtemp_gym
+from steamtemp_gym.plants import plant_class
 from steamtemp_gym.scenarios import Scenario
 from steamtemp_gym.testing import parametrize_with_checks
 
@@ -78,14 +79,14 @@ def test_scenario_yaml(tmp_path):
         gym.make(env_id, scenario=str(tmp_path / "absent.yaml"))
 
 
-@pytest.mark.parametrize("env_id", IDS)
+@pytest.mark.parametrize("env_id", [i for i in IDS if plant_class(i).design_spray is not None])
 def test_holding_the_setpoint_with_design_spray_scores_about_zero(env_id):
     """The reward's spray term charges only spray above the plant's design spray."""
     env = gym.make(env_id, scenario=Scenario(name="rated", duration_s=200.0, load=1.0),
                    params={"omega_halfwidth_K": 0.0, "omega2_scale_kg_s": 0.0}
                    if "Cascade" in env_id else {})  # fmt: skip
     plant = env.unwrapped.plant
-    assert plant.design_spray in plant.index, "every plant declares its design spray output"
+    assert plant.design_spray in plant.index, "design_spray names none of the plant's outputs"
     _, info = env.reset(seed=0)
     hold = (2.0 * np.atleast_1d(info["spray_valve"]) - 1.0).astype(np.float32)
     rewards = [env.step(hold)[1] for _ in range(20)]
@@ -97,3 +98,22 @@ def test_holding_the_setpoint_with_design_spray_scores_about_zero(env_id):
     spray = info["spray_flow_kg_s"]
     assert spray > core.Z[0, plant.index[plant.design_spray]]
     assert r_more < np.mean(rewards)  # more spray than designed costs
+
+
+def test_without_a_design_spray_the_reward_charges_all_spray(monkeypatch):
+    """A plant that declares no design spray (``Plant.design_spray`` None) is charged for
+    every kg/s of spray, in units of the first spray flow's scale."""
+    env_id = IDS[0]
+    monkeypatch.setattr(plant_class(env_id), "design_spray", None)
+    only_spray = {"w_abs": 0.0, "w_band": 0.0, "w_secondary": 0.0, "w_move": 0.0, "w_spray": 1.0}
+    env = gym.make(env_id, scenario=Scenario(name="rated", duration_s=200.0, load=1.0),
+                   reward=only_spray)  # fmt: skip
+    _, info = env.reset(seed=0)
+    hold = (2.0 * np.atleast_1d(info["spray_valve"]) - 1.0).astype(np.float32)
+    core, plant = env.unwrapped.core, env.unwrapped.plant
+    scale = plant.outputs[core.spray_idx[0]].scale
+    for _ in range(5):
+        r = env.step(hold)[1]
+        spray = core.Z[0, core.spray_idx].sum()
+        assert spray > 0.0
+        assert r == pytest.approx(-spray / scale, rel=1e-12)
