@@ -14,6 +14,7 @@ from steamtemp_gym.plants.attemperator import mix
 from steamtemp_gym.plants.base import K0, nominal_disturbances
 from steamtemp_gym.plants.benson_subcritical.kernel import _boundary, _reheat, _table, p_setpoint
 from steamtemp_gym.plants.benson_subcritical.layout import (
+    COPIED,
     IF,
     IP,
     ITB,
@@ -31,6 +32,7 @@ from steamtemp_gym.plants.benson_subcritical.steady_state import (
     _sh_steady,
     _upstream_steady,
 )
+from steamtemp_gym.plants.copies import write_copies
 from steamtemp_gym.plants.integrator import pattern_arrays
 from steamtemp_gym.plants.roots import secant
 from steamtemp_gym.plants.superheater import chain_pattern, pipe_cells, pipe_pattern
@@ -205,38 +207,15 @@ def _pack(pr: BensonParams) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
 
 
 def _pack_scalars(pr: BensonParams, P: np.ndarray) -> None:
-    """The scalar parameters of P (flows, pressures, turbine, loops, valves, thermowells)."""
+    """The scalar parameters of P: the copied fields (layout.COPIED) and the economizer and
+    reheat flows, pump head and expansion exponent derived from them."""
+    write_copies(P, IP, COPIED, pr)
     W_nom = pr.W_nom_kg_s
     s_des = pr.spray1_design_fraction + pr.spray2_design_fraction
-    P[IP.WNOM] = W_nom
     P[IP.WECO] = W_nom * (1.0 - s_des)
-    P[IP.PNOM] = pr.p_nom_MPa * 1e6
-    P[IP.PMIN] = pr.p_min_MPa * 1e6
-    P[IP.SLL] = pr.slide_low_load
-    P[IP.DPB] = pr.dp_boiler_MPa * 1e6
     P[IP.DPPUMP] = (pr.p_pump_MPa - pr.p_nom_MPa) * 1e6
-    P[IP.PRH] = pr.p_rh_nom_MPa * 1e6
-    P[IP.DPRH] = pr.dp_reheater_MPa * 1e6
-    P[IP.RHF] = pr.rh_flow_fraction
     P[IP.WRHN] = pr.rh_flow_fraction * W_nom
-    P[IP.GCOEF] = pr.gas_temp_coeff
-    P[IP.GEXP] = pr.gas_flow_exponent
-    P[IP.REXP] = pr.radiant_exponent
     P[IP.KE] = (pr.k_expansion - 1.0) / pr.k_expansion
-    P[IP.CPT] = pr.cp_turbine_J_kgK
-    P[IP.ETAHP] = pr.eta_hp
-    P[IP.ETAIP] = pr.eta_iplp
-    P[IP.PCOND] = pr.p_condenser_kPa * 1e3
-    P[IP.TBIR] = pr.T_bir_s
-    P[IP.KP] = pr.fwr_kp
-    P[IP.KI] = pr.fwr_ki_per_s
-    P[IP.TAUV] = pr.tau_valve_s
-    P[IP.RATEV] = pr.valve_rate_per_s
-    P[IP.TC1] = pr.tau_tc1_s
-    P[IP.TC2] = pr.tau_tc2_s
-    P[IP.TAUF] = pr.tau_furnace_s
-    P[IP.HERR] = pr.fwr_schedule_error_kJ_kg * 1e3
-    P[IP.BEV] = pr.bias_evap_share
 
 
 def _pack_sections(pr: BensonParams, P: np.ndarray) -> tuple[list[tuple[int, int]], int]:
@@ -252,7 +231,7 @@ def _pack_sections(pr: BensonParams, P: np.ndarray) -> tuple[list[tuple[int, int
     prev_h = -1
     for k, name in enumerate(SECTIONS):
         if k == SEC.RH:  # outlet header and main-steam line, between SH4 and the reheater
-            P[IP.LOFF], P[IP.NL], P[IP.JLINE] = off, pr.n_line, len(pat)
+            P[IP.LOFF], P[IP.JLINE] = off, len(pat)
             P[IP.LV], P[IP.LCM] = pipe_cells(
                 pr.n_line, pr.line_volume_m3, pr.line_metal_t, pr.c_metal_J_kgK
             )

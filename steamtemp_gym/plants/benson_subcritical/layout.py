@@ -7,6 +7,7 @@ from __future__ import annotations
 import numpy as np
 
 from steamtemp_gym.plants.base import Signal
+from steamtemp_gym.plants.copies import Copy
 from steamtemp_gym.slots import blocks, slots
 
 
@@ -86,6 +87,20 @@ IP, N_P = blocks(
         "JLINE")],
     ("spare", 5), ("SEC", NF * 7), ("TAB", N_TB * N_TAB),
 )  # fmt: skip
+#: The slots of P that hold a BensonParams field, in SI units
+#: (steamtemp_gym/plants/copies.py).
+COPIED = {
+    "WNOM": "W_nom_kg_s", "PNOM": Copy("p_nom_MPa", scale=1e6),
+    "PMIN": Copy("p_min_MPa", scale=1e6), "SLL": "slide_low_load",
+    "DPB": Copy("dp_boiler_MPa", scale=1e6), "PRH": Copy("p_rh_nom_MPa", scale=1e6),
+    "DPRH": Copy("dp_reheater_MPa", scale=1e6), "RHF": "rh_flow_fraction",
+    "GCOEF": "gas_temp_coeff", "GEXP": "gas_flow_exponent", "REXP": "radiant_exponent",
+    "CPT": "cp_turbine_J_kgK", "ETAHP": "eta_hp", "ETAIP": "eta_iplp",
+    "PCOND": Copy("p_condenser_kPa", scale=1e3), "TBIR": "T_bir_s", "KP": "fwr_kp",
+    "KI": "fwr_ki_per_s", "TAUV": "tau_valve_s", "RATEV": "valve_rate_per_s", "TC1": "tau_tc1_s",
+    "TC2": "tau_tc2_s", "TAUF": "tau_furnace_s",
+    "HERR": Copy("fwr_schedule_error_kJ_kg", scale=1e3), "BEV": "bias_evap_share", "NL": "n_line",
+}  # fmt: skip
 #: The states: pressure, valves and furnace heat release, the chains from IX.CHAINS on
 #: (economizer .. SH4, the main-steam line cells from P[IP.LOFF], the reheater), the 8
 #: thermowells (from P[IP.S0]) and last the fuel/water-ratio trim (P[IP.STRIM]), so that

@@ -20,6 +20,7 @@ from steamtemp_gym.plants.boiler_turbine_mimo.kernel import (
     _tab,
 )
 from steamtemp_gym.plants.boiler_turbine_mimo.layout import (
+    COPIED,
     IP,
     ITAB,
     IX,
@@ -30,6 +31,7 @@ from steamtemp_gym.plants.boiler_turbine_mimo.layout import (
 )
 from steamtemp_gym.plants.boiler_turbine_mimo.params import BoilerTurbineParams
 from steamtemp_gym.plants.boiler_turbine_mimo.steady_state import _bisect_rgd, _sh_steady
+from steamtemp_gym.plants.copies import write_copies
 from steamtemp_gym.plants.integrator import pattern_arrays
 from steamtemp_gym.plants.roots import secant
 from steamtemp_gym.plants.superheater import chain_steady
@@ -166,20 +168,7 @@ def _conductances(n_tubes: int, length: float, d_i: float, d_o: float, alpha: fl
 def _pack(params: BoilerTurbineParams) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
     q = params
     P = np.zeros(N_P)
-    P[IP.N1], P[IP.N2], P[IP.N3], P[IP.N4] = (
-        q.n_seg_primary,
-        q.n_seg_platen,
-        q.n_seg_final,
-        q.n_seg_reheat,
-    )
-    P[IP.WNOM] = q.W_nom_kg_s
-    P[IP.PNOM], P[IP.PMIN] = q.p_nom_MPa * 1e6, q.p_min_MPa * 1e6
-    P[IP.KNEE], P[IP.LMIN] = q.slide_knee_load, q.slide_min_load
-    P[IP.PRH], P[IP.PRHMIN], P[IP.FRH] = (
-        q.p_rh_nom_MPa * 1e6,
-        q.p_rh_min_MPa * 1e6,
-        q.reheat_flow_fraction,
-    )
+    write_copies(P, IP, COPIED, params)
     rc = q.rho_metal_kg_m3 * q.c_metal_J_kgK
     P[IP.KAF_P], P[IP.KAW_P], P[IP.V_P], P[IP.CM_P] = _conductances(
         q.primary_n_tubes, q.primary_length_m, q.primary_id_m, q.primary_od_m, q.alpha_sh_W_m2K,
@@ -190,37 +179,14 @@ def _pack(params: BoilerTurbineParams) -> tuple[np.ndarray, np.ndarray, np.ndarr
     P[IP.KAF_R], P[IP.KAW_R], P[IP.V_R], P[IP.CM_R] = _conductances(
         q.reheat_n_tubes, q.reheat_length_m, q.reheat_id_m, q.reheat_od_m, q.alpha_rh_W_m2K,
         q.k_wall_W_mK, rc)  # fmt: skip
-    P[IP.KAF_PL], P[IP.KAW_PL] = q.platen_kA_film_MW_K * 1e6, q.platen_kA_wall_MW_K * 1e6
-    P[IP.V_PL], P[IP.CM_PL] = q.platen_volume_m3, q.platen_metal_MJ_K * 1e6
-    P[IP.TG_P], P[IP.TG_F], P[IP.TG_R] = q.Tg_primary_C + K0, q.Tg_final_C + K0, q.Tg_reheat_C + K0
-    P[IP.DTG], P[IP.GEXP], P[IP.REXP] = q.dTg_dload_K, q.gas_flow_exponent, q.radiant_exponent
-    P[IP.DTGR] = q.dTg_reheat_dload_K
-    P[IP.RMAX] = q.recirc_max_fraction
     P[IP.RNOM] = q.recirc_max_fraction * q.rgd_design_opening
-    P[IP.PLGR] = q.platen_recirc_sensitivity
-    P[IP.DPB] = q.dp_boiler_nom_MPa * 1e6
-    P[IP.TAUF], P[IP.TBIR], P[IP.TAUW] = q.tau_firing_s, q.T_bir_s, q.tau_steam_s
-    P[IP.TAUUP], P[IP.FWR], P[IP.TAUHP] = q.tau_upstream_s, q.fwr_coupling, q.tau_hp_s
-    P[IP.FBACT], P[IP.FBMAX], P[IP.TAUFB] = (
-        float(q.fuel_bias_action),
-        q.fuel_bias_max,
-        q.tau_fuel_bias_s,
-    )
-    P[IP.TAUV], P[IP.RATEV] = q.tau_valve_s, q.valve_rate_per_s
-    P[IP.TAUD], P[IP.RATED] = q.tau_damper_s, q.damper_rate_per_s
-    P[IP.TC1], P[IP.TC2] = q.tau_tc1_s, q.tau_tc2_s
-    P[IP.VD], P[IP.GD], P[IP.TRH] = q.valve_design_opening, q.rgd_design_opening, q.T_rh_C + K0
     n1, n2, n3, n4 = q.n_seg_primary, q.n_seg_platen, q.n_seg_final, q.n_seg_reheat
     P[IP.JOFF_PL] = 4 * n1
     P[IP.JOFF_F] = P[IP.JOFF_PL] + 4 * n2 + 2
     P[IP.JOFF_R] = P[IP.JOFF_F] + 4 * n3 + 1
-    P[IP.TAUM], P[IP.HERR], P[IP.BUP] = q.tau_mill_s, q.fwr_schedule_error_kJ_kg * 1e3, \
-        q.bias_upstream_share  # fmt: skip
     cm = q.c_metal_J_kgK * 1e3
-    P[IP.NL], P[IP.LCM] = q.n_line, q.line_metal_t * cm / q.n_line
-    P[IP.LV] = q.line_volume_m3 / q.n_line
-    P[IP.NRL], P[IP.RLCM], P[IP.RLV] = (q.n_rh_line, q.rh_line_metal_t * cm / q.n_rh_line,
-                                     q.rh_line_volume_m3 / q.n_rh_line)  # fmt: skip
+    P[IP.LCM], P[IP.LV] = q.line_metal_t * cm / q.n_line, q.line_volume_m3 / q.n_line
+    P[IP.RLCM], P[IP.RLV] = q.rh_line_metal_t * cm / q.n_rh_line, q.rh_line_volume_m3 / q.n_rh_line
     P[IP.JOFF_L] = P[IP.JOFF_R] + 4 * n4
     P[IP.JOFF_RL] = P[IP.JOFF_L] + 2 * q.n_line
     n_x = IX.CHAIN + 2 * (n1 + n2 + n3 + n4) + q.n_line + q.n_rh_line

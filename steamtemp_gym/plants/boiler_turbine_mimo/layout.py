@@ -8,6 +8,7 @@ import numpy as np
 
 from steamtemp_gym.plants.base import Signal
 from steamtemp_gym.plants.boiler_turbine_mimo.params import BoilerTurbineParams
+from steamtemp_gym.plants.copies import Copy, kelvin
 from steamtemp_gym.plants.superheater import chain_pattern, pipe_pattern
 from steamtemp_gym.slots import blocks, slots
 
@@ -85,6 +86,30 @@ IP, N_P = blocks(
         "TAUM", "HERR", "BUP", "NL", "LCM", "LV", "NRL", "RLCM", "RLV", "JOFF_L", "JOFF_RL")],
     ("spare", 3), ("TAB", len(ITAB) * N_TAB),
 )  # fmt: skip
+#: The slots of P that hold a BoilerTurbineParams field, in SI units
+#: (steamtemp_gym/plants/copies.py).
+COPIED = {
+    "N1": "n_seg_primary", "N2": "n_seg_platen", "N3": "n_seg_final", "N4": "n_seg_reheat",
+    "WNOM": "W_nom_kg_s", "PNOM": Copy("p_nom_MPa", scale=1e6),
+    "PMIN": Copy("p_min_MPa", scale=1e6), "KNEE": "slide_knee_load", "LMIN": "slide_min_load",
+    "PRH": Copy("p_rh_nom_MPa", scale=1e6), "PRHMIN": Copy("p_rh_min_MPa", scale=1e6),
+    "FRH": "reheat_flow_fraction",
+    "KAF_PL": Copy("platen_kA_film_MW_K", scale=1e6),
+    "KAW_PL": Copy("platen_kA_wall_MW_K", scale=1e6), "V_PL": "platen_volume_m3",
+    "CM_PL": Copy("platen_metal_MJ_K", scale=1e6),
+    "TG_P": kelvin("Tg_primary_C"), "TG_F": kelvin("Tg_final_C"), "TG_R": kelvin("Tg_reheat_C"),
+    "DTG": "dTg_dload_K", "GEXP": "gas_flow_exponent", "REXP": "radiant_exponent",
+    "DTGR": "dTg_reheat_dload_K", "RMAX": "recirc_max_fraction",
+    "PLGR": "platen_recirc_sensitivity", "DPB": Copy("dp_boiler_nom_MPa", scale=1e6),
+    "TAUF": "tau_firing_s", "TBIR": "T_bir_s", "TAUW": "tau_steam_s",
+    "TAUUP": "tau_upstream_s", "FWR": "fwr_coupling", "TAUHP": "tau_hp_s",
+    "FBACT": "fuel_bias_action", "FBMAX": "fuel_bias_max", "TAUFB": "tau_fuel_bias_s",
+    "TAUV": "tau_valve_s", "RATEV": "valve_rate_per_s", "TAUD": "tau_damper_s",
+    "RATED": "damper_rate_per_s", "TC1": "tau_tc1_s", "TC2": "tau_tc2_s",
+    "VD": "valve_design_opening", "GD": "rgd_design_opening", "TRH": kelvin("T_rh_C"),
+    "TAUM": "tau_mill_s", "HERR": Copy("fwr_schedule_error_kJ_kg", scale=1e3),
+    "BUP": "bias_upstream_share", "NL": "n_line", "NRL": "n_rh_line",
+}  # fmt: skip
 #: The states; the chains follow from CHAIN (primary, platen, final, reheater), then the
 #: main-steam line and hot-reheat line cells. MILL: coal flow out of the mills, fraction
 #: of rated firing.

@@ -10,12 +10,13 @@ import numpy as np
 from scipy.linalg import expm
 
 from steamtemp_gym.plants.base import K0
-from steamtemp_gym.plants.cascade_300mw.layout import IP, IX, N_GRID
+from steamtemp_gym.plants.cascade_300mw.layout import COPIED, IP, IX, N_GRID
 from steamtemp_gym.plants.cascade_300mw.params import (
     LOAD_MAX,
     LOAD_MIN,
     CascadeParams,
 )
+from steamtemp_gym.plants.copies import write_copies
 from steamtemp_gym.steam import cp_pT, h_pT
 
 
@@ -60,21 +61,13 @@ def _pack(params: CascadeParams) -> tuple[np.ndarray, np.ndarray, np.ndarray, in
     n = n1 + n2
     nb = n * (n + 1) // 2 + 2 * n
     P = np.zeros(IP.GRID + (N_GRID + 2) * nb)
-    P[IP.N1], P[IP.N2] = n1, n2
-    P[IP.LD] = 1.0 if params.load_dependent else 0.0
-    P[IP.DT] = params.dt_s
-    P[IP.WMAX] = params.spray_max_kg_s
-    P[IP.W100] = params.spray_rated_kg_s
-    P[IP.W50] = params.spray_half_load_kg_s
+    write_copies(P, IP, COPIED, params)
     P[IP.CQ] = params.ht_rise_K / params.inertia_gain
     p = params.attemp_pressure_MPa * 1e6
     T_sw = params.spray_water_temp_C + K0
     h_s = h_pT(p, params.T_out_C - params.ht_rise_K + K0)
     P[IP.CSW] = cp_pT(p, T_sw) / (h_s - h_pT(p, T_sw))
-    P[IP.TOUT] = params.T_out_C
     P[IP.TI] = params.T_out_C - params.ht_rise_K
-    P[IP.AOM] = params.omega_halfwidth_K
-    P[IP.BOM2] = params.omega2_scale_kg_s
     P[IP.NB] = nb
     tau_om = params.omega_corr_time_s
     P[IP.COM] = math.exp(-params.dt_s / tau_om) if tau_om > 0.0 else 0.0

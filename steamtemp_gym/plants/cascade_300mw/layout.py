@@ -58,6 +58,12 @@ N_GRID = 101  # loads LOAD_MIN .. LOAD_MAX (params.py)
 #: block and a copy of it.
 IP = slots("CascadeParams", "N1", "N2", "LD", "DT", "WMAX", "W100", "W50", "CQ", "CSW",
            "TOUT", "TI", "AOM", "BOM2", "NB", "COM", "spare", "GRID")  # fmt: skip
+#: The slots of P that hold a CascadeParams field (steamtemp_gym/plants/copies.py).
+COPIED = {
+    "N1": "lead_order", "N2": "inertia_order", "LD": "load_dependent", "DT": "dt_s",
+    "WMAX": "spray_max_kg_s", "W100": "spray_rated_kg_s", "W50": "spray_half_load_kg_s",
+    "TOUT": "T_out_C", "AOM": "omega_halfwidth_K", "BOM2": "omega2_scale_kg_s",
+}  # fmt: skip
 #: The states: the measured disturbances omega and omega_2, the generator's seed and step
 #: counter, the valve, the gas-side state, then the lag chain from X.
 IX = slots("CascadeStates", "OM", "OM2", "SEED", "CNT", "V", "G", "X")

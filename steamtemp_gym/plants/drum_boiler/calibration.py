@@ -13,8 +13,10 @@ from steamtemp_gym._jit import read_only
 from steamtemp_gym.plants import drum as dr
 from steamtemp_gym.plants.attemperator import mix
 from steamtemp_gym.plants.base import D_FOULING, D_LOAD, K0
+from steamtemp_gym.plants.copies import write_copies
 from steamtemp_gym.plants.drum_boiler.kernel import _boundary, _fw
 from steamtemp_gym.plants.drum_boiler.layout import (
+    COPIED,
     DSP_LOADS,
     FW_DT_K,
     FW_T0_K,
@@ -87,17 +89,11 @@ def _calibrate(params: DrumBoilerParams, P: np.ndarray, n_x: int) -> None:
 def _pack(params: DrumBoilerParams) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
     n = params.n_segments
     P = np.zeros(N_P)
-    P[IP.N] = n
+    write_copies(P, IP, COPIED, params)
     s = params.spray_design_fraction
     P[IP.WNOM] = params.q_s_nom_kg_s / (1.0 - s)
-    P[IP.QSN] = params.q_s_nom_kg_s
-    P[IP.PSP] = params.p_drum_MPa * 1e6
-    P[IP.TFW] = params.T_fw_nom_C + K0
-    P[IP.DTFW] = params.dT_fw_dload_K
-    P[IP.DPSP] = params.dp_spray_MPa * 1e6
-    P[IP.DPSH] = params.dp_sh_nom_MPa * 1e6
-    for i, (ika, iv, icm, itg, idtg) in enumerate(
-        ((IP.KA1, IP.V1, IP.CM1, IP.TG1, IP.DTG1), (IP.KA2, IP.V2, IP.CM2, IP.TG2, IP.DTG2)),
+    for i, (ika, iv, icm) in enumerate(
+        ((IP.KA1, IP.V1, IP.CM1), (IP.KA2, IP.V2, IP.CM2)),
         start=1,
     ):
         nt = getattr(params, f"n_tubes_{i}")
@@ -107,27 +103,9 @@ def _pack(params: DrumBoilerParams) -> tuple[np.ndarray, np.ndarray, np.ndarray,
         P[iv] = math.pi / 4.0 * di**2 * seg * nt
         P[icm] = (math.pi / 4.0 * (do**2 - di**2) * seg * nt * params.rho_metal_kg_m3
                   * params.c_metal_J_kgK)  # fmt: skip
-        P[itg] = getattr(params, f"Tg{i}_nom_C") + K0
-        P[idtg] = getattr(params, f"dTg{i}_dload_K")
-    P[IP.GEXP] = params.gas_flow_exponent
-    P[IP.TAUW] = params.tau_steam_s
-    P[IP.TAUF] = params.tau_firing_s
-    P[IP.KPP] = params.Kp_pressure
-    P[IP.TIP] = params.Ti_pressure_s
-    P[IP.KPL] = params.Kp_level_kg_s_m
-    P[IP.TIL] = params.Ti_level_s
-    P[IP.TAUFW] = params.tau_fw_s
-    P[IP.TAUV] = params.tau_valve_s
-    P[IP.RATEV] = params.valve_rate_per_s
-    P[IP.TC1] = params.tau_tc1_s
-    P[IP.TC2] = params.tau_tc2_s
-    P[IP.TAUM] = params.tau_mill_s
-    P[IP.TBIR] = params.T_bir_s
-    P[IP.NL] = params.n_line
     P[IP.LV], P[IP.LCM] = pipe_cells(
         params.n_line, params.line_volume_m3, params.line_metal_t, params.c_metal_J_kgK
     )
-    P[IP.MARG] = params.attemp_margin_K
     P[IP.DRUM : IP.DRUM + dr.N_DRUM_P] = dr.drum_block(
         params.V_d_m3, params.V_r_m3, params.V_dc_m3, params.m_t_kg, params.m_r_kg,
         params.m_d_kg, params.C_p_J_kgK, params.A_d_m2, params.A_dc_m2, params.k_friction,

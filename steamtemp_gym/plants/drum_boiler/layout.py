@@ -7,6 +7,7 @@ from __future__ import annotations
 from steamtemp_gym._jit import njit
 from steamtemp_gym.plants import drum as dr
 from steamtemp_gym.plants.base import Signal
+from steamtemp_gym.plants.copies import Copy, kelvin
 from steamtemp_gym.plants.superheater import chain_pattern, pipe_pattern
 from steamtemp_gym.slots import blocks, slots
 
@@ -56,6 +57,18 @@ IP, N_P = blocks(
         "TAUV", "RATEV", "TC1", "TC2", "QSN", "TAUM", "TBIR", "NL", "LV", "MARG", "LCM")],
     ("DSP", len(DSP_LOADS)), ("DRUM", dr.N_DRUM_P), ("FW", 2 * N_FW),
 )  # fmt: skip
+#: The slots of P that hold a DrumBoilerParams field, in SI units
+#: (steamtemp_gym/plants/copies.py).
+COPIED = {
+    "N": "n_segments", "QSN": "q_s_nom_kg_s", "PSP": Copy("p_drum_MPa", scale=1e6),
+    "TFW": kelvin("T_fw_nom_C"), "DTFW": "dT_fw_dload_K", "DPSP": Copy("dp_spray_MPa", scale=1e6),
+    "DPSH": Copy("dp_sh_nom_MPa", scale=1e6), "TG1": kelvin("Tg1_nom_C"), "DTG1": "dTg1_dload_K",
+    "TG2": kelvin("Tg2_nom_C"), "DTG2": "dTg2_dload_K", "GEXP": "gas_flow_exponent",
+    "TAUW": "tau_steam_s", "TAUF": "tau_firing_s", "KPP": "Kp_pressure", "TIP": "Ti_pressure_s",
+    "KPL": "Kp_level_kg_s_m", "TIL": "Ti_level_s", "TAUFW": "tau_fw_s", "TAUV": "tau_valve_s",
+    "RATEV": "valve_rate_per_s", "TC1": "tau_tc1_s", "TC2": "tau_tc2_s", "TAUM": "tau_mill_s",
+    "TBIR": "T_bir_s", "NL": "n_line", "MARG": "attemp_margin_K",
+}  # fmt: skip
 
 #: The states: feedwater, firing and the pressure and level loops' integrators, the feed
 #: lag and the spray valve, the drum (drum.PD and its other offsets), then the primary SH

@@ -10,12 +10,20 @@ import numpy as np
 
 from steamtemp_gym._jit import read_only
 from steamtemp_gym.plants.base import K0
+from steamtemp_gym.plants.copies import write_copies
 from steamtemp_gym.plants.integrator import pattern_arrays
 from steamtemp_gym.plants.roots import secant
 from steamtemp_gym.plants.supercritical_fsh.kernel import (
     _pressure,
 )
-from steamtemp_gym.plants.supercritical_fsh.layout import INLET_COLS, IP, IX, N_P, TAB_LOADS
+from steamtemp_gym.plants.supercritical_fsh.layout import (
+    COPIED,
+    INLET_COLS,
+    IP,
+    IX,
+    N_P,
+    TAB_LOADS,
+)
 from steamtemp_gym.plants.supercritical_fsh.params import FSHParams
 from steamtemp_gym.plants.superheater import (
     chain_pattern,
@@ -99,39 +107,13 @@ def _pack(params: FSHParams) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
     area_metal = math.pi / 4.0 * (params.tube_od_m**2 - params.tube_id_m**2)
     seg_len = params.tube_length_m / n
     P = np.zeros(N_P)
-    P[IP.N] = n
-    P[IP.WNOM] = params.W_nom_kg_s
-    P[IP.PNOM] = params.p_nom_MPa * 1e6
-    P[IP.PMIN] = params.p_min_MPa * 1e6
-    P[IP.SLH] = params.slide_high_load
-    P[IP.SLL] = params.slide_low_load
+    write_copies(P, IP, COPIED, params)
     P[IP.KA] = params.alpha_nom_W_m2K * math.pi * params.tube_id_m * seg_len * params.n_tubes
     P[IP.V] = area_flow * seg_len * params.n_tubes
     P[IP.CM] = area_metal * seg_len * params.n_tubes * params.rho_metal_kg_m3 * params.c_metal_J_kgK
-    P[IP.TGN] = params.Tg_nom_C + K0
-    P[IP.DTG] = params.dTg_dload_K
-    P[IP.GEXP] = params.gas_flow_exponent
-    P[IP.DPB] = params.dp_boiler_nom_MPa * 1e6
-    P[IP.TFW] = params.T_fw_nom_C + K0
-    P[IP.DTFW] = params.dT_fw_dload_K
-    P[IP.TAUF] = params.tau_firing_s
-    P[IP.TBIR] = params.T_bir_s
-    P[IP.TAUW] = params.tau_steam_s
-    P[IP.TAUUP] = params.tau_upstream_s
-    P[IP.FWR] = params.fwr_coupling
-    P[IP.TAUV] = params.tau_valve_s
-    P[IP.RATEV] = params.valve_rate_per_s
-    P[IP.TC1] = params.tau_tc1_s
-    P[IP.TC2] = params.tau_tc2_s
-    P[IP.TAUM] = params.tau_mill_s
-    P[IP.MIS] = params.fwr_mismatch
-    P[IP.BUP] = params.bias_upstream_share
-    P[IP.NL] = params.n_line
     P[IP.LV], P[IP.LCM] = pipe_cells(
         params.n_line, params.line_volume_m3, params.line_metal_t, params.c_metal_J_kgK
     )
-    P[IP.SPD] = params.spray_design_fraction
-    P[IP.MARG] = params.attemp_margin_K
     n_x = IX.CHAIN + 2 * n + 1 + params.n_line
     _calibrate(params, P, n_x)
     pat = chain_pattern(IX.CHAIN, n, INLET_COLS, IX.LW)

@@ -8,6 +8,7 @@ import numpy as np
 
 from steamtemp_gym._jit import njit
 from steamtemp_gym.plants.base import Signal
+from steamtemp_gym.plants.copies import Copy, kelvin
 from steamtemp_gym.slots import blocks, slots
 
 #: The physical outputs, in the order of z.
@@ -58,6 +59,18 @@ IP, N_P = blocks(
         "TAUV", "RATEV", "TC1", "TC2", "TAUM", "MIS", "BUP", "NL", "LV", "SPD", "MARG", "LCM")],
     *[(name, N_TAB) for name in ("HUP", "DHUP", "HFW", "CPFW", "DCPFW", "RHOFW")],
 )  # fmt: skip
+#: The slots of P that hold an FSHParams field, in SI units (steamtemp_gym/plants/copies.py).
+COPIED = {
+    "N": "n_segments", "WNOM": "W_nom_kg_s", "PNOM": Copy("p_nom_MPa", scale=1e6),
+    "PMIN": Copy("p_min_MPa", scale=1e6), "SLH": "slide_high_load", "SLL": "slide_low_load",
+    "TGN": kelvin("Tg_nom_C"), "DTG": "dTg_dload_K", "GEXP": "gas_flow_exponent",
+    "DPB": Copy("dp_boiler_nom_MPa", scale=1e6), "TFW": kelvin("T_fw_nom_C"),
+    "DTFW": "dT_fw_dload_K", "TAUF": "tau_firing_s", "TBIR": "T_bir_s", "TAUW": "tau_steam_s",
+    "TAUUP": "tau_upstream_s", "FWR": "fwr_coupling", "TAUV": "tau_valve_s",
+    "RATEV": "valve_rate_per_s", "TC1": "tau_tc1_s", "TC2": "tau_tc2_s", "TAUM": "tau_mill_s",
+    "MIS": "fwr_mismatch", "BUP": "bias_upstream_share", "NL": "n_line",
+    "SPD": "spray_design_fraction", "MARG": "attemp_margin_K",
+}  # fmt: skip
 #: The states: firing, steam flow, the upstream enthalpy, the spray valve and the
 #: thermowells (main steam lags 1, 2; attemperator outlet lags 1, 2), then the FSH chain
 #: (2 n states), the coal mill and the n_line line cells.
