@@ -12,8 +12,12 @@ Every controller gets the same terms:
 - **Objective**: the leaderboard's normalized score, averaged over those episodes, with
   the leaderboard's ends: 0 = ``cascade_pi_ff``'s return, 1 = the oracle's, on the same
   episodes (:func:`ends`, computed once per env and stored in ``baselines/tuned/ends.json``).
-- **Constraints**: no trip, and a mean valve travel of at most :data:`TRAVEL_BUDGET` times
-  ``cascade_pi_ff``'s on the same episodes; and the commissioning checks at the two ends
+- **Constraints**: no trip, and a mean valve travel of at most
+  :data:`TUNING_TRAVEL_BUDGET` times ``cascade_pi_ff``'s on the same episodes (the
+  leaderboard's budget :data:`TRAVEL_BUDGET` less a margin for unseen scenarios); the
+  robustness check (:func:`agents.tuning_terms.robustness`: on plants drawn with
+  ``plant_randomization``, a mean cost at most :data:`ROBUST_COST_MAX` times that on the
+  nominal plant, same episodes); and the commissioning checks at the two ends
   of the load range (:data:`COMMISSIONING_CHECKS`, episodes held at each of
   :data:`CHECK_LOADS` with a setpoint and a heat-absorption step, one per seed of
   :data:`CHECK_SEEDS`): in every one no trip, no limit cycle
@@ -25,7 +29,8 @@ Every controller gets the same terms:
   it breaks them (so a start outside them is walked in). The checks run on the start and
   on every candidate that would otherwise be accepted: one that does not improve the
   objective cannot be accepted whatever the checks say, so the search is the same as
-  checking all.
+  checking all. The robustness check runs the same way, after the commissioning checks
+  pass.
 - **Search**: a deterministic compass search on the unit cube of the knobs (log or
   linear, :class:`baselines.tuning.Knob`) from the controller's defaults: each round tries
   +- the step along every knob in turn, moves to the first candidate that improves the
@@ -57,13 +62,18 @@ from agents.tuning_terms import (
     CHECK_LOADS,
     CHECK_SEEDS,
     EPISODES,
+    ROBUST_COST_MAX,
+    ROBUST_EPISODES,
+    ROBUST_SEED,
     TRAVEL_BUDGET,
     TUNING_SEED,
+    TUNING_TRAVEL_BUDGET,
     ZERO,
     check_breach,
     check_metrics,
     code_digest,
     ends,
+    robustness,
     run_episodes,
     seeds,
 )
@@ -81,7 +91,9 @@ MIN_STEP = 1.0 / 64.0
 class Evaluation:
     """One candidate's result on the training episodes and, once run, the commissioning
     checks (``check``: None if not run, "" if passed, else what broke;
-    ``check_travel_ratio``: the largest valve-travel ratio to the reference's over them)."""
+    ``check_travel_ratio``: the largest valve-travel ratio to the reference's over them)
+    and the robustness check (``robust_ratio``: drawn plants' cost over the nominal's; NaN
+    if not run)."""
 
     knobs: dict[str, float]
     score: float  # mean normalized score
@@ -89,10 +101,18 @@ class Evaluation:
     trips: int
     check: str | None = None
     check_travel_ratio: float = float("nan")
+    robust_ratio: float = float("nan")
+
+    @property
+    def robust_excess(self) -> float:
+        """How far the robustness check's ratio exceeds its bound (0 if kept or not run)."""
+        r = self.robust_ratio
+        return max(r - ROBUST_COST_MAX, 0.0) if r == r else 0.0
 
     @property
     def feasible(self) -> bool:
-        return self.trips == 0 and self.travel_ratio <= TRAVEL_BUDGET and not self.check
+        return (self.trips == 0 and self.travel_ratio <= TUNING_TRAVEL_BUDGET
+                and not self.check and self.robust_excess == 0.0)  # fmt: skip
 
     @property
     def merit(self) -> float:
@@ -101,7 +121,8 @@ class Evaluation:
         if self.feasible:
             return self.score
         broken = 1.0 if self.check else 0.0
-        return -1e6 - self.trips - max(self.travel_ratio - TRAVEL_BUDGET, 0.0) - broken
+        return (-1e6 - self.trips - max(self.travel_ratio - TUNING_TRAVEL_BUDGET, 0.0) - broken
+                - self.robust_excess)  # fmt: skip
 
 
 def evaluate(name: str, env_id: str, values: dict[str, float], e: dict[str, Any]) -> Evaluation:
@@ -233,7 +254,13 @@ def search(
         breach, ratio = check_breach(ms, refs)
         if log:
             log(f"{name} {env_id}: commissioning checks {breach or 'passed'}")
-        return replace(res, check=breach, check_travel_ratio=ratio)
+        res = replace(res, check=breach, check_travel_ratio=ratio)
+        if breach:
+            return res
+        robust = robustness(env_id, lambda env: baselines.make(name, env, **res.knobs))
+        if log:
+            log(f"{name} {env_id}: robustness: drawn plants' cost x{robust:.2f} the nominal's")
+        return replace(res, robust_ratio=robust)
 
     history = compass(x0, evaluate_at, confirm=confirm)
     best = best_of(history)
@@ -245,8 +272,11 @@ def search(
         "feasible": best.feasible,
         "evaluations": len(history),
         "replayed": replayed,
-        "check_travel_ratio": best.check_travel_ratio,
-        "start": history[0][1].__dict__,
+        "check_travel_ratio": _finite(best.check_travel_ratio),
+        "robust_ratio": _finite(best.robust_ratio),
+        "start": {**history[0][1].__dict__,
+                  "check_travel_ratio": _finite(history[0][1].check_travel_ratio),
+                  "robust_ratio": _finite(history[0][1].robust_ratio)},
         "history": [_row(r) for _, r in history],
     }
 
@@ -255,10 +285,16 @@ def _key(knobs: dict[str, float]) -> tuple[tuple[str, float], ...]:
     return tuple(sorted((k, float(v)) for k, v in knobs.items()))
 
 
+def _finite(v: float) -> float | None:
+    """A ratio as stored: None where it was not measured (NaN), so the file is strict JSON."""
+    return None if v != v else v
+
+
 def _row(r: Evaluation) -> dict[str, Any]:
-    """One evaluation as stored: its knobs, score, travel ratio, trips and check."""
+    """One evaluation as stored: its knobs, score, travel ratio, trips and checks."""
     return {"knobs": r.knobs, "score": r.score, "travel_ratio": r.travel_ratio,
-            "trips": r.trips, "check": r.check}  # fmt: skip
+            "trips": r.trips, "check": r.check,
+            "robust_ratio": _finite(r.robust_ratio)}  # fmt: skip
 
 
 def write(name: str, env_ids: list[str], log: Any = None, replay: bool = False) -> dict[str, Any]:
@@ -274,7 +310,10 @@ def write(name: str, env_ids: list[str], log: Any = None, replay: bool = False) 
         data["plants"][env_id] = res
         data["terms"] = {"episodes": EPISODES, "tuning_seed": TUNING_SEED,
                          "evaluations": EVALUATIONS, "step0": STEP0, "min_step": MIN_STEP,
-                         "travel_budget": TRAVEL_BUDGET, "reference": ZERO,
+                         "travel_budget": TUNING_TRAVEL_BUDGET,
+                         "admissibility_budget": TRAVEL_BUDGET, "reference": ZERO,
+                         "robustness": {"episodes": ROBUST_EPISODES, "seed": ROBUST_SEED,
+                                        "cost_max": ROBUST_COST_MAX},
                          "commissioning_checks": {
                              "loads": list(CHECK_LOADS), "seeds": list(CHECK_SEEDS),
                              "travel_max": stats.REALISM_TRAVEL_MAX}}  # fmt: skip

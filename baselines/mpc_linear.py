@@ -77,7 +77,7 @@ import scipy.sparse as sp
 
 from baselines import tuning
 from baselines.loops import observation_layout, restart_rows
-from baselines.mpc_linear_design import GRID_LOADS, design
+from baselines.mpc_linear_design import GRID_LOADS, HEAT_STD, NOISE_K, design
 from baselines.tuning import Knob
 
 #: The local model and its QP are those of the load rounded to this (fraction of rated).
@@ -145,32 +145,44 @@ class MPCLinear:
         env: The env (or vector env) the policy will act on.
         disturbance_model: Estimate the heat-absorption and output disturbances (the
             offset-free design); False holds them at zero (no offset-free estimation).
-        move_weight: Move suppression; u_weight: weight of the steady target (the ``KNOBS``;
-            default: the benchmark's stored tuning, baselines/tuned/mpc_linear.json, where
-            the plant has one, else the commissioning rule's MOVE_WEIGHTS entry and U_WEIGHT).
+        move_weight: Move suppression; u_weight: weight of the steady target;
+            filter_noise_K: the thermocouple noise (K) the Kalman filter assumes; heat_std:
+            the heat-absorption variability it assumes (the ``KNOBS``; default: the
+            benchmark's stored tuning, baselines/tuned/mpc_linear.json, where the plant has
+            one, else the commissioning rule's MOVE_WEIGHTS entry, U_WEIGHT and the named
+            scenarios' noise and disturbance, baselines/mpc_linear_design.py NOISE_K and
+            HEAT_STD). A larger filter noise or smaller variability detunes the estimator:
+            it trusts the model's prediction more than each new measurement, which keeps the
+            loop stable on a unit faster or of higher gain than its model.
     """
 
     #: Searched by agents.baseline_tuning from the commissioning rule's values.
-    KNOBS = (Knob("move_weight", 1e-4, 0.1), Knob("u_weight", 1e-3, 1.0))
+    KNOBS = (Knob("move_weight", 1e-4, 0.1), Knob("u_weight", 1e-3, 1.0),
+             Knob("filter_noise_K", NOISE_K, 100 * NOISE_K), Knob("heat_std", 1e-3, 0.05))  # fmt: skip
 
     @staticmethod
     def knob_defaults(env_id: str) -> dict[str, float]:
-        """The commissioning rule's move suppression and U_WEIGHT."""
+        """The commissioning rule's move suppression and U_WEIGHT, and the filter of the
+        named scenarios' noise and disturbance."""
         return {"move_weight": MOVE_WEIGHTS.get(env_id, MOVE_WEIGHT_LADDER[1]),
-                "u_weight": U_WEIGHT}  # fmt: skip
+                "u_weight": U_WEIGHT, "filter_noise_K": NOISE_K, "heat_std": HEAT_STD}  # fmt: skip
 
     def __init__(self, env: Any, disturbance_model: bool = True, move_weight: float | None = None,
-                 u_weight: float | None = None) -> None:  # fmt: skip
+                 u_weight: float | None = None, filter_noise_K: float | None = None,
+                 heat_std: float | None = None) -> None:  # fmt: skip
         u = env.unwrapped
         plant = u.plant
         base = tuning.stored_or("mpc_linear", plant.id, self.knob_defaults(plant.id))
-        move_weight = base["move_weight"] if move_weight is None else move_weight
-        u_weight = base["u_weight"] if u_weight is None else u_weight
-        for name, v in (("move_weight", move_weight), ("u_weight", u_weight)):
-            if not (isinstance(v, (int, float)) and np.isfinite(v) and v > 0):
+        given = {"move_weight": move_weight, "u_weight": u_weight,
+                 "filter_noise_K": filter_noise_K, "heat_std": heat_std}  # fmt: skip
+        k = {name: base[name] if v is None else v for name, v in given.items()}
+        for name, v in k.items():
+            if not (isinstance(v, (int, float)) and not isinstance(v, bool) and np.isfinite(v)
+                    and v > 0):  # fmt: skip
                 raise ValueError(f"{name} must be a positive finite number, got {v!r}")
+        move_weight, u_weight = k["move_weight"], k["u_weight"]
         params = json.dumps(getattr(u, "params_overrides", {}) or {}, sort_keys=True)
-        self.d = d = design(plant.id, params)
+        self.d = d = design(plant.id, params, float(k["filter_noise_K"]), float(k["heat_std"]))
         self.estimate_disturbances = bool(disturbance_model)
         self._weights = (float(move_weight), float(u_weight))
         names, self._scale, self._center = observation_layout(env)

@@ -225,13 +225,16 @@ def _horizon(Ar: np.ndarray, Br: np.ndarray, Cr: np.ndarray, n_y: int, n_c: int,
     return t63, Nh, pts, moves, n_hold
 
 
-def _noise(observed: list, p_rows: list[int], r: int, dt: float) -> tuple[np.ndarray, ...]:
-    """(V, W): the Kalman filter's measurement noise and process noise of the augmented
-    state; W's block of the plant states is set per grid model (:func:`_grid_model`)."""
+def _noise(observed: list, p_rows: list[int], r: int, dt: float, noise_K: float,
+           heat_std: float) -> tuple[np.ndarray, ...]:  # fmt: skip
+    """(V, W): the Kalman filter's measurement noise (``noise_K`` on the thermocouples) and
+    process noise of the augmented state (the heat-absorption bias's increments from an OU
+    process of std ``heat_std``); W's block of the plant states is set per grid model
+    (:func:`_grid_model`)."""
     n_z = r + 1 + len(p_rows)
-    V = np.diag([(NOISE_K if s.noisy else V_REL * s.scale) ** 2 for s in observed])
+    V = np.diag([(noise_K if s.noisy else V_REL * s.scale) ** 2 for s in observed])
     W = np.zeros((n_z, n_z))
-    W[r, r] = (HEAT_STD * np.sqrt(1.0 - np.exp(-2.0 * dt / HEAT_TAU_S))) ** 2
+    W[r, r] = (heat_std * np.sqrt(1.0 - np.exp(-2.0 * dt / HEAT_TAU_S))) ** 2
     W[r + 1 :, r + 1 :] = np.diag([(P_REL * observed[j].scale) ** 2 for j in p_rows])
     return V, W
 
@@ -277,9 +280,13 @@ def _grid_model(model: tuple, T: np.ndarray, Ti: np.ndarray, W: np.ndarray, V: n
 
 
 @functools.lru_cache(maxsize=16)
-def design(env_id: str, params_json: str) -> dict[str, Any]:
+def design(env_id: str, params_json: str, noise_K: float = NOISE_K,
+           heat_std: float = HEAT_STD) -> dict[str, Any]:  # fmt: skip
     """The MPC of a plant (cached): per grid load the reduced augmented model, Kalman gain,
-    prediction matrices and steady gains; horizon, points, moves; operating-point tables."""
+    prediction matrices and steady gains; horizon, points, moves; operating-point tables.
+    ``noise_K`` and ``heat_std``: the thermocouple noise and heat-absorption variability the
+    Kalman filter assumes (the module docstring's NOISE_K and HEAT_STD by default; larger
+    noise or a smaller variability detune the estimator)."""
     plant = plants.make(env_id, **json.loads(params_json))
     observed = [s for s in plant.outputs if s.observed]
     ctrl = [plant.outlet] + [n for n, _ in plant.secondary]
@@ -294,7 +301,7 @@ def design(env_id: str, params_json: str) -> dict[str, Any]:
     pair = _pairs(plant, Cs @ np.linalg.solve(np.eye(len(As)) - As, Bs), n_y, ctrl)
     p_rows, E, Ec = _output_disturbances(pair, n_y, n_c)
     t63, Nh, pts, moves, n_hold = _horizon(Ti @ As @ T, Ti @ Bs, Cs @ T, n_y, n_c, n_u, dt)
-    V, W = _noise(observed, p_rows, r, dt)
+    V, W = _noise(observed, p_rows, r, dt, noise_K, heat_std)
     lay = _Layout(env_id, r, n_y, n_c, n_u, len(md_rows), pair, E, Ec, Nh, pts, moves, n_hold,
                   dt)  # fmt: skip
     grid = [_grid_model(model, T, Ti, W, V, lay) for model in scaled]
