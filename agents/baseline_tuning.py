@@ -63,8 +63,6 @@ from agents.tuning_terms import (
     CHECK_SEEDS,
     EPISODES,
     ROBUST_COST_MAX,
-    ROBUST_EPISODES,
-    ROBUST_SEED,
     TRAVEL_BUDGET,
     TUNING_SEED,
     TUNING_TRAVEL_BUDGET,
@@ -102,6 +100,7 @@ class Evaluation:
     check: str | None = None
     check_travel_ratio: float = float("nan")
     robust_ratio: float = float("nan")
+    mean_return: float = float("nan")  # on the training episodes (NaN where replayed)
 
     @property
     def robust_excess(self) -> float:
@@ -133,7 +132,7 @@ def evaluate(name: str, env_id: str, values: dict[str, float], e: dict[str, Any]
         [stats.normalize(x, z, o) for x, z, o in zip(r["return"], e["zero"], e["one"], strict=True)]
     )
     return Evaluation(dict(values), float(score), float(r["travel"].mean() / e["travel"]),
-                      int(r["tripped"].sum()))  # fmt: skip
+                      int(r["tripped"].sum()), mean_return=float(r["return"].mean()))  # fmt: skip
 
 
 def defaults(factory: Any, env_id: str) -> dict[str, float]:
@@ -257,7 +256,8 @@ def search(
         res = replace(res, check=breach, check_travel_ratio=ratio)
         if breach:
             return res
-        robust = robustness(env_id, lambda env: baselines.make(name, env, **res.knobs))
+        known = None if res.mean_return != res.mean_return else res.mean_return
+        robust = robustness(env_id, lambda env: baselines.make(name, env, **res.knobs), known)
         if log:
             log(f"{name} {env_id}: robustness: drawn plants' cost x{robust:.2f} the nominal's")
         return replace(res, robust_ratio=robust)
@@ -274,7 +274,7 @@ def search(
         "replayed": replayed,
         "check_travel_ratio": _finite(best.check_travel_ratio),
         "robust_ratio": _finite(best.robust_ratio),
-        "start": {**history[0][1].__dict__,
+        "start": {**{k: v for k, v in history[0][1].__dict__.items() if k != "mean_return"},
                   "check_travel_ratio": _finite(history[0][1].check_travel_ratio),
                   "robust_ratio": _finite(history[0][1].robust_ratio)},
         "history": [_row(r) for _, r in history],
@@ -312,7 +312,7 @@ def write(name: str, env_ids: list[str], log: Any = None, replay: bool = False) 
                          "evaluations": EVALUATIONS, "step0": STEP0, "min_step": MIN_STEP,
                          "travel_budget": TUNING_TRAVEL_BUDGET,
                          "admissibility_budget": TRAVEL_BUDGET, "reference": ZERO,
-                         "robustness": {"episodes": ROBUST_EPISODES, "seed": ROBUST_SEED,
+                         "robustness": {"episodes": "training, drawn plants",
                                         "cost_max": ROBUST_COST_MAX},
                          "commissioning_checks": {
                              "loads": list(CHECK_LOADS), "seeds": list(CHECK_SEEDS),

@@ -13,6 +13,7 @@ import pytest
 
 import baselines
 from agents import baseline_tuning as bt
+from agents import stats
 from agents import tuning_terms as tt
 from baselines import tuning
 from baselines.tuning import Knob
@@ -50,12 +51,50 @@ def test_compass_search_finds_a_known_optimum_within_its_budget():
 
 
 def test_infeasible_candidates_rank_below_every_feasible_one():
-    ok = bt.Evaluation({}, -5.0, 1.9, 0)
-    over = bt.Evaluation({}, 0.9, 2.1, 0)
+    ok = bt.Evaluation({}, -5.0, 1.65, 0)
+    over = bt.Evaluation({}, 0.9, 1.8, 0)  # within the 2x budget, not within its margin
     trip = bt.Evaluation({}, 0.9, 1.0, 1)
     assert ok.feasible and not over.feasible and not trip.feasible
     assert ok.merit > over.merit and ok.merit > trip.merit
     assert bt.Evaluation({}, 0.0, 2.5, 0).merit > bt.Evaluation({}, 0.0, 3.0, 0).merit
+
+
+def test_the_tuners_travel_bound_keeps_a_margin_under_the_budget():
+    """The training episodes' bound is the leaderboard's budget less a margin, so a tuning
+    at the bound stays admissible on scenarios it never saw."""
+    assert tt.TRAVEL_BUDGET == stats.TRAVEL_BUDGET == 2.0
+    assert tt.TUNING_TRAVEL_BUDGET == 1.7 < tt.TRAVEL_BUDGET
+    assert bt.Evaluation({}, 0.0, 1.7, 0).feasible
+    assert not bt.Evaluation({}, 0.0, 1.71, 0).feasible
+
+
+def test_a_candidate_fragile_on_drawn_plants_ranks_below_every_feasible_one():
+    """The robustness check: above its cost ratio a candidate is infeasible, ranked by how
+    far it is above (so a fragile start is walked towards robustness); not run, it never
+    lowers a merit."""
+    robust = bt.Evaluation({}, -5.0, 1.0, 0, check="", robust_ratio=1.4)
+    fragile = bt.Evaluation({}, 0.9, 1.0, 0, check="", robust_ratio=2.6)
+    worse = bt.Evaluation({}, 0.9, 1.0, 0, check="", robust_ratio=3.0)
+    unchecked = bt.Evaluation({}, 0.9, 1.0, 0)
+    assert robust.feasible and unchecked.feasible and not fragile.feasible
+    assert robust.merit > fragile.merit > worse.merit
+    assert fragile.merit <= unchecked.merit
+    assert bt.Evaluation({}, 0.0, 1.0, 0, robust_ratio=tt.ROBUST_COST_MAX).feasible
+
+
+def test_the_robustness_check_draws_plants_and_tells_a_fragile_tuning():
+    """On Cascade300MW the drawn plants cost the industrial reference almost nothing
+    (ratio < 1.2), while mpc_linear with a filter that trusts each thermocouple reading as
+    the named scenarios' noise is unstable on some of them (ratio above the bound) and the
+    detuned filter is not."""
+    env_id = "steamtemp/Cascade300MW-v0"
+    ref = tt.robustness(env_id, lambda v: baselines.make(tt.ZERO, v))
+    assert 0.9 < ref < 1.2
+    fragile = tt.robustness(env_id, lambda v: baselines.make(
+        "mpc_linear", v, move_weight=1e-4, filter_noise_K=0.25, heat_std=0.02))
+    detuned = tt.robustness(env_id, lambda v: baselines.make(
+        "mpc_linear", v, move_weight=1e-4, filter_noise_K=10.0, heat_std=0.005))
+    assert fragile > tt.ROBUST_COST_MAX > detuned
 
 
 def test_a_failed_commissioning_check_ranks_below_every_feasible_candidate():
@@ -214,3 +253,18 @@ def test_every_stored_tuning_passes_the_commissioning_check(name, env_id):
     # Library versions (scipy's Riccati and least-squares solvers, BLAS) move the last
     # digits: the stored ratio is reproduced to 1e-6, not bit for bit, across them.
     assert ratio == pytest.approx(rec["plants"][env_id]["check_travel_ratio"], rel=1e-6)
+
+
+@pytest.mark.parametrize(("name", "env_id"), _stored_pairs())
+def test_every_stored_tuning_was_chosen_under_the_current_terms(name, env_id):
+    """Each stored tuning was searched with the robustness check and the travel margin:
+    the file records those terms, and its result keeps them on the training episodes."""
+    rec = json.loads(tuning.path(name).read_text())
+    terms = rec["terms"]
+    assert terms.get("robustness") == {"episodes": "training, drawn plants",
+                                       "cost_max": tt.ROBUST_COST_MAX}, (
+        "tuned without the current robustness check: rerun the tuning")  # fmt: skip
+    assert terms["travel_budget"] == tt.TUNING_TRAVEL_BUDGET
+    res = rec["plants"][env_id]
+    assert res["feasible"] and res["travel_ratio"] <= tt.TUNING_TRAVEL_BUDGET
+    assert res["robust_ratio"] is not None and res["robust_ratio"] <= tt.ROBUST_COST_MAX
