@@ -307,6 +307,7 @@ def write(name: str, env_ids: list[str], log: Any = None, replay: bool = False) 
         old = data["plants"].get(env_id, {}).get("history") if replay else None
         res = search(name, env_id, log, replay=old)
         res["seconds"] = round(time.perf_counter() - t0, 1)
+        res["code"] = code_digest(env_id, name)
         data["plants"][env_id] = res
         data["terms"] = {"episodes": EPISODES, "tuning_seed": TUNING_SEED,
                          "evaluations": EVALUATIONS, "step0": STEP0, "min_step": MIN_STEP,
@@ -317,7 +318,7 @@ def write(name: str, env_ids: list[str], log: Any = None, replay: bool = False) 
                          "commissioning_checks": {
                              "loads": list(CHECK_LOADS), "seeds": list(CHECK_SEEDS),
                              "travel_max": stats.REALISM_TRAVEL_MAX}}  # fmt: skip
-        data["code"] = code_digest()
+        data.pop("code", None)  # per plant since the provenance digests are scoped
         tuning.TUNED.mkdir(exist_ok=True)
         f.write_text(json.dumps(data, indent=1, sort_keys=True) + "\n")  # after every env
     return data

@@ -39,6 +39,7 @@ from typing import Any
 import agents
 import baselines
 from baselines import tuning
+from steamtemp_gym import plants, provenance
 from steamtemp_gym.checks import head
 
 BASELINE, SHIPPED, FILES, FACTORY = "baseline", "shipped", "files", "factory"
@@ -89,24 +90,65 @@ class Spec:
         return policy
 
     def digest(self, env_id: str) -> str:
-        """The name, and the hash of what decides its actions beyond the source of
-        steamtemp_gym, baselines and agents: a baseline's stored tuning on the env
-        (:func:`tuning_digest`), a trained agent's files, a factory's module."""
+        """The name, and the provenance digests of what decides its actions: its code (the
+        module and what it imports from baselines and agents, :func:`code_digest`) and a
+        baseline's stored tuning on the env (:func:`tuning_digest`), a trained agent's
+        files, a factory's module."""
         if self.kind == BASELINE:
-            return self.name + ":" + tuning_digest(self.target, env_id)
+            module = baselines.factory(self.target).__module__
+            return f"{self.name}:{tuning_digest(self.target, env_id)}:{code_digest(module)}"
         if self.kind == SHIPPED:
             from agents.files import steamtemp_files
 
             files = steamtemp_files(agents.ZOO, env_id, self.target, self.run or 0)
-            return self.name + ":" + files.digest()
+            return f"{self.name}:{files.digest()}:{code_digest(AGENT_MODULE)}"
         if self.kind == FILES:
-            return self.name + ":" + _agent(self.target, env_id).digest()
+            return (f"{self.name}:{_agent(self.target, env_id).digest()}:"
+                    f"{code_digest(AGENT_MODULE)}")  # fmt: skip
         if self.kind == FACTORY:
             module = _module(self.name, self.target.rsplit(":", 1)[0])
             path = getattr(module, "__file__", None)
             if path:
-                return self.name + ":" + hashlib.sha256(Path(path).read_bytes()).hexdigest()
+                return self.name + ":" + provenance.file_digest(Path(path))
         return self.name
+
+
+#: The module of the trained agents' policies (observation pipeline, model).
+AGENT_MODULE = "agents.policy"
+#: The packages a policy's code digest follows imports into (the plant's own scope,
+#: steamtemp_gym, is the fingerprint's other part).
+POLICY_PACKAGES = ("baselines", "agents")
+
+
+def code_digest(*modules: str) -> str:
+    """The provenance digest (steamtemp_gym/provenance.py) of ``modules`` and of every
+    module of baselines and agents they import; a module outside the checkout (a user's
+    baseline registered with ``--import``) enters with its own file."""
+    files = []
+    for m in modules:
+        found = provenance.module_files(m, POLICY_PACKAGES)
+        if not found:
+            path = getattr(importlib.import_module(m), "__file__", None)
+            found = [Path(path)] if path else []
+        files += found
+    return provenance.digest(files)
+
+
+#: The module that computes an episode's metrics and return from its trace.
+EVALUATION = "agents.evaluation"
+
+
+def source_digest(env_id: str) -> str:
+    """The provenance digest of the code every result on ``env_id`` depends on: the plant's
+    own package with the code all plants share (steamtemp_gym.provenance.plant_files) and
+    the evaluation (metrics and return from the trace). A policy's own code and stored
+    files are its part of a fingerprint (:meth:`Spec.digest`), so editing one baseline
+    reruns its rows only, editing one plant that plant's, a docstring nothing."""
+    module = plants.PLANTS[env_id].split(":")[0] if env_id in plants.PLANTS else None
+    if module is None:  # a plant registered from outside the package
+        return f"{code_digest(EVALUATION)}:{provenance.digest(provenance.package_files())}"
+    return provenance.digest([*provenance.plant_files(module),
+                              *provenance.module_files(EVALUATION, POLICY_PACKAGES)])
 
 
 def tuning_digest(name: str, env_id: str) -> str:

@@ -6,17 +6,14 @@ episodes, the score's ends on them (the reference's and the oracle's returns, st
 
 from __future__ import annotations
 
-import hashlib
 import json
-from pathlib import Path
 from typing import Any
 
 import gymnasium as gym
 import numpy as np
 
 import baselines
-import steamtemp_gym
-from agents import stats
+from agents import specs, stats
 from agents.evaluation import run_batch
 from agents.oracle import Oracle
 from baselines import tuning
@@ -73,11 +70,6 @@ COMMISSIONING_CHECKS = tuple(commissioning_check(load) for load in CHECK_LOADS)
 CHECK_SEEDS = tuple(TUNING_SEED - 1 - k for k in range(5))
 
 
-#: Modules of steamtemp_gym that no trajectory depends on (drawing, docs, the command line),
-#: left out of the code digests with the testing package.
-NO_DYNAMICS = ("render.py", "docs.py", "__main__.py")
-
-
 def seeds() -> list[int]:
     """The training episodes' seeds."""
     return [TUNING_SEED + k for k in range(EPISODES)]
@@ -105,7 +97,7 @@ def ends(env_id: str, compute: bool = True) -> dict[str, Any]:
     changed (``compute=False``: a ValueError instead)."""
     f = tuning.TUNED / "ends.json"
     table = json.loads(f.read_text()) if f.is_file() else {}
-    key = {"seeds": seeds(), "scenario": "random", "code": code_digest(ends=True)}
+    key = {"seeds": seeds(), "scenario": "random", "code": code_digest(env_id)}
     got = table.get(env_id)
     if got is not None and got.get("episodes") == key:
         return got
@@ -162,23 +154,11 @@ def check_breach(ms: list[dict[str, Any]], refs: list[dict[str, Any]]) -> tuple[
     return "; ".join(broke), float(ratio)
 
 
-def code_digest(ends: bool = False) -> str:
-    """Hash of the code a tuning depends on: the plants, scenarios and metrics, the
-    evaluation, and the baselines (for the ends only the reference and the oracle)."""
-    h = hashlib.sha256()
-    here = Path(__file__).parent
-    pkg = Path(steamtemp_gym.__file__).parent
-    files = [f for f in sorted(pkg.rglob("*.py")) if f.name not in NO_DYNAMICS
-             and "testing" not in f.relative_to(pkg).parts]  # fmt: skip
-    files += [here / "evaluation.py"]
-    if ends:
-        files += [
-            Path(baselines.__file__).with_name(f)
-            for f in ("cascade_pi.py", "loops.py", "identification.py")
-        ]
-        files += [here / "oracle.py"]
-    else:
-        files += sorted(Path(baselines.__file__).parent.rglob("*.py"))
-    for f in files:
-        h.update(f.read_bytes())
-    return h.hexdigest()[:16]
+def code_digest(env_id: str, name: str | None = None) -> str:
+    """The provenance digest (steamtemp_gym/provenance.py) of the code a result on the
+    training episodes of ``env_id`` depends on: the plant's scope, the evaluation, the
+    reference and the oracle (the score's ends, ``name`` None) or controller ``name`` and
+    the tuner (a tuning)."""
+    modules = [baselines.factory(ZERO).__module__, "agents.oracle"] if name is None else [
+        baselines.factory(name).__module__, "agents.baseline_tuning"]  # fmt: skip
+    return f"{specs.source_digest(env_id)}:{specs.code_digest(*modules)}"

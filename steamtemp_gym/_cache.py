@@ -38,7 +38,6 @@ WARNING level (shown on stderr without any logging set-up). Silence it with
 
 from __future__ import annotations
 
-import ast
 import atexit
 import contextlib
 import hashlib
@@ -53,6 +52,8 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numba
+
+from steamtemp_gym import provenance
 
 try:  # numba's event API (documented as experimental): only the compile notice uses it
     from numba.core import event
@@ -82,7 +83,8 @@ def base_dir() -> Path:
 
 
 def _code_digest(roots: list[Path], memo: Path) -> str:
-    """SHA-256 over numba's version and the docstring-free syntax trees under ``roots``.
+    """The provenance digest (steamtemp_gym/provenance.py: docstring-free syntax trees) of
+    the Python files under ``roots`` and numba's version.
 
     Parsing takes ~0.5 s, so the result is memoized in the file ``memo`` under a key of
     the files' paths, sizes and modification times (an installed package never moves).
@@ -106,23 +108,9 @@ def _code_digest(roots: list[Path], memo: Path) -> str:
         known = {}
     if isinstance(known.get(key), str):
         return known[key]
-    digest = hashlib.sha256(numba.__version__.encode())
-    for f in files:
-        tree = ast.parse(f.read_bytes())
-        for node in ast.walk(tree):
-            body = getattr(node, "body", None)
-            if (
-                isinstance(body, list)
-                and body
-                and isinstance(body[0], ast.Expr)
-                and isinstance(body[0].value, ast.Constant)
-                and isinstance(body[0].value.value, str)
-            ):
-                body[0] = ast.Pass()
-        digest.update(f"{f.parent.name}/{f.name}".encode())
-        digest.update(ast.dump(tree).encode())
+    digest = provenance.digest(files, f"numba {numba.__version__}", root=roots[0].parent)
     known = dict(list(known.items())[-(_MEMO_SIZE - 1):])
-    known[key] = digest.hexdigest()[:16]
+    known[key] = digest
     try:
         memo.parent.mkdir(parents=True, exist_ok=True)
         tmp = memo.with_name(f"{memo.name}.{os.getpid()}")

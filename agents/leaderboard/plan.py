@@ -24,7 +24,6 @@ import gymnasium as gym
 
 import agents
 import baselines
-import steamtemp_gym
 from agents import specs, stats
 from agents.leaderboard import mismatch, summary
 from agents.leaderboard.records import EPISODES, SCHEMA, Key
@@ -250,25 +249,16 @@ def _check_out(ap: argparse.ArgumentParser, out: Path, resume: bool) -> None:
         )
 
 
-def _source_digest() -> str:
-    """Hash of the code that produces a row (physics, scenarios, metrics, baselines). The
-    baselines' stored tunings are part of their rows' policy digests (agents/specs.py), so
-    a new tuning reruns that controller's rows, not the oracle's or the agents'."""
-    h = hashlib.sha256()
-    roots = [Path(steamtemp_gym.__file__).parent, Path(baselines.__file__).parent]
-    files = [f for r in roots for f in sorted(r.rglob("*.py"))]
-    files += [Path(agents.__file__).with_name(f)
-              for f in ("evaluation.py", "difficulty.py", "oracle.py")]  # fmt: skip
-    for f in files:
-        h.update(f.read_bytes())
-    return h.hexdigest()
+#: The code of the references that are no baselines.
+_REFERENCE_MODULES = {summary.ONE: "agents.oracle", REFERENCE: "agents.difficulty"}
 
 
 def _policy_digest(env_id: str, name: str) -> str:
-    """The policy's part of the fingerprint: the name, with the hash of a trained agent's
-    files or of a factory's module (agents/specs.py)."""
-    if name in (summary.ONE, REFERENCE):
-        return name
+    """The policy's part of the fingerprint: the name, with the provenance digest of its
+    code and of a baseline's stored tuning, a trained agent's files or a factory's module
+    (agents/specs.py)."""
+    if name in _REFERENCE_MODULES:
+        return f"{name}:{specs.code_digest(_REFERENCE_MODULES[name])}"
     return specs.parse(name).digest(env_id)
 
 
@@ -334,8 +324,8 @@ def build_plan(ap: argparse.ArgumentParser, args: argparse.Namespace) -> Plan:
             plan.variants[env_id] = mismatch.labels(env_id)
             for label in plan.variants[env_id]:
                 resolved[env_id, label] = resolved[env_id, mismatch.SCENARIO]
-    source = _source_digest()
     for env_id in envs:
+        source = specs.source_digest(env_id)
         digests = {name: _policy_digest(env_id, name) for name in pols[env_id]}  # once per env
         for sc in scs:
             try:
