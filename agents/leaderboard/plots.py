@@ -9,6 +9,9 @@ trend plots (agents/leaderboard/trends.py) share.
 - :func:`profiles`: per plant, performance profiles (fraction of runs above a normalized
   score, averaged over scenarios) over the scores that matter, :data:`PROFILE_RANGE`; the
   share of a policy's runs beyond it is given in the legend and marked at the axis edge.
+- :func:`pareto`: per plant, each policy's score against its valve travel over the
+  reference's, the travel budget, and the Pareto front of the admissible policies
+  (:func:`pareto_front`) joined and labelled.
 
 Colours (:func:`policy_colors`): baselines (``baselines.NAMES``) in blues and greens, trained
 agents and other policies in oranges, reds and purples, the references in grey and black;
