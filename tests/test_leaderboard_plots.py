@@ -255,8 +255,9 @@ def _pareto_summary(budget: float = 2.0) -> dict:
            "fao_sf": (0.9, -0.5), "cascade_pi": (0.7, -0.4)}  # fmt: skip
     pols = {}
     for p, (travel, v) in pts.items():
+        est = {"value": v, "ci95": [v - 0.05, v + 0.05]}
         pols[p] = {"travel_ratio": travel, "trips": 0, "failed": 0,
-                   "normalized_score": {"iqm": {"value": v, "ci95": [v - 0.05, v + 0.05]}}}
+                   "normalized_score": {"iqm": est}}  # fmt: skip
         if p not in REFERENCES:
             pols[p]["admissible"] = travel <= budget
             pols[p]["rank"] = 1
@@ -289,10 +290,10 @@ def test_the_labels_of_the_pareto_figure_do_not_overlap(figures, tmp_path):
     pols = s["plants"]["steamtemp/A-v0"]["policies"]
     for k in range(8):
         v = 0.05 * k
+        est = {"value": 0.26 + v, "ci95": [0.25 + v, 0.27 + v]}
         pols[f"policy_{k}"] = {"travel_ratio": 1.45 + 0.02 * k, "trips": 0, "failed": 0,
                                "admissible": True, "rank": 1,
-                               "normalized_score": {"iqm": {"value": 0.26 + v,
-                                                            "ci95": [0.25 + v, 0.27 + v]}}}
+                               "normalized_score": {"iqm": est}}  # fmt: skip
     s["run"]["policies"]["e"] = list(pols)
     plots.pareto(tmp_path / plots.PARETO, s)
     (fig,) = figures
