@@ -135,8 +135,8 @@ def _rebuild(out: Path, plan: Plan, figures: bool = True) -> tuple[list[dict], d
     if figures and summary is not None:
         (out / "plots").mkdir(parents=True, exist_ok=True)
         plots.bars(out / "plots" / "scores.png", summary)
-        plots.pareto(out / "plots" / plots.PARETO, summary)
         if any(norm.values()):
+            plots.pareto(out / "plots" / plots.PARETO, summary)
             plots.profiles(out / "plots" / "profiles.png", norm, len(plan.seeds),
                            order=plots.figure_order(summary), highlight={
                                e: plots.trend_policies(summary["plants"][e],
