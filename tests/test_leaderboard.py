@@ -518,7 +518,8 @@ def test_leaderboard_cli_with_the_baseline(tmp_path):
                                                   *sorted(trained)]  # fmt: skip
     assert sum(r.split(" | ")[2].startswith("**") for r in table) == 1
     names = {p.name for p in (tmp_path / "plots").glob("*.png")}
-    assert {"scores.png", "profiles.png", "SupercriticalFSH-v0__heldout_mill_trip.png"} <= names
+    assert {"scores.png", "profiles.png", "pareto.png",
+            "SupercriticalFSH-v0__heldout_mill_trip.png"} <= names  # fmt: skip
     with pytest.raises(SystemExit):
         lb.main(["--envs", "steamtemp/Nope-v0", "--out", str(tmp_path / "x")])
 

@@ -234,3 +234,86 @@ def test_long_policy_names_keep_their_end_on_the_bars():
     assert len(label) == plots.LABEL_CHARS and label.startswith("…")
     assert label.endswith("ppo_residual__run2.zip")
     assert plots.short_name("cascade_pi_ff_tuned") == "cascade_pi_ff_tuned"
+
+
+# --------------------------------------------------------------------------- pareto
+def test_the_pareto_front_keeps_the_policies_no_other_beats_on_both():
+    points = {"cheap": (0.5, -0.3), "ref": (1.0, 0.0), "worse": (1.2, -0.1),  # ref beats it
+              "good": (1.5, 0.4), "same_travel_less": (1.5, 0.2), "best": (1.9, 0.8),
+              "costly_no_gain": (1.95, 0.8), "twin": (1.5, 0.4)}  # fmt: skip
+    assert plots.pareto_front(points) == ["cheap", "ref", "good", "best"]  # "good" < "twin"
+    assert plots.pareto_front({}) == []
+    assert plots.pareto_front({"a": (1.0, 0.0)}) == ["a"]
+
+
+def _pareto_summary(budget: float = 2.0) -> dict:
+    """One plant: the reference, the oracle, the frozen valve (far below the axis), two
+    policies on the front, one behind it, one over the budget that no admissible one beats
+    and one over the budget that is beaten."""
+    pts = {ZERO: (1.0, 0.0), "oracle": (0.6, 1.0), "frozen_valve": (0.0, -10.0),
+           "cascade_pi_ff_tuned": (1.4, 0.25), "mpc_linear": (2.04, 0.76), "lqi": (2.1, 0.15),
+           "fao_sf": (0.9, -0.5), "cascade_pi": (0.7, -0.4)}  # fmt: skip
+    pols = {}
+    for p, (travel, v) in pts.items():
+        est = {"value": v, "ci95": [v - 0.05, v + 0.05]}
+        pols[p] = {"travel_ratio": travel, "trips": 0, "failed": 0,
+                   "normalized_score": {"iqm": est}}  # fmt: skip
+        if p not in REFERENCES:
+            pols[p]["admissible"] = travel <= budget
+            pols[p]["rank"] = 1
+    return {"run": {"seeds": [0, 1], "travel_budget": budget, "policies": {"e": list(pols)}},
+            "plants": {"steamtemp/A-v0": {"policies": pols}}, "ranking": []}  # fmt: skip
+
+
+def test_the_pareto_figure_draws_the_budget_the_front_and_its_labels(figures, tmp_path):
+    plots.pareto(tmp_path / plots.PARETO, _pareto_summary())
+    (fig,) = figures
+    ax = fig.axes[0]
+    labels = {t.get_text() for t in ax.texts if t.get_text()}
+    front = ["cascade_pi", ZERO, "cascade_pi_ff_tuned"]
+    assert set(front) <= labels and "oracle" in labels
+    assert f"mpc_linear {report.INADMISSIBLE} 2.04x" in labels  # over the budget, unbeaten
+    assert "fao_sf" not in labels and not any(t.startswith("lqi") for t in labels)
+    assert "frozen_valve (0.0x, -10.00)" in labels  # below the axis: at its edge, its value
+    assert ax.get_ylim()[0] >= plots.PARETO_FLOOR - 0.05
+    budget = [ln for ln in ax.get_lines() if list(ln.get_xdata()) == [2.0, 2.0]]
+    assert len(budget) == 1 and budget[0].get_linestyle() == "--"
+    (stairs,) = [ln for ln in ax.get_lines() if ln.get_label().startswith("Pareto front")]
+    xs, ys = stairs.get_xdata(), stairs.get_ydata()
+    assert list(xs) == [0.7, 1.0, 1.4, 2.0] and list(ys) == [-0.4, 0.0, 0.25, 0.25]
+    assert "valve travel" in ax.get_xlabel() and "normalized score" in ax.get_ylabel()
+
+
+def test_the_labels_of_the_pareto_figure_do_not_overlap(figures, tmp_path):
+    """Eight front policies crowded together: every label is placed apart from the others."""
+    s = _pareto_summary()
+    pols = s["plants"]["steamtemp/A-v0"]["policies"]
+    for k in range(8):
+        v = 0.05 * k
+        est = {"value": 0.26 + v, "ci95": [0.25 + v, 0.27 + v]}
+        pols[f"policy_{k}"] = {"travel_ratio": 1.45 + 0.02 * k, "trips": 0, "failed": 0,
+                               "admissible": True, "rank": 1,
+                               "normalized_score": {"iqm": est}}  # fmt: skip
+    s["run"]["policies"]["e"] = list(pols)
+    plots.pareto(tmp_path / plots.PARETO, s)
+    (fig,) = figures
+    ax = fig.axes[0]
+    renderer = fig.canvas.get_renderer()
+    boxes = [t.get_window_extent(renderer) for t in ax.texts if t.get_text()
+             and not t.get_text().startswith(" budget")]  # fmt: skip
+    assert len(boxes) >= 11
+    overlaps = [(a, b) for i, a in enumerate(boxes) for b in boxes[i + 1 :] if a.overlaps(b)]
+    assert not overlaps
+
+
+def test_the_rebuild_writes_the_pareto_figure(tmp_path):
+    """A real file from the summary of hand-made rows, as outputs._rebuild draws it."""
+    run = {"envs": ["steamtemp/A-v0"], "scenarios": ["s"], "seeds": [0, 1, 2],
+           "policies": {"steamtemp/A-v0": ["cascade_pi_ff", "oracle", "mpc_linear"]},
+           "travel_budget": 2.0}  # fmt: skip
+    rows = _rows()
+    for r in rows:
+        r["metrics"]["valve_travel"] = 1.0 if r["policy"] != "mpc_linear" else 2.5
+    summary, _ = summarize(rows, run)
+    path = plots.pareto(tmp_path / "plots" / plots.PARETO, summary)
+    assert path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"

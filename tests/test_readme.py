@@ -115,6 +115,7 @@ def test_leaderboard_generator_rewrites_readme_and_agents_page(tmp_path, monkeyp
     monkeypatch.setattr(gen, "ROBUSTNESS_PAGE", robustness_page)
     monkeypatch.setattr(gen, "ROOT", tmp_path)
     monkeypatch.setattr(gen, "IMAGE", tmp_path / "img" / "trend.png")
+    monkeypatch.setattr(gen, "PARETO_IMAGE", tmp_path / "img" / "leaderboard_pareto.png")
     env = "steamtemp/A-v0"
     rows = [{"env": env, "scenario": "s", "policy": p, "seed": s, "metrics": {
         "return": r - s, "tripped": 0.0, "iae_K_s": 100.0, "valve_travel": 1.0}}
@@ -130,8 +131,14 @@ def test_leaderboard_generator_rewrites_readme_and_agents_page(tmp_path, monkeyp
     (out / "plots" / "A-v0__heldout_sootblowing.png").write_bytes(b"png")
     before = readme.read_text()
     gen.main(["--out", str(out), "--plot", "A-v0__heldout_sootblowing.png"])
+    assert "docs/img/leaderboard_pareto.png" not in readme.read_text()  # no figure, no link
+    (out / "plots" / "pareto.png").write_bytes(b"pareto")
+    gen.main(["--out", str(out), "--plot", "A-v0__heldout_sootblowing.png"])
     after = readme.read_text()
     assert "| 1 | sb3:ppo | 0.50" in after and "scenario `heldout:sootblowing`" in after
+    assert "Rows are ordered by the mean over plants" in after and "| score over plants |" in after
+    assert "](docs/img/leaderboard_pareto.png)" in after
+    assert (tmp_path / "img" / "leaderboard_pareto.png").read_bytes() == b"pareto"
     assert "| `lqi` | 100 / 1.0x / - / 0/2 |" in after  # the baselines' actuator table
     # outside the markers nothing changed
     strip = re.compile(r"<!-- (leaderboard|trend|baselines):start.*?<!-- \1:end -->", re.S)

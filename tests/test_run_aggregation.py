@@ -2,8 +2,9 @@
 of agents/stats.py (training runs, then episodes within each) on hand-computable cases,
 and the report's one row per agent over run x scenario x seed (agents/leaderboard/summary.py)
 on hand-made records; with one run the summary is the one-run report's, number for number
-(tests/data/one_run_summary.json: the summary and markdown the report wrote before it
-knew training runs, on the record of tests/run_records.py)."""
+(tests/data/one_run_summary.json: the summary the report wrote before it knew training
+runs, on the record of tests/run_records.py, and its markdown as the version-8 report
+writes it: the same numbers under the headline's new order, captions and last column)."""
 
 from __future__ import annotations
 
@@ -98,11 +99,12 @@ def _summary(offsets: dict, spread: bool = True) -> tuple[dict, list[dict]]:
 def test_one_run_gives_the_one_run_summary(run):
     gold = json.loads(GOLDEN.read_text())
     s, r = _summary({run: 0.0})
-    assert s["schema_version"] == gold["summary"]["schema_version"] + 2 == 7
+    assert s["schema_version"] == gold["summary"]["schema_version"] + 3 == 8
     for pe in s["plants"][ENV]["policies"].values():  # the record predates this entry
         pe.pop("realism", None)
     assert s["plants"] == gold["summary"]["plants"]
-    assert s["ranking"] == gold["summary"]["ranking"]
+    old = gold["summary"]["ranking"]  # version 5's fields; version 8 adds score and more
+    assert [{k: e[k] for k in old[0]} for e in s["ranking"]] == old
     if run is None:
         assert s["run"] == gold["summary"]["run"]
         assert report.markdown(s, r) == gold["markdown"]

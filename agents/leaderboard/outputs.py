@@ -136,6 +136,7 @@ def _rebuild(out: Path, plan: Plan, figures: bool = True) -> tuple[list[dict], d
         (out / "plots").mkdir(parents=True, exist_ok=True)
         plots.bars(out / "plots" / "scores.png", summary)
         if any(norm.values()):
+            plots.pareto(out / "plots" / plots.PARETO, summary)
             plots.profiles(out / "plots" / "profiles.png", norm, len(plan.seeds),
                            order=plots.figure_order(summary), highlight={
                                e: plots.trend_policies(summary["plants"][e],

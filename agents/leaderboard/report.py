@@ -17,6 +17,7 @@ from agents import stats
 from agents.leaderboard import mismatch
 from agents.leaderboard.summary import (
     ONE,
+    ORDER_RULE,
     REFERENCE,
     REFERENCES,
     TABLE_METRICS,
@@ -99,40 +100,90 @@ def stat_label(n_seeds: int) -> str:
 INADMISSIBLE = "†"
 
 
-def _travel(pe: dict[str, Any]) -> str:
-    return f"{pe['travel_ratio']:.1f}x" if "travel_ratio" in pe else "-"
+def budget(summary: dict[str, Any]) -> float:
+    """The run's valve-travel budget (a multiple of the reference's travel)."""
+    return float(summary["run"].get("travel_budget", stats.TRAVEL_BUDGET))
 
 
-def _headline_cell(pe: dict[str, Any]) -> str:
-    """Score with CI, (rank), travel ratio and the inadmissible mark of one plant."""
+#: Most decimals :func:`ratio` writes to tell a travel ratio from the budget.
+RATIO_DECIMALS = 4
+
+
+def ratio(r: float, limit: float | None = None, decimals: int = 1) -> str:
+    """A travel ratio as ``1.7x``, with more decimals (up to :data:`RATIO_DECIMALS`) where
+    ``decimals`` would round it onto ``limit`` (the budget) or across it: 2.04 against 2
+    reads ``2.04x``, 1.96 ``1.96x``, so the text shows on which side it is."""
+    d = decimals
+    while limit is not None and d < RATIO_DECIMALS and r != limit:
+        shown = round(r, d)
+        if shown != limit and (shown > limit) == (r > limit):
+            break
+        d += 1
+    return f"{r:.{d}f}x"
+
+
+def _travel(pe: dict[str, Any], limit: float | None = None) -> str:
+    return ratio(pe["travel_ratio"], limit) if "travel_ratio" in pe else "-"
+
+
+def inadmissible_reason(pe: dict[str, Any], limit: float) -> str:
+    """Why a policy is not admissible on a plant, e.g. ``travel 2.04x > 2x, 1 trip``
+    ("" where it is admissible or has no verdict)."""
+    if pe.get("admissible") is not False:
+        return ""
+    why = []
+    if pe.get("travel_ratio", 0.0) > limit:
+        why.append(f"travel {ratio(pe['travel_ratio'], limit)} > {limit:g}x")
+    for key, word in (("trips", "trip"), ("failed", "failed episode")):
+        n = pe.get(key, 0)
+        if n:
+            why.append(f"{n} {word}{'s' if n > 1 else ''}")
+    return ", ".join(why)
+
+
+def _headline_cell(pe: dict[str, Any], limit: float) -> str:
+    """Score with CI and, where admissible, (rank among the plant's admissible policies)
+    and travel ratio; where not, the mark and the reason."""
     est = pe.get("normalized_score", {}).get("iqm")
     if not est or "rank" not in pe:
         return "-"
-    mark = f" {INADMISSIBLE}" if pe.get("admissible") is False else ""
-    return f"{_ci(est)} ({pe['rank']}), travel {_travel(pe)}{mark}"
+    why = inadmissible_reason(pe, limit)
+    if why:
+        travel = "" if "travel" in why else f", travel {_travel(pe, limit)}"
+        return f"{_ci(est)} {INADMISSIBLE} {why}{travel}"
+    return f"{_ci(est)} ({pe['rank']}), travel {_travel(pe, limit)}"
 
 
 def admissibility_note(summary: dict[str, Any]) -> str:
     """What the travel column and the mark mean, with the run's budget."""
-    b = summary["run"].get("travel_budget", stats.TRAVEL_BUDGET)
     return (f"travel: mean valve travel over {ZERO}'s on the same episodes; {INADMISSIBLE}: not "
-            f"admissible on that plant (travel above {b:g}x {ZERO}'s, a trip or a failed "
-            "episode), ranked after every admissible policy.")  # fmt: skip
+            f"admissible on that plant (travel above {budget(summary):g}x {ZERO}'s, a trip or "
+            "a failed episode), listed after every admissible policy.")  # fmt: skip
+
+
+def order_note() -> str:
+    """The sentence that states the headline table's order."""
+    return f"Rows are {ORDER_RULE}."
 
 
 def headline_rows(summary: dict[str, Any]) -> tuple[list[str], list[list[str]]]:
-    """Header and rows of the headline table (policy x plant)."""
+    """Header and rows of the headline table (policy x plant), in the ranking's order
+    (:data:`ORDER_RULE`), the last column the ranking's score."""
     plants = list(summary["plants"])
-    header = ["#", "policy", *[p.split("/")[-1] for p in plants], "mean rank"]
+    header = ["#", "policy", *[p.split("/")[-1] for p in plants], "score over plants"]
+    limit = budget(summary)
     rows = []
     for e in summary["ranking"]:
         cells = []
         for env_id in plants:
             cells.append(_headline_cell(summary["plants"][env_id]["policies"].get(
-                e["policy"], {})))  # fmt: skip
-        rank = f"{e['mean_rank']:.1f}" + (f" ({e['plants']} plants)" if e["plants"] < len(
-            plants) else "")  # fmt: skip
-        rows.append([str(e["position"]), e["policy"], *cells, rank])
+                e["policy"], {}), limit))  # fmt: skip
+        score = num(e["score"])
+        if e["plants"] < len(plants):
+            score += f" ({e['plants']} of {len(plants)} plants)"
+        if e["admissible_plants"] < e["plants"]:
+            score += f", {INADMISSIBLE} on {e['plants'] - e['admissible_plants']}"
+        rows.append([str(e["position"]), e["policy"], *cells, score])
     for ref in REFERENCES:  # listed below the ranking, never ranked
         ests = [summary["plants"][p]["policies"].get(ref, {}).get("normalized_score", {}).get(
             "iqm") for p in plants]  # fmt: skip
@@ -150,10 +201,11 @@ def headline_markdown(summary: dict[str, Any], margins: bool = True) -> str:
     """The headline table with its label (also in the README), and below it the score's
     ends per plant (:func:`margin_markdown`) unless ``margins`` is False."""
     n = len(summary["run"]["seeds"])
-    lines = [f"{stat_label(n)}: the share of the achievable improvement over the industrial "
-             f"reference that a policy realizes (0 = {ZERO}, the cascade a commissioned unit "
-             f"runs; 1 = {ONE}, the clairvoyant NMPC on the true plant; per scenario); "
-             f"(k) = rank on that plant; {admissibility_note(summary)}"
+    lines = [f"{order_note()} Score: {stat_label(n)}: the share of the achievable improvement "
+             f"over the industrial reference that a policy realizes (0 = {ZERO}, the cascade a "
+             f"commissioned unit runs; 1 = {ONE}, the clairvoyant NMPC on the true plant; per "
+             f"scenario); (k) = rank among the policies admissible on that plant; "
+             f"{admissibility_note(summary)}"
              + (f" {RUNS_NOTE}" if _multi_run(summary) else ""), ""]  # fmt: skip
     lines += _table(*headline_rows(summary))
     if margins:
@@ -199,6 +251,7 @@ def agents_markdown(summary: dict[str, Any]) -> str:
     header = ["plant", "policy", "IQM norm. score", *(["runs"] if multi else []),
               "mean return", COLUMNS["iae_K_s"][0], f"travel / {ZERO}'s", "trips"]  # fmt: skip
     body = []
+    limit = budget(summary)
     for env_id, p in summary["plants"].items():
         pols = p["policies"]
         others = [k for k in pols if k in baselines.NAMES and k != VERSUS]
@@ -220,8 +273,8 @@ def agents_markdown(summary: dict[str, Any]) -> str:
                          f"**{score}**" if k == top else score, *spread,
                          f"**{ret}**" if met.get("return") == best_ret else ret,
                          f"**{iae}**" if met.get("iae_K_s") == best_iae else iae,
-                         _travel(e) + (f" {INADMISSIBLE}" if e.get("admissible") is False
-                                       else ""), str(e["trips"])])  # fmt: skip
+                         _travel(e, limit) + (f" {INADMISSIBLE}" if e.get("admissible")
+                                              is False else ""), str(e["trips"])])  # fmt: skip
     return "\n".join(lines + _table(header, body)) + "\n"
 
 
@@ -233,6 +286,7 @@ def baselines_markdown(summary: dict[str, Any]) -> str:
     header = ["baseline", *[f"{p.split('/')[-1]}: IAE [K s] / travel / reversals / rejected"
                             for p in plants]]  # fmt: skip
     body = []
+    limit = budget(summary)
     for name in baselines.NAMES:
         cells = []
         for env_id in plants:
@@ -242,7 +296,7 @@ def baselines_markdown(summary: dict[str, Any]) -> str:
                 continue
             met = pe["metrics"]
             mark = f" {INADMISSIBLE}" if pe.get("admissible") is False else ""
-            cells.append(f"{num(met.get('iae_K_s'), 0)} / {_travel(pe)} / "
+            cells.append(f"{num(met.get('iae_K_s'), 0)} / {_travel(pe, limit)} / "
                          f"{num(met.get('valve_reversals'), 0)} / "
                          f"{_rejected(pe)}{mark}")  # fmt: skip
         if any(c != "-" for c in cells):
@@ -343,6 +397,7 @@ def markdown(summary: dict[str, Any], rows: list[dict]) -> str:
     if robust:
         lines += ["## Robustness to model mismatch", "", robust]
     multi = _multi_run(summary)
+    limit = budget(summary)
     for env_id, p in summary["plants"].items():
         pols = p["policies"]
         order = sorted(pols, key=lambda k: (pols[k].get("rank", 10**6), k))
@@ -350,7 +405,8 @@ def markdown(summary: dict[str, Any], rows: list[dict]) -> str:
                   f"95 % stratified-bootstrap CIs; P(> {VERSUS}): probability that an "
                   f"episode of the policy has a higher return than one of {VERSUS} on the "
                   "same scenario, averaged over scenarios. IAE, max\\|dev\\| and time outside "
-                  "±5 K: mean over scenario × seed where they apply."
+                  "±5 K: mean over scenario × seed where they apply. The admissible policies "
+                  f"by score, then those not admissible ({INADMISSIBLE}), with the reason."
                   + (f" {RUNS_NOTE}" if multi else ""), ""]  # fmt: skip
         header = ["rank", "policy", "IQM norm. score", *(["runs"] if multi else []),
                   "mean norm. score", "IQM return",
@@ -362,14 +418,16 @@ def markdown(summary: dict[str, Any], rows: list[dict]) -> str:
             e = pols[k]
             ns = e.get("normalized_score", {})
             met = e["metrics"]
-            ratio = f"{e['travel_ratio']:.2f}" if "travel_ratio" in e else "-"
-            verdict = {True: "yes", False: f"no {INADMISSIBLE}"}.get(e.get("admissible"), "-")
-            body.append([str(e.get("rank", "ref." if k in REFERENCES else "-")), k,
+            travel = ratio(e["travel_ratio"], limit, 2)[:-1] if "travel_ratio" in e else "-"
+            verdict = {True: "yes", False: f"no {INADMISSIBLE}: {inadmissible_reason(e, limit)}"
+                       }.get(e.get("admissible"), "-")  # fmt: skip
+            rank = INADMISSIBLE if e.get("admissible") is False else e.get("rank")
+            body.append([str(rank or ("ref." if k in REFERENCES else "-")), k,
                          _ci(ns.get("iqm")), *([_run_range(ns.get("iqm"))] if multi else []),
                          _ci(ns.get("mean")),
                          _ci(e["return"]["iqm"], 0),
                          _ci(e.get(f"p_improvement_over_{VERSUS}")),
-                         *(_col(k, met.get(k)) for k in RANK_METRICS), ratio,
+                         *(_col(k, met.get(k)) for k in RANK_METRICS), travel,
                          _col("valve_reversals", met.get("valve_reversals")), verdict,
                          str(e["trips"]), str(e["failed"])])  # fmt: skip
         lines += _table(header, body) + [""]
@@ -404,5 +462,6 @@ def console(summary: dict[str, Any]) -> str:
     widths = [max(len(r[i]) for r in [header, *rows]) for i in range(len(header))]
     fmt = "  ".join(f"{{:<{w}}}" for w in widths)
     n = len(summary["run"]["seeds"])
-    return "\n".join([stat_label(n) + " (rank on the plant):", fmt.format(*header),
+    return "\n".join([f"{stat_label(n)} (k: rank among the plant's admissible policies). "
+                      f"{order_note()}", fmt.format(*header),
                       *[fmt.format(*r) for r in rows]])  # fmt: skip

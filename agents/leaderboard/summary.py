@@ -5,8 +5,8 @@ IQM of the normalized score (0 = the industrial reference ``cascade_pi_ff``'s me
 on that scenario, 1 = the clairvoyant ``oracle``'s; agents/stats.py ``normalize``) and of
 the return, with 95 % stratified-bootstrap CIs; the probability of improvement over
 ``cascade_pi_ff``; the rank per plant (by the IQM of the normalized score; the references
-``oracle`` and ``frozen_valve`` are listed, never ranked) and overall (the mean of the
-per-plant ranks). A trained agent scored over several training runs (policy names
+``oracle`` and ``frozen_valve`` are listed, never ranked; the admissible policies first) and
+overall (:data:`ORDER_RULE`). A trained agent scored over several training runs (policy names
 ``sb3:<algo>@run<k>``, agents/specs.py) is one policy, ``sb3:<algo>``, over training run x
 scenario x seed: its normalized score's and return's CIs resample the training runs and,
 within each, the episodes (agents/stats.py ``training_run_bootstrap_ci``), and each
@@ -31,7 +31,7 @@ from agents import specs, stats
 from agents.leaderboard import mismatch
 
 #: Version of leaderboard.json's format (docs/leaderboard_schema.json).
-SCHEMA_VERSION = 7
+SCHEMA_VERSION = 8
 #: The 0 of the normalized score: the cascade as a commissioned unit runs it.
 ZERO = baselines.INDUSTRIAL_REFERENCE
 #: The 1: the clairvoyant NMPC on the true plant (agents/oracle.py).
@@ -283,16 +283,37 @@ def _admissibility(pol_out: dict[str, Any], budget: float) -> None:
                                    and e["failed"] == 0)  # fmt: skip
 
 
+#: How the cross-plant ranking orders the policies (the tables' captions quote it).
+ORDER_RULE = (
+    "ordered by the mean over plants of the policy's IQM score, where on a plant where it is "
+    f"not admissible (†) a positive score counts as 0 (the score of {ZERO}, which an "
+    "operator would put back); policies scored on fewer plants come after"
+)
+
+
+def counted_score(entry: dict[str, Any]) -> float:
+    """A policy's IQM score on a plant as the cross-plant ranking counts it
+    (:data:`ORDER_RULE`): as it is where admissible, at most 0 where not."""
+    score = entry["normalized_score"]["iqm"]["value"]
+    return score if entry.get("admissible") is not False else min(score, 0.0)
+
+
 def _overall(plants: dict[str, Any]) -> list[dict[str, Any]]:
-    """Mean per-plant rank of each policy; policies ranked on more plants first."""
-    ranks = defaultdict(list)
+    """The cross-plant ranking (:data:`ORDER_RULE`) of the policies ranked on some plant:
+    ``score`` (the mean of :func:`counted_score` over the plants), ``plants`` (how many),
+    ``admissible_plants``, ``mean_rank`` (the mean per-plant rank) and ``position``; equal
+    scores are ordered by mean rank, then name."""
+    entries = defaultdict(list)
     for p in plants.values():
         for name, e in p["policies"].items():
             if "rank" in e:
-                ranks[name].append(e["rank"])
-    out = [{"policy": n, "mean_rank": float(np.mean(r)), "plants": len(r)}
-           for n, r in ranks.items()]  # fmt: skip
-    out.sort(key=lambda e: (-e["plants"], e["mean_rank"]))
+                entries[name].append(e)
+    out = [{"policy": n, "score": float(np.mean([counted_score(e) for e in es])),
+            "plants": len(es), "admissible_plants": sum(e.get("admissible") is not False
+                                                        for e in es),
+            "mean_rank": float(np.mean([e["rank"] for e in es]))}
+           for n, es in entries.items()]  # fmt: skip
+    out.sort(key=lambda e: (-e["plants"], -e["score"], e["mean_rank"], e["policy"]))
     for i, e in enumerate(out):
         e["position"] = i + 1
     return out
