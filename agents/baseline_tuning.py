@@ -143,6 +143,12 @@ def defaults(factory: Any, env_id: str) -> dict[str, float]:
     return {k.name: float(given[k.name]) if k.name in given else k.from_unit(0.5) for k in ks}
 
 
+def alternatives(factory: Any, env_id: str) -> list[dict[str, float]]:
+    """Further starts of the search the class declares (``knob_alternatives(env_id)``: knob
+    values over the defaults, e.g. a robust design), judged like the start."""
+    return list(factory.knob_alternatives(env_id)) if hasattr(factory, "knob_alternatives") else []
+
+
 def compass(
     x0: np.ndarray,
     evaluate_at: Any,
@@ -150,6 +156,7 @@ def compass(
     step0: float = STEP0,
     min_step: float = MIN_STEP,
     confirm: Any = None,
+    first: Any = None,
 ) -> list[tuple[np.ndarray, Any]]:
     """Deterministic compass search on the unit cube (module docstring).
 
@@ -160,13 +167,14 @@ def compass(
         confirm: ``(u, result) -> result``, a further check run on the start and on a
             candidate only when its merit beats the best's; it may lower the merit, never
             raise it (None: no check).
+        first: The start's result if already judged (evaluated and confirmed).
 
     Returns:
         Every (point, result) evaluated, in order; the best is the last accepted move.
     """
     confirm = confirm or (lambda u, r: r)
     x = np.asarray(x0, dtype=float)
-    best = confirm(x, evaluate_at(x))
+    best = confirm(x, evaluate_at(x)) if first is None else first
     history = [(x, best)]
     step = step0
     while len(history) < budget and step >= min_step:
@@ -262,7 +270,16 @@ def search(
             log(f"{name} {env_id}: robustness: drawn plants' cost x{robust:.2f} the nominal's")
         return replace(res, robust_ratio=robust)
 
-    history = compass(x0, evaluate_at, confirm=confirm)
+    # the controller's alternative starts (a robust design), each judged in full; the
+    # search begins at the best of them and the defaults
+    pre = [(x0, confirm(x0, evaluate_at(x0)))]
+    for alt in alternatives(factory, env_id):
+        u = np.array([k.to_unit({**start, **alt}[k.name]) for k in ks])
+        pre.append((u, confirm(u, evaluate_at(u))))
+    i = max(range(len(pre)), key=lambda j: pre[j][1].merit)
+    walk = compass(pre[i][0], evaluate_at, budget=EVALUATIONS - len(pre) + 1, confirm=confirm,
+                   first=pre[i][1])  # fmt: skip
+    history = pre + walk[1:]  # the defaults first
     best = best_of(history)
     return {
         "knobs": best.knobs,

@@ -180,6 +180,12 @@ class MPCLinear:
         return {"move_weight": MOVE_WEIGHTS.get(env_id, MOVE_WEIGHT_LADDER[1]),
                 "u_weight": U_WEIGHT, "filter_noise_K": NOISE_K, "heat_std": HEAT_STD}  # fmt: skip
 
+    @staticmethod
+    def knob_alternatives(env_id: str) -> list[dict[str, float]]:
+        """The robust design the tuner also starts from: the filter detuned to ten times the
+        thermocouple noise and a quarter of the heat-absorption variability."""
+        return [{"filter_noise_K": 10.0 * NOISE_K, "heat_std": HEAT_STD / 4.0}]
+
     def __init__(self, env: Any, disturbance_model: bool = True, move_weight: float | None = None,
                  u_weight: float | None = None, filter_noise_K: float | None = None,
                  heat_std: float | None = None) -> None:  # fmt: skip

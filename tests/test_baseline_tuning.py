@@ -98,7 +98,7 @@ def test_the_robustness_check_draws_plants_and_tells_a_fragile_tuning():
 
 
 def test_a_failed_commissioning_check_ranks_below_every_feasible_candidate():
-    passed = bt.Evaluation({}, -5.0, 1.9, 0, check="")
+    passed = bt.Evaluation({}, -5.0, 1.6, 0, check="")
     broken = bt.Evaluation({}, 0.9, 1.0, 0, check="travel 9.00 = 4.50x the reference's 2.00")
     unchecked = bt.Evaluation({}, 0.9, 1.0, 0)
     assert passed.feasible and unchecked.feasible and not broken.feasible
@@ -268,3 +268,40 @@ def test_every_stored_tuning_was_chosen_under_the_current_terms(name, env_id):
     res = rec["plants"][env_id]
     assert res["feasible"] and res["travel_ratio"] <= tt.TUNING_TRAVEL_BUDGET
     assert res["robust_ratio"] is not None and res["robust_ratio"] <= tt.ROBUST_COST_MAX
+
+
+def test_the_search_starts_from_the_best_of_the_defaults_and_the_declared_alternatives(
+    monkeypatch,
+):
+    """A controller's alternative start (mpc_linear's detuned filter) is judged like the
+    defaults; the walk begins at the better one, the defaults stay the recorded start, and
+    the budget counts both."""
+    calls = []
+
+    class Ctl:
+        KNOBS = (Knob("a", 0.01, 1.0), Knob("b", 0.01, 1.0))
+
+        @staticmethod
+        def knob_defaults(env_id):
+            return {"a": 0.1, "b": 0.1}
+
+        @staticmethod
+        def knob_alternatives(env_id):
+            return [{"b": 0.9}]
+
+    def fake_eval(name, env_id, values, e):
+        calls.append(dict(values))
+        return bt.Evaluation(dict(values), -abs(values["a"] - 0.1) - abs(values["b"] - 0.9),
+                             1.0, 0)  # fmt: skip
+
+    monkeypatch.setattr(bt.baselines, "factory", lambda name: Ctl)
+    monkeypatch.setattr(bt, "ends", lambda env_id: {})
+    monkeypatch.setattr(bt, "check_metrics", lambda env_id, make: [])
+    monkeypatch.setattr(bt, "check_breach", lambda ms, refs: ("", 1.0))
+    monkeypatch.setattr(bt, "robustness", lambda env_id, make, known=None: 1.0)
+    monkeypatch.setattr(bt, "evaluate", fake_eval)
+    res = bt.search("ctl", "steamtemp/Cascade300MW-v0")
+    assert calls[0] == {"a": 0.1, "b": 0.1} and calls[1]["b"] == pytest.approx(0.9)
+    assert res["start"]["knobs"] == {"a": 0.1, "b": 0.1}
+    assert res["knobs"]["b"] == pytest.approx(0.9) and res["knobs"]["a"] == pytest.approx(0.1)
+    assert res["evaluations"] == len(calls) <= bt.EVALUATIONS
