@@ -40,6 +40,7 @@ import agents
 import baselines
 from baselines import tuning
 from steamtemp_gym.checks import head
+from steamtemp_gym.testing import guard
 
 BASELINE, SHIPPED, FILES, FACTORY = "baseline", "shipped", "files", "factory"
 SB3_PREFIX, ZOO_PREFIX = "sb3:", "zoo:"
@@ -71,6 +72,12 @@ class Spec:
     target: str
     envs: frozenset[str] | None = None
     run: int | None = None
+
+    @property
+    def shipped(self) -> bool:
+        """Whether it is the benchmark's own code: a shipped baseline or trained agent (the
+        leaderboard runs every other policy in a process of its own)."""
+        return self.kind == SHIPPED or (self.kind == BASELINE and self.target in baselines.SHIPPED)
 
     def available(self, env_id: str) -> bool:
         """Whether it can act on ``env_id``."""
@@ -255,9 +262,11 @@ def _module(name: str, ref: str):
             del sys.modules[key]
             raise
         return module
-    except Exception as exc:  # noqa: BLE001 - any failure of the import is a bad name
-        raise ValueError(f"policy {_show(name)}: cannot import {ref!r}: {type(exc).__name__}: "
-                         f"{exc}") from None  # fmt: skip
+    except BaseException as exc:  # any failure of the import is a bad name, SystemExit too
+        if not guard.own_failure(exc):  # Ctrl-C
+            raise
+        raise ValueError(f"policy {_show(name)}: cannot import {ref!r}: "
+                         f"{guard.describe(exc, 'the module')}") from None  # fmt: skip
 
 
 def _factory(name: str, ref: str):
