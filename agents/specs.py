@@ -17,7 +17,8 @@ take them: one parser for both, so a name means the same policy everywhere.
   dotted module importable from ``sys.path`` (``PYTHONPATH=.`` adds the current directory)
   or a ``.py`` file; ``callable`` may be dotted (``MyController.create``).
 
-:func:`parse` checks a name (importing a factory's module, finding an agent's files);
+:func:`parse` checks a name (importing a factory's module, finding an agent's files and
+checking that its model fits the observation and action spaces of the env it names);
 :meth:`Spec.make` builds the policy for an env; :func:`check_built` checks what a factory
 returns; :meth:`Spec.digest` is what the leaderboard's fingerprint hashes: the name, with
 a baseline's stored tuning on the env, or the hash of a trained agent's files or of a
@@ -150,6 +151,13 @@ def parse(name: str) -> Spec:
             if not envs:
                 raise ValueError(f"no training run {run} of {agent!r} shipped; its runs: "
                                  f"{ {e: have[e] for e in sorted(have)} }")  # fmt: skip
+        from agents.files import steamtemp_files
+
+        for e in sorted(envs):
+            try:
+                steamtemp_files(agents.ZOO, e, algo, run or 0).check()
+            except ValueError as exc:
+                raise ValueError(f"policy {_show(name)}: {exc}") from None
         return Spec(name, SHIPPED, algo, envs, run)
     if name.startswith(ZOO_PREFIX):
         return _files_spec(name, name[len(ZOO_PREFIX):])
@@ -215,6 +223,8 @@ def _files_spec(name: str, path: str) -> Spec:
 
     try:
         found = find(path)
+        for f in found:  # the model fits the env it is labelled with (agents/files.py)
+            f.check()
     except ValueError as exc:
         raise ValueError(f"policy {_show(name)}: {exc}") from None
     by_env: dict[str, list[str]] = {}

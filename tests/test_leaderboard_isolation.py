@@ -263,9 +263,9 @@ def test_ctrl_c_still_stops_the_run_and_ends_the_policys_process(files, tmp_path
     130, resumable), is not recorded as that policy's failure, and ends its process."""
     out = tmp_path / "out"
     env = dict(os.environ, POLICY_SLEEPS="1")
-    proc = subprocess.Popen([sys.executable, "-m", "agents.leaderboard",
-                             *_argv(files, out, ["sleeper"], "0", 1)], cwd=ROOT, env=env,
-                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)  # fmt: skip
+    argv = [sys.executable, "-m", "agents.leaderboard", *_argv(files, out, ["sleeper"], "0")]
+    proc = subprocess.Popen(argv, cwd=ROOT, env=env, stdout=subprocess.DEVNULL,
+                            stderr=subprocess.PIPE, text=True)  # fmt: skip
     try:
         deadline = time.monotonic() + 60
         record = out / records.EPISODES  # opened once the plan is made: the run's process
