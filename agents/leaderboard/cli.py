@@ -56,7 +56,11 @@ All JSON is strict (no NaN or Infinity tokens).
 
 An episode that raises (a policy error, a plant failure) is recorded as a row with
 an ``error`` and the run goes on: a long run is not lost to one bad policy. At the end
-the failures are listed and the exit code is 1.
+the failures are listed and the exit code is 1. A policy that is not shipped (a factory,
+a trained agent's files, a registered baseline) runs in a process of its own, built by
+its factory on an env of its own: its SystemExit, KeyboardInterrupt or a hang longer than
+``--episode-timeout`` fails its episodes, and it cannot reach the env it is scored on
+(docs/leaderboard.md, "Failures, timeouts and isolation").
 
 Cost: the oracle's episodes are the long ones (it optimizes by rollouts of the plant at
 every replanning instant); they are started first.
