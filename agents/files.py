@@ -21,15 +21,21 @@ Two layouts:
 
 :func:`find` takes a directory of either layout or one model ``.zip`` in it. The files
 that decide an agent's actions (the model and its metadata or statistics) are hashed
-for the leaderboard's fingerprint (:meth:`AgentFiles.digest`).
+for the leaderboard's fingerprint (:meth:`AgentFiles.digest`). :meth:`AgentFiles.check`
+reads the model's observation and action shapes from its ``.zip`` (no torch, nothing
+unpickled) and checks them against the env it is labelled with, so that a model of
+another env, an RL Zoo run without its controller memory or a corrupt ``.zip`` is refused
+when the name is parsed, not episode by episode.
 """
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import json
 import pickle
 import re
+import zipfile
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -71,27 +77,96 @@ class AgentFiles:
             h.update(f.read_bytes())
         return h.hexdigest()
 
+    def shapes(self) -> tuple[tuple[int, ...], tuple[int, ...]]:
+        """The observation and action shapes the model was trained with (its ``.zip``'s
+        ``data`` entry, as SB3 writes it).
+
+        Raises:
+            ValueError: the file is not an SB3 model (not a zip, no ``data``, no spaces).
+        """
+        try:
+            with zipfile.ZipFile(self.model) as z:
+                data = json.loads(z.read("data"))
+            return tuple(data["observation_space"]["_shape"]), tuple(data["action_space"]["_shape"])
+        except (OSError, zipfile.BadZipFile, KeyError, TypeError, ValueError) as exc:
+            raise ValueError(f"{str(self.model)!r} is not a Stable-Baselines3 model file (a .zip "
+                             f"with its 'data' entry and spaces): {type(exc).__name__}: {exc}; "
+                             "is it corrupt or cut short?") from None  # fmt: skip
+
+    def check(self) -> None:
+        """The model fits the env it is labelled with: it takes that env's observation
+        with this agent's controller memory appended and gives that env's action.
+
+        Raises:
+            ValueError: naming the model, its env and both sides' shapes.
+        """
+        stat = tuple((f.stat().st_size, f.stat().st_mtime_ns) for f in (self.model, *self.meta))
+        _check(self, stat)
+
+    def _memory(self) -> dict | None:
+        """The controller-memory options of its observation pipeline (None: no memory)."""
+        if self.layout == STEAMTEMP:
+            return json.loads(self.meta[0].read_text(encoding="utf-8"))["memory"]
+        return _rl_zoo_pipeline(self.model, self.meta)
+
     def load(self):
         """The agent as a Policy (agents.policy.AgentPolicy) on a new env of its id."""
         import gymnasium as gym
 
         from agents.policy import AgentPolicy, model_class
 
+        memory = self._memory()
         if self.layout == STEAMTEMP:
             meta = json.loads(self.meta[0].read_text(encoding="utf-8"))
-            cls, memory = meta["sb3_class"], meta["memory"]
-            norm, residual = meta["normalization"], meta["residual_scale"]
+            cls, norm, residual = meta["sb3_class"], meta["normalization"], meta["residual_scale"]
             max_move = meta.get("max_move")  # no key: the action is a valve position
         else:
             cls = _RL_ZOO_CLASSES.get(self.algo, self.algo.upper())
-            memory, norm, residual = _rl_zoo_pipeline(self.model, self.meta), None, None
-            max_move = None
+            norm, residual, max_move = None, None, None
             pkl = [f for f in self.meta if f.name == "vecnormalize.pkl"]
             if pkl:
                 norm = _vecnormalize_stats(pkl[0])
         model = model_class(cls).load(self.model, device="cpu")
         return AgentPolicy(model, gym.make(self.env_id), memory=memory, obs_norm=norm,
                            residual_scale=residual, max_move=max_move)  # fmt: skip
+
+
+@functools.lru_cache(maxsize=64)
+def _env(env_id: str) -> Any:
+    """One env of each id, to read its spaces and plant."""
+    import gymnasium as gym
+
+    return gym.make(env_id)
+
+
+@functools.lru_cache(maxsize=256)
+def _check(files: AgentFiles, stat: tuple) -> None:
+    """:meth:`AgentFiles.check` (once per agent and state of its files)."""
+    from agents.memory import MemoryConfig
+
+    obs, act = files.shapes()
+    try:
+        env = _env(files.env_id)
+    except Exception as exc:  # noqa: BLE001 - an unknown or broken env id
+        raise ValueError(f"{str(files.model)!r} is labelled for env {files.env_id!r}, which "
+                         f"cannot be made: {type(exc).__name__}: {exc}") from None  # fmt: skip
+    plant = env.unwrapped.plant
+    memory = files._memory()
+    extra = 0 if memory is None else MemoryConfig.from_kwargs(memory).n_extra(
+        len(plant.valves), len(plant.secondary))  # fmt: skip
+    want_obs = (env.observation_space.shape[-1] + extra,)
+    want_act = tuple(env.action_space.shape)
+    if (obs, act) == (want_obs, want_act):
+        return
+    how = (f"with its controller memory of {extra} entries ({memory})" if memory is not None
+           else "without controller memory" + (" (its config.yml has no env_wrapper)"
+                                               if files.layout == RL_ZOO else ""))  # fmt: skip
+    raise ValueError(
+        f"{str(files.model)!r} does not fit {files.env_id}, the env its files name: the model "
+        f"takes observations of shape {obs} and gives actions of shape {act}; {files.env_id} "
+        f"{how} gives observations of shape {want_obs} and takes actions of shape {want_act}. "
+        "Was it trained on another env, or with another controller memory?"
+    )
 
 
 def stem(env_id: str, algo: str, run: int | None = None) -> str:
@@ -276,7 +351,7 @@ def _zoo_yaml(path: Path) -> Any:
 
 def _rl_zoo_pipeline(model: Path, meta: tuple[Path, ...]) -> dict | None:
     """The controller-memory options of an RL Zoo run (its config.yml's ``env_wrapper``)."""
-    from agents.wrappers import memory_options
+    from agents.memory import memory_options
 
     config = [f for f in meta if f.name == "config.yml"]
     hp = _zoo_yaml(config[0]) if config else {}

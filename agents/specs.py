@@ -17,7 +17,8 @@ take them: one parser for both, so a name means the same policy everywhere.
   dotted module importable from ``sys.path`` (``PYTHONPATH=.`` adds the current directory)
   or a ``.py`` file; ``callable`` may be dotted (``MyController.create``).
 
-:func:`parse` checks a name (importing a factory's module, finding an agent's files);
+:func:`parse` checks a name (importing a factory's module, finding an agent's files and
+checking that its model fits the observation and action spaces of the env it names);
 :meth:`Spec.make` builds the policy for an env; :func:`check_built` checks what a factory
 returns; :meth:`Spec.digest` is what the leaderboard's fingerprint hashes: the name, with
 a baseline's stored tuning on the env, or the hash of a trained agent's files or of a
@@ -41,6 +42,7 @@ import baselines
 from baselines import tuning
 from steamtemp_gym import plants, provenance
 from steamtemp_gym.checks import head
+from steamtemp_gym.testing import guard
 
 BASELINE, SHIPPED, FILES, FACTORY = "baseline", "shipped", "files", "factory"
 SB3_PREFIX, ZOO_PREFIX = "sb3:", "zoo:"
@@ -72,6 +74,12 @@ class Spec:
     target: str
     envs: frozenset[str] | None = None
     run: int | None = None
+
+    @property
+    def shipped(self) -> bool:
+        """Whether it is the benchmark's own code: a shipped baseline or trained agent (the
+        leaderboard runs every other policy in a process of its own)."""
+        return self.kind == SHIPPED or (self.kind == BASELINE and self.target in baselines.SHIPPED)
 
     def available(self, env_id: str) -> bool:
         """Whether it can act on ``env_id``."""
@@ -185,6 +193,13 @@ def parse(name: str) -> Spec:
             if not envs:
                 raise ValueError(f"no training run {run} of {agent!r} shipped; its runs: "
                                  f"{ {e: have[e] for e in sorted(have)} }")  # fmt: skip
+        from agents.files import steamtemp_files
+
+        for e in sorted(envs):
+            try:
+                steamtemp_files(agents.ZOO, e, algo, run or 0).check()
+            except ValueError as exc:
+                raise ValueError(f"policy {_show(name)}: {exc}") from None
         return Spec(name, SHIPPED, algo, envs, run)
     if name.startswith(ZOO_PREFIX):
         return _files_spec(name, name[len(ZOO_PREFIX):])
@@ -250,6 +265,8 @@ def _files_spec(name: str, path: str) -> Spec:
 
     try:
         found = find(path)
+        for f in found:  # the model fits the env it is labelled with (agents/files.py)
+            f.check()
     except ValueError as exc:
         raise ValueError(f"policy {_show(name)}: {exc}") from None
     by_env: dict[str, list[str]] = {}
@@ -297,9 +314,11 @@ def _module(name: str, ref: str):
             del sys.modules[key]
             raise
         return module
-    except Exception as exc:  # noqa: BLE001 - any failure of the import is a bad name
-        raise ValueError(f"policy {_show(name)}: cannot import {ref!r}: {type(exc).__name__}: "
-                         f"{exc}") from None  # fmt: skip
+    except BaseException as exc:  # any failure of the import is a bad name, SystemExit too
+        if not guard.own_failure(exc):  # Ctrl-C
+            raise
+        raise ValueError(f"policy {_show(name)}: cannot import {ref!r}: "
+                         f"{guard.describe(exc, 'the module')}") from None  # fmt: skip
 
 
 def _factory(name: str, ref: str):

@@ -63,8 +63,10 @@ class Scripted(FrozenValves):
 
 @pytest.fixture
 def fake_policies(monkeypatch):
-    """Policies ``frozen`` and ``flaky`` (Scripted) next to the baselines."""
+    """Policies ``frozen`` and ``flaky`` (Scripted) next to the baselines, run in this process
+    as the shipped ones are."""
     monkeypatch.setattr(baselines, "NAMES", (*baselines.NAMES, "frozen", "flaky"))
+    monkeypatch.setattr(baselines, "SHIPPED", (*baselines.SHIPPED, "frozen", "flaky"))
     real = episodes._make_policy
 
     def make(name, env_id, env):

@@ -252,6 +252,83 @@ def test_bad_policy_is_an_argparse_error_of_both_clis(name, words, tmp_path, tin
     assert exc.value.code == 2 and "--policy" in err and all(w in err for w in words), err
 
 
+# ------------------------------------------------- agent files that do not fit their env
+FSH = "steamtemp/SupercriticalFSH-v0"
+
+
+def _mislabelled(tmp_path: Path) -> Path:
+    """The FSH agent's files named and labelled as an agent of ENV."""
+    algo = next(a for e, a in agents.shipped() if e == FSH)
+    src = next(s for s in (files.stem(FSH, algo, 0), files.stem(FSH, algo))
+               if (agents.ZOO / f"{s}.zip").is_file())  # fmt: skip
+    d = tmp_path / "mislabelled"
+    d.mkdir()
+    stem = files.stem(ENV, algo)
+    shutil.copy(agents.ZOO / f"{src}.zip", d / f"{stem}.zip")
+    meta = json.loads((agents.ZOO / f"{src}.json").read_text())
+    (d / f"{stem}.json").write_text(json.dumps(dict(meta, env_id=ENV)))
+    return d
+
+
+def _zoo_without_wrapper(tmp_path: Path) -> Path:
+    """An RL Zoo run trained with the controller memory whose config.yml lost env_wrapper."""
+    run, _, _ = _rl_zoo_run(tmp_path)
+    config = run / ENV.replace("/", "-") / "config.yml"
+    config.write_text(yaml.dump(OrderedDict([("n_timesteps", 1000), ("policy", "MlpPolicy")])))
+    return run
+
+
+def _corrupt(tmp_path: Path) -> Path:
+    """The shipped agent's files with the model .zip cut short."""
+    d = tmp_path / "corrupt"
+    d.mkdir()
+    stem = _run0_stem()
+    shutil.copy(agents.ZOO / f"{stem}.json", d / f"{stem}.json")
+    (d / f"{stem}.zip").write_bytes((agents.ZOO / f"{stem}.zip").read_bytes()[:300])
+    return d
+
+
+UNFIT = [
+    (_mislabelled, ["does not fit steamtemp/Cascade300MW-v0", "observations of shape",
+                    "another env"]),
+    (_zoo_without_wrapper, ["does not fit", "without controller memory",
+                            "config.yml has no env_wrapper"]),
+    (_corrupt, ["is not a Stable-Baselines3 model file", "corrupt"]),
+]  # fmt: skip
+
+
+@pytest.mark.parametrize(("make", "words"), UNFIT, ids=[m.__name__ for m, _ in UNFIT])
+def test_agent_files_that_do_not_fit_their_env_are_refused_when_named(
+        make, words, tmp_path, tiny, capsys):  # fmt: skip
+    """A model of another env, an RL Zoo run without its memory wrapper and a corrupt .zip
+    are refused by both CLIs before anything runs, naming the shapes (each episode failed
+    with a broadcast or matmul error, or 'No data found')."""
+    name = f"zoo:{make(tmp_path)}"
+    with pytest.raises(ValueError) as exc:
+        specs.parse(name)
+    assert all(w in str(exc.value) for w in words), str(exc.value)
+    out = tmp_path / "out"
+    with pytest.raises(SystemExit) as code:
+        lb.main(["--envs", ENV, "--policies", name, "--scenarios", str(tiny), "--out", str(out),
+                 "--no-oracle"])  # fmt: skip
+    assert code.value.code == 2 and not out.exists()
+    err = capsys.readouterr().err
+    assert all(w in err for w in words), err
+    with pytest.raises(SystemExit) as code:
+        cli.main([ENV, "--policy", name, "--no-env-checks"])
+    err = capsys.readouterr().err
+    assert code.value.code == 2 and all(w in err for w in words), err
+
+
+def test_shipped_agents_fit_their_envs():
+    """Every shipped agent's model fits its env (checked when its name is parsed)."""
+    for name in specs.shipped_names():
+        spec = specs.parse(name)
+        for env_id in spec.envs:
+            for run in agents.runs(env_id, spec.target):
+                files.steamtemp_files(agents.ZOO, env_id, spec.target, run).check()
+
+
 # --------------------------------------------------------------------------- steamtemp-check
 def test_check_cli_takes_sb3_names_and_factories(at_root, capsys):
     code = cli.main([ENV, "--no-env-checks", "--check", "check_predict_signature",

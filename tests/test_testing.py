@@ -299,3 +299,77 @@ def test_documented_example_pytest_form(tmp_path, pytester, monkeypatch):
     monkeypatch.setenv("PYTHONPATH", str(DOCS.parents[1]))  # this source tree
     result = _run_documented_pytest_file(tmp_path, pytester, subprocess=True)
     result.assert_outcomes(passed=18)
+
+
+# ------------------------------------------------ the checked code cannot end the run
+_ENDING = '''
+import sys
+import baselines
+
+
+class Ending:
+    def __init__(self, env, exc):
+        self.inner, self.exc = baselines.make("cascade_pi", env), exc
+
+    def reset(self):
+        self.inner.reset()
+
+    def predict(self, observation, state=None, episode_start=None, deterministic=True):
+        raise self.exc
+
+
+def sys_exit(env):
+    return Ending(env, SystemExit(3))
+
+
+def interrupt(env):
+    return Ending(env, KeyboardInterrupt())
+
+
+def exit_when_built(env):
+    sys.exit(4)
+'''
+
+
+@pytest.mark.parametrize(("factory", "raised"), [("sys_exit", "SystemExit: 3"),
+                                                 ("interrupt", "KeyboardInterrupt")])
+def test_a_policy_ending_the_process_fails_its_checks_and_the_run_goes_on(
+        tmp_path, capsys, factory, raised):  # fmt: skip
+    """A policy's SystemExit or KeyboardInterrupt fails each check it ends; the table, the
+    messages and the exit status 1 follow (once they ended the checker, exit 3, silently)."""
+    (tmp_path / "ending.py").write_text(_ENDING)
+    code = main([CASCADE, "--policy", f"{tmp_path / 'ending.py'}:{factory}", "--no-env-checks",
+                 "--quick", "--check", "check_predict_signature", "--check",
+                 "check_actions_in_bounds"])  # fmt: skip
+    out = capsys.readouterr().out
+    assert code == 1
+    assert len(re.findall(r"check_\w+\s+FAIL", out)) == 2
+    assert f"{raised} (raised by the code under check" in out and "0 passed, 2 failed" in out
+
+
+def test_a_factory_ending_the_process_is_a_bad_policy(tmp_path, capsys):
+    (tmp_path / "ending.py").write_text(_ENDING)
+    with pytest.raises(SystemExit) as exc:
+        main([CASCADE, "--policy", f"{tmp_path / 'ending.py'}:exit_when_built", "--quick"])
+    assert exc.value.code == 2
+    assert "SystemExit: 4 (raised by the factory" in capsys.readouterr().err
+
+
+def test_a_subject_whose_every_check_was_skipped_is_not_a_pass(capsys, monkeypatch):
+    """The shipped agent of another plant checks nothing on Cascade300MW: exit 1, naming the
+    subject and why (it printed '0 passed, 0 failed, 8 skipped' and exited 0)."""
+    import agents
+    from agents import specs
+
+    other = next(n for n in specs.shipped_names()
+                 if CASCADE not in {e for e, a in agents.shipped() if f"sb3:{a}" == n})
+    code = main([CASCADE, "--policy", other, "--no-env-checks", "--quick"])
+    out = capsys.readouterr().out
+    assert code == 1
+    assert f"NOT CHECKED policy {other}: every check was skipped" in out
+    assert f"{other} is not available for {CASCADE}" in out and "0 passed, 0 failed" in out
+    # a subject with one check run and one skipped is checked
+    monkeypatch.setitem(sys.modules, "stable_baselines3.common.env_checker", None)
+    assert main([CASCADE, "--check", "check_render_frame", "--check", "check_sb3_env"]) == 0
+    assert main([CASCADE, "--check", "check_sb3_env"]) == 1
+    assert "NOT CHECKED env checks of steamtemp/Cascade300MW-v0" in capsys.readouterr().out

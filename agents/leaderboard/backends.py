@@ -8,11 +8,15 @@ from __future__ import annotations
 import os
 import signal
 import sys
-import threading
 import time
 
 from agents import ray_backend
 from agents.leaderboard.episodes import Unit, run_unit
+from agents.leaderboard.isolated import (
+    PARENT_POLL_S,  # noqa: F401 - the workers' poll, too
+    start_method,
+    watch_parent,
+)
 from agents.leaderboard.plan import Plan
 from agents.leaderboard.records import Record
 
@@ -54,27 +58,15 @@ def _pool(jobs: int):
     import multiprocessing as mp
     from concurrent.futures import ProcessPoolExecutor
 
-    fork = "fork" in mp.get_all_start_methods() and "torch" not in sys.modules
-    return ProcessPoolExecutor(max_workers=jobs, mp_context=mp.get_context(
-        "fork" if fork else "spawn"), initializer=_worker_start,
-        initargs=(os.getpid(),))  # fmt: skip
-
-
-#: How often a pool worker checks that the process that started it is alive (s).
-PARENT_POLL_S = 0.5
+    return ProcessPoolExecutor(max_workers=jobs, mp_context=mp.get_context(start_method()),
+                               initializer=_worker_start, initargs=(os.getpid(),))  # fmt: skip
 
 
 def _worker_start(parent: int) -> None:
     """In a pool worker: SIGTERM ends it (not the handler a forked worker inherits), and it
     ends itself within :data:`PARENT_POLL_S` of its parent's death, SIGKILL included."""
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
-
-    def watch() -> None:
-        while os.getppid() == parent:
-            time.sleep(PARENT_POLL_S)
-        os._exit(1)
-
-    threading.Thread(target=watch, name="parent-watch", daemon=True).start()
+    watch_parent(parent)
 
 
 def _local_results(units: list[Unit], jobs: int):

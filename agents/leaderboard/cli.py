@@ -56,7 +56,11 @@ All JSON is strict (no NaN or Infinity tokens).
 
 An episode that raises (a policy error, a plant failure) is recorded as a row with
 an ``error`` and the run goes on: a long run is not lost to one bad policy. At the end
-the failures are listed and the exit code is 1.
+the failures are listed and the exit code is 1. A policy that is not shipped (a factory,
+a trained agent's files, a registered baseline) runs in a process of its own, built by
+its factory on an env of its own: its SystemExit, KeyboardInterrupt or a hang longer than
+``--episode-timeout`` fails its episodes, and it cannot reach the env it is scored on
+(docs/leaderboard.md, "Failures, timeouts and isolation").
 
 Cost: the oracle's episodes are the long ones (it optimizes by rollouts of the plant at
 every replanning instant); they are started first.
@@ -94,9 +98,16 @@ from agents.leaderboard import report
 from agents.leaderboard.backends import _execute
 from agents.leaderboard.episodes import _units
 from agents.leaderboard.outputs import Plots, _rebuild
-from agents.leaderboard.plan import _EXCERPT, DEFAULT_SCENARIOS, DEFAULT_SEEDS, build_plan
+from agents.leaderboard.plan import (
+    _EXCERPT,
+    DEFAULT_SCENARIOS,
+    DEFAULT_SEEDS,
+    EPISODE_TIMEOUT_S,
+    build_plan,
+)
 from agents.leaderboard.records import EPISODES, Record, _latest, read_record
 from steamtemp_gym.checks import head
+from steamtemp_gym.testing import guard
 
 #: --out directories this process locked (resolved path -> descriptor)
 _LOCKS: dict[str, int] = {}
@@ -128,6 +139,7 @@ class Terminated(KeyboardInterrupt):
 
 
 def _on_sigterm(signum: int, frame: Any) -> None:
+    guard.stop_asked()
     raise Terminated
 
 
@@ -177,6 +189,12 @@ def make_parser() -> argparse.ArgumentParser:
                     metavar="X", help="a policy is admissible on a plant when its mean valve "
                     "travel there is at most X times cascade_pi_ff's and it never trips; "
                     "rankings list admissible policies first (default: %(default)s)")  # fmt: skip
+    ap.add_argument("--episode-timeout", default=f"{EPISODE_TIMEOUT_S:g}", metavar="S",
+                    help="a policy that is not shipped (a factory, a trained agent's files, a "
+                    "registered baseline) runs in a process of its own; an episode of it that "
+                    "takes longer than S seconds fails (rerun by --resume), and so does "
+                    "building it; 0: no limit (default: %(default)s, about 10 times the "
+                    "longest episode of a shipped policy)")  # fmt: skip
     ap.add_argument("--scenarios", default=",".join(DEFAULT_SCENARIOS),
                     help="comma list of scenario names, heldout:<name>, random (the seeded "
                     "training distribution) or YAML paths, as gym.make(..., scenario=...) "
@@ -229,6 +247,11 @@ def _show_library_log() -> None:
 
 def main(argv: list[str] | None = None) -> None:
     """Run the leaderboard (see the module docstring)."""
+    with guard.watch():  # a policy module's own KeyboardInterrupt is not a Ctrl-C
+        _main(argv)
+
+
+def _main(argv: list[str] | None) -> None:
     _show_library_log()
     ap = make_parser()
     args = ap.parse_args(argv)

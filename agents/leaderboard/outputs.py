@@ -93,8 +93,14 @@ class Plots:
                 try:
                     runs = [r for r in self.plan.policies[env_id]
                             if specs.split_run(r)[0] == name]  # fmt: skip
-                    pol = episodes._make_policy(runs[0] if runs else name, env_id, env)
-                    traces[name] = run_episode(env, pol, seed)["trace"]
+                    pol = episodes.make_policy(runs[0] if runs else name, env_id, env,
+                                               self.plan.resolved[env_id, sc],
+                                               imports=self.plan.imports,
+                                               timeout=self.plan.episode_timeout)  # fmt: skip
+                    try:
+                        traces[name] = run_episode(env, pol, seed)["trace"]
+                    finally:
+                        episodes.close(pol)
                 except Exception as exc:  # noqa: BLE001 - that episode is in the record
                     print(f"note: no trace of {name} seed {seed} for the plot: {exc}",
                           file=sys.stderr)  # fmt: skip

@@ -26,11 +26,13 @@ import agents
 import baselines
 from agents import specs, stats
 from agents.leaderboard import mismatch, summary
+from agents.leaderboard.isolated import PolicyFailed, PolicyProcess
 from agents.leaderboard.records import EPISODES, SCHEMA, Key
 from steamtemp_gym import envs as envs_
 from steamtemp_gym import scenarios
 from steamtemp_gym.checks import head, tail
 from steamtemp_gym.scenarios import heldout
+from steamtemp_gym.testing import guard
 
 #: The named scenarios every plant has, then the held-out set (steamtemp_gym/scenarios/heldout).
 NAMED_SCENARIOS = ("load_ramp_100_50", "load_ramp_50_100", "load_cycle", "setpoint_step",
@@ -44,6 +46,10 @@ ALWAYS = (summary.ZERO, summary.ONE, REFERENCE)
 #: Upper bound on the number of seeds (a range such as ``0-1000000000`` is a typo).
 MAX_SEEDS = 10_000
 MAX_SEED = 2**63 - 1
+#: Default --episode-timeout (s): about 10 times the longest episode of a shipped policy (the
+#: oracle and mpc_evarx on BoilerTurbineMIMO's load_cycle, 4800 s of plant time: 28 s and
+#: 24 s wall on 2 shared cores).
+EPISODE_TIMEOUT_S = 300.0
 #: Longest excerpt of an exception message quoted in an argparse error.
 _EXCERPT = 400
 _SEED_ITEM = re.compile(r"^(\d+)(?:-(\d+))?$")
@@ -62,6 +68,7 @@ class Plan:
     fingerprints: dict[tuple[str, str, str], str] = field(default_factory=dict)
     imports: tuple[str, ...] = ()  # --import: modules every worker imports first
     travel_budget: float = stats.TRAVEL_BUDGET  # --travel-budget
+    episode_timeout: float | None = EPISODE_TIMEOUT_S  # --episode-timeout
     #: env -> mismatch label -> the variant's params (agents/leaderboard/mismatch.py)
     variants: dict[str, dict[str, dict]] = field(default_factory=dict)
 
@@ -164,9 +171,11 @@ def _resolve(spec: str, env_id: str) -> Any:
 
 
 def _policies(ap: argparse.ArgumentParser, envs: list[str], text: str | None,
-              oracle: bool = True) -> dict:  # fmt: skip
+              oracle: bool = True, imports: tuple[str, ...] = (),
+              timeout: float | None = EPISODE_TIMEOUT_S) -> dict:  # fmt: skip
     """Policies per env; every requested name must parse (agents/specs.py) and be available
-    for at least one env, and a factory's policy is built once on each env and checked.
+    for at least one env, and a factory's policy is built once on each env and checked, in
+    a process of its own as it runs (agents/leaderboard/isolated.py), within ``timeout``.
     :data:`ALWAYS` joins every env (the oracle only with ``oracle``)."""
     always = [p for p in ALWAYS if oracle or p != summary.ONE]
     if text is None:
@@ -201,14 +210,12 @@ def _policies(ap: argparse.ArgumentParser, envs: list[str], text: str | None,
         pols[:] = list(dict.fromkeys(r for n in pols for r in specs.training_runs(n, e)))
         if missing:
             print(f"note: {missing} not available for {e}; skipped there", file=sys.stderr)
-        factories = [n for n in pols if n in parsed and parsed[n].kind == specs.FACTORY]
-        env = gym.make(e) if factories else None
-        for n in factories:
+        for n in [n for n in pols if n in parsed and parsed[n].kind == specs.FACTORY]:
             try:
-                parsed[n].make(e, env)
-            except Exception as exc:  # noqa: BLE001 - any failure is a bad --policies value
+                PolicyProcess(n, e, None, None, imports, timeout).close()
+            except PolicyFailed as exc:  # any failure is a bad --policies value
                 ap.error(f"argument --policies: {head(n, 60)!r} on {e}: "
-                         f"{type(exc).__name__}: {head(str(exc), _EXCERPT)}")  # fmt: skip
+                         f"{head(str(exc), _EXCERPT)}")  # fmt: skip
         pols += [p for p in always if p not in pols]
     return out
 
@@ -281,9 +288,11 @@ def build_plan(ap: argparse.ArgumentParser, args: argparse.Namespace) -> Plan:
     for module in imports:  # first: they may register env ids, baselines and scenarios
         try:
             importlib.import_module(module)
-        except Exception as exc:  # noqa: BLE001 - any failure is a bad --import value
+        except BaseException as exc:  # any failure is a bad --import value, SystemExit too
+            if not guard.own_failure(exc):  # Ctrl-C
+                raise
             ap.error(f"argument --import: cannot import {head(module, 100)!r}: "
-                     f"{type(exc).__name__}: {head(str(exc), _EXCERPT)}")  # fmt: skip
+                     f"{head(guard.describe(exc, 'the module'), _EXCERPT)}")  # fmt: skip
     envs = _items(ap, "--envs", args.envs, key=_env_id)
     unknown = [e for e in envs if _env_id(e) not in envs_.ids()]
     if unknown:
@@ -302,7 +311,17 @@ def build_plan(ap: argparse.ArgumentParser, args: argparse.Namespace) -> Plan:
             f"argument --travel-budget: must be a finite number > 0 (a multiple of "
             f"{summary.ZERO}'s valve travel), got {head(str(args.travel_budget), 60)!r}"
         )
-    pols = _policies(ap, envs, args.policies, oracle=not args.no_oracle)
+    timeout = getattr(args, "episode_timeout", str(EPISODE_TIMEOUT_S))
+    try:
+        timeout = float(timeout)
+    except (TypeError, ValueError):
+        timeout = math.nan
+    if not (math.isfinite(timeout) and timeout >= 0.0):
+        ap.error(f"argument --episode-timeout: must be a number of seconds >= 0 (0: no limit), "
+                 f"got {head(str(getattr(args, 'episode_timeout', '')), 60)!r}")  # fmt: skip
+    timeout = timeout or None
+    pols = _policies(ap, envs, args.policies, oracle=not args.no_oracle, imports=imports,
+                     timeout=timeout)  # fmt: skip
     scs = _items(ap, "--scenarios", args.scenarios, key=_scenario_key)
     if args.out is None or str(args.out).strip() == "":
         ap.error("argument --out: empty path")
@@ -318,7 +337,7 @@ def build_plan(ap: argparse.ArgumentParser, args: argparse.Namespace) -> Plan:
                     f"{head(str(exc), 1000)}"  # the message lists every form
                 )
     plan = Plan(envs=envs, scenarios=scs, seeds=seeds, policies=pols, resolved=resolved,
-                imports=imports, travel_budget=budget)  # fmt: skip
+                imports=imports, travel_budget=budget, episode_timeout=timeout)  # fmt: skip
     if not args.no_mismatch and mismatch.SCENARIO in scs:
         for env_id in envs:
             plan.variants[env_id] = mismatch.labels(env_id)

@@ -5,7 +5,8 @@
     steamtemp-check my/FSH12-v0 --import my_plants --policy cascade_pi --policy lqi
     steamtemp-check steamtemp/Cascade300MW-v0 --check check_determinism
 
-Exit status 0 when every check passed or was skipped, 1 on any failure, 2 on bad arguments.
+Exit status 0 when every check passed or was skipped, 1 on any failure or when every check
+of a subject (an env's env checks, a policy's checks) was skipped, 2 on bad arguments.
 """
 
 from __future__ import annotations
@@ -18,7 +19,8 @@ from collections.abc import Sequence
 
 import gymnasium as gym
 
-from steamtemp_gym.testing.runner import CHECK_NAMES, Result, bound_checks, run
+from steamtemp_gym.testing import guard
+from steamtemp_gym.testing.runner import CHECK_NAMES, Result, bound_checks, run, unchecked
 from steamtemp_gym.testing.subjects import short_id
 
 
@@ -103,12 +105,22 @@ def _check_policies(parser: argparse.ArgumentParser, policies: list[str], ids: l
             env_id = (ids or steamtemp_gym.ENV_IDS)[0]
             try:
                 spec.make(env_id, gym.make(env_id))
-            except Exception as exc:  # noqa: BLE001 - any failure is a bad --policy value
-                parser.error(f"--policy {name}: on {env_id}: {type(exc).__name__}: {exc}")
+            except BaseException as exc:  # any failure is a bad --policy value; SystemExit too
+                if not guard.own_failure(exc):
+                    raise
+                parser.error(f"--policy {name}: on {env_id}: "
+                             f"{guard.describe(exc, 'the factory')}")  # fmt: skip
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point of ``steamtemp-check``; returns the exit status."""
+    """Entry point of ``steamtemp-check``; returns the exit status. A check's code (the
+    policy's, the env's) that raises ``SystemExit`` or ``KeyboardInterrupt`` fails that
+    check; Ctrl-C stops the run."""
+    with guard.watch():
+        return _main(argv)
+
+
+def _main(argv: Sequence[str] | None) -> int:
     import baselines
 
     parser = _parser()
@@ -118,6 +130,10 @@ def main(argv: Sequence[str] | None = None) -> int:
             importlib.import_module(module)
         except ImportError as exc:
             parser.error(f"--import {module}: {exc}")
+        except BaseException as exc:  # the module's own failure, SystemExit included
+            if not guard.own_failure(exc):
+                raise
+            parser.error(f"--import {module}: {guard.describe(exc, 'the module')}")
     args.ids = [_env_id(parser, i) for i in args.ids]
     policies = list(baselines.NAMES) if "all" in args.policy else args.policy
     _check_policies(parser, policies, args.ids)
@@ -140,10 +156,15 @@ def main(argv: Sequence[str] | None = None) -> int:
     for r in failed:
         print(f"\nFAIL {r.check} on {r.env}" + (f" / {r.policy}" if r.policy else ""))
         print("  " + r.message.replace("\n", "\n  "))
+    nothing = unchecked(results)
+    for subject, reasons in nothing.items():
+        print(f"\nNOT CHECKED {subject}: every check was skipped")
+        print("  " + "\n  ".join(reasons))
     counts = {s: sum(r.status == s for r in results) for s in ("pass", "fail", "skip")}
     print(f"\n{counts['pass']} passed, {counts['fail']} failed, {counts['skip']} skipped "
-          f"in {time.perf_counter() - t0:.1f} s")  # fmt: skip
-    return 1 if failed else 0
+          f"in {time.perf_counter() - t0:.1f} s"
+          + (f"; {len(nothing)} subject(s) not checked at all" if nothing else ""))  # fmt: skip
+    return 1 if failed or nothing else 0
 
 
 if __name__ == "__main__":

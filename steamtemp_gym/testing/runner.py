@@ -10,6 +10,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from steamtemp_gym.testing import env_checks as ec
+from steamtemp_gym.testing import guard
 from steamtemp_gym.testing import policy_checks as pc
 from steamtemp_gym.testing.subjects import resolve_env, resolve_policy, short_id
 from steamtemp_gym.testing.vector_checks import check_vector_env_matches_single_env
@@ -143,13 +144,26 @@ def run(env: Any, check: BoundCheck, skip_slow: bool = False) -> Result:
                       "slow; run without --quick")  # fmt: skip
     t0 = time.perf_counter()
     try:
-        check(env)
+        with guard.watch():  # the checked code's own KeyboardInterrupt fails the check
+            check(env)
         status, msg = "pass", ""
     except unittest.SkipTest as exc:
         status, msg = "skip", str(exc)
     except AssertionError as exc:
         status, msg = "fail", str(exc)
     return Result(label, check.policy_label, check.label, status, time.perf_counter() - t0, msg)
+
+
+def unchecked(results: Iterable[Result]) -> dict[str, list[str]]:
+    """The subjects whose every check was skipped, with the reasons (each once): an env's
+    env checks (``env checks of <id>``), a policy's checks over every env (``policy
+    <label>``). A run that checked nothing of a subject has not checked it."""
+    subjects: dict[str, list[Result]] = {}
+    for r in results:
+        key = f"env checks of {r.env}" if r.policy is None else f"policy {r.policy}"
+        subjects.setdefault(key, []).append(r)
+    return {key: list(dict.fromkeys(r.message or "no reason given" for r in rs))
+            for key, rs in subjects.items() if all(r.status == "skip" for r in rs)}  # fmt: skip
 
 
 def _raise_failures(results: list[Result]) -> list[Result]:

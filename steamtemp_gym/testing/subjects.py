@@ -13,6 +13,8 @@ from typing import Any
 import gymnasium as gym
 from gymnasium.vector import SyncVectorEnv
 
+from steamtemp_gym.testing import guard
+
 
 class CheckSkipped(unittest.SkipTest):
     """A check that cannot run here (a missing optional library, a factory without a native
@@ -134,7 +136,7 @@ def _make_named(name: str, env: Any) -> Any:
 
 
 def _failure(check: str, subject: str, call: str, exc: BaseException) -> AssertionError:
-    what = str(exc) if isinstance(exc, AssertionError) else f"{type(exc).__name__}: {exc}"
+    what = str(exc) if isinstance(exc, AssertionError) else guard.describe(exc)
     return AssertionError(
         f"{check} failed on {subject}: {what}\n"
         f"  reproduce: from steamtemp_gym.testing import {check}; {check}({call})"
@@ -158,7 +160,9 @@ def env_check(fn: Callable[..., None]) -> Callable[..., None]:
             fn(target, **kwargs)
         except unittest.SkipTest:
             raise
-        except Exception as exc:  # an error inside a check is a failed contract
+        except BaseException as exc:  # an error inside a check is a failed contract
+            if not guard.own_failure(exc):  # Ctrl-C: stop
+                raise
             call = target.repro() + _quick_arg(kwargs)
             raise _failure(fn.__name__, target.label, call, exc) from exc
 
@@ -177,7 +181,9 @@ def policy_check(fn: Callable[..., None]) -> Callable[..., None]:
             fn(p, target, **kwargs)
         except unittest.SkipTest:
             raise
-        except Exception as exc:
+        except BaseException as exc:  # SystemExit, KeyboardInterrupt of the policy included
+            if not guard.own_failure(exc):  # Ctrl-C: stop
+                raise
             call = f"{p.repro()}, {target.repro()}{_quick_arg(kwargs)}"
             raise _failure(fn.__name__, f"{p.label} on {target.label}", call, exc) from exc
 

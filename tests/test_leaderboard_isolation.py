@@ -1,0 +1,288 @@
+"""A policy that is not shipped cannot cheat, hang or kill the leaderboard
+(agents/leaderboard/isolated.py): it acts from a process of its own, commissioned on an
+env of its own; its SystemExit, KeyboardInterrupt or hang fails its episodes and the run
+ends with every row written; Ctrl-C still stops the run; and it scores exactly as the same
+controller run in the leaderboard's own process.
+
+One plant (Cascade300MW, the cheapest), a 60 s scenario, one or two seeds.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+from agents import leaderboard as lb
+from agents.evaluation import run_batch
+from agents.leaderboard import episodes, isolated, records
+from agents.leaderboard.plan import EPISODE_TIMEOUT_S
+
+ROOT = Path(__file__).parents[1]
+ENV = "steamtemp/Cascade300MW-v0"
+TINY = "name: tiny\nduration_s: 60\nload: [[0, 1.0], [30, 0.95]]\n"
+POLICIES = """
+import os
+import sys
+import time
+
+import numpy as np
+
+import baselines
+
+
+class Scripted:
+    '''Valves held at mid-stroke; ``predict`` does ``what`` first.'''
+
+    def __init__(self, env, what=None):
+        self.what = what
+
+    def reset(self):
+        pass
+
+    def predict(self, observation, state=None, episode_start=None, deterministic=True):
+        if self.what is not None:
+            self.what()
+        return np.zeros(np.shape(observation)[:-1] + (1,), dtype=np.float32), None
+
+
+def _exit():
+    sys.exit(3)
+
+
+def _interrupt():
+    raise KeyboardInterrupt
+
+
+def _sleep():
+    if os.environ.get("POLICY_SLEEPS"):
+        time.sleep(1000)
+
+
+def sys_exit(env):
+    return Scripted(env, _exit)
+
+
+def interrupt(env):
+    return Scripted(env, _interrupt)
+
+
+def ends_its_process(env):
+    return Scripted(env, lambda: os._exit(5))
+
+
+def sleeper(env):
+    return Scripted(env, _sleep)
+
+
+def exit_when_built(env):
+    sys.exit(4)
+
+
+def cheat(env):
+    '''Zero the reward weights of the env it is handed and move it to another scenario.'''
+    env.unwrapped.core.cfg[[6, 9, 10, 11]] = 0
+    env.reset(options={"scenario": "setpoint_step"})
+    return baselines.make("cascade_pi", env)
+
+
+def my_lqi(env):
+    return baselines.make("lqi", env)
+"""
+
+
+@pytest.fixture
+def files(tmp_path) -> tuple[Path, Path]:
+    (tmp_path / "pols.py").write_text(POLICIES)
+    (tmp_path / "tiny.yaml").write_text(TINY)
+    return tmp_path / "pols.py", tmp_path / "tiny.yaml"
+
+
+def _argv(files, out: Path, policies: list[str], seeds: str = "0,1", jobs: int = 1,
+          *extra: str) -> list[str]:  # fmt: skip
+    pols, tiny = files
+    names = ",".join(p if p in ("cascade_pi", "lqi", "cascade_pi_ff") else f"{pols}:{p}"
+                     for p in policies)  # fmt: skip
+    return ["--envs", ENV, "--policies", names, "--scenarios", str(tiny), "--seeds", seeds,
+            "--jobs", str(jobs), "--no-oracle", "--out", str(out), *extra]  # fmt: skip
+
+
+def _rows(out: Path) -> dict[tuple[str, int], dict]:
+    rows = [json.loads(line) for line in (out / records.EPISODES).read_text().splitlines()]
+    return {(r["policy"].rsplit(":", 1)[-1], r["seed"]): r for r in rows}
+
+
+@pytest.mark.parametrize("jobs", [1, 2])
+def test_a_policy_ending_its_process_fails_its_episodes_and_the_run_goes_on(
+        files, tmp_path, capsys, jobs):  # fmt: skip
+    """SystemExit, KeyboardInterrupt and os._exit in predict fail that policy's episodes;
+    every other row is written, the outputs are built, the exit status is 1 with a message
+    (SystemExit ended the run with status 3, nothing printed and no leaderboard.json)."""
+    out = tmp_path / "out"
+    with pytest.raises(SystemExit) as exc:
+        lb.main(_argv(files, out, ["cascade_pi", "sys_exit", "interrupt", "ends_its_process"],
+                      jobs=jobs))  # fmt: skip
+    assert exc.value.code == 1
+    rows = _rows(out)
+    assert len(rows) == 6 * 2  # the four, cascade_pi_ff, frozen_valve x 2 seeds
+    for seed in (0, 1):
+        assert rows["cascade_pi", seed]["metrics"] is not None
+        assert "SystemExit: 3" in rows["sys_exit", seed]["error"]
+        assert "KeyboardInterrupt" in rows["interrupt", seed]["error"]
+        assert "ended (exit code 5)" in rows["ends_its_process", seed]["error"]
+        assert "in its predict" in rows["sys_exit", seed]["error"]
+    assert "sys.exit(3)" in rows["sys_exit", 0]["traceback"]  # the policy's own traceback
+    doc = json.loads((out / "leaderboard.json").read_text())
+    assert len(doc["episodes"]) == 12 and (out / "leaderboard.md").is_file()
+    err = capsys.readouterr().err
+    assert "6 of 12 episodes failed" in err and "--resume" in err
+
+
+def test_a_factory_ending_the_process_is_a_bad_policy(files, tmp_path, capsys):
+    with pytest.raises(SystemExit) as exc:
+        lb.main(_argv(files, tmp_path / "out", ["exit_when_built"]))
+    assert exc.value.code == 2
+    err = capsys.readouterr().err
+    assert "argument --policies" in err and "SystemExit: 4" in err and "in its factory" in err
+
+
+def test_a_hanging_policy_times_out_and_resumes(files, tmp_path, monkeypatch, capsys):
+    """--jobs 1: a predict that sleeps fails its episodes after --episode-timeout (the run
+    hung at 1/4 episodes); --resume runs only those again."""
+    out = tmp_path / "out"
+    argv = _argv(files, out, ["sleeper"], "0,1", 1)
+    monkeypatch.setenv("POLICY_SLEEPS", "1")
+    t0 = time.monotonic()
+    with pytest.raises(SystemExit) as exc:
+        lb.main([*argv, "--episode-timeout", "10"])
+    assert exc.value.code == 1 and time.monotonic() - t0 < 180
+    rows = _rows(out)
+    for seed in (0, 1):
+        assert "timed out" in rows["sleeper", seed]["error"]
+        assert "--episode-timeout 10" in rows["sleeper", seed]["error"]
+    assert rows["cascade_pi_ff", 0]["metrics"] is not None
+    monkeypatch.delenv("POLICY_SLEEPS")
+    lb.main([*argv, "--resume"])  # the timeout is not part of the fingerprint
+    lines = (out / records.EPISODES).read_text().splitlines()
+    assert len(lines) == 6 + 2 and all('"sleeper' not in x or "error" not in x for x in lines[6:])
+    assert [json.loads(x)["policy"].endswith(":sleeper") for x in lines[6:]] == [True, True]
+
+
+def test_episode_timeout_flag_is_checked(files, tmp_path, capsys):
+    for bad in ("-1", "nan", "soon"):
+        with pytest.raises(SystemExit) as exc:
+            lb.main(_argv(files, tmp_path / "out", ["cascade_pi"], "0", 1,
+                          "--episode-timeout", bad))  # fmt: skip
+        assert exc.value.code == 2 and "--episode-timeout" in capsys.readouterr().err
+    assert not (tmp_path / "out").exists()
+    assert EPISODE_TIMEOUT_S >= 10 * 28  # the longest shipped episode measured: 28 s
+
+
+def test_a_factory_cannot_change_how_it_is_scored(files, tmp_path):
+    """A factory that zeroes the reward weights of the env it is handed and resets it into
+    another scenario changes only its own commissioning env: it scores as cascade_pi, the
+    controller it builds (it scored a return of 0 before)."""
+    out = tmp_path / "out"
+    lb.main(_argv(files, out, ["cascade_pi", "cheat"]))
+    rows = _rows(out)
+    for seed in (0, 1):
+        assert rows["cheat", seed]["metrics"] == rows["cascade_pi", seed]["metrics"]
+        assert rows["cheat", seed]["metrics"]["return"] < 0
+
+
+def test_a_policy_in_its_own_process_scores_as_in_the_leaderboards(files, tmp_path):
+    """The same baselines from a factory file (a process of their own, commissioned on an
+    env of their own) give the rows of the shipped ones, bit for bit, alone and in a pool."""
+    for jobs in (1, 2):
+        out = tmp_path / f"out{jobs}"
+        lb.main(_argv(files, out, ["lqi", "my_lqi"], "0,1", jobs))
+        lines = [json.loads(x) for x in (out / records.EPISODES).read_text().splitlines()]
+        mine = {r["seed"]: r["metrics"] for r in lines if r["policy"].endswith(":my_lqi")}
+        shipped = {r["seed"]: r["metrics"] for r in lines if r["policy"] == "lqi"}
+        assert mine == shipped and len(mine) == 2
+
+
+@pytest.mark.parametrize("name", ["cascade_pi_ff", "lqi", "mpc_linear"])
+def test_baselines_commission_alike_on_an_env_of_their_own(name):
+    """A shipped baseline commissioned on a separate env made as the evaluation env is (the
+    same id, scenario and rows) acts as one commissioned on the evaluation env: the traces
+    of run_batch are identical bit for bit."""
+    from steamtemp_gym import scenarios
+
+    sc = scenarios.resolve("setpoint_step", ENV)
+    traces = []
+    for separate in (False, True):
+        venv = isolated.make_env(ENV, sc, 2)
+        model = isolated.make_env(ENV, sc, 2) if separate else venv
+        out = run_batch(venv, episodes._make_policy(name, ENV, model), [0, 1])
+        traces.append(out)
+    for a, b in zip(*traces, strict=True):
+        assert a["metrics"] == b["metrics"]
+        for k in a["trace"]:
+            np.testing.assert_array_equal(a["trace"][k], b["trace"][k], err_msg=f"{name} {k}")
+
+
+def test_policy_process_answers_bit_for_bit():
+    """A PolicyProcess's actions are its policy's, bit for bit, and it ends on close."""
+    env = gym.make(ENV)
+    obs, _ = env.reset(seed=0)
+    here = episodes._make_policy("cascade_pi", ENV, gym.make(ENV))
+    with isolated.PolicyProcess("cascade_pi", ENV, None, None) as there:
+        for k in range(5):
+            a = here.predict(obs, episode_start=np.array([k == 0]))[0]
+            b = there.predict(obs, episode_start=np.array([k == 0]))[0]
+            assert a.dtype == b.dtype and np.array_equal(a, b)
+            obs, *_ = env.step(a)
+        proc = there._proc
+    assert not proc.is_alive()
+
+
+def _children(pid: int) -> list[int]:
+    path = Path(f"/proc/{pid}/task/{pid}/children")
+    return [int(c) for c in path.read_text().split()] if path.exists() else []
+
+
+def _alive(pid: int) -> bool:
+    """Running (not a zombie waiting for a parent that does not reap it)."""
+    try:
+        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] != "Z"
+    except (FileNotFoundError, ProcessLookupError, IndexError):
+        return False
+
+
+def test_ctrl_c_still_stops_the_run_and_ends_the_policys_process(files, tmp_path):
+    """Ctrl-C (SIGINT) while a policy of its own process acts stops the run as before (exit
+    130, resumable), is not recorded as that policy's failure, and ends its process."""
+    out = tmp_path / "out"
+    env = dict(os.environ, POLICY_SLEEPS="1")
+    argv = [sys.executable, "-m", "agents.leaderboard", *_argv(files, out, ["sleeper"], "0")]
+    proc = subprocess.Popen(argv, cwd=ROOT, env=env, stdout=subprocess.DEVNULL,
+                            stderr=subprocess.PIPE, text=True)  # fmt: skip
+    try:
+        deadline = time.monotonic() + 60
+        record = out / records.EPISODES  # opened once the plan is made: the run's process
+        while not (record.exists() and (children := _children(proc.pid))):
+            assert proc.poll() is None, proc.stderr.read()
+            assert time.monotonic() < deadline, "no policy process"
+            time.sleep(0.1)
+        time.sleep(0.5)
+        proc.send_signal(signal.SIGINT)
+        assert proc.wait(timeout=30) == 130
+        assert "--resume" in proc.stderr.read()
+        deadline = time.monotonic() + 5
+        while any(_alive(c) for c in children) and time.monotonic() < deadline:
+            time.sleep(0.1)
+        assert not any(_alive(c) for c in children), "the policy's process outlived the run"
+        rows = [json.loads(x) for x in record.read_text().splitlines()]
+        assert not any(r.get("error") for r in rows)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
