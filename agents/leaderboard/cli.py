@@ -63,7 +63,11 @@ its factory on an env of its own: its SystemExit, KeyboardInterrupt or a hang lo
 (docs/leaderboard.md, "Failures, timeouts and isolation").
 
 Cost: the oracle's episodes are the long ones (it optimizes by rollouts of the plant at
-every replanning instant); they are started first.
+every replanning instant); they are started first. The package stores the episodes of the
+score's two ends (``cascade_pi_ff`` and the oracle) for every plant, named and held-out
+scenario and default seed, keyed by the provenance digest of what they depend on
+(agents/leaderboard/references.py): a run takes them where that digest is the current
+code's and runs the rest, saying how many of each; ``--recompute-references`` runs all.
 
 ``--resume`` continues in an existing ``--out``: episodes already in
 ``episodes.jsonl`` with the same env, scenario, policy, seed and fingerprint and no
@@ -94,9 +98,9 @@ from typing import Any
 
 import steamtemp_gym
 from agents import ray_backend, stats
-from agents.leaderboard import report
+from agents.leaderboard import references, report
 from agents.leaderboard.backends import _execute
-from agents.leaderboard.episodes import _units
+from agents.leaderboard.episodes import _finished, _units
 from agents.leaderboard.outputs import Plots, _rebuild
 from agents.leaderboard.plan import (
     _EXCERPT,
@@ -206,6 +210,10 @@ def make_parser() -> argparse.ArgumentParser:
     ap.add_argument("--trend-all", action="store_true",
                     help="trend plots show every policy (default: cascade_pi_ff, the oracle, "
                     "cascade_pi and the plant's three best-ranked policies)")  # fmt: skip
+    ap.add_argument("--recompute-references", action="store_true",
+                    help="run the reference episodes (cascade_pi_ff, the oracle) even where "
+                    "the package stores them for the same code (default: take the stored "
+                    "ones, agents/leaderboard/references.py)")  # fmt: skip
     ap.add_argument("--resume", action="store_true",
                     help="continue in --out: skip the episodes already in its episodes.jsonl "
                     "(default: off)")  # fmt: skip
@@ -245,6 +253,23 @@ def _show_library_log() -> None:
     log.setLevel(logging.INFO)
 
 
+def _use_stored_references(plan: Any, done: dict, record: Record) -> None:
+    """Add the package's stored reference episodes whose fingerprint is the plan's to the
+    record (and to ``done``), saying how many were taken and how many will run."""
+    rows, stale = references.matching(plan)
+    for r in rows:
+        key = (r["env"], r["scenario"], r["policy"], r["seed"]), r["fingerprint"]
+        if not _finished(done.get(key)):
+            record.write(r)
+            done[key] = r
+    if rows or stale:
+        names = " and ".join(references.POLICIES)
+        print(f"note: {len(rows)} episodes of {names} taken from the stored references "
+              f"({references.ROWS.name}); {stale} run now (no stored episode for their "
+              "current code, scenario and seed); --recompute-references runs them all",
+              file=sys.stderr)  # fmt: skip
+
+
 def main(argv: list[str] | None = None) -> None:
     """Run the leaderboard (see the module docstring)."""
     with guard.watch():  # a policy module's own KeyboardInterrupt is not a Ctrl-C
@@ -279,6 +304,8 @@ def _main(argv: list[str] | None) -> None:
         record = Record(out / EPISODES)
     except OSError as exc:
         ap.error(f"argument --out: cannot write {str(out)!r}: {exc.strerror or exc}")
+    if not args.recompute_references:
+        _use_stored_references(plan, done, record)
     t0 = time.time()
     units = _units(plan, done)
     figures = Plots(out, plan, units, every=args.trend_all)
