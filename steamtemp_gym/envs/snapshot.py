@@ -190,16 +190,37 @@ def _check_fields(core: Any, snap: Snapshot) -> int:
         if not isinstance(value, (tuple, list)) or len(value) != n:
             got = (f"{len(value)} entries" if isinstance(value, (tuple, list))
                    else type(value).__name__)  # fmt: skip
-            raise ValueError(f"snapshot's {name} must be a tuple of one entry per row "
-                             f"({n}), got {got}")  # fmt: skip
+            raise ValueError(f"snapshot's {name} must be a tuple of one entry per row of "
+                             f"its rows ({n}), got {got}")  # fmt: skip
         return tuple(value)
 
+    empty = isinstance(snap.plants, (tuple, list)) and not snap.plants
+    plants = () if empty else sequence("plants")
+    kind = type(core.plant)
+    for i, p in enumerate(plants):
+        if not isinstance(p, kind) or type(p.params) is not type(own):
+            raise ValueError(f"snapshot's plants[{i}] must be a {kind.__name__}, got "
+                             f"{type(p).__name__}")  # fmt: skip
+    # an env drawing its rows' plants takes the snapshot's; any other needs its own in each
+    wanted = [snap.params] if own_rows(core) else [p.params for p in plants] or [snap.params]
+    for params in wanted:
+        if params != own:
+            diff = [f.name for f in dataclasses.fields(params)
+                    if getattr(params, f.name) != getattr(own, f.name)]  # fmt: skip
+            raise ValueError(f"snapshot of {snap.plant_id} with other plant parameters "
+                             f"(differing: {diff}) cannot be restored into this env")  # fmt: skip
+    sizes = core.plant.n_x, core.plant.P.shape, core.plant.dt_s
+    for i, p in enumerate(plants):
+        if (p.n_x, p.P.shape, p.dt_s) != sizes:
+            raise ValueError(f"snapshot's plants[{i}] differs from this env's plant in its "
+                             "state or parameter sizes or its time step")  # fmt: skip
     waiting = snap.waiting
     if not (isinstance(waiting, np.ndarray) and waiting.dtype == np.bool_
             and waiting.shape == (n,)):  # fmt: skip
         got = (f"{waiting.dtype} {waiting.shape}" if isinstance(waiting, np.ndarray)
                else type(waiting).__name__)  # fmt: skip
-        raise ValueError(f"snapshot's waiting must be a bool array of shape ({n},), got {got}")
+        raise ValueError(f"snapshot's waiting must be a bool array of shape ({n},) (an entry "
+                         f"per entry of its rows), got {got}")  # fmt: skip
     _check_arrays(core, snap.arrays, n, waiting)
     for i, s in enumerate(sequence("scenarios")):
         if s is None:
@@ -211,22 +232,6 @@ def _check_fields(core: Any, snap: Snapshot) -> int:
         if not isinstance(state, dict):
             raise ValueError(f"snapshot's rng_states[{i}] must be a dict "
                              f"(bit_generator.state), got {type(state).__name__}")  # fmt: skip
-    empty = isinstance(snap.plants, (tuple, list)) and not snap.plants
-    plants = () if empty else sequence("plants")
-    for i, p in enumerate(plants):
-        if not isinstance(p, type(core.plant)) or type(p.params) is not type(own) or (
-                p.n_x != core.plant.n_x or p.P.shape != core.plant.P.shape
-                or p.dt_s != core.plant.dt_s):  # fmt: skip
-            raise ValueError(f"snapshot's plants[{i}] is not a plant of this env's kind "
-                             f"({type(core.plant).__name__}, its sizes and time step)")  # fmt: skip
-    # an env drawing its rows' plants takes the snapshot's; any other needs its own in each
-    wanted = [snap.params] if own_rows(core) else [p.params for p in plants] or [snap.params]
-    for params in wanted:
-        if params != own:
-            diff = [f.name for f in dataclasses.fields(params)
-                    if getattr(params, f.name) != getattr(own, f.name)]  # fmt: skip
-            raise ValueError(f"snapshot of {snap.plant_id} with other plant parameters "
-                             f"(differing: {diff}) cannot be restored into this env")  # fmt: skip
     return n
 
 
@@ -246,7 +251,7 @@ def _check_arrays(core: Any, arrays: Any, n: int, waiting: np.ndarray) -> None:
             got = (f"{a.dtype} {a.shape}" if isinstance(a, np.ndarray)
                    else type(a).__name__)  # fmt: skip
             raise ValueError(f"snapshot's arrays[{name!r}] must be a {own.dtype} array of "
-                             f"shape {want}, got {got}")  # fmt: skip
+                             f"shape {want} (a row per entry of its rows), got {got}")  # fmt: skip
         if a.dtype.kind == "f" and not np.isfinite(a[running]).all():
             raise ValueError(f"snapshot's arrays[{name!r}] holds NaN or infinite values in a "
                              "running row")  # fmt: skip
