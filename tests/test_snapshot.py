@@ -349,7 +349,7 @@ def test_a_failed_reset_changes_nothing(kind):
     slagged = scenarios.Scenario(name="slagged", duration_s=60.0, fouling=0.6)
     # seeds 4 and 11 draw plants that hold SHORT's start, 0-3 and 5-10 none
     calls = [lambda: env.reset(seed=0), lambda: env.reset(seed=5),
-             lambda: env.reset(seed=3, options={"scenario": slagged})]
+             lambda: env.reset(seed=3, options={"scenario": slagged})]  # fmt: skip
     if kind == "vector":  # rows that start before one that cannot
         mask = np.zeros(n, dtype=bool)
         mask[3:] = True

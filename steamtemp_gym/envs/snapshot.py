@@ -26,10 +26,19 @@ Example (one episode's state fanned out to 64 rows of a planning env)::
 
 The episodes after the current one are drawn by the restored generator from the target
 env's own ``scenario`` option (the same option as the source env's gives the same
-episodes). Restoring into an env whose reward options differ is allowed (the state is the same; the
-rewards are that env's). Bad input (a snapshot of another plant or parameter set, rows out
-of range, a row count that matches neither the snapshot nor 1) raises ``ValueError``
-naming the problem and changes nothing.
+episodes). Restoring into an env whose reward options differ is allowed (the state is the
+same; the rewards are that env's).
+
+``restore`` checks the whole snapshot (:func:`check`) before it writes anything: a
+snapshot of another plant or parameter set, a field of the wrong type, length or shape
+for its ``rows``, arrays of another dtype or with NaN or infinite values in a running row,
+a scenario that is not a Scenario, generator states of another kind, target rows out of
+range or a row count that matches neither the snapshot nor 1 raise ``ValueError`` naming
+the field, and change nothing.
+
+Planners that copy rows often use :func:`planning_core` and :func:`copy_rows` (no
+Snapshot in between): the copied rows take their scenario and their plant along, a
+``plant_randomization`` row its drawn one.
 """
 
 from __future__ import annotations
