@@ -4,7 +4,8 @@ Not an admissible controller: a reference, like the frozen valve. At every repla
 instant it copies the *full internal state* of each row of the env it acts on (plant,
 valve and thermowell states, the plant's own random generators, the coloured
 heat-absorption disturbance, the noise key and step counter, the scenario with its whole
-future: envs/snapshot.py) into rows of a planning core of the same plant object, and
+future: envs/snapshot.py) into rows of a planning core of the same plant object (with
+``plant_randomization``, each row's own drawn plant: ``snapshot.planning_core``), and
 optimizes the valve commands over a receding horizon on the env's own compiled kernel
 and reward. Since the noise is counter-based and the scenario is known, its rollouts see
 the true future disturbances exactly: up to the optimizer's suboptimality, no causal
@@ -42,8 +43,7 @@ import numpy as np
 
 from steamtemp_gym.envs.core import Core
 from steamtemp_gym.envs.kernels import E_DUR, E_TIME
-from steamtemp_gym.envs.snapshot import copy_rows
-from steamtemp_gym.rewards import RewardConfig
+from steamtemp_gym.envs.snapshot import copy_rows, planning_core
 
 
 @dataclass(frozen=True)
@@ -121,12 +121,11 @@ class Oracle:
 
     # ---------------------------------------------------------------------- planning
     def _planner(self) -> Core:
-        """The planning core (rows x samples rows), made once per source batch size."""
+        """The planning core (rows x samples rows), made once per source batch size; its
+        rows simulate the plants of the rows copied into them (snapshot.planning_core)."""
         n = self.src.B * self.samples
         if self._core is None or self._core.B != n:
-            core = Core(self.src.plant, n, RewardConfig())
-            core.cfg[:] = self.src.cfg  # the env's own reward weights
-            self._core = core
+            self._core = planning_core(self.src, n)
         return self._core
 
     def _commands(self, knots: np.ndarray) -> np.ndarray:

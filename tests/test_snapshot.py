@@ -4,6 +4,8 @@ snapshots and rows are refused with a ValueError and change nothing."""
 
 from __future__ import annotations
 
+import dataclasses
+
 import gymnasium as gym
 import numpy as np
 import pytest
@@ -120,3 +122,246 @@ def test_bad_snapshots_and_rows_are_refused_and_change_nothing():
     single.reset(seed=0)
     with pytest.raises(ValueError, match="one-row"):
         single.unwrapped.restore(snap2)
+
+
+# ------------------------------------------------- a failed restore or reset changes nothing
+#: Caches that a failed call may fill without changing any row: the scenarios whose start
+#: check passed, the per-block kernel arguments and the compiled entry points.
+_CACHES = ("_feasible", "_block_args", "_entries", "_row_entries", "_advance_args")
+
+
+def _whole_state(env) -> dict:
+    """Every piece of state of an env: each array of its core, the scenario, plant and
+    factors of each row (the objects themselves), the schedule slots, the generators'
+    states and the episode flags."""
+    u = env.unwrapped
+    out = {}
+    for name, v in vars(u.core).items():
+        if name in _CACHES:
+            continue
+        if isinstance(v, np.ndarray):
+            out[name] = v.copy()
+        elif name == "_slots":
+            out[name] = [(s, list(e)) for s, e in v.items()]
+        elif name in ("scenario", "plants", "_free", "factors"):
+            out[name] = [dict(x) if isinstance(x, dict) else x for x in v]
+    if hasattr(u, "_rngs"):
+        out["rngs"] = [(g, g.bit_generator.state) for g in u._rngs]
+        out["flags"] = (u._autoreset.copy(), u._started)
+    else:
+        g = u._np_random
+        out["rngs"] = [(g, None if g is None else g.bit_generator.state, u._np_random_seed)]
+        out["flags"] = (u._needs_reset,)
+    return out
+
+
+def _assert_same(before: dict, after: dict) -> None:
+    assert before.keys() == after.keys()
+    for k, v in before.items():
+        w = after[k]
+        if isinstance(v, np.ndarray):
+            np.testing.assert_array_equal(v, w, err_msg=k)
+            assert v.dtype == w.dtype, k
+        elif k in ("scenario", "plants", "rngs"):  # the same objects, in the same state
+            assert len(v) == len(w), k
+            for x, y in zip(v, w, strict=True):
+                xs, ys = (x, y) if isinstance(x, tuple) else ((x,), (y,))
+                assert xs[0] is ys[0], k
+                for a, b in zip(xs[1:], ys[1:], strict=True):
+                    assert repr(a) == repr(b), k
+        elif k == "flags":
+            for a, b in zip(v, w, strict=True):
+                np.testing.assert_array_equal(a, b, err_msg=k)
+        else:
+            assert v == w, k
+
+
+def _corruptions(snap, env_id: str) -> list[tuple[str, dict, str]]:
+    """(what, dataclasses.replace arguments, words of the error) of snapshots corrupted in
+    one field each."""
+    from steamtemp_gym.plants import perturb, plant_class
+
+    n = len(snap)
+    a = snap.arrays
+
+    def arrays(name, value):
+        return {**a, name: value}
+
+    def nan(name):
+        x = a[name].copy()
+        x.flat[0] = np.nan
+        return x
+
+    other_env = next(e for e in steamtemp_gym.ENV_IDS if e != env_id)
+    variant = next(iter(perturb.MISMATCH[env_id].values()))
+    other_params = plant_class(env_id).Params(**variant)
+    mt = np.random.MT19937(0).state
+    bad_pcg = {**snap.rng_states[0], "state": {"state": "x", "inc": 1}}
+    return [
+        ("plant_id", {"plant_id": "steamtemp/Other-v0"}, "Other-v0"),
+        ("plant_id type", {"plant_id": 7}, "snapshot of 7"),
+        ("params type", {"params": None}, "params"),
+        ("rows empty", {"rows": ()}, "rows is empty"),
+        ("rows a string", {"rows": ("a",) * n}, "rows must be integers"),
+        ("rows negative", {"rows": (-1,) * n}, "rows .* out of range"),
+        ("rows huge", {"rows": (2**63,) * n}, "rows .* out of range"),
+        ("rows bool", {"rows": (True,) * n}, "rows must be integers"),
+        ("rows an array", {"rows": np.arange(n)}, "rows must be a tuple"),
+        ("rows too many", {"rows": tuple(range(n + 1))}, "rows"),
+        ("arrays a list", {"arrays": list(a.values())}, "arrays must be a dict"),
+        ("arrays without X", {"arrays": {k: v for k, v in a.items() if k != "X"}}, "arrays"),
+        ("arrays with more", {"arrays": arrays("extra", a["X"])}, "arrays must be a dict"),
+        ("X NaN", {"arrays": arrays("X", nan("X"))}, r"arrays\['X'\].*NaN"),
+        ("X inf", {"arrays": arrays("X", a["X"] + np.inf)}, r"arrays\['X'\].*infinite"),
+        ("obs NaN", {"arrays": arrays("obs", nan("obs"))}, r"arrays\['obs'\].*NaN"),
+        ("X float32", {"arrays": arrays("X", a["X"].astype(np.float32))}, r"arrays\['X'\]"),
+        ("X shape", {"arrays": arrays("X", a["X"][:, :-1])}, r"arrays\['X'\].*shape"),
+        ("X rows", {"arrays": arrays("X", np.concatenate([a["X"], a["X"]]))}, r"arrays\['X'\]"),
+        ("X a list", {"arrays": arrays("X", a["X"].tolist())}, r"arrays\['X'\].*list"),
+        ("key float", {"arrays": arrays("key", a["key"].astype(float))}, r"arrays\['key'\]"),
+        ("counter float", {"arrays": arrays("counter", a["counter"] * 1.0)}, "counter"),
+        ("counter negative", {"arrays": arrays("counter", a["counter"] - 10**6)}, "counter"),
+        ("scenarios names", {"scenarios": ("load_ramp_100_50",) * n}, r"scenarios\[0\]"),
+        ("scenarios None", {"scenarios": (None,) * n}, "never reset"),
+        ("scenarios short", {"scenarios": ()}, "scenarios"),
+        ("scenarios long", {"scenarios": snap.scenarios * 2}, "scenarios"),
+        ("scenarios a str", {"scenarios": "setpoint_step"}, "scenarios"),
+        ("rng_states kind", {"rng_states": ({"bit_generator": "MT19937"},) * n}, "rng_states"),
+        ("rng_states MT19937", {"rng_states": (mt,) * n}, r"rng_states\[0\].*PCG64"),
+        ("rng_states PCG64 bad", {"rng_states": (bad_pcg,) * n}, r"rng_states\[0\]"),
+        ("rng_states strings", {"rng_states": ("x",) * n}, r"rng_states\[0\]"),
+        ("rng_states short", {"rng_states": ()}, "rng_states"),
+        ("waiting ints", {"waiting": snap.waiting.astype(int)}, "waiting"),
+        ("waiting long", {"waiting": np.zeros(n + 1, dtype=bool)}, "waiting"),
+        ("waiting a list", {"waiting": [False] * n}, "waiting"),
+        ("plants strings", {"plants": ("x",) * n}, r"plants\[0\]"),
+        ("plants other kind", {"plants": (steamtemp_gym.plants.make(other_env),) * n},
+         r"plants\[0\]"),
+        ("plants long", {"plants": snap.plants * 2}, "plants"),
+        ("params other", {"params": other_params, "plants": ()}, "other plant parameters"),
+    ]  # fmt: skip
+
+
+_KINDS = [("single", False), ("vector", False), ("single", True), ("vector", True)]
+
+
+def _env(env_id, kind, drawn, **kw):
+    opts = {"scenario": SHORT, **({"plant_randomization": True} if drawn else {}), **kw}
+    if kind == "single":
+        return gym.make(env_id, **opts)
+    return gym.make_vec(env_id, num_envs=3, vectorization_mode="vector_entry_point", **opts)
+
+
+def _snap(env):
+    u = env.unwrapped
+    return u.snapshot() if not hasattr(u, "_rngs") else u.snapshot(rows=[0, 2])
+
+
+@pytest.mark.parametrize("env_id", steamtemp_gym.ENV_IDS)
+@pytest.mark.parametrize(("kind", "drawn"), _KINDS)
+def test_a_corrupted_snapshot_is_refused_naming_its_field_and_changes_nothing(env_id, kind,
+                                                                             drawn):  # fmt: skip
+    """Each field of a snapshot corrupted in turn: restore raises a ValueError naming the
+    field, and every array, scenario, plant and generator of the env is as before; the env
+    then restores the good snapshot and goes on bit for bit, and resets as a fresh one."""
+    env = _env(env_id, kind, drawn)
+    env.reset(seed=4)
+    shape = (3, env.unwrapped.plant.n_u) if kind == "vector" else (env.unwrapped.plant.n_u,)
+    actions = _actions(np.random.default_rng(0), 12, shape)
+    for a in actions[:6]:
+        env.step(a)
+    good = _snap(env)
+    want = [env.step(a)[:2] for a in actions[6:]]
+    before = _whole_state(env)
+    for what, change, words in _corruptions(good, env_id):
+        try:
+            with pytest.raises(ValueError, match=words):
+                env.unwrapped.restore(dataclasses.replace(good, **change))
+            _assert_same(before, _whole_state(env))
+        except BaseException as exc:  # pytest's failures too: name the corruption
+            exc.add_note(f"corrupted: {what}")
+            raise
+    for rows in ([0, 3], [2**63], np.array([2**63], dtype=np.uint64), [0]):
+        if kind == "vector":  # a 2-row snapshot into rows out of range or too few
+            with pytest.raises(ValueError, match="out of range|2 rows"):
+                env.unwrapped.restore(good, rows=rows)
+            _assert_same(before, _whole_state(env))
+    env.unwrapped.restore(good)
+    got = [env.step(a)[:2] for a in actions[6:]]
+    rows = list(good.rows) if kind == "vector" else slice(None)  # the rows restored
+    for (o1, r1), (o2, r2) in zip(want, got, strict=True):
+        np.testing.assert_array_equal(o1[rows], o2[rows])
+        np.testing.assert_array_equal(np.atleast_1d(r1)[rows], np.atleast_1d(r2)[rows])
+    fresh = _env(env_id, kind, drawn)
+    np.testing.assert_array_equal(env.reset(seed=0)[0], fresh.reset(seed=0)[0])
+
+
+def test_a_non_finite_trip_restores():
+    """A row that tripped on a non-finite state waits for its reset holding NaN: its
+    snapshot restores (finiteness is asked of running rows only)."""
+    env = gym.make("steamtemp/Cascade300MW-v0", scenario=SHORT)
+    env.reset(seed=0)
+    env.unwrapped.core.X[0, 0] = np.nan  # a plant that left its valid region
+    *_, term, _, info = env.step(np.zeros(1, dtype=np.float32))
+    assert term and info["trip_reason"] == "non_finite_state"
+    snap = env.unwrapped.snapshot()
+    assert not np.isfinite(snap.arrays["X"]).all() and snap.waiting[0]
+    other = gym.make("steamtemp/Cascade300MW-v0", scenario=SHORT)
+    other.reset(seed=1)
+    other.unwrapped.restore(snap)
+    with pytest.raises(RuntimeError, match="reset"):
+        other.step(np.zeros(1, dtype=np.float32))
+    running = dataclasses.replace(snap, waiting=np.zeros(1, dtype=bool))
+    with pytest.raises(ValueError, match="NaN"):
+        other.unwrapped.restore(running)
+
+
+#: Ranges of Cascade300MW's section gains whose draws cannot hold most starts.
+_FAILING = {"section_gains": (1e-4, 1.2e-3)}
+
+
+@pytest.mark.parametrize("kind", ["single", "vector"])
+def test_a_failed_reset_changes_nothing(kind):
+    """A reset whose episode cannot start (a drawn plant, a scenario) raises a ValueError
+    and leaves every row, plant and generator as it was: the env goes on bit for bit as a
+    twin that never tried."""
+    env_id = "steamtemp/Cascade300MW-v0"
+    n = 8 if kind == "vector" else 1
+    opts = {"scenario": SHORT}
+
+    def make(**kw):
+        if kind == "single":
+            return gym.make(env_id, **opts, **kw)
+        return gym.make_vec(env_id, num_envs=n, vectorization_mode="vector_entry_point",
+                            **opts, **kw)  # fmt: skip
+
+    twin = make(plant_randomization=True)
+    twin.reset(seed=0)
+    shape = (n, 1) if kind == "vector" else (1,)
+    actions = _actions(np.random.default_rng(2), 10, shape)
+    for a in actions[:4]:
+        twin.step(a)
+    # the twin's state, with failing ranges (the env itself: gym.make's env checker wants
+    # a first reset through it)
+    env = make(plant_randomization=_FAILING).unwrapped
+    env.restore(twin.unwrapped.snapshot())
+    before = _whole_state(env)
+    slagged = scenarios.Scenario(name="slagged", duration_s=60.0, fouling=0.6)
+    # seeds 4 and 11 draw plants that hold SHORT's start, 0-3 and 5-10 none
+    calls = [lambda: env.reset(seed=0), lambda: env.reset(seed=5),
+             lambda: env.reset(seed=3, options={"scenario": slagged})]  # fmt: skip
+    if kind == "vector":  # rows that start before one that cannot
+        mask = np.zeros(n, dtype=bool)
+        mask[3:] = True
+        seeds = [None, None, None, 4, 11, 0, 4, 4]
+        calls += [lambda: env.reset(seed=4),
+                  lambda: env.reset(seed=seeds, options={"reset_mask": mask})]  # fmt: skip
+    for call in calls:
+        with pytest.raises(ValueError, match="plant_randomization|cannot start"):
+            call()
+        _assert_same(before, _whole_state(env))
+    for a in actions[4:]:
+        o1, r1, *_ = twin.step(a)
+        o2, r2, *_ = env.step(a)
+        np.testing.assert_array_equal(o1, o2)
+        np.testing.assert_array_equal(r1, r2)

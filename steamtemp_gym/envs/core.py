@@ -257,13 +257,40 @@ class Core:
         )
 
     def reset_row(self, b: int, scenario: sc.Scenario, key: int) -> None:
-        """Start row b at t = 0 of ``scenario`` in steady state, with noise key ``key``.
+        """Start row b at t = 0 of ``scenario`` in steady state, with noise key ``key``
+        (:meth:`reset_rows` of one row)."""
+        self.reset_rows([b], [(scenario, key)])
+
+    def reset_rows(self, rows: Any, episodes: list[tuple[sc.Scenario, int]]) -> None:
+        """Start each row of ``rows`` at t = 0 of its (scenario, noise key) of ``episodes``
+        in steady state, all or none: every row's start is checked (:meth:`episode_plant`)
+        before any row changes.
 
         Raises:
-            ValueError: the plant cannot hold the scenario's start (:meth:`check_start`);
-                row b is left as it was.
+            ValueError: a scenario that is not a Scenario or that a row's plant cannot
+                hold at its start (:meth:`check_start`); no row is changed.
         """
+        drawn = [self.episode_plant(scenario, key) for scenario, key in episodes]
+        for b, (scenario, key), plant in zip(rows, episodes, drawn, strict=True):
+            self._start_row(int(b), scenario, key, plant)
+
+    def episode_plant(self, scenario: sc.Scenario, key: int) -> tuple[Plant, dict[str, float]]:
+        """(plant, its parameter groups' factors) of an episode of ``scenario`` with noise
+        key ``key``, checked to hold its start: the core's plant and no factors here
+        (envs/plant_rows.py draws one from the key).
+
+        Raises:
+            ValueError: ``scenario`` is not a Scenario, or the plant cannot hold its start.
+        """
+        if not isinstance(scenario, sc.Scenario):
+            raise ValueError(f"a row starts on a Scenario, got {type(scenario).__name__}")
         self.check_start(scenario)
+        return self.plant, {}
+
+    def _start_row(self, b: int, scenario: sc.Scenario, key: int,
+                   drawn: tuple[Plant, dict[str, float]]) -> None:  # fmt: skip
+        """Start row b on ``scenario`` and ``key`` with the plant ``drawn`` for them by
+        :meth:`episode_plant` (nothing here can fail)."""
         self.assign_scenario(b, scenario)
         ou_ab = ou_coefficients(
             scenario.heat_absorption_noise_std,

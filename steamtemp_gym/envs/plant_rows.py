@@ -10,8 +10,9 @@ the option the envs use the plain Core, untouched.
 
 Cost: the draw builds a plant (its packing and calibration) at each reset. The step of a
 single env is the plain Core's (the row's parameter vector is swapped in at the reset);
-a vector env steps its rows' plants one row at a time (one compiled call per row, no
-threads) and runs the rest of the step batched as always.
+a vector env steps its rows' plants one run of rows of one plant at a time (one compiled
+call per row of a plant of its own, one for the rows a planner fanned out from one row;
+no threads) and runs the rest of the step batched as always.
 """
 
 from __future__ import annotations
@@ -50,15 +51,23 @@ class PlantRowsCore(Core):
         self.base = dict(base)
         self.plants: list[Plant] = [plant] * batch
         self.factors: list[dict[str, float]] = [{} for _ in range(batch)]
-        self._row_args = [self._args_of(b, plant) for b in range(batch)]
+        self._block_args: list[tuple] | None = None
         self._row_entries: tuple | None = None
         if batch > 1:
             self.step = self._step_rows  # type: ignore[method-assign]
 
-    def _args_of(self, b: int, plant: Plant) -> tuple:
-        """The plant kernel's arguments for row b alone (views of the core's arrays)."""
-        r = slice(b, b + 1)
-        return plant.step_args(self.X[r], self.U[r], self.D[r], self.Z[r])
+    def _blocks(self) -> list[tuple]:
+        """The plant kernel's arguments for each run of consecutive rows that simulate one
+        plant object (views of the core's arrays): rows fanned out from one row (a planner's
+        copies) step in one call, rows of plants of their own one at a time."""
+        out, first = [], 0
+        for b in range(1, self.B + 1):
+            if b == self.B or self.plants[b] is not self.plants[first]:
+                r = slice(first, b)
+                out.append(self.plants[first].step_args(self.X[r], self.U[r], self.D[r],
+                                                        self.Z[r]))  # fmt: skip
+                first = b
+        return out
 
     def row_plant(self, b: int) -> Plant:
         return self.plants[b]
@@ -68,53 +77,53 @@ class PlantRowsCore(Core):
         touched."""
         self.plants[b] = plant
         self.factors[b] = dict(factors or {})
-        self._row_args[b] = self._args_of(b, plant)
+        self._block_args = None
         if self.B == 1 and self._plant_args is not None:  # Core.step runs this row's plant
             self._plant_args = plant.step_args(self.X, self.U, self.D, self.Z)
 
-    def reset_row(self, b: int, scenario: Any, key: int) -> None:
-        """Draw row b's plant from ``key`` (plants/perturb.py), then start the row as
-        Core.reset_row does.
+    def episode_plant(self, scenario: Any, key: int) -> tuple[Plant, dict[str, float]]:
+        """(plant, factors) drawn from ``key`` (plants/perturb.py) for an episode of
+        ``scenario``, after the start check of Core.episode_plant.
 
         Raises:
             ValueError: the env's own plant cannot hold the scenario's start, or no draw
-                can (perturb.draw_plant); row b is left as it was.
+                can (perturb.draw_plant).
         """
-        self.check_start(scenario)
-        plant, factors = perturb.draw_plant(self.plant.id, self.base, self.ranges, key,
-                                            lambda p: self.start_fits(scenario, p))  # fmt: skip
-        old = self.plants[b], self.factors[b]
-        self.set_plant(b, plant, factors)
-        try:
-            super().reset_row(b, scenario, key)
-        except Exception:
-            self.set_plant(b, *old)
-            raise
+        super().episode_plant(scenario, key)
+        return perturb.draw_plant(self.plant.id, self.base, self.ranges, key,
+                                  lambda p: self.start_fits(scenario, p))  # fmt: skip
+
+    def _start_row(self, b: int, scenario: Any, key: int,
+                   drawn: tuple[Plant, dict[str, float]]) -> None:  # fmt: skip
+        self.set_plant(b, *drawn)
+        super()._start_row(b, scenario, key, drawn)
 
     def _step_rows(self, A: Any) -> None:
-        """Core.step for rows of different plants: each row's plant kernel, then the rest
-        of the step over every row."""
+        """Core.step for rows of different plants: the plant kernel on each run of rows of
+        one plant (:meth:`_blocks`), then the rest of the step over every row."""
         if not to_commands(A, self.U):
             raise non_finite_action(A)
+        blocks = self._block_args
+        if blocks is None:
+            blocks = self._block_args = self._blocks()
         entries = self._row_entries
         if entries is None:
-            entries = self._row_entries = (entry_point(self.plant.kernel(), self._row_args[0]),
+            entries = self._row_entries = (entry_point(self.plant.kernel(), blocks[0]),
                                            entry_point(advance, self._step_args()))  # fmt: skip
         kernel = entries[0]
-        for args in self._row_args:
+        for args in blocks:
             kernel(*args)
         entries[1](*(self._advance_args or self._step_args()))
 
     def __getstate__(self) -> dict:
-        """As Core's, without the per-row kernel arguments (views of the row arrays, made
-        again by __setstate__ over the copied arrays) and the bound step."""
+        """As Core's, without the per-block kernel arguments (views of the row arrays, made
+        again at the next step over the copied arrays) and the bound step."""
         state = super().__getstate__()
-        state.update(_row_entries=None, _row_args=None)
+        state.update(_row_entries=None, _block_args=None)
         state.pop("step", None)
         return state
 
     def __setstate__(self, state: dict) -> None:
         super().__setstate__(state)
-        self._row_args = [self._args_of(b, p) for b, p in enumerate(self.plants)]
         if self.B > 1:
             self.step = self._step_rows  # type: ignore[method-assign]

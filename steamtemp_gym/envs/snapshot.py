@@ -26,10 +26,19 @@ Example (one episode's state fanned out to 64 rows of a planning env)::
 
 The episodes after the current one are drawn by the restored generator from the target
 env's own ``scenario`` option (the same option as the source env's gives the same
-episodes). Restoring into an env whose reward options differ is allowed (the state is the same; the
-rewards are that env's). Bad input (a snapshot of another plant or parameter set, rows out
-of range, a row count that matches neither the snapshot nor 1) raises ``ValueError``
-naming the problem and changes nothing.
+episodes). Restoring into an env whose reward options differ is allowed (the state is the
+same; the rewards are that env's).
+
+``restore`` checks the whole snapshot (:func:`check`) before it writes anything: a
+snapshot of another plant or parameter set, a field of the wrong type, length or shape
+for its ``rows``, arrays of another dtype or with NaN or infinite values in a running row,
+a scenario that is not a Scenario, generator states of another kind, target rows out of
+range or a row count that matches neither the snapshot nor 1 raise ``ValueError`` naming
+the field, and change nothing.
+
+Planners that copy rows often use :func:`planning_core` and :func:`copy_rows` (no
+Snapshot in between): the copied rows take their scenario and their plant along, a
+``plant_randomization`` row its drawn one.
 """
 
 from __future__ import annotations
@@ -40,6 +49,13 @@ from typing import Any
 
 import numpy as np
 
+from steamtemp_gym import scenarios as sc
+from steamtemp_gym.envs.core import Core
+from steamtemp_gym.envs.plant_rows import PlantRowsCore
+from steamtemp_gym.rewards import RewardConfig
+
+#: The bit generator of the envs' per-row episode generators (gymnasium.utils.seeding).
+GENERATOR = np.random.PCG64
 #: The per-row arrays of envs/core.py:Core that make a row's state (first axis: the row).
 ROW_ARRAYS = ("X", "Z", "U", "U_prev", "D", "sp", "ep", "ou", "key", "counter", "out", "meas",
               "obs", "info")  # fmt: skip
@@ -92,10 +108,11 @@ def row_indices(rows: Any, n_rows: int, what: str = "rows") -> np.ndarray:
         r, (bool, np.bool_))]  # fmt: skip
     if bad:
         raise ValueError(f"{what} must be integers, got {str(bad[:3])[:80]}")
-    out = np.array([int(r) for r in items], dtype=np.int64)
-    outside = out[(out < 0) | (out >= n_rows)]
-    if outside.size:
-        raise ValueError(f"{what} {outside[:5].tolist()} out of range for {n_rows} row(s)")
+    ints = [int(r) for r in items]  # Python integers: any size compares
+    outside = [r for r in ints if not 0 <= r < n_rows]
+    if outside:
+        raise ValueError(f"{what} {outside[:5]} out of range for {n_rows} row(s)")
+    out = np.array(ints, dtype=np.int64)
     if np.unique(out).size != out.size:
         raise ValueError(f"{what} has duplicates: {out.tolist()[:20]}")
     return out
@@ -115,65 +132,196 @@ def take(core: Any, rows: np.ndarray, rngs: list, waiting: np.ndarray) -> Snapsh
     )
 
 
-def check(core: Any, snap: Any, rows: Any) -> tuple[np.ndarray, np.ndarray]:
-    """(target rows, snapshot row for each) of a restore; ValueError if it cannot be done."""
+@dataclasses.dataclass(frozen=True)
+class Restore:
+    """A checked restore (:func:`check`): what :func:`put` writes, where.
+
+    Attributes:
+        target: The rows written.
+        source: The snapshot row written into each target row.
+        rngs: A fresh generator per target row, in its snapshot row's state.
+    """
+
+    target: np.ndarray
+    source: np.ndarray
+    rngs: tuple[np.random.Generator, ...]
+
+
+def check(core: Any, snap: Any, rows: Any) -> Restore:
+    """Check a restore of ``snap`` into ``rows`` of ``core`` entirely: the snapshot's type,
+    plant and parameters, every field's type, its length or shape against the snapshot's
+    ``rows``, the arrays' dtypes and finiteness (of running rows), the scenarios, the
+    generators' kind and states; then the target rows.
+
+    Raises:
+        ValueError: naming the field and the problem. Nothing is written (:func:`put`
+            writes a checked restore and cannot fail).
+    """
     if not isinstance(snap, Snapshot):
         raise ValueError(f"expected a Snapshot (env.snapshot()), got {type(snap).__name__}")
     if snap.plant_id != core.plant.id:
-        raise ValueError(f"snapshot of {snap.plant_id} cannot be restored into {core.plant.id}")
+        raise ValueError(f"snapshot of {snap.plant_id!r} cannot be restored into {core.plant.id}")
+    n = _check_fields(core, snap)
+    target = row_indices(snap.rows if rows is None else rows, core.B)
+    if n == len(target):
+        source = np.arange(n)
+    elif n == 1:
+        source = np.zeros(len(target), dtype=np.int64)
+    else:
+        raise ValueError(f"snapshot holds {n} rows; restoring into {len(target)} row(s) needs "
+                         "a snapshot of as many rows or a one-row snapshot")  # fmt: skip
+    fresh = []
+    for i in source.tolist():
+        rng = np.random.Generator(GENERATOR())
+        try:
+            rng.bit_generator.state = snap.rng_states[i]
+        except Exception as exc:  # noqa: BLE001 - the setter's ValueError, TypeError, KeyError
+            raise ValueError(f"snapshot's rng_states[{i}] cannot set this env's "
+                             f"{type(rng.bit_generator).__name__} generator: "
+                             f"{type(exc).__name__}: {exc}") from None  # fmt: skip
+        fresh.append(rng)
+    return Restore(target, source, tuple(fresh))
+
+
+def _check_fields(core: Any, snap: Snapshot) -> int:
+    """The number of rows of ``snap`` after checking its fields against ``core``."""
     own = core.plant.params
+    if type(snap.params) is not type(own):
+        raise ValueError(f"snapshot's params must be a {type(own).__name__}, "
+                         f"got {type(snap.params).__name__}")  # fmt: skip
+    if not isinstance(snap.rows, (tuple, list)):
+        raise ValueError(f"snapshot's rows must be a tuple of row indices, "
+                         f"got {type(snap.rows).__name__}")  # fmt: skip
+    n = len(row_indices(snap.rows, 2**63, "snapshot's rows"))
+
+    def sequence(name: str) -> tuple:
+        value = getattr(snap, name)
+        if not isinstance(value, (tuple, list)) or len(value) != n:
+            got = (f"{len(value)} entries" if isinstance(value, (tuple, list))
+                   else type(value).__name__)  # fmt: skip
+            raise ValueError(f"snapshot's {name} must be a tuple of one entry per row of "
+                             f"its rows ({n}), got {got}")  # fmt: skip
+        return tuple(value)
+
+    empty = isinstance(snap.plants, (tuple, list)) and not snap.plants
+    plants = () if empty else sequence("plants")
+    kind = type(core.plant)
+    for i, p in enumerate(plants):
+        if not isinstance(p, kind) or type(p.params) is not type(own):
+            raise ValueError(f"snapshot's plants[{i}] must be a {kind.__name__}, got "
+                             f"{type(p).__name__}")  # fmt: skip
     # an env drawing its rows' plants takes the snapshot's; any other needs its own in each
-    wanted = [snap.params] if own_rows(core) else [p.params for p in snap.plants] or [snap.params]
+    wanted = [snap.params] if own_rows(core) else [p.params for p in plants] or [snap.params]
     for params in wanted:
         if params != own:
             diff = [f.name for f in dataclasses.fields(params)
                     if getattr(params, f.name) != getattr(own, f.name)]  # fmt: skip
             raise ValueError(f"snapshot of {snap.plant_id} with other plant parameters "
                              f"(differing: {diff}) cannot be restored into this env")  # fmt: skip
-    if any(snap.scenarios[i] is None for i in range(len(snap))):
-        raise ValueError("snapshot of rows that were never reset")
-    n = core.B
-    target = row_indices(snap.rows if rows is None else rows, n)
-    if len(snap) == len(target):
-        source = np.arange(len(snap))
-    elif len(snap) == 1:
-        source = np.zeros(len(target), dtype=np.int64)
-    else:
-        raise ValueError(f"snapshot holds {len(snap)} rows; restore needs as many target rows "
-                         f"or a one-row snapshot, got {len(target)} rows")  # fmt: skip
+    sizes = core.plant.n_x, core.plant.P.shape, core.plant.dt_s
+    for i, p in enumerate(plants):
+        if (p.n_x, p.P.shape, p.dt_s) != sizes:
+            raise ValueError(f"snapshot's plants[{i}] differs from this env's plant in its "
+                             "state or parameter sizes or its time step")  # fmt: skip
+    waiting = snap.waiting
+    if not (isinstance(waiting, np.ndarray) and waiting.dtype == np.bool_
+            and waiting.shape == (n,)):  # fmt: skip
+        got = (f"{waiting.dtype} {waiting.shape}" if isinstance(waiting, np.ndarray)
+               else type(waiting).__name__)  # fmt: skip
+        raise ValueError(f"snapshot's waiting must be a bool array of shape ({n},) (an entry "
+                         f"per entry of its rows), got {got}")  # fmt: skip
+    _check_arrays(core, snap.arrays, n, waiting)
+    for i, s in enumerate(sequence("scenarios")):
+        if s is None:
+            raise ValueError("snapshot of rows that were never reset")
+        if not isinstance(s, sc.Scenario):
+            raise ValueError(f"snapshot's scenarios[{i}] must be a Scenario, got "
+                             f"{type(s).__name__} {str(s)[:60]!r}")  # fmt: skip
+    for i, state in enumerate(sequence("rng_states")):
+        if not isinstance(state, dict):
+            raise ValueError(f"snapshot's rng_states[{i}] must be a dict "
+                             f"(bit_generator.state), got {type(state).__name__}")  # fmt: skip
+    return n
+
+
+def _check_arrays(core: Any, arrays: Any, n: int, waiting: np.ndarray) -> None:
+    """Check the snapshot's ``arrays`` of ``n`` rows: every name of :data:`ROW_ARRAYS` and
+    no other, each of the core's dtype and shape (n, ...), counters non-negative, the
+    float arrays finite in every row that does not wait for its reset (a row that tripped
+    on a non-finite state holds NaN until then)."""
+    if not isinstance(arrays, dict) or set(arrays) != set(ROW_ARRAYS):
+        keys = sorted(map(str, arrays)) if isinstance(arrays, dict) else type(arrays).__name__
+        raise ValueError(f"snapshot's arrays must be a dict of {list(ROW_ARRAYS)}, got {keys}")
+    running = ~waiting
     for name in ROW_ARRAYS:
-        want, got = getattr(core, name).shape[1:], snap.arrays[name].shape[1:]
-        if want != got:
-            raise ValueError(f"snapshot's {name} has row shape {got}, this env's {want}")
-    return target, source
+        a, own = arrays[name], getattr(core, name)
+        want = (n, *own.shape[1:])
+        if not isinstance(a, np.ndarray) or a.dtype != own.dtype or a.shape != want:
+            got = (f"{a.dtype} {a.shape}" if isinstance(a, np.ndarray)
+                   else type(a).__name__)  # fmt: skip
+            raise ValueError(f"snapshot's arrays[{name!r}] must be a {own.dtype} array of "
+                             f"shape {want} (a row per entry of its rows), got {got}")  # fmt: skip
+        if a.dtype.kind == "f" and not np.isfinite(a[running]).all():
+            raise ValueError(f"snapshot's arrays[{name!r}] holds NaN or infinite values in a "
+                             "running row")  # fmt: skip
+        if name == "counter" and (a < 0).any():
+            raise ValueError(f"snapshot's arrays['counter'] must be >= 0, got {a.tolist()[:5]}")
 
 
-def put(core: Any, snap: Snapshot, target: np.ndarray, source: np.ndarray, rngs: list,
-        waiting: np.ndarray) -> None:  # fmt: skip
-    """Write snapshot rows ``source`` into ``target`` rows (checked by :func:`check`)."""
+def put(core: Any, snap: Snapshot, plan: Restore, rngs: list, waiting: np.ndarray) -> None:
+    """Write the checked restore ``plan`` (:func:`check`) of ``snap``: the rows' arrays,
+    scenarios, plants (into a core whose rows have their own), generators (into ``rngs``)
+    and waiting flags."""
+    target, source = plan.target, plan.source
     for name in ROW_ARRAYS:
         getattr(core, name)[target] = snap.arrays[name][source]
-    for b, i in zip(target.tolist(), source.tolist(), strict=True):
+    for b, i, rng in zip(target.tolist(), source.tolist(), plan.rngs, strict=True):
         core.assign_scenario(b, snap.scenarios[i])
         if own_rows(core) and snap.plants:
             core.set_plant(b, snap.plants[i])
-        rng = np.random.Generator(type(rngs[b].bit_generator)())
-        rng.bit_generator.state = snap.rng_states[i]
         rngs[b] = rng
         waiting[b] = snap.waiting[i]
 
 
 def own_rows(core: Any) -> bool:
     """Whether ``core``'s rows each simulate a plant of their own (plant_randomization)."""
-    return hasattr(core, "plants")
+    return isinstance(core, PlantRowsCore)
+
+
+def planning_core(src: Any, batch: int) -> Core:
+    """A core of ``batch`` rows to plan from rows of ``src`` (:func:`copy_rows`): of its
+    plant object and reward weights; where ``src``'s rows simulate plants of their own
+    (plant_randomization), one whose rows take the plants of the rows copied into them."""
+    if own_rows(src):
+        core = PlantRowsCore(src.plant, batch, RewardConfig(), src.ranges, src.base)
+    else:
+        core = Core(src.plant, batch, RewardConfig())
+    core.cfg[:] = src.cfg  # the env's own reward weights
+    return core
 
 
 def copy_rows(src: Any, src_rows: np.ndarray, dst: Any, dst_rows: np.ndarray) -> None:
-    """Copy the state of ``src_rows`` of one core into ``dst_rows`` of another core of the
-    same plant object (a planner's fan-out without a Snapshot in between; unchecked: the
-    caller owns both cores)."""
+    """Copy the state of ``src_rows`` of one core into ``dst_rows`` of another, each row
+    with its scenario and its plant: a planner's fan-out without a Snapshot in between
+    (the caller owns both cores; make ``dst`` with :func:`planning_core`).
+
+    Raises:
+        ValueError: ``dst`` simulates one plant and a copied row another (a row of a
+            plant_randomization env into a plain Core); nothing is copied.
+    """
+    src_rows, dst_rows = np.asarray(src_rows).tolist(), np.asarray(dst_rows).tolist()
+    drawn, per_row = own_rows(src), own_rows(dst)
+    if not per_row:
+        copied = map(src.row_plant, set(src_rows)) if drawn else (src.plant,)
+        if any(p is not dst.plant and p.params != dst.plant.params for p in copied):
+            raise ValueError("copy_rows: the copied rows simulate other plants than the "
+                             "destination core's; make it with planning_core(src, n)")  # fmt: skip
     for name in ROW_ARRAYS:
         getattr(dst, name)[dst_rows] = getattr(src, name)[src_rows]
-    for b, i in zip(np.asarray(dst_rows).tolist(), np.asarray(src_rows).tolist(), strict=True):
+    for b, i in zip(dst_rows, src_rows, strict=True):
         if dst.scenario[b] is not src.scenario[i]:
             dst.assign_scenario(b, src.scenario[i])
+        if per_row:
+            plant = src.row_plant(i)
+            if dst.plants[b] is not plant:
+                dst.set_plant(b, plant, src.factors[i] if drawn else None)

@@ -102,10 +102,21 @@ class SteamTempEnv(gym.Env):
         return self.core.scenario[0]
 
     def reset(self, *, seed: int | None = None, options: dict | None = None):
+        """Start an episode (module docstring); all or nothing: if it cannot start (a
+        ValueError: a scenario or drawn plant that cannot hold its start), the env, its
+        episode and its generator are as before."""
         spec = scenario_option(options, self._scenario_spec, self.plant.id)
+        rng, rng_seed = self._np_random, self._np_random_seed
+        rng_state = None if rng is None else rng.bit_generator.state
         super().reset(seed=seed)
-        scenario, key = draw_episode(self.np_random, spec, self.plant.default_duration_s)
-        self.core.reset_row(0, scenario, key)
+        try:
+            scenario, key = draw_episode(self.np_random, spec, self.plant.default_duration_s)
+            self.core.reset_rows([0], [(scenario, key)])
+        except Exception:
+            self._np_random, self._np_random_seed = rng, rng_seed
+            if rng is not None:
+                rng.bit_generator.state = rng_state
+            raise
         self._needs_reset = False
         info = self._info()
         self._display = None
@@ -155,11 +166,9 @@ class SteamTempEnv(gym.Env):
             ValueError: a snapshot of another plant or parameter set, or of several rows;
                 nothing is changed.
         """
-        if isinstance(snapshot, snap_.Snapshot) and len(snapshot) != 1:
-            raise ValueError(f"a single env restores one-row snapshots, got {len(snapshot)} rows")
-        target, source = snap_.check(self.core, snapshot, [0])
-        rngs, waiting = [self.np_random], np.zeros(1, dtype=bool)
-        snap_.put(self.core, snapshot, target, source, rngs, waiting)
+        plan = snap_.check(self.core, snapshot, [0])
+        rngs, waiting = [self._np_random], np.zeros(1, dtype=bool)
+        snap_.put(self.core, snapshot, plan, rngs, waiting)
         self._np_random = rngs[0]
         self._needs_reset = bool(waiting[0])
         self._display = None

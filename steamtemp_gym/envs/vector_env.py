@@ -103,11 +103,21 @@ class SteamTempVectorEnv(VectorEnv):
         #: (the info keys' mask keys, {mask key: the all-rows mask}), made at the first reset
         self._mask_keys: tuple[list[str], dict] | None = None
 
-    def _reset_rows(self, rows, spec: Any = None) -> None:
+    def _reset_rows(self, rows, spec: Any = None, rngs: list | None = None) -> None:
+        """Start new episodes in ``rows``, drawn from their generators ``rngs`` (default:
+        the env's; on success they become the env's); all or nothing: if one cannot start,
+        the ValueError leaves every row and generator as before."""
         spec = self._scenario_spec if spec is None else spec
-        for b in rows:
-            scenario, key = draw_episode(self._rngs[b], spec, self.plant.default_duration_s)
-            self.core.reset_row(int(b), scenario, key)
+        rngs = self._rngs if rngs is None else rngs
+        states = [rngs[b].bit_generator.state for b in rows]
+        try:
+            episodes = [draw_episode(rngs[b], spec, self.plant.default_duration_s) for b in rows]
+            self.core.reset_rows(rows, episodes)
+        except Exception:
+            for b, state in zip(rows, states, strict=True):
+                rngs[b].bit_generator.state = state
+            raise
+        self._rngs = rngs
 
     def reset(self, *, seed: int | list[int | None] | None = None, options: dict | None = None):
         """Reset every sub-env, or those of ``options={"reset_mask": mask}`` (Gymnasium's
@@ -118,6 +128,10 @@ class SteamTempVectorEnv(VectorEnv):
         or None entries (the sub-envs not reset ignore theirs). ``options={"scenario":
         spec}`` starts the episodes of the sub-envs reset now under ``spec`` (as
         SteamTempEnv's reset does); their autoresets return to the env's own scenario.
+
+        All or nothing: if a sub-env's episode cannot start (a ValueError: a scenario or
+        drawn plant that cannot hold its start), every sub-env, plant and generator is as
+        before.
         """
         spec = scenario_option(options, self._scenario_spec, self.plant.id, ("reset_mask",))
         mask = (options or {}).get("reset_mask")
@@ -132,10 +146,11 @@ class SteamTempVectorEnv(VectorEnv):
         elif not self._started and not mask.all():
             raise ValueError("the first reset() must reset every sub-env (no reset_mask)")
         rows = np.flatnonzero(mask)
+        rngs = list(self._rngs)
         for b, s in zip(rows, self._seeds(seed)[rows], strict=True):
             if s is not None:
-                self._rngs[b] = seeding.np_random(int(s))[0]
-        self._reset_rows(rows, spec)
+                rngs[b] = seeding.np_random(int(s))[0]
+        self._reset_rows(rows, spec, rngs)
         self._autoreset[rows] = False
         self._started = True
         return self.core.obs.copy(), self._info(mask)
@@ -240,10 +255,10 @@ class SteamTempVectorEnv(VectorEnv):
                 of the wrong count, or (before the first reset) rows that do not cover every
                 sub-env; nothing is changed.
         """
-        target, source = snap_.check(self.core, snapshot, rows)
-        if not self._started and target.size != self.num_envs:
+        plan = snap_.check(self.core, snapshot, rows)
+        if not self._started and plan.target.size != self.num_envs:
             raise ValueError("before the first reset() restore must cover every sub-env")
-        snap_.put(self.core, snapshot, target, source, self._rngs, self._autoreset)
+        snap_.put(self.core, snapshot, plan, self._rngs, self._autoreset)
         self._started = True
 
     @property
