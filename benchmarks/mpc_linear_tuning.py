@@ -53,7 +53,8 @@ def main(argv: list[str] | None = None) -> None:
             fits = True
             for sc, ref in zip(TESTS, refs, strict=True):
                 env = gym.make(env_id, scenario=sc)
-                m = run_episode(env, MPCLinear(env, move_weight=w), args.seed)["metrics"]
+                knobs = {**MPCLinear.knob_defaults(env_id), "move_weight": w}  # not stored ones
+                m = run_episode(env, MPCLinear(env, **knobs), args.seed)["metrics"]
                 rm = ref["metrics"]
                 ratio = m["valve_travel"] / rm["valve_travel"]
                 fits &= ratio <= TRAVEL_RATIO_MAX

@@ -47,8 +47,8 @@ def test_a_recomputed_sample_gives_the_stored_metrics_bit_for_bit(stored, tmp_pa
     """One scenario per plant, both ends, seed 0, run with --recompute-references: each
     row's metrics are the stored row's exactly."""
     out = tmp_path / "out"
-    cli.main(["--out", str(out), "--policies", "cascade_pi_ff", "--scenarios", SAMPLE,
-              "--seeds", "0", "--no-mismatch", "--recompute-references", "--jobs", "1"])  # fmt: skip
+    cli.main(["--out", str(out), "--policies", "cascade_pi_ff", "--scenarios", SAMPLE, "--seeds",
+              "0", "--no-mismatch", "--recompute-references", "--jobs", "1"])  # fmt: skip
     ran = [r for r in read_record(out / EPISODES) if r["policy"] in references.POLICIES]
     assert len(ran) == len(steamtemp_gym.ENV_IDS) * len(references.POLICIES)
     for r in ran:
