@@ -344,8 +344,8 @@ def write(name: str, env_ids: list[str], log: Any = None, replay: bool = False) 
 def markdown(names: tuple[str, ...] = TUNABLE) -> str:
     """The stored tunings as a markdown table: per controller and env, the training score and
     travel ratio at the start and at the result, evaluations used, and the knobs."""
-    lines = ["| controller | plant | start: score, travel | tuned: score, travel | "
-             "evaluations | knobs |", "|---|---|---|---|---|---|"]  # fmt: skip
+    lines = ["| controller | plant | start: score, travel | tuned: score, travel, drawn plants' "
+             "cost | evaluations | knobs |", "|---|---|---|---|---|---|"]  # fmt: skip
     for name in names:
         f = tuning.path(name)
         if not f.is_file():
@@ -353,9 +353,13 @@ def markdown(names: tuple[str, ...] = TUNABLE) -> str:
         for env_id, r in json.loads(f.read_text())["plants"].items():
             st = r["start"]
             knobs = ", ".join(f"{k} {v:.3g}" for k, v in sorted(r["knobs"].items()))
+            rob = r.get("robust_ratio")
+            tuned = f"{r['score']:.3f}, {r['travel_ratio']:.2f}x, "
+            tuned += f"{rob:.2f}x" if rob is not None else "not checked"
+            tuned += "" if r.get("feasible", True) else " (no candidate kept every term)"
             lines.append(f"| `{name}` | {env_id.split('/')[-1]} | {st['score']:.3f}, "
-                         f"{st['travel_ratio']:.2f}x | {r['score']:.3f}, {r['travel_ratio']:.2f}x"
-                         f" | {r['evaluations']} | {knobs} |")  # fmt: skip
+                         f"{st['travel_ratio']:.2f}x | {tuned} | {r['evaluations']} | "
+                         f"{knobs} |")  # fmt: skip
     return "\n".join(lines) + "\n"
 
 
