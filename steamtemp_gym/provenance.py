@@ -141,7 +141,8 @@ def module_files(module: str, packages: tuple[str, ...], root: Path | None = Non
         if path is None:
             continue
         seen[name] = path
-        for dep in _imports(path, name):
+        st = path.stat()
+        for dep in _imports(str(path), name, st.st_size, st.st_mtime_ns):
             if dep.split(".")[0] in packages and dep not in seen:
                 todo.append(dep)
     return sorted(seen.values())
@@ -155,9 +156,11 @@ def _module_path(name: str, root: Path) -> Path | None:
     return None
 
 
-def _imports(path: Path, name: str) -> list[str]:
+@functools.lru_cache(maxsize=4096)
+def _imports(path_s: str, name: str, size: int, mtime_ns: int) -> tuple[str, ...]:
     """The modules a file imports: for ``from a import b`` both ``a`` and ``a.b`` (b may
-    be a module); relative imports resolved against ``name``."""
+    be a module); relative imports resolved against ``name`` (memoized per file state)."""
+    path = Path(path_s)
     is_pkg = path.name == "__init__.py"
     package = name if is_pkg else name.rpartition(".")[0]
     out = []
@@ -176,7 +179,7 @@ def _imports(path: Path, name: str) -> list[str]:
             parts = mod.split(".")
             out += [".".join(parts[: i + 1]) for i in range(len(parts))]
             out += [f"{mod}.{a.name}" for a in node.names if a.name != "*"]
-    return out
+    return tuple(out)
 
 
 __all__ = ["LENGTH", "NO_DYNAMICS", "ROOT", "digest", "file_digest", "module_files",
