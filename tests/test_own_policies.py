@@ -102,7 +102,9 @@ def test_factory_is_fingerprinted_by_its_file(tmp_path):
     name = f"{mod}:make_controller"
     first = _policy_digest(ENV, name)
     assert first.startswith(name + ":") and len(first) == len(name) + 65
-    mod.write_text(EXAMPLE.read_text() + "\n# another version\n")
+    mod.write_text(EXAMPLE.read_text() + "\n# a comment changes no action\n")
+    assert _policy_digest(ENV, name) == first
+    mod.write_text(EXAMPLE.read_text() + "\nANOTHER_VERSION = 2\n")
     assert _policy_digest(ENV, name) != first
 
 

@@ -130,8 +130,10 @@ def test_a_zoo_with_one_run_scores_it_under_its_own_name(tmp_path, monkeypatch):
 
 
 def test_policy_names_of_runs(tmp_path, monkeypatch):
-    for k in (0, 1, 2):
-        _fake(tmp_path, files.stem(ENV, "ppo", k))
+    for k in (0, 1, 2):  # the shipped runs' files (a policy name is checked against its model)
+        shipped = files.steamtemp_files(agents.ZOO, ENV, "ppo", k)
+        for f in (shipped.model, *shipped.meta):
+            shutil.copy(f, tmp_path / (files.stem(ENV, "ppo", k) + f.suffix))
     _fake(tmp_path, files.stem(ENV, "sac"))
     monkeypatch.setattr(agents, "ZOO", tmp_path)
     assert specs.training_runs("sb3:ppo", ENV) == ["sb3:ppo@run0", "sb3:ppo@run1", "sb3:ppo@run2"]
