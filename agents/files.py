@@ -153,7 +153,7 @@ def _check(files: AgentFiles, stat: tuple) -> None:
     plant = env.unwrapped.plant
     memory = files._memory()
     extra = 0 if memory is None else MemoryConfig.from_kwargs(memory).n_extra(
-        len(plant.valves), len(plant.secondary))  # fmt: skip
+        len(plant.valves), len(plant.secondary), env.observation_space.shape[-1])  # fmt: skip
     want_obs = (env.observation_space.shape[-1] + extra,)
     want_act = tuple(env.action_space.shape)
     if (obs, act) == (want_obs, want_act):

@@ -21,9 +21,15 @@ class MemoryConfig:
     integral_limit_K: float = 40.0
     history: int = 4
     history_stride: int = 5
+    history_signals: str = "error_valves"
+    rates: bool = False
+    rate_filter_s: float = 30.0
 
     def __post_init__(self) -> None:
-        for name in ("integral_time_s", "integral_limit_K"):
+        if self.history_signals not in HISTORY_SIGNALS:
+            raise ValueError(f"history_signals must be one of {list(HISTORY_SIGNALS)}, got "
+                             f"{self.history_signals!r}")  # fmt: skip
+        for name in ("integral_time_s", "integral_limit_K", "rate_filter_s"):
             v = getattr(self, name)
             if not (isinstance(v, (int, float)) and not isinstance(v, bool) and v > 0):
                 raise ValueError(f"{name} must be a positive number, got {v!r}")
@@ -31,7 +37,7 @@ class MemoryConfig:
             v = getattr(self, name)
             if not (isinstance(v, int) and not isinstance(v, bool) and v >= lo):
                 raise ValueError(f"{name} must be an integer >= {lo}, got {v!r}")
-        for name in ("integral", "secondary_integral"):
+        for name in ("integral", "secondary_integral", "rates"):
             if not isinstance(getattr(self, name), bool):
                 raise ValueError(f"{name} must be true or false, got {getattr(self, name)!r}")
         if self.secondary_integral and not self.integral:
@@ -47,11 +53,17 @@ class MemoryConfig:
             raise ValueError(f"unknown controller-memory option(s) {unknown}; valid: {valid}")
         return cls(**kwargs)
 
-    def n_extra(self, n_valves: int, n_secondary: int = 0) -> int:
-        """How many entries the memory adds for a plant with ``n_valves`` actuators and
-        ``n_secondary`` secondary scored temperatures."""
+    def n_extra(self, n_valves: int, n_secondary: int, n_obs: int) -> int:
+        """How many entries the memory adds for a plant with ``n_valves`` actuators,
+        ``n_secondary`` secondary scored temperatures and ``n_obs`` observed signals."""
         n_int = int(self.integral) * (1 + (n_secondary if self.secondary_integral else 0))
-        return n_int + self.history * (1 + n_valves)
+        n_sample = n_obs if self.history_signals == "observation" else 1 + n_valves
+        return n_int + self.history * n_sample + 2 * int(self.rates)
+
+
+#: What the history samples: the error and the valve openings, or every observed signal
+#: (the inner temperatures, load, flows and measured disturbances a controller acts on).
+HISTORY_SIGNALS = ("error_valves", "observation")
 
 
 #: The controller memory as an RL Zoo ``env_wrapper`` names it.

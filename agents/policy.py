@@ -45,9 +45,13 @@ class MlpActor:
 
         pol = getattr(model, "policy", None)
         space = getattr(pol, "action_space", None)
-        if pol is None or getattr(pol, "use_sde", False) or not hasattr(space, "low"):
+        if pol is None or not hasattr(space, "low"):
             return None
+        # gSDE changes the exploration noise, not the deterministic action (the mean), but
+        # for PPO's squash_output (a tanh on the mean)
         if hasattr(pol, "action_net") and hasattr(pol, "mlp_extractor"):  # PPO, A2C
+            if getattr(pol, "squash_output", False):
+                return None
             modules = [*pol.mlp_extractor.policy_net, pol.action_net]
             extractor, squash = pol.pi_features_extractor, False
         elif hasattr(getattr(pol, "actor", None), "latent_pi"):  # SAC

@@ -22,7 +22,7 @@ HYPERPARAMS = Path(__file__).with_name("hyperparams")
 #: RL Zoo keys with a meaning of their own (the rest go to the algorithm's constructor).
 SPECIAL = ("n_timesteps", "n_envs", "policy", "normalize", "env_wrapper", "policy_kwargs",
            "noise_type", "noise_std", "residual_scale", "max_move", "train_reward",
-           "plant_randomization")  # fmt: skip
+           "plant_randomization", "travel_price")  # fmt: skip
 
 
 class ConfigError(ValueError):
@@ -112,6 +112,15 @@ def read_hyperparams(path: Path, env_id: str, algo: str) -> dict[str, Any]:
             RewardConfig.from_options(hp["train_reward"])
         except ValueError as exc:
             raise ConfigError(f"--hyperparams {path}: train_reward: {exc}") from None
+    if "travel_price" in hp:
+        from agents.travel_price import PRICE_MAX, PRICE_MIN
+
+        v = hp["travel_price"]
+        ok = isinstance(v, (int, float)) and not isinstance(v, bool)
+        if not (ok and PRICE_MIN <= v <= PRICE_MAX):
+            raise ConfigError(f"--hyperparams {path}: travel_price (the starting price per "
+                              f"valve stroke) must be a number in [{PRICE_MIN}, {PRICE_MAX}], "
+                              f"got {v!r}")  # fmt: skip
     if "plant_randomization" in hp:
         from steamtemp_gym.plants import perturb
 

@@ -20,8 +20,10 @@ from agents.files import steamtemp_paths, stem
 from agents.train_config import HYPERPARAMS, SPECIAL, ConfigError, algo_class, read_hyperparams
 
 #: Seeds of the validation episodes (``random`` scenario); training uses --seed + i.
+#: Sixteen: the seed-to-seed spread of a return (about 70 on the FSH) over 16 is about 18,
+#: below the differences between checkpoints worth choosing between.
 VALIDATION_SEED = 1_000_000
-N_VALIDATION = 3
+N_VALIDATION = 16
 #: Where in the budget the agent is validated (and the best kept): every eighth.
 EVAL_FRACTIONS = tuple(k / 8 for k in range(1, 9))
 
@@ -42,17 +44,26 @@ def _git_revision() -> str:
         return "unknown"
 
 
-def make_training_env(env_id: str, n_envs: int, seed: int, hp: dict[str, Any]):
-    """(VecEnv for training, the native vector env under it)."""
+def make_training_env(env_id: str, n_envs: int, seed: int, hp: dict[str, Any],
+                       reference_rate: float | None = None):  # fmt: skip
+    """(VecEnv for training, the native vector env under it, the travel price wrapper or
+    None). ``reference_rate``: the reference's travel per second, which a ``travel_price``
+    entry needs (agents/travel_price.py)."""
     from stable_baselines3.common.vec_env import VecMonitor, VecNormalize
 
     from agents.moves import VecMoves
+    from agents.travel_price import VecTravelPrice
     from agents.vec_env import NativeVecEnv
     from agents.wrappers import VecControllerMemory, VecResidual
 
     base = NativeVecEnv(env_id, n_envs, scenario="random", reward=hp.get("train_reward"),
                         plant_randomization=hp.get("plant_randomization"))  # fmt: skip
+    price = None
     venv = base
+    if hp.get("travel_price") is not None:
+        if reference_rate is None:
+            raise ConfigError("travel_price needs the reference's travel rate")
+        venv = price = VecTravelPrice(venv, base.venv, reference_rate, hp["travel_price"])
     if hp.get("residual_scale") is not None:
         venv = VecResidual(venv, base.venv, hp["residual_scale"])
     if hp.get("max_move") is not None:
@@ -64,7 +75,7 @@ def make_training_env(env_id: str, n_envs: int, seed: int, hp: dict[str, Any]):
         kw = hp["normalize"] if isinstance(hp["normalize"], dict) else {}
         venv = VecNormalize(venv, gamma=hp.get("gamma", 0.99), **kw)
     venv.seed(seed)
-    return venv, base.venv
+    return venv, base.venv, price
 
 
 def _shown_path(path: Path) -> str:
@@ -99,8 +110,11 @@ def validate(env_id: str, policy, n: int = N_VALIDATION) -> dict[str, float]:
         policy = policy(venv)
     runs = run_batch(venv, policy, [VALIDATION_SEED + k for k in range(n)])
     venv.close()
-    return {key: float(np.mean([r["metrics"][key] for r in runs]))
-            for key in ("return", "iae_K_s", "valve_travel")}  # fmt: skip
+    out = {key: float(np.mean([r["metrics"][key] for r in runs]))
+           for key in ("return", "iae_K_s", "valve_travel")}  # fmt: skip
+    seconds = sum(float(r["trace"]["time_s"][-1] - r["trace"]["time_s"][0]) for r in runs)
+    out["travel_per_s"] = n * out["valve_travel"] / max(seconds, 1e-9)
+    return out
 
 
 def better_checkpoint(new: dict[str, float], best: dict[str, float], budget: float) -> bool:
@@ -163,7 +177,7 @@ def _checkpointing(model: Any, venv: Any, native: Any, hp: dict[str, Any], env_i
     and where it beats ``best`` (:func:`better_checkpoint`) keep it there and save the model
     to ``save_to``."""
     from agents.policy import AgentPolicy
-    from agents.stats import TRAVEL_BUDGET
+    from agents.tuning_terms import TUNING_TRAVEL_BUDGET
 
     def evaluate(steps: int, wall: float) -> None:
         policy = AgentPolicy(model, native, memory=hp["env_wrapper"], obs_norm=_obs_stats(venv),
@@ -172,7 +186,8 @@ def _checkpointing(model: Any, venv: Any, native: Any, hp: dict[str, Any], env_i
         score = validate(env_id, policy)
         score["travel_ratio"] = score["valve_travel"] / reference["valve_travel"]
         curve.append({"timesteps": steps, "fraction": steps / total, "wall_s": wall, **score})
-        if better_checkpoint(score, best, TRAVEL_BUDGET):
+        # within the tuned baselines' margin under the budget (agents/tuning_terms.py)
+        if better_checkpoint(score, best, TUNING_TRAVEL_BUDGET):
             best.update(score, timesteps=steps, obs_norm=_obs_stats(venv))
             model.save(save_to)
 
@@ -190,12 +205,20 @@ def _progress(evaluate: Callable[[int, float], None], curve: list, total: int, t
         def __init__(self) -> None:
             super().__init__()
             self.marks = [int(f * total) for f in EVAL_FRACTIONS]
+            # with a time budget, also every eighth of it (the budget may end the run first)
+            self.clock = ([] if max_minutes is None else
+                          [60.0 * max_minutes * f for f in EVAL_FRACTIONS[:-1]])  # fmt: skip
             self.last_line = 0.0
 
         def _on_step(self) -> bool:
             steps, wall = self.num_timesteps, time.monotonic() - t0
-            if self.marks and steps >= self.marks[0]:
+            due = bool(self.marks and steps >= self.marks[0])
+            due |= bool(self.clock and wall >= self.clock[0])
+            while self.marks and steps >= self.marks[0]:
                 self.marks.pop(0)
+            while self.clock and wall >= self.clock[0]:
+                self.clock.pop(0)
+            if due:
                 evaluate(steps, wall)
             if not quiet and wall - self.last_line > 10.0:
                 self.last_line = wall
@@ -218,7 +241,7 @@ def _metadata(env_id: str, algo: str, cls: Any, revision: str, path: Path,
               curve: list) -> dict[str, Any]:  # fmt: skip
     """The run's ``<stem>.json``: everything ``agents.load`` needs and how the run went."""
     import baselines
-    from agents.stats import TRAVEL_BUDGET
+    from agents.tuning_terms import TUNING_TRAVEL_BUDGET
 
     return {
         "env_id": env_id, "algo": algo, "sb3_class": cls.__name__,
@@ -231,11 +254,22 @@ def _metadata(env_id: str, algo: str, cls: Any, revision: str, path: Path,
                        for k in range(N_VALIDATION)], "best": {k: best[k] for k in
                        ("return", "iae_K_s", "valve_travel", "travel_ratio")},
                        "reference": {"policy": baselines.INDUSTRIAL_REFERENCE, **reference},
-                       "travel_budget": TRAVEL_BUDGET, "curve": curve},
+                       "travel_budget": TUNING_TRAVEL_BUDGET, "curve": curve},
         "normalization": best["obs_norm"], "memory": hp["env_wrapper"],
         "residual_scale": hp.get("residual_scale"), "max_move": hp.get("max_move"),
         "train_reward": hp.get("train_reward"),
     }  # fmt: skip
+
+
+def _price_record(prices: list[tuple[int, float, float, float]]) -> dict[str, Any]:
+    """The travel price's course for the metadata: the first rollout's travel over the
+    reference's (the untrained policy with its exploration, before any update), the last
+    price, and at most 100 (timesteps, the policy's travel ratio, the rollout's, price)
+    points."""
+    keep = prices[:: max(1, len(prices) // 100)]
+    return {"exploration_travel_ratio": prices[0][2] if prices else None,
+            "final_price": prices[-1][3] if prices else None,
+            "course": [list(p) for p in keep]}  # fmt: skip
 
 
 def train(env_id: str, algo: str, hyperparams: Path | None = None, timesteps: int | None = None,
@@ -250,28 +284,35 @@ def train(env_id: str, algo: str, hyperparams: Path | None = None, timesteps: in
     import torch
 
     torch.set_num_threads(1)  # one core per run (a shared machine; small networks)
-    venv, native = make_training_env(env_id, n_envs, seed, hp)
+    import baselines
+
+    reference = validate(env_id, lambda v: baselines.make(baselines.INDUSTRIAL_REFERENCE, v))
+    venv, native, price = make_training_env(env_id, n_envs, seed, hp,
+                                            reference_rate=reference["travel_per_s"])  # fmt: skip
     model = _sb3_model(cls, hp, venv, seed, tensorboard)
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     name = stem(env_id, algo, run)
     model_path, meta_path = steamtemp_paths(out, env_id, algo, run)
-    import baselines
-
-    reference = validate(env_id, lambda v: baselines.make(baselines.INDUSTRIAL_REFERENCE, v))
     revision = _git_revision()  # the code this run trains with
     t0 = time.monotonic()
     curve: list[dict[str, Any]] = []
     best: dict[str, Any] = {}
+    prices: list[tuple[int, float, float]] = []
     evaluate = _checkpointing(model, venv, native, hp, env_id, reference, total, curve, best,
                               model_path)  # fmt: skip
-    model.learn(total_timesteps=total, callback=_progress(evaluate, curve, total, t0, name,
-                                                          quiet, max_minutes),
-                progress_bar=False)  # fmt: skip
+    callbacks = [_progress(evaluate, curve, total, t0, name, quiet, max_minutes)]
+    if price is not None:
+        from agents.travel_price import price_callback
+
+        callbacks.append(price_callback(price, prices, hp.get("max_move")))
+    model.learn(total_timesteps=total, callback=callbacks, progress_bar=False)
     if not curve:  # a budget below the first mark's granularity
         evaluate(model.num_timesteps, time.monotonic() - t0)
     meta = _metadata(env_id, algo, cls, revision, path, hp, seed, run, n_envs, total, model,
                      best, time.monotonic() - t0, reference, curve)  # fmt: skip
+    if price is not None:
+        meta["travel_price"] = _price_record(prices)
     meta_path.write_text(json.dumps(meta, indent=1), encoding="utf-8")
     venv.close()
     return meta

@@ -16,8 +16,13 @@ SupercriticalFSH: -1.36 K without an integral, 0.00 K with it; docs/agents.md). 
   temperature (``Plant.secondary``, e.g. BoilerTurbineMIMO's reheat: its setpoint minus
   its measurement), observed in that measurement's normalization: a plant that scores two
   temperatures needs an integral per temperature to remove both offsets;
-- the error and the valve openings ``history`` samples back, ``history_stride`` control
-  steps apart (oldest last), normalized as the env normalizes them.
+- the error and the valve openings (``history_signals: error_valves``) or every observed
+  signal (``observation``: inner temperatures, load, flows, the measured disturbances)
+  ``history`` samples back, ``history_stride`` control steps apart (oldest last),
+  normalized as the env normalizes them; agents/horizons.py gives the stride at which
+  they span the plant's dead time plus lag;
+- with ``rates``, the per-minute changes of the load demand and of the setpoint, filtered
+  with a lag of ``rate_filter_s`` (what a load feed-forward acts on).
 
 One batched implementation (:class:`MemoryState`) serves three front ends that give the
 same observations: :class:`ControllerMemory` (a ``gymnasium.Wrapper``, hence RL Zoo's
@@ -68,9 +73,17 @@ class MemoryState:
         self.sec_scale, self.sec_center = scale[self.i_sec], center[self.i_sec]
         # every integral is observed in its own error's normalization
         self.i_scale = np.concatenate([[self.e_scale], self.sec_scale])
-        self.n_extra = config.n_extra(len(self.i_valve), len(second))
+        self.n_extra = config.n_extra(len(self.i_valve), len(second), self.n_obs)
+        self.i_sample = (np.arange(self.n_obs) if config.history_signals == "observation"
+                         else np.concatenate([[self.i_err], self.i_valve]).astype(int))  # fmt: skip
+        # rates: the filtered per-minute change of the load demand and of the setpoint, in
+        # their observations' normalization
+        self.i_rate = np.array([names.index("load_demand"), names.index("setpoint_C")])
+        self.a_rate = float(np.exp(-self.dt / config.rate_filter_s))
         self._integral = np.zeros((0, 1 + len(second)))
-        self._buf = np.zeros((0, 0, 0))  # (rows, samples kept, 1 + n_valves)
+        self._buf = np.zeros((0, 0, 0))  # (rows, samples kept, sampled signals)
+        self._rate = np.zeros((0, 2))
+        self._last = np.zeros((0, 2))
 
     def extend_space(self, space: gym.spaces.Box) -> gym.spaces.Box:
         """The observation space with the memory's entries appended (last axis)."""
@@ -86,14 +99,18 @@ class MemoryState:
         keep = c.history * c.history_stride + 1
         if self._integral.shape[0] != n:
             self._integral = np.zeros((n, 1 + self.i_sec.size))
-            self._buf = np.zeros((n, keep, 1 + len(self.i_valve)))
+            self._buf = np.zeros((n, keep, self.i_sample.size))
+            self._rate, self._last = np.zeros((n, 2)), np.zeros((n, 2))
             restart = np.ones(n, dtype=bool)
         elif restart is None:
             restart = np.zeros(n, dtype=bool)
-        sample = np.concatenate([obs[:, [self.i_err]], obs[:, self.i_valve]], axis=1)
+        sample = obs[:, self.i_sample]
+        now = obs[:, self.i_rate]
         if restart.any():
             self._integral[restart] = 0.0
             self._buf[restart] = sample[restart, None, :]
+            self._rate[restart] = 0.0
+            self._last[restart] = now[restart]
         if c.integral:
             e_K = obs[:, [self.i_err]] * self.e_scale
             if self.i_sec.size:
@@ -109,6 +126,11 @@ class MemoryState:
         parts = [obs]
         if c.integral:
             parts.append(self._integral / self.i_scale)
+        if c.rates:
+            self._rate = (self.a_rate * self._rate
+                          + (1.0 - self.a_rate) * (now - self._last) * (60.0 / self.dt))
+            self._last = now
+            parts.append(self._rate)
         if c.history:
             self._buf = np.roll(self._buf, 1, axis=1)
             self._buf[:, 0] = sample
@@ -116,12 +138,13 @@ class MemoryState:
             parts.append(past.reshape(n, -1))
         return np.concatenate(parts, axis=1).astype(obs.dtype, copy=False)
 
-    def state(self) -> tuple[np.ndarray, np.ndarray]:
-        """A copy of (integral, history buffer) (to extend a terminal observation)."""
-        return self._integral.copy(), self._buf.copy()
+    def state(self) -> tuple[np.ndarray, ...]:
+        """A copy of (integral, history buffer, rates, last rate inputs) (to extend a
+        terminal observation)."""
+        return tuple(a.copy() for a in (self._integral, self._buf, self._rate, self._last))
 
-    def set_state(self, state: tuple[np.ndarray, np.ndarray]) -> None:
-        self._integral, self._buf = state[0].copy(), state[1].copy()
+    def set_state(self, state: tuple[np.ndarray, ...]) -> None:
+        self._integral, self._buf, self._rate, self._last = (a.copy() for a in state)
 
 
 def _measured(names: list[str], true_name: str) -> int:

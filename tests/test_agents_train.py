@@ -213,8 +213,8 @@ def test_train_reward_is_checked_and_applies_to_the_training_envs_only(tmp_path)
     path.write_text(yaml.safe_dump({ENV_ID: {"policy": "MlpPolicy",
                                              "train_reward": {"w_move": 5.0}}}))  # fmt: skip
     hp = train_config.read_hyperparams(path, ENV_ID, "ppo")
-    charged, _ = training.make_training_env(ENV_ID, 2, 0, hp)
-    plain, _ = training.make_training_env(ENV_ID, 2, 0, {**hp, "train_reward": None})
+    charged, _, _ = training.make_training_env(ENV_ID, 2, 0, hp)
+    plain, _, _ = training.make_training_env(ENV_ID, 2, 0, {**hp, "train_reward": None})
     stroke = np.ones((2, charged.action_space.shape[0]))  # open every valve fully
     rewards = []
     for venv in (charged, plain):
@@ -235,11 +235,11 @@ def test_plant_randomization_is_checked_and_draws_the_training_plants(tmp_path):
         train_config.read_hyperparams(path, ENV_ID, "ppo")
     path.write_text(yaml.safe_dump({ENV_ID: {"policy": "MlpPolicy", "plant_randomization": True}}))
     hp = train_config.read_hyperparams(path, ENV_ID, "ppo")
-    drawn, base = training.make_training_env(ENV_ID, 2, 0, hp)
+    drawn, base, _ = training.make_training_env(ENV_ID, 2, 0, hp)
     drawn.reset()
     plants = base.core.plants
     assert plants[0].params != plants[1].params  # each row its own unit
-    _, nominal = training.make_training_env(ENV_ID, 2, 0, {**hp, "plant_randomization": None})
+    _, nominal, _ = training.make_training_env(ENV_ID, 2, 0, {**hp, "plant_randomization": None})
     assert not hasattr(nominal.core, "plants")
 
 

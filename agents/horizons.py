@@ -1,0 +1,78 @@
+"""The plant's own time scale, and the agent settings read from it.
+
+An agent has to credit a valve move with a temperature change that comes a dead time
+later and settles over a lag: its discount must look further ahead than that, its
+advantage estimate must reach past the dead time, and its observation must remember
+that far back. The time scale is the one a commissioning engineer measures: dead time
+plus time constant (Tu + Tg) of the true main-steam temperature after a step of a valve
+that acts on it (the plant's main-steam loops, ``Plant.control_loops``), at 50 % load,
+the slowest operating point (baselines/identification.py ``step_test``; docs/leaderboard.md
+lists them: FSH 53 + 181 s, Benson 55 + 194 s, MIMO 47 + 134 s, Drum 77 + 251 s,
+Cascade300MW 113 + 231 s).
+
+The rules (docs/agents.md, "Horizons from the plant"):
+
+- discount: the horizon ``dt / (1 - gamma)`` is :data:`HORIZON_FACTOR` times the time
+  scale (a move's whole effect and as long again for the recovery);
+- GAE: the window ``dt / (1 - gamma lambda)`` is :data:`GAE_FACTOR` times the dead time
+  (the advantage of a move sees its effect begin), lambda at most :data:`GAE_LAMBDA_MAX`;
+- history: the controller memory's samples span the time scale.
+"""
+
+from __future__ import annotations
+
+import functools
+
+from steamtemp_gym import plants
+from steamtemp_gym.plants.base import MAIN
+
+#: The operating point of the step test (fraction of rated load): the slowest.
+LOAD = 0.5
+HORIZON_FACTOR = 2.0
+GAE_FACTOR = 2.0
+GAE_LAMBDA_MAX = 0.995
+
+
+@functools.lru_cache(maxsize=None)
+def time_scale(env_id: str) -> tuple[float, float]:
+    """(dead time, time constant) in s of the true main-steam temperature after a step of
+    the slowest main-steam valve at :data:`LOAD` (module docstring)."""
+    from baselines.identification import step_test
+
+    plant = plants.make(env_id)
+    best = (0.0, 0.0)
+    for j, (_, outer) in enumerate(plant.control_loops):
+        if outer != MAIN:
+            continue
+        m = step_test(env_id, j, ["outlet_temp_C"], load=LOAD)["outlet_temp_C"]
+        if m.theta_s + m.tau_s > sum(best):
+            best = (float(m.theta_s), float(m.tau_s))
+    if best == (0.0, 0.0):
+        raise ValueError(f"{env_id}: no valve acts on the main-steam temperature")
+    return best
+
+
+def discount(env_id: str) -> float:
+    """gamma with ``dt / (1 - gamma) = HORIZON_FACTOR * (dead time + time constant)``."""
+    dt = plants.make(env_id).dt_s
+    return 1.0 - dt / (HORIZON_FACTOR * sum(time_scale(env_id)))
+
+
+def gae_lambda(env_id: str) -> float:
+    """lambda with ``dt / (1 - gamma lambda) = GAE_FACTOR * dead time`` (at most
+    :data:`GAE_LAMBDA_MAX`)."""
+    dt = plants.make(env_id).dt_s
+    gl = 1.0 - dt / (GAE_FACTOR * time_scale(env_id)[0])
+    return min(gl / discount(env_id), GAE_LAMBDA_MAX)
+
+
+def history_stride(env_id: str, history: int) -> int:
+    """Control steps between the memory's ``history`` samples so that they span the time
+    scale (at least 1)."""
+    if not (isinstance(history, int) and history >= 1):
+        raise ValueError(f"history must be an integer >= 1 to span the plant, got {history!r}")
+    dt = plants.make(env_id).dt_s
+    return max(1, round(sum(time_scale(env_id)) / (history * dt)))
+
+
+__all__ = ["discount", "gae_lambda", "history_stride", "time_scale"]

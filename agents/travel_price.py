@@ -1,0 +1,155 @@
+"""The valve-travel budget as a constraint in training: a price on travel that a Lagrange
+multiplier sets, instead of a fixed charge.
+
+The leaderboard admits a policy whose valve travel is at most ``TRAVEL_BUDGET`` (2x) the
+industrial reference's (agents/stats.py). A fixed charge on travel either leaves the
+agent over budget or teaches it to leave the valves alone (measured: tenfold the default
+charge ended at 0.7-1.4x). Here the training reward is the scored reward less
+``price * travel`` of each step, and after every rollout the price follows the travel
+rate of the policy that will be scored, against ``target`` times the reference's (dual
+ascent on the constraint ``travel <= target * reference``, in log space so that the price
+stays positive)::
+
+    price <- clip(price * exp(rate * (ratio / target - 1)), PRICE_MIN, PRICE_MAX)
+
+``ratio`` is the travel per second over the reference's of the policy's deterministic
+action along the rollout's states (for PPO, read from its rollout buffer): the scored
+policy acts deterministically, and the rollout's own travel is mostly exploration
+(measured on the FSH: 8x the reference's before training against 0.2-1.8x for the
+deterministic policy; a price on it rose to its bound and the agent froze the valve).
+Algorithms without a rollout buffer (SAC, TD3) use the rollout's own travel. ``target``
+is below the budget (:data:`TARGET`, the tuner's margin, agents/tuning_terms.py) because
+travel on unseen scenarios spreads about the training travel.
+
+:class:`VecTravelPrice` (an SB3 ``VecEnvWrapper`` directly over the env, where actions are
+valve positions) charges the price and measures the rollout's travel;
+:func:`price_callback` updates the price at the end of each rollout. The price is in
+units of the reward per full valve stroke; the scored reward's own charge (``w_move``)
+stays in the reward.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from stable_baselines3.common.vec_env.base_vec_env import VecEnv, VecEnvWrapper
+
+from agents.tuning_terms import TUNING_TRAVEL_BUDGET
+from baselines.loops import observation_layout
+
+#: Training travel target (multiple of the reference's travel rate): the tuner's.
+TARGET = TUNING_TRAVEL_BUDGET
+#: Bounds and step (per rollout, log space) of the price.
+PRICE_MIN, PRICE_MAX = 0.01, 100.0
+RATE = 0.1
+
+
+class VecTravelPrice(VecEnvWrapper):
+    """Charges ``price`` per unit of valve travel and measures the travel rate (module
+    docstring).
+
+    Args:
+        venv: The VecEnv to wrap: its observations must be the env's raw ones.
+        env: The native vector env under it (observation layout and valves).
+        reference_rate: The reference's travel per second (the budget's unit).
+        price: The starting price.
+    """
+
+    def __init__(self, venv: VecEnv, env: Any, reference_rate: float, price: float) -> None:
+        if not (np.isfinite(reference_rate) and reference_rate > 0):
+            raise ValueError(f"reference travel rate must be > 0, got {reference_rate!r}")
+        if not (np.isfinite(price) and PRICE_MIN <= price <= PRICE_MAX):
+            raise ValueError(f"travel price must be in [{PRICE_MIN}, {PRICE_MAX}], got {price!r}")
+        super().__init__(venv)
+        names, scale, center = observation_layout(env)
+        self.i_valve = np.array([names.index(v) for v in env.unwrapped.plant.valves])
+        self.v_scale, self.v_center = scale[self.i_valve], center[self.i_valve]
+        self.dt = float(env.unwrapped.plant.dt_s)
+        self.reference_rate = float(reference_rate)
+        self.price = float(price)
+        self._last: np.ndarray | None = None
+        self._travel, self._steps = 0.0, 0
+
+    def _opening(self, obs: np.ndarray) -> np.ndarray:
+        return np.asarray(obs)[..., self.i_valve] * self.v_scale + self.v_center
+
+    def reset(self) -> np.ndarray:
+        obs = self.venv.reset()
+        self._last = self._opening(obs)
+        return obs
+
+    def step_async(self, actions: np.ndarray) -> None:
+        self.venv.step_async(actions)
+
+    def step_wait(self):
+        obs, rew, dones, infos = self.venv.step_wait()
+        now = self._opening(obs)
+        end = now.copy()
+        for b in np.flatnonzero(dones):  # an ended row's move is to its final opening
+            end[b] = self._opening(infos[b]["terminal_observation"])
+        move = np.abs(end - self._last).sum(axis=1)
+        self._last = now
+        self._travel += float(move.sum())
+        self._steps += move.size
+        return obs, (rew - self.price * move).astype(np.float32), dones, infos
+
+    def ratio(self) -> float:
+        """Travel per second since the last call over the reference's (then restarts)."""
+        rate = self._travel / max(self._steps * self.dt, 1e-9)
+        self._travel, self._steps = 0.0, 0
+        return rate / self.reference_rate
+
+    def update(self, ratio: float | None = None, target: float = TARGET) -> tuple[float, float]:
+        """Move the price on ``ratio`` (default: the rollout's own travel since the last
+        update, :meth:`ratio`); (ratio, new price)."""
+        r = self.ratio() if ratio is None else float(ratio)
+        self.price = float(np.clip(self.price * np.exp(RATE * (r / target - 1.0)), PRICE_MIN,
+                                   PRICE_MAX))  # fmt: skip
+        return r, self.price
+
+
+def policy_travel(model: Any, max_move: float | None) -> float | None:
+    """Valve travel per control step of ``model``'s deterministic action along the states
+    of its rollout buffer (None without one): position actions move the valves by half
+    the change of the action (actions in [-1, 1]), incremental ones by ``max_move`` times
+    the action; a row's first step of an episode does not count."""
+    import torch
+
+    buf = getattr(model, "rollout_buffer", None)
+    if buf is None or not getattr(buf, "full", False):
+        return None
+    obs = buf.observations  # (steps, rows, n): the normalized observations acted on
+    with torch.no_grad():
+        x = torch.as_tensor(obs.reshape(-1, obs.shape[-1]), device=model.device)
+        a = model.policy._predict(x, deterministic=True).cpu().numpy()
+    a = np.clip(a.reshape(*obs.shape[:2], -1), -1.0, 1.0)
+    if max_move is not None:
+        return float(max_move * np.abs(a).sum(axis=-1).mean())
+    move = 0.5 * np.abs(np.diff(a, axis=0)).sum(axis=-1)  # (steps - 1, rows)
+    counts = buf.episode_starts[1:] == 0  # a move into a new episode is not a move
+    return float(move[counts].mean()) if counts.any() else 0.0
+
+
+def price_callback(wrapper: VecTravelPrice, log: list, max_move: float | None = None) -> Any:
+    """SB3 callback: at each rollout's end, :meth:`VecTravelPrice.update` on the travel of
+    the policy's deterministic action (:func:`policy_travel`; the rollout's own travel
+    where the algorithm keeps no rollout buffer), appending ``(timesteps, ratio of the
+    policy, ratio of the rollout, price)`` to ``log``."""
+    from stable_baselines3.common.callbacks import BaseCallback
+
+    class Price(BaseCallback):
+        def _on_step(self) -> bool:
+            return True
+
+        def _on_rollout_end(self) -> None:
+            rollout = wrapper.ratio()
+            per_step = policy_travel(self.model, max_move)
+            own = rollout if per_step is None else per_step / wrapper.dt / wrapper.reference_rate
+            r, p = wrapper.update(own)
+            log.append((self.num_timesteps, r, rollout, p))
+
+    return Price()
+
+
+__all__ = ["TARGET", "VecTravelPrice", "policy_travel", "price_callback"]

@@ -1,0 +1,193 @@
+"""The agents' settings from the plant's own time scale (agents/horizons.py), the
+observation that spans it (agents/wrappers.py: every signal's history, the load and
+setpoint rates) and the travel budget as a priced constraint (agents/travel_price.py)."""
+
+from __future__ import annotations
+
+import gymnasium as gym
+import numpy as np
+import pytest
+import yaml
+
+import steamtemp_gym
+from steamtemp_gym import plants
+from agents import horizons, train_config, training
+from agents.memory import MemoryConfig
+from agents.travel_price import PRICE_MAX, PRICE_MIN, TARGET, VecTravelPrice
+from agents.vec_env import NativeVecEnv
+from agents.wrappers import MemoryState
+from steamtemp_gym.scenarios import Scenario
+
+#: (dead time, time constant) in s at 50 % load, as docs/leaderboard.md lists them.
+DOCUMENTED = {
+    "steamtemp/SupercriticalFSH-v0": (53, 181),
+    "steamtemp/BensonSubcritical-v0": (55, 194),
+    "steamtemp/BoilerTurbineMIMO-v0": (47, 134),
+    "steamtemp/DrumBoilerSH-v0": (77, 251),
+    "steamtemp/Cascade300MW-v0": (113, 231),
+}
+ENV_ID = "steamtemp/SupercriticalFSH-v0"
+
+
+@pytest.mark.parametrize("env_id", steamtemp_gym.ENV_IDS)
+def test_time_scale_is_the_documented_step_response(env_id):
+    theta, tau = horizons.time_scale(env_id)
+    assert (round(theta), round(tau)) == DOCUMENTED[env_id]
+
+
+@pytest.mark.parametrize("env_id", steamtemp_gym.ENV_IDS)
+def test_discount_gae_and_history_follow_the_rules(env_id):
+    dt = plants.make(env_id).dt_s
+    theta, tau = horizons.time_scale(env_id)
+    gamma, lam = horizons.discount(env_id), horizons.gae_lambda(env_id)
+    assert dt / (1 - gamma) == pytest.approx(horizons.HORIZON_FACTOR * (theta + tau))
+    window = dt / (1 - gamma * lam)
+    assert window == pytest.approx(horizons.GAE_FACTOR * theta) or lam == horizons.GAE_LAMBDA_MAX
+    assert dt / (1 - gamma * lam) > theta  # the advantage sees a move's effect begin
+    stride = horizons.history_stride(env_id, 8)
+    assert abs(8 * stride * dt - (theta + tau)) <= 4 * stride * dt / 8 + dt
+    with pytest.raises(ValueError, match="history must be an integer >= 1"):
+        horizons.history_stride(env_id, 0)
+
+
+def test_shipped_ppo_entries_take_the_rules_values():
+    """The shipped PPO file (RL Zoo's format, so numbers) holds what the rules give."""
+    doc = yaml.safe_load((train_config.HYPERPARAMS / "ppo.yml").read_text())
+    for env_id, hp in doc.items():
+        assert hp["gamma"] == pytest.approx(horizons.discount(env_id), abs=5e-6), env_id
+        assert hp["gae_lambda"] == pytest.approx(horizons.gae_lambda(env_id), abs=5e-5), env_id
+        memory = hp["env_wrapper"][0]["agents.wrappers.ControllerMemory"]
+        assert memory["history_stride"] == horizons.history_stride(env_id, memory["history"])
+        assert memory["history_signals"] == "observation" and memory["rates"] is True
+
+
+# --------------------------------------------------------------------------- observation
+def test_history_of_every_signal_spans_its_stride():
+    env = gym.make(ENV_ID)
+    m = MemoryState(env, MemoryConfig(integral=False, history=2, history_stride=3,
+                                      history_signals="observation"))  # fmt: skip
+    assert m.n_extra == 2 * m.n_obs
+    seq = [np.full((1, m.n_obs), float(k)) for k in range(8)]
+    out = [m(o) for o in seq][-1]
+    np.testing.assert_array_equal(out[0, m.n_obs:].reshape(2, m.n_obs), [[4.0] * m.n_obs,
+                                                                        [1.0] * m.n_obs])
+
+
+def test_rates_are_the_filtered_per_minute_changes_of_load_and_setpoint():
+    env = gym.make(ENV_ID)
+    m = MemoryState(env, MemoryConfig(integral=False, history=0, rates=True, rate_filter_s=20.0))
+    assert m.n_extra == 2
+    i_load, i_sp = m.i_rate
+    dt = env.unwrapped.plant.dt_s
+    obs = np.zeros((1, m.n_obs))
+    out = m(obs.copy())
+    np.testing.assert_array_equal(out[0, -2:], [0.0, 0.0])  # a start has no rate
+    for _ in range(200):  # a ramp of 0.01 per step of the load's observation, setpoint held
+        obs[0, i_load] += 0.01
+        out = m(obs.copy())
+    assert out[0, -2] == pytest.approx(0.01 * 60.0 / dt, rel=1e-6)
+    assert out[0, -1] == 0.0
+    out = m(obs.copy(), restart=np.array([True]))
+    np.testing.assert_array_equal(out[0, -2:], [0.0, 0.0])
+
+
+@pytest.mark.parametrize(("kwargs", "match"), [
+    ({"history_signals": "all"}, "history_signals must be one of"),
+    ({"rates": 1}, "rates must be true or false"),
+    ({"rate_filter_s": 0.0}, "rate_filter_s must be a positive number"),
+])  # fmt: skip
+def test_bad_memory_options_are_refused(kwargs, match):
+    with pytest.raises(ValueError, match=match):
+        MemoryConfig(**kwargs)
+
+
+# --------------------------------------------------------------------------- travel price
+def _priced(price: float) -> tuple[VecTravelPrice, NativeVecEnv]:
+    base = NativeVecEnv(ENV_ID, 2, scenario=Scenario(name="short", duration_s=20.0))
+    return VecTravelPrice(base, base.venv, reference_rate=1e-3, price=price), base
+
+
+def test_price_charges_the_travel_and_measures_its_rate():
+    priced, base = _priced(2.0)
+    plain = NativeVecEnv(ENV_ID, 2, scenario=Scenario(name="short", duration_s=20.0))
+    for venv in (priced, plain):
+        venv.seed(0)
+        venv.reset()
+    opening = priced._opening(priced.reset())
+    plain.reset()
+    stroke = np.ones((2, 1))
+    r_priced = priced.step(stroke)[1]
+    obs, r_plain, _, _ = plain.step(stroke)
+    move = np.abs(priced._opening(obs) - opening).sum(axis=1)
+    assert np.all(move > 0)
+    np.testing.assert_allclose(r_priced, r_plain - 2.0 * move, rtol=1e-6)
+    dt = base.venv.unwrapped.plant.dt_s
+    assert priced.ratio() == pytest.approx(move.mean() / dt / 1e-3)
+    assert priced.ratio() == 0.0  # restarts
+
+
+def test_price_rises_over_the_target_and_falls_under_it_within_bounds():
+    priced, _ = _priced(1.0)
+    priced._travel, priced._steps = 2 * TARGET * 1e-3 * priced.dt * 10, 10
+    ratio, up = priced.update()
+    assert ratio == pytest.approx(2 * TARGET) and up > 1.0
+    priced._travel, priced._steps = 0.0, 10
+    _, down = priced.update()
+    assert down < up
+    for _ in range(100):
+        priced._travel, priced._steps = 0.0, 10
+        priced.update()
+    assert priced.price == PRICE_MIN
+
+
+@pytest.mark.parametrize("bad", [0.0, -1.0, PRICE_MAX * 2, "0.1", True, float("nan")])
+def test_bad_travel_price_is_a_config_error(tmp_path, bad):
+    path = tmp_path / "ppo.yml"
+    path.write_text(yaml.safe_dump({ENV_ID: {"policy": "MlpPolicy", "travel_price": bad}}))
+    with pytest.raises(train_config.ConfigError, match="travel_price"):
+        train_config.read_hyperparams(path, ENV_ID, "ppo")
+    with pytest.raises(ValueError, match="travel price must be in"):
+        _priced(bad if isinstance(bad, float) else -1.0)
+
+
+def test_training_env_with_a_price_needs_the_reference_rate(tmp_path):
+    path = tmp_path / "ppo.yml"
+    path.write_text(yaml.safe_dump({ENV_ID: {"policy": "MlpPolicy", "travel_price": 0.1}}))
+    hp = train_config.read_hyperparams(path, ENV_ID, "ppo")
+    with pytest.raises(train_config.ConfigError, match="reference's travel rate"):
+        training.make_training_env(ENV_ID, 2, 0, hp)
+    venv, _, price = training.make_training_env(ENV_ID, 2, 0, hp, reference_rate=1e-3)
+    assert price.price == 0.1 and PRICE_MIN <= price.price <= PRICE_MAX
+    venv.close()
+
+
+class _Policy:
+    """A policy whose deterministic action is its observation's first entry."""
+
+    def _predict(self, x, deterministic=True):
+        assert deterministic
+        return x[:, :1]
+
+
+class _Model:
+    def __init__(self, actions: np.ndarray, starts: np.ndarray) -> None:
+        import types
+
+        obs = np.concatenate([actions[..., None], np.zeros((*actions.shape, 2))], axis=-1)
+        self.rollout_buffer = types.SimpleNamespace(observations=obs.astype(np.float32),
+                                                    episode_starts=starts, full=True)  # fmt: skip
+        self.policy, self.device = _Policy(), "cpu"
+
+
+def test_policy_travel_is_the_deterministic_actions_travel_along_the_rollout():
+    from agents.travel_price import policy_travel
+
+    a = np.array([[0.0, 1.0], [0.5, 1.0], [-0.5, 3.0], [-0.5, 1.0]])  # (steps, rows)
+    starts = np.array([[1, 1], [0, 0], [0, 1], [0, 0]], dtype=np.float32)
+    # position: half the change of the (clipped) action, not across an episode start
+    want = np.mean([0.25, 0.5, 0.0, 0.0, 0.0])  # row 0: 0.25, 0.5, 0; row 1: 0, (start), 0
+    assert policy_travel(_Model(a, starts), None) == pytest.approx(want)
+    # incremental: max_move times the clipped action
+    assert policy_travel(_Model(a, starts), 0.05) == pytest.approx(0.05 * np.abs(
+        np.clip(a, -1, 1)).mean())  # fmt: skip
+    assert policy_travel(object(), None) is None  # no rollout buffer: the rollout's travel
