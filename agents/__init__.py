@@ -14,6 +14,17 @@ from pathlib import Path
 
 ZOO = Path(__file__).with_name("zoo")
 
+#: What kind of agent each algorithm's entry trains: the question "does RL beat the
+#: controllers" has one answer per kind.
+KINDS = {"ppo": "model-free", "sac": "model-free", "td3": "model-free",
+         "recurrentppo": "model-free", "sac_caps": "model-free",
+         "ppo_residual": "residual over cascade_pi_ff"}  # fmt: skip
+
+
+def kind(algo: str) -> str:
+    """The kind of agent ``algo`` trains (:data:`KINDS`); "trained agent" for another."""
+    return KINDS.get(algo, "trained agent")
+
 
 def shipped() -> list[tuple[str, str]]:
     """(env_id, algo) pairs of the shipped trained agents (a model .zip with its .json),

@@ -21,7 +21,8 @@ an incremental agent whose action is a valve move of at most ``max_move`` of str
 interval, agents/moves.py; reward options for the training envs only, e.g.
 ``{w_move: 1.0}`` to charge valve travel more while learning, steamtemp_gym/rewards.py;
 ``plant_randomization``: the training envs' option of that name, a plant drawn per episode,
-docs/robustness.md; such entries are not for RL Zoo). Every other key
+docs/robustness.md; ``travel_price``: the starting price of the valve-travel constraint,
+agents/travel_price.py; such entries are not for RL Zoo). Every other key
 must be an argument of the algorithm's constructor. All input is checked before training
 starts. Validation, the leaderboard and every score use the env's default reward.
 
@@ -30,10 +31,11 @@ Training runs on the ``random`` scenario distribution through the native vector 
 eighth of the budget (and at a --max-minutes stop) the agent is evaluated (agents.evaluation) on
 ``random`` validation episodes with seeds from :data:`VALIDATION_SEED` (training envs
 use ``--seed`` + i: never the same draws; never the leaderboard's scenarios); the best
-one is kept: the highest validation return among the checkpoints within the leaderboard's
-valve-travel budget (mean travel at most ``agents.stats.TRAVEL_BUDGET`` times
-``cascade_pi_ff``'s on the same validation episodes), or, if none is, the one of least
-travel. Output in ``--out``: ``<env>__<algo>.zip`` (the best SB3 model) and
+one is kept: the highest validation return among the checkpoints within the tuned
+baselines' margin under the leaderboard's valve-travel budget (mean travel at most
+``agents.tuning_terms.TUNING_TRAVEL_BUDGET`` = 1.7 times ``cascade_pi_ff``'s on the same
+validation episodes), or, if none is, the one of least travel. With ``--max-minutes`` the
+agent is also validated at every eighth of that time. Output in ``--out``: ``<env>__<algo>.zip`` (the best SB3 model) and
 ``<env>__<algo>.json`` (env id, package version, git revision, hyperparameters, seed,
 timesteps, wall time, the validation curve and score, the normalization statistics and
 the wrapper config: everything ``agents.load`` needs).

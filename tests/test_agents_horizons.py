@@ -50,9 +50,9 @@ def test_discount_gae_and_history_follow_the_rules(env_id):
         horizons.history_stride(env_id, 0)
 
 
-def test_shipped_ppo_entries_take_the_rules_values():
-    """The shipped PPO file (RL Zoo's format, so numbers) holds what the rules give."""
-    doc = yaml.safe_load((train_config.HYPERPARAMS / "ppo.yml").read_text())
+def test_candidate_ppo_entries_take_the_rules_values():
+    """The candidate PPO file (RL Zoo's format, so numbers) holds what the rules give."""
+    doc = yaml.safe_load((train_config.HYPERPARAMS / "candidates" / "ppo_horizons.yml").read_text())
     for env_id, hp in doc.items():
         assert hp["gamma"] == pytest.approx(horizons.discount(env_id), abs=5e-6), env_id
         assert hp["gae_lambda"] == pytest.approx(horizons.gae_lambda(env_id), abs=5e-5), env_id

@@ -28,6 +28,13 @@ def test_every_plant_has_a_shipped_agent_with_three_training_runs(env_id):
     assert all(agents.runs(env_id, a) == [0, 1, 2] for a in algos)
 
 
+def test_every_algorithm_says_what_kind_of_agent_it_trains():
+    assert set(agents.KINDS) == set(train_config.ALGOS)
+    assert {agents.kind(a) for _, a in agents.shipped()} <= set(agents.KINDS.values())
+    assert agents.kind("ppo_residual").startswith("residual over ")
+    assert agents.kind("my_algo") == "trained agent"
+
+
 @pytest.mark.parametrize(("env_id", "algo"), agents.shipped())
 def test_shipped_agent_runs_a_named_scenario_deterministically(env_id, algo):
     meta = json.loads(files.steamtemp_paths(agents.ZOO, env_id, algo)[1].read_text())
