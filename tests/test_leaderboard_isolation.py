@@ -96,6 +96,21 @@ def cheat(env):
 
 def my_lqi(env):
     return baselines.make("lqi", env)
+
+
+class _Exits:
+    def __reduce__(self):  # unpickled where it is received: sys.exit(7) there
+        return (sys.exit, (7,))
+
+
+class Smuggler(Scripted):
+    def predict(self, observation, state=None, episode_start=None, deterministic=True):
+        return super().predict(observation)[0], _Exits()
+
+
+def smuggler(env):
+    '''Answers predict with a state that would end the process unpickling it.'''
+    return Smuggler(env)
 """
 
 
@@ -228,6 +243,53 @@ def test_baselines_commission_alike_on_an_env_of_their_own(name):
         assert a["metrics"] == b["metrics"]
         for k in a["trace"]:
             np.testing.assert_array_equal(a["trace"][k], b["trace"][k], err_msg=f"{name} {k}")
+
+
+def test_an_answer_that_would_run_code_when_unpickled_fails_the_policy(files, tmp_path, capsys):
+    """An answer whose unpickling would call sys.exit in the leaderboard's process (ended
+    the run with status 7, silently, without the other rows) fails that policy's episodes."""
+    out = tmp_path / "out"
+    with pytest.raises(SystemExit) as exc:
+        lb.main(_argv(files, out, ["cascade_pi", "smuggler"], "0"))
+    assert exc.value.code == 1
+    rows = _rows(out)
+    assert len(rows) == 4 and rows["cascade_pi", 0]["metrics"] is not None
+    assert "it names sys.exit (in its predict)" in rows["smuggler", 0]["error"]
+    assert "1 of 4 episodes failed" in capsys.readouterr().err
+
+
+def test_answers_read_numbers_strings_containers_and_arrays_only(tmp_path):
+    """read_answer builds what actions, states and failures are made of, bit for bit, and
+    refuses any other global before anything of the policy's choosing runs."""
+    import pickle
+    from multiprocessing.reduction import ForkingPickler
+
+    def dumps(obj):
+        return bytes(ForkingPickler.dumps(obj))
+
+    a = np.array([[0.25], [-1.0]], dtype=np.float32)
+    state = (np.zeros((1, 2, 3)), {"h": [np.float64(1.5), 2, "x", None]})
+    kind, (got, got_state) = isolated.read_answer(dumps(("ok", (a, state))))
+    assert kind == "ok" and got.dtype == a.dtype and np.array_equal(got, a)
+    assert np.array_equal(got_state[0], state[0]) and got_state[1] == state[1]
+    assert isolated.read_answer(dumps(("error", ("m", "tb")))) == ("error", ("m", "tb"))
+    flag = tmp_path / "ran"
+    payload = (exec, (f"open({str(flag)!r}, 'w').close()",))
+
+    class Runs:
+        def __reduce__(self):
+            return payload
+
+    for bad, words in [(("ok", (a, Runs())), "names builtins.exec"),
+                       (("ok", np.array([Runs()], dtype=object)), "names builtins.exec"),
+                       (("ok", np.ma.masked_array([1.0])), "names numpy.ma"),
+                       (("error", 5), "another form"), (["ok", None], "another form")]:  # fmt: skip
+        with pytest.raises(ValueError, match=words):
+            isolated.read_answer(dumps(bad))
+    with pytest.raises(ValueError, match="cannot cross"):
+        isolated.read_answer(b"not a pickle")
+    assert not flag.exists()
+    assert pickle.loads(dumps(Runs())) is None and flag.exists()  # the payload does run
 
 
 def test_policy_process_answers_bit_for_bit():

@@ -13,13 +13,19 @@ episode's time (``--episode-timeout``) ends the process (:class:`PolicyTimeout`)
 and SIGTERM stop the leaderboard, and the policy's process ends with it.
 
 The actions cross the pipe pickled, bit for bit: a policy scores the same here as in the
-leaderboard's own process (tests/test_leaderboard_isolation.py).
+leaderboard's own process (tests/test_leaderboard_isolation.py). The leaderboard unpickles
+an answer with :class:`_AnswerUnpickler`, which builds numbers, strings, containers and
+numpy arrays only: an answer that would run code in the leaderboard's process when
+unpickled (an object whose ``__reduce__`` names ``sys.exit`` or ``exec``) fails the
+policy's episodes instead.
 """
 
 from __future__ import annotations
 
 import importlib
+import io
 import os
+import pickle
 import signal
 import sys
 import threading
@@ -47,6 +53,49 @@ class PolicyFailed(Exception):
 
 class PolicyTimeout(PolicyFailed):
     """The policy did not answer within its episodes' time (``--episode-timeout``)."""
+
+
+#: The only globals an answer from a policy's process may name when unpickled: what numpy
+#: arrays, scalars and dtypes pickle to (numpy 1 and 2 module names).
+_ANSWER_GLOBALS = frozenset(
+    [(m, n) for m in ("numpy.core.multiarray", "numpy._core.multiarray")
+     for n in ("_reconstruct", "scalar")]
+    + [(m, "_frombuffer") for m in ("numpy.core.numeric", "numpy._core.numeric")]
+    + [("numpy", "ndarray"), ("numpy", "dtype")]
+)  # fmt: skip
+
+
+class _AnswerUnpickler(pickle.Unpickler):
+    """Unpickles numbers, strings, containers and numpy arrays; refuses any other global
+    (a class or callable of the policy's choosing would run in this process)."""
+
+    def find_class(self, module: str, name: str) -> Any:
+        if (module, name) not in _ANSWER_GLOBALS:
+            raise pickle.UnpicklingError(f"it names {module}.{name}")
+        return super().find_class(module, name)
+
+
+def read_answer(data: bytes) -> tuple[str, Any]:
+    """A policy process's answer ``("ok", value)`` or ``("error", (message, traceback))``
+    from its pickled bytes, built by :class:`_AnswerUnpickler`.
+
+    Raises:
+        ValueError: the bytes name another global, do not unpickle, or are not such an
+            answer; nothing of the policy's choosing has run.
+    """
+    try:
+        answer = _AnswerUnpickler(io.BytesIO(data)).load()
+    except Exception as exc:  # noqa: BLE001 - any malformed pickle
+        raise ValueError("the policy's answer cannot cross from its process (numbers, strings, "
+                         f"containers and numpy arrays only): {exc}") from None  # fmt: skip
+    ok = isinstance(answer, tuple) and len(answer) == 2 and answer[0] in ("ok", "error")
+    if ok and answer[0] == "error":
+        v = answer[1]
+        ok = isinstance(v, tuple) and len(v) == 2 and all(isinstance(x, str) for x in v)
+    if not ok:
+        raise ValueError(f"the policy's process sent an answer of another form: "
+                         f"{type(answer).__name__}")  # fmt: skip
+    return answer
 
 
 def start_method() -> str:
@@ -138,13 +187,18 @@ class PolicyProcess:
                 raise PolicyTimeout(f"timed out: the policy did not answer its {what} within "
                                     f"{limit:g} s{n} (--episode-timeout {self.timeout:g}); its "
                                     "process was ended")  # fmt: skip
-            kind, value = self._conn.recv()
+            data = self._conn.recv_bytes()
         except (EOFError, OSError):
             self._proc.join(5)
             code = self._proc.exitcode
             self.close()
             raise PolicyFailed(f"the policy's process ended (exit code {code}) during its "
                                f"{what}") from None  # fmt: skip
+        try:
+            kind, value = read_answer(data)
+        except ValueError as exc:
+            self.close()
+            raise PolicyFailed(f"{exc} (in its {what})") from None
         if kind == "error":
             self.close()
             raise PolicyFailed(*value)
