@@ -197,6 +197,9 @@ def _corruptions(snap, env_id: str) -> list[tuple[str, dict, str]]:
     other_params = plant_class(env_id).Params(**variant)
     mt = np.random.MT19937(0).state
     bad_pcg = {**snap.rng_states[0], "state": {"state": "x", "inc": 1}}
+    forged, listed = (dataclasses.replace(snap.scenarios[0]) for _ in range(2))
+    object.__setattr__(forged, "load", None)  # past the frozen dataclass's checks
+    object.__setattr__(listed, "load", [list(p) for p in listed.load])
     return [
         ("plant_id", {"plant_id": "steamtemp/Other-v0"}, "Other-v0"),
         ("plant_id type", {"plant_id": 7}, "snapshot of 7"),
@@ -226,6 +229,8 @@ def _corruptions(snap, env_id: str) -> list[tuple[str, dict, str]]:
         ("scenarios short", {"scenarios": ()}, "scenarios"),
         ("scenarios long", {"scenarios": snap.scenarios * 2}, "scenarios"),
         ("scenarios a str", {"scenarios": "setpoint_step"}, "scenarios"),
+        ("scenarios forged", {"scenarios": (forged,) * n}, r"scenarios\[0\].*not a valid"),
+        ("scenarios listed", {"scenarios": (listed,) * n}, r"scenarios\[0\].*other types"),
         ("rng_states kind", {"rng_states": ({"bit_generator": "MT19937"},) * n}, "rng_states"),
         ("rng_states MT19937", {"rng_states": (mt,) * n}, r"rng_states\[0\].*PCG64"),
         ("rng_states PCG64 bad", {"rng_states": (bad_pcg,) * n}, r"rng_states\[0\]"),

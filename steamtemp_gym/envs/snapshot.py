@@ -237,6 +237,13 @@ def _check_fields(core: Any, snap: Snapshot) -> int:
         if not isinstance(s, sc.Scenario):
             raise ValueError(f"snapshot's scenarios[{i}] must be a Scenario, got "
                              f"{type(s).__name__} {str(s)[:60]!r}")  # fmt: skip
+        try:  # its fields as construction checks them (a frozen one can be forged)
+            valid = dataclasses.replace(s) == s
+        except (ValueError, TypeError) as exc:
+            raise ValueError(f"snapshot's scenarios[{i}] is not a valid Scenario: {exc}") from None
+        if not valid:
+            raise ValueError(f"snapshot's scenarios[{i}] holds fields of other types than a "
+                             "Scenario's")  # fmt: skip
     for i, state in enumerate(sequence("rng_states")):
         if not isinstance(state, dict):
             raise ValueError(f"snapshot's rng_states[{i}] must be a dict "
