@@ -134,32 +134,6 @@ def run_unit(u: Unit) -> tuple[list[dict], dict | None]:
         if seed == u.trace_seed:
             trace = res["trace"]
     return rows, trace
-    env = make_env(u.env_id, u.scenario, **plant)
-    policy = None
-    if not own:
-        try:
-            model = make_env(u.env_id, u.scenario) if plant else env
-            policy = _make_policy(u.policy, u.env_id, model)
-        except Exception as exc:  # noqa: BLE001 - every seed of it fails alike
-            policy = exc
-    rows = []
-    for seed in u.seeds:
-        try:
-            if isinstance(policy, Exception):
-                raise policy
-            if own:  # a new process each episode: a failure ends it
-                with PolicyProcess(u.policy, u.env_id, u.scenario, None, u.imports,
-                                   u.timeout) as alone:  # fmt: skip
-                    res = run_episode(env, alone, seed)
-            else:
-                res = run_episode(env, policy, seed)
-        except Exception as exc:  # noqa: BLE001 - recorded; the run goes on
-            rows.append(_error_row((u.env_id, u.spec, u.policy, seed), u.fingerprint, exc))
-            continue
-        rows.append(_ok_row(u, seed, res["metrics"]))
-        if seed == u.trace_seed:
-            trace = res["trace"]
-    return rows, trace
 
 
 def _error_row(key: Key, fp: str, exc: BaseException) -> dict:
