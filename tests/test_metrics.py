@@ -488,3 +488,33 @@ def test_quiet_peak_to_peak_does_not_apply_to_a_short_stretch():
     assert np.isfinite(metrics.quiet_peak_to_peak(t, e, 3600.0 - 700.0))
     with pytest.raises(ValueError, match="finite"):
         metrics.quiet_peak_to_peak(t, e, float("nan"))
+
+
+def _frac_above_numpy(a: NDArray[np.float64], c: NDArray[np.float64], level: float,
+                      inclusive: bool) -> NDArray[np.float64]:  # fmt: skip
+    """The fraction above ``level`` of each linear segment, in numpy (the reference)."""
+    d = c - a
+    flat = d == 0.0
+    with np.errstate(over="ignore", divide="ignore", invalid="ignore"):
+        s = (level - a) / np.where(flat, 1.0, d)
+    on_flat = (a >= level) if inclusive else (a > level)
+    crossed = np.where(d > 0.0, np.clip(1.0 - s, 0.0, 1.0), np.clip(s, 0.0, 1.0))
+    return np.where(flat, on_flat.astype(float), crossed)
+
+
+def test_compiled_band_fractions_equal_the_numpy_formula_bit_for_bit() -> None:
+    """The compiled per-interval fractions (which the env's cost reads too) give the bits
+    of the numpy formula, signed zeros, denormal slopes and segments on a level included."""
+    from steamtemp_gym.metrics.calculus import _frac_above, _frac_outside
+
+    edge = np.array([5.0, -5.0, 0.0, -0.0, 1e-310, -1e-310, 5 + 1e-15, 5 - 1e-15, 1e300, 0.995])
+    a, c = (x.ravel() for x in np.meshgrid(edge, edge))
+    e = np.random.default_rng(0).normal(0.0, 8.0, 20_000)
+    for e0, e1 in ((a, c), (e[:-1], e[1:])):
+        for level in (5.0, 8.0, 0.995, -0.005, 0.0):
+            for inclusive in (False, True):
+                want = _frac_above_numpy(e0, e1, level, inclusive)
+                got = _frac_above(e0, e1, level, inclusive=inclusive)
+                assert np.array_equal(got.view(np.int64), want.view(np.int64))
+        want = _frac_above_numpy(e0, e1, 5.0, False) + _frac_above_numpy(-e0, -e1, 5.0, False)
+        assert np.array_equal(_frac_outside(e0, e1, 5.0).view(np.int64), want.view(np.int64))

@@ -8,6 +8,8 @@ import math
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from steamtemp_gym._jit import njit
+
 # --------------------------------------------------------------------------- validation
 
 
@@ -46,22 +48,70 @@ def _as_signal(x: ArrayLike, name: str, n: int, allow_2d: bool = False) -> NDArr
 # --------------------------------------------------------------- piecewise-linear calculus
 
 
+@njit(cache=True, error_model="numpy")
+def frac_above(a: float, c: float, level: float, inclusive: bool) -> float:
+    """Fraction of one sample interval where the linear segment from ``a`` to ``c`` exceeds
+    ``level``, in [0, 1] (the first-order-hold convention of :mod:`steamtemp_gym.metrics`).
+
+    ``inclusive`` only matters for a segment lying exactly on the level. The crossing is
+    clipped to [0, 1] as ``numpy.clip`` (2.x) does, keeping the sign of a zero, so the
+    metrics give the same bits as before they were compiled, alone, over arrays or inside
+    the env's step.
+    """
+    d = c - a
+    if d == 0.0:
+        return 1.0 if (a >= level if inclusive else a > level) else 0.0
+    s = (level - a) / d  # parameter in [0, 1] where the segment meets the level
+    x = 1.0 - s if d > 0.0 else s  # rising: the part after the crossing; falling: before
+    x = 0.0 if x < 0.0 else x  # a denormal slope gives +-inf: clipped here
+    return 1.0 if x > 1.0 else x
+
+
+@njit(cache=True, error_model="numpy")
+def frac_outside(e0: float, e1: float, band: float) -> float:
+    """Fraction of one sample interval where the linear segment from ``e0`` to ``e1`` lies
+    outside ``[-band, band]``: the integrand of ``time_outside_<band>K_s``, which the env's
+    constraint cost (``envs/cost.py``) reads per control interval."""
+    return frac_above(e0, e1, band, False) + frac_above(-e0, -e1, band, False)
+
+
+@njit(cache=True, error_model="numpy")
+def _frac_above_rows(a, c, level, inclusive, out):
+    """``out[i] = frac_above(a[i], c[i], level, inclusive)`` over flat arrays."""
+    for i in range(a.shape[0]):
+        out[i] = frac_above(a[i], c[i], level, inclusive)
+
+
+@njit(cache=True, error_model="numpy")
+def _frac_outside_rows(e0, e1, band, out):
+    """``out[i] = frac_outside(e0[i], e1[i], band)`` over flat arrays."""
+    for i in range(e0.shape[0]):
+        out[i] = frac_outside(e0[i], e1[i], band)
+
+
+def _flat_pair(a: ArrayLike, c: ArrayLike) -> tuple[NDArray[np.float64], ...]:
+    """Contiguous float64 copies or views of two arrays of one shape, flattened."""
+    a = np.ascontiguousarray(a, dtype=np.float64)
+    c = np.ascontiguousarray(c, dtype=np.float64)
+    return a.reshape(-1), c.reshape(-1)
+
+
 def _frac_above(
     a: NDArray[np.float64], c: NDArray[np.float64], level: float, *, inclusive: bool
 ) -> NDArray[np.float64]:
-    """Fraction of each interval where the linear segment from ``a`` to ``c`` exceeds ``level``.
+    """:func:`frac_above` of each interval of the arrays ``a`` and ``c`` (the same shape)."""
+    out = np.empty(np.shape(a))
+    _frac_above_rows(*_flat_pair(a, c), float(level), bool(inclusive), out.reshape(-1))
+    return out
 
-    ``inclusive`` only matters for segments lying exactly on the level.
-    """
-    d = c - a
-    flat = d == 0.0
-    safe_d = np.where(flat, 1.0, d)
-    with np.errstate(over="ignore"):  # a denormal slope gives +-inf: clipped below
-        s = (level - a) / safe_d  # parameter in [0, 1] where the segment meets the level
-    rising = np.clip(1.0 - s, 0.0, 1.0)
-    falling = np.clip(s, 0.0, 1.0)
-    on_flat = (a >= level) if inclusive else (a > level)
-    return np.where(flat, on_flat.astype(float), np.where(d > 0.0, rising, falling))
+
+def _frac_outside(
+    e0: NDArray[np.float64], e1: NDArray[np.float64], band: float
+) -> NDArray[np.float64]:
+    """:func:`frac_outside` of each interval of the arrays ``e0`` and ``e1`` (one shape)."""
+    out = np.empty(np.shape(e0))
+    _frac_outside_rows(*_flat_pair(e0, e1), float(band), out.reshape(-1))
+    return out
 
 
 def _integral_abs(e: NDArray[np.float64], dt: NDArray[np.float64]) -> float:

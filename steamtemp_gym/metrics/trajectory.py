@@ -13,6 +13,7 @@ from steamtemp_gym.metrics.calculus import (
     _as_time,
     _first_crossing,
     _frac_above,
+    _frac_outside,
     _integral_abs,
     _integral_sq,
     _trapezoid,
@@ -245,7 +246,7 @@ def _deviation_metrics(
         "mean_dev_K": _trapezoid(e, dt) / duration,
     }
     for b in bands:
-        frac = _frac_above(e0, e1, b, inclusive=False) + _frac_above(-e0, -e1, b, inclusive=False)
+        frac = _frac_outside(e0, e1, b)
         out[_band_key(b)] = float(np.sum(frac * dt))
     return out
 
