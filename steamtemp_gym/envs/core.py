@@ -14,6 +14,7 @@ import numpy as np
 from steamtemp_gym import scenarios as sc
 from steamtemp_gym._jit import entry_point
 from steamtemp_gym.checks import is_real
+from steamtemp_gym.envs.cost import COST_DOC, COST_KEYS
 from steamtemp_gym.envs.kernels import (
     ADVANCE_ROWS,
     E_NOISE,
@@ -44,7 +45,7 @@ _TRIP_NAMES = np.array(TRIP_REASONS)
 #: starts as a disturbance nobody can correct.
 START_BAND_K = 5.0
 #: The values every info carries after the plant's own outputs (Core.info's last columns).
-INFO_TAIL = ("measured_temp_C", "time_s", "setpoint_C", "load", "spray_flow_kg_s")
+INFO_TAIL = ("measured_temp_C", "time_s", "setpoint_C", "load", "spray_flow_kg_s", *COST_KEYS)
 #: Unit and meaning of the info values every plant has (the others are plant outputs).
 INFO_DOC = {
     "outlet_temp_C": ("C", "true main-steam temperature (the trip band applies to it)"),
@@ -58,6 +59,7 @@ INFO_DOC = {
     "spray_flow_kg_s": ("kg/s", "total spray-water flow of every attemperator"),
     "trip_reason": ("", "why the episode terminated: '' or one of "
                         + ", ".join(repr(r) for r in TRIP_REASONS[1:])),
+    **COST_DOC,
 }  # fmt: skip
 
 
@@ -315,7 +317,8 @@ class Core:
 
     def _fill_info_args(self, b: int) -> tuple:
         """The arguments of ``fill_info`` for row b."""
-        return (b, self.Z, *self._info_idx, self.meas, self.ep, self.sp, self.D, self.info)
+        # cost 0: the info of a reset closes no control interval
+        return (b, self.Z, *self._info_idx, self.meas, self.ep, self.sp, self.D, 0.0, self.info)
 
     def _schedules_args(self, b: int) -> tuple:
         """The arguments of ``schedules`` for row b at t = 0."""

@@ -28,6 +28,7 @@ import numpy as np
 
 from steamtemp_gym import scenarios as sc
 from steamtemp_gym._jit import njit
+from steamtemp_gym.envs.cost import interval_cost
 from steamtemp_gym.plants.base import D_FOULING, D_HEAT_BIAS, D_LOAD, D_LOAD_RATE, D_SPRAY_T
 from steamtemp_gym.rewards import N_WEIGHTS, non_finite_reward, row_reward
 from steamtemp_gym.rng import gauss
@@ -148,7 +149,8 @@ def advance(X, Z, U, U_prev, slot, bp_t, bp_v, bp_n, ep, ou, key, counter, ints,
         cfg: The scalars of :data:`CFG`, the reward weights, the secondary setpoints.
         meas: (B,) written: the outlet thermocouple's reading (noise included).
         out: (B, 3) written: [reward, trip code (TRIP_REASONS index; 0: running), truncated].
-        info: (B, n_info + 5) written: the row's info values (:func:`fill_info`).
+        info: (B, n_info + len(INFO_TAIL)) written: the row's info values (:func:`fill_info`),
+            the previous error read from it first for the interval's cost (envs/cost.py).
     """
     i_out, i_meas, i_design = ints[H.outlet], ints[H.measured], ints[H.design_spray]
     obs_idx = ints[ints[H.obs] : ints[H.valves]]
@@ -166,7 +168,9 @@ def advance(X, Z, U, U_prev, slot, bp_t, bp_v, bp_n, ep, ou, key, counter, ints,
             ou[b] = ep[b, E_OU_A] * ou[b] + ep[b, E_OU_B] * gauss(key[b], counter[b], OU_CHANNEL)
         schedules(b, slot[b], ep[b, E_TIME], bp_t, bp_v, bp_n, sp_nom, ou, D, sp)
         observe(b, Z, obs_idx, obs_cs, i_meas, key, counter, ep[b, E_NOISE], sp, D, obs, meas)
-        fill_info(b, Z, info_idx, s_idx, meas, ep, sp, D, info)
+        # the cost of the interval from the last info's error to this step's (envs/cost.py)
+        cost = interval_cost(_info_error(b, info, info_idx.shape[0]), Z[b, i_out] - sp[b])
+        fill_info(b, Z, info_idx, s_idx, meas, ep, sp, D, cost, info)
         e = sp[b] - Z[b, i_out]
         code = TRIP_ABOVE if e < -trip_hi else (TRIP_BELOW if e > trip_lo else 0)
         if not (_finite(X, b) and _finite(Z, b)):
@@ -198,9 +202,10 @@ def _finite(A, b):
 
 
 @njit(cache=True, error_model="numpy")
-def fill_info(b, Z, cols, sprays, meas, ep, sp, D, info):
+def fill_info(b, Z, cols, sprays, meas, ep, sp, D, cost, info):
     """Fill info[b]: Z's columns ``cols`` of row b, then (:data:`INFO_TAIL`) the measured
-    temperature, time, setpoint, load and the sum of the spray columns ``sprays``."""
+    temperature, time, setpoint, load, the sum of the spray columns ``sprays`` and the
+    interval's ``cost`` twice (the total and its one component, envs/cost.py)."""
     k = cols.shape[0]
     for j in range(k):
         info[b, j] = Z[b, cols[j]]
@@ -212,6 +217,15 @@ def fill_info(b, Z, cols, sprays, meas, ep, sp, D, info):
     for j in range(sprays.shape[0]):
         spray += Z[b, sprays[j]]
     info[b, k + 4] = spray
+    info[b, k + 5] = cost
+    info[b, k + 6] = cost
+
+
+@njit(cache=True, error_model="numpy")
+def _info_error(b, info, k):
+    """``outlet_temp_C - setpoint_C`` of row b's info (k: the number of plant columns; the
+    first is the outlet, core.info_sources), the error :func:`fill_info` last wrote."""
+    return info[b, 0] - info[b, k + 2]
 
 
 @njit(cache=True, error_model="numpy")

@@ -6,7 +6,8 @@ them), the setpoint, the control error and the load demand, each normalized as
 (opening (a + 1)/2). Reward: rewards.py. ``terminated`` when the true outlet
 temperature leaves the plant's trip band (``plant.trip_band_K`` around the
 setpoint: superheater/turbine protection); ``truncated`` at the end of the
-scenario. ``info`` carries physical values in engineering units.
+scenario. ``info`` carries physical values in engineering units and the constraint
+cost of safe RL (``info["cost"]``, envs/cost.py).
 """
 
 from __future__ import annotations
@@ -21,6 +22,7 @@ from steamtemp_gym.checks import key_list
 from steamtemp_gym.envs import options as opts
 from steamtemp_gym.envs import snapshot as snap_
 from steamtemp_gym.envs.core import Core, check_action
+from steamtemp_gym.envs.cost import cost_limit
 from steamtemp_gym.signals import OBS_LIMIT
 
 
@@ -100,6 +102,18 @@ class SteamTempEnv(gym.Env):
     def scenario(self) -> sc.Scenario | None:
         """The scenario of the current episode."""
         return self.core.scenario[0]
+
+    @property
+    def cost_limit(self) -> float:
+        """The default limit of the current episode's summed ``info["cost"]``
+        (envs/cost.py, docs/safe_rl.md).
+
+        Raises:
+            ValueError: no reset() yet.
+        """
+        if self.core.scenario[0] is None:
+            raise ValueError("call reset() before cost_limit (it depends on the scenario)")
+        return cost_limit(self.core.scenario[0], self.plant.dt_s)
 
     def reset(self, *, seed: int | None = None, options: dict | None = None):
         """Start an episode (module docstring); all or nothing: if it cannot start (a

@@ -35,6 +35,7 @@ from steamtemp_gym.checks import is_integer
 from steamtemp_gym.envs import options as opts
 from steamtemp_gym.envs import snapshot as snap_
 from steamtemp_gym.envs.core import check_action
+from steamtemp_gym.envs.cost import cost_limit
 from steamtemp_gym.envs.steam_temp_env import draw_episode, scenario_option, spaces
 
 #: No rows (the usual case of rows that ended last step).
@@ -260,6 +261,18 @@ class SteamTempVectorEnv(VectorEnv):
             raise ValueError("before the first reset() restore must cover every sub-env")
         snap_.put(self.core, snapshot, plan, self._rngs, self._autoreset)
         self._started = True
+
+    @property
+    def cost_limit(self) -> np.ndarray:
+        """The default limit of each sub-env's current episode's summed ``info["cost"]``,
+        shape (num_envs,) (envs/cost.py, docs/safe_rl.md).
+
+        Raises:
+            ValueError: no reset() yet.
+        """
+        if not self._started:
+            raise ValueError("call reset() before cost_limit (it depends on the scenarios)")
+        return np.array([cost_limit(s, self.plant.dt_s) for s in self.core.scenario])
 
     @property
     def observations(self) -> np.ndarray:
