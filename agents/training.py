@@ -35,7 +35,7 @@ def _schedule(value: Any):
     return value
 
 
-def _git_revision() -> str:
+def git_revision() -> str:
     try:
         done = subprocess.run(["git", "rev-parse", "HEAD"], cwd=Path(__file__).parent,
                               capture_output=True, text=True, check=True)  # fmt: skip
@@ -294,7 +294,7 @@ def train(env_id: str, algo: str, hyperparams: Path | None = None, timesteps: in
     out.mkdir(parents=True, exist_ok=True)
     name = stem(env_id, algo, run)
     model_path, meta_path = steamtemp_paths(out, env_id, algo, run)
-    revision = _git_revision()  # the code this run trains with
+    revision = git_revision()  # the code this run trains with
     t0 = time.monotonic()
     curve: list[dict[str, Any]] = []
     best: dict[str, Any] = {}

@@ -282,6 +282,13 @@ def fingerprint(env_id: str, scenario: Any, policy_digest: str, source_digest: s
     return hashlib.sha256(text.encode()).hexdigest()[:16]
 
 
+def episode_fingerprint(env_id: str, scenario: str, name: str) -> str:
+    """The fingerprint :func:`build_plan` gives the episodes of policy ``name`` on the
+    nominal plant of ``env_id`` under ``scenario`` (a name as ``--scenarios`` takes it)."""
+    return fingerprint(env_id, _resolve(scenario, env_id), _policy_digest(env_id, name),
+                       specs.source_digest(env_id))  # fmt: skip
+
+
 def build_plan(ap: argparse.ArgumentParser, args: argparse.Namespace) -> Plan:
     """Check every flag (argparse errors, exit code 2) and build the envs; runs nothing."""
     imports = tuple(getattr(args, "modules", None) or ())

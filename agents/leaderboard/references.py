@@ -33,6 +33,7 @@ import numpy as np
 
 from agents.leaderboard import summary
 from agents.leaderboard.records import EPISODES, Key, dumps, read_record
+from steamtemp_gym import scenarios
 
 #: The policies whose episodes are stored: the score's 0 and its 1.
 POLICIES = (summary.ZERO, summary.ONE)
@@ -76,6 +77,36 @@ def matching(plan: Any, stored: dict[tuple[Key, str], dict] | None = None
         else:
             rows.append(row)
     return rows, stale
+
+
+def returns(env_id: str, scenario: str, policy: str, seeds: list[int],
+            stored: dict[tuple[Key, str], dict] | None = None) -> tuple[np.ndarray, int]:
+    """(returns, taken): the episode returns of ``policy`` (``cascade_pi_ff`` or ``oracle``)
+    on ``env_id``'s ``scenario`` for ``seeds``, in order, as a leaderboard run gets them: the
+    stored row where its fingerprint is the current code's, else the episode run now as the
+    leaderboard runs it (agents/leaderboard/episodes.py); ``taken``: how many were stored.
+
+    Raises:
+        ValueError: a policy that is not one of :data:`POLICIES`.
+        RuntimeError: an episode run now failed (naming it and why).
+    """
+    if policy not in POLICIES:
+        raise ValueError(f"stored references are of {POLICIES}, not {policy!r}")
+    from agents.leaderboard import episodes, plan
+
+    fp = plan.episode_fingerprint(env_id, scenario, policy)
+    stored = load() if stored is None else stored
+    rows = {s: stored.get(((env_id, scenario, policy, s), fp)) for s in seeds}
+    missing = [s for s in seeds if rows[s] is None]
+    if missing:
+        unit = episodes.Unit(env_id, scenario, scenarios.resolve(scenario, env_id), policy,
+                             missing, fp, None)  # fmt: skip
+        for row in episodes.run_unit(unit)[0]:
+            if row.get("error"):
+                raise RuntimeError(f"{policy} on {env_id} {scenario} seed {row['seed']}: "
+                                   f"{row['error']}")  # fmt: skip
+            rows[row["seed"]] = row
+    return np.array([rows[s]["metrics"]["return"] for s in seeds]), len(seeds) - len(missing)
 
 
 def trace(key: Key, fingerprint: str, path: Path = TRACES) -> dict[str, np.ndarray] | None:
