@@ -1,0 +1,331 @@
+"""Offline RL datasets in Minari's format: episodes of a policy on a plant's ``random``
+training distribution, with the leaderboard's score ends as the reference scores.
+
+``python -m agents.datasets --env SupercriticalFSH-v0 --policy mpc_linear --episodes 20``
+records 20 episodes (seeds ``--seed`` .. ``--seed + 19``) of the policy with
+``minari.DataCollector`` (every info key recorded, the safe-RL ``cost`` among them) and
+creates the dataset ``steamtemp/SupercriticalFSH/mpc_linear-v0`` in Minari's data folder
+(``--data-dir``, else ``MINARI_DATASETS_PATH``, else ``~/.minari/datasets``). Minari reads
+a dataset id as ``(namespace/)name(-v<version>)``: the namespace here is
+``steamtemp/<Plant>``, the name the policy's (characters other than letters, digits, ``_``
+and ``-`` written ``-``: ``sb3:ppo`` -> ``sb3-ppo``) or ``--name``.
+
+The policy is any name ``steamtemp-leaderboard --policies`` takes (agents/specs.py).
+``--mixed F`` makes a mixed-quality dataset for offline RL, ``<name>-mixed-v0``: each
+episode is, with probability F, ``cascade_pi`` at a tuning drawn from the search box of
+its knobs (``CascadePI.KNOBS``: every gain and integral time factor log-uniform in
+0.25-4, so from sluggish to oscillating), else the policy.
+
+Reference scores: the dataset's evaluation env is the plant under a named scenario
+(``--eval-scenario``, default ``load_ramp_100_50``); ``ref_min_score`` and
+``ref_max_score`` are the mean returns of ``cascade_pi_ff`` and the oracle there over
+``--eval-seeds`` (default the leaderboard's 0-4), the episodes the leaderboard runs (taken
+from its stored references where they are the current code's,
+agents/leaderboard/references.py). So ``minari.get_normalized_score(dataset, returns)``
+is the leaderboard's normalized score of those episodes on that scenario wherever the
+oracle's margin is at least ``agents.stats.MIN_SPAN`` of the reference's cost (docs/offline.md).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import re
+import sys
+import time
+import warnings
+from pathlib import Path
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+
+import baselines
+import steamtemp_gym
+from agents import specs
+from agents.leaderboard import references, summary
+from agents.training import git_revision
+from baselines.cascade_pi import CascadePI
+from steamtemp_gym import envs as envs_
+from steamtemp_gym import scenarios
+
+#: Every dataset's namespace starts with this (then the plant's name).
+NAMESPACE = "steamtemp"
+#: The evaluation env's default scenario: the load-ramp test of Sagara et al. 1998.
+EVAL_SCENARIO = "load_ramp_100_50"
+#: The leaderboard's default seeds, over which the reference scores are means.
+EVAL_SEEDS = (0, 1, 2, 3, 4)
+#: The detuned controller of a mixed dataset.
+DETUNED = "cascade_pi"
+AUTHOR = "steamtemp_gym contributors"
+MAX_EPISODES = 100_000
+_NOT_NAME = re.compile(r"[^A-Za-z0-9_-]+")
+
+
+def plant_name(env_id: str) -> str:
+    """``steamtemp/SupercriticalFSH-v0`` -> ``SupercriticalFSH``."""
+    return gym.spec(env_id).name
+
+
+def dataset_name(policy: str, mixed: float | None = None) -> str:
+    """The dataset name of a policy: its name with every run of characters Minari refuses
+    in a name written ``-`` (``sb3:ppo`` -> ``sb3-ppo``), ``-mixed`` appended for a mixed
+    dataset."""
+    name = _NOT_NAME.sub("-", policy).strip("-") or "policy"
+    return f"{name}-mixed" if mixed else name
+
+
+def dataset_id(env_id: str, name: str, version: int = 0) -> str:
+    """``steamtemp/<Plant>/<name>-v<version>``."""
+    return f"{NAMESPACE}/{plant_name(env_id)}/{name}-v{version}"
+
+
+def reference_scores(env_id: str, scenario: str = EVAL_SCENARIO,
+                     seeds: tuple[int, ...] = EVAL_SEEDS) -> tuple[float, float, int]:  # fmt: skip
+    """(ref_min_score, ref_max_score, taken): the mean returns of ``cascade_pi_ff`` and the
+    oracle on ``env_id``'s ``scenario`` over ``seeds``, as the leaderboard's
+    ``zero_return`` and ``one_return`` (agents/leaderboard/summary.py), and how many of
+    their episodes were stored references."""
+    lo, taken_lo = references.returns(env_id, scenario, summary.ZERO, list(seeds))
+    hi, taken_hi = references.returns(env_id, scenario, summary.ONE, list(seeds))
+    return float(lo.mean()), float(hi.mean()), taken_lo + taken_hi
+
+
+def detuned_knobs(rng: np.random.Generator) -> dict[str, float]:
+    """A tuning of :data:`DETUNED` drawn from its knobs' search box (log-uniform)."""
+    out = {}
+    for k in CascadePI.KNOBS:
+        out[k.name] = float(np.exp(rng.uniform(np.log(k.lo), np.log(k.hi))) if k.log
+                            else rng.uniform(k.lo, k.hi))  # fmt: skip
+    return out
+
+
+def episode_plan(policy: str, episodes: int, seed: int,
+                 mixed: float | None = None) -> list[dict[str, Any]]:  # fmt: skip
+    """Per episode its seed, policy and (for a detuned one) knobs; the draws of a mixed
+    dataset come from ``seed``, so the same flags give the same dataset."""
+    rng = np.random.default_rng([seed, 0x5EED])
+    out = []
+    for i in range(episodes):
+        if mixed and rng.uniform() < mixed:
+            out.append({"seed": seed + i, "policy": DETUNED, "knobs": detuned_knobs(rng)})
+        else:
+            out.append({"seed": seed + i, "policy": policy})
+    return out
+
+
+def record(env_id: str, policy: str, episodes: int, seed: int = 0, *,
+           mixed: float | None = None, name: str | None = None, version: int = 0,
+           eval_scenario: str = EVAL_SCENARIO, eval_seeds: tuple[int, ...] = EVAL_SEEDS,
+           author: str = AUTHOR, code_permalink: str | None = None,
+           log: Any = None) -> Any:  # fmt: skip
+    """Record the episodes and create the dataset (module docstring) in Minari's data
+    folder (``MINARI_DATASETS_PATH``); returns the ``MinariDataset``.
+
+    Raises:
+        ValueError: an unknown env, policy or scenario, a bad count, seed or fraction, or a
+            dataset id that exists already; nothing is written then.
+    """
+    import minari
+    from minari.storage import get_dataset_path
+
+    env_id = envs_.resolve_id(env_id)
+    if isinstance(episodes, bool) or not isinstance(episodes, int) or not (
+            1 <= episodes <= MAX_EPISODES):  # fmt: skip
+        raise ValueError(f"episodes must be an integer in 1..{MAX_EPISODES}, got {episodes!r}")
+    if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
+        raise ValueError(f"seed must be an integer >= 0, got {seed!r}")
+    if mixed is not None and not (isinstance(mixed, float | int) and 0.0 < mixed <= 1.0):
+        raise ValueError(f"mixed must be a fraction in (0, 1], got {mixed!r}")
+    spec = specs.parse(policy)
+    if not spec.available(env_id):
+        raise ValueError(f"policy {policy!r} has no agent for {env_id}")
+    scenarios.resolve(eval_scenario, env_id)  # a bad name fails before anything runs
+    if eval_scenario == scenarios.RANDOM:
+        raise ValueError("the evaluation scenario must be a fixed one, not 'random'")
+    did = dataset_id(env_id, name or dataset_name(policy, mixed), version)
+    minari.dataset.minari_dataset.parse_dataset_id(did)  # Minari's own rules
+    if Path(get_dataset_path(did)).exists():
+        raise ValueError(f"dataset {did} exists already in {get_dataset_path(did)}; delete "
+                         "it (minari delete) or give another --version or --name")  # fmt: skip
+    say = log or (lambda msg: None)
+    t0 = time.perf_counter()
+    lo, hi, taken = reference_scores(env_id, eval_scenario, tuple(eval_seeds))
+    say(f"reference scores on {eval_scenario}, seeds {list(eval_seeds)}: cascade_pi_ff "
+        f"{lo:.6g}, oracle {hi:.6g} ({taken} of {2 * len(eval_seeds)} episodes stored, "
+        f"{time.perf_counter() - t0:.1f} s)")
+    t1 = time.perf_counter()
+    plan = episode_plan(policy, episodes, seed, mixed)
+    env = minari.DataCollector(gym.make(env_id, scenario=scenarios.RANDOM), record_infos=True)
+    built: dict[str, Any] = {}
+    for ep in plan:
+        if "knobs" in ep:
+            pol = baselines.make(DETUNED, env.unwrapped, **ep["knobs"])
+        else:
+            if policy not in built:
+                built[policy] = spec.make(env_id, env.unwrapped)
+            pol = built[policy]
+        ep["return"] = _episode(env, pol, ep["seed"])
+    say(f"{episodes} episodes of {policy if not mixed else f'{policy} mixed {mixed:g}'} on "
+        f"{env_id} random, seeds {seed}-{seed + episodes - 1}: "
+        f"{time.perf_counter() - t1:.1f} s")
+    eval_env = gym.make(env_id, scenario=eval_scenario)
+    description = (
+        f"{episodes} episodes of {policy} on {env_id}, scenario 'random' (the training "
+        f"distribution, a fresh draw per episode), seeds {seed}..{seed + episodes - 1}"
+        + (f"; each episode with probability {mixed:g} by {DETUNED} at a tuning drawn "
+           "log-uniform from its knobs' box (factors 0.25-4 on every gain and integral "
+           "time) instead: the steamtemp_episodes metadata names each" if mixed else "")
+        + f". Infos recorded (cost: the safe-RL constraint cost). eval_env: {env_id} "
+        f"under '{eval_scenario}'; ref_min_score / ref_max_score: the mean returns of "
+        f"cascade_pi_ff and the oracle there over seeds {list(eval_seeds)}, the "
+        "leaderboard's score ends (0 and 1). steamtemp_gym "
+        f"{steamtemp_gym.__version__}, python -m agents.datasets."
+    )
+    with warnings.catch_warnings():  # the one field left out: no e-mail address
+        warnings.filterwarnings("ignore", message="`author_email` is set to None")
+        dataset = env.create_dataset(
+            dataset_id=did, eval_env=eval_env, algorithm_name=policy, author=author,
+            code_permalink=code_permalink or _permalink(), ref_min_score=lo,
+            ref_max_score=hi, num_episodes_average_score=len(eval_seeds),
+            description=description,
+            requirements=[f"steamtemp-gym=={steamtemp_gym.__version__}"],
+        )  # fmt: skip
+    dataset.storage.update_metadata({"steamtemp_episodes": json.dumps(plan)})
+    env.close()
+    return dataset
+
+
+def _episode(env: Any, policy: Any, seed: int) -> float:
+    """One episode through the collector, acting as agents.evaluation.run_episode does."""
+    obs, _ = env.reset(seed=seed)
+    policy.reset()
+    ret, start = 0.0, True
+    while True:
+        action, _ = policy.predict(obs, episode_start=np.array([start]), deterministic=True)
+        start = False
+        obs, r, terminated, truncated, _ = env.step(action)
+        ret += r
+        if terminated or truncated:
+            return ret
+
+
+def _permalink() -> str:
+    return (f"steamtemp_gym {steamtemp_gym.__version__}, git {git_revision()}: "
+            "agents/datasets.py")
+
+
+def _int(lo: int, hi: int, what: str):
+    def parse(text: str) -> int:
+        try:
+            v = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{what} must be an integer, got {text!r}") from None
+        if not lo <= v <= hi:
+            raise argparse.ArgumentTypeError(f"{what} must be in {lo}..{hi}, got {v}")
+        return v
+
+    return parse
+
+
+def _fraction(text: str) -> float:
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"a fraction in (0, 1], got {text!r}") from None
+    if not 0.0 < v <= 1.0:
+        raise argparse.ArgumentTypeError(f"a fraction in (0, 1], got {text!r}")
+    return v
+
+
+def _seeds(text: str) -> tuple[int, ...]:
+    try:
+        seeds = tuple(dict.fromkeys(int(s) for s in text.split(",") if s.strip()))
+    except ValueError:
+        seeds = ()
+    if not seeds or min(seeds) < 0:
+        raise argparse.ArgumentTypeError(f"comma-separated integers >= 0, got {text!r}")
+    return seeds
+
+
+def make_parser() -> argparse.ArgumentParser:
+    doc = __doc__ or ""
+    ap = argparse.ArgumentParser(prog="python -m agents.datasets", description=doc.split("\n")[0],
+                                 epilog="docs/offline.md")  # fmt: skip
+    ap.add_argument("--env", default="SupercriticalFSH-v0",
+                    help="the plant's env id, with or without steamtemp/ (default: %(default)s)")
+    ap.add_argument("--policy", required=True,
+                    help="the policy that acts: " + specs.FORMS)
+    ap.add_argument("--episodes", type=_int(1, MAX_EPISODES, "--episodes"), default=20,
+                    help="number of episodes (default: %(default)s)")
+    ap.add_argument("--seed", type=_int(0, 2**31 - 1, "--seed"), default=0,
+                    help="seed of the first episode; episode i has seed + i (default: 0)")
+    ap.add_argument("--data-dir", default=None, metavar="DIR",
+                    help="Minari's data folder (sets MINARI_DATASETS_PATH; default: that "
+                    "variable, else ~/.minari/datasets)")  # fmt: skip
+    ap.add_argument("--mixed", type=_fraction, default=None, metavar="F",
+                    help=f"mixed quality: each episode by {DETUNED} at a random tuning with "
+                    "probability F, else by --policy; the name gets -mixed")  # fmt: skip
+    ap.add_argument("--name", default=None, help="the dataset name (default: from the policy)")
+    ap.add_argument("--version", type=_int(0, 10**6, "--version"), default=0,
+                    help="the dataset version (default: 0)")
+    ap.add_argument("--eval-scenario", default=EVAL_SCENARIO,
+                    help="the evaluation env's scenario, where the reference scores are "
+                    "measured (default: %(default)s)")  # fmt: skip
+    ap.add_argument("--eval-seeds", type=_seeds, default=EVAL_SEEDS, metavar="S,S,...",
+                    help="seeds of the reference episodes (default: 0,1,2,3,4, the "
+                    "leaderboard's)")  # fmt: skip
+    ap.add_argument("--author", default=AUTHOR, help="(default: %(default)s)")
+    return ap
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = make_parser()
+    args = ap.parse_args(argv)
+    try:
+        import minari  # noqa: F401
+    except ImportError:
+        ap.error("minari is not installed: pip install 'steamtemp-gym[offline]'")
+    try:
+        env_id = envs_.resolve_id(args.env)
+    except ValueError as exc:
+        ap.error(f"argument --env: {exc}")
+    try:
+        spec = specs.parse(args.policy)
+    except ValueError as exc:
+        ap.error(f"argument --policy: {exc}")
+    if not spec.available(env_id):
+        ap.error(f"argument --policy: {args.policy!r} has no agent for {env_id}")
+    try:
+        scenarios.resolve(args.eval_scenario, env_id)
+    except ValueError as exc:
+        ap.error(f"argument --eval-scenario: {exc}")
+    if args.eval_scenario == scenarios.RANDOM:
+        ap.error("argument --eval-scenario: must be a fixed scenario, not 'random'")
+    if args.name is not None and not re.fullmatch(r"[A-Za-z0-9_][A-Za-z0-9_-]*", args.name):
+        ap.error(f"argument --name: letters, digits, '_' and '-' only, got {args.name!r}")
+    if args.data_dir is not None:
+        os.environ["MINARI_DATASETS_PATH"] = str(Path(args.data_dir).resolve())
+    from minari.storage import get_dataset_path
+
+    did = dataset_id(env_id, args.name or dataset_name(args.policy, args.mixed), args.version)
+    if Path(get_dataset_path(did)).exists():
+        ap.error(f"dataset {did} exists already in {get_dataset_path(did)}; delete it "
+                 "(minari delete) or give another --version or --name")  # fmt: skip
+    t0 = time.perf_counter()
+    dataset = record(env_id, args.policy, args.episodes, args.seed, mixed=args.mixed,
+                     name=args.name, version=args.version, eval_scenario=args.eval_scenario,
+                     eval_seeds=args.eval_seeds, author=args.author,
+                     log=lambda m: print(m, file=sys.stderr))  # fmt: skip
+    path = Path(get_dataset_path(did))
+    size = sum(f.stat().st_size for f in path.rglob("*") if f.is_file())
+    print(f"{did}: {dataset.total_episodes} episodes, {dataset.total_steps} steps, "
+          f"{size / 1e6:.1f} MB in {path}, {time.perf_counter() - t0:.1f} s; ref_min_score "
+          f"{dataset.storage.metadata['ref_min_score']:.6g}, ref_max_score "
+          f"{dataset.storage.metadata['ref_max_score']:.6g}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,187 @@
+"""Offline datasets (agents/datasets.py) and behaviour cloning from them
+(agents/behaviour_cloning.py): a dataset of two episodes made by the command, read back
+with Minari (episodes, infos with the cost, metadata); its reference scores are the
+leaderboard's score ends and Minari's normalized score is the leaderboard's; bad flags are
+refused before anything is written; a cloned agent is scored by the leaderboard."""
+
+from __future__ import annotations
+
+import json
+import os
+
+import numpy as np
+import pytest
+
+minari = pytest.importorskip("minari", reason="minari is in the [offline] extra, not [test]")
+pytest.importorskip("jax", reason="Minari writes datasets through jax (minari[create])")
+pytest.importorskip("h5py", reason="Minari's HDF5 storage (minari[hdf5])")
+
+import gymnasium as gym  # noqa: E402
+
+import baselines  # noqa: E402
+from agents import behaviour_cloning, datasets, stats  # noqa: E402
+from agents.evaluation import run_episode  # noqa: E402
+from agents.files import find  # noqa: E402
+from agents.leaderboard import cli  # noqa: E402
+from agents.leaderboard.records import EPISODES, read_record  # noqa: E402
+
+ENV = "steamtemp/Cascade300MW-v0"
+SCENARIO = "load_ramp_100_50"
+DATASET = "steamtemp/Cascade300MW/cascade_pi_ff-v0"
+
+
+@pytest.fixture(scope="module")
+def data_dir(tmp_path_factory):
+    path = tmp_path_factory.mktemp("minari")
+    old = os.environ.get("MINARI_DATASETS_PATH")
+    os.environ["MINARI_DATASETS_PATH"] = str(path)
+    yield path
+    if old is None:
+        del os.environ["MINARI_DATASETS_PATH"]
+    else:
+        os.environ["MINARI_DATASETS_PATH"] = old
+
+
+@pytest.fixture(scope="module")
+def dataset(data_dir):
+    assert datasets.main(["--env", "Cascade300MW-v0", "--policy", "cascade_pi_ff",
+                          "--episodes", "2", "--seed", "3", "--eval-seeds", "0",
+                          "--data-dir", str(data_dir)]) == 0  # fmt: skip
+    return minari.load_dataset(DATASET)
+
+
+@pytest.fixture(scope="module")
+def agent_dir(dataset, tmp_path_factory):
+    out = tmp_path_factory.mktemp("bc")
+    behaviour_cloning.train(DATASET, out, epochs=2, max_seconds=30)
+    return out
+
+
+@pytest.fixture(scope="module")
+def leaderboard(agent_dir, tmp_path_factory):
+    """The leaderboard on the dataset's evaluation scenario and seed, with the cloned agent."""
+    out = tmp_path_factory.mktemp("lb")
+    cli.main(["--policies", f"cascade_pi,zoo:{agent_dir}", "--envs", "Cascade300MW-v0",
+              "--scenarios", SCENARIO, "--seeds", "0", "--no-mismatch", "--jobs", "1",
+              "--out", str(out)])  # fmt: skip
+    summary = json.loads((out / "leaderboard.json").read_text())
+    rows = {r["policy"]: r for r in read_record(out / EPISODES)}
+    return summary["plants"][ENV], rows
+
+
+def test_the_dataset_holds_the_episodes_the_policy_runs(dataset):
+    assert dataset.total_episodes == 2
+    env = gym.make(ENV, scenario="random")
+    seeds = [m["seed"] for m in dataset.storage.get_episode_metadata([0, 1])]
+    assert seeds == [3, 4]
+    for seed, ep in zip(seeds, dataset.iterate_episodes(), strict=True):
+        ref = run_episode(env, baselines.make("cascade_pi_ff", env), seed)
+        assert len(ep.actions) == len(ref["trace"]["time_s"]) - 1
+        assert float(np.sum(ep.rewards)) == pytest.approx(ref["metrics"]["return"], abs=1e-9)
+        np.testing.assert_array_equal(ep.infos["outlet_temp_C"], ref["trace"]["outlet_temp_C"])
+        # the safe-RL cost is recorded: summed times dt it is the metric
+        dt = env.unwrapped.plant.dt_s
+        assert np.sum(ep.infos["cost"][1:] * dt) == pytest.approx(
+            ref["metrics"]["time_outside_5K_s"], abs=1e-9)  # fmt: skip
+
+
+def test_metadata(dataset):
+    meta = dataset.storage.metadata
+    assert meta["dataset_id"] == DATASET
+    assert meta["algorithm_name"] == "cascade_pi_ff"
+    assert meta["author"] and meta["description"] and meta["code_permalink"]
+    eval_env = dataset.recover_environment(eval_env=True)
+    assert eval_env.spec.id == ENV and eval_env.spec.kwargs["scenario"] == SCENARIO
+    assert dataset.recover_environment().spec.kwargs["scenario"] == "random"
+    assert meta["num_episodes_average_score"] == 1
+    plan = json.loads(meta["steamtemp_episodes"])
+    assert [p["seed"] for p in plan] == [3, 4]
+
+
+def test_reference_scores_are_the_leaderboards_score_ends(dataset, leaderboard):
+    plant, rows = leaderboard
+    ref = plant["reference"][SCENARIO]
+    assert dataset.storage.metadata["ref_min_score"] == ref["zero_return"]
+    assert dataset.storage.metadata["ref_max_score"] == ref["one_return"]
+    assert ref["zero_return"] == rows["cascade_pi_ff"]["metrics"]["return"]
+
+
+def test_minaris_normalized_score_is_the_leaderboards(dataset, leaderboard):
+    plant, rows = leaderboard
+    ref = plant["reference"][SCENARIO]
+    assert ref["headroom"] >= stats.MIN_SPAN * abs(ref["zero_return"])  # where they agree
+    for name in ("cascade_pi", "oracle", "frozen_valve"):
+        ret = np.array([rows[name]["metrics"]["return"]])
+        ours = stats.normalize(ret, ref["zero_return"], ref["one_return"])
+        theirs = minari.get_normalized_score(dataset, ret)
+        assert abs(float(theirs[0]) - float(ours[0])) <= 1e-9
+        # one seed: the scenario's mean score is this episode's
+        cell = plant["scenarios"][SCENARIO][name]["normalized_score"]
+        assert abs(float(theirs[0]) - cell) <= 1e-9
+
+
+def test_a_cloned_agent_is_a_trained_agents_files_scored_by_the_leaderboard(
+        dataset, agent_dir, leaderboard):  # fmt: skip
+    (files,) = find(agent_dir)
+    files.check()
+    assert (files.env_id, files.algo) == (ENV, "bc")
+    meta = json.loads(files.meta[0].read_text())
+    assert meta["dataset"] == DATASET and meta["sb3_class"] == "TD3"
+    policy = files.load()
+    assert policy.actor is not None  # the MLP in float64 NumPy
+    obs, _ = behaviour_cloning.transitions(dataset)
+    a = policy.predict(obs[:50])[0]
+    assert a.shape == (50, 1) and np.all(np.abs(a) <= 1)
+    plant, rows = leaderboard
+    name = f"zoo:{agent_dir}"
+    assert not rows[name].get("error")
+    assert np.isfinite(plant["scenarios"][SCENARIO][name]["normalized_score"])
+
+
+def _refused(capsys, *args: str) -> str:
+    with pytest.raises(SystemExit) as exc:
+        datasets.main(list(args))
+    assert exc.value.code == 2
+    return capsys.readouterr().err
+
+
+@pytest.mark.parametrize("args, says", [
+    (["--policy", "cascade_pi_ff", "--episodes", "0"], "--episodes must be in 1"),
+    (["--policy", "cascade_pi_ff", "--episodes", "two"], "--episodes must be an integer"),
+    (["--policy", "cascade_pi_ff", "--seed", "-1"], "--seed must be in 0"),
+    (["--policy", "cascade_pi_ff", "--mixed", "1.5"], "a fraction in (0, 1]"),
+    (["--policy", "no_such_policy"], "unknown policy 'no_such_policy'"),
+    (["--policy", "cascade_pi_ff", "--env", "NoSuchPlant-v0"], "argument --env"),
+    (["--policy", "cascade_pi_ff", "--eval-scenario", "random"], "not 'random'"),
+    (["--policy", "cascade_pi_ff", "--eval-scenario", "no_such_scenario"],
+     "argument --eval-scenario"),
+    (["--policy", "cascade_pi_ff", "--eval-seeds", "0,-2"], "integers >= 0"),
+    (["--policy", "cascade_pi_ff", "--name", "a b"], "argument --name"),
+    (["--episodes", "2"], "--policy"),
+])  # fmt: skip
+def test_bad_flags_are_refused_and_write_nothing(capsys, monkeypatch, tmp_path, args, says):
+    monkeypatch.setenv("MINARI_DATASETS_PATH", str(tmp_path / "d"))  # restored after
+    err = _refused(capsys, "--data-dir", str(tmp_path / "d"), *args)
+    assert says in err
+    assert not (tmp_path / "d" / "steamtemp").exists()
+
+
+def test_an_existing_dataset_is_refused(capsys, monkeypatch, dataset, data_dir):
+    monkeypatch.setenv("MINARI_DATASETS_PATH", str(data_dir))
+    err = _refused(capsys, "--env", "Cascade300MW-v0", "--policy", "cascade_pi_ff",
+                   "--data-dir", str(data_dir))  # fmt: skip
+    assert "exists already" in err
+    assert minari.load_dataset(DATASET).total_episodes == 2  # unchanged
+
+
+def test_a_mixed_dataset_draws_its_episodes_from_the_seed():
+    plan = datasets.episode_plan("mpc_linear", 200, 7, mixed=0.5)
+    assert plan == datasets.episode_plan("mpc_linear", 200, 7, mixed=0.5)
+    detuned = [p for p in plan if p["policy"] == datasets.DETUNED]
+    assert 60 < len(detuned) < 140
+    for p in detuned:
+        assert set(p["knobs"]) == {"outer_gain", "outer_reset", "inner_gain", "inner_reset"}
+        assert all(0.25 <= v <= 4.0 for v in p["knobs"].values())
+    assert [p["seed"] for p in plan] == list(range(7, 207))
+    assert datasets.dataset_name("sb3:ppo") == "sb3-ppo"
+    assert datasets.dataset_name("mpc_linear", 0.5) == "mpc_linear-mixed"
