@@ -33,7 +33,7 @@ GAE_FACTOR = 2.0
 GAE_LAMBDA_MAX = 0.995
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def time_scale(env_id: str) -> tuple[float, float]:
     """(dead time, time constant) in s of the true main-steam temperature after a step of
     the slowest main-steam valve at :data:`LOAD` (module docstring)."""

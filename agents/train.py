@@ -35,10 +35,11 @@ one is kept: the highest validation return among the checkpoints within the tune
 baselines' margin under the leaderboard's valve-travel budget (mean travel at most
 ``agents.tuning_terms.TUNING_TRAVEL_BUDGET`` = 1.7 times ``cascade_pi_ff``'s on the same
 validation episodes), or, if none is, the one of least travel. With ``--max-minutes`` the
-agent is also validated at every eighth of that time. Output in ``--out``: ``<env>__<algo>.zip`` (the best SB3 model) and
-``<env>__<algo>.json`` (env id, package version, git revision, hyperparameters, seed,
-timesteps, wall time, the validation curve and score, the normalization statistics and
-the wrapper config: everything ``agents.load`` needs).
+agent is also validated at every eighth of that time. Output in ``--out``:
+``<env>__<algo>.zip`` (the best SB3 model) and ``<env>__<algo>.json`` (env id, package
+version, git revision, hyperparameters, seed, timesteps, wall time, the validation curve
+and score, the normalization statistics and the wrapper config: everything
+``agents.load`` needs).
 
 Training runs (``--zoo --runs K``): run k of an agent is trained with seed
 :func:`run_seed` (``--seed`` + :data:`RUN_SEED_STRIDE` k: its training envs draw seeds

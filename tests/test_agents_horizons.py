@@ -10,12 +10,12 @@ import pytest
 import yaml
 
 import steamtemp_gym
-from steamtemp_gym import plants
 from agents import horizons, train_config, training
 from agents.memory import MemoryConfig
 from agents.travel_price import PRICE_MAX, PRICE_MIN, TARGET, VecTravelPrice
 from agents.vec_env import NativeVecEnv
 from agents.wrappers import MemoryState
+from steamtemp_gym import plants
 from steamtemp_gym.scenarios import Scenario
 
 #: (dead time, time constant) in s at 50 % load, as docs/leaderboard.md lists them.

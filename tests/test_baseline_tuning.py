@@ -172,6 +172,7 @@ def test_a_replayed_search_runs_only_what_it_has_not_stored(monkeypatch):
     monkeypatch.setattr(bt, "ends", lambda env_id: {})
     monkeypatch.setattr(bt, "check_metrics", lambda env_id, make: [])
     monkeypatch.setattr(bt, "check_breach", lambda ms, refs: ("", 1.0))
+    monkeypatch.setattr(bt, "robustness", lambda env_id, make: 1.0)
     ks = tuning.knobs(baselines.factory("cascade_pi"))
     monkeypatch.setattr(bt, "defaults", lambda f, env_id: {k.name: 1.0 for k in ks})
     target = np.array([0.9, 0.3, 0.6, 0.2])

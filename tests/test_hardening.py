@@ -14,6 +14,7 @@ import pytest
 import steamtemp_gym
 from steamtemp_gym import plants
 from steamtemp_gym.envs.corners import run_corners
+from steamtemp_gym.envs.cost import interval_cost
 from steamtemp_gym.envs.kernels import TRIP_REASONS
 from steamtemp_gym.rewards import RewardConfig
 from steamtemp_gym.scenarios import Scenario
@@ -342,7 +343,8 @@ def test_info_reports_what_the_sensor_reported(env_id):
 @pytest.mark.parametrize("env_id", IDS)
 def test_info_carries_each_rows_own_values(env_id):
     """Single-env and vector info (written by the compiled step and by reset) hold row b's
-    outputs, reading, time, setpoint, load and spray, after a reset and after steps."""
+    outputs, reading, time, setpoint, load, spray and constraint cost, after a reset and
+    after steps."""
     sc = Scenario(name="distinct", duration_s=600.0, load=((0.0, 0.85), (600.0, 0.8)),
                   fouling=((0.0, 1.05),),
                   setpoint_offset_C=((0.0, 0.0), (600.0, -3.0)))  # fmt: skip
@@ -352,15 +354,19 @@ def test_info_carries_each_rows_own_values(env_id):
     plant = core.plant
     idx = plant.index
     a = np.zeros(venv.action_space.shape, dtype=np.float32)
+    prev_error = [None, None]  # the outlet's error at the last info: the interval's cost
     for k in range(3):
         for b in range(2):
             z, row = core.Z[b], core.info_row(b)
+            error = z[idx[plant.outlet]] - core.sp[b]
+            cost = 0.0 if prev_error[b] is None else interval_cost(prev_error[b], error)
+            prev_error[b] = error
             expect = {"outlet_temp_C": z[idx[plant.outlet]],
                       "measured_temp_noise_free_C": z[idx[plant.outlet_measured]],
                       "measured_temp_C": core.meas[b], "time_s": k * plant.dt_s,
                       "setpoint_C": core.sp[b], "load": core.D[b, 0],
                       "spray_flow_kg_s": sum(z[idx[s]] for s in plant.sprays),
-                      "trip_reason": ""}  # fmt: skip
+                      "trip_reason": "", "cost": cost, "cost_band": cost}  # fmt: skip
             expect.update({name: z[idx[name]] for name in plant.extra_info})
             valves = [z[idx[v]] for v in plant.valves]
             expect["spray_valve"] = valves[0] if len(valves) == 1 else np.array(valves)

@@ -588,7 +588,8 @@ def test_workers_end_with_the_leaderboard(tmp_path, sig):
     proc, workers = _start_cli(tmp_path / "out")
     try:
         proc.send_signal(getattr(signal, sig))
-        assert proc.wait(timeout=30) == (143 if sig == "SIGTERM" else -signal.SIGKILL)
+        proc.communicate(timeout=60)  # drains stderr, which could otherwise block the child
+        assert proc.returncode == (143 if sig == "SIGTERM" else -signal.SIGKILL)
         deadline = time.monotonic() + 5 * backends.PARENT_POLL_S + 3
         while any(_alive(w) for w in workers) and time.monotonic() < deadline:
             time.sleep(0.1)
