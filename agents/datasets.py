@@ -44,6 +44,7 @@ import numpy as np
 import baselines
 import steamtemp_gym
 from agents import specs
+from agents.evaluation import run_episode
 from agents.leaderboard import references, summary
 from agents.training import git_revision
 from baselines.cascade_pi import CascadePI
@@ -198,17 +199,8 @@ def record(env_id: str, policy: str, episodes: int, seed: int = 0, *,
 
 
 def _episode(env: Any, policy: Any, seed: int) -> float:
-    """One episode through the collector, acting as agents.evaluation.run_episode does."""
-    obs, _ = env.reset(seed=seed)
-    policy.reset()
-    ret, start = 0.0, True
-    while True:
-        action, _ = policy.predict(obs, episode_start=np.array([start]), deterministic=True)
-        start = False
-        obs, r, terminated, truncated, _ = env.step(action)
-        ret += r
-        if terminated or truncated:
-            return ret
+    """One episode through the collector, run as the leaderboard runs it; its return."""
+    return float(run_episode(env, policy, seed)["metrics"]["return"])
 
 
 def _permalink() -> str:
