@@ -18,7 +18,9 @@ ZOO = Path(__file__).with_name("zoo")
 #: controllers" has one answer per kind.
 KINDS = {"ppo": "model-free", "sac": "model-free", "td3": "model-free",
          "recurrentppo": "model-free", "sac_caps": "model-free",
-         "ppo_residual": "residual over cascade_pi_ff"}  # fmt: skip
+         "ppo_residual": "residual over cascade_pi_ff",
+         "ppo_residual_pi": "residual over cascade_pi_ff_tuned",
+         "ppo_residual_mpc": "residual over mpc_linear"}  # fmt: skip
 
 
 def kind(algo: str) -> str:
@@ -48,7 +50,7 @@ def load(env_id: str, algo: str, zoo: Path | str | None = None, run: int = 0):
     Args:
         env_id: Registered id.
         algo: Algorithm name of the file (``ppo``, ``sac``, ``td3``, ``ppo_residual``,
-            ``recurrentppo``, ``sac_caps``).
+            ``ppo_residual_pi``, ``ppo_residual_mpc``, ``recurrentppo``, ``sac_caps``).
         zoo: Directory holding ``<env>__<algo>.zip`` and ``.json``, or the run-indexed
             ``<env>__<algo>__run<k>`` files (default: the shipped zoo).
         run: Which training run (0: ``__run0``, else the file without a run index).

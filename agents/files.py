@@ -6,7 +6,7 @@ Two layouts:
 - ``steamtemp-train --out DIR`` (and the shipped ``agents/zoo/``):
   ``DIR/<env>__<algo>.zip`` (the SB3 model) and ``DIR/<env>__<algo>.json`` (env id,
   ``sb3_class``, controller ``memory``, ``normalization`` statistics, ``residual_scale``,
-  ``max_move``);
+  ``residual_base``, ``max_move``);
   ``<env>`` is the env id with ``/`` written ``__``. Independent training runs of one
   agent (``python -m agents.train --zoo --runs K``) are ``<env>__<algo>__run<k>``,
   k = 0..K-1; a file without the run index is read as run 0 (where ``__run0`` is absent).
@@ -120,15 +120,17 @@ class AgentFiles:
             meta = json.loads(self.meta[0].read_text(encoding="utf-8"))
             cls, norm, residual = meta["sb3_class"], meta["normalization"], meta["residual_scale"]
             max_move = meta.get("max_move")  # no key: the action is a valve position
+            base = meta.get("residual_base")  # no key: the legacy residual form
         else:
             cls = _RL_ZOO_CLASSES.get(self.algo, self.algo.upper())
-            norm, residual, max_move = None, None, None
+            norm, residual, max_move, base = None, None, None, None
             pkl = [f for f in self.meta if f.name == "vecnormalize.pkl"]
             if pkl:
                 norm = _vecnormalize_stats(pkl[0])
         model = model_class(cls).load(self.model, device="cpu")
         return AgentPolicy(model, gym.make(self.env_id), memory=memory, obs_norm=norm,
-                           residual_scale=residual, max_move=max_move)  # fmt: skip
+                           residual_scale=residual, max_move=max_move,
+                           residual_base=base)  # fmt: skip
 
 
 @functools.lru_cache(maxsize=64)
@@ -154,6 +156,9 @@ def _check(files: AgentFiles, stat: tuple) -> None:
     memory = files._memory()
     extra = 0 if memory is None else MemoryConfig.from_kwargs(memory).n_extra(
         len(plant.valves), len(plant.secondary), env.observation_space.shape[-1])  # fmt: skip
+    if files.layout == STEAMTEMP and json.loads(files.meta[0].read_text(encoding="utf-8")).get(
+            "residual_base") is not None:  # the base's action is observed (agents/residual.py)
+        extra += len(plant.valves)
     want_obs = (env.observation_space.shape[-1] + extra,)
     want_act = tuple(env.action_space.shape)
     if (obs, act) == (want_obs, want_act):

@@ -75,4 +75,35 @@ def history_stride(env_id: str, history: int) -> int:
     return max(1, round(sum(time_scale(env_id)) / (history * dt)))
 
 
-__all__ = ["discount", "gae_lambda", "history_stride", "time_scale"]
+#: The value that asks for a setting read from the plant (:func:`from_plant`).
+PLANT = "plant"
+
+
+def from_plant(env_id: str, hp: dict) -> dict:
+    """``hp`` (an entry of an RL Zoo hyperparameter file) with every ``plant`` value of
+    ``gamma``, ``gae_lambda`` and the controller memory's ``history_stride`` replaced by
+    the rule's (:func:`discount`, :func:`gae_lambda`, :func:`history_stride`); the
+    entry states the rule instead of numbers."""
+    out = dict(hp)
+    rules = {"gamma": discount, "gae_lambda": gae_lambda}
+    for key, rule in rules.items():
+        if out.get(key) == PLANT:
+            out[key] = round(rule(env_id), 5)
+    wrappers = out.get("env_wrapper")
+    if isinstance(wrappers, list):
+        out["env_wrapper"] = [_memory_from_plant(env_id, w) for w in wrappers]
+    elif isinstance(wrappers, dict):
+        out["env_wrapper"] = _memory_from_plant(env_id, wrappers)
+    return out
+
+
+def _memory_from_plant(env_id: str, item: object) -> object:
+    if not (isinstance(item, dict) and len(item) == 1):
+        return item
+    (name, kwargs), = item.items()
+    if not (isinstance(kwargs, dict) and kwargs.get("history_stride") == PLANT):
+        return item
+    return {name: {**kwargs, "history_stride": history_stride(env_id, kwargs.get("history", 4))}}
+
+
+__all__ = ["PLANT", "discount", "from_plant", "gae_lambda", "history_stride", "time_scale"]

@@ -2,7 +2,7 @@
 observation and carries its own observation pipeline (controller memory, then the
 VecNormalize statistics frozen at the end of training) with the memory's state kept per
 row across calls; ``reset()`` or ``episode_start`` restarts it. A residual agent adds its
-scaled action to the industrial reference's (``cascade_pi_ff``); an incremental agent's
+scaled action to its base controller's (agents/residual.py); an incremental agent's
 action is a bounded valve move per interval (agents/moves.py). ``predict`` refuses a
 non-finite or misshapen observation with a ``ValueError`` before any state changes, as the
 baselines do
@@ -114,8 +114,10 @@ class AgentPolicy:
         env: The env it acts on (observation layout, plant; the base of a residual).
         memory: Controller-memory options (agents.wrappers.MemoryConfig fields) or None.
         obs_norm: Frozen VecNormalize statistics or None.
-        residual_scale: If set, the action is the industrial reference's
-            (``baselines.INDUSTRIAL_REFERENCE``) plus this times the model's.
+        residual_scale: If set, the action is the base controller's plus this times the
+            model's (agents/residual.py).
+        residual_base: The base controller of a residual agent that observes it (a
+            registered baseline's name); None: the industrial reference, unobserved.
         max_move: If set, the model's action is a valve move of at most this fraction of
             stroke per control interval (agents/moves.py); not with ``residual_scale``.
     """
@@ -133,6 +135,7 @@ class AgentPolicy:
         obs_norm: dict | None = None,
         residual_scale: float | None = None,
         max_move: float | None = None,
+        residual_base: str | None = None,
     ) -> None:
         if residual_scale is not None and max_move is not None:
             raise ValueError("an agent is either residual (residual_scale) or incremental "
@@ -146,9 +149,11 @@ class AgentPolicy:
         self.residual_scale = residual_scale
         self.base = None
         if residual_scale is not None:
-            import baselines
+            from agents.residual import ResidualBase
 
-            self.base = baselines.make(baselines.INDUSTRIAL_REFERENCE, env)
+            self.base = ResidualBase(env, residual_scale, residual_base)
+        elif residual_base is not None:
+            raise ValueError("residual_base needs residual_scale (a residual agent)")
         self.moves = None if max_move is None else MoveState(env, max_move)
         #: The LSTM state of a recurrent model (sb3-contrib's RecurrentPPO), per row.
         self.recurrent = hasattr(getattr(model, "policy", None), "lstm_actor")
@@ -172,7 +177,11 @@ class AgentPolicy:
         self._n = n
         if self.moves is not None and restart.any():
             self.moves.restart(obs, restart)
-        x = self.memory(obs, restart) if self.memory is not None else obs
+        x = obs
+        if self.base is not None:
+            self.base.step(obs, restart)
+            x = self.base.extend(obs)
+        x = self.memory(x, restart) if self.memory is not None else x
         x = normalize_obs(x, self.obs_norm)
         if self.recurrent:  # the model restarts the LSTM state of the restarted rows
             action, self._lstm = self.model.predict(
@@ -184,8 +193,7 @@ class AgentPolicy:
             action, _ = self.model.predict(x, deterministic=deterministic)
         action = np.asarray(action, dtype=np.float32).reshape(n, -1)
         if self.base is not None:
-            base, _ = self.base.predict(obs, episode_start=restart)
-            action = np.clip(base + self.residual_scale * action, -1.0, 1.0).astype(np.float32)
+            action = self.base.combine(action)
         if self.moves is not None:
             action = self.moves(action)
         return (action[0] if np.ndim(observation) == 1 else action), None

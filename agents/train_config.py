@@ -14,15 +14,22 @@ from agents.moves import check_max_move
 from agents.policy import model_class
 from agents.wrappers import memory_options
 
-#: Algorithm names: SB3's PPO, SAC, TD3, PPO as a residual on cascade_pi_ff (its own YAML
-#: file, whose entries need ``residual_scale``) and sb3-contrib's RecurrentPPO (an LSTM
-#: policy: the memory is learned instead of given by agents.wrappers).
-ALGOS = ("ppo", "sac", "td3", "ppo_residual", "recurrentppo", "sac_caps")
+#: Algorithm names: SB3's PPO, SAC, TD3, PPO as a residual on a base controller
+#: (:data:`RESIDUAL_BASES`; each its own YAML file, whose entries need ``residual_scale``)
+#: and sb3-contrib's RecurrentPPO (an LSTM policy: the memory is learned instead of given
+#: by agents.wrappers).
+ALGOS = ("ppo", "sac", "td3", "ppo_residual", "ppo_residual_pi", "ppo_residual_mpc",
+         "recurrentppo", "sac_caps")  # fmt: skip
+#: The base controller of each residual algorithm (agents/residual.py): observed by the
+#: agent and told the applied command; None: ``ppo_residual``'s legacy form (the industrial
+#: reference, unobserved).
+RESIDUAL_BASES = {"ppo_residual": None, "ppo_residual_pi": "cascade_pi_ff_tuned",
+                  "ppo_residual_mpc": "mpc_linear"}  # fmt: skip
 HYPERPARAMS = Path(__file__).with_name("hyperparams")
 #: RL Zoo keys with a meaning of their own (the rest go to the algorithm's constructor).
 SPECIAL = ("n_timesteps", "n_envs", "policy", "normalize", "env_wrapper", "policy_kwargs",
            "noise_type", "noise_std", "residual_scale", "max_move", "train_reward",
-           "plant_randomization", "travel_price")  # fmt: skip
+           "plant_randomization", "travel_price", "residual_base")  # fmt: skip
 
 
 class ConfigError(ValueError):
@@ -32,7 +39,7 @@ class ConfigError(ValueError):
 def algo_class(algo: str):
     if algo not in ALGOS:
         raise ConfigError(f"unknown algo {algo!r}; valid: {list(ALGOS)}")
-    names = {"recurrentppo": "RecurrentPPO", "sac_caps": "SACCAPS"}
+    names = {"recurrentppo": "RecurrentPPO", "sac_caps": "SACCAPS"}  # the rest: PPO, SAC, TD3
     try:
         return model_class(names.get(algo, algo.split("_")[0].upper()))
     except ValueError as exc:
@@ -79,6 +86,12 @@ def read_hyperparams(path: Path, env_id: str, algo: str) -> dict[str, Any]:
     hp = doc[env_id]
     if not isinstance(hp, dict):
         raise ConfigError(f"--hyperparams {path}: {env_id} must map to a mapping")
+    from agents.horizons import from_plant
+
+    try:
+        hp = from_plant(env_id, hp)  # "plant": the setting read from the plant's time scale
+    except ValueError as exc:
+        raise ConfigError(f"--hyperparams {path}: {exc}") from None
     import inspect
 
     ctor = set()
@@ -94,9 +107,16 @@ def read_hyperparams(path: Path, env_id: str, algo: str) -> dict[str, Any]:
             f"--hyperparams {path}: unknown key(s) {unknown} for {algo}; valid: "
             f"{sorted(ctor | set(SPECIAL))}"
         )
-    if ("residual_scale" in hp) != algo.endswith("_residual"):
-        raise ConfigError(f"--hyperparams {path}: residual_scale is required for a *_residual "
-                          f"algo and only there (algo {algo!r})")  # fmt: skip
+    if ("residual_scale" in hp) != (algo in RESIDUAL_BASES):
+        raise ConfigError(f"--hyperparams {path}: residual_scale is required for a residual "
+                          f"algo ({list(RESIDUAL_BASES)}) and only there (algo {algo!r})")
+    if "residual_scale" in hp:
+        from agents.residual import check_residual
+
+        try:
+            check_residual(hp["residual_scale"], RESIDUAL_BASES[algo])
+        except ValueError as exc:
+            raise ConfigError(f"--hyperparams {path}: {exc}") from None
     if "max_move" in hp:
         if "residual_scale" in hp:
             raise ConfigError(f"--hyperparams {path}: residual_scale and max_move exclude each "
@@ -128,7 +148,11 @@ def read_hyperparams(path: Path, env_id: str, algo: str) -> dict[str, Any]:
             perturb.parse(env_id, hp["plant_randomization"])
         except ValueError as exc:
             raise ConfigError(f"--hyperparams {path}: {exc}") from None
+    if "residual_base" in hp:
+        raise ConfigError(f"--hyperparams {path}: residual_base is set by the algo "
+                          f"({RESIDUAL_BASES}), not in the file")  # fmt: skip
     hp = dict(hp)
+    hp["residual_base"] = RESIDUAL_BASES.get(algo)
     hp["policy_kwargs"] = _dict_string("policy_kwargs", hp.get("policy_kwargs", {}))
     norm = hp.get("normalize", False)
     hp["normalize"] = norm if isinstance(norm, bool) else _dict_string("normalize", norm)

@@ -65,7 +65,7 @@ def make_training_env(env_id: str, n_envs: int, seed: int, hp: dict[str, Any],
             raise ConfigError("travel_price needs the reference's travel rate")
         venv = price = VecTravelPrice(venv, base.venv, reference_rate, hp["travel_price"])
     if hp.get("residual_scale") is not None:
-        venv = VecResidual(venv, base.venv, hp["residual_scale"])
+        venv = VecResidual(venv, base.venv, hp["residual_scale"], hp.get("residual_base"))
     if hp.get("max_move") is not None:
         venv = VecMoves(venv, base.venv, hp["max_move"])
     if hp["env_wrapper"] is not None:
@@ -165,9 +165,30 @@ def _sb3_model(cls: Any, hp: dict[str, Any], venv: Any, seed: int,
         n_u = venv.action_space.shape[0]
         kwargs["action_noise"] = NormalActionNoise(np.zeros(n_u), hp.get("noise_std", 0.1)
                                                    * np.ones(n_u))  # fmt: skip
-    return cls(hp.get("policy", "MlpPolicy"), venv, seed=seed, device="cpu", verbose=0,
-               policy_kwargs=hp["policy_kwargs"] or None, tensorboard_log=tensorboard,
-               **kwargs)  # fmt: skip
+    model = cls(hp.get("policy", "MlpPolicy"), venv, seed=seed, device="cpu", verbose=0,
+                policy_kwargs=hp["policy_kwargs"] or None, tensorboard_log=tensorboard,
+                **kwargs)  # fmt: skip
+    if hp.get("residual_base") is not None:
+        zero_output(model)
+    return model
+
+
+def zero_output(model: Any) -> None:
+    """Zero the last layer of ``model``'s actor (PPO's ``action_net``, SAC's and TD3's last
+    linear layer): a residual agent's deterministic action starts at 0, so training starts
+    from its base controller."""
+    import torch
+
+    pol = model.policy
+    if hasattr(pol, "action_net"):
+        layers = [pol.action_net]
+    else:
+        mus = [a.mu for a in (pol.actor, getattr(pol, "actor_target", None)) if a is not None]
+        layers = [[m for m in mu.modules() if isinstance(m, torch.nn.Linear)][-1] for mu in mus]
+    with torch.no_grad():
+        for layer in layers:
+            layer.weight.zero_()
+            layer.bias.zero_()
 
 
 def _checkpointing(model: Any, venv: Any, native: Any, hp: dict[str, Any], env_id: str,
@@ -182,6 +203,7 @@ def _checkpointing(model: Any, venv: Any, native: Any, hp: dict[str, Any], env_i
     def evaluate(steps: int, wall: float) -> None:
         policy = AgentPolicy(model, native, memory=hp["env_wrapper"], obs_norm=_obs_stats(venv),
                              residual_scale=hp.get("residual_scale"),
+                             residual_base=hp.get("residual_base"),
                              max_move=hp.get("max_move"))  # fmt: skip
         score = validate(env_id, policy)
         score["travel_ratio"] = score["valve_travel"] / reference["valve_travel"]
@@ -256,7 +278,8 @@ def _metadata(env_id: str, algo: str, cls: Any, revision: str, path: Path,
                        "reference": {"policy": baselines.INDUSTRIAL_REFERENCE, **reference},
                        "travel_budget": TUNING_TRAVEL_BUDGET, "curve": curve},
         "normalization": best["obs_norm"], "memory": hp["env_wrapper"],
-        "residual_scale": hp.get("residual_scale"), "max_move": hp.get("max_move"),
+        "residual_scale": hp.get("residual_scale"), "residual_base": hp.get("residual_base"),
+        "max_move": hp.get("max_move"),
         "train_reward": hp.get("train_reward"),
     }  # fmt: skip
 
@@ -301,6 +324,8 @@ def train(env_id: str, algo: str, hyperparams: Path | None = None, timesteps: in
     prices: list[tuple[int, float, float]] = []
     evaluate = _checkpointing(model, venv, native, hp, env_id, reference, total, curve, best,
                               model_path)  # fmt: skip
+    if hp.get("residual_base") is not None:  # zero output: the base itself (zero_output)
+        evaluate(0, 0.0)
     callbacks = [_progress(evaluate, curve, total, t0, name, quiet, max_minutes)]
     if price is not None:
         from agents.travel_price import price_callback

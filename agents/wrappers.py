@@ -207,32 +207,32 @@ class VecControllerMemory(VecEnvWrapper):
 
 
 class VecResidual(VecEnvWrapper):
-    """SB3 VecEnv wrapper for a residual agent: the env receives the industrial reference's
-    action (``baselines.INDUSTRIAL_REFERENCE``) plus ``scale`` times the agent's, clipped to
-    [-1, 1] (the arrangement industrial RL deploys: the conventional loops stay in charge,
-    the agent corrects them)."""
+    """SB3 VecEnv wrapper for a residual agent (agents/residual.py): the env receives the
+    base controller's action plus ``scale`` times the agent's, clipped to [-1, 1]; in the
+    observed form (``base`` named) the agent's observation ends with the base's action
+    of the step it acts in (an ended row's ``terminal_observation`` with the base action
+    of its last step)."""
 
-    def __init__(self, venv: VecEnv, env: Any, scale: float) -> None:
-        import baselines
+    def __init__(self, venv: VecEnv, env: Any, scale: float, base: str | None = None) -> None:
+        from agents.residual import ResidualBase
 
-        if not (isinstance(scale, (int, float)) and 0 < scale <= 2):
-            raise ValueError(f"residual_scale must be a number in (0, 2], got {scale!r}")
-        super().__init__(venv)
-        self.base = baselines.make(baselines.INDUSTRIAL_REFERENCE, env)
-        self.scale = float(scale)
-        self._obs = np.zeros((venv.num_envs, *venv.observation_space.shape))
-        self._start = np.ones(venv.num_envs, dtype=bool)
+        self.base = ResidualBase(env, scale, base)
+        super().__init__(venv, observation_space=self.base.extend_space(venv.observation_space))
 
     def reset(self) -> np.ndarray:
-        self._obs = self.venv.reset()
-        self._start = np.ones(self.num_envs, dtype=bool)
-        return self._obs
+        obs = self.venv.reset()
+        self.base.step(obs, np.ones(self.num_envs, dtype=bool))
+        return self.base.extend(obs)
 
     def step_async(self, actions: np.ndarray) -> None:
-        base, _ = self.base.predict(self._obs, episode_start=self._start)
-        self.venv.step_async(np.clip(base + self.scale * actions, -1.0, 1.0).astype(np.float32))
+        self.venv.step_async(self.base.combine(actions))
 
     def step_wait(self):
-        self._obs, rew, dones, infos = self.venv.step_wait()
-        self._start = dones
-        return self._obs, rew, dones, infos
+        obs, rew, dones, infos = self.venv.step_wait()
+        if self.base.observed and dones.any():
+            last = self.base.action
+            for b in np.flatnonzero(dones):
+                final = np.asarray(infos[b]["terminal_observation"])[None]
+                infos[b]["terminal_observation"] = self.base.extend(final, last[[b]])[0]
+        self.base.step(obs, np.asarray(dones, dtype=bool))
+        return self.base.extend(obs), rew, dones, infos

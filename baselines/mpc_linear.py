@@ -247,6 +247,21 @@ class MPCLinear:
     def reset(self) -> None:
         self._rows = None
 
+    def applied(self, action: Any) -> None:
+        """Tell the estimator the commands the valves received after this call's
+        ``predict`` (env action units, one row per row of that call), when something
+        downstream changed them (a residual agent adds its correction): the next time
+        update and output prediction use these, so that the disturbance estimates do not
+        absorb the correction. The regulator still plans from its own last command."""
+        if self._rows is None:
+            raise ValueError("mpc_linear.applied: no predict call to apply commands to")
+        u = np.atleast_2d(np.asarray(action, dtype=np.float64))
+        if u.shape != (len(self._rows), self.n_u) or not np.all(np.isfinite(u)):
+            raise ValueError(f"mpc_linear.applied: expected finite commands of shape "
+                             f"({len(self._rows)}, {self.n_u}), got shape {u.shape}")  # fmt: skip
+        for st, ub in zip(self._rows, np.clip(0.5 * (u + 1.0), 0.0, 1.0), strict=True):
+            st["applied"] = ub
+
     # -- scheduling ----------------------------------------------------------------------
     def _model(self, L: float) -> tuple[int, dict[str, Any]]:
         """(key, local model): the grid models interpolated at L rounded to LOAD_QUANTUM
@@ -324,10 +339,11 @@ class MPCLinear:
             z = st["z"]
         else:  # time update over the last interval, the frame moved to this load's op
             rate = (L - st["L"]) / self.dt
-            known = np.concatenate([st["u"] - st["op"][1], [rate], st["md"]])
+            u_in = st.get("applied", st["u"])  # what the valves were commanded (applied())
+            known = np.concatenate([u_in - st["op"][1], [rate], st["md"]])
             z = m["Az"] @ st["z"] + m["Bz"] @ known
             z[:r] -= xi_op - st["op"][0]
-            feed = m["Dm"] @ (st["u"] - u_op) + m["DdL"] * (st["L"] - L) + m["Ddr"] * rate
+            feed = m["Dm"] @ (u_in - u_op) + m["DdL"] * (st["L"] - L) + m["Ddr"] * rate
             z = z + m["M"] @ (y[: d["n_y"]] - ym_op - feed - m["Cmz"] @ z)
             if not self.estimate_disturbances:
                 z[r:] = 0.0
