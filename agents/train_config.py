@@ -148,6 +148,11 @@ def read_hyperparams(path: Path, env_id: str, algo: str) -> dict[str, Any]:
             perturb.parse(env_id, hp["plant_randomization"])
         except ValueError as exc:
             raise ConfigError(f"--hyperparams {path}: {exc}") from None
+    for key in ("gamma", "gae_lambda"):
+        v = hp.get(key, 0.5)
+        if not (isinstance(v, (int, float)) and not isinstance(v, bool) and 0 < v <= 1):
+            raise ConfigError(f"--hyperparams {path}: {key} must be a number in (0, 1] or "
+                              f"'plant' (read from the plant's time scale), got {v!r}")
     if "residual_base" in hp:
         raise ConfigError(f"--hyperparams {path}: residual_base is set by the algo "
                           f"({RESIDUAL_BASES}), not in the file")  # fmt: skip

@@ -252,15 +252,18 @@ class MPCLinear:
         ``predict`` (env action units, one row per row of that call), when something
         downstream changed them (a residual agent adds its correction): the next time
         update and output prediction use these, so that the disturbance estimates do not
-        absorb the correction. The regulator still plans from its own last command."""
+        absorb the correction (a row told its own action is left as it is). The regulator
+        still plans from its own last command."""
         if self._rows is None:
             raise ValueError("mpc_linear.applied: no predict call to apply commands to")
         u = np.atleast_2d(np.asarray(action, dtype=np.float64))
         if u.shape != (len(self._rows), self.n_u) or not np.all(np.isfinite(u)):
             raise ValueError(f"mpc_linear.applied: expected finite commands of shape "
                              f"({len(self._rows)}, {self.n_u}), got shape {u.shape}")  # fmt: skip
-        for st, ub in zip(self._rows, np.clip(0.5 * (u + 1.0), 0.0, 1.0), strict=True):
-            st["applied"] = ub
+        for st, ab in zip(self._rows, u, strict=True):
+            own = (2.0 * st["u"] - 1.0).astype(np.float32)  # the action predict gave
+            if not np.array_equal(own, ab.astype(np.float32)):
+                st["applied"] = np.clip(0.5 * (ab + 1.0), 0.0, 1.0)
 
     # -- scheduling ----------------------------------------------------------------------
     def _model(self, L: float) -> tuple[int, dict[str, Any]]:

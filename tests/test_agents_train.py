@@ -25,6 +25,7 @@ SMALL = {
     "td3": {"learning_starts": 300, "batch_size": 64, "train_freq": 8, "gradient_steps": 1,
             "noise_type": "normal", "noise_std": 0.1},
     "ppo_residual": {"n_steps": 128, "batch_size": 64, "n_epochs": 2, "residual_scale": 0.2},
+    "ppo_residual_mpc": {"n_steps": 128, "batch_size": 64, "n_epochs": 2, "residual_scale": 0.2},
     "sac_caps": {"learning_starts": 300, "batch_size": 64, "train_freq": 8, "gradient_steps": 1,
                  "caps_temporal": 0.1, "caps_spatial": 0.1},
     "recurrentppo": {"n_steps": 128, "batch_size": 64, "n_epochs": 2, "policy": "MlpLstmPolicy",
@@ -35,6 +36,7 @@ STEPS = {
     "sac": 1200,
     "td3": 1200,
     "ppo_residual": 1024,
+    "ppo_residual_mpc": 1024,
     "recurrentppo": 1024,
     "sac_caps": 1200,
 }
@@ -73,15 +75,20 @@ def test_smoke_training_writes_model_and_metadata(trained, algo):
     assert meta["env_id"] == ENV_ID and meta["algo"] == algo and meta["seed"] == 1
     assert meta["timesteps_trained"] >= STEPS[algo]
     assert [c["fraction"] for c in meta["validation"]["curve"]][-1] >= 1.0
-    assert len(meta["validation"]["curve"]) == len(training.EVAL_FRACTIONS)
+    base = train_config.RESIDUAL_BASES.get(algo)
+    # a zero-output residual is validated before training too: its base alone
+    assert len(meta["validation"]["curve"]) == len(training.EVAL_FRACTIONS) + (base is not None)
+    assert meta["residual_base"] == base
     n_obs = gym.make(ENV_ID).observation_space.shape[0]
     if algo == "recurrentppo":
         assert meta["memory"] is None and meta["sb3_class"] == "RecurrentPPO"
         assert len(meta["normalization"]["mean"]) == n_obs
     else:
         assert meta["memory"] == MEMORY[0]["agents.wrappers.ControllerMemory"]
-        assert len(meta["normalization"]["mean"]) == n_obs + 1 + 3  # integral + 1 x (e, 2 valves)
-    assert meta["residual_scale"] == (0.2 if algo == "ppo_residual" else None)
+        # integral + 1 x (e, 2 valves), and the observed base's 2 commands
+        extra = 1 + 3 + (2 if base is not None else 0)
+        assert len(meta["normalization"]["mean"]) == n_obs + extra
+    assert meta["residual_scale"] == (0.2 if algo in train_config.RESIDUAL_BASES else None)
     chosen: dict = {}
     for c in meta["validation"]["curve"]:
         if training.better_checkpoint(c, chosen, meta["validation"]["travel_budget"]):
@@ -93,7 +100,7 @@ def test_smoke_training_writes_model_and_metadata(trained, algo):
     assert meta["git_revision"] and meta["wall_time_s"] > 0
 
 
-@pytest.mark.parametrize("algo", ["ppo", "sac", "recurrentppo"])
+@pytest.mark.parametrize("algo", ["ppo", "sac", "recurrentppo", "ppo_residual_mpc"])
 def test_loaded_policy_reproduces_validation_and_is_deterministic(trained, algo):
     pol = agents.load(ENV_ID, algo, zoo=trained[algo])
     meta = json.loads(steamtemp_paths(trained[algo], ENV_ID, algo)[1].read_text())
