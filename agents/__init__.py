@@ -20,7 +20,8 @@ KINDS = {"ppo": "model-free", "sac": "model-free", "td3": "model-free",
          "recurrentppo": "model-free", "sac_caps": "model-free",
          "ppo_residual": "residual over cascade_pi_ff",
          "ppo_residual_pi": "residual over cascade_pi_ff_tuned",
-         "ppo_residual_mpc": "residual over mpc_linear"}  # fmt: skip
+         "ppo_residual_mpc": "residual over mpc_linear",
+         "ppo_imitation_mpc": "imitation of mpc_linear"}  # fmt: skip
 
 
 def kind(algo: str) -> str:

@@ -64,24 +64,50 @@ def fit(obs: np.ndarray, act: np.ndarray, *, epochs: int = 30, batch: int = 256,
     x = torch.as_tensor(normalize_obs(obs, stats), dtype=torch.float32)
     y = torch.as_tensor(np.clip(act, -1.0, 1.0), dtype=torch.float32)
     net = actor(obs.shape[1], act.shape[1])
+    regress(net, x, y, epochs=epochs, batch=batch, lr=lr, seed=seed, max_seconds=max_seconds,
+            log=log)  # fmt: skip
+    return net, stats
+
+
+def regress(net: Any, x: Any, y: Any, *, epochs: int, batch: int = 256, lr: float = 1e-3,
+            seed: int = 0, max_seconds: float = 120.0, log: Any = None,
+            moves: tuple[Any, Any, float] | None = None) -> float:  # fmt: skip
+    """Fit the torch module ``net`` to ``y`` from ``x`` (tensors) by mean squared error with
+    Adam, in shuffled minibatches, for ``epochs`` or ``max_seconds``, whichever comes
+    first; the last epoch's mean squared error of the actions. ``moves``: (x of the next
+    step, y of the next step, weight): the loss adds weight times the squared error of the
+    move ``net(x_next) - net(x)`` against ``y_next - y`` over the moves' mean square (a
+    learner that matches the actions but not their moves strokes the valve on every
+    measurement's noise)."""
+    import torch
+
     opt = torch.optim.Adam(net.parameters(), lr=lr)
     gen = torch.Generator().manual_seed(seed)
+    if moves is not None:  # the expert's moves' mean square: the move term's unit
+        scale = float(torch.mean((moves[1] - y) ** 2)) + 1e-12
     t0 = time.perf_counter()
+    mse = float("nan")
     for epoch in range(epochs):
         perm = torch.randperm(len(x), generator=gen)
         total = 0.0
         for i in range(0, len(x), batch):
             idx = perm[i:i + batch]
-            loss = torch.mean((net(x[idx]) - y[idx]) ** 2)
+            a = net(x[idx])
+            loss = torch.mean((a - y[idx]) ** 2)
+            fit = loss
+            if moves is not None:
+                step = net(moves[0][idx]) - a
+                loss = loss + moves[2] * torch.mean((step - (moves[1][idx] - y[idx])) ** 2) / scale
             opt.zero_grad()
             loss.backward()
             opt.step()
-            total += float(loss.detach()) * len(idx)
+            total += float(fit.detach()) * len(idx)
+        mse = total / len(x)
         if log:
-            log(f"epoch {epoch + 1}: mse {total / len(x):.3g}")
+            log(f"epoch {epoch + 1}: mse {mse:.3g}")
         if time.perf_counter() - t0 > max_seconds:
             break
-    return net, stats
+    return mse
 
 
 def actor(n_obs: int, n_act: int) -> Any:

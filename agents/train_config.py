@@ -10,16 +10,18 @@ from typing import Any
 
 import yaml
 
+from agents.imitation import EXPERTS
+from agents.imitation import KEYS as IMITATION_KEYS
 from agents.moves import check_max_move
 from agents.policy import model_class
 from agents.wrappers import memory_options
 
 #: Algorithm names: SB3's PPO, SAC, TD3, PPO as a residual on a base controller
 #: (:data:`RESIDUAL_BASES`; each its own YAML file, whose entries need ``residual_scale``)
-#: and sb3-contrib's RecurrentPPO (an LSTM policy: the memory is learned instead of given
-#: by agents.wrappers).
+#: PPO imitating a causal expert by DAgger (agents/imitation.py) and sb3-contrib's
+#: RecurrentPPO (an LSTM policy: the memory is learned instead of given by agents.wrappers).
 ALGOS = ("ppo", "sac", "td3", "ppo_residual", "ppo_residual_pi", "ppo_residual_mpc",
-         "recurrentppo", "sac_caps")  # fmt: skip
+         "ppo_imitation_mpc", "recurrentppo", "sac_caps")  # fmt: skip
 #: The base controller of each residual algorithm (agents/residual.py): observed by the
 #: agent and told the applied command; None: ``ppo_residual``'s legacy form (the industrial
 #: reference, unobserved).
@@ -29,7 +31,7 @@ HYPERPARAMS = Path(__file__).with_name("hyperparams")
 #: RL Zoo keys with a meaning of their own (the rest go to the algorithm's constructor).
 SPECIAL = ("n_timesteps", "n_envs", "policy", "normalize", "env_wrapper", "policy_kwargs",
            "noise_type", "noise_std", "residual_scale", "max_move", "train_reward",
-           "plant_randomization", "travel_price", "residual_base")  # fmt: skip
+           "plant_randomization", "travel_price", "residual_base", *IMITATION_KEYS)  # fmt: skip
 
 
 class ConfigError(ValueError):
@@ -153,6 +155,21 @@ def read_hyperparams(path: Path, env_id: str, algo: str) -> dict[str, Any]:
         if not (isinstance(v, (int, float)) and not isinstance(v, bool) and 0 < v <= 1):
             raise ConfigError(f"--hyperparams {path}: {key} must be a number in (0, 1] or "
                               f"'plant' (read from the plant's time scale), got {v!r}")
+    given = sorted(set(hp) & set(IMITATION_KEYS))
+    if given and algo not in EXPERTS:
+        raise ConfigError(f"--hyperparams {path}: {given} only for an imitation algo "
+                          f"({list(EXPERTS)})")  # fmt: skip
+    if algo in EXPERTS:
+        from agents.imitation import check
+
+        try:
+            check(hp)
+        except ValueError as exc:
+            raise ConfigError(f"--hyperparams {path}: {exc}") from None
+        if "max_move" in hp or "residual_scale" in hp or "travel_price" in hp:
+            raise ConfigError(f"--hyperparams {path}: an imitation agent acts on valve "
+                              "positions as its expert does (no max_move, residual_scale "
+                              "or travel_price)")  # fmt: skip
     if "residual_base" in hp:
         raise ConfigError(f"--hyperparams {path}: residual_base is set by the algo "
                           f"({RESIDUAL_BASES}), not in the file")  # fmt: skip

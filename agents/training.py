@@ -295,6 +295,29 @@ def _price_record(prices: list[tuple[int, float, float, float]]) -> dict[str, An
             "course": [list(p) for p in keep]}  # fmt: skip
 
 
+def _imitation(env_id: str, algo: str, cls: Any, path: Path, hp: dict[str, Any], seed: int,
+               run: int | None, n_envs: int, total: int, out: Path, reference: dict,
+               venv: Any, quiet: bool, max_minutes: float | None) -> dict[str, Any]:  # fmt: skip
+    """A run of an imitation algorithm (agents/imitation.py) with a training run's files."""
+    from agents import imitation
+
+    venv.close()
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    model_path, meta_path = steamtemp_paths(out, env_id, algo, run)
+    revision = git_revision()
+    t0 = time.monotonic()
+    log = None if quiet else (lambda m: print(m, file=sys.stderr, flush=True))
+    model, best, curve, record = imitation.train(env_id, algo, hp, seed, n_envs, reference,
+                                                 model_path, log, max_minutes)  # fmt: skip
+    meta = _metadata(env_id, algo, cls, revision, path, hp, seed, run, n_envs, total, model,
+                     best, time.monotonic() - t0, reference, curve)  # fmt: skip
+    meta["timesteps_trained"] = curve[-1]["timesteps"]
+    meta["imitation"] = record
+    meta_path.write_text(json.dumps(meta, indent=1), encoding="utf-8")
+    return meta
+
+
 def train(env_id: str, algo: str, hyperparams: Path | None = None, timesteps: int | None = None,
           seed: int = 0, n_envs: int | None = None, out: Path = Path("trained"),
           max_minutes: float | None = None, tensorboard: str | None = None,
@@ -312,6 +335,11 @@ def train(env_id: str, algo: str, hyperparams: Path | None = None, timesteps: in
     reference = validate(env_id, lambda v: baselines.make(baselines.INDUSTRIAL_REFERENCE, v))
     venv, native, price = make_training_env(env_id, n_envs, seed, hp,
                                             reference_rate=reference["travel_per_s"])  # fmt: skip
+    from agents.imitation import EXPERTS
+
+    if algo in EXPERTS:
+        return _imitation(env_id, algo, cls, path, hp, seed, run, n_envs, total, out,
+                          reference, venv, quiet, max_minutes)  # fmt: skip
     model = _sb3_model(cls, hp, venv, seed, tensorboard)
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)

@@ -26,6 +26,7 @@ SMALL = {
             "noise_type": "normal", "noise_std": 0.1},
     "ppo_residual": {"n_steps": 128, "batch_size": 64, "n_epochs": 2, "residual_scale": 0.2},
     "ppo_residual_mpc": {"n_steps": 128, "batch_size": 64, "n_epochs": 2, "residual_scale": 0.2},
+    "ppo_imitation_mpc": {"dagger_iterations": 2, "fit_epochs": 1, "move_weight": 0.01},
     "sac_caps": {"learning_starts": 300, "batch_size": 64, "train_freq": 8, "gradient_steps": 1,
                  "caps_temporal": 0.1, "caps_spatial": 0.1},
     "recurrentppo": {"n_steps": 128, "batch_size": 64, "n_epochs": 2, "policy": "MlpLstmPolicy",
@@ -37,6 +38,7 @@ STEPS = {
     "td3": 1200,
     "ppo_residual": 1024,
     "ppo_residual_mpc": 1024,
+    "ppo_imitation_mpc": 1,
     "recurrentppo": 1024,
     "sac_caps": 1200,
 }
@@ -77,7 +79,9 @@ def test_smoke_training_writes_model_and_metadata(trained, algo):
     assert [c["fraction"] for c in meta["validation"]["curve"]][-1] >= 1.0
     base = train_config.RESIDUAL_BASES.get(algo)
     # a zero-output residual is validated before training too: its base alone
-    assert len(meta["validation"]["curve"]) == len(training.EVAL_FRACTIONS) + (base is not None)
+    n_checks = (meta["hyperparameters"]["dagger_iterations"] if algo == "ppo_imitation_mpc"
+                else len(training.EVAL_FRACTIONS) + (base is not None))  # fmt: skip
+    assert len(meta["validation"]["curve"]) == n_checks
     assert meta["residual_base"] == base
     n_obs = gym.make(ENV_ID).observation_space.shape[0]
     if algo == "recurrentppo":
@@ -100,7 +104,8 @@ def test_smoke_training_writes_model_and_metadata(trained, algo):
     assert meta["git_revision"] and meta["wall_time_s"] > 0
 
 
-@pytest.mark.parametrize("algo", ["ppo", "sac", "recurrentppo", "ppo_residual_mpc"])
+@pytest.mark.parametrize("algo", ["ppo", "sac", "recurrentppo", "ppo_residual_mpc",
+                                  "ppo_imitation_mpc"])  # fmt: skip
 def test_loaded_policy_reproduces_validation_and_is_deterministic(trained, algo):
     pol = agents.load(ENV_ID, algo, zoo=trained[algo])
     meta = json.loads(steamtemp_paths(trained[algo], ENV_ID, algo)[1].read_text())

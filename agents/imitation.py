@@ -1,0 +1,185 @@
+"""Imitation of a causal expert by DAgger, into a PPO model that RL can fine-tune.
+
+``steamtemp-train --algo ppo_imitation_mpc`` (and the zoo's entries of that name) trains
+an agent to act as ``mpc_linear`` does from what the agents observe (the env's observation
+and the controller memory, agents/wrappers.py), with the dataset aggregation of Ross,
+Gordon and Bagnell, "A reduction of imitation learning and structured prediction to
+no-regret online learning", AISTATS 2011:
+
+1. iteration 0 runs the expert on ``n_envs`` training episodes (``random`` scenario,
+   seeds ``seed + k``) and records (memory-extended observation, expert action) pairs;
+   the observation's standardization is frozen from these;
+2. each later iteration i runs, per step and row, the expert's action with probability
+   ``beta_decay ** i`` and the learner's otherwise, on new training episodes; the expert
+   runs in shadow on the same observations and is told the command that was applied
+   (``mpc_linear.applied``), so its estimate stays that of the plant as it is driven, and
+   labels every visited state with its action;
+3. after each iteration the actor (the PPO policy's mean: its ``mlp_extractor.policy_net``
+   and ``action_net``) is fitted to every pair so far by mean squared error, plus
+   ``move_weight`` times the error of its moves from one step to the next against the
+   expert's (agents/behaviour_cloning.py's ``regress``: matching the actions alone, the
+   learner strokes the valve on the measurement noise: 1.7-2.9x the reference's travel
+   on the FSH where the expert's is 1.7x), and validated as steamtemp-train validates
+   (agents/training.py); the best checkpoint within the travel budget is kept.
+
+The result is a PPO model with its memory and frozen normalization in steamtemp-train's
+layout, so agents.load, the leaderboard and PPO fine-tuning read it as any trained agent.
+Position actions (the expert's own units). Without the controller memory an MLP sees one
+observation and cannot hold what the expert's estimator holds: the plain behaviour cloning
+of docs/offline.md scores far below its expert.
+"""
+
+from __future__ import annotations
+
+import time
+from typing import Any
+
+import numpy as np
+
+#: The expert of each imitation algorithm.
+EXPERTS = {"ppo_imitation_mpc": "mpc_linear"}
+#: Entry keys of an imitation algorithm (besides the PPO constructor's and RL Zoo's).
+KEYS = ("dagger_iterations", "beta_decay", "fit_epochs", "fit_seconds", "move_weight")
+DEFAULTS = {"dagger_iterations": 8, "beta_decay": 0.5, "fit_epochs": 10, "fit_seconds": 60.0,
+            "move_weight": 1.0}  # fmt: skip
+
+
+def check(hp: dict[str, Any]) -> None:
+    """ValueError naming the first bad imitation setting of an entry ``hp``."""
+    for key, lo, kind in (("dagger_iterations", 1, int), ("fit_epochs", 1, int)):
+        v = hp.get(key, DEFAULTS[key])
+        if not (isinstance(v, kind) and not isinstance(v, bool) and v >= lo):
+            raise ValueError(f"{key} must be an integer >= {lo}, got {v!r}")
+    v = hp.get("move_weight", DEFAULTS["move_weight"])
+    if not (isinstance(v, (int, float)) and not isinstance(v, bool) and 0 <= v < np.inf):
+        raise ValueError(f"move_weight must be a number >= 0, got {v!r}")
+    for key in ("beta_decay", "fit_seconds"):
+        v = hp.get(key, DEFAULTS[key])
+        ok = isinstance(v, (int, float)) and not isinstance(v, bool) and np.isfinite(v)
+        if not (ok and v > 0 and (key != "beta_decay" or v < 1)):
+            raise ValueError(f"{key} must be a number in {'(0, 1)' if key == 'beta_decay' else '> 0'}, got {v!r}")  # fmt: skip
+
+
+def actor_net(model: Any) -> Any:
+    """The PPO policy's deterministic actor as one torch module (its own parameters)."""
+    import torch
+
+    pol = model.policy
+    return torch.nn.Sequential(*pol.mlp_extractor.policy_net, pol.action_net)
+
+
+def collect(env_id: str, expert_name: str, memory: dict, seeds: list[int], beta: float,
+            learner: Any, rng: np.random.Generator) -> tuple[np.ndarray, ...]:  # fmt: skip
+    """(memory-extended observations, expert actions, the same at the next step) of every
+    step but an episode's last, one episode per seed, the applied action being the
+    expert's with probability ``beta`` per step and row and ``learner(x)`` otherwise
+    (module docstring)."""
+    import gymnasium as gym
+
+    import baselines
+    from agents.memory import MemoryConfig
+    from agents.wrappers import MemoryState
+
+    n = len(seeds)
+    venv = gym.make_vec(env_id, num_envs=n, vectorization_mode="vector_entry_point",
+                        scenario="random")  # fmt: skip
+    expert = baselines.make(expert_name, venv)
+    mem = MemoryState(venv, MemoryConfig.from_kwargs(memory))
+    obs, _ = venv.reset(seed=[int(s) for s in seeds])
+    pairs: list[tuple[np.ndarray, ...]] = []
+    start = np.ones(n, dtype=bool)
+    live = np.ones(n, dtype=bool)
+    last = None
+    while live.any():
+        x = mem(obs, start)
+        a_exp = np.asarray(expert.predict(obs, episode_start=start)[0], np.float64).reshape(n, -1)
+        if last is not None:
+            pairs.append((last[0][live], last[1][live], x[live], a_exp[live]))
+        last = (x, a_exp)
+        act = a_exp
+        if beta < 1.0:
+            mine = rng.random(n) >= beta
+            act = np.where(mine[:, None], np.clip(learner(x), -1.0, 1.0), a_exp)
+            expert.applied(act)
+        start = np.zeros(n, dtype=bool)
+        obs, _, term, trunc, _ = venv.step(act.astype(np.float32))
+        live &= ~(term | trunc)
+    venv.close()
+    return tuple(np.concatenate(p) for p in zip(*pairs, strict=True))
+
+
+def train(env_id: str, algo: str, hp: dict[str, Any], seed: int, n_envs: int,
+          reference: dict[str, float], save_to: Any, log: Any = None,
+          max_minutes: float | None = None) -> tuple[Any, dict, list, dict]:  # fmt: skip
+    """DAgger (module docstring): returns (model, best checkpoint, validation curve,
+    imitation record); the best model is saved to ``save_to``."""
+    import torch
+
+    from agents.behaviour_cloning import regress
+    from agents.policy import AgentPolicy, MlpActor, normalize_obs
+    from agents.training import better_checkpoint, make_training_env, validate
+    from agents.tuning_terms import TUNING_TRAVEL_BUDGET
+    from stable_baselines3 import PPO
+
+    from agents.behaviour_cloning import CLIP_OBS, EPSILON
+
+    settings = {k: hp.get(k, DEFAULTS[k]) for k in KEYS}
+    expert = EXPERTS[algo]
+    memory = hp["env_wrapper"]
+    venv, native, _ = make_training_env(env_id, 1, seed, {**hp, "normalize": False})
+    kwargs = {k: v for k, v in hp.items() if k in ("learning_rate", "gamma", "gae_lambda",
+                                                     "n_steps", "batch_size", "n_epochs")}
+    kwargs.pop("learning_rate", None)
+    model = PPO(hp.get("policy", "MlpPolicy"), venv, seed=seed, device="cpu", verbose=0,
+                policy_kwargs=hp["policy_kwargs"] or None, **kwargs)  # fmt: skip
+    net = actor_net(model)
+    rng = np.random.default_rng(seed)
+    t0 = time.monotonic()
+    data: list[tuple[np.ndarray, ...]] = []
+    stats = None
+    best: dict[str, Any] = {}
+    curve: list[dict[str, Any]] = []
+    record = {"expert": expert, **settings, "iterations": []}
+    for i in range(settings["dagger_iterations"]):
+        beta = settings["beta_decay"] ** i
+        learner = MlpActor.of(model)
+        seeds = [seed + i * n_envs + k for k in range(n_envs)]
+        got = collect(env_id, expert, memory, seeds, beta,
+                      lambda z: learner(normalize_obs(z, stats)), rng)  # fmt: skip
+        data.append(got)
+        if stats is None:
+            x = got[0]
+            stats = {"mean": x.mean(axis=0).tolist(), "var": x.var(axis=0).tolist(),
+                     "epsilon": EPSILON, "clip_obs": CLIP_OBS}  # fmt: skip
+
+        def tensor(j: int, obs: bool) -> Any:
+            a = np.concatenate([d[j] for d in data])
+            a = normalize_obs(a, stats) if obs else np.clip(a, -1.0, 1.0)
+            return torch.as_tensor(a, dtype=torch.float32)
+
+        xa, ya = tensor(0, True), tensor(1, False)
+        moves = (tensor(2, True), tensor(3, False), settings["move_weight"])
+        mse = regress(net, xa, ya, epochs=settings["fit_epochs"],
+                      max_seconds=settings["fit_seconds"], seed=seed + i,
+                      moves=moves if settings["move_weight"] > 0 else None)  # fmt: skip
+        policy = AgentPolicy(model, native, memory=memory, obs_norm=stats)
+        score = validate(env_id, policy)
+        score["travel_ratio"] = score["valve_travel"] / reference["valve_travel"]
+        wall = time.monotonic() - t0
+        steps = int(sum(len(d[0]) for d in data))
+        curve.append({"timesteps": steps, "fraction": (i + 1) / settings["dagger_iterations"],
+                      "wall_s": wall, **score})  # fmt: skip
+        record["iterations"].append({"beta": beta, "pairs": steps, "mse": mse})
+        if log:
+            log(f"[{algo}] iteration {i}: beta {beta:.3g}, {steps:,} pairs, mse {mse:.3g}, "
+                f"validation return {score['return']:.1f}, travel {score['travel_ratio']:.2f}x")
+        if better_checkpoint(score, best, TUNING_TRAVEL_BUDGET):
+            best.update(score, timesteps=steps, obs_norm=stats)
+            model.save(save_to)
+        if max_minutes is not None and wall > 60.0 * max_minutes:
+            break
+    venv.close()
+    return model, best, curve, record
+
+
+__all__ = ["DEFAULTS", "EXPERTS", "KEYS", "actor_net", "check", "collect", "train"]

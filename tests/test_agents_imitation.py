@@ -1,0 +1,113 @@
+"""Imitation by DAgger (agents/imitation.py): the pairs it records, the expert in shadow
+told what was applied, the move term of the regression, and the entries' checks."""
+
+from __future__ import annotations
+
+import gymnasium as gym
+import numpy as np
+import pytest
+import torch
+import yaml
+
+import baselines
+from agents import imitation, train_config
+from agents.behaviour_cloning import regress
+from agents.evaluation import run_batch
+from baselines.loops import observation_layout
+from baselines.mpc_linear import MPCLinear
+
+ENV_ID = "steamtemp/BensonSubcritical-v0"
+MEMORY = {"integral_time_s": 60.0, "history": 2, "history_stride": 3}
+SEEDS = [11, 12]
+
+
+def _expert_alone() -> list[dict]:
+    venv = gym.make_vec(ENV_ID, num_envs=len(SEEDS), vectorization_mode="vector_entry_point",
+                        scenario="random")  # fmt: skip
+    return run_batch(venv, baselines.make("mpc_linear", venv), SEEDS)
+
+
+def test_with_beta_one_the_pairs_are_the_experts_own_episodes():
+    x, y, x_next, y_next = imitation.collect(ENV_ID, "mpc_linear", MEMORY, SEEDS, 1.0,
+                                             learner=None, rng=np.random.default_rng(0))  # fmt: skip
+    runs = _expert_alone()
+    steps = [len(r["trace"]["time_s"]) - 1 for r in runs]  # actions per episode
+    assert len(x) == sum(steps) - len(steps)  # every step but each episode's last
+    m = min(steps) - 1  # steps at which both rows are recorded, row 0 then row 1
+    row0 = slice(0, 2 * m, 2)
+    # the recorded valve openings are those of the expert's own episode
+    env = gym.make(ENV_ID)
+    names, scale, center = observation_layout(env)
+    i = [names.index(v) for v in env.unwrapped.plant.valves]
+    seen = x[row0][:, i] * scale[i] + center[i]
+    np.testing.assert_allclose(seen, runs[0]["trace"]["spray_valve"][:m], atol=1e-9)
+    # consecutive pairs chain: a pair's next step is the same row's following pair
+    np.testing.assert_array_equal(x_next[row0][:-1], x[row0][1:])
+    np.testing.assert_array_equal(y_next[row0][:-1], y[row0][1:])
+    assert np.all(np.abs(y) <= 1.0)
+
+
+def test_the_learner_acts_and_the_expert_is_told_what_was_applied(monkeypatch):
+    calls, told = [], []
+
+    def learner(z):
+        calls.append(z.shape)
+        return np.full((z.shape[0], 2), 0.25)
+
+    original = MPCLinear.applied
+
+    def applied(self, action):
+        told.append(np.array(action))
+        original(self, action)
+
+    monkeypatch.setattr(MPCLinear, "applied", applied)
+
+    x, y, _, _ = imitation.collect(ENV_ID, "mpc_linear", MEMORY, SEEDS, 0.5, learner,
+                                   np.random.default_rng(0))  # fmt: skip
+    assert calls and all(c == (len(SEEDS), x.shape[1]) for c in calls)
+    assert len(told) == len(calls)  # every mixed step is told to the expert
+    learners = np.concatenate([t for t in told]).reshape(-1, 2)
+    assert 0.3 < np.mean(np.all(learners == 0.25, axis=1)) < 0.7  # beta 0.5: half the rows
+    ref_x, _, _, _ = imitation.collect(ENV_ID, "mpc_linear", MEMORY, SEEDS, 1.0, None,
+                                       np.random.default_rng(0))  # fmt: skip
+    assert len(x) == len(ref_x)
+    assert np.abs(x - ref_x).max() > 1e-3  # the learner's steps moved the plant
+
+
+def test_the_move_term_pulls_the_learners_moves_to_the_experts():
+    rng = np.random.default_rng(0)
+    x = torch.as_tensor(rng.normal(size=(512, 3)), dtype=torch.float32)
+    x_next = x + torch.as_tensor(0.5 * rng.normal(size=(512, 3)), dtype=torch.float32)
+    y = torch.zeros(512, 1)  # the expert holds still whatever it sees
+
+    def fitted(weight):
+        torch.manual_seed(0)
+        net = torch.nn.Sequential(torch.nn.Linear(3, 8), torch.nn.Tanh(), torch.nn.Linear(8, 1))
+        with torch.no_grad():
+            net[2].bias.fill_(0.3)
+        mse = regress(net, x, y, epochs=30, seed=0, moves=(x_next, y + 1e-3, weight))
+        with torch.no_grad():
+            return mse, float(torch.mean((net(x_next) - net(x)) ** 2))
+
+    _, plain_moves = fitted(0.0)
+    _, tied_moves = fitted(10.0)
+    assert tied_moves < plain_moves
+
+
+@pytest.mark.parametrize(("extra", "match"), [
+    ({"dagger_iterations": 0}, "dagger_iterations"), ({"beta_decay": 1.0}, "beta_decay"),
+    ({"fit_seconds": -1}, "fit_seconds"), ({"move_weight": -0.1}, "move_weight"),
+    ({"fit_epochs": 2.5}, "fit_epochs"), ({"max_move": 0.05}, "positions"),
+])  # fmt: skip
+def test_bad_imitation_entries_are_config_errors(tmp_path, extra, match):
+    f = tmp_path / "im.yml"
+    f.write_text(yaml.safe_dump({ENV_ID: {"policy": "MlpPolicy", **extra}}))
+    with pytest.raises(train_config.ConfigError, match=match):
+        train_config.read_hyperparams(f, ENV_ID, "ppo_imitation_mpc")
+
+
+def test_imitation_keys_are_refused_for_another_algo(tmp_path):
+    f = tmp_path / "ppo.yml"
+    f.write_text(yaml.safe_dump({ENV_ID: {"policy": "MlpPolicy", "dagger_iterations": 3}}))
+    with pytest.raises(train_config.ConfigError, match="only for an imitation algo"):
+        train_config.read_hyperparams(f, ENV_ID, "ppo")
