@@ -69,15 +69,18 @@ def actor_net(model: Any) -> Any:
 
 
 def collect(env_id: str, expert_name: str, memory: dict, seeds: list[int], beta: float,
-            learner: Any, rng: np.random.Generator) -> tuple[np.ndarray, ...]:  # fmt: skip
+            learner: Any, rng: np.random.Generator,
+            filter_s: float | None = None) -> tuple[np.ndarray, ...]:  # fmt: skip
     """(memory-extended observations, expert actions, the same at the next step) of every
     step but an episode's last, one episode per seed, the applied action being the
     expert's with probability ``beta`` per step and row and ``learner(x)`` otherwise
-    (module docstring)."""
+    (module docstring); ``filter_s``: the learner's positions pass the output filter
+    (agents/moves.py ``LowPassState``), started at each step from the applied command."""
     import gymnasium as gym
 
     import baselines
     from agents.memory import MemoryConfig
+    from agents.moves import command_state
     from agents.wrappers import MemoryState
 
     n = len(seeds)
@@ -85,6 +88,7 @@ def collect(env_id: str, expert_name: str, memory: dict, seeds: list[int], beta:
                         scenario="random")  # fmt: skip
     expert = baselines.make(expert_name, venv)
     mem = MemoryState(venv, MemoryConfig.from_kwargs(memory))
+    shape = command_state(venv, None, filter_s)
     obs, _ = venv.reset(seed=[int(s) for s in seeds])
     pairs: list[tuple[np.ndarray, ...]] = []
     start = np.ones(n, dtype=bool)
@@ -99,7 +103,13 @@ def collect(env_id: str, expert_name: str, memory: dict, seeds: list[int], beta:
         act = a_exp
         if beta < 1.0:
             mine = rng.random(n) >= beta
-            act = np.where(mine[:, None], np.clip(learner(x), -1.0, 1.0), a_exp)
+            own = np.clip(learner(x), -1.0, 1.0)
+            if shape is not None:
+                shape.restart(obs, start)
+                own = shape(own).astype(np.float64)
+            act = np.where(mine[:, None], own, a_exp)
+            if shape is not None:  # the filter goes on from the command applied
+                shape.u = 0.5 * (act + 1.0)
             expert.applied(act)
         start = np.zeros(n, dtype=bool)
         obs, _, term, trunc, _ = venv.step(act.astype(np.float32))
@@ -145,7 +155,8 @@ def train(env_id: str, algo: str, hp: dict[str, Any], seed: int, n_envs: int,
         learner = MlpActor.of(model)
         seeds = [seed + i * n_envs + k for k in range(n_envs)]
         got = collect(env_id, expert, memory, seeds, beta,
-                      lambda z: learner(normalize_obs(z, stats)), rng)  # fmt: skip
+                      lambda z: learner(normalize_obs(z, stats)), rng,
+                      hp.get("action_filter_s"))  # fmt: skip
         data.append(got)
         if stats is None:
             x = got[0]
@@ -162,7 +173,8 @@ def train(env_id: str, algo: str, hp: dict[str, Any], seed: int, n_envs: int,
         mse = regress(net, xa, ya, epochs=settings["fit_epochs"],
                       max_seconds=settings["fit_seconds"], seed=seed + i,
                       moves=moves if settings["move_weight"] > 0 else None)  # fmt: skip
-        policy = AgentPolicy(model, native, memory=memory, obs_norm=stats)
+        policy = AgentPolicy(model, native, memory=memory, obs_norm=stats,
+                             action_filter_s=hp.get("action_filter_s"))  # fmt: skip
         score = validate(env_id, policy)
         score["travel_ratio"] = score["valve_travel"] / reference["valve_travel"]
         wall = time.monotonic() - t0

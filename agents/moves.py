@@ -1,5 +1,6 @@
-"""Incremental actions for agents: the agent's action is a bounded valve move per control
-interval, not a valve position.
+"""Incremental and filtered actions for agents: the agent's action is a bounded valve move
+per control interval, or a valve position through an output filter (:class:`LowPassState`),
+not a valve position applied as it is.
 
 An agent acting on positions can stroke a valve end to end from one interval to the next;
 exploration noise then shows up one for one as valve travel. In the incremental mode (the
@@ -38,16 +39,11 @@ def check_max_move(max_move: Any) -> float:
     return float(max_move)
 
 
-class MoveState:
-    """The commands of an incremental agent, per row (module docstring).
+class _Commands:
+    """The valve commands an agent's actions drive, per row, started bumpless from the
+    openings observed at an episode's start; subclasses define the update."""
 
-    Args:
-        env: The env (or vector env) acted on: its observation layout and valves.
-        max_move: Largest move per actuator and control interval (fraction of stroke).
-    """
-
-    def __init__(self, env: Any, max_move: float) -> None:
-        self.max_move = check_max_move(max_move)
+    def __init__(self, env: Any) -> None:
         names, self._scale, self._center = observation_layout(env)
         self.i_valve = [names.index(n) for n in env.unwrapped.plant.valves]
         self.u: np.ndarray | None = None  # (rows, actuators) last commands in [0, 1]
@@ -62,27 +58,96 @@ class MoveState:
         self.u[rows] = np.clip(opening[rows], 0.0, 1.0)
 
     def __call__(self, action: np.ndarray) -> np.ndarray:
-        """The env's action (float32, 2 u - 1) for the agent's moves ``action`` (rows, n)."""
+        """The env's action (float32, 2 u - 1) for the agent's ``action`` (rows, n)."""
         if self.u is None:
-            raise ValueError("MoveState.restart must be called with the first observation")
+            raise ValueError(f"{type(self).__name__}.restart must be called with the first "
+                             "observation")  # fmt: skip
         a = np.clip(np.asarray(action, dtype=np.float64).reshape(self.u.shape), -1.0, 1.0)
-        self.u = np.clip(self.u + self.max_move * a, 0.0, 1.0)
+        self.u = self._next(a)
         return (2.0 * self.u - 1.0).astype(np.float32)
+
+    def _next(self, a: np.ndarray) -> np.ndarray:
+        raise NotImplementedError
+
+
+class MoveState(_Commands):
+    """The commands of an incremental agent, per row (module docstring).
+
+    Args:
+        env: The env (or vector env) acted on: its observation layout and valves.
+        max_move: Largest move per actuator and control interval (fraction of stroke).
+    """
+
+    def __init__(self, env: Any, max_move: float) -> None:
+        self.max_move = check_max_move(max_move)
+        super().__init__(env)
+
+    def _next(self, a: np.ndarray) -> np.ndarray:
+        return np.clip(self.u + self.max_move * a, 0.0, 1.0)
+
+
+class LowPassState(_Commands):
+    """The commands of an agent whose position action passes a first-order lag, per row::
+
+        u_k = u_(k-1) + alpha (p_k - u_(k-1)),  p_k = (a_k + 1) / 2,  alpha = dt / (T_f + dt)
+
+    (a DCS output filter of time constant ``T_f``; exploration noise through it is
+    low-pass noise: its valve travel falls by about alpha).
+
+    Args:
+        env: The env (or vector env) acted on: its observation layout, valves and interval.
+        filter_s: The filter's time constant T_f in s.
+    """
+
+    def __init__(self, env: Any, filter_s: float) -> None:
+        self.filter_s = check_filter(filter_s)
+        super().__init__(env)
+        dt = float(env.unwrapped.plant.dt_s)
+        self.alpha = dt / (self.filter_s + dt)
+
+    def _next(self, a: np.ndarray) -> np.ndarray:
+        return self.u + self.alpha * (0.5 * (a + 1.0) - self.u)
+
+
+def check_filter(filter_s: Any) -> float:
+    """``filter_s`` as a float > 0 (s); ValueError otherwise."""
+    ok = isinstance(filter_s, (int, float)) and not isinstance(filter_s, bool)
+    if not (ok and np.isfinite(filter_s) and filter_s > 0):
+        raise ValueError(f"action_filter_s must be a number > 0 (the output filter's time "
+                         f"constant in s), got {filter_s!r}")  # fmt: skip
+    return float(filter_s)
+
+
+def command_state(env: Any, max_move: float | None = None,
+                  filter_s: float | None = None) -> _Commands | None:  # fmt: skip
+    """The command state of an agent's action form: incremental (``max_move``), filtered
+    positions (``filter_s``) or None (plain positions); ValueError for both."""
+    if max_move is not None and filter_s is not None:
+        raise ValueError("an agent's actions are incremental (max_move) or filtered "
+                         "(action_filter_s), not both")  # fmt: skip
+    if max_move is not None:
+        return MoveState(env, max_move)
+    return LowPassState(env, filter_s) if filter_s is not None else None
 
 
 class VecMoves(VecEnvWrapper):
-    """SB3 VecEnv wrapper for an incremental agent (module docstring): it takes the agent's
-    moves and passes the env the resulting commands; the observation is the env's.
+    """SB3 VecEnv wrapper for an incremental or filtered agent (module docstring,
+    :class:`LowPassState`): it takes the agent's actions and passes the env the resulting
+    commands; the observation is the env's.
 
     Args:
         venv: The VecEnv to wrap (its observations are the env's raw ones).
         env: The native vector env under it (observation layout and valves).
         max_move: Largest move per actuator and control interval (fraction of stroke).
+        filter_s: Instead, the time constant of a filter on position actions (s).
     """
 
-    def __init__(self, venv: VecEnv, env: Any, max_move: float) -> None:
+    def __init__(self, venv: VecEnv, env: Any, max_move: float | None = None,
+                 filter_s: float | None = None) -> None:  # fmt: skip
         super().__init__(venv)
-        self.moves = MoveState(env, max_move)
+        self.moves = command_state(env, max_move, filter_s)
+        if self.moves is None:
+            raise ValueError("VecMoves needs max_move or filter_s")
 
     def reset(self) -> np.ndarray:
         obs = self.venv.reset()
@@ -99,4 +164,5 @@ class VecMoves(VecEnvWrapper):
         return obs, rew, dones, infos
 
 
-__all__ = ["MoveState", "VecMoves", "check_max_move"]
+__all__ = ["LowPassState", "MoveState", "VecMoves", "check_filter", "check_max_move",
+           "command_state"]  # fmt: skip

@@ -22,7 +22,7 @@ from typing import Any
 
 import numpy as np
 
-from agents.moves import MoveState
+from agents.moves import command_state
 from agents.wrappers import MemoryConfig, MemoryState
 from baselines.loops import restart_rows
 from baselines.policy import check_predict_args, observation_size
@@ -120,6 +120,8 @@ class AgentPolicy:
             registered baseline's name); None: the industrial reference, unobserved.
         max_move: If set, the model's action is a valve move of at most this fraction of
             stroke per control interval (agents/moves.py); not with ``residual_scale``.
+        action_filter_s: If set, the model's action is a valve position through a
+            first-order filter of this time constant (agents/moves.py ``LowPassState``).
     """
 
     #: Batched and unbatched actions agree to this (read by steamtemp_gym.testing's
@@ -136,10 +138,11 @@ class AgentPolicy:
         residual_scale: float | None = None,
         max_move: float | None = None,
         residual_base: str | None = None,
+        action_filter_s: float | None = None,
     ) -> None:
-        if residual_scale is not None and max_move is not None:
+        if residual_scale is not None and (max_move, action_filter_s) != (None, None):
             raise ValueError("an agent is either residual (residual_scale) or incremental "
-                             "(max_move), not both")  # fmt: skip
+                             "(max_move) or filtered (action_filter_s), not two of them")
         self.model = model
         self.n_obs = observation_size(env)
         self.memory = None
@@ -154,7 +157,7 @@ class AgentPolicy:
             self.base = ResidualBase(env, residual_scale, residual_base)
         elif residual_base is not None:
             raise ValueError("residual_base needs residual_scale (a residual agent)")
-        self.moves = None if max_move is None else MoveState(env, max_move)
+        self.moves = command_state(env, max_move, action_filter_s)
         #: The LSTM state of a recurrent model (sb3-contrib's RecurrentPPO), per row.
         self.recurrent = hasattr(getattr(model, "policy", None), "lstm_actor")
         self.actor = None if self.recurrent else MlpActor.of(model)

@@ -31,7 +31,8 @@ HYPERPARAMS = Path(__file__).with_name("hyperparams")
 #: RL Zoo keys with a meaning of their own (the rest go to the algorithm's constructor).
 SPECIAL = ("n_timesteps", "n_envs", "policy", "normalize", "env_wrapper", "policy_kwargs",
            "noise_type", "noise_std", "residual_scale", "max_move", "train_reward",
-           "plant_randomization", "travel_price", "residual_base", *IMITATION_KEYS)  # fmt: skip
+           "plant_randomization", "travel_price", "residual_base", "action_filter_s",
+           *IMITATION_KEYS)  # fmt: skip
 
 
 class ConfigError(ValueError):
@@ -125,6 +126,16 @@ def read_hyperparams(path: Path, env_id: str, algo: str) -> dict[str, Any]:
                               "other (an agent is residual or incremental)")  # fmt: skip
         try:
             check_max_move(hp["max_move"])
+        except ValueError as exc:
+            raise ConfigError(f"--hyperparams {path}: {exc}") from None
+    if "action_filter_s" in hp:
+        from agents.moves import check_filter
+
+        if "max_move" in hp or "residual_scale" in hp:
+            raise ConfigError(f"--hyperparams {path}: action_filter_s filters position "
+                              "actions: not with max_move or residual_scale")  # fmt: skip
+        try:
+            check_filter(hp["action_filter_s"])
         except ValueError as exc:
             raise ConfigError(f"--hyperparams {path}: {exc}") from None
     if "train_reward" in hp:

@@ -66,8 +66,8 @@ def make_training_env(env_id: str, n_envs: int, seed: int, hp: dict[str, Any],
         venv = price = VecTravelPrice(venv, base.venv, reference_rate, hp["travel_price"])
     if hp.get("residual_scale") is not None:
         venv = VecResidual(venv, base.venv, hp["residual_scale"], hp.get("residual_base"))
-    if hp.get("max_move") is not None:
-        venv = VecMoves(venv, base.venv, hp["max_move"])
+    if hp.get("max_move") is not None or hp.get("action_filter_s") is not None:
+        venv = VecMoves(venv, base.venv, hp.get("max_move"), hp.get("action_filter_s"))
     if hp["env_wrapper"] is not None:
         venv = VecControllerMemory(venv, base.venv, **hp["env_wrapper"])
     venv = VecMonitor(venv)
@@ -204,7 +204,8 @@ def _checkpointing(model: Any, venv: Any, native: Any, hp: dict[str, Any], env_i
         policy = AgentPolicy(model, native, memory=hp["env_wrapper"], obs_norm=_obs_stats(venv),
                              residual_scale=hp.get("residual_scale"),
                              residual_base=hp.get("residual_base"),
-                             max_move=hp.get("max_move"))  # fmt: skip
+                             max_move=hp.get("max_move"),
+                             action_filter_s=hp.get("action_filter_s"))  # fmt: skip
         score = validate(env_id, policy)
         score["travel_ratio"] = score["valve_travel"] / reference["valve_travel"]
         curve.append({"timesteps": steps, "fraction": steps / total, "wall_s": wall, **score})
@@ -279,7 +280,7 @@ def _metadata(env_id: str, algo: str, cls: Any, revision: str, path: Path,
                        "travel_budget": TUNING_TRAVEL_BUDGET, "curve": curve},
         "normalization": best["obs_norm"], "memory": hp["env_wrapper"],
         "residual_scale": hp.get("residual_scale"), "residual_base": hp.get("residual_base"),
-        "max_move": hp.get("max_move"),
+        "max_move": hp.get("max_move"), "action_filter_s": hp.get("action_filter_s"),
         "train_reward": hp.get("train_reward"),
     }  # fmt: skip
 

@@ -1,6 +1,7 @@
-"""Incremental actions (agents/moves.py): every move within ``max_move``, a bumpless start
-at the observed openings, restarted rows, the training wrapper and the Policy giving the
-env the same commands, and bad values refused."""
+"""Incremental and filtered actions (agents/moves.py): every move within ``max_move``, the
+output filter's lag, a bumpless start at the observed openings, restarted rows, the
+training wrapper and the Policy giving the env the same commands, and bad values
+refused."""
 
 from __future__ import annotations
 
@@ -9,7 +10,7 @@ import json
 import numpy as np
 import pytest
 
-from agents.moves import MoveState, VecMoves
+from agents.moves import LowPassState, MoveState, VecMoves, command_state
 from agents.policy import AgentPolicy
 from agents.vec_env import NativeVecEnv
 from baselines.loops import observation_layout
@@ -76,7 +77,11 @@ def test_a_restarted_row_starts_again_from_its_opening_and_the_other_keeps_its_c
     assert kept.dtype == np.float32
 
 
-def test_the_training_wrapper_and_the_policy_command_the_same():
+FORMS = [{"max_move": MAX_MOVE}, {"action_filter_s": 4.0}]
+
+
+@pytest.mark.parametrize("form", FORMS, ids=["incremental", "filtered"])
+def test_the_training_wrapper_and_the_policy_command_the_same(form):
     """The same model actions through VecMoves (training) and AgentPolicy (evaluation) give
     the env the same commands, across an episode boundary of the wrapper's auto-reset."""
     short = Scenario(name="short", duration_s=10.0, load=0.8)
@@ -84,7 +89,7 @@ def test_the_training_wrapper_and_the_policy_command_the_same():
     steps = int(short.duration_s / native.venv.unwrapped.plant.dt_s)
     assert steps < 20  # two episodes and a half in the 25 steps below
     n = native.action_space.shape[0]
-    wrapped = VecMoves(native, native.venv, MAX_MOVE)
+    wrapped = VecMoves(native, native.venv, form.get("max_move"), form.get("action_filter_s"))
     sent = []
     orig = native.step_async
     native.step_async = lambda a: (sent.append(np.array(a)), orig(a))[1]
@@ -99,7 +104,7 @@ def test_the_training_wrapper_and_the_policy_command_the_same():
         native.step_async = orig
     commands = np.array(sent)
 
-    policy = AgentPolicy(Model(n, 2), native.venv, max_move=MAX_MOVE)
+    policy = AgentPolicy(Model(n, 2), native.venv, **form)
     native.seed(7)
     obs = native.reset()
     start = np.ones(2, dtype=bool)
@@ -111,6 +116,49 @@ def test_the_training_wrapper_and_the_policy_command_the_same():
     native.close()
 
 
+def test_a_filtered_agent_follows_its_positions_through_the_first_order_lag(native):
+    native.seed(2)
+    obs = native.reset()
+    lp = LowPassState(native.venv, 9.0)
+    dt = native.venv.unwrapped.plant.dt_s
+    assert lp.alpha == pytest.approx(dt / (9.0 + dt))
+    lp.restart(obs, np.ones(2, dtype=bool))
+    u0 = _openings(native.venv, obs)
+    n = native.action_space.shape[0]
+    target = np.full((2, n), 0.6)  # position 0.8 of stroke
+    u = (lp(target).astype(np.float64) + 1.0) / 2.0
+    np.testing.assert_allclose(u, u0 + lp.alpha * (0.8 - u0), atol=1e-6)
+    for _ in range(400):
+        u = (lp(target).astype(np.float64) + 1.0) / 2.0
+    np.testing.assert_allclose(u, 0.8, atol=1e-6)  # it settles on the position
+    # white noise through it: the travel falls by about alpha
+    rng = np.random.default_rng(0)
+    a = rng.uniform(-1, 1, (2000, 2, n))
+    lp.restart(obs, np.ones(2, dtype=bool))
+    filtered = np.array([lp(x) for x in a])
+    ratio = np.abs(np.diff(filtered, axis=0)).mean() / np.abs(np.diff(a, axis=0)).mean()
+    assert ratio < 2 * lp.alpha
+
+
+@pytest.mark.parametrize("bad", [0, -1.0, float("nan"), float("inf"), True, "5", None])
+def test_bad_filter_time_constants_are_refused(native, bad):
+    with pytest.raises(ValueError, match="action_filter_s"):
+        LowPassState(native.venv, bad)
+
+
+def test_incremental_and_filtered_together_are_refused(native, tmp_path):
+    with pytest.raises(ValueError, match="not both"):
+        command_state(native.venv, 0.05, 10.0)
+    with pytest.raises(ValueError, match="not two of them"):
+        AgentPolicy(Model(1, 2), native.venv, residual_scale=0.2, action_filter_s=10.0)
+    from agents.train_config import ConfigError, read_hyperparams
+
+    with pytest.raises(ConfigError, match="action_filter_s filters position actions"):
+        read_hyperparams(_ppo_yaml(tmp_path, max_move=0.05, action_filter_s=10.0), ENV, "ppo")
+    with pytest.raises(ConfigError, match="action_filter_s must be"):
+        read_hyperparams(_ppo_yaml(tmp_path, action_filter_s=-2.0), ENV, "ppo")
+
+
 @pytest.mark.parametrize("bad", [0, 0.0, -0.1, 1.5, float("nan"), float("inf"), True, "0.1", None])
 def test_bad_max_move_is_refused(native, bad):
     with pytest.raises(ValueError, match="max_move"):
@@ -118,7 +166,7 @@ def test_bad_max_move_is_refused(native, bad):
 
 
 def test_residual_and_incremental_together_are_refused(native):
-    with pytest.raises(ValueError, match="residual_scale.*max_move"):
+    with pytest.raises(ValueError, match="residual_scale.*max_move.*not two of them"):
         AgentPolicy(Model(1, 2), native.venv, residual_scale=0.2, max_move=0.02)
 
 

@@ -239,16 +239,24 @@ def _iqm_score(entry: dict[str, Any]) -> float:
     return entry.get("normalized_score", {}).get("iqm", {}).get("value", -np.inf)
 
 
+def _kind(name: str) -> str:
+    """What a row of the agents' table is: a baseline, or a trained agent's kind
+    (``agents.kind``: model-free, residual over X, imitation of X)."""
+    import agents
+
+    return agents.kind(name[len("sb3:"):]) if name.startswith("sb3:") else "baseline"
+
+
 def agents_markdown(summary: dict[str, Any]) -> str:
-    """Per plant, each trained agent (``sb3:*``) against ``cascade_pi`` and the best other
-    baseline (by the IQM of the normalized score): IQM normalized score with its CI, mean
+    """Per plant, each trained agent (``sb3:*``, with its kind) against ``cascade_pi`` and
+    the best other baseline (by the IQM of the normalized score): IQM normalized score with its CI, mean
     return and mean IAE over scenario × seed, trips. The zoo table of docs/agents.md."""
     n = len(summary["run"]["seeds"])
     multi = _multi_run(summary)
     lines = [f"{stat_label(n)}; return and IAE: means over scenario × seed. **Bold**: the "
              f"best of the plant's rows; {admissibility_note(summary)}"
              + (f" {RUNS_NOTE}" if multi else ""), ""]  # fmt: skip
-    header = ["plant", "policy", "IQM norm. score", *(["runs"] if multi else []),
+    header = ["plant", "policy", "kind", "IQM norm. score", *(["runs"] if multi else []),
               "mean return", COLUMNS["iae_K_s"][0], f"travel / {ZERO}'s", "trips"]  # fmt: skip
     body = []
     limit = budget(summary)
@@ -269,7 +277,7 @@ def agents_markdown(summary: dict[str, Any]) -> str:
             ret, iae = _col("return", met.get("return")), _col("iae_K_s", met.get("iae_K_s"))
             spread = [_run_range(e.get("normalized_score", {}).get("iqm"))] if multi else []
             body.append([env_id.split("/")[-1],
-                         f"{k} (best baseline)" if k == best_base else k,
+                         f"{k} (best baseline)" if k == best_base else k, _kind(k),
                          f"**{score}**" if k == top else score, *spread,
                          f"**{ret}**" if met.get("return") == best_ret else ret,
                          f"**{iae}**" if met.get("iae_K_s") == best_iae else iae,
