@@ -16,7 +16,8 @@ The rules (docs/agents.md, "Horizons from the plant"):
   scale (a move's whole effect and as long again for the recovery);
 - GAE: the window ``dt / (1 - gamma lambda)`` is :data:`GAE_FACTOR` times the dead time
   (the advantage of a move sees its effect begin), lambda at most :data:`GAE_LAMBDA_MAX`;
-- history: the controller memory's samples span the time scale.
+- history: the controller memory's samples span the time scale;
+- output filter: a time constant of :data:`FILTER_FACTOR` times the time scale.
 """
 
 from __future__ import annotations
@@ -31,6 +32,10 @@ LOAD = 0.5
 HORIZON_FACTOR = 2.0
 GAE_FACTOR = 2.0
 GAE_LAMBDA_MAX = 0.995
+#: The output filter's time constant (``action_filter_s``, agents/moves.py) as a fraction
+#: of the time scale: 9-14 s, a lag the loop barely sees that cuts a step-to-step jitter's
+#: valve travel to its 7-33 % (the interval over the filter's time constant).
+FILTER_FACTOR = 0.04
 
 
 @functools.cache
@@ -66,6 +71,11 @@ def gae_lambda(env_id: str) -> float:
     return min(gl / discount(env_id), GAE_LAMBDA_MAX)
 
 
+def action_filter(env_id: str) -> float:
+    """The output filter's time constant in s: :data:`FILTER_FACTOR` times the time scale."""
+    return FILTER_FACTOR * sum(time_scale(env_id))
+
+
 def history_stride(env_id: str, history: int) -> int:
     """Control steps between the memory's ``history`` samples so that they span the time
     scale (at least 1)."""
@@ -81,11 +91,12 @@ PLANT = "plant"
 
 def from_plant(env_id: str, hp: dict) -> dict:
     """``hp`` (an entry of an RL Zoo hyperparameter file) with every ``plant`` value of
-    ``gamma``, ``gae_lambda`` and the controller memory's ``history_stride`` replaced by
-    the rule's (:func:`discount`, :func:`gae_lambda`, :func:`history_stride`); the
-    entry states the rule instead of numbers."""
+    ``gamma``, ``gae_lambda``, ``action_filter_s`` and the controller memory's
+    ``history_stride`` replaced by the rule's (:func:`discount`, :func:`gae_lambda`,
+    :func:`action_filter`, :func:`history_stride`); the entry states the rule instead of
+    numbers."""
     out = dict(hp)
-    rules = {"gamma": discount, "gae_lambda": gae_lambda}
+    rules = {"gamma": discount, "gae_lambda": gae_lambda, "action_filter_s": action_filter}
     for key, rule in rules.items():
         if out.get(key) == PLANT:
             out[key] = round(rule(env_id), 5)
@@ -106,4 +117,5 @@ def _memory_from_plant(env_id: str, item: object) -> object:
     return {name: {**kwargs, "history_stride": history_stride(env_id, kwargs.get("history", 4))}}
 
 
-__all__ = ["PLANT", "discount", "from_plant", "gae_lambda", "history_stride", "time_scale"]
+__all__ = ["PLANT", "action_filter", "discount", "from_plant", "gae_lambda", "history_stride",
+           "time_scale"]  # fmt: skip

@@ -50,6 +50,21 @@ def test_discount_gae_and_history_follow_the_rules(env_id):
         horizons.history_stride(env_id, 0)
 
 
+def test_plant_in_an_entry_asks_for_the_rules_values():
+    env_id = "steamtemp/DrumBoilerSH-v0"
+    hp = {"gamma": "plant", "gae_lambda": "plant", "action_filter_s": "plant", "n_steps": 64,
+          "env_wrapper": [{"agents.wrappers.ControllerMemory": {"history": 8,
+                                                                "history_stride": "plant"}}]}
+    out = horizons.from_plant(env_id, hp)
+    assert out["gamma"] == round(horizons.discount(env_id), 5)
+    assert out["gae_lambda"] == round(horizons.gae_lambda(env_id), 5)
+    assert out["action_filter_s"] == pytest.approx(horizons.FILTER_FACTOR
+                                                   * sum(horizons.time_scale(env_id)))
+    memory = out["env_wrapper"][0]["agents.wrappers.ControllerMemory"]
+    assert memory["history_stride"] == horizons.history_stride(env_id, 8) == 20
+    assert out["n_steps"] == 64 and hp["gamma"] == "plant"  # the entry itself is unchanged
+
+
 def test_candidate_ppo_entries_take_the_rules_values():
     """The candidate PPO file (RL Zoo's format, so numbers) holds what the rules give."""
     doc = yaml.safe_load((train_config.HYPERPARAMS / "candidates" / "ppo_horizons.yml").read_text())
