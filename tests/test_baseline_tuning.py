@@ -290,14 +290,6 @@ def test_every_stored_tuning_passes_the_commissioning_check(name, env_id):
     assert ratio == pytest.approx(rec["plants"][env_id]["check_travel_ratio"], rel=1e-6)
 
 
-#: Stored tunings searched under the former terms (no robustness check, travel up to 2x on
-#: the training episodes). Their search is the costliest (an identification and one QP per
-#: step and row: 3-10 s per evaluation, 15-20 minutes per plant of one core under load),
-#: and they stay in the budget (1.4-1.5x) on the leaderboard; re-search them with
-#: python -m agents.baseline_tuning mpc_evarx mpc_arx --replay
-FORMER_TERMS = ("mpc_evarx", "mpc_arx")
-
-
 #: Searches that found no candidate keeping every term, with what they measured.
 INFEASIBLE = {
     ("mpc_linear", "steamtemp/BoilerTurbineMIMO-v0"): (
@@ -313,8 +305,7 @@ INFEASIBLE = {
 def _current_terms_pairs() -> list:
     out = []
     for p in _stored_pairs():
-        former = "tuned under the former terms (no robustness check, travel bound 2x): rerun"
-        why = former if p.values[0] in FORMER_TERMS else INFEASIBLE.get(p.values)
+        why = INFEASIBLE.get(p.values)
         out.append(pytest.param(*p.values, id=p.id, marks=pytest.mark.xfail(
             strict=True, reason=why)) if why else p)  # fmt: skip
     return out
