@@ -359,7 +359,10 @@ def train(env_id: str, algo: str, hyperparams: Path | None = None, timesteps: in
     if price is not None:
         from agents.travel_price import price_callback
 
-        callbacks.append(price_callback(price, prices, hp.get("max_move")))
+        filter_s = hp.get("action_filter_s")
+        dt = native.unwrapped.plant.dt_s
+        alpha = None if filter_s is None else dt / (filter_s + dt)
+        callbacks.append(price_callback(price, prices, hp.get("max_move"), alpha))
     model.learn(total_timesteps=total, callback=callbacks, progress_bar=False)
     if not curve:  # a budget below the first mark's granularity
         evaluate(model.num_timesteps, time.monotonic() - t0)

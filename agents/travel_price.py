@@ -109,11 +109,14 @@ class VecTravelPrice(VecEnvWrapper):
         return r, self.price
 
 
-def policy_travel(model: Any, max_move: float | None) -> float | None:
+def policy_travel(model: Any, max_move: float | None,
+                  alpha: float | None = None) -> float | None:  # fmt: skip
     """Valve travel per control step of ``model``'s deterministic action along the states
     of its rollout buffer (None without one): position actions move the valves by half
     the change of the action (actions in [-1, 1]), incremental ones by ``max_move`` times
-    the action; a row's first step of an episode does not count."""
+    the action, filtered ones (``alpha``: the output filter's gain per step,
+    agents/moves.py ``LowPassState``) by the change of the filtered position, restarted
+    at each episode's first action; a row's first step of an episode does not count."""
     import torch
 
     buf = getattr(model, "rollout_buffer", None)
@@ -126,12 +129,20 @@ def policy_travel(model: Any, max_move: float | None) -> float | None:
     a = np.clip(a.reshape(*obs.shape[:2], -1), -1.0, 1.0)
     if max_move is not None:
         return float(max_move * np.abs(a).sum(axis=-1).mean())
+    if alpha is not None:  # the filter's output along each row, from its first position
+        p, u = 0.5 * (a + 1.0), np.empty_like(a)
+        u[0] = p[0]
+        for k in range(1, len(p)):
+            fresh = buf.episode_starts[k].astype(bool)
+            u[k] = np.where(fresh[:, None], p[k], u[k - 1] + alpha * (p[k] - u[k - 1]))
+        a = 2.0 * u - 1.0
     move = 0.5 * np.abs(np.diff(a, axis=0)).sum(axis=-1)  # (steps - 1, rows)
     counts = buf.episode_starts[1:] == 0  # a move into a new episode is not a move
     return float(move[counts].mean()) if counts.any() else 0.0
 
 
-def price_callback(wrapper: VecTravelPrice, log: list, max_move: float | None = None) -> Any:
+def price_callback(wrapper: VecTravelPrice, log: list, max_move: float | None = None,
+                   alpha: float | None = None) -> Any:  # fmt: skip
     """SB3 callback: at each rollout's end, :meth:`VecTravelPrice.update` on the travel of
     the policy's deterministic action (:func:`policy_travel`; the rollout's own travel
     where the algorithm keeps no rollout buffer), appending ``(timesteps, ratio of the
@@ -144,7 +155,7 @@ def price_callback(wrapper: VecTravelPrice, log: list, max_move: float | None = 
 
         def _on_rollout_end(self) -> None:
             rollout = wrapper.ratio()
-            per_step = policy_travel(self.model, max_move)
+            per_step = policy_travel(self.model, max_move, alpha)
             own = rollout if per_step is None else per_step / wrapper.dt / wrapper.reference_rate
             r, p = wrapper.update(own)
             log.append((self.num_timesteps, r, rollout, p))

@@ -206,3 +206,11 @@ def test_policy_travel_is_the_deterministic_actions_travel_along_the_rollout():
     assert policy_travel(_Model(a, starts), 0.05) == pytest.approx(0.05 * np.abs(
         np.clip(a, -1, 1)).mean())  # fmt: skip
     assert policy_travel(object(), None) is None  # no rollout buffer: the rollout's travel
+    # filtered: the change of the filter's output, restarted at an episode's first action
+    p = 0.5 * (np.clip(a, -1, 1) + 1.0)
+    u0 = [p[0, 0]]
+    for k in range(1, 4):
+        u0.append(u0[-1] + 0.5 * (p[k, 0] - u0[-1]))
+    u1 = [p[0, 1], p[0, 1], p[2, 1], p[2, 1]]  # row 1: held at 1, restarted at step 2
+    moves = list(np.abs(np.diff(u0))) + [abs(u1[1] - u1[0]), abs(u1[3] - u1[2])]
+    assert policy_travel(_Model(a, starts), None, 0.5) == pytest.approx(np.mean(moves))
