@@ -143,7 +143,8 @@ def test_leaderboard_generator_rewrites_readme_and_agents_page(tmp_path, monkeyp
     # outside the markers nothing changed
     strip = re.compile(r"<!-- (leaderboard|trend|baselines):start.*?<!-- \1:end -->", re.S)
     assert strip.sub("", after) == strip.sub("", before)
-    assert "| A-v0 | sb3:ppo | **0.50" in agents_page.read_text()
+    assert "| A-v0 | sb3:ppo | model-free | **0.50" in agents_page.read_text()
+    assert "| A-v0 | lqi (best baseline) | baseline |" in agents_page.read_text()
     assert "| s | - / - / -100.5 | - / - / 100 | - / - / 1.00 | - / - / - |" in (
         baselines_page.read_text())  # mpc_linear / cascade_pi / cascade_pi_ff, two not run
     assert "1 of 1 baseline-plant pairs have no episode" in baselines_page.read_text()
