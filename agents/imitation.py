@@ -57,7 +57,8 @@ def check(hp: dict[str, Any]) -> None:
         v = hp.get(key, DEFAULTS[key])
         ok = isinstance(v, (int, float)) and not isinstance(v, bool) and np.isfinite(v)
         if not (ok and v > 0 and (key != "beta_decay" or v < 1)):
-            raise ValueError(f"{key} must be a number in {'(0, 1)' if key == 'beta_decay' else '> 0'}, got {v!r}")  # fmt: skip
+            where = "(0, 1)" if key == "beta_decay" else "> 0"
+            raise ValueError(f"{key} must be a number in {where}, got {v!r}")
 
 
 def actor_net(model: Any) -> Any:
@@ -118,75 +119,84 @@ def collect(env_id: str, expert_name: str, memory: dict, seeds: list[int], beta:
     return tuple(np.concatenate(p) for p in zip(*pairs, strict=True))
 
 
+def _standardization(x: np.ndarray) -> dict[str, Any]:
+    """Frozen VecNormalize statistics of the observations ``x`` (agents.policy)."""
+    from agents.behaviour_cloning import CLIP_OBS, EPSILON
+
+    return {"mean": x.mean(axis=0).tolist(), "var": x.var(axis=0).tolist(),
+            "epsilon": EPSILON, "clip_obs": CLIP_OBS}  # fmt: skip
+
+
+def _learner(model: Any, stats: dict[str, Any] | None) -> Any:
+    """The model's deterministic action of a raw memory-extended observation."""
+    from agents.policy import MlpActor, normalize_obs
+
+    actor = MlpActor.of(model)
+    return lambda z: actor(normalize_obs(z, stats))
+
+
+def _fit(net: Any, data: list[tuple[np.ndarray, ...]], stats: dict[str, Any],
+         settings: dict[str, Any], seed: int) -> float:  # fmt: skip
+    """Fit the actor to every pair in ``data`` (:func:`collect`'s), with the move term where
+    ``move_weight`` > 0; the last epoch's mean squared error."""
+    import torch
+
+    from agents.behaviour_cloning import regress
+    from agents.policy import normalize_obs
+
+    def tensor(j: int, obs: bool) -> Any:
+        a = np.concatenate([d[j] for d in data])
+        a = normalize_obs(a, stats) if obs else np.clip(a, -1.0, 1.0)
+        return torch.as_tensor(a, dtype=torch.float32)
+
+    moves = None
+    if settings["move_weight"] > 0:
+        moves = (tensor(2, True), tensor(3, False), settings["move_weight"])
+    return regress(net, tensor(0, True), tensor(1, False), epochs=settings["fit_epochs"],
+                   max_seconds=settings["fit_seconds"], seed=seed, moves=moves)  # fmt: skip
+
+
 def train(env_id: str, algo: str, hp: dict[str, Any], seed: int, n_envs: int,
           reference: dict[str, float], save_to: Any, log: Any = None,
           max_minutes: float | None = None) -> tuple[Any, dict, list, dict]:  # fmt: skip
     """DAgger (module docstring): returns (model, best checkpoint, validation curve,
-    imitation record); the best model is saved to ``save_to``."""
-    import torch
-
-    from agents.behaviour_cloning import regress
-    from agents.policy import AgentPolicy, MlpActor, normalize_obs
-    from agents.training import better_checkpoint, make_training_env, validate
-    from agents.tuning_terms import TUNING_TRAVEL_BUDGET
+    imitation record); the best model is saved to ``save_to``. Training episodes: seeds
+    ``seed + i * n_envs + k`` in iteration i."""
     from stable_baselines3 import PPO
 
-    from agents.behaviour_cloning import CLIP_OBS, EPSILON
+    from agents.policy import AgentPolicy
+    from agents.training import better_checkpoint, make_training_env, validate
+    from agents.tuning_terms import TUNING_TRAVEL_BUDGET
 
     settings = {k: hp.get(k, DEFAULTS[k]) for k in KEYS}
-    expert = EXPERTS[algo]
-    memory = hp["env_wrapper"]
+    expert, memory, filter_s = EXPERTS[algo], hp["env_wrapper"], hp.get("action_filter_s")
     venv, native, _ = make_training_env(env_id, 1, seed, {**hp, "normalize": False})
-    kwargs = {k: v for k, v in hp.items() if k in ("learning_rate", "gamma", "gae_lambda",
-                                                     "n_steps", "batch_size", "n_epochs")}
-    kwargs.pop("learning_rate", None)
     model = PPO(hp.get("policy", "MlpPolicy"), venv, seed=seed, device="cpu", verbose=0,
-                policy_kwargs=hp["policy_kwargs"] or None, **kwargs)  # fmt: skip
-    net = actor_net(model)
-    rng = np.random.default_rng(seed)
-    t0 = time.monotonic()
+                policy_kwargs=hp["policy_kwargs"] or None,
+                **{k: hp[k] for k in ("gamma", "gae_lambda") if k in hp})  # fmt: skip
+    net, rng, t0 = actor_net(model), np.random.default_rng(seed), time.monotonic()
     data: list[tuple[np.ndarray, ...]] = []
-    stats = None
-    best: dict[str, Any] = {}
-    curve: list[dict[str, Any]] = []
+    stats, best, curve = None, {}, []
     record = {"expert": expert, **settings, "iterations": []}
     for i in range(settings["dagger_iterations"]):
         beta = settings["beta_decay"] ** i
-        learner = MlpActor.of(model)
         seeds = [seed + i * n_envs + k for k in range(n_envs)]
-        got = collect(env_id, expert, memory, seeds, beta,
-                      lambda z: learner(normalize_obs(z, stats)), rng,
-                      hp.get("action_filter_s"))  # fmt: skip
-        data.append(got)
-        if stats is None:
-            x = got[0]
-            stats = {"mean": x.mean(axis=0).tolist(), "var": x.var(axis=0).tolist(),
-                     "epsilon": EPSILON, "clip_obs": CLIP_OBS}  # fmt: skip
-
-        def tensor(j: int, obs: bool) -> Any:
-            a = np.concatenate([d[j] for d in data])
-            a = normalize_obs(a, stats) if obs else np.clip(a, -1.0, 1.0)
-            return torch.as_tensor(a, dtype=torch.float32)
-
-        xa, ya = tensor(0, True), tensor(1, False)
-        moves = (tensor(2, True), tensor(3, False), settings["move_weight"])
-        mse = regress(net, xa, ya, epochs=settings["fit_epochs"],
-                      max_seconds=settings["fit_seconds"], seed=seed + i,
-                      moves=moves if settings["move_weight"] > 0 else None)  # fmt: skip
-        policy = AgentPolicy(model, native, memory=memory, obs_norm=stats,
-                             action_filter_s=hp.get("action_filter_s"))  # fmt: skip
-        score = validate(env_id, policy)
+        data.append(collect(env_id, expert, memory, seeds, beta, _learner(model, stats), rng,
+                            filter_s))  # fmt: skip
+        stats = stats or _standardization(data[0][0])
+        mse = _fit(net, data, stats, settings, seed + i)
+        score = validate(env_id, AgentPolicy(model, native, memory=memory, obs_norm=stats,
+                                             action_filter_s=filter_s))  # fmt: skip
         score["travel_ratio"] = score["valve_travel"] / reference["valve_travel"]
-        wall = time.monotonic() - t0
-        steps = int(sum(len(d[0]) for d in data))
-        curve.append({"timesteps": steps, "fraction": (i + 1) / settings["dagger_iterations"],
+        wall, pairs = time.monotonic() - t0, int(sum(len(d[0]) for d in data))
+        curve.append({"timesteps": pairs, "fraction": (i + 1) / settings["dagger_iterations"],
                       "wall_s": wall, **score})  # fmt: skip
-        record["iterations"].append({"beta": beta, "pairs": steps, "mse": mse})
+        record["iterations"].append({"beta": beta, "pairs": pairs, "mse": mse})
         if log:
-            log(f"[{algo}] iteration {i}: beta {beta:.3g}, {steps:,} pairs, mse {mse:.3g}, "
+            log(f"[{algo}] iteration {i}: beta {beta:.3g}, {pairs:,} pairs, mse {mse:.3g}, "
                 f"validation return {score['return']:.1f}, travel {score['travel_ratio']:.2f}x")
         if better_checkpoint(score, best, TUNING_TRAVEL_BUDGET):
-            best.update(score, timesteps=steps, obs_norm=stats)
+            best.update(score, timesteps=pairs, obs_norm=stats)
             model.save(save_to)
         if max_minutes is not None and wall > 60.0 * max_minutes:
             break

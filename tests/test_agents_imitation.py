@@ -29,7 +29,7 @@ def _expert_alone() -> list[dict]:
 
 def test_with_beta_one_the_pairs_are_the_experts_own_episodes():
     x, y, x_next, y_next = imitation.collect(ENV_ID, "mpc_linear", MEMORY, SEEDS, 1.0,
-                                             learner=None, rng=np.random.default_rng(0))  # fmt: skip
+                                             None, np.random.default_rng(0))  # fmt: skip
     runs = _expert_alone()
     steps = [len(r["trace"]["time_s"]) - 1 for r in runs]  # actions per episode
     assert len(x) == sum(steps) - len(steps)  # every step but each episode's last

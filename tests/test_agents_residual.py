@@ -132,7 +132,8 @@ def test_a_zero_output_ppo_residual_acts_as_its_base(tmp_path):
     venv, native, _ = training.make_training_env(ENV_ID, 2, 0, hp)
     model = training._sb3_model(train_config.algo_class("ppo_residual_mpc"), hp, venv, 0, None)
     agent = AgentPolicy(model, native, memory=hp["env_wrapper"], obs_norm=None,
-                        residual_scale=hp["residual_scale"], residual_base="mpc_linear")  # fmt: skip
+                        residual_scale=hp["residual_scale"],
+                        residual_base="mpc_linear")  # fmt: skip
     _, act_base = _rollout(lambda v: baselines.make("mpc_linear", v), n=15)
     _, act_agent = _rollout(lambda v: agent, n=15)
     np.testing.assert_array_equal(act_agent, act_base)

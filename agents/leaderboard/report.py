@@ -249,8 +249,9 @@ def _kind(name: str) -> str:
 
 def agents_markdown(summary: dict[str, Any]) -> str:
     """Per plant, each trained agent (``sb3:*``, with its kind) against ``cascade_pi`` and
-    the best other baseline (by the IQM of the normalized score): IQM normalized score with its CI, mean
-    return and mean IAE over scenario × seed, trips. The zoo table of docs/agents.md."""
+    the best other baseline (by the IQM of the normalized score): IQM normalized score with
+    its CI, mean return and mean IAE over scenario × seed, trips. The zoo table of
+    docs/agents.md."""
     n = len(summary["run"]["seeds"])
     multi = _multi_run(summary)
     lines = [f"{stat_label(n)}; return and IAE: means over scenario × seed. **Bold**: the "
