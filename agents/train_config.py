@@ -32,6 +32,7 @@ HYPERPARAMS = Path(__file__).with_name("hyperparams")
 SPECIAL = ("n_timesteps", "n_envs", "policy", "normalize", "env_wrapper", "policy_kwargs",
            "noise_type", "noise_std", "residual_scale", "max_move", "train_reward",
            "plant_randomization", "travel_price", "residual_base", "action_filter_s",
+           "critic_warmup_steps",
            *IMITATION_KEYS)  # fmt: skip
 
 
@@ -138,6 +139,14 @@ def read_hyperparams(path: Path, env_id: str, algo: str) -> dict[str, Any]:
             check_filter(hp["action_filter_s"])
         except ValueError as exc:
             raise ConfigError(f"--hyperparams {path}: {exc}") from None
+    if "critic_warmup_steps" in hp:
+        v = hp["critic_warmup_steps"]
+        if not (isinstance(v, int) and not isinstance(v, bool) and v >= 0):
+            raise ConfigError(f"--hyperparams {path}: critic_warmup_steps must be an integer "
+                              f">= 0, got {v!r}")  # fmt: skip
+        if algo.split("_")[0] != "ppo":
+            raise ConfigError(f"--hyperparams {path}: critic_warmup_steps is for PPO's "
+                              f"actor and critic, not {algo!r}")  # fmt: skip
     if "train_reward" in hp:
         from steamtemp_gym.rewards import RewardConfig
 

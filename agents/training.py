@@ -296,6 +296,38 @@ def _price_record(prices: list[tuple[int, float, float, float]]) -> dict[str, An
             "course": [list(p) for p in keep]}  # fmt: skip
 
 
+def actor_parameters(model: Any) -> list:
+    """The parameters of a PPO policy's actor: its own layers, its output and log std."""
+    pol = model.policy
+    return [*pol.mlp_extractor.policy_net.parameters(), *pol.action_net.parameters(),
+            pol.log_std]  # fmt: skip
+
+
+def critic_warmup(steps: int) -> Any:
+    """SB3 callback holding a PPO policy's actor still for its first ``steps`` timesteps, so
+    that the critic learns the values of the starting policy before any advantage moves
+    the actor (a residual starts at its base, an imitation at its expert: their first
+    advantages are noise around a good policy)."""
+    from stable_baselines3.common.callbacks import BaseCallback
+
+    class Warmup(BaseCallback):
+        def _set(self, on: bool) -> None:
+            for p in actor_parameters(self.model):
+                p.requires_grad_(on)
+
+        def _on_training_start(self) -> None:
+            self._set(False)
+
+        def _on_step(self) -> bool:
+            return True
+
+        def _on_rollout_end(self) -> None:
+            if self.num_timesteps >= steps:
+                self._set(True)
+
+    return Warmup()
+
+
 def _imitation(env_id: str, algo: str, cls: Any, path: Path, hp: dict[str, Any], seed: int,
                run: int | None, n_envs: int, total: int, out: Path, reference: dict,
                venv: Any, quiet: bool, max_minutes: float | None) -> dict[str, Any]:  # fmt: skip
@@ -363,6 +395,8 @@ def train(env_id: str, algo: str, hyperparams: Path | None = None, timesteps: in
         dt = native.unwrapped.plant.dt_s
         alpha = None if filter_s is None else dt / (filter_s + dt)
         callbacks.append(price_callback(price, prices, hp.get("max_move"), alpha))
+    if hp.get("critic_warmup_steps"):
+        callbacks.append(critic_warmup(hp["critic_warmup_steps"]))
     model.learn(total_timesteps=total, callback=callbacks, progress_bar=False)
     if not curve:  # a budget below the first mark's granularity
         evaluate(model.num_timesteps, time.monotonic() - t0)

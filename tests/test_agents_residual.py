@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+import torch
 import yaml
 
 import baselines
@@ -162,3 +163,34 @@ def test_residual_entries_take_their_base_from_the_algo_and_plant_settings_from_
         f.write_text(yaml.safe_dump({ENV_ID: hp}))
         with pytest.raises(train_config.ConfigError, match=match):
             train_config.read_hyperparams(f, ENV_ID, "ppo_residual_mpc")
+
+
+def test_the_actor_holds_still_while_the_critic_warms_up():
+    path = train_config.HYPERPARAMS / "ppo_residual_pi.yml"
+    hp = train_config.read_hyperparams(path, ENV_ID, "ppo_residual_pi")
+    hp.update(n_steps=32, batch_size=32, n_epochs=2)
+    venv, _, _ = training.make_training_env(ENV_ID, 2, 0, hp)
+    model = training._sb3_model(train_config.algo_class("ppo_residual_pi"), hp, venv, 0, None)
+    actor0 = [p.detach().clone() for p in training.actor_parameters(model)]
+    critic0 = [p.detach().clone() for p in model.policy.value_net.parameters()]
+    model.learn(total_timesteps=128, callback=[training.critic_warmup(10_000)])
+    assert all(torch.equal(a, p) for a, p in zip(actor0, training.actor_parameters(model),
+                                                   strict=True))  # fmt: skip
+    assert not all(torch.equal(c, p) for c, p in zip(critic0, model.policy.value_net.parameters(),
+                                                     strict=True))  # fmt: skip
+    model.learn(total_timesteps=128, callback=[training.critic_warmup(64)],
+                reset_num_timesteps=False)  # past the warm-up: the actor learns
+    assert not all(torch.equal(a, p) for a, p in zip(actor0, training.actor_parameters(model),
+                                                     strict=True))  # fmt: skip
+    venv.close()
+
+
+@pytest.mark.parametrize(("value", "algo", "match"), [
+    (-1, "ppo", "critic_warmup_steps must be"), (1.5, "ppo", "critic_warmup_steps must be"),
+    (100, "sac", "critic_warmup_steps is for PPO"),
+])  # fmt: skip
+def test_bad_critic_warmups_are_refused(tmp_path, value, algo, match):
+    f = tmp_path / "w.yml"
+    f.write_text(yaml.safe_dump({ENV_ID: {"policy": "MlpPolicy", "critic_warmup_steps": value}}))
+    with pytest.raises(train_config.ConfigError, match=match):
+        train_config.read_hyperparams(f, ENV_ID, algo)
