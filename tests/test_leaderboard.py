@@ -520,7 +520,9 @@ def test_leaderboard_cli_with_the_baseline(tmp_path):
     best_base = max(others, key=lambda p: pols[p]["normalized_score"]["iqm"]["value"])
     assert [r.split(" | ")[1] for r in table] == [zero, f"{best_base} (best baseline)",
                                                   *sorted(trained)]  # fmt: skip
-    assert sum(r.split(" | ")[2].startswith("**") for r in table) == 1
+    assert [r.split(" | ")[2] for r in table] == ["baseline", "baseline",
+                                                  *(agents.kind(t[4:]) for t in sorted(trained))]
+    assert sum(r.split(" | ")[3].startswith("**") for r in table) == 1
     names = {p.name for p in (tmp_path / "plots").glob("*.png")}
     assert {"scores.png", "profiles.png", "pareto.png",
             "SupercriticalFSH-v0__heldout_mill_trip.png"} <= names  # fmt: skip
