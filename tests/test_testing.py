@@ -331,10 +331,22 @@ def exit_when_built(env):
 '''
 
 
+@pytest.fixture
+def default_sigint():
+    """Python's own SIGINT handler for the test, as ``steamtemp-check`` has it in its own
+    process (the guard tells a policy's KeyboardInterrupt from Ctrl-C only there; a test
+    run earlier in the same worker may leave another handler)."""
+    import signal
+
+    before = signal.signal(signal.SIGINT, signal.default_int_handler)
+    yield
+    signal.signal(signal.SIGINT, before)
+
+
 @pytest.mark.parametrize(("factory", "raised"), [("sys_exit", "SystemExit: 3"),
                                                  ("interrupt", "KeyboardInterrupt")])
 def test_a_policy_ending_the_process_fails_its_checks_and_the_run_goes_on(
-        tmp_path, capsys, factory, raised):  # fmt: skip
+        tmp_path, capsys, factory, raised, default_sigint):  # fmt: skip
     """A policy's SystemExit or KeyboardInterrupt fails each check it ends; the table, the
     messages and the exit status 1 follow (once they ended the checker, exit 3, silently)."""
     (tmp_path / "ending.py").write_text(_ENDING)
