@@ -102,11 +102,15 @@ class LowPassState(_Commands):
     def __init__(self, env: Any, filter_s: float) -> None:
         self.filter_s = check_filter(filter_s)
         super().__init__(env)
-        dt = float(env.unwrapped.plant.dt_s)
-        self.alpha = dt / (self.filter_s + dt)
+        self.alpha = filter_gain(env.unwrapped.plant.dt_s, self.filter_s)
 
     def _next(self, a: np.ndarray) -> np.ndarray:
         return self.u + self.alpha * (0.5 * (a + 1.0) - self.u)
+
+
+def filter_gain(dt_s: float, filter_s: float) -> float:
+    """alpha = dt / (T_f + dt): the output filter's gain per control interval."""
+    return float(dt_s) / (float(filter_s) + float(dt_s))
 
 
 def check_filter(filter_s: Any) -> float:
@@ -165,4 +169,4 @@ class VecMoves(VecEnvWrapper):
 
 
 __all__ = ["LowPassState", "MoveState", "VecMoves", "check_filter", "check_max_move",
-           "command_state"]  # fmt: skip
+           "command_state", "filter_gain"]  # fmt: skip

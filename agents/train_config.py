@@ -72,6 +72,14 @@ def _dict_string(key: str, value: Any) -> dict:
         ) from None
 
 
+def _checked(path: Path, check: Any, *args: Any) -> None:
+    """``check(*args)``, its ValueError turned into a ConfigError naming the file."""
+    try:
+        check(*args)
+    except ValueError as exc:
+        raise ConfigError(f"--hyperparams {path}: {exc}") from None
+
+
 def read_hyperparams(path: Path, env_id: str, algo: str) -> dict[str, Any]:
     """The checked hyperparameters of env_id in an RL-Zoo YAML file.
 
@@ -117,28 +125,19 @@ def read_hyperparams(path: Path, env_id: str, algo: str) -> dict[str, Any]:
     if "residual_scale" in hp:
         from agents.residual import check_residual
 
-        try:
-            check_residual(hp["residual_scale"], RESIDUAL_BASES[algo])
-        except ValueError as exc:
-            raise ConfigError(f"--hyperparams {path}: {exc}") from None
+        _checked(path, check_residual, hp["residual_scale"], RESIDUAL_BASES[algo])
     if "max_move" in hp:
         if "residual_scale" in hp:
             raise ConfigError(f"--hyperparams {path}: residual_scale and max_move exclude each "
                               "other (an agent is residual or incremental)")  # fmt: skip
-        try:
-            check_max_move(hp["max_move"])
-        except ValueError as exc:
-            raise ConfigError(f"--hyperparams {path}: {exc}") from None
+        _checked(path, check_max_move, hp["max_move"])
     if "action_filter_s" in hp:
         from agents.moves import check_filter
 
         if "max_move" in hp or "residual_scale" in hp:
             raise ConfigError(f"--hyperparams {path}: action_filter_s filters position "
                               "actions: not with max_move or residual_scale")  # fmt: skip
-        try:
-            check_filter(hp["action_filter_s"])
-        except ValueError as exc:
-            raise ConfigError(f"--hyperparams {path}: {exc}") from None
+        _checked(path, check_filter, hp["action_filter_s"])
     if "critic_warmup_steps" in hp:
         v = hp["critic_warmup_steps"]
         if not (isinstance(v, int) and not isinstance(v, bool) and v >= 0):
@@ -166,10 +165,7 @@ def read_hyperparams(path: Path, env_id: str, algo: str) -> dict[str, Any]:
     if "plant_randomization" in hp:
         from steamtemp_gym.plants import perturb
 
-        try:
-            perturb.parse(env_id, hp["plant_randomization"])
-        except ValueError as exc:
-            raise ConfigError(f"--hyperparams {path}: {exc}") from None
+        _checked(path, perturb.parse, env_id, hp["plant_randomization"])
     for key in ("gamma", "gae_lambda"):
         v = hp.get(key, 0.5)
         if not (isinstance(v, (int, float)) and not isinstance(v, bool) and 0 < v <= 1):
@@ -182,10 +178,7 @@ def read_hyperparams(path: Path, env_id: str, algo: str) -> dict[str, Any]:
     if algo in EXPERTS:
         from agents.imitation import check
 
-        try:
-            check(hp)
-        except ValueError as exc:
-            raise ConfigError(f"--hyperparams {path}: {exc}") from None
+        _checked(path, check, hp)
         if "max_move" in hp or "residual_scale" in hp or "travel_price" in hp:
             raise ConfigError(f"--hyperparams {path}: an imitation agent acts on valve "
                               "positions as its expert does (no max_move, residual_scale "

@@ -389,11 +389,11 @@ def train(env_id: str, algo: str, hyperparams: Path | None = None, timesteps: in
         evaluate(0, 0.0)
     callbacks = [_progress(evaluate, curve, total, t0, name, quiet, max_minutes)]
     if price is not None:
+        from agents.moves import filter_gain
         from agents.travel_price import price_callback
 
         filter_s = hp.get("action_filter_s")
-        dt = native.unwrapped.plant.dt_s
-        alpha = None if filter_s is None else dt / (filter_s + dt)
+        alpha = None if filter_s is None else filter_gain(native.unwrapped.plant.dt_s, filter_s)
         callbacks.append(price_callback(price, prices, hp.get("max_move"), alpha))
     if hp.get("critic_warmup_steps"):
         callbacks.append(critic_warmup(hp["critic_warmup_steps"]))
