@@ -106,7 +106,8 @@ def collect(env_id: str, expert_name: str, memory: dict, seeds: list[int], beta:
             mine = rng.random(n) >= beta
             own = np.clip(learner(x), -1.0, 1.0)
             if shape is not None:
-                shape.restart(obs, start)
+                if shape.u is None or start.any():
+                    shape.restart(obs, start)
                 own = shape(own).astype(np.float64)
             act = np.where(mine[:, None], own, a_exp)
             if shape is not None:  # the filter goes on from the command applied
