@@ -21,7 +21,8 @@ KINDS = {"ppo": "model-free", "sac": "model-free", "td3": "model-free",
          "ppo_residual": "residual over cascade_pi_ff",
          "ppo_residual_pi": "residual over cascade_pi_ff_tuned",
          "ppo_residual_mpc": "residual over mpc_linear",
-         "ppo_imitation_mpc": "imitation of mpc_linear"}  # fmt: skip
+         "ppo_imitation_mpc": "imitation of mpc_linear",
+         "ppo_imitation_mpc_rl": "imitation of mpc_linear, then RL"}  # fmt: skip
 
 
 def kind(algo: str) -> str:

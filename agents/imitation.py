@@ -37,22 +37,39 @@ from typing import Any
 import numpy as np
 
 #: The expert of each imitation algorithm.
-EXPERTS = {"ppo_imitation_mpc": "mpc_linear"}
-#: Entry keys of an imitation algorithm (besides the PPO constructor's and RL Zoo's).
-KEYS = ("dagger_iterations", "beta_decay", "fit_epochs", "fit_seconds", "move_weight")
+EXPERTS = {"ppo_imitation_mpc": "mpc_linear", "ppo_imitation_mpc_rl": "mpc_linear"}
+#: The imitation algorithms that go on with PPO after DAgger (:func:`anchor`).
+FINE_TUNED = ("ppo_imitation_mpc_rl",)
+#: Entry keys of an imitation algorithm (besides the PPO constructor's and RL Zoo's); the
+#: last three are a fine-tuned one's only.
+KEYS = ("dagger_iterations", "beta_decay", "fit_epochs", "fit_seconds", "move_weight",
+        "dagger_minutes", "anchor_weight", "anchor_fraction")  # fmt: skip
+FINE_TUNE_KEYS = KEYS[-3:]
 DEFAULTS = {"dagger_iterations": 8, "beta_decay": 0.5, "fit_epochs": 10, "fit_seconds": 60.0,
-            "move_weight": 1.0}  # fmt: skip
+            "move_weight": 1.0, "dagger_minutes": None, "anchor_weight": 1.0,
+            "anchor_fraction": 0.5}  # fmt: skip
 
 
-def check(hp: dict[str, Any]) -> None:
-    """ValueError naming the first bad imitation setting of an entry ``hp``."""
+def check(hp: dict[str, Any], algo: str = "ppo_imitation_mpc") -> None:
+    """ValueError naming the first bad imitation setting of an entry ``hp`` of ``algo``."""
+    given = sorted(set(hp) & set(FINE_TUNE_KEYS))
+    if given and algo not in FINE_TUNED:
+        raise ValueError(f"{given} only for an imitation fine-tuned by RL ({list(FINE_TUNED)})")
+    v = hp.get("dagger_minutes")
+    if v is not None and not (isinstance(v, (int, float)) and not isinstance(v, bool)
+                              and 0 < v < np.inf):  # fmt: skip
+        raise ValueError(f"dagger_minutes must be a number > 0, got {v!r}")
+    v = hp.get("anchor_fraction", DEFAULTS["anchor_fraction"])
+    if not (isinstance(v, (int, float)) and not isinstance(v, bool) and 0 < v <= 1):
+        raise ValueError(f"anchor_fraction must be a number in (0, 1], got {v!r}")
     for key, lo, kind in (("dagger_iterations", 1, int), ("fit_epochs", 1, int)):
         v = hp.get(key, DEFAULTS[key])
         if not (isinstance(v, kind) and not isinstance(v, bool) and v >= lo):
             raise ValueError(f"{key} must be an integer >= {lo}, got {v!r}")
-    v = hp.get("move_weight", DEFAULTS["move_weight"])
-    if not (isinstance(v, (int, float)) and not isinstance(v, bool) and 0 <= v < np.inf):
-        raise ValueError(f"move_weight must be a number >= 0, got {v!r}")
+    for key in ("move_weight", "anchor_weight"):
+        v = hp.get(key, DEFAULTS[key])
+        if not (isinstance(v, (int, float)) and not isinstance(v, bool) and 0 <= v < np.inf):
+            raise ValueError(f"{key} must be a number >= 0, got {v!r}")
     for key in ("beta_decay", "fit_seconds"):
         v = hp.get(key, DEFAULTS[key])
         ok = isinstance(v, (int, float)) and not isinstance(v, bool) and np.isfinite(v)
@@ -159,17 +176,17 @@ def _fit(net: Any, data: list[tuple[np.ndarray, ...]], stats: dict[str, Any],
 
 def train(env_id: str, algo: str, hp: dict[str, Any], seed: int, n_envs: int,
           reference: dict[str, float], save_to: Any, log: Any = None,
-          max_minutes: float | None = None) -> tuple[Any, dict, list, dict]:  # fmt: skip
+          max_minutes: float | None = None) -> tuple[Any, dict, list, dict, list]:  # fmt: skip
     """DAgger (module docstring): returns (model, best checkpoint, validation curve,
-    imitation record); the best model is saved to ``save_to``. Training episodes: seeds
-    ``seed + i * n_envs + k`` in iteration i."""
+    imitation record, the aggregated pairs); the best model is saved to ``save_to``.
+    Training episodes: seeds ``seed + i * n_envs + k`` in iteration i."""
     from stable_baselines3 import PPO
 
     from agents.policy import AgentPolicy
     from agents.training import better_checkpoint, make_training_env, validate
     from agents.tuning_terms import TUNING_TRAVEL_BUDGET
 
-    settings = {k: hp.get(k, DEFAULTS[k]) for k in KEYS}
+    settings = {k: hp.get(k, DEFAULTS[k]) for k in KEYS if k not in FINE_TUNE_KEYS}
     expert, memory, filter_s = EXPERTS[algo], hp["env_wrapper"], hp.get("action_filter_s")
     venv, native, _ = make_training_env(env_id, 1, seed, {**hp, "normalize": False})
     model = PPO(hp.get("policy", "MlpPolicy"), venv, seed=seed, device="cpu", verbose=0,
@@ -202,7 +219,68 @@ def train(env_id: str, algo: str, hp: dict[str, Any], seed: int, n_envs: int,
         if max_minutes is not None and wall > 60.0 * max_minutes:
             break
     venv.close()
-    return model, best, curve, record
+    return model, best, curve, record, data
 
 
-__all__ = ["DEFAULTS", "EXPERTS", "KEYS", "actor_net", "check", "collect", "train"]
+def frozen_normalization(venv: Any, stats: dict[str, Any], gamma: float) -> Any:
+    """SB3's VecNormalize over ``venv`` with the observations standardized by the frozen
+    ``stats`` (:func:`_standardization`'s) and the rewards by their running return scale."""
+    from stable_baselines3.common.running_mean_std import RunningMeanStd
+    from stable_baselines3.common.vec_env import VecNormalize
+
+    class FrozenStats(RunningMeanStd):  # statistics that do not move
+        def update(self, arr: np.ndarray) -> None:
+            del arr
+
+    out = VecNormalize(venv, norm_obs=True, norm_reward=True, gamma=gamma,
+                       clip_obs=stats["clip_obs"], epsilon=stats["epsilon"])  # fmt: skip
+    out.obs_rms = FrozenStats(shape=out.obs_rms.mean.shape)
+    out.obs_rms.mean = np.asarray(stats["mean"], np.float64)
+    out.obs_rms.var = np.asarray(stats["var"], np.float64)
+    return out
+
+
+def anchor(data: list[tuple[np.ndarray, ...]], stats: dict[str, Any], weight: float,
+           until: int, seed: int) -> Any:  # fmt: skip
+    """SB3 callback keeping a PPO actor near the expert early in RL fine-tuning: PPO's loss
+    gains ``w`` times the expert actions' negative log-likelihood under the policy's
+    Gaussian, as far as its mean moves it (the squared error of the mean over twice the
+    policy's variance, on a minibatch of DAgger's pairs ``data`` per optimizer step; the
+    gradient is added in a step pre-hook of PPO's optimizer, after PPO's own gradient and
+    its clipping). ``w`` falls linearly from ``weight`` at the start to 0 at ``until``
+    timesteps. While the actor is held still (critic warm-up) there is no term."""
+    import torch
+    from stable_baselines3.common.callbacks import BaseCallback
+
+    from agents.policy import normalize_obs
+
+    x = torch.as_tensor(normalize_obs(np.concatenate([d[0] for d in data]), stats))
+    y = torch.as_tensor(np.clip(np.concatenate([d[1] for d in data]), -1.0, 1.0),
+                        dtype=torch.float32)  # fmt: skip
+    gen = torch.Generator().manual_seed(seed)
+
+    class Anchor(BaseCallback):
+        def _on_training_start(self) -> None:
+            net, pol = actor_net(self.model), self.model.policy
+
+            def add_term(optimizer: Any, args: Any, kwargs: Any) -> None:
+                w = weight * max(0.0, 1.0 - self.num_timesteps / until)
+                if w <= 0.0 or not pol.log_std.requires_grad:
+                    return
+                idx = torch.randint(len(x), (self.model.batch_size,), generator=gen)
+                var = torch.exp(2.0 * pol.log_std.detach())
+                loss = w * torch.mean((net(x[idx]) - y[idx]) ** 2 / (2.0 * var))
+                loss.backward()
+
+            self.handle = pol.optimizer.register_step_pre_hook(add_term)
+
+        def _on_step(self) -> bool:
+            return True
+
+        def _on_training_end(self) -> None:
+            self.handle.remove()
+
+    return Anchor()
+
+
+__all__ = ["DEFAULTS", "EXPERTS", "FINE_TUNED", "FINE_TUNE_KEYS", "KEYS", "actor_net", "anchor", "check", "collect", "frozen_normalization", "train"]

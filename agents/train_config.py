@@ -18,10 +18,11 @@ from agents.wrappers import memory_options
 
 #: Algorithm names: SB3's PPO, SAC, TD3, PPO as a residual on a base controller
 #: (:data:`RESIDUAL_BASES`; each its own YAML file, whose entries need ``residual_scale``)
-#: PPO imitating a causal expert by DAgger (agents/imitation.py) and sb3-contrib's
+#: PPO imitating a causal expert by DAgger (agents/imitation.py), the same fine-tuned by PPO
+#: (``_rl``) and sb3-contrib's
 #: RecurrentPPO (an LSTM policy: the memory is learned instead of given by agents.wrappers).
 ALGOS = ("ppo", "sac", "td3", "ppo_residual", "ppo_residual_pi", "ppo_residual_mpc",
-         "ppo_imitation_mpc", "recurrentppo", "sac_caps")  # fmt: skip
+         "ppo_imitation_mpc", "ppo_imitation_mpc_rl", "recurrentppo", "sac_caps")  # fmt: skip
 #: The base controller of each residual algorithm (agents/residual.py): observed by the
 #: agent and told the applied command; None: ``ppo_residual``'s legacy form (the industrial
 #: reference, unobserved).
@@ -178,7 +179,7 @@ def read_hyperparams(path: Path, env_id: str, algo: str) -> dict[str, Any]:
     if algo in EXPERTS:
         from agents.imitation import check
 
-        _checked(path, check, hp)
+        _checked(path, check, hp, algo)
         if "max_move" in hp or "residual_scale" in hp or "travel_price" in hp:
             raise ConfigError(f"--hyperparams {path}: an imitation agent acts on valve "
                               "positions as its expert does (no max_move, residual_scale "

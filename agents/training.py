@@ -193,10 +193,10 @@ def zero_output(model: Any) -> None:
 
 def _checkpointing(model: Any, venv: Any, native: Any, hp: dict[str, Any], env_id: str,
                    reference: dict[str, float], total: int, curve: list, best: dict,
-                   save_to: Path) -> Callable[[int, float], None]:  # fmt: skip
+                   save_to: Path, offset: int = 0) -> Callable[[int, float], None]:  # fmt: skip
     """``evaluate(steps, wall)``: validate the model as it is, add the result to ``curve``,
     and where it beats ``best`` (:func:`better_checkpoint`) keep it there and save the model
-    to ``save_to``."""
+    to ``save_to``; ``offset``: what the run trained on before (added to ``steps``)."""
     from agents.policy import AgentPolicy
     from agents.tuning_terms import TUNING_TRAVEL_BUDGET
 
@@ -208,10 +208,11 @@ def _checkpointing(model: Any, venv: Any, native: Any, hp: dict[str, Any], env_i
                              action_filter_s=hp.get("action_filter_s"))  # fmt: skip
         score = validate(env_id, policy)
         score["travel_ratio"] = score["valve_travel"] / reference["valve_travel"]
-        curve.append({"timesteps": steps, "fraction": steps / total, "wall_s": wall, **score})
+        curve.append({"timesteps": offset + steps, "fraction": steps / total, "wall_s": wall,
+                      **score})  # fmt: skip
         # within the tuned baselines' margin under the budget (agents/tuning_terms.py)
         if better_checkpoint(score, best, TUNING_TRAVEL_BUDGET):
-            best.update(score, timesteps=steps, obs_norm=_obs_stats(venv))
+            best.update(score, timesteps=offset + steps, obs_norm=_obs_stats(venv))
             model.save(save_to)
 
     return evaluate
@@ -330,8 +331,12 @@ def critic_warmup(steps: int) -> Any:
 
 def _imitation(env_id: str, algo: str, cls: Any, path: Path, hp: dict[str, Any], seed: int,
                run: int | None, n_envs: int, total: int, out: Path, reference: dict,
-               venv: Any, quiet: bool, max_minutes: float | None) -> dict[str, Any]:  # fmt: skip
-    """A run of an imitation algorithm (agents/imitation.py) with a training run's files."""
+               venv: Any, quiet: bool, max_minutes: float | None,
+               tensorboard: str | None) -> dict[str, Any]:  # fmt: skip
+    """A run of an imitation algorithm (agents/imitation.py) with a training run's files;
+    a fine-tuned one (``imitation.FINE_TUNED``) goes on from DAgger's best checkpoint with
+    PPO for ``total`` timesteps (:func:`_fine_tune`), in what is left of ``max_minutes``
+    after DAgger's ``dagger_minutes``."""
     from agents import imitation
 
     venv.close()
@@ -341,14 +346,69 @@ def _imitation(env_id: str, algo: str, cls: Any, path: Path, hp: dict[str, Any],
     revision = git_revision()
     t0 = time.monotonic()
     log = None if quiet else (lambda m: print(m, file=sys.stderr, flush=True))
-    model, best, curve, record = imitation.train(env_id, algo, hp, seed, n_envs, reference,
-                                                 model_path, log, max_minutes)  # fmt: skip
+    tuned = algo in imitation.FINE_TUNED
+    dagger_minutes = hp.get("dagger_minutes") if tuned else None
+    if max_minutes is not None:
+        dagger_minutes = min(dagger_minutes or max_minutes, max_minutes)
+    model, best, curve, record, data = imitation.train(env_id, algo, hp, seed, n_envs,
+                                                       reference, model_path, log,
+                                                       dagger_minutes)  # fmt: skip
+    pairs = curve[-1]["timesteps"]
+    for point in curve:
+        point["phase"] = "dagger"
+    if tuned:
+        left = None if max_minutes is None else max_minutes - (time.monotonic() - t0) / 60.0
+        if left is None or left > 0:
+            model = _fine_tune(env_id, cls, hp, seed, n_envs, total, model_path, reference,
+                               data, best, curve, quiet, left, tensorboard, stem(env_id, algo,
+                               run))  # fmt: skip
     meta = _metadata(env_id, algo, cls, revision, path, hp, seed, run, n_envs, total, model,
                      best, time.monotonic() - t0, reference, curve)  # fmt: skip
-    meta["timesteps_trained"] = curve[-1]["timesteps"]
+    meta["timesteps_trained"] = pairs + (model.num_timesteps if tuned else 0)
     meta["imitation"] = record
     meta_path.write_text(json.dumps(meta, indent=1), encoding="utf-8")
     return meta
+
+
+def _fine_tune(env_id: str, cls: Any, hp: dict[str, Any], seed: int, n_envs: int, total: int,
+               model_path: Path, reference: dict, data: list, best: dict, curve: list,
+               quiet: bool, max_minutes: float | None, tensorboard: str | None,
+               name: str) -> Any:  # fmt: skip
+    """PPO from DAgger's best checkpoint (saved at ``model_path``, its statistics in
+    ``best``): the observations standardized as DAgger froze them, the critic learning
+    alone for ``critic_warmup_steps``, the actor anchored to the expert's actions
+    (``imitation.anchor``); validated as any run, the best checkpoint (DAgger's included)
+    kept. Returns the fine-tuned model."""
+    import torch
+    from stable_baselines3 import PPO
+
+    from agents import imitation
+
+    stats = best["obs_norm"]
+    venv, native, _ = make_training_env(env_id, n_envs, seed, {**hp, "normalize": False})
+    venv = imitation.frozen_normalization(venv, stats, hp.get("gamma", 0.99))
+    venv.seed(seed)
+    model = _sb3_model(cls, hp, venv, seed, tensorboard)
+    model.policy.load_state_dict(PPO.load(model_path, device="cpu").policy.state_dict())
+    with torch.no_grad():
+        model.policy.log_std.fill_(hp["policy_kwargs"].get("log_std_init", 0.0))
+    rl_curve: list[dict[str, Any]] = []
+    evaluate = _checkpointing(model, venv, native, hp, env_id, reference, total, rl_curve,
+                              best, model_path, offset=curve[-1]["timesteps"])  # fmt: skip
+    t0 = time.monotonic()
+    callbacks = [_progress(evaluate, rl_curve, total, t0, name, quiet, max_minutes),
+                 imitation.anchor(data, stats, hp.get("anchor_weight",
+                                  imitation.DEFAULTS["anchor_weight"]),
+                                  int(total * hp.get("anchor_fraction",
+                                      imitation.DEFAULTS["anchor_fraction"])), seed)]  # fmt: skip
+    if hp.get("critic_warmup_steps"):
+        callbacks.append(critic_warmup(hp["critic_warmup_steps"]))
+    model.learn(total_timesteps=total, callback=callbacks, progress_bar=False)
+    if not rl_curve:
+        evaluate(model.num_timesteps, time.monotonic() - t0)
+    curve.extend({**point, "phase": "rl"} for point in rl_curve)
+    venv.close()
+    return model
 
 
 def train(env_id: str, algo: str, hyperparams: Path | None = None, timesteps: int | None = None,
@@ -372,7 +432,7 @@ def train(env_id: str, algo: str, hyperparams: Path | None = None, timesteps: in
 
     if algo in EXPERTS:
         return _imitation(env_id, algo, cls, path, hp, seed, run, n_envs, total, out,
-                          reference, venv, quiet, max_minutes)  # fmt: skip
+                          reference, venv, quiet, max_minutes, tensorboard)  # fmt: skip
     model = _sb3_model(cls, hp, venv, seed, tensorboard)
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)

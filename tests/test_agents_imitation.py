@@ -111,3 +111,68 @@ def test_imitation_keys_are_refused_for_another_algo(tmp_path):
     f.write_text(yaml.safe_dump({ENV_ID: {"policy": "MlpPolicy", "dagger_iterations": 3}}))
     with pytest.raises(train_config.ConfigError, match="only for an imitation algo"):
         train_config.read_hyperparams(f, ENV_ID, "ppo")
+
+
+@pytest.mark.parametrize(("algo", "extra", "match"), [
+    ("ppo_imitation_mpc", {"anchor_weight": 1.0}, "only for an imitation fine-tuned by RL"),
+    ("ppo_imitation_mpc_rl", {"anchor_weight": -1.0}, "anchor_weight"),
+    ("ppo_imitation_mpc_rl", {"anchor_fraction": 0.0}, "anchor_fraction"),
+    ("ppo_imitation_mpc_rl", {"anchor_fraction": 1.5}, "anchor_fraction"),
+    ("ppo_imitation_mpc_rl", {"dagger_minutes": 0}, "dagger_minutes"),
+    ("ppo_imitation_mpc_rl", {"dagger_minutes": "x"}, "dagger_minutes"),
+])  # fmt: skip
+def test_bad_fine_tuning_entries_are_config_errors(tmp_path, algo, extra, match):
+    f = tmp_path / "im.yml"
+    f.write_text(yaml.safe_dump({ENV_ID: {"policy": "MlpPolicy", **extra}}))
+    with pytest.raises(train_config.ConfigError, match=match):
+        train_config.read_hyperparams(f, ENV_ID, algo)
+
+
+def test_fine_tuning_keeps_the_frozen_standardization_and_moves_the_reward_scale():
+    from agents.training import make_training_env
+
+    hp = train_config.read_hyperparams(train_config.HYPERPARAMS / "ppo_imitation_mpc_rl.yml",
+                                       ENV_ID, "ppo_imitation_mpc_rl")  # fmt: skip
+    venv, _, _ = make_training_env(ENV_ID, 2, 0, {**hp, "normalize": False})
+    n = venv.observation_space.shape[0]
+    stats = {"mean": list(np.linspace(-1, 1, n)), "var": list(np.linspace(0.5, 2, n)),
+             "epsilon": 1e-8, "clip_obs": 10.0}  # fmt: skip
+    norm = imitation.frozen_normalization(venv, stats, 0.99)
+    raw = venv.reset()
+    norm.reset()
+    for _ in range(20):
+        obs, *_ = norm.step(np.zeros((2, venv.action_space.shape[0]), np.float32))
+    raw = norm.get_original_obs()
+    from agents.policy import normalize_obs
+
+    np.testing.assert_array_equal(obs, normalize_obs(raw, stats))
+    assert norm.obs_rms.mean.tolist() == stats["mean"] and norm.ret_rms.count > 1
+    venv.close()
+
+
+def test_the_anchor_pulls_the_actor_to_the_experts_actions():
+    """After PPO updates, the anchor's steps bring the actor's actions on DAgger's pairs
+    closer to the expert's, more with a larger weight; without updates it does nothing."""
+    import torch
+    from stable_baselines3 import PPO
+
+    from agents.training import make_training_env
+
+    hp = train_config.read_hyperparams(train_config.HYPERPARAMS / "ppo_imitation_mpc_rl.yml",
+                                       ENV_ID, "ppo_imitation_mpc_rl")  # fmt: skip
+    venv, _, _ = make_training_env(ENV_ID, 2, 0, {**hp, "normalize": False})
+    n = venv.observation_space.shape[0]
+    rng = np.random.default_rng(0)
+    x = rng.normal(size=(512, n))
+    y = np.tanh(x[:, :1] - x[:, 1:2]).repeat(venv.action_space.shape[0], axis=1)
+    stats = {"mean": [0.0] * n, "var": [1.0] * n, "epsilon": 1e-8, "clip_obs": 10.0}
+    errors = {}
+    for weight in (0.0, 1.0, 10.0):
+        model = PPO("MlpPolicy", venv, n_steps=64, batch_size=64, n_epochs=2, seed=0,
+                    device="cpu", learning_rate=1e-3)  # fmt: skip
+        model.learn(128, callback=imitation.anchor([(x, y)], stats, weight, 10_000, 0))
+        with torch.no_grad():
+            a = imitation.actor_net(model)(torch.as_tensor(x, dtype=torch.float32)).numpy()
+        errors[weight] = float(np.mean((np.clip(y, -1, 1) - a) ** 2))
+    assert errors[10.0] < errors[1.0] < errors[0.0]
+    venv.close()

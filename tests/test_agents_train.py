@@ -27,6 +27,9 @@ SMALL = {
     "ppo_residual": {"n_steps": 128, "batch_size": 64, "n_epochs": 2, "residual_scale": 0.2},
     "ppo_residual_mpc": {"n_steps": 128, "batch_size": 64, "n_epochs": 2, "residual_scale": 0.2},
     "ppo_imitation_mpc": {"dagger_iterations": 2, "fit_epochs": 1, "move_weight": 0.01},
+    "ppo_imitation_mpc_rl": {"dagger_iterations": 2, "fit_epochs": 1, "n_steps": 128,
+                             "batch_size": 64, "n_epochs": 2, "critic_warmup_steps": 512,
+                             "anchor_weight": 1.0, "anchor_fraction": 1.0},
     "sac_caps": {"learning_starts": 300, "batch_size": 64, "train_freq": 8, "gradient_steps": 1,
                  "caps_temporal": 0.1, "caps_spatial": 0.1},
     "recurrentppo": {"n_steps": 128, "batch_size": 64, "n_epochs": 2, "policy": "MlpLstmPolicy",
@@ -39,6 +42,7 @@ STEPS = {
     "ppo_residual": 1024,
     "ppo_residual_mpc": 1024,
     "ppo_imitation_mpc": 1,
+    "ppo_imitation_mpc_rl": 2048,
     "recurrentppo": 1024,
     "sac_caps": 1200,
 }
@@ -79,9 +83,13 @@ def test_smoke_training_writes_model_and_metadata(trained, algo):
     assert [c["fraction"] for c in meta["validation"]["curve"]][-1] >= 1.0
     base = train_config.RESIDUAL_BASES.get(algo)
     # a zero-output residual is validated before training too: its base alone
-    n_checks = (meta["hyperparameters"]["dagger_iterations"] if algo == "ppo_imitation_mpc"
-                else len(training.EVAL_FRACTIONS) + (base is not None))  # fmt: skip
-    assert len(meta["validation"]["curve"]) == n_checks
+    dagger = meta["hyperparameters"].get("dagger_iterations", 0)
+    rl = 0 if algo == "ppo_imitation_mpc" else len(training.EVAL_FRACTIONS) + (base is not None)
+    assert len(meta["validation"]["curve"]) == dagger + rl
+    if dagger:  # DAgger's checkpoints, then PPO's from DAgger's pairs on
+        phases = [c["phase"] for c in meta["validation"]["curve"]]
+        assert phases == ["dagger"] * dagger + ["rl"] * rl
+        assert meta["timesteps_trained"] == meta["validation"]["curve"][-1]["timesteps"]
     assert meta["residual_base"] == base
     n_obs = gym.make(ENV_ID).observation_space.shape[0]
     if algo == "recurrentppo":
@@ -105,7 +113,7 @@ def test_smoke_training_writes_model_and_metadata(trained, algo):
 
 
 @pytest.mark.parametrize("algo", ["ppo", "sac", "recurrentppo", "ppo_residual_mpc",
-                                  "ppo_imitation_mpc"])  # fmt: skip
+                                  "ppo_imitation_mpc", "ppo_imitation_mpc_rl"])  # fmt: skip
 def test_loaded_policy_reproduces_validation_and_is_deterministic(trained, algo):
     pol = agents.load(ENV_ID, algo, zoo=trained[algo])
     meta = json.loads(steamtemp_paths(trained[algo], ENV_ID, algo)[1].read_text())
