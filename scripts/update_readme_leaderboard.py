@@ -10,12 +10,12 @@ Reads ``<out>/leaderboard.json`` (the current schema version) and writes, betwee
   leaderboard.md, same statistic, label and order) and, where the run drew it, the
   score-against-travel figure ``<out>/plots/pareto.png`` copied to
   ``docs/img/leaderboard_pareto.png``;
-- README.md ``baselines:start`` / ``baselines:end``: every baseline's IAE, valve travel
-  and reversals per plant (``baselines_markdown``);
 - README.md ``trend:start`` / ``trend:end``: the picture at the top, one trend plot of
   ``<out>/plots`` copied to ``docs/img/leaderboard_trend.png``, with its caption;
 - docs/agents.md ``zoo:start`` / ``zoo:end``: the trained agents against the baselines
   (``agents_markdown``);
+- docs/baselines.md ``baselines:start`` / ``baselines:end``: every baseline's IAE, valve
+  travel, reversals and rejected episodes per plant (``baselines_markdown``);
 - docs/baselines.md ``compare:start`` / ``compare:end``: per plant and scenario,
   ``mpc_linear``, ``cascade_pi`` and ``cascade_pi_ff`` side by side
   (``comparison_markdown``);
@@ -127,8 +127,6 @@ def main(argv: list[str] | None = None) -> None:
     pareto = out / "plots" / plots.PARETO
     text = replace(README.read_text(), START, END, section(doc, pareto.exists()), README.name)
     text = replace(text, TREND_START, TREND_END, picture(args.plot), README.name)
-    base = f"{BASE_START} {_GEN}\n\n" + report.baselines_markdown(doc) + "\n" + BASE_END
-    text = replace(text, BASE_START, BASE_END, base, README.name)
     zoo = f"{ZOO_START} {_GEN}\n\n" + report.agents_markdown(doc) + "\n" + ZOO_END
     agents_text = replace(AGENTS_PAGE.read_text(), ZOO_START, ZOO_END, zoo, AGENTS_PAGE.name)
     cmp = f"{CMP_START} {_GEN}\n\n" + report.comparison_markdown(doc, COMPARED) + "\n" + CMP_END
@@ -136,6 +134,8 @@ def main(argv: list[str] | None = None) -> None:
                              BASELINES_PAGE.name)  # fmt: skip
     real = f"{REAL_START} {_GEN}\n\n" + report.realism_markdown(doc) + "\n" + REAL_END
     baselines_text = replace(baselines_text, REAL_START, REAL_END, real, BASELINES_PAGE.name)
+    base = f"{BASE_START} {_GEN}\n\n" + report.baselines_markdown(doc) + "\n" + BASE_END
+    baselines_text = replace(baselines_text, BASE_START, BASE_END, base, BASELINES_PAGE.name)
     robust = f"{MIS_START} {_GEN}\n\n" + mismatch.markdown(doc, ZERO) + "\n" + MIS_END
     robustness_text = replace(ROBUSTNESS_PAGE.read_text(), MIS_START, MIS_END, robust,
                               ROBUSTNESS_PAGE.name)  # fmt: skip
