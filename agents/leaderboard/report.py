@@ -289,8 +289,8 @@ def agents_markdown(summary: dict[str, Any]) -> str:
 
 def baselines_markdown(summary: dict[str, Any]) -> str:
     """Every baseline on every plant: mean IAE of the main steam, valve travel relative to
-    the reference's and valve reversals, over scenario x seed (docs/baselines.md's valve-activity table's
-    actuator columns); † = not admissible."""
+    the reference's and valve reversals, over scenario x seed (the actuator columns of
+    docs/baselines.md's valve-activity table); † = not admissible."""
     plants = list(summary["plants"])
     header = ["baseline", *[f"{p.split('/')[-1]}: IAE [K s] / travel / reversals / rejected"
                             for p in plants]]  # fmt: skip
