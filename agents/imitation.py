@@ -283,4 +283,5 @@ def anchor(data: list[tuple[np.ndarray, ...]], stats: dict[str, Any], weight: fl
     return Anchor()
 
 
-__all__ = ["DEFAULTS", "EXPERTS", "FINE_TUNED", "FINE_TUNE_KEYS", "KEYS", "actor_net", "anchor", "check", "collect", "frozen_normalization", "train"]
+__all__ = ["DEFAULTS", "EXPERTS", "FINE_TUNED", "FINE_TUNE_KEYS", "KEYS", "actor_net", "anchor",
+           "check", "collect", "frozen_normalization", "train"]  # fmt: skip

@@ -79,8 +79,8 @@ def test_readme_is_a_guide():
         assert (ROOT / link).exists(), link
 
 
-MARKERS = [(README, "leaderboard"), (README, "trend"), (ROOT / "docs" / "baselines.md", "baselines"),
-           (ROOT / "docs" / "agents.md", "zoo"), (ROOT / "docs" / "baselines.md", "compare"),
+MARKERS = [(README, "leaderboard"), (README, "trend"), (ROOT / "docs" / "agents.md", "zoo"),
+           (ROOT / "docs" / "baselines.md", "baselines"), (ROOT / "docs" / "baselines.md", "compare"),
            (ROOT / "docs" / "baselines.md", "realism"),
            (ROOT / "docs" / "robustness.md", "mismatch"),
            (ROOT / "docs" / "difficulty.md", "difficulty")]  # fmt: skip
