@@ -80,7 +80,8 @@ def test_readme_is_a_guide():
 
 
 MARKERS = [(README, "leaderboard"), (README, "trend"), (ROOT / "docs" / "agents.md", "zoo"),
-           (ROOT / "docs" / "baselines.md", "baselines"), (ROOT / "docs" / "baselines.md", "compare"),
+           (ROOT / "docs" / "baselines.md", "baselines"),
+           (ROOT / "docs" / "baselines.md", "compare"),
            (ROOT / "docs" / "baselines.md", "realism"),
            (ROOT / "docs" / "robustness.md", "mismatch"),
            (ROOT / "docs" / "difficulty.md", "difficulty")]  # fmt: skip
