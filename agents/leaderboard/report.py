@@ -250,15 +250,16 @@ def _kind(name: str) -> str:
 def agents_markdown(summary: dict[str, Any]) -> str:
     """Per plant, each trained agent (``sb3:*``, with its kind) against ``cascade_pi`` and
     the best other baseline (by the IQM of the normalized score): IQM normalized score with
-    its CI, mean return and mean IAE over scenario × seed, trips. The zoo table of
-    docs/agents.md."""
+    its CI, mean return and mean IAE over scenario × seed, trips and the episodes a plant
+    engineer would reject (:func:`_rejected`). The zoo table of docs/agents.md."""
     n = len(summary["run"]["seeds"])
     multi = _multi_run(summary)
     lines = [f"{stat_label(n)}; return and IAE: means over scenario × seed. **Bold**: the "
-             f"best of the plant's rows; {admissibility_note(summary)}"
+             f"best of the plant's rows; {admissibility_note(summary)} {_rejected_note()}"
              + (f" {RUNS_NOTE}" if multi else ""), ""]  # fmt: skip
     header = ["plant", "policy", "kind", "IQM norm. score", *(["runs"] if multi else []),
-              "mean return", COLUMNS["iae_K_s"][0], f"travel / {ZERO}'s", "trips"]  # fmt: skip
+              "mean return", COLUMNS["iae_K_s"][0], f"travel / {ZERO}'s", "trips",
+              "rejected"]  # fmt: skip
     body = []
     limit = budget(summary)
     for env_id, p in summary["plants"].items():
@@ -283,7 +284,8 @@ def agents_markdown(summary: dict[str, Any]) -> str:
                          f"**{ret}**" if met.get("return") == best_ret else ret,
                          f"**{iae}**" if met.get("iae_K_s") == best_iae else iae,
                          _travel(e, limit) + (f" {INADMISSIBLE}" if e.get("admissible")
-                                              is False else ""), str(e["trips"])])  # fmt: skip
+                                              is False else ""), str(e["trips"]),
+                         _rejected(e)])  # fmt: skip
     return "\n".join(lines + _table(header, body)) + "\n"
 
 
@@ -312,11 +314,16 @@ def baselines_markdown(summary: dict[str, Any]) -> str:
             body.append([f"`{name}`", *cells])
     n = len(summary["run"]["seeds"])
     lines = [f"Means over scenario × seed ({n} seeds); {admissibility_note(summary)[:-1]}; "
-             f"rejected: the episodes a plant engineer would reject against cascade_pi_ff's "
-             f"on the same scenario and seed (a trip, valve travel above "
-             f"{num(stats.REALISM_TRAVEL_MAX, 0)}x, or a limit cycle in the quiet stretch "
-             f"after the last scheduled change).", ""]  # fmt: skip
+             f"{_rejected_note()}", ""]  # fmt: skip
     return "\n".join(lines + _table(header, body)) + "\n"
+
+
+def _rejected_note() -> str:
+    """What the tables' ``rejected`` column counts."""
+    return (f"rejected: the episodes a plant engineer would reject against cascade_pi_ff's "
+            f"on the same scenario and seed (a trip, valve travel above "
+            f"{num(stats.REALISM_TRAVEL_MAX, 0)}x, or a limit cycle in the quiet stretch "
+            f"after the last scheduled change).")  # fmt: skip
 
 
 def _rejected(pe: dict[str, Any]) -> str:
