@@ -52,7 +52,8 @@ def load(env_id: str, algo: str, zoo: Path | str | None = None, run: int = 0):
     Args:
         env_id: Registered id.
         algo: Algorithm name of the file (``ppo``, ``sac``, ``td3``, ``ppo_residual``,
-            ``ppo_residual_pi``, ``ppo_residual_mpc``, ``recurrentppo``, ``sac_caps``).
+            ``ppo_residual_pi``, ``ppo_residual_mpc``, ``ppo_imitation_mpc``,
+            ``ppo_imitation_mpc_rl``, ``recurrentppo``, ``sac_caps``).
         zoo: Directory holding ``<env>__<algo>.zip`` and ``.json``, or the run-indexed
             ``<env>__<algo>__run<k>`` files (default: the shipped zoo).
         run: Which training run (0: ``__run0``, else the file without a run index).
