@@ -36,46 +36,9 @@ from typing import Any
 
 import numpy as np
 
-#: The expert of each imitation algorithm.
-EXPERTS = {"ppo_imitation_mpc": "mpc_linear", "ppo_imitation_mpc_rl": "mpc_linear"}
-#: The imitation algorithms that go on with PPO after DAgger (:func:`anchor`).
-FINE_TUNED = ("ppo_imitation_mpc_rl",)
-#: Entry keys of an imitation algorithm (besides the PPO constructor's and RL Zoo's); the
-#: last three are a fine-tuned one's only.
-KEYS = ("dagger_iterations", "beta_decay", "fit_epochs", "fit_seconds", "move_weight",
-        "dagger_minutes", "anchor_weight", "anchor_fraction")  # fmt: skip
-FINE_TUNE_KEYS = KEYS[-3:]
-DEFAULTS = {"dagger_iterations": 8, "beta_decay": 0.5, "fit_epochs": 10, "fit_seconds": 60.0,
-            "move_weight": 1.0, "dagger_minutes": None, "anchor_weight": 1.0,
-            "anchor_fraction": 0.5}  # fmt: skip
-
-
-def check(hp: dict[str, Any], algo: str = "ppo_imitation_mpc") -> None:
-    """ValueError naming the first bad imitation setting of an entry ``hp`` of ``algo``."""
-    given = sorted(set(hp) & set(FINE_TUNE_KEYS))
-    if given and algo not in FINE_TUNED:
-        raise ValueError(f"{given} only for an imitation fine-tuned by RL ({list(FINE_TUNED)})")
-    v = hp.get("dagger_minutes")
-    if v is not None and not (isinstance(v, (int, float)) and not isinstance(v, bool)
-                              and 0 < v < np.inf):  # fmt: skip
-        raise ValueError(f"dagger_minutes must be a number > 0, got {v!r}")
-    v = hp.get("anchor_fraction", DEFAULTS["anchor_fraction"])
-    if not (isinstance(v, (int, float)) and not isinstance(v, bool) and 0 < v <= 1):
-        raise ValueError(f"anchor_fraction must be a number in (0, 1], got {v!r}")
-    for key, lo, kind in (("dagger_iterations", 1, int), ("fit_epochs", 1, int)):
-        v = hp.get(key, DEFAULTS[key])
-        if not (isinstance(v, kind) and not isinstance(v, bool) and v >= lo):
-            raise ValueError(f"{key} must be an integer >= {lo}, got {v!r}")
-    for key in ("move_weight", "anchor_weight"):
-        v = hp.get(key, DEFAULTS[key])
-        if not (isinstance(v, (int, float)) and not isinstance(v, bool) and 0 <= v < np.inf):
-            raise ValueError(f"{key} must be a number >= 0, got {v!r}")
-    for key in ("beta_decay", "fit_seconds"):
-        v = hp.get(key, DEFAULTS[key])
-        ok = isinstance(v, (int, float)) and not isinstance(v, bool) and np.isfinite(v)
-        if not (ok and v > 0 and (key != "beta_decay" or v < 1)):
-            where = "(0, 1)" if key == "beta_decay" else "> 0"
-            raise ValueError(f"{key} must be a number in {where}, got {v!r}")
+from agents.train_config import DAGGER_DEFAULTS as DEFAULTS
+from agents.train_config import EXPERTS, FINE_TUNE_KEYS
+from agents.train_config import IMITATION_KEYS as KEYS
 
 
 def actor_net(model: Any) -> Any:
@@ -183,8 +146,9 @@ def train(env_id: str, algo: str, hp: dict[str, Any], seed: int, n_envs: int,
     from stable_baselines3 import PPO
 
     from agents.policy import AgentPolicy
-    from agents.training import better_checkpoint, make_training_env, validate
     from agents.tuning_terms import TUNING_TRAVEL_BUDGET
+    from agents.validation import better_checkpoint, validate
+    from agents.vec_env import make_training_env
 
     settings = {k: hp.get(k, DEFAULTS[k]) for k in KEYS if k not in FINE_TUNE_KEYS}
     expert, memory, filter_s = EXPERTS[algo], hp["env_wrapper"], hp.get("action_filter_s")
@@ -283,5 +247,4 @@ def anchor(data: list[tuple[np.ndarray, ...]], stats: dict[str, Any], weight: fl
     return Anchor()
 
 
-__all__ = ["DEFAULTS", "EXPERTS", "FINE_TUNED", "FINE_TUNE_KEYS", "KEYS", "actor_net", "anchor",
-           "check", "collect", "frozen_normalization", "train"]  # fmt: skip
+__all__ = ["actor_net", "anchor", "collect", "frozen_normalization", "train"]

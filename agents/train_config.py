@@ -8,10 +8,9 @@ import ast
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import yaml
 
-from agents.imitation import EXPERTS
-from agents.imitation import KEYS as IMITATION_KEYS
 from agents.moves import check_max_move
 from agents.policy import model_class
 from agents.wrappers import memory_options
@@ -28,6 +27,48 @@ ALGOS = ("ppo", "sac", "td3", "ppo_residual", "ppo_residual_pi", "ppo_residual_m
 #: reference, unobserved).
 RESIDUAL_BASES = {"ppo_residual": None, "ppo_residual_pi": "cascade_pi_ff_tuned",
                   "ppo_residual_mpc": "mpc_linear"}  # fmt: skip
+#: The expert of each imitation algorithm (agents/imitation.py).
+EXPERTS = {"ppo_imitation_mpc": "mpc_linear", "ppo_imitation_mpc_rl": "mpc_linear"}
+#: The imitation algorithms that go on with PPO after DAgger (agents/imitation.py ``anchor``).
+FINE_TUNED = ("ppo_imitation_mpc_rl",)
+#: Entry keys of an imitation algorithm (besides the PPO constructor's and RL Zoo's); the
+#: last three are a fine-tuned one's only.
+IMITATION_KEYS = ("dagger_iterations", "beta_decay", "fit_epochs", "fit_seconds", "move_weight",
+        "dagger_minutes", "anchor_weight", "anchor_fraction")  # fmt: skip
+FINE_TUNE_KEYS = IMITATION_KEYS[-3:]
+DAGGER_DEFAULTS = {"dagger_iterations": 8, "beta_decay": 0.5, "fit_epochs": 10, "fit_seconds": 60.0,
+            "move_weight": 1.0, "dagger_minutes": None, "anchor_weight": 1.0,
+            "anchor_fraction": 0.5}  # fmt: skip
+
+
+def check_imitation(hp: dict[str, Any], algo: str = "ppo_imitation_mpc") -> None:
+    """ValueError naming the first bad imitation setting of an entry ``hp`` of ``algo``."""
+    given = sorted(set(hp) & set(FINE_TUNE_KEYS))
+    if given and algo not in FINE_TUNED:
+        raise ValueError(f"{given} only for an imitation fine-tuned by RL ({list(FINE_TUNED)})")
+    v = hp.get("dagger_minutes")
+    if v is not None and not (isinstance(v, (int, float)) and not isinstance(v, bool)
+                              and 0 < v < np.inf):  # fmt: skip
+        raise ValueError(f"dagger_minutes must be a number > 0, got {v!r}")
+    v = hp.get("anchor_fraction", DAGGER_DEFAULTS["anchor_fraction"])
+    if not (isinstance(v, (int, float)) and not isinstance(v, bool) and 0 < v <= 1):
+        raise ValueError(f"anchor_fraction must be a number in (0, 1], got {v!r}")
+    for key, lo, kind in (("dagger_iterations", 1, int), ("fit_epochs", 1, int)):
+        v = hp.get(key, DAGGER_DEFAULTS[key])
+        if not (isinstance(v, kind) and not isinstance(v, bool) and v >= lo):
+            raise ValueError(f"{key} must be an integer >= {lo}, got {v!r}")
+    for key in ("move_weight", "anchor_weight"):
+        v = hp.get(key, DAGGER_DEFAULTS[key])
+        if not (isinstance(v, (int, float)) and not isinstance(v, bool) and 0 <= v < np.inf):
+            raise ValueError(f"{key} must be a number >= 0, got {v!r}")
+    for key in ("beta_decay", "fit_seconds"):
+        v = hp.get(key, DAGGER_DEFAULTS[key])
+        ok = isinstance(v, (int, float)) and not isinstance(v, bool) and np.isfinite(v)
+        if not (ok and v > 0 and (key != "beta_decay" or v < 1)):
+            where = "(0, 1)" if key == "beta_decay" else "> 0"
+            raise ValueError(f"{key} must be a number in {where}, got {v!r}")
+
+
 HYPERPARAMS = Path(__file__).with_name("hyperparams")
 #: RL Zoo keys with a meaning of their own (the rest go to the algorithm's constructor).
 SPECIAL = ("n_timesteps", "n_envs", "policy", "normalize", "env_wrapper", "policy_kwargs",
@@ -177,9 +218,7 @@ def read_hyperparams(path: Path, env_id: str, algo: str) -> dict[str, Any]:
         raise ConfigError(f"--hyperparams {path}: {given} only for an imitation algo "
                           f"({list(EXPERTS)})")  # fmt: skip
     if algo in EXPERTS:
-        from agents.imitation import check
-
-        _checked(path, check, hp, algo)
+        _checked(path, check_imitation, hp, algo)
         if "max_move" in hp or "residual_scale" in hp or "travel_price" in hp:
             raise ConfigError(f"--hyperparams {path}: an imitation agent acts on valve "
                               "positions as its expert does (no max_move, residual_scale "

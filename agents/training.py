@@ -17,13 +17,19 @@ import numpy as np
 
 import steamtemp_gym
 from agents.files import steamtemp_paths, stem
-from agents.train_config import HYPERPARAMS, SPECIAL, ConfigError, algo_class, read_hyperparams
+from agents.train_config import (
+    DAGGER_DEFAULTS,
+    EXPERTS,
+    FINE_TUNED,
+    HYPERPARAMS,
+    SPECIAL,
+    ConfigError,
+    algo_class,
+    read_hyperparams,
+)
+from agents.validation import N_VALIDATION, VALIDATION_SEED, better_checkpoint, validate  # noqa: F401 - re-exported
+from agents.vec_env import make_training_env  # noqa: F401 - re-exported
 
-#: Seeds of the validation episodes (``random`` scenario); training uses --seed + i.
-#: Sixteen: the seed-to-seed spread of a return (about 70 on the FSH) over 16 is about 18,
-#: below the differences between checkpoints worth choosing between.
-VALIDATION_SEED = 1_000_000
-N_VALIDATION = 16
 #: Where in the budget the agent is validated (and the best kept): every eighth.
 EVAL_FRACTIONS = tuple(k / 8 for k in range(1, 9))
 
@@ -44,40 +50,6 @@ def git_revision() -> str:
         return "unknown"
 
 
-def make_training_env(env_id: str, n_envs: int, seed: int, hp: dict[str, Any],
-                       reference_rate: float | None = None):  # fmt: skip
-    """(VecEnv for training, the native vector env under it, the travel price wrapper or
-    None). ``reference_rate``: the reference's travel per second, which a ``travel_price``
-    entry needs (agents/travel_price.py)."""
-    from stable_baselines3.common.vec_env import VecMonitor, VecNormalize
-
-    from agents.moves import VecMoves
-    from agents.travel_price import VecTravelPrice
-    from agents.vec_env import NativeVecEnv
-    from agents.wrappers import VecControllerMemory, VecResidual
-
-    base = NativeVecEnv(env_id, n_envs, scenario="random", reward=hp.get("train_reward"),
-                        plant_randomization=hp.get("plant_randomization"))  # fmt: skip
-    price = None
-    venv = base
-    if hp.get("travel_price") is not None:
-        if reference_rate is None:
-            raise ConfigError("travel_price needs the reference's travel rate")
-        venv = price = VecTravelPrice(venv, base.venv, reference_rate, hp["travel_price"])
-    if hp.get("residual_scale") is not None:
-        venv = VecResidual(venv, base.venv, hp["residual_scale"], hp.get("residual_base"))
-    if hp.get("max_move") is not None or hp.get("action_filter_s") is not None:
-        venv = VecMoves(venv, base.venv, hp.get("max_move"), hp.get("action_filter_s"))
-    if hp["env_wrapper"] is not None:
-        venv = VecControllerMemory(venv, base.venv, **hp["env_wrapper"])
-    venv = VecMonitor(venv)
-    if hp["normalize"]:
-        kw = hp["normalize"] if isinstance(hp["normalize"], dict) else {}
-        venv = VecNormalize(venv, gamma=hp.get("gamma", 0.99), **kw)
-    venv.seed(seed)
-    return venv, base.venv, price
-
-
 def _shown_path(path: Path) -> str:
     """``path`` as recorded in the metadata: relative to the project for a shipped file (no
     machine's directory in the zoo's metadata), as given otherwise."""
@@ -93,40 +65,6 @@ def _obs_stats(venv) -> dict[str, Any] | None:
     from agents.policy import frozen_stats
 
     return frozen_stats(venv) if isinstance(venv, VecNormalize) else None
-
-
-def validate(env_id: str, policy, n: int = N_VALIDATION) -> dict[str, float]:
-    """Mean return, IAE and valve travel of ``policy`` over the validation episodes (default
-    reward), run as one batch in the native vector env by agents.evaluation.run_batch (row k
-    is ``gym.make(env_id, scenario="random")`` reset with seed VALIDATION_SEED + k, bit for
-    bit). ``policy``: a Policy, or a factory ``venv -> Policy``."""
-    import gymnasium as gym
-
-    from agents.evaluation import run_batch
-
-    venv = gym.make_vec(env_id, num_envs=n, vectorization_mode="vector_entry_point",
-                        scenario="random")  # fmt: skip
-    if not hasattr(policy, "predict"):
-        policy = policy(venv)
-    runs = run_batch(venv, policy, [VALIDATION_SEED + k for k in range(n)])
-    venv.close()
-    out = {key: float(np.mean([r["metrics"][key] for r in runs]))
-           for key in ("return", "iae_K_s", "valve_travel")}  # fmt: skip
-    seconds = sum(float(r["trace"]["time_s"][-1] - r["trace"]["time_s"][0]) for r in runs)
-    out["travel_per_s"] = n * out["valve_travel"] / max(seconds, 1e-9)
-    return out
-
-
-def better_checkpoint(new: dict[str, float], best: dict[str, float], budget: float) -> bool:
-    """Whether validation result ``new`` beats ``best`` (both with ``return`` and
-    ``travel_ratio``): within the travel budget first, then the higher return; outside it,
-    the lower travel."""
-    if not best:
-        return True
-    ok_new, ok_best = new["travel_ratio"] <= budget, best["travel_ratio"] <= budget
-    if ok_new != ok_best:
-        return ok_new
-    return new["return"] > best["return"] if ok_new else new["travel_ratio"] < best["travel_ratio"]
 
 
 def _checked_input(env_id: str, algo: str, hyperparams: Path | None, timesteps: int | None,
@@ -334,7 +272,7 @@ def _imitation(env_id: str, algo: str, cls: Any, path: Path, hp: dict[str, Any],
                venv: Any, quiet: bool, max_minutes: float | None,
                tensorboard: str | None) -> dict[str, Any]:  # fmt: skip
     """A run of an imitation algorithm (agents/imitation.py) with a training run's files;
-    a fine-tuned one (``imitation.FINE_TUNED``) goes on from DAgger's best checkpoint with
+    a fine-tuned one (``FINE_TUNED``) goes on from DAgger's best checkpoint with
     PPO for ``total`` timesteps (:func:`_fine_tune`), in what is left of ``max_minutes``
     after DAgger's ``dagger_minutes``."""
     from agents import imitation
@@ -346,7 +284,7 @@ def _imitation(env_id: str, algo: str, cls: Any, path: Path, hp: dict[str, Any],
     revision = git_revision()
     t0 = time.monotonic()
     log = None if quiet else (lambda m: print(m, file=sys.stderr, flush=True))
-    tuned = algo in imitation.FINE_TUNED
+    tuned = algo in FINE_TUNED
     dagger_minutes = hp.get("dagger_minutes") if tuned else None
     if max_minutes is not None:
         dagger_minutes = min(dagger_minutes or max_minutes, max_minutes)
@@ -398,9 +336,9 @@ def _fine_tune(env_id: str, cls: Any, hp: dict[str, Any], seed: int, n_envs: int
     t0 = time.monotonic()
     callbacks = [_progress(evaluate, rl_curve, total, t0, name, quiet, max_minutes),
                  imitation.anchor(data, stats, hp.get("anchor_weight",
-                                  imitation.DEFAULTS["anchor_weight"]),
+                                  DAGGER_DEFAULTS["anchor_weight"]),
                                   int(total * hp.get("anchor_fraction",
-                                      imitation.DEFAULTS["anchor_fraction"])), seed)]  # fmt: skip
+                                      DAGGER_DEFAULTS["anchor_fraction"])), seed)]  # fmt: skip
     if hp.get("critic_warmup_steps"):
         callbacks.append(critic_warmup(hp["critic_warmup_steps"]))
     model.learn(total_timesteps=total, callback=callbacks, progress_bar=False)
@@ -428,8 +366,6 @@ def train(env_id: str, algo: str, hyperparams: Path | None = None, timesteps: in
     reference = validate(env_id, lambda v: baselines.make(baselines.INDUSTRIAL_REFERENCE, v))
     venv, native, price = make_training_env(env_id, n_envs, seed, hp,
                                             reference_rate=reference["travel_per_s"])  # fmt: skip
-    from agents.imitation import EXPERTS
-
     if algo in EXPERTS:
         return _imitation(env_id, algo, cls, path, hp, seed, run, n_envs, total, out,
                           reference, venv, quiet, max_minutes, tensorboard)  # fmt: skip

@@ -152,3 +152,37 @@ def _rows(info: dict[str, Any], n: int, full: bool = False) -> list[dict[str, An
         for b in np.flatnonzero(info["_" + k]).tolist():
             rows[b][k] = col[b]
     return rows
+
+
+def make_training_env(env_id: str, n_envs: int, seed: int, hp: dict[str, Any],
+                       reference_rate: float | None = None):  # fmt: skip
+    """(VecEnv for training, the native vector env under it, the travel price wrapper or
+    None). ``reference_rate``: the reference's travel per second, which a ``travel_price``
+    entry needs (agents/travel_price.py)."""
+    from stable_baselines3.common.vec_env import VecMonitor, VecNormalize
+
+    from agents.moves import VecMoves
+    from agents.train_config import ConfigError
+    from agents.travel_price import VecTravelPrice
+    from agents.wrappers import VecControllerMemory, VecResidual
+
+    base = NativeVecEnv(env_id, n_envs, scenario="random", reward=hp.get("train_reward"),
+                        plant_randomization=hp.get("plant_randomization"))  # fmt: skip
+    price = None
+    venv = base
+    if hp.get("travel_price") is not None:
+        if reference_rate is None:
+            raise ConfigError("travel_price needs the reference's travel rate")
+        venv = price = VecTravelPrice(venv, base.venv, reference_rate, hp["travel_price"])
+    if hp.get("residual_scale") is not None:
+        venv = VecResidual(venv, base.venv, hp["residual_scale"], hp.get("residual_base"))
+    if hp.get("max_move") is not None or hp.get("action_filter_s") is not None:
+        venv = VecMoves(venv, base.venv, hp.get("max_move"), hp.get("action_filter_s"))
+    if hp["env_wrapper"] is not None:
+        venv = VecControllerMemory(venv, base.venv, **hp["env_wrapper"])
+    venv = VecMonitor(venv)
+    if hp["normalize"]:
+        kw = hp["normalize"] if isinstance(hp["normalize"], dict) else {}
+        venv = VecNormalize(venv, gamma=hp.get("gamma", 0.99), **kw)
+    venv.seed(seed)
+    return venv, base.venv, price
