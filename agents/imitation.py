@@ -36,9 +36,7 @@ from typing import Any
 
 import numpy as np
 
-from agents.train_config import DAGGER_DEFAULTS as DEFAULTS
-from agents.train_config import EXPERTS, FINE_TUNE_KEYS
-from agents.train_config import IMITATION_KEYS as KEYS
+from agents.train_config import DAGGER_KEYS, EXPERTS, IMITATION_DEFAULTS
 
 
 def actor_net(model: Any) -> Any:
@@ -150,7 +148,7 @@ def train(env_id: str, algo: str, hp: dict[str, Any], seed: int, n_envs: int,
     from agents.validation import better_checkpoint, validate
     from agents.vec_env import make_training_env
 
-    settings = {k: hp.get(k, DEFAULTS[k]) for k in KEYS if k not in FINE_TUNE_KEYS}
+    settings = {k: hp.get(k, IMITATION_DEFAULTS[k]) for k in DAGGER_KEYS}
     expert, memory, filter_s = EXPERTS[algo], hp["env_wrapper"], hp.get("action_filter_s")
     venv, native, _ = make_training_env(env_id, 1, seed, {**hp, "normalize": False})
     model = PPO(hp.get("policy", "MlpPolicy"), venv, seed=seed, device="cpu", verbose=0,

@@ -31,17 +31,17 @@ RESIDUAL_BASES = {"ppo_residual": None, "ppo_residual_pi": "cascade_pi_ff_tuned"
 EXPERTS = {"ppo_imitation_mpc": "mpc_linear", "ppo_imitation_mpc_rl": "mpc_linear"}
 #: The imitation algorithms that go on with PPO after DAgger (agents/imitation.py ``anchor``).
 FINE_TUNED = ("ppo_imitation_mpc_rl",)
-#: Entry keys of an imitation algorithm (besides the PPO constructor's and RL Zoo's); the
-#: last three are a fine-tuned one's only.
-IMITATION_KEYS = ("dagger_iterations", "beta_decay", "fit_epochs", "fit_seconds", "move_weight",
-        "dagger_minutes", "anchor_weight", "anchor_fraction")  # fmt: skip
-FINE_TUNE_KEYS = IMITATION_KEYS[-3:]
-DAGGER_DEFAULTS = {"dagger_iterations": 8, "beta_decay": 0.5, "fit_epochs": 10, "fit_seconds": 60.0,
-            "move_weight": 1.0, "dagger_minutes": None, "anchor_weight": 1.0,
-            "anchor_fraction": 0.5}  # fmt: skip
+#: Entry keys of an imitation algorithm's DAgger (besides the PPO constructor's and RL Zoo's),
+#: and those of a fine-tuned one's RL (:data:`FINE_TUNED` only).
+DAGGER_KEYS = ("dagger_iterations", "beta_decay", "fit_epochs", "fit_seconds", "move_weight")
+FINE_TUNE_KEYS = ("dagger_minutes", "anchor_weight", "anchor_fraction")
+IMITATION_KEYS = DAGGER_KEYS + FINE_TUNE_KEYS
+IMITATION_DEFAULTS = {"dagger_iterations": 8, "beta_decay": 0.5, "fit_epochs": 10,
+                      "fit_seconds": 60.0, "move_weight": 1.0, "dagger_minutes": None,
+                      "anchor_weight": 1.0, "anchor_fraction": 0.5}  # fmt: skip
 
 
-def check_imitation(hp: dict[str, Any], algo: str = "ppo_imitation_mpc") -> None:
+def check_imitation(hp: dict[str, Any], algo: str) -> None:
     """ValueError naming the first bad imitation setting of an entry ``hp`` of ``algo``."""
     given = sorted(set(hp) & set(FINE_TUNE_KEYS))
     if given and algo not in FINE_TUNED:
@@ -50,19 +50,19 @@ def check_imitation(hp: dict[str, Any], algo: str = "ppo_imitation_mpc") -> None
     if v is not None and not (isinstance(v, (int, float)) and not isinstance(v, bool)
                               and 0 < v < np.inf):  # fmt: skip
         raise ValueError(f"dagger_minutes must be a number > 0, got {v!r}")
-    v = hp.get("anchor_fraction", DAGGER_DEFAULTS["anchor_fraction"])
+    v = hp.get("anchor_fraction", IMITATION_DEFAULTS["anchor_fraction"])
     if not (isinstance(v, (int, float)) and not isinstance(v, bool) and 0 < v <= 1):
         raise ValueError(f"anchor_fraction must be a number in (0, 1], got {v!r}")
     for key, lo, kind in (("dagger_iterations", 1, int), ("fit_epochs", 1, int)):
-        v = hp.get(key, DAGGER_DEFAULTS[key])
+        v = hp.get(key, IMITATION_DEFAULTS[key])
         if not (isinstance(v, kind) and not isinstance(v, bool) and v >= lo):
             raise ValueError(f"{key} must be an integer >= {lo}, got {v!r}")
     for key in ("move_weight", "anchor_weight"):
-        v = hp.get(key, DAGGER_DEFAULTS[key])
+        v = hp.get(key, IMITATION_DEFAULTS[key])
         if not (isinstance(v, (int, float)) and not isinstance(v, bool) and 0 <= v < np.inf):
             raise ValueError(f"{key} must be a number >= 0, got {v!r}")
     for key in ("beta_decay", "fit_seconds"):
-        v = hp.get(key, DAGGER_DEFAULTS[key])
+        v = hp.get(key, IMITATION_DEFAULTS[key])
         ok = isinstance(v, (int, float)) and not isinstance(v, bool) and np.isfinite(v)
         if not (ok and v > 0 and (key != "beta_decay" or v < 1)):
             where = "(0, 1)" if key == "beta_decay" else "> 0"

@@ -18,10 +18,10 @@ import numpy as np
 import steamtemp_gym
 from agents.files import steamtemp_paths, stem
 from agents.train_config import (
-    DAGGER_DEFAULTS,
     EXPERTS,
     FINE_TUNED,
     HYPERPARAMS,
+    IMITATION_DEFAULTS,
     SPECIAL,
     ConfigError,
     algo_class,
@@ -325,7 +325,6 @@ def _fine_tune(env_id: str, cls: Any, hp: dict[str, Any], seed: int, n_envs: int
     stats = best["obs_norm"]
     venv, native, _ = make_training_env(env_id, n_envs, seed, {**hp, "normalize": False})
     venv = imitation.frozen_normalization(venv, stats, hp.get("gamma", 0.99))
-    venv.seed(seed)
     model = _sb3_model(cls, hp, venv, seed, tensorboard)
     model.policy.load_state_dict(PPO.load(model_path, device="cpu").policy.state_dict())
     with torch.no_grad():
@@ -336,9 +335,9 @@ def _fine_tune(env_id: str, cls: Any, hp: dict[str, Any], seed: int, n_envs: int
     t0 = time.monotonic()
     callbacks = [_progress(evaluate, rl_curve, total, t0, name, quiet, max_minutes),
                  imitation.anchor(data, stats, hp.get("anchor_weight",
-                                  DAGGER_DEFAULTS["anchor_weight"]),
+                                  IMITATION_DEFAULTS["anchor_weight"]),
                                   int(total * hp.get("anchor_fraction",
-                                      DAGGER_DEFAULTS["anchor_fraction"])), seed)]  # fmt: skip
+                                      IMITATION_DEFAULTS["anchor_fraction"])), seed)]  # fmt: skip
     if hp.get("critic_warmup_steps"):
         callbacks.append(critic_warmup(hp["critic_warmup_steps"]))
     model.learn(total_timesteps=total, callback=callbacks, progress_bar=False)
