@@ -22,8 +22,8 @@ Reads ``<out>/leaderboard.json`` (the current schema version) and writes, betwee
 - docs/baselines.md ``realism:start`` / ``realism:end``: the baseline-plant pairs with
   episodes a plant engineer would reject, with the first of them (``realism_markdown``);
 - docs/robustness.md ``mismatch:start`` / ``mismatch:end``: every policy on the
-  model-mismatch variants (agents/leaderboard/mismatch.py ``markdown``); the README's
-  leaderboard section also gets the robustness column (``worst_markdown``).
+  model-mismatch variants (agents/leaderboard/mismatch.py ``markdown``), each policy's
+  worst variant among them; the README's leaderboard section links it.
 
 Nothing is typed by hand.
 """
@@ -74,13 +74,12 @@ def section(doc: dict, pareto: bool = False) -> str:
                   "`cascade_pi_ff`'s: the line joins the admissible policies that no other "
                   "beats on both (the Pareto front); right of the dashed budget a policy is "
                   "not admissible.*", ""]  # fmt: skip
-    worst = mismatch.worst_markdown(doc)
-    if worst:
-        lines += [f"Robustness to model mismatch: each policy commissioned on the nominal "
-                  f"plant and run on the plant's perturbed variants under "
-                  f"`{mismatch.SCENARIO}`; the cell is its worst variant's mean return over "
-                  "its nominal one (1.00 = as on the model, 1.30 = 30 % more cost). Every "
-                  "variant: [docs/robustness.md](docs/robustness.md).", "", worst]
+    if mismatch.worst_markdown(doc):
+        lines += [f"Robustness to model mismatch (each policy commissioned on the nominal plant "
+                  f"and run on the plant's perturbed variants under `{mismatch.SCENARIO}`, "
+                  "its worst variant's cost over its nominal one per plant): "
+                  "[docs/robustness.md](docs/robustness.md#in-the-leaderboard-the-robustness-"
+                  "column).", ""]  # fmt: skip
     return "\n".join([*lines, END])
 
 
