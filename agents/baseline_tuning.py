@@ -63,6 +63,7 @@ from agents.tuning_terms import (
     CHECK_SEEDS,
     EPISODES,
     ROBUST_COST_MAX,
+    ROBUST_EPISODES,
     ROBUST_MARGIN,
     TRAVEL_BUDGET,
     TUNING_SEED,
@@ -71,6 +72,7 @@ from agents.tuning_terms import (
     check_breach,
     check_metrics,
     code_digest,
+    corner_check_metrics,
     ends,
     robustness,
     run_episodes,
@@ -92,7 +94,8 @@ class Evaluation:
     checks (``check``: None if not run, "" if passed, else what broke;
     ``check_travel_ratio``: the largest valve-travel ratio to the reference's over them)
     and the robustness check (``robust_ratio``: the worst corner plant's cost over the
-    nominal's in the same episode; NaN if not run)."""
+    nominal's in the same episode, NaN if not run; ``robust_breach``: what broke in the
+    commissioning checks on the corner plants, "" if nothing)."""
 
     knobs: dict[str, float]
     score: float  # mean normalized score
@@ -101,6 +104,7 @@ class Evaluation:
     check: str | None = None
     check_travel_ratio: float = float("nan")
     robust_ratio: float = float("nan")
+    robust_breach: str = ""
     mean_return: float = float("nan")  # on the training episodes (NaN where replayed)
 
     @property
@@ -112,17 +116,22 @@ class Evaluation:
     @property
     def feasible(self) -> bool:
         return (self.trips == 0 and self.travel_ratio <= TUNING_TRAVEL_BUDGET
-                and not self.check and self.robust_excess == 0.0)  # fmt: skip
+                and not self.check and self.robust_excess == 0.0
+                and not self.robust_breach)  # fmt: skip
 
     @property
     def merit(self) -> float:
-        """The search's objective: the score if feasible, else below every feasible one.
-        Never raised by running the check, so a candidate is judged before it is checked."""
+        """The search's objective: the score if feasible, else below every feasible one: by
+        trips and travel above the bound, then a broken commissioning check below every
+        candidate that passed it, and a robustness check not kept by how far it is above
+        its bound (plus 1 for a broken check on a corner plant). Never raised by running
+        the checks, so a candidate is judged before it is checked."""
         if self.feasible:
             return self.score
-        broken = 1.0 if self.check else 0.0
-        return (-1e6 - self.trips - max(self.travel_ratio - TUNING_TRAVEL_BUDGET, 0.0) - broken
-                - self.robust_excess)  # fmt: skip
+        base = -1e6 - self.trips - max(self.travel_ratio - TUNING_TRAVEL_BUDGET, 0.0)
+        if self.check:
+            return base - 1e3
+        return base - min(self.robust_excess + (1.0 if self.robust_breach else 0.0), 100.0)
 
 
 def evaluate(name: str, env_id: str, values: dict[str, float], e: dict[str, Any]) -> Evaluation:
@@ -229,6 +238,7 @@ def search(
     replayed = 0
 
     refs = check_metrics(env_id, lambda env: baselines.make(ZERO, env))
+    corner_refs = corner_check_metrics(env_id, lambda env: baselines.make(ZERO, env))[1]
 
     def evaluate_at(u: np.ndarray) -> Evaluation:
         nonlocal replayed
@@ -265,11 +275,12 @@ def search(
         res = replace(res, check=breach, check_travel_ratio=ratio)
         if breach:
             return res
-        robust = robustness(env_id, lambda env: baselines.make(name, env, **res.knobs))
+        robust, breach = robustness(env_id, lambda env: baselines.make(name, env, **res.knobs),
+                                    corner_refs)  # fmt: skip
         if log:
             log(f"{name} {env_id}: robustness: worst corner plant's cost x{robust:.2f} the "
-                "nominal's")
-        return replace(res, robust_ratio=robust)
+                f"nominal's{'; ' + breach if breach else ''}")
+        return replace(res, robust_ratio=robust, robust_breach=breach)
 
     # the controller's alternative starts (a robust design), each judged in full; the
     # search begins at the best of them and the defaults
@@ -292,6 +303,7 @@ def search(
         "replayed": replayed,
         "check_travel_ratio": _finite(best.check_travel_ratio),
         "robust_ratio": _finite(best.robust_ratio),
+        "robust_breach": best.robust_breach,
         "start": {**{k: v for k, v in history[0][1].__dict__.items() if k != "mean_return"},
                   "check_travel_ratio": _finite(history[0][1].check_travel_ratio),
                   "robust_ratio": _finite(history[0][1].robust_ratio)},
@@ -312,7 +324,7 @@ def _row(r: Evaluation) -> dict[str, Any]:
     """One evaluation as stored: its knobs, score, travel ratio, trips and checks."""
     return {"knobs": r.knobs, "score": r.score, "travel_ratio": r.travel_ratio,
             "trips": r.trips, "check": r.check,
-            "robust_ratio": _finite(r.robust_ratio)}  # fmt: skip
+            "robust_ratio": _finite(r.robust_ratio), "robust_breach": r.robust_breach}  # fmt: skip
 
 
 def write(name: str, env_ids: list[str], log: Any = None, replay: bool = False) -> dict[str, Any]:
@@ -332,6 +344,7 @@ def write(name: str, env_ids: list[str], log: Any = None, replay: bool = False) 
                          "travel_budget": TUNING_TRAVEL_BUDGET,
                          "admissibility_budget": TRAVEL_BUDGET, "reference": ZERO,
                          "robustness": {"plants": "corners of the parameter ranges",
+                                        "episodes": ROBUST_EPISODES,
                                         "margin": ROBUST_MARGIN,
                                         "cost_max": ROBUST_COST_MAX},
                          "commissioning_checks": {

@@ -35,16 +35,20 @@ TRAVEL_BUDGET = stats.TRAVEL_BUDGET
 #: stored tunings moved the valves up to 6 % more (relative to the reference) than on their
 #: training episodes (docs/baseline_tuning.md); 1.7 leaves 18 %, three times that spread.
 TUNING_TRAVEL_BUDGET = 1.7
-#: The robustness check: the candidate, commissioned on the model, runs training episodes on
-#: the plants at the corners of the documented uncertainty box (every combination of each
-#: parameter group's two directions, ``plant_randomization`` with the factors fixed), each
-#: group's factor at the end of its range less ROBUST_MARGIN of the range's log half-width
-#: (so never a named model-mismatch variant, which sit at the ranges' ends and stay an
-#: evaluation); on no corner may it cost more than ROBUST_COST_MAX times what it costs on
-#: the nominal plant in the same episode. Random draws from the ranges reach the corners
-#: too rarely to see the instabilities that sit there (docs/baseline_tuning.md).
+#: The robustness check (:func:`robustness`): the candidate, commissioned on the model, runs
+#: training episodes and the commissioning checks on the plants at the corners of the
+#: documented uncertainty box (every combination of each parameter group's two directions,
+#: ``plant_randomization`` with the factors fixed), each group's factor at the end of its
+#: range less ROBUST_MARGIN of the range's log half-width (so never a named model-mismatch
+#: variant, which sit at the ranges' ends and stay an evaluation); on no corner may it cost
+#: more than ROBUST_COST_MAX times what it costs on the nominal plant in the same episode,
+#: nor trip, limit-cycle or stroke the valves beyond the realism bound in a check. Random
+#: draws from the ranges reach the corners too rarely to see the instabilities that sit
+#: there (docs/baseline_tuning.md).
 ROBUST_COST_MAX = 2.5
 ROBUST_MARGIN = 0.15
+#: The episodes the corner plants run (:func:`robustness`), as the tuning files record them.
+ROBUST_EPISODES = "training episodes; commissioning checks at both ends of the load range"
 #: Loads of the commissioning checks: the bottom of the load range the suite's scenarios
 #: reach, and rated load.
 CHECK_LOADS = (0.35, 1.0)
@@ -133,12 +137,26 @@ def robust_corners(env_id: str) -> list[dict[str, float]]:
     return [dict(zip(groups, c, strict=True)) for c in itertools.product(*ends_)]
 
 
-def robustness(env_id: str, make_policy: Any) -> float:
-    """The robustness check's cost ratio (:data:`ROBUST_COST_MAX`): the largest over the
-    corners of :func:`robust_corners` of one policy's cost (minus the return) on that
-    corner's plant over its cost on the nominal plant in the same training episode. The
-    policy is commissioned on the nominal plant; corner k runs training episode k modulo
-    their number, and every training episode runs on at least one corner."""
+def robustness(env_id: str, make_policy: Any,
+               corner_refs: list[dict[str, Any]] | None = None) -> tuple[float, str]:  # fmt: skip
+    """The robustness check: (cost ratio, breach). The ratio (bounded by
+    :data:`ROBUST_COST_MAX`) is the largest over the corners of :func:`robust_corners` of
+    one policy's cost (minus the return) on that corner's plant over its cost on the
+    nominal plant in the same episode, on two sets of episodes:
+
+    - the training episodes: corner k runs training episode k modulo their number, and
+      every training episode runs on at least one corner;
+    - the commissioning checks at both ends of the load range (:data:`COMMISSIONING_CHECKS`,
+      seed ``CHECK_SEEDS[0]``) on every corner: the training episodes reach a corner only at
+      the loads they happen to visit, while a loop tuned to the edge of its stability
+      breaks at one end of the load range (a tuned PI limit-cycling at rated load on a
+      corner plant, an MPC diverging at 35 % load).
+
+    The breach ("" if none) is what a plant engineer would reject in a corner's check
+    episode against ``corner_refs``, the reference's metrics on the same episodes
+    (:func:`corner_check_metrics`; :func:`agents.stats.realism_breach`: a trip, a limit
+    cycle, the valves stroked beyond ``stats.REALISM_TRAVEL_MAX`` times the reference's).
+    The policy is commissioned on the nominal plant of each episode set."""
     corners = robust_corners(env_id)
     if not corners:
         raise ValueError(f"{env_id} declares no parameter groups: no robustness check")
@@ -151,12 +169,50 @@ def robustness(env_id: str, make_policy: Any) -> float:
                                                       strict=True)}  # fmt: skip
     worst = 0.0
     for factors, s in runs:
-        fixed = {g: (f, f) for g, f in factors.items()}
-        unit = gym.make_vec(env_id, num_envs=1, scenario="random",
-                            vectorization_mode="vector_entry_point", plant_randomization=fixed)
+        unit = _corner_venv(env_id, "random", factors)
         ret = run_batch(unit, policy, [s])[0]["metrics"]["return"]
         worst = max(worst, -ret / max(-twin[s], 1e-9))
-    return float(worst)
+    refs = corner_refs if corner_refs is not None else corner_check_metrics(
+        env_id, lambda env: baselines.make(ZERO, env))[1]  # fmt: skip
+    nominal_checks, ms = corner_check_metrics(env_id, make_policy)
+    breaches = []
+    for (i, factors), m, ref in zip(_corner_episodes(env_id), ms, refs, strict=True):
+        nom = nominal_checks[i]
+        worst = max(worst, -m["return"] / max(-nom["return"], 1e-9))
+        if b := stats.realism_breach(m, ref):
+            where = ", ".join(f"{g} x{f:.2f}" for g, f in factors.items())
+            breaches.append(f"{COMMISSIONING_CHECKS[i].name} on the corner plant ({where}): {b}")
+    return float(worst), "; ".join(breaches)
+
+
+def _corner_venv(env_id: str, scenario: Any, factors: dict[str, float] | None) -> Any:
+    """A one-row vector env of ``scenario`` on the corner plant of group ``factors`` (None:
+    the nominal plant)."""
+    fixed = None if factors is None else {g: (f, f) for g, f in factors.items()}
+    return gym.make_vec(env_id, num_envs=1, scenario=scenario,
+                        vectorization_mode="vector_entry_point",
+                        **({} if fixed is None else {"plant_randomization": fixed}))  # fmt: skip
+
+
+def _corner_episodes(env_id: str) -> list[tuple[int, dict[str, float]]]:
+    """(index of the commissioning check, corner) of the robustness check's check episodes:
+    checks outer, corners inner."""
+    return [(i, c) for i in range(len(COMMISSIONING_CHECKS)) for c in robust_corners(env_id)]
+
+
+def corner_check_metrics(env_id: str,
+                         make_policy: Any) -> tuple[list[dict[str, Any]], list[dict[str, Any]]]:  # fmt: skip
+    """Metrics of one policy, commissioned on the nominal plant of each commissioning check,
+    on that check (seed ``CHECK_SEEDS[0]``): on the nominal plant (one per check) and on
+    every corner plant (in the order of :func:`_corner_episodes`)."""
+    nominal, corners = [], []
+    for sc in COMMISSIONING_CHECKS:
+        venv = _corner_venv(env_id, sc, None)
+        policy = make_policy(venv)
+        nominal.append(run_batch(venv, policy, [CHECK_SEEDS[0]])[0]["metrics"])
+        corners += [run_batch(_corner_venv(env_id, sc, c), policy, [CHECK_SEEDS[0]])[0]["metrics"]
+                    for c in robust_corners(env_id)]  # fmt: skip
+    return nominal, corners
 
 
 def check_metrics(env_id: str, make_policy: Any) -> list[dict[str, Any]]:

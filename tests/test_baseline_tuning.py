@@ -107,13 +107,51 @@ def test_the_robustness_check_tells_a_fragile_tuning():
     thermocouple reading as the named scenarios' noise goes unstable on the corner of high
     gain and short time constants (ratio above the bound) and the detuned filter does not."""
     env_id = "steamtemp/Cascade300MW-v0"
-    ref = tt.robustness(env_id, lambda v: baselines.make(tt.ZERO, v))
-    assert 0.9 < ref < 1.5
-    fragile = tt.robustness(env_id, lambda v: baselines.make(
+    ref, ref_breach = tt.robustness(env_id, lambda v: baselines.make(tt.ZERO, v))
+    assert 0.9 < ref < 1.5 and ref_breach == ""
+    fragile, _ = tt.robustness(env_id, lambda v: baselines.make(
         "mpc_linear", v, move_weight=1e-4, filter_noise_K=0.25, heat_std=0.02))
-    detuned = tt.robustness(env_id, lambda v: baselines.make(
+    detuned, _ = tt.robustness(env_id, lambda v: baselines.make(
         "mpc_linear", v, move_weight=1e-4, filter_noise_K=10.0, heat_std=0.005))
     assert fragile > tt.ROBUST_COST_MAX > detuned
+
+
+def test_the_corner_checks_see_a_limit_cycle_the_training_episodes_miss():
+    """A cascade tuned to the edge of its stability on the model (BensonSubcritical, outer
+    gain 2 and inner reset 0.59 of the commissioning rule's) keeps every training episode
+    on every corner plant within the cost bound, but limit-cycles at rated load on the
+    corners of light metal and slow thermowells (on clean tubes with fast firing about 15 K
+    peak to peak against the reference's 1.8 K, the valves stroked 3.6 times as far): the
+    commissioning checks on the corner plants find it, and the untuned reference passes
+    them."""
+    env_id = "steamtemp/BensonSubcritical-v0"
+    edge = {"feedforward_gain": 1.0, "inner_gain": 1.19, "inner_reset": 0.59,
+            "outer_gain": 2.0, "outer_reset": 3.36}  # fmt: skip
+    refs = tt.corner_check_metrics(env_id, lambda v: baselines.make(tt.ZERO, v))[1]
+    ratio, breach = tt.robustness(env_id, lambda v: baselines.make("cascade_pi_ff", v, **edge),
+                                  refs)  # fmt: skip
+    assert "commissioning_check_100 on the corner plant" in breach
+    assert "commissioning_check_35" not in breach
+    assert ratio > tt.ROBUST_COST_MAX
+    ref_ratio, ref_breach = tt.robustness(env_id, lambda v: baselines.make(tt.ZERO, v), refs)
+    assert ref_breach == "" and ref_ratio < 2.0
+
+
+def test_a_broken_check_on_the_model_ranks_below_a_broken_one_on_a_corner_plant():
+    """Tiers of the infeasible: a candidate that breaks a commissioning check on the model
+    ranks below every one that keeps them, whatever its score or robustness; among those,
+    a broken check on a corner plant costs as much as a unit of cost ratio above the
+    bound (so a walk from a start that limit-cycles on a corner goes towards robustness,
+    never to a candidate that limit-cycles on the model)."""
+    corner = bt.Evaluation({}, 0.1, 1.0, 0, check="", robust_ratio=3.0,
+                           robust_breach="commissioning_check_100 on the corner plant: ...")
+    ratio_only = bt.Evaluation({}, 0.1, 1.0, 0, check="", robust_ratio=3.0)
+    model = bt.Evaluation({}, 0.9, 1.0, 0, check="at 35 % load, seed 1: tripped")
+    assert not corner.feasible and not model.feasible
+    assert ratio_only.merit > corner.merit > model.merit
+    assert corner.merit == pytest.approx(ratio_only.merit - 1.0)
+    fragile = bt.Evaluation({}, 0.9, 1.0, 0, check="", robust_ratio=1e9)
+    assert fragile.merit > model.merit
 
 
 def test_a_failed_commissioning_check_ranks_below_every_feasible_candidate():
@@ -172,7 +210,8 @@ def test_a_replayed_search_runs_only_what_it_has_not_stored(monkeypatch):
     monkeypatch.setattr(bt, "ends", lambda env_id: {})
     monkeypatch.setattr(bt, "check_metrics", lambda env_id, make: [])
     monkeypatch.setattr(bt, "check_breach", lambda ms, refs: ("", 1.0))
-    monkeypatch.setattr(bt, "robustness", lambda env_id, make: 1.0)
+    monkeypatch.setattr(bt, "robustness", lambda env_id, make, refs=None: (1.0, ""))
+    monkeypatch.setattr(bt, "corner_check_metrics", lambda env_id, make: ([], []))
     ks = tuning.knobs(baselines.factory("cascade_pi"))
     monkeypatch.setattr(bt, "defaults", lambda f, env_id: {k.name: 1.0 for k in ks})
     target = np.array([0.9, 0.3, 0.6, 0.2])
@@ -318,6 +357,7 @@ def test_every_stored_tuning_was_chosen_under_the_current_terms(name, env_id):
     rec = json.loads(tuning.path(name).read_text())
     terms = rec["terms"]
     assert terms.get("robustness") == {"plants": "corners of the parameter ranges",
+                                       "episodes": tt.ROBUST_EPISODES,
                                        "margin": tt.ROBUST_MARGIN,
                                        "cost_max": tt.ROBUST_COST_MAX}, (
         "tuned without the current robustness check: rerun the tuning")  # fmt: skip
@@ -355,7 +395,8 @@ def test_the_search_starts_from_the_best_of_the_defaults_and_the_declared_altern
     monkeypatch.setattr(bt, "ends", lambda env_id: {})
     monkeypatch.setattr(bt, "check_metrics", lambda env_id, make: [])
     monkeypatch.setattr(bt, "check_breach", lambda ms, refs: ("", 1.0))
-    monkeypatch.setattr(bt, "robustness", lambda env_id, make: 1.0)
+    monkeypatch.setattr(bt, "robustness", lambda env_id, make, refs=None: (1.0, ""))
+    monkeypatch.setattr(bt, "corner_check_metrics", lambda env_id, make: ([], []))
     monkeypatch.setattr(bt, "evaluate", fake_eval)
     res = bt.search("ctl", "steamtemp/Cascade300MW-v0")
     assert calls[0] == {"a": 0.1, "b": 0.1} and calls[1]["b"] == pytest.approx(0.9)
