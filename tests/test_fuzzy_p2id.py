@@ -166,7 +166,18 @@ def _ratios(scenario: str) -> tuple[float, float, float]:
             f["fuel_kg"].mean() / p["fuel_kg"].mean())  # fmt: skip
 
 
-@pytest.mark.parametrize("scenario", CLAIM_SCENARIOS)
+#: Claim scenarios where the accuracy claim does not reproduce, with what was measured.
+NOT_MORE_ACCURATE = {
+    "load_ramp_100_50": (
+        "measured: IAE ratio fuzzy_p2id / cascade_pi 1.031 (std ratio 0.859) on the 100 -> 50 % "
+        "ramp with the gains the tuner chose under the commissioning checks on the corner "
+        "plants (docs/baseline_tuning.md); the gains chosen without them gave 0.937"),
+}
+
+
+@pytest.mark.parametrize("scenario", [
+    pytest.param(sc, marks=pytest.mark.xfail(strict=True, reason=NOT_MORE_ACCURATE[sc]))
+    if sc in NOT_MORE_ACCURATE else sc for sc in CLAIM_SCENARIOS])  # fmt: skip
 def test_claim_more_accurate_and_less_fluctuation(scenario):
     """The paper: the P²ID is "more accurate and [has] less fluctuation" than the classic
     controller: a smaller IAE and a smaller std of the outlet temperature error than
@@ -198,7 +209,7 @@ def test_pin_claim_ratios(scenario):
 
 #: (IAE ratio, std ratio) fuzzy_p2id / cascade_pi measured on the claim scenarios.
 MEASURED = {
-    "load_ramp_100_50": (0.937, 0.824),
-    "load_ramp_50_100": (0.793, 0.836),
-    "load_following": (0.864, 0.883),
+    "load_ramp_100_50": (1.031, 0.859),
+    "load_ramp_50_100": (0.798, 0.841),
+    "load_following": (0.877, 0.895),
 }
