@@ -58,10 +58,11 @@ block diagram, and Fig. 5, the membership functions and rule base):
   uses the start set.
 
 Claim check (tests/test_fuzzy_p2id.py; BensonSubcritical-v0, 5 seeds, against cascade_pi,
-with the common tuning's gains): IAE ratio 0.94 / 0.79 / 0.86 and outlet-error std ratio
-0.82 / 0.84 / 0.88 on load_ramp_100_50 / load_ramp_50_100 / load_following: "more accurate,
-less fluctuation" reproduces. The fuel claim does not (a strict xfail): fuel equal within
-0.01 % (this unit's fuel follows the load demand through its fuel/water schedule).
+with the common tuning's gains): IAE ratio 1.03 / 0.80 / 0.88 and outlet-error std ratio
+0.86 / 0.84 / 0.90 on load_ramp_100_50 / load_ramp_50_100 / load_following: "less
+fluctuation" reproduces, "more accurate" on two of the three (a strict xfail on the 100 ->
+50 % ramp). The fuel claim does not (a strict xfail): fuel equal within 0.01 % (this
+unit's fuel follows the load demand through its fuel/water schedule).
 
 Mapping onto the plants (``Plant.control_loops``; the paper uses the P²ID "for superheaters
 temperature control", one per spray stage, replacing the classic loop that holds that
