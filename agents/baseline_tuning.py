@@ -16,8 +16,10 @@ Every controller gets the same terms:
   :data:`TUNING_TRAVEL_BUDGET` times ``cascade_pi_ff``'s on the same episodes (the
   leaderboard's budget :data:`TRAVEL_BUDGET` less a margin for unseen scenarios); the
   robustness check (:func:`agents.tuning_terms.robustness`: on the plants at the corners of
-  the documented parameter ranges less a margin, a cost at most :data:`ROBUST_COST_MAX`
-  times that on the nominal plant in the same episode); and the commissioning checks at the two ends
+  the documented parameter ranges less a margin, on training episodes and on both
+  commissioning checks, a cost at most :data:`ROBUST_COST_MAX` times that on the nominal
+  plant in the same episode, and in the checks no trip, limit cycle or travel beyond the
+  realism bound); and the commissioning checks at the two ends
   of the load range (:data:`COMMISSIONING_CHECKS`, episodes held at each of
   :data:`CHECK_LOADS` with a setpoint and a heat-absorption step, one per seed of
   :data:`CHECK_SEEDS`): in every one no trip, no limit cycle
