@@ -295,17 +295,7 @@ def _check_reference(env_id: str) -> list[dict]:
     return tt.check_metrics(env_id, lambda env: baselines.make(tt.ZERO, env))
 
 
-#: Stored tunings that break the commissioning checks (the least infeasible of their search).
-CHECK_BROKEN: dict = {}
-
-
-def _checked_pairs() -> list:
-    return [pytest.param(*p.values, id=p.id, marks=pytest.mark.xfail(
-                strict=True, reason=CHECK_BROKEN[p.values])) if p.values in CHECK_BROKEN else p
-            for p in _stored_pairs()]  # fmt: skip
-
-
-@pytest.mark.parametrize(("name", "env_id"), _checked_pairs())
+@pytest.mark.parametrize(("name", "env_id"), _stored_pairs())
 def test_every_stored_tuning_passes_the_commissioning_check(name, env_id):
     """Each stored tuning was chosen under the commissioning checks: run again, it trips
     not, limit-cycles not and strokes the valve at most 3x the reference's on each check."""
