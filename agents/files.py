@@ -121,17 +121,19 @@ class AgentFiles:
             cls, norm, residual = meta["sb3_class"], meta["normalization"], meta["residual_scale"]
             max_move = meta.get("max_move")  # no key: the action is a valve position
             filter_s = meta.get("action_filter_s")
+            tied = meta.get("tied_valves")  # no key: one action per valve
             base = meta.get("residual_base")  # no key: the legacy residual form
         else:
             cls = _RL_ZOO_CLASSES.get(self.algo, self.algo.upper())
-            norm, residual, max_move, base, filter_s = None, None, None, None, None
+            norm, residual, max_move, base, filter_s, tied = (None,) * 6
             pkl = [f for f in self.meta if f.name == "vecnormalize.pkl"]
             if pkl:
                 norm = _vecnormalize_stats(pkl[0])
         model = model_class(cls).load(self.model, device="cpu")
         return AgentPolicy(model, gym.make(self.env_id), memory=memory, obs_norm=norm,
                            residual_scale=residual, max_move=max_move,
-                           residual_base=base, action_filter_s=filter_s)  # fmt: skip
+                           residual_base=base, action_filter_s=filter_s,
+                           tied_valves=tied)  # fmt: skip
 
 
 @functools.lru_cache(maxsize=64)

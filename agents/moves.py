@@ -15,6 +15,12 @@ valve opening observed at the episode's start (bumpless), and is held per row as
 agent's own state; nothing of the plant is revealed. With ``max_move`` m the valve travel
 is at most m per actuator and interval, so a budget of travel is a budget of m.
 
+Tied valves (``tied_valves``, e.g. BoilerTurbineMIMO's two spray stages in series): the
+agent has one action for the named valves, which move together (incremental: by the same
+move, so the split they start with is held; filtered: to the same position). A direction
+of the actuators that the scored temperatures barely see (the two sprays in anti-phase)
+is then not the agent's to explore.
+
 One batched implementation (:class:`MoveState`) serves the training wrapper
 (:class:`VecMoves`, an SB3 ``VecEnvWrapper``) and the shipped agents' Policy
 (agents/policy.py), so that what the agent trained with holds at evaluation.
@@ -24,6 +30,7 @@ from __future__ import annotations
 
 from typing import Any
 
+import gymnasium as gym
 import numpy as np
 from stable_baselines3.common.vec_env.base_vec_env import VecEnv, VecEnvWrapper
 
@@ -39,13 +46,43 @@ def check_max_move(max_move: Any) -> float:
     return float(max_move)
 
 
+def tie_map(valves: tuple[str, ...], tied_valves: Any = None) -> np.ndarray:
+    """The agent's action index of each of ``valves`` when ``tied_valves`` (two or more of
+    them, or None) share one action: e.g. valves (sp1, sp2, rgd) with sp1 and sp2 tied give
+    [0, 0, 1]. ValueError for names that are not the plant's valves, repeated, or fewer
+    than two."""
+    if tied_valves is None:
+        return np.arange(len(valves))
+    tied = list(tied_valves) if isinstance(tied_valves, (list, tuple)) else None
+    if (tied is None or len(tied) < 2 or len(set(tied)) != len(tied)
+            or not all(isinstance(v, str) for v in tied)):  # fmt: skip
+        raise ValueError(f"tied_valves must be a list of two or more different valve names, "
+                         f"got {tied_valves!r}")  # fmt: skip
+    unknown = [v for v in tied if v not in valves]
+    if unknown:
+        raise ValueError(f"tied_valves: {unknown} not among the plant's valves {list(valves)}")
+    first = min(valves.index(v) for v in tied)
+    out, k = np.empty(len(valves), dtype=np.int64), 0
+    for j, v in enumerate(valves):
+        if v in tied and j != first:
+            out[j] = out[first]
+        else:
+            out[j], k = k, k + 1
+    return out
+
+
 class _Commands:
     """The valve commands an agent's actions drive, per row, started bumpless from the
-    openings observed at an episode's start; subclasses define the update."""
+    openings observed at an episode's start; subclasses define the update. ``tied_valves``:
+    valves that share one action (module docstring)."""
 
-    def __init__(self, env: Any) -> None:
+    def __init__(self, env: Any, tied_valves: Any = None) -> None:
         names, self._scale, self._center = observation_layout(env)
-        self.i_valve = [names.index(n) for n in env.unwrapped.plant.valves]
+        valves = tuple(env.unwrapped.plant.valves)
+        self.i_valve = [names.index(n) for n in valves]
+        #: the agent's action index of each actuator, and how many actions the agent has
+        self.expand = tie_map(valves, tied_valves)
+        self.n_actions = int(self.expand.max()) + 1
         self.u: np.ndarray | None = None  # (rows, actuators) last commands in [0, 1]
 
     def restart(self, obs: np.ndarray, rows: np.ndarray) -> None:
@@ -62,8 +99,8 @@ class _Commands:
         if self.u is None:
             raise ValueError(f"{type(self).__name__}.restart must be called with the first "
                              "observation")  # fmt: skip
-        a = np.clip(np.asarray(action, dtype=np.float64).reshape(self.u.shape), -1.0, 1.0)
-        self.u = self._next(a)
+        a = np.asarray(action, dtype=np.float64).reshape(self.u.shape[0], self.n_actions)
+        self.u = self._next(np.clip(a, -1.0, 1.0)[:, self.expand])
         return (2.0 * self.u - 1.0).astype(np.float32)
 
     def _next(self, a: np.ndarray) -> np.ndarray:
@@ -76,11 +113,12 @@ class MoveState(_Commands):
     Args:
         env: The env (or vector env) acted on: its observation layout and valves.
         max_move: Largest move per actuator and control interval (fraction of stroke).
+        tied_valves: Valves that share one action (module docstring), or None.
     """
 
-    def __init__(self, env: Any, max_move: float) -> None:
+    def __init__(self, env: Any, max_move: float, tied_valves: Any = None) -> None:
         self.max_move = check_max_move(max_move)
-        super().__init__(env)
+        super().__init__(env, tied_valves)
 
     def _next(self, a: np.ndarray) -> np.ndarray:
         return np.clip(self.u + self.max_move * a, 0.0, 1.0)
@@ -97,11 +135,12 @@ class LowPassState(_Commands):
     Args:
         env: The env (or vector env) acted on: its observation layout, valves and interval.
         filter_s: The filter's time constant T_f in s.
+        tied_valves: Valves that share one action (module docstring), or None.
     """
 
-    def __init__(self, env: Any, filter_s: float) -> None:
+    def __init__(self, env: Any, filter_s: float, tied_valves: Any = None) -> None:
         self.filter_s = check_filter(filter_s)
-        super().__init__(env)
+        super().__init__(env, tied_valves)
         self.alpha = filter_gain(env.unwrapped.plant.dt_s, self.filter_s)
 
     def _next(self, a: np.ndarray) -> np.ndarray:
@@ -122,36 +161,48 @@ def check_filter(filter_s: Any) -> float:
     return float(filter_s)
 
 
-def command_state(env: Any, max_move: float | None = None,
-                  filter_s: float | None = None) -> _Commands | None:  # fmt: skip
+def command_state(env: Any, max_move: float | None = None, filter_s: float | None = None,
+                  tied_valves: Any = None) -> _Commands | None:  # fmt: skip
     """The command state of an agent's action form: incremental (``max_move``), filtered
-    positions (``filter_s``) or None (plain positions); ValueError for both."""
+    positions (``filter_s``) or None (plain positions), with ``tied_valves`` sharing one
+    action (either form); ValueError for both forms, or tied valves on plain positions."""
     if max_move is not None and filter_s is not None:
         raise ValueError("an agent's actions are incremental (max_move) or filtered "
                          "(action_filter_s), not both")  # fmt: skip
     if max_move is not None:
-        return MoveState(env, max_move)
-    return LowPassState(env, filter_s) if filter_s is not None else None
+        return MoveState(env, max_move, tied_valves)
+    if filter_s is not None:
+        return LowPassState(env, filter_s, tied_valves)
+    if tied_valves is not None:
+        raise ValueError("tied_valves needs incremental (max_move) or filtered "
+                         "(action_filter_s) actions")  # fmt: skip
+    return None
 
 
 class VecMoves(VecEnvWrapper):
     """SB3 VecEnv wrapper for an incremental or filtered agent (module docstring,
     :class:`LowPassState`): it takes the agent's actions and passes the env the resulting
-    commands; the observation is the env's.
+    commands; the observation is the env's, the action space the agent's (one action per
+    group of tied valves).
 
     Args:
         venv: The VecEnv to wrap (its observations are the env's raw ones).
         env: The native vector env under it (observation layout and valves).
         max_move: Largest move per actuator and control interval (fraction of stroke).
         filter_s: Instead, the time constant of a filter on position actions (s).
+        tied_valves: Valves that share one action (module docstring), or None.
     """
 
     def __init__(self, venv: VecEnv, env: Any, max_move: float | None = None,
-                 filter_s: float | None = None) -> None:  # fmt: skip
-        super().__init__(venv)
-        self.moves = command_state(env, max_move, filter_s)
-        if self.moves is None:
+                 filter_s: float | None = None, tied_valves: Any = None) -> None:  # fmt: skip
+        moves = command_state(env, max_move, filter_s, tied_valves)
+        if moves is None:
             raise ValueError("VecMoves needs max_move or filter_s")
+        space = venv.action_space
+        if moves.n_actions != space.shape[0]:
+            space = gym.spaces.Box(-1.0, 1.0, (moves.n_actions,), dtype=space.dtype)
+        super().__init__(venv, action_space=space)
+        self.moves = moves
 
     def reset(self) -> np.ndarray:
         obs = self.venv.reset()
@@ -169,4 +220,4 @@ class VecMoves(VecEnvWrapper):
 
 
 __all__ = ["LowPassState", "MoveState", "VecMoves", "check_filter", "check_max_move",
-           "command_state", "filter_gain"]  # fmt: skip
+           "command_state", "filter_gain", "tie_map"]  # fmt: skip

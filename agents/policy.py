@@ -122,6 +122,8 @@ class AgentPolicy:
             stroke per control interval (agents/moves.py); not with ``residual_scale``.
         action_filter_s: If set, the model's action is a valve position through a
             first-order filter of this time constant (agents/moves.py ``LowPassState``).
+        tied_valves: Valves that share one of the model's actions (agents/moves.py; with
+            ``max_move`` or ``action_filter_s``).
     """
 
     #: Batched and unbatched actions agree to this (read by steamtemp_gym.testing's
@@ -139,6 +141,7 @@ class AgentPolicy:
         max_move: float | None = None,
         residual_base: str | None = None,
         action_filter_s: float | None = None,
+        tied_valves: list[str] | None = None,
     ) -> None:
         if residual_scale is not None and (max_move, action_filter_s) != (None, None):
             raise ValueError("an agent is either residual (residual_scale) or incremental "
@@ -157,7 +160,7 @@ class AgentPolicy:
             self.base = ResidualBase(env, residual_scale, residual_base)
         elif residual_base is not None:
             raise ValueError("residual_base needs residual_scale (a residual agent)")
-        self.moves = command_state(env, max_move, action_filter_s)
+        self.moves = command_state(env, max_move, action_filter_s, tied_valves)
         #: The LSTM state of a recurrent model (sb3-contrib's RecurrentPPO), per row.
         self.recurrent = hasattr(getattr(model, "policy", None), "lstm_actor")
         self.actor = None if self.recurrent else MlpActor.of(model)

@@ -11,7 +11,7 @@ from typing import Any
 import numpy as np
 import yaml
 
-from agents.moves import check_max_move
+from agents.moves import check_max_move, tie_map
 from agents.policy import model_class
 from agents.wrappers import memory_options
 
@@ -74,7 +74,7 @@ HYPERPARAMS = Path(__file__).with_name("hyperparams")
 SPECIAL = ("n_timesteps", "n_envs", "policy", "normalize", "env_wrapper", "policy_kwargs",
            "noise_type", "noise_std", "residual_scale", "max_move", "train_reward",
            "plant_randomization", "travel_price", "residual_base", "action_filter_s",
-           "critic_warmup_steps",
+           "critic_warmup_steps", "tied_valves",
            *IMITATION_KEYS)  # fmt: skip
 
 
@@ -112,6 +112,17 @@ def _dict_string(key: str, value: Any) -> dict:
         raise ConfigError(
             f"{key} must be a mapping or a 'dict(key=literal, ...)' string, got {value!r}"
         ) from None
+
+
+def _env_valves(env_id: str) -> tuple[str, ...]:
+    """The valves of ``env_id``'s plant (its env made with the default options)."""
+    import gymnasium as gym
+
+    env = gym.make(env_id)
+    try:
+        return tuple(env.unwrapped.plant.valves)
+    finally:
+        env.close()
 
 
 def _checked(path: Path, check: Any, *args: Any) -> None:
@@ -180,6 +191,11 @@ def read_hyperparams(path: Path, env_id: str, algo: str) -> dict[str, Any]:
             raise ConfigError(f"--hyperparams {path}: action_filter_s filters position "
                               "actions: not with max_move or residual_scale")  # fmt: skip
         _checked(path, check_filter, hp["action_filter_s"])
+    if "tied_valves" in hp:
+        if "max_move" not in hp and "action_filter_s" not in hp:
+            raise ConfigError(f"--hyperparams {path}: tied_valves needs incremental "
+                              "(max_move) or filtered (action_filter_s) actions")  # fmt: skip
+        _checked(path, tie_map, _env_valves(env_id), hp["tied_valves"])
     if "critic_warmup_steps" in hp:
         v = hp["critic_warmup_steps"]
         if not (isinstance(v, int) and not isinstance(v, bool) and v >= 0):
@@ -219,10 +235,10 @@ def read_hyperparams(path: Path, env_id: str, algo: str) -> dict[str, Any]:
                           f"({list(EXPERTS)})")  # fmt: skip
     if algo in EXPERTS:
         _checked(path, check_imitation, hp, algo)
-        if "max_move" in hp or "residual_scale" in hp or "travel_price" in hp:
+        if any(k in hp for k in ("max_move", "residual_scale", "travel_price", "tied_valves")):
             raise ConfigError(f"--hyperparams {path}: an imitation agent acts on valve "
-                              "positions as its expert does (no max_move, residual_scale "
-                              "or travel_price)")  # fmt: skip
+                              "positions as its expert does (no max_move, residual_scale, "
+                              "travel_price or tied_valves)")  # fmt: skip
     if "residual_base" in hp:
         raise ConfigError(f"--hyperparams {path}: residual_base is set by the algo "
                           f"({RESIDUAL_BASES}), not in the file")  # fmt: skip

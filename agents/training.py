@@ -143,7 +143,8 @@ def _checkpointing(model: Any, venv: Any, native: Any, hp: dict[str, Any], env_i
                              residual_scale=hp.get("residual_scale"),
                              residual_base=hp.get("residual_base"),
                              max_move=hp.get("max_move"),
-                             action_filter_s=hp.get("action_filter_s"))  # fmt: skip
+                             action_filter_s=hp.get("action_filter_s"),
+                             tied_valves=hp.get("tied_valves"))  # fmt: skip
         score = validate(env_id, policy)
         score["travel_ratio"] = score["valve_travel"] / reference["valve_travel"]
         curve.append({"timesteps": offset + steps, "fraction": steps / total, "wall_s": wall,
@@ -220,7 +221,7 @@ def _metadata(env_id: str, algo: str, cls: Any, revision: str, path: Path,
         "normalization": best["obs_norm"], "memory": hp["env_wrapper"],
         "residual_scale": hp.get("residual_scale"), "residual_base": hp.get("residual_base"),
         "max_move": hp.get("max_move"), "action_filter_s": hp.get("action_filter_s"),
-        "train_reward": hp.get("train_reward"),
+        "tied_valves": hp.get("tied_valves"), "train_reward": hp.get("train_reward"),
     }  # fmt: skip
 
 
@@ -384,12 +385,14 @@ def train(env_id: str, algo: str, hyperparams: Path | None = None, timesteps: in
         evaluate(0, 0.0)
     callbacks = [_progress(evaluate, curve, total, t0, name, quiet, max_minutes)]
     if price is not None:
-        from agents.moves import filter_gain
+        from agents.moves import filter_gain, tie_map
         from agents.travel_price import price_callback
 
         filter_s = hp.get("action_filter_s")
-        alpha = None if filter_s is None else filter_gain(native.unwrapped.plant.dt_s, filter_s)
-        callbacks.append(price_callback(price, prices, hp.get("max_move"), alpha))
+        plant = native.unwrapped.plant
+        alpha = None if filter_s is None else filter_gain(plant.dt_s, filter_s)
+        expand = tie_map(tuple(plant.valves), hp.get("tied_valves"))
+        callbacks.append(price_callback(price, prices, hp.get("max_move"), alpha, expand))
     if hp.get("critic_warmup_steps"):
         callbacks.append(critic_warmup(hp["critic_warmup_steps"]))
     model.learn(total_timesteps=total, callback=callbacks, progress_bar=False)

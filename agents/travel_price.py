@@ -109,14 +109,16 @@ class VecTravelPrice(VecEnvWrapper):
         return r, self.price
 
 
-def policy_travel(model: Any, max_move: float | None,
-                  alpha: float | None = None) -> float | None:  # fmt: skip
+def policy_travel(model: Any, max_move: float | None, alpha: float | None = None,
+                  expand: np.ndarray | None = None) -> float | None:  # fmt: skip
     """Valve travel per control step of ``model``'s deterministic action along the states
     of its rollout buffer (None without one): position actions move the valves by half
     the change of the action (actions in [-1, 1]), incremental ones by ``max_move`` times
     the action, filtered ones (``alpha``: the output filter's gain per step,
     agents/moves.py ``LowPassState``) by the change of the filtered position, restarted
-    at each episode's first action; a row's first step of an episode does not count."""
+    at each episode's first action; a row's first step of an episode does not count.
+    ``expand``: the action index of each valve where valves are tied (agents/moves.py
+    ``tie_map``), None for one action per valve."""
     import torch
 
     buf = getattr(model, "rollout_buffer", None)
@@ -127,6 +129,8 @@ def policy_travel(model: Any, max_move: float | None,
         x = torch.as_tensor(obs.reshape(-1, obs.shape[-1]), device=model.device)
         a = model.policy._predict(x, deterministic=True).cpu().numpy()
     a = np.clip(a.reshape(*obs.shape[:2], -1), -1.0, 1.0)
+    if expand is not None:
+        a = a[..., expand]
     if max_move is not None:
         return float(max_move * np.abs(a).sum(axis=-1).mean())
     if alpha is not None:  # the filter's output along each row, from its first position
@@ -142,7 +146,7 @@ def policy_travel(model: Any, max_move: float | None,
 
 
 def price_callback(wrapper: VecTravelPrice, log: list, max_move: float | None = None,
-                   alpha: float | None = None) -> Any:  # fmt: skip
+                   alpha: float | None = None, expand: np.ndarray | None = None) -> Any:  # fmt: skip
     """SB3 callback: at each rollout's end, :meth:`VecTravelPrice.update` on the travel of
     the policy's deterministic action (:func:`policy_travel`; the rollout's own travel
     where the algorithm keeps no rollout buffer), appending ``(timesteps, ratio of the
@@ -155,7 +159,7 @@ def price_callback(wrapper: VecTravelPrice, log: list, max_move: float | None = 
 
         def _on_rollout_end(self) -> None:
             rollout = wrapper.ratio()
-            per_step = policy_travel(self.model, max_move, alpha)
+            per_step = policy_travel(self.model, max_move, alpha, expand)
             own = rollout if per_step is None else per_step / wrapper.dt / wrapper.reference_rate
             r, p = wrapper.update(own)
             log.append((self.num_timesteps, r, rollout, p))

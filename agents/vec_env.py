@@ -177,7 +177,8 @@ def make_training_env(env_id: str, n_envs: int, seed: int, hp: dict[str, Any],
     if hp.get("residual_scale") is not None:
         venv = VecResidual(venv, base.venv, hp["residual_scale"], hp.get("residual_base"))
     if hp.get("max_move") is not None or hp.get("action_filter_s") is not None:
-        venv = VecMoves(venv, base.venv, hp.get("max_move"), hp.get("action_filter_s"))
+        venv = VecMoves(venv, base.venv, hp.get("max_move"), hp.get("action_filter_s"),
+                        hp.get("tied_valves"))  # fmt: skip
     if hp["env_wrapper"] is not None:
         venv = VecControllerMemory(venv, base.venv, **hp["env_wrapper"])
     venv = VecMonitor(venv)

@@ -214,3 +214,7 @@ def test_policy_travel_is_the_deterministic_actions_travel_along_the_rollout():
     u1 = [p[0, 1], p[0, 1], p[2, 1], p[2, 1]]  # row 1: held at 1, restarted at step 2
     moves = list(np.abs(np.diff(u0))) + [abs(u1[1] - u1[0]), abs(u1[3] - u1[2])]
     assert policy_travel(_Model(a, starts), None, 0.5) == pytest.approx(np.mean(moves))
+    # one action for two tied valves and one for a third: the tied action moves both
+    expand = np.array([0, 0])
+    assert policy_travel(_Model(a, starts), 0.05, None, expand) == pytest.approx(
+        2 * 0.05 * np.abs(np.clip(a, -1, 1)).mean())  # fmt: skip

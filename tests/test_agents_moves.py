@@ -229,3 +229,111 @@ def test_bad_max_move_in_the_hyperparameters_is_refused_before_training(
         train.main(args)
     assert exc.value.code == 2 and match in capsys.readouterr().err
     assert not (tmp_path / "out").exists()
+
+
+MIMO = "steamtemp/BoilerTurbineMIMO-v0"
+SPRAYS = ["sp1_valve", "sp2_valve"]
+
+
+def test_tie_map_gives_each_valve_its_action():
+    from agents.moves import tie_map
+
+    valves = ("sp1_valve", "sp2_valve", "rgd_damper", "fuel_bias")
+    np.testing.assert_array_equal(tie_map(valves), [0, 1, 2, 3])
+    np.testing.assert_array_equal(tie_map(valves, SPRAYS), [0, 0, 1, 2])
+    np.testing.assert_array_equal(tie_map(valves, ["rgd_damper", "sp2_valve"]), [0, 1, 1, 2])
+
+
+@pytest.mark.parametrize(("bad", "match"), [(["sp1_valve"], "two or more"),
+                                            (["sp1_valve", "sp1_valve"], "two or more"),
+                                            ("sp1_valve", "two or more"),
+                                            (["sp1_valve", "spray3"], "spray3"),
+                                            (["sp1_valve", 2], "two or more")])  # fmt: skip
+def test_bad_tied_valves_are_refused(bad, match):
+    from agents.moves import tie_map
+
+    with pytest.raises(ValueError, match=match):
+        tie_map(("sp1_valve", "sp2_valve", "rgd_damper"), bad)
+
+
+@pytest.fixture(scope="module")
+def mimo():
+    venv = NativeVecEnv(MIMO, 2, scenario="load_ramp_100_50")
+    yield venv
+    venv.close()
+
+
+@pytest.mark.parametrize("form", FORMS, ids=["incremental", "filtered"])
+def test_tied_sprays_take_one_action_and_move_together(mimo, form):
+    """BoilerTurbineMIMO's two sprays tied: the agent has two actions (sprays, damper);
+    started apart, incremental sprays move by the same amount every step (their split is
+    held), filtered ones approach the same position; the damper moves on its own."""
+    wrapped = VecMoves(mimo, mimo.venv, form.get("max_move"), form.get("action_filter_s"),
+                       SPRAYS)  # fmt: skip
+    assert wrapped.action_space.shape == (2,) and mimo.action_space.shape == (3,)
+    moves = wrapped.moves
+    mimo.seed(4)
+    obs = mimo.reset()
+    names, scale, _ = observation_layout(mimo.venv)
+    obs[:, names.index("sp1_valve")] += 0.2 / scale[names.index("sp1_valve")]  # 20 % apart
+    moves.restart(obs, np.ones(2, dtype=bool))
+    u0 = _openings(mimo.venv, obs)
+    assert np.all(u0[:, 0] - u0[:, 1] > 0.19)
+    model = Model(2, 2, seed=5)
+    u = np.array([(moves(model.predict(obs)[0]).astype(np.float64) + 1.0) / 2.0
+                  for _ in range(60)])  # (steps, rows, 3)  # fmt: skip
+    if "max_move" in form:
+        inside = ((u[:, :, :2] > 1e-9) & (u[:, :, :2] < 1 - 1e-9)).all(axis=-1)
+        assert inside.mean() > 0.5
+        split = np.broadcast_to(u0[:, 0] - u0[:, 1], inside.shape)
+        np.testing.assert_allclose((u[:, :, 0] - u[:, :, 1])[inside], split[inside], atol=1e-6)
+        assert np.abs(np.diff(u[:, :, 0], axis=0)).sum() > 0.1  # and they do move
+    else:
+        np.testing.assert_allclose(u[-1, :, 0], u[-1, :, 1], atol=1e-6)
+    assert np.abs(np.diff(u[:, :, 2], axis=0)).sum() > 0.1  # the damper has its own action
+
+
+def test_tied_valves_in_the_hyperparameters_train_and_load(tmp_path):
+    """``tied_valves`` in the hyperparameters: the model has one action per group, the
+    metadata names the valves, and the loaded Policy gives the env every valve."""
+    import gymnasium as gym
+    import yaml
+
+    import agents
+    from agents import training
+
+    hp = yaml.safe_load(_ppo_yaml(tmp_path, max_move=MAX_MOVE, tied_valves=SPRAYS).read_text())
+    path = tmp_path / "mimo.yml"
+    path.write_text(yaml.safe_dump({MIMO: hp[ENV]}))
+    training.train(MIMO, "ppo", path, timesteps=128, seed=0, out=tmp_path, quiet=True)
+    meta = json.loads((tmp_path / "steamtemp__BoilerTurbineMIMO-v0__ppo.json").read_text())
+    assert meta["tied_valves"] == SPRAYS
+    (files,) = agents.files.find(tmp_path)
+    pol = files.load()
+    assert pol.model.action_space.shape == (2,) and pol.moves.n_actions == 2
+    env = gym.make(MIMO, scenario="load_ramp_100_50")
+    obs, _ = env.reset(seed=0)
+    u0 = None
+    for _ in range(10):
+        a, _ = pol.predict(obs)
+        assert a.shape == (3,)
+        u = (a.astype(np.float64) + 1.0) / 2.0
+        u0 = u if u0 is None else u0
+        obs, *_ = env.step(a)
+    assert (u[0] - u[1]) == pytest.approx(u0[0] - u0[1], abs=1e-6)
+
+
+@pytest.mark.parametrize(("extra", "match"), [
+    ({"tied_valves": SPRAYS}, "tied_valves needs incremental"),
+    ({"max_move": 0.05, "tied_valves": ["sp1_valve", "sp3"]}, "sp3"),
+    ({"max_move": 0.05, "tied_valves": "sp1_valve"}, "two or more")])  # fmt: skip
+def test_bad_tied_valves_in_the_hyperparameters_are_refused(tmp_path, extra, match):
+    import yaml
+
+    from agents.train_config import ConfigError, read_hyperparams
+
+    hp = yaml.safe_load(_ppo_yaml(tmp_path, **extra).read_text())[ENV]
+    path = tmp_path / "mimo.yml"
+    path.write_text(yaml.safe_dump({MIMO: hp}))
+    with pytest.raises(ConfigError, match=match):
+        read_hyperparams(path, MIMO, "ppo")
