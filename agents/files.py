@@ -148,6 +148,7 @@ def _env(env_id: str) -> Any:
 def _check(files: AgentFiles, stat: tuple) -> None:
     """:meth:`AgentFiles.check` (once per agent and state of its files)."""
     from agents.memory import MemoryConfig
+    from agents.moves import tie_map
 
     obs, act = files.shapes()
     try:
@@ -159,11 +160,14 @@ def _check(files: AgentFiles, stat: tuple) -> None:
     memory = files._memory()
     extra = 0 if memory is None else MemoryConfig.from_kwargs(memory).n_extra(
         len(plant.valves), len(plant.secondary), env.observation_space.shape[-1])  # fmt: skip
-    if files.layout == STEAMTEMP and json.loads(files.meta[0].read_text(encoding="utf-8")).get(
-            "residual_base") is not None:  # the base's action is observed (agents/residual.py)
+    meta = json.loads(files.meta[0].read_text(encoding="utf-8")) if files.layout == STEAMTEMP \
+        else {}  # fmt: skip
+    if meta.get("residual_base") is not None:  # the base's action is observed (residual.py)
         extra += len(plant.valves)
     want_obs = (env.observation_space.shape[-1] + extra,)
     want_act = tuple(env.action_space.shape)
+    if meta.get("tied_valves") is not None:  # one action per group of tied valves (moves.py)
+        want_act = (int(tie_map(tuple(plant.valves), meta["tied_valves"]).max()) + 1,)
     if (obs, act) == (want_obs, want_act):
         return
     how = (f"with its controller memory of {extra} entries ({memory})" if memory is not None

@@ -309,6 +309,7 @@ def test_tied_valves_in_the_hyperparameters_train_and_load(tmp_path):
     meta = json.loads((tmp_path / "steamtemp__BoilerTurbineMIMO-v0__ppo.json").read_text())
     assert meta["tied_valves"] == SPRAYS
     (files,) = agents.files.find(tmp_path)
+    files.check()  # the model's two actions fit the env's three valves
     pol = files.load()
     assert pol.model.action_space.shape == (2,) and pol.moves.n_actions == 2
     env = gym.make(MIMO, scenario="load_ramp_100_50")
