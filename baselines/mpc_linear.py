@@ -61,7 +61,8 @@ keeps it stable there (``filter_noise_K`` 10 K, ``heat_std`` 0.005 on ``load_ram
 worst variant 1.14x the nominal cost instead of 24x, at 1.18x the nominal cost). The
 benchmark's tuner chooses them, and the move suppression, under its robustness check on
 the corner plants of the documented parameter ranges (docs/baseline_tuning.md); it starts
-from the commissioning rule, from the filter detuned to 10 and to 20 times the named noise
+from the commissioning rule, from the filter detuned to 10 times the named noise, from the
+filter detuned to 20 times with the least move suppression and target weight
 (``knob_alternatives``) and from three times the rule's move suppression.
 
 OSQP, one solver per row (set up at its episode start, so a row acts the same alone or in
@@ -186,12 +187,17 @@ class MPCLinear:
 
     @staticmethod
     def knob_alternatives(env_id: str) -> list[dict[str, float]]:
-        """The robust designs the tuner also starts from: the filter detuned to ten and to
-        twenty times the thermocouple noise with a quarter of the heat-absorption
-        variability; and three times the commissioning rule's move suppression."""
+        """The robust designs the tuner also starts from: the filter detuned to ten times the
+        thermocouple noise with a quarter of the heat-absorption variability; the filter
+        detuned to twenty times with the least move suppression and steady-target weight
+        of the knobs' boxes (a slow estimator with a fast regulator: the estimate no
+        longer follows each reading, so the moves need little suppression); and three
+        times the commissioning rule's move suppression."""
         rule = MOVE_WEIGHTS.get(env_id, MOVE_WEIGHT_LADDER[1])
+        lo = {k.name: k.lo for k in MPCLinear.KNOBS}
         return [{"filter_noise_K": 10.0 * NOISE_K, "heat_std": HEAT_STD / 4.0},
-                {"filter_noise_K": 20.0 * NOISE_K, "heat_std": HEAT_STD / 4.0},
+                {"filter_noise_K": 20.0 * NOISE_K, "heat_std": HEAT_STD / 4.0,
+                 "move_weight": lo["move_weight"], "u_weight": lo["u_weight"]},
                 {"move_weight": 3.0 * rule}]
 
     def __init__(self, env: Any, disturbance_model: bool = True, move_weight: float | None = None,
