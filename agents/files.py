@@ -148,7 +148,7 @@ def _env(env_id: str) -> Any:
 def _check(files: AgentFiles, stat: tuple) -> None:
     """:meth:`AgentFiles.check` (once per agent and state of its files)."""
     from agents.memory import MemoryConfig
-    from agents.moves import tie_map
+    from agents.moves import n_actions, tie_map
 
     obs, act = files.shapes()
     try:
@@ -167,7 +167,7 @@ def _check(files: AgentFiles, stat: tuple) -> None:
     want_obs = (env.observation_space.shape[-1] + extra,)
     want_act = tuple(env.action_space.shape)
     if meta.get("tied_valves") is not None:  # one action per group of tied valves (moves.py)
-        want_act = (int(tie_map(tuple(plant.valves), meta["tied_valves"]).max()) + 1,)
+        want_act = (n_actions(tie_map(tuple(plant.valves), meta["tied_valves"])),)
     if (obs, act) == (want_obs, want_act):
         return
     how = (f"with its controller memory of {extra} entries ({memory})" if memory is not None

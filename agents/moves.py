@@ -46,6 +46,11 @@ def check_max_move(max_move: Any) -> float:
     return float(max_move)
 
 
+def n_actions(expand: np.ndarray) -> int:
+    """How many actions an agent has, given the action index of each valve (:func:`tie_map`)."""
+    return int(expand.max()) + 1
+
+
 def tie_map(valves: tuple[str, ...], tied_valves: Any = None) -> np.ndarray:
     """The agent's action index of each of ``valves`` when ``tied_valves`` (two or more of
     them, or None) share one action: e.g. valves (sp1, sp2, rgd) with sp1 and sp2 tied give
@@ -80,9 +85,11 @@ class _Commands:
         names, self._scale, self._center = observation_layout(env)
         valves = tuple(env.unwrapped.plant.valves)
         self.i_valve = [names.index(n) for n in valves]
-        #: the agent's action index of each actuator, and how many actions the agent has
-        self.expand = tie_map(valves, tied_valves)
-        self.n_actions = int(self.expand.max()) + 1
+        expand = tie_map(valves, tied_valves)
+        #: how many actions the agent has, and the action index of each actuator where
+        #: valves are tied (None: one action per actuator, passed as it is)
+        self.n_actions = n_actions(expand)
+        self._expand = None if tied_valves is None else expand
         self.u: np.ndarray | None = None  # (rows, actuators) last commands in [0, 1]
 
     def restart(self, obs: np.ndarray, rows: np.ndarray) -> None:
@@ -99,8 +106,9 @@ class _Commands:
         if self.u is None:
             raise ValueError(f"{type(self).__name__}.restart must be called with the first "
                              "observation")  # fmt: skip
-        a = np.asarray(action, dtype=np.float64).reshape(self.u.shape[0], self.n_actions)
-        self.u = self._next(np.clip(a, -1.0, 1.0)[:, self.expand])
+        a = np.clip(np.asarray(action, dtype=np.float64).reshape(self.u.shape[0], self.n_actions),
+                    -1.0, 1.0)  # fmt: skip
+        self.u = self._next(a if self._expand is None else a[:, self._expand])
         return (2.0 * self.u - 1.0).astype(np.float32)
 
     def _next(self, a: np.ndarray) -> np.ndarray:
@@ -220,4 +228,4 @@ class VecMoves(VecEnvWrapper):
 
 
 __all__ = ["LowPassState", "MoveState", "VecMoves", "check_filter", "check_max_move",
-           "command_state", "filter_gain", "tie_map"]  # fmt: skip
+           "command_state", "filter_gain", "n_actions", "tie_map"]  # fmt: skip

@@ -114,17 +114,6 @@ def _dict_string(key: str, value: Any) -> dict:
         ) from None
 
 
-def _env_valves(env_id: str) -> tuple[str, ...]:
-    """The valves of ``env_id``'s plant (its env made with the default options)."""
-    import gymnasium as gym
-
-    env = gym.make(env_id)
-    try:
-        return tuple(env.unwrapped.plant.valves)
-    finally:
-        env.close()
-
-
 def _checked(path: Path, check: Any, *args: Any) -> None:
     """``check(*args)``, its ValueError turned into a ConfigError naming the file."""
     try:
@@ -195,7 +184,9 @@ def read_hyperparams(path: Path, env_id: str, algo: str) -> dict[str, Any]:
         if "max_move" not in hp and "action_filter_s" not in hp:
             raise ConfigError(f"--hyperparams {path}: tied_valves needs incremental "
                               "(max_move) or filtered (action_filter_s) actions")  # fmt: skip
-        _checked(path, tie_map, _env_valves(env_id), hp["tied_valves"])
+        from steamtemp_gym.plants import plant_class  # the valves of the default options
+
+        _checked(path, tie_map, tuple(plant_class(env_id).valves), hp["tied_valves"])
     if "critic_warmup_steps" in hp:
         v = hp["critic_warmup_steps"]
         if not (isinstance(v, int) and not isinstance(v, bool) and v >= 0):
