@@ -123,9 +123,10 @@ class AgentFiles:
             filter_s = meta.get("action_filter_s")
             tied = meta.get("tied_valves")  # no key: one action per valve
             base = meta.get("residual_base")  # no key: the legacy residual form
+            repeat = meta.get("action_repeat")  # no key: a decision every interval
         else:
             cls = _RL_ZOO_CLASSES.get(self.algo, self.algo.upper())
-            norm, residual, max_move, base, filter_s, tied = (None,) * 6
+            norm, residual, max_move, base, filter_s, tied, repeat = (None,) * 7
             pkl = [f for f in self.meta if f.name == "vecnormalize.pkl"]
             if pkl:
                 norm = _vecnormalize_stats(pkl[0])
@@ -133,7 +134,7 @@ class AgentFiles:
         return AgentPolicy(model, gym.make(self.env_id), memory=memory, obs_norm=norm,
                            residual_scale=residual, max_move=max_move,
                            residual_base=base, action_filter_s=filter_s,
-                           tied_valves=tied)  # fmt: skip
+                           tied_valves=tied, action_repeat=repeat)  # fmt: skip
 
 
 @functools.lru_cache(maxsize=64)

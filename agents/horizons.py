@@ -17,7 +17,11 @@ The rules (docs/agents.md, "Horizons from the plant"):
 - GAE: the window ``dt / (1 - gamma lambda)`` is :data:`GAE_FACTOR` times the dead time
   (the advantage of a move sees its effect begin), lambda at most :data:`GAE_LAMBDA_MAX`;
 - history: the controller memory's samples span the time scale;
-- output filter: a time constant of :data:`FILTER_FACTOR` times the time scale.
+- output filter: a time constant of :data:`FILTER_FACTOR` times the time scale;
+- action repeat (agents/repeat.py): the agent decides every :data:`REPEAT_FACTOR` of the
+  dead time (at least every interval), the usual sampling of a dead-time process (four to
+  ten samples per dead time); with an action repeat of k intervals the discount and the
+  GAE window above hold per decision of k intervals (the same horizons in seconds).
 """
 
 from __future__ import annotations
@@ -36,6 +40,9 @@ GAE_LAMBDA_MAX = 0.995
 #: of the time scale: 9-14 s, a lag the loop barely sees that cuts a step-to-step jitter's
 #: valve travel to its 7-33 % (the interval over the filter's time constant).
 FILTER_FACTOR = 0.04
+#: The decision interval (``action_repeat``, agents/repeat.py) as a fraction of the dead
+#: time: FSH, MIMO 2 intervals, Benson 1, Drum 3, Cascade300MW 11.
+REPEAT_FACTOR = 0.1
 
 
 @functools.cache
@@ -57,18 +64,24 @@ def time_scale(env_id: str) -> tuple[float, float]:
     return best
 
 
-def discount(env_id: str) -> float:
-    """gamma with ``dt / (1 - gamma) = HORIZON_FACTOR * (dead time + time constant)``."""
-    dt = plants.make(env_id).dt_s
+def discount(env_id: str, repeat: int = 1) -> float:
+    """gamma per decision of ``repeat`` intervals with ``repeat dt / (1 - gamma) =
+    HORIZON_FACTOR * (dead time + time constant)``."""
+    dt = plants.make(env_id).dt_s * repeat
     return 1.0 - dt / (HORIZON_FACTOR * sum(time_scale(env_id)))
 
 
-def gae_lambda(env_id: str) -> float:
-    """lambda with ``dt / (1 - gamma lambda) = GAE_FACTOR * dead time`` (at most
+def gae_lambda(env_id: str, repeat: int = 1) -> float:
+    """lambda with ``repeat dt / (1 - gamma lambda) = GAE_FACTOR * dead time`` (at most
     :data:`GAE_LAMBDA_MAX`)."""
-    dt = plants.make(env_id).dt_s
+    dt = plants.make(env_id).dt_s * repeat
     gl = 1.0 - dt / (GAE_FACTOR * time_scale(env_id)[0])
-    return min(gl / discount(env_id), GAE_LAMBDA_MAX)
+    return min(gl / discount(env_id, repeat), GAE_LAMBDA_MAX)
+
+
+def action_repeat(env_id: str) -> int:
+    """Control intervals per decision: :data:`REPEAT_FACTOR` of the dead time, at least 1."""
+    return max(1, int(REPEAT_FACTOR * time_scale(env_id)[0] / plants.make(env_id).dt_s))
 
 
 def action_filter(env_id: str) -> float:
@@ -91,12 +104,17 @@ PLANT = "plant"
 
 def from_plant(env_id: str, hp: dict) -> dict:
     """``hp`` (an entry of an RL Zoo hyperparameter file) with every ``plant`` value of
-    ``gamma``, ``gae_lambda``, ``action_filter_s`` and the controller memory's
-    ``history_stride`` replaced by the rule's (:func:`discount`, :func:`gae_lambda`,
-    :func:`action_filter`, :func:`history_stride`); the entry states the rule instead of
-    numbers."""
+    ``action_repeat``, ``gamma``, ``gae_lambda``, ``action_filter_s`` and the controller
+    memory's ``history_stride`` replaced by the rule's (:func:`action_repeat`,
+    :func:`discount` and :func:`gae_lambda` per decision, :func:`action_filter`,
+    :func:`history_stride`); the entry states the rule instead of numbers."""
     out = dict(hp)
-    rules = {"gamma": discount, "gae_lambda": gae_lambda, "action_filter_s": action_filter}
+    if out.get("action_repeat") == PLANT:
+        out["action_repeat"] = action_repeat(env_id)
+    k = out.get("action_repeat", 1)
+    k = k if isinstance(k, int) and not isinstance(k, bool) and k >= 1 else 1  # checked later
+    rules = {"gamma": lambda e: discount(e, k), "gae_lambda": lambda e: gae_lambda(e, k),
+             "action_filter_s": action_filter}  # fmt: skip
     for key, rule in rules.items():
         if out.get(key) == PLANT:
             out[key] = round(rule(env_id), 5)
@@ -117,5 +135,5 @@ def _memory_from_plant(env_id: str, item: object) -> object:
     return {name: {**kwargs, "history_stride": history_stride(env_id, kwargs.get("history", 4))}}
 
 
-__all__ = ["PLANT", "action_filter", "discount", "from_plant", "gae_lambda", "history_stride",
-           "time_scale"]  # fmt: skip
+__all__ = ["PLANT", "action_filter", "action_repeat", "discount", "from_plant", "gae_lambda",
+           "history_stride", "time_scale"]  # fmt: skip

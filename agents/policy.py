@@ -23,6 +23,7 @@ from typing import Any
 import numpy as np
 
 from agents.moves import command_state
+from agents.repeat import Decisions
 from agents.wrappers import MemoryConfig, MemoryState
 from baselines.loops import restart_rows
 from baselines.policy import check_predict_args, observation_size
@@ -124,6 +125,8 @@ class AgentPolicy:
             first-order filter of this time constant (agents/moves.py ``LowPassState``).
         tied_valves: Valves that share one of the model's actions (agents/moves.py; with
             ``max_move`` or ``action_filter_s``).
+        action_repeat: If set, the model decides every this many control intervals and its
+            action is held in between (agents/repeat.py); not for a recurrent model.
     """
 
     #: Batched and unbatched actions agree to this (read by steamtemp_gym.testing's
@@ -142,6 +145,7 @@ class AgentPolicy:
         residual_base: str | None = None,
         action_filter_s: float | None = None,
         tied_valves: list[str] | None = None,
+        action_repeat: int | None = None,
     ) -> None:
         if residual_scale is not None and (max_move, action_filter_s) != (None, None):
             raise ValueError("an agent is either residual (residual_scale) or incremental "
@@ -168,6 +172,12 @@ class AgentPolicy:
             self.batch_tolerance = 1e-6
         self._lstm = None
         self._n: int | None = None
+        self.decisions = None
+        if action_repeat is not None:
+            if self.recurrent:
+                raise ValueError("action_repeat is for a feed-forward model: a recurrent "
+                                 "model's state would move on the held intervals")  # fmt: skip
+            self.decisions = Decisions(action_repeat, incremental=max_move is not None)
 
     def reset(self) -> None:
         self._n = None
@@ -189,7 +199,13 @@ class AgentPolicy:
             x = self.base.extend(obs)
         x = self.memory(x, restart) if self.memory is not None else x
         x = normalize_obs(x, self.obs_norm)
-        if self.recurrent:  # the model restarts the LSTM state of the restarted rows
+        due = None
+        if self.decisions is not None:  # only the rows that decide in this interval
+            due = self.decisions.due(restart)
+            x = x[due]
+        if len(x) == 0:
+            action = None
+        elif self.recurrent:  # the model restarts the LSTM state of the restarted rows
             action, self._lstm = self.model.predict(
                 x, state=None if restart.all() else self._lstm, episode_start=restart,
                 deterministic=deterministic)  # fmt: skip
@@ -197,7 +213,10 @@ class AgentPolicy:
             action = self.actor(x)
         else:
             action, _ = self.model.predict(x, deterministic=deterministic)
-        action = np.asarray(action, dtype=np.float32).reshape(n, -1)
+        if action is not None:
+            action = np.asarray(action, dtype=np.float32).reshape(len(x), -1)
+        if due is not None:
+            action = self.decisions.act(due, action)
         if self.base is not None:
             action = self.base.combine(action)
         if self.moves is not None:

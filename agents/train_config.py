@@ -74,7 +74,7 @@ HYPERPARAMS = Path(__file__).with_name("hyperparams")
 SPECIAL = ("n_timesteps", "n_envs", "policy", "normalize", "env_wrapper", "policy_kwargs",
            "noise_type", "noise_std", "residual_scale", "max_move", "train_reward",
            "plant_randomization", "travel_price", "residual_base", "action_filter_s",
-           "critic_warmup_steps", "tied_valves",
+           "critic_warmup_steps", "tied_valves", "action_repeat",
            *IMITATION_KEYS)  # fmt: skip
 
 
@@ -187,6 +187,13 @@ def read_hyperparams(path: Path, env_id: str, algo: str) -> dict[str, Any]:
         from steamtemp_gym.plants import plant_class  # the valves of the default options
 
         _checked(path, tie_map, tuple(plant_class(env_id).valves), hp["tied_valves"])
+    if "action_repeat" in hp:
+        from agents.repeat import check_repeat
+
+        _checked(path, check_repeat, hp["action_repeat"])
+        if "lstm" in str(hp.get("policy", "")).lower():
+            raise ConfigError(f"--hyperparams {path}: action_repeat is for a feed-forward "
+                              "policy, not a recurrent one")  # fmt: skip
     if "critic_warmup_steps" in hp:
         v = hp["critic_warmup_steps"]
         if not (isinstance(v, int) and not isinstance(v, bool) and v >= 0):
@@ -226,10 +233,12 @@ def read_hyperparams(path: Path, env_id: str, algo: str) -> dict[str, Any]:
                           f"({list(EXPERTS)})")  # fmt: skip
     if algo in EXPERTS:
         _checked(path, check_imitation, hp, algo)
-        if any(k in hp for k in ("max_move", "residual_scale", "travel_price", "tied_valves")):
+        if any(k in hp for k in ("max_move", "residual_scale", "travel_price", "tied_valves",
+                                 "action_repeat")):  # fmt: skip
             raise ConfigError(f"--hyperparams {path}: an imitation agent acts on valve "
-                              "positions as its expert does (no max_move, residual_scale, "
-                              "travel_price or tied_valves)")  # fmt: skip
+                              "positions in every interval as its expert does (no max_move, "
+                              "residual_scale, travel_price, tied_valves or "
+                              "action_repeat)")  # fmt: skip
     if "residual_base" in hp:
         raise ConfigError(f"--hyperparams {path}: residual_base is set by the algo "
                           f"({RESIDUAL_BASES}), not in the file")  # fmt: skip

@@ -144,7 +144,8 @@ def _checkpointing(model: Any, venv: Any, native: Any, hp: dict[str, Any], env_i
                              residual_base=hp.get("residual_base"),
                              max_move=hp.get("max_move"),
                              action_filter_s=hp.get("action_filter_s"),
-                             tied_valves=hp.get("tied_valves"))  # fmt: skip
+                             tied_valves=hp.get("tied_valves"),
+                             action_repeat=hp.get("action_repeat"))  # fmt: skip
         score = validate(env_id, policy)
         score["travel_ratio"] = score["valve_travel"] / reference["valve_travel"]
         curve.append({"timesteps": offset + steps, "fraction": steps / total, "wall_s": wall,
@@ -222,6 +223,7 @@ def _metadata(env_id: str, algo: str, cls: Any, revision: str, path: Path,
         "residual_scale": hp.get("residual_scale"), "residual_base": hp.get("residual_base"),
         "max_move": hp.get("max_move"), "action_filter_s": hp.get("action_filter_s"),
         "tied_valves": hp.get("tied_valves"), "train_reward": hp.get("train_reward"),
+        "action_repeat": hp.get("action_repeat"),
     }  # fmt: skip
 
 
@@ -388,11 +390,14 @@ def train(env_id: str, algo: str, hyperparams: Path | None = None, timesteps: in
         from agents.moves import filter_gain, tie_map
         from agents.travel_price import price_callback
 
-        filter_s = hp.get("action_filter_s")
+        filter_s, repeat = hp.get("action_filter_s"), hp.get("action_repeat") or 1
         plant = native.unwrapped.plant
-        alpha = None if filter_s is None else filter_gain(plant.dt_s, filter_s)
+        # the filter's gain per decision: it runs every interval on the held position
+        alpha = (None if filter_s is None
+                 else 1.0 - (1.0 - filter_gain(plant.dt_s, filter_s)) ** repeat)  # fmt: skip
         expand = tie_map(tuple(plant.valves), hp.get("tied_valves"))
-        callbacks.append(price_callback(price, prices, hp.get("max_move"), alpha, expand))
+        callbacks.append(price_callback(price, prices, hp.get("max_move"), alpha, expand,
+                                        repeat))  # fmt: skip
     if hp.get("critic_warmup_steps"):
         callbacks.append(critic_warmup(hp["critic_warmup_steps"]))
     model.learn(total_timesteps=total, callback=callbacks, progress_bar=False)

@@ -146,11 +146,13 @@ def policy_travel(model: Any, max_move: float | None, alpha: float | None = None
 
 
 def price_callback(wrapper: VecTravelPrice, log: list, max_move: float | None = None,
-                   alpha: float | None = None, expand: np.ndarray | None = None) -> Any:  # fmt: skip
+                   alpha: float | None = None, expand: np.ndarray | None = None,
+                   repeat: int = 1) -> Any:  # fmt: skip
     """SB3 callback: at each rollout's end, :meth:`VecTravelPrice.update` on the travel of
-    the policy's deterministic action (:func:`policy_travel`; the rollout's own travel
-    where the algorithm keeps no rollout buffer), appending ``(timesteps, ratio of the
-    policy, ratio of the rollout, price)`` to ``log``."""
+    the policy's deterministic action (:func:`policy_travel`, per decision of ``repeat``
+    control intervals, agents/repeat.py; ``alpha``: the filter's gain per decision; the
+    rollout's own travel where the algorithm keeps no rollout buffer), appending
+    ``(timesteps, ratio of the policy, ratio of the rollout, price)`` to ``log``."""
     from stable_baselines3.common.callbacks import BaseCallback
 
     class Price(BaseCallback):
@@ -160,7 +162,8 @@ def price_callback(wrapper: VecTravelPrice, log: list, max_move: float | None = 
         def _on_rollout_end(self) -> None:
             rollout = wrapper.ratio()
             per_step = policy_travel(self.model, max_move, alpha, expand)
-            own = rollout if per_step is None else per_step / wrapper.dt / wrapper.reference_rate
+            own = (rollout if per_step is None
+                   else per_step / (wrapper.dt * repeat) / wrapper.reference_rate)  # fmt: skip
             r, p = wrapper.update(own)
             log.append((self.num_timesteps, r, rollout, p))
 

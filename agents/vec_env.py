@@ -181,6 +181,10 @@ def make_training_env(env_id: str, n_envs: int, seed: int, hp: dict[str, Any],
                         hp.get("tied_valves"))  # fmt: skip
     if hp["env_wrapper"] is not None:
         venv = VecControllerMemory(venv, base.venv, **hp["env_wrapper"])
+    if hp.get("action_repeat", 1) > 1:
+        from agents.repeat import VecRepeat
+
+        venv = VecRepeat(venv, hp["action_repeat"], incremental=hp.get("max_move") is not None)
     venv = VecMonitor(venv)
     if hp["normalize"]:
         kw = hp["normalize"] if isinstance(hp["normalize"], dict) else {}
