@@ -17,7 +17,9 @@ action along the rollout's states (for PPO, read from its rollout buffer): the s
 policy acts deterministically, and the rollout's own travel is mostly exploration
 (measured on the FSH: 8x the reference's before training against 0.2-1.8x for the
 deterministic policy; a price on it rose to its bound and the agent froze the valve).
-Algorithms without a rollout buffer (SAC, TD3) use the rollout's own travel. ``target``
+Off-policy algorithms (SAC, TD3) collect a step at a time: their price moves every
+:data:`OFF_POLICY_EVERY` transitions, on the deterministic action along the states their
+replay buffer took in since. ``target``
 is below the budget (:data:`TARGET`, the tuner's margin, agents/tuning_terms.py) because
 travel on unseen scenarios spreads about the training travel.
 
@@ -110,23 +112,26 @@ class VecTravelPrice(VecEnvWrapper):
 
 
 def policy_travel(model: Any, max_move: float | None, alpha: float | None = None,
-                  expand: np.ndarray | None = None) -> float | None:  # fmt: skip
-    """Valve travel per control step of ``model``'s deterministic action along the states
-    of its rollout buffer (None without one): position actions move the valves by half
-    the change of the action (actions in [-1, 1]), incremental ones by ``max_move`` times
-    the action, filtered ones (``alpha``: the output filter's gain per step,
-    agents/moves.py ``LowPassState``) by the change of the filtered position, restarted
-    at each episode's first action; a row's first step of an episode does not count.
-    ``expand``: the action index of each valve where valves are tied (agents/moves.py
-    ``tie_map``), None for one action per valve."""
+                  expand: np.ndarray | None = None,
+                  recent: int | None = None) -> float | None:  # fmt: skip
+    """Valve travel per decision of ``model``'s deterministic action along the states it
+    last collected (None if it holds none): PPO's rollout buffer, or the last ``recent``
+    steps of an off-policy algorithm's replay buffer (SAC's, TD3's). Position actions move
+    the valves by half the change of the action (actions in [-1, 1]), incremental ones by
+    ``max_move`` times the action, filtered ones (``alpha``: the output filter's gain per
+    decision, agents/moves.py ``LowPassState``) by the change of the filtered position,
+    restarted at each episode's first action; a row's first step of an episode does not
+    count. ``expand``: the action index of each valve where valves are tied
+    (agents/moves.py ``tie_map``), None for one action per valve."""
     import torch
 
-    buf = getattr(model, "rollout_buffer", None)
-    if buf is None or not getattr(buf, "full", False):
+    got = _collected(model, recent)
+    if got is None:
         return None
-    obs = buf.observations  # (steps, rows, n): the normalized observations acted on
+    obs, starts = got  # (steps, rows, n) normalized observations acted on; (steps, rows)
     with torch.no_grad():
-        x = torch.as_tensor(obs.reshape(-1, obs.shape[-1]), device=model.device)
+        x = torch.as_tensor(obs.reshape(-1, obs.shape[-1]), dtype=torch.float32,
+                            device=model.device)  # fmt: skip
         a = model.policy._predict(x, deterministic=True).cpu().numpy()
     a = np.clip(a.reshape(*obs.shape[:2], -1), -1.0, 1.0)
     if expand is not None:
@@ -137,12 +142,37 @@ def policy_travel(model: Any, max_move: float | None, alpha: float | None = None
         p, u = 0.5 * (a + 1.0), np.empty_like(a)
         u[0] = p[0]
         for k in range(1, len(p)):
-            fresh = buf.episode_starts[k].astype(bool)
+            fresh = starts[k].astype(bool)
             u[k] = np.where(fresh[:, None], p[k], u[k - 1] + alpha * (p[k] - u[k - 1]))
         a = 2.0 * u - 1.0
     move = 0.5 * np.abs(np.diff(a, axis=0)).sum(axis=-1)  # (steps - 1, rows)
-    counts = buf.episode_starts[1:] == 0  # a move into a new episode is not a move
+    counts = starts[1:] == 0  # a move into a new episode is not a move
     return float(move[counts].mean()) if counts.any() else 0.0
+
+
+def _collected(model: Any, recent: int | None) -> tuple[np.ndarray, np.ndarray] | None:
+    """(normalized observations (steps, rows, n), episode starts (steps, rows)) of the states
+    ``model`` last collected, oldest first (:func:`policy_travel`); None without them."""
+    buf = getattr(model, "rollout_buffer", None)
+    if buf is not None:
+        return (buf.observations, buf.episode_starts) if getattr(buf, "full", False) else None
+    buf = getattr(model, "replay_buffer", None)
+    held = 0 if buf is None else (buf.buffer_size if buf.full else buf.pos)
+    if recent is None or recent < 2 or held < recent:
+        return None
+    idx = (buf.pos - recent + np.arange(recent)) % buf.buffer_size
+    obs = buf.observations[idx]  # stored before the normalization, which sampling applies
+    norm = model.get_vec_normalize_env()
+    if norm is not None:
+        obs = norm.normalize_obs(obs)
+    starts = np.ones(buf.dones[idx].shape, dtype=np.float32)
+    starts[1:] = buf.dones[idx][:-1]  # the step after an episode's last starts the next
+    return np.asarray(obs), starts
+
+
+#: Transitions between two price updates of an off-policy algorithm, whose rollouts are a
+#: step or a few: a PPO rollout's (512 steps of 8 envs).
+OFF_POLICY_EVERY = 4096
 
 
 def price_callback(wrapper: VecTravelPrice, log: list, max_move: float | None = None,
@@ -152,16 +182,26 @@ def price_callback(wrapper: VecTravelPrice, log: list, max_move: float | None = 
     the policy's deterministic action (:func:`policy_travel`, per decision of ``repeat``
     control intervals, agents/repeat.py; ``alpha``: the filter's gain per decision; the
     rollout's own travel where the algorithm keeps no rollout buffer), appending
-    ``(timesteps, ratio of the policy, ratio of the rollout, price)`` to ``log``."""
+    ``(timesteps, ratio of the policy, ratio of the rollout, price)`` to ``log``. An
+    off-policy algorithm's price moves every :data:`OFF_POLICY_EVERY` transitions, on the
+    deterministic action along the states collected since."""
     from stable_baselines3.common.callbacks import BaseCallback
 
     class Price(BaseCallback):
+        last = 0
+
         def _on_step(self) -> bool:
             return True
 
         def _on_rollout_end(self) -> None:
+            recent = None
+            if getattr(self.model, "rollout_buffer", None) is None:
+                if self.num_timesteps - self.last < OFF_POLICY_EVERY:
+                    return
+                recent = (self.num_timesteps - self.last) // self.training_env.num_envs
+                self.last = self.num_timesteps
             rollout = wrapper.ratio()
-            per_step = policy_travel(self.model, max_move, alpha, expand)
+            per_step = policy_travel(self.model, max_move, alpha, expand, recent)
             own = (rollout if per_step is None
                    else per_step / (wrapper.dt * repeat) / wrapper.reference_rate)  # fmt: skip
             r, p = wrapper.update(own)
@@ -170,4 +210,4 @@ def price_callback(wrapper: VecTravelPrice, log: list, max_move: float | None = 
     return Price()
 
 
-__all__ = ["TARGET", "VecTravelPrice", "policy_travel", "price_callback"]
+__all__ = ["OFF_POLICY_EVERY", "TARGET", "VecTravelPrice", "policy_travel", "price_callback"]

@@ -218,3 +218,64 @@ def test_policy_travel_is_the_deterministic_actions_travel_along_the_rollout():
     expand = np.array([0, 0])
     assert policy_travel(_Model(a, starts), 0.05, None, expand) == pytest.approx(
         2 * 0.05 * np.abs(np.clip(a, -1, 1)).mean())  # fmt: skip
+
+
+class _OffPolicy:
+    """An off-policy model: a replay buffer of raw observations (the first entry the
+    deterministic action after the normalization, which subtracts 1) and its done flags."""
+
+    def __init__(self, actions: np.ndarray, dones: np.ndarray, pos: int) -> None:
+        import types
+
+        obs = np.concatenate([actions[..., None] + 1.0, np.zeros((*actions.shape, 2))], axis=-1)
+        self.replay_buffer = types.SimpleNamespace(
+            observations=obs.astype(np.float32), dones=dones.astype(np.float32),
+            buffer_size=len(actions), pos=pos, full=True)  # fmt: skip
+        self.policy, self.device = _Policy(), "cpu"
+
+    def get_vec_normalize_env(self):
+        import types
+
+        return types.SimpleNamespace(normalize_obs=lambda o: o - np.array([1.0, 0.0, 0.0]))
+
+
+def test_an_off_policy_travel_is_the_deterministic_actions_travel_along_its_last_steps():
+    """The last ``recent`` steps of the (circular) replay buffer, oldest first, normalized
+    as sampling does; a done flag starts the next step's episode."""
+    from agents.travel_price import policy_travel
+
+    # buffer rows in time order 3, 4, 0, 1, 2 (pos = 3: the next write), one env
+    a_time = np.array([0.9, 0.0, 0.5, -0.5, -0.5])
+    dones_time = np.array([0, 0, 1, 0, 0])  # the episode ends at the third step
+    order = np.array([3, 4, 0, 1, 2])
+    a = np.empty(5)
+    d = np.empty(5)
+    a[order], d[order] = a_time, dones_time
+    model = _OffPolicy(a[:, None], d[:, None], pos=3)
+    # the last 4 steps: 0.0, 0.5 | -0.5, -0.5: moves 0.25, (new episode), 0
+    assert policy_travel(model, None, recent=4) == pytest.approx(np.mean([0.25, 0.0]))
+    assert policy_travel(model, 0.05, recent=4) == pytest.approx(0.05 * np.mean([0, .5, .5, .5]))
+    assert policy_travel(model, None, recent=None) is None  # no window: the rollout's travel
+    model.replay_buffer.full, model.replay_buffer.pos = False, 3
+    assert policy_travel(model, None, recent=4) is None  # fewer steps held than asked for
+
+
+def test_an_off_policy_agents_price_moves_on_its_deterministic_travel(tmp_path):
+    """TD3 with a travel price and action repeat: the price moves every OFF_POLICY_EVERY
+    transitions, on the deterministic actor's travel (not the exploring rollout's)."""
+    from agents.travel_price import OFF_POLICY_EVERY
+
+    env_id = "steamtemp/Cascade300MW-v0"
+    path = tmp_path / "td3.yml"
+    path.write_text(yaml.safe_dump({env_id: {
+        "n_envs": 8, "policy": "MlpPolicy", "normalize": "dict(norm_obs=True)",
+        "learning_starts": 100, "buffer_size": 20000, "batch_size": 32, "train_freq": 1,
+        "gradient_steps": 1, "noise_type": "normal", "noise_std": 0.3,
+        "policy_kwargs": "dict(net_arch=[8])", "max_move": 0.05, "action_repeat": 2,
+        "travel_price": 0.1}}))  # fmt: skip
+    meta = training.train(env_id, "td3", path, timesteps=2 * OFF_POLICY_EVERY + 8, seed=0,
+                          out=tmp_path, quiet=True)  # fmt: skip
+    course = meta["travel_price"]["course"]
+    assert [c[0] for c in course] == [OFF_POLICY_EVERY, 2 * OFF_POLICY_EVERY]
+    assert all(c[1] != c[2] for c in course)  # the policy's travel, not the rollout's
+    assert course[-1][3] != 0.1 and meta["action_repeat"] == 2
