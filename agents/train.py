@@ -35,7 +35,8 @@ one is kept: the highest validation return among the checkpoints within the tune
 baselines' margin under the leaderboard's valve-travel budget (mean travel at most
 ``agents.tuning_terms.TUNING_TRAVEL_BUDGET`` = 1.7 times ``cascade_pi_ff``'s on the same
 validation episodes), or, if none is, the one of least travel. With ``--max-minutes`` the
-agent is also validated at every eighth of that time. Output in ``--out``:
+agent is also validated at every eighth of that time; an entry's ``max_minutes`` is its
+runs' wall-time budget where ``--max-minutes`` is not given. Output in ``--out``:
 ``<env>__<algo>.zip`` (the best SB3 model) and ``<env>__<algo>.json`` (env id, package
 version, git revision, hyperparameters, seed, timesteps, wall time, the validation curve
 and score, the normalization statistics and the wrapper config: everything
@@ -105,13 +106,15 @@ def make_parser() -> argparse.ArgumentParser:
         "--max-minutes",
         type=float,
         default=None,
-        help="stop after this wall time (with --zoo: of each run, default 10)",
+        help="stop after this wall time (default: the YAML entry's max_minutes; with --zoo: "
+             "of each run, 10 where the entry has none)",
     )
     ap.add_argument("--tensorboard", default=None, help="TensorBoard log directory")
     ap.add_argument("--zoo", action="store_true",
                     help="rebuild agents/zoo/ (or --out): every shipped agent from its YAML "
                          "entry (or --hyperparams), or with --env/--algo every entry of "
-                         "those; one at a time, at nice 10 (--max-minutes each, default 10; "
+                         "those; one at a time, at nice 10 (--max-minutes each, default the "
+                         "entry's max_minutes or 10; "
                          "--timesteps and --n-envs, when given, for each)")  # fmt: skip
     ap.add_argument("--runs", type=_run_count, default=None, metavar="K",
                     help=f"with --zoo: K independent training runs per agent (1 to {MAX_RUNS}), "
@@ -173,7 +176,7 @@ def main(argv: list[str] | None = None) -> None:
                 read_hyperparams(Path(args.hyperparams or HYPERPARAMS / f"{algo}.yml"),
                                  env_id, algo)  # fmt: skip
             jobs = zoo_jobs(entries, Path(args.out or ZOO), args.seed, args.runs,
-                            args.max_minutes or 10.0, timesteps=args.timesteps,
+                            args.max_minutes, timesteps=args.timesteps,
                             n_envs=args.n_envs, hyperparams=args.hyperparams and
                             Path(args.hyperparams).resolve())  # fmt: skip
             if args.backend == "ray":

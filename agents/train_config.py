@@ -71,10 +71,13 @@ def check_imitation(hp: dict[str, Any], algo: str) -> None:
 
 HYPERPARAMS = Path(__file__).with_name("hyperparams")
 #: RL Zoo keys with a meaning of their own (the rest go to the algorithm's constructor).
+#: The longest wall-time budget of a run an entry may ask for (``max_minutes``): minutes of
+#: one core, the project's budget per training run.
+MAX_RUN_MINUTES = 20
 SPECIAL = ("n_timesteps", "n_envs", "policy", "normalize", "env_wrapper", "policy_kwargs",
            "noise_type", "noise_std", "residual_scale", "max_move", "train_reward",
            "plant_randomization", "travel_price", "residual_base", "action_filter_s",
-           "critic_warmup_steps", "tied_valves", "action_repeat",
+           "critic_warmup_steps", "tied_valves", "action_repeat", "max_minutes",
            *IMITATION_KEYS)  # fmt: skip
 
 
@@ -187,6 +190,12 @@ def read_hyperparams(path: Path, env_id: str, algo: str) -> dict[str, Any]:
         from steamtemp_gym.plants import plant_class  # the valves of the default options
 
         _checked(path, tie_map, tuple(plant_class(env_id).valves), hp["tied_valves"])
+    if "max_minutes" in hp:
+        v = hp["max_minutes"]
+        ok = isinstance(v, (int, float)) and not isinstance(v, bool)
+        if not (ok and 0 < v <= MAX_RUN_MINUTES):
+            raise ConfigError(f"--hyperparams {path}: max_minutes (a run's wall-time budget) "
+                              f"must be a number in (0, {MAX_RUN_MINUTES}], got {v!r}")  # fmt: skip
     if "action_repeat" in hp:
         from agents.repeat import check_repeat
 

@@ -21,6 +21,9 @@ ZOO = Path(__file__).with_name("zoo")
 RUN_SEED_STRIDE = 1000
 #: Most runs per agent (run seeds stay far below agents.training.VALIDATION_SEED).
 MAX_RUNS = 100
+#: A zoo run's wall-time budget (minutes of one core) where neither --max-minutes nor its
+#: YAML entry gives one.
+ZOO_MINUTES = 10.0
 
 
 def zoo_entries_of(algo: str) -> list[str]:
@@ -53,15 +56,18 @@ def zoo_run(job: dict[str, Any]) -> dict[str, Any]:
 
 
 def zoo_jobs(entries: list[tuple[str, str]], out: Path, seed: int, runs: int | None,
-             max_minutes: float, **options: Any) -> list[dict[str, Any]]:  # fmt: skip
+             max_minutes: float | None, **options: Any) -> list[dict[str, Any]]:  # fmt: skip
     """The :func:`zoo_run` jobs of ``entries``: one per entry without ``runs`` (file names
     without a run index, ``seed``), else ``runs`` per entry (run k: :func:`run_seed`);
-    ``options``: further arguments of :func:`train` (those that are not None)."""
+    each run bounded by ``max_minutes``, or if None by its entry's ``max_minutes`` or
+    :data:`ZOO_MINUTES`; ``options``: further arguments of :func:`train` (those that are
+    not None)."""
     ks = [None] if runs is None else list(range(runs))
     extra = {k: v for k, v in options.items() if v is not None}
     return [{"env_id": env_id, "algo": algo, "out": Path(out).resolve(), "run": k,
              "seed": seed if k is None else run_seed(seed, k), "max_minutes": max_minutes,
-             **extra} for env_id, algo in entries for k in ks]  # fmt: skip
+             "default_minutes": ZOO_MINUTES, **extra}
+            for env_id, algo in entries for k in ks]  # fmt: skip
 
 
 def zoo_env(name: str | None) -> str | None:

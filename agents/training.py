@@ -354,12 +354,15 @@ def _fine_tune(env_id: str, cls: Any, hp: dict[str, Any], seed: int, n_envs: int
 def train(env_id: str, algo: str, hyperparams: Path | None = None, timesteps: int | None = None,
           seed: int = 0, n_envs: int | None = None, out: Path = Path("trained"),
           max_minutes: float | None = None, tensorboard: str | None = None,
-          quiet: bool = False, run: int | None = None) -> dict[str, Any]:  # fmt: skip
+          quiet: bool = False, run: int | None = None,
+          default_minutes: float | None = None) -> dict[str, Any]:  # fmt: skip
     """Train one agent (agents/train.py's module docstring); returns its metadata. Input is
     checked first. ``run``: the training run's index in the file names (None: names without
-    one)."""
+    one). ``max_minutes`` None: the entry's ``max_minutes``, else ``default_minutes``."""
     env_id, cls, path, hp, total, n_envs = _checked_input(env_id, algo, hyperparams, timesteps,
                                                           n_envs, max_minutes)  # fmt: skip
+    if max_minutes is None:
+        max_minutes = hp.get("max_minutes", default_minutes)
     import torch
 
     torch.set_num_threads(1)  # one core per run (a shared machine; small networks)

@@ -315,3 +315,25 @@ def test_the_leaderboard_scores_each_run_and_reports_the_agent(local_zoo, tmp_pa
     )
     md = (tmp_path / "lb" / "leaderboard.md").read_text()
     assert "| sb3:ppo |" in md and "(2 runs)" in md
+
+
+def test_an_entrys_max_minutes_bounds_its_runs_where_the_command_does_not(tmp_path):
+    """``max_minutes`` in a YAML entry stops its runs (here at once: after the first
+    rollout) where --max-minutes is not given; --max-minutes wins where it is."""
+    yml = tmp_path / "ppo.yml"
+    yml.write_text(yaml.safe_dump({ENV: {**TINY_PPO[ENV], "max_minutes": 1e-4}}))
+    meta = training.train(ENV, "ppo", yml, timesteps=100_000, seed=0, out=tmp_path, quiet=True)
+    assert meta["timesteps_trained"] < 100_000
+    (job,) = train_runs.zoo_jobs([(ENV, "ppo")], tmp_path, 0, None, None)
+    assert job["max_minutes"] is None and job["default_minutes"] == train_runs.ZOO_MINUTES
+    meta = training.train(ENV, "ppo", yml, timesteps=128, seed=0, out=tmp_path, quiet=True,
+                          max_minutes=5.0)  # fmt: skip
+    assert meta["timesteps_trained"] == 128
+
+
+@pytest.mark.parametrize("bad", [0, -1, 21, "ten", True])
+def test_bad_max_minutes_in_an_entry_is_refused(tmp_path, bad):
+    yml = tmp_path / "ppo.yml"
+    yml.write_text(yaml.safe_dump({ENV: {**TINY_PPO[ENV], "max_minutes": bad}}))
+    with pytest.raises(train_config.ConfigError, match="max_minutes"):
+        train_config.read_hyperparams(yml, ENV, "ppo")
