@@ -108,11 +108,12 @@ def from_plant(env_id: str, hp: dict) -> dict:
     memory's ``history_stride`` replaced by the rule's (:func:`action_repeat`,
     :func:`discount` and :func:`gae_lambda` per decision, :func:`action_filter`,
     :func:`history_stride`); the entry states the rule instead of numbers."""
+    from agents.repeat import check_repeat
+
     out = dict(hp)
     if out.get("action_repeat") == PLANT:
         out["action_repeat"] = action_repeat(env_id)
-    k = out.get("action_repeat", 1)
-    k = k if isinstance(k, int) and not isinstance(k, bool) and k >= 1 else 1  # checked later
+    k = check_repeat(out.get("action_repeat", 1))
     rules = {"gamma": lambda e: discount(e, k), "gae_lambda": lambda e: gae_lambda(e, k),
              "action_filter_s": action_filter}  # fmt: skip
     for key, rule in rules.items():

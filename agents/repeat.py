@@ -74,19 +74,20 @@ class VecRepeat(VecEnvWrapper):
     def step_wait(self):
         total = np.zeros(self.num_envs)
         ended = np.zeros(self.num_envs, dtype=bool)
-        infos: list[dict] = [{} for _ in range(self.num_envs)]
+        last: dict[int, dict] = {}  # the infos of the rows whose episode ended, at its end
         action = self._actions
         for i in range(self.k):
             self.venv.step_async(action)
-            obs, rew, dones, step_infos = self.venv.step_wait()
+            obs, rew, dones, infos = self.venv.step_wait()
             live = ~ended  # a row's transition ends with its episode
             total[live] += rew[live]
-            for b in np.flatnonzero(live):
-                infos[b] = step_infos[b]
+            for b in np.flatnonzero(live & dones):
+                last[int(b)] = infos[b]
             ended |= np.asarray(dones, dtype=bool)
             if i == 0:
                 action = held(self._actions, self.incremental)
-        return obs, total.astype(np.float32), ended, infos
+        return obs, total.astype(np.float32), ended, [last.get(b, info)
+                                                      for b, info in enumerate(infos)]
 
 
 class Decisions:
@@ -119,9 +120,7 @@ class Decisions:
             self._last[due] = decided
         elif self._last is None:
             raise ValueError("Decisions.act: no row has decided since its episode's start")
-        out = held(self._last, self.incremental).copy()
-        out[due] = self._last[due]
         self._t += 1
-        return out
+        return np.where(due[:, None], self._last, held(self._last, self.incremental))
 
 __all__ = ["REPEAT_MAX", "Decisions", "VecRepeat", "check_repeat", "held"]

@@ -196,10 +196,7 @@ def read_hyperparams(path: Path, env_id: str, algo: str) -> dict[str, Any]:
         if not (ok and 0 < v <= MAX_RUN_MINUTES):
             raise ConfigError(f"--hyperparams {path}: max_minutes (a run's wall-time budget) "
                               f"must be a number in (0, {MAX_RUN_MINUTES}], got {v!r}")  # fmt: skip
-    if "action_repeat" in hp:
-        from agents.repeat import check_repeat
-
-        _checked(path, check_repeat, hp["action_repeat"])
+    if "action_repeat" in hp:  # its value checked by from_plant, which reads it
         if "lstm" in str(hp.get("policy", "")).lower():
             raise ConfigError(f"--hyperparams {path}: action_repeat is for a feed-forward "
                               "policy, not a recurrent one")  # fmt: skip

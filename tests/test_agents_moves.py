@@ -9,6 +9,7 @@ import json
 
 import numpy as np
 import pytest
+from stand_ins import Model
 
 from agents.moves import LowPassState, MoveState, VecMoves, command_state
 from agents.policy import AgentPolicy
@@ -18,17 +19,6 @@ from steamtemp_gym.scenarios import Scenario
 
 ENV = "steamtemp/Cascade300MW-v0"
 MAX_MOVE = 0.03
-
-
-class Model:
-    """A stand-in model: a fixed pseudo-random action sequence, whatever it observes."""
-
-    def __init__(self, n_act: int, n_rows: int, seed: int = 0) -> None:
-        self.rng = np.random.default_rng(seed)
-        self.shape = (n_rows, n_act)
-
-    def predict(self, x, deterministic=True):
-        return self.rng.uniform(-1.5, 1.5, self.shape).astype(np.float32), None
 
 
 def _openings(venv, obs) -> np.ndarray:

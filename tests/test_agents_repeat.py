@@ -8,6 +8,7 @@ import json
 import numpy as np
 import pytest
 import yaml
+from stand_ins import Model
 
 import steamtemp_gym
 from agents import horizons
@@ -20,20 +21,6 @@ from steamtemp_gym.scenarios import Scenario
 
 ENV = "steamtemp/Cascade300MW-v0"
 K = 5
-
-
-class Model:
-    """A stand-in model: a fixed pseudo-random action sequence, whatever it observes."""
-
-    def __init__(self, n_act: int, n_rows: int, seed: int = 0) -> None:
-        self.rng = np.random.default_rng(seed)
-        self.shape = (n_rows, n_act)
-        self.calls = 0
-
-    def predict(self, x, deterministic=True):
-        assert len(x) == self.shape[0]
-        self.calls += 1
-        return self.rng.uniform(-1.5, 1.5, self.shape).astype(np.float32), None
 
 
 def _recorded(native):
