@@ -22,7 +22,8 @@ KINDS = {"ppo": "model-free", "sac": "model-free", "td3": "model-free",
          "ppo_residual_pi": "residual over cascade_pi_ff_tuned",
          "ppo_residual_mpc": "residual over mpc_linear",
          "ppo_imitation_mpc": "imitation of mpc_linear",
-         "ppo_imitation_mpc_rl": "imitation of mpc_linear, then RL"}  # fmt: skip
+         "ppo_imitation_mpc_rl": "imitation of mpc_linear, then RL",
+         "bc": "offline: behaviour cloning of mpc_linear's noisy dataset"}  # fmt: skip
 
 
 def kind(algo: str) -> str:

@@ -1,14 +1,30 @@
 """Behaviour cloning from a Minari dataset, saved as a trained agent's files.
 
-``python -m agents.behaviour_cloning --dataset steamtemp/SupercriticalFSH/mpc_linear-v0
---out bc`` fits a small MLP (two hidden layers of 64 ReLU units, a tanh output) to the
-dataset's (observation, action) pairs by mean squared error, the observation
-standardized with the dataset's mean and variance, and writes it in steamtemp-train's
-layout (agents/files.py): ``bc/<env>__bc.zip``, an SB3 TD3 model whose actor is the MLP
-(TD3's actor is exactly such a network), and ``bc/<env>__bc.json`` with the
-standardization as frozen VecNormalize statistics. So ``steamtemp-leaderboard --policies
-zoo:bc`` scores it as any trained agent (agents/policy.py: the actor in float64 NumPy);
-it sees the env's observation alone, without controller memory. docs/offline.md.
+``python -m agents.behaviour_cloning --dataset steamtemp/SupercriticalFSH/mpc_linear-noisy-v0
+--out bc`` fits an MLP (two hidden layers of 128 ReLU units, a tanh output) by mean
+squared error to the dataset's (observation, action) pairs and writes it in
+steamtemp-train's layout (agents/files.py): ``bc/<env>__bc.zip``, an SB3 TD3 model whose
+actor is the MLP (TD3's actor is exactly such a network), and ``bc/<env>__bc.json`` with
+the observation pipeline. So ``steamtemp-leaderboard --policies zoo:bc`` scores it as any
+trained agent (agents/policy.py: the actor in float64 NumPy). docs/offline.md.
+
+What the clone sees and learns, by default as the imitation agents (agents/imitation.py):
+
+- **observation**: the env's, with the controller memory :data:`MEMORY` (every observed
+  signal over the plant's dead time and lag, the load and setpoint rates, the error
+  integral) computed along each recorded episode as the agent computes it when it acts,
+  standardized with the data's mean and variance (frozen VecNormalize statistics);
+- **label**: the action the dataset's policy chose: the info ``policy_action`` where the
+  dataset injected noise (agents/datasets.py ``--noise``), else the recorded action;
+- **output**: a valve position through the first-order filter of the imitation agents
+  (time constant ``agents.horizons.action_filter``, 9-14 s), so that the clone does not
+  stroke the valve on every measurement's noise.
+
+``--plain`` clones the env's observation alone into the raw action (no memory, no filter).
+
+``python -m agents.behaviour_cloning --zoo`` rebuilds the shipped clones (``sb3:bc``): per
+plant, the dataset :data:`ZOO_DATASET` (recorded where Minari's data folder lacks it) and
+:data:`ZOO_RUNS` runs with fit seeds 0, 1, 2 into ``agents/zoo``.
 """
 
 from __future__ import annotations
@@ -25,20 +41,52 @@ import numpy as np
 
 import steamtemp_gym
 from agents.files import steamtemp_paths
+from steamtemp_gym import envs as envs_
 
 ALGO = "bc"
-HIDDEN = (64, 64)
+HIDDEN = (128, 128)
+#: The controller memory of the clone: the imitation agents' (agents/hyperparams/
+#: ppo_imitation_mpc.yml), its stride read from the plant.
+MEMORY = {"integral_time_s": 60.0, "integral_limit_K": 40.0, "history": 8,
+          "history_stride": "plant", "history_signals": "observation", "rates": True}  # fmt: skip
+#: The dataset of the shipped clones (agents/datasets.py ``record``'s arguments): 96 episodes
+#: of mpc_linear on the training distribution with noise of 5 % of the stroke injected.
+ZOO_DATASET = {"policy": "mpc_linear", "episodes": 96, "seed": 0, "noise": 0.05}
+#: Runs of each shipped clone, as steamtemp-train's zoo has for every agent.
+ZOO_RUNS = 3
 #: The standardization's epsilon and clip, as SB3's VecNormalize defaults.
 EPSILON, CLIP_OBS = 1e-8, 10.0
 
 
-def transitions(dataset: Any) -> tuple[np.ndarray, np.ndarray]:
-    """(observations, actions) of every step of a Minari dataset: each episode's
-    observations but its last, with the action taken after it."""
+def memory_of(env_id: str) -> dict[str, Any]:
+    """:data:`MEMORY` with its stride for ``env_id`` (agents.horizons.from_plant)."""
+    from agents.horizons import from_plant
+    from agents.memory import MEMORY_WRAPPER
+
+    return from_plant(env_id, {"env_wrapper": {MEMORY_WRAPPER: MEMORY}})["env_wrapper"][
+        MEMORY_WRAPPER]
+
+
+def transitions(dataset: Any, memory: dict[str, Any] | None = None,
+                env: Any = None) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+    """(observations, labels) of every step of a Minari dataset: each episode's
+    observations but its last (with the controller ``memory`` appended, computed along the
+    episode as agents.policy.AgentPolicy does, for ``env``'s observation layout), and the
+    action the policy chose there (module docstring)."""
+    from agents.datasets import POLICY_ACTION
+    from agents.memory import MemoryConfig
+    from agents.wrappers import MemoryState
+
+    state = MemoryState(env, MemoryConfig.from_kwargs(memory)) if memory is not None else None
     obs, act = [], []
     for ep in dataset.iterate_episodes():
-        obs.append(np.asarray(ep.observations, dtype=np.float64)[:-1])
-        act.append(np.asarray(ep.actions, dtype=np.float64).reshape(len(ep.actions), -1))
+        o = np.asarray(ep.observations, dtype=np.float64)[:-1]
+        if state is not None:
+            o = np.concatenate([state(o[i : i + 1], np.array([i == 0])) for i in range(len(o))])
+        infos = ep.infos if isinstance(ep.infos, dict) else {}
+        label = infos[POLICY_ACTION][1:] if POLICY_ACTION in infos else ep.actions
+        obs.append(o)
+        act.append(np.asarray(label, dtype=np.float64).reshape(len(ep.actions), -1))
     if not obs:
         raise ValueError(f"dataset {dataset.spec.dataset_id} holds no episode")
     return np.concatenate(obs), np.concatenate(act)
@@ -121,44 +169,85 @@ def actor(n_obs: int, n_act: int) -> Any:
     return torch.nn.Sequential(*layers, torch.nn.Linear(width, n_act), torch.nn.Tanh())
 
 
-def save(net: Any, stats: dict[str, Any], env_id: str, out: str | Path,
-         dataset_id: str, training: dict[str, Any]) -> tuple[Path, Path]:  # fmt: skip
-    """Write the agent in steamtemp-train's layout; returns the .zip and .json paths."""
+def save(net: Any, stats: dict[str, Any], env_id: str, out: str | Path, dataset_id: str,
+         training: dict[str, Any], memory: dict[str, Any] | None = None,
+         action_filter_s: float | None = None,
+         run: int | None = None) -> tuple[Path, Path]:  # fmt: skip
+    """Write the agent (run ``run``) in steamtemp-train's layout; returns the .zip and .json
+    paths."""
     import gymnasium as gym
     import torch
     from stable_baselines3 import TD3
 
-    model_path, meta_path = steamtemp_paths(out, env_id, ALGO)
+    from agents.wrappers import ControllerMemory
+
+    model_path, meta_path = steamtemp_paths(out, env_id, ALGO, run)
     model_path.parent.mkdir(parents=True, exist_ok=True)
     env = gym.make(env_id)
+    env = ControllerMemory(env, **memory) if memory is not None else env
     model = TD3("MlpPolicy", env, buffer_size=1, learning_starts=0, device="cpu",
                 policy_kwargs={"net_arch": list(HIDDEN)})  # fmt: skip
     with torch.no_grad():
         for target in (model.actor.mu, model.actor_target.mu):
             target.load_state_dict(net.state_dict())
     model.save(model_path)
-    meta = {"env_id": env_id, "algo": ALGO, "sb3_class": "TD3", "memory": None,
-            "normalization": stats, "residual_scale": None,
+    meta = {"env_id": env_id, "algo": ALGO, "run": run, "sb3_class": "TD3", "memory": memory,
+            "normalization": stats, "residual_scale": None, "action_filter_s": action_filter_s,
             "package_version": steamtemp_gym.__version__, "dataset": dataset_id,
             "training": training}  # fmt: skip
     meta_path.write_text(json.dumps(meta, indent=1) + "\n", encoding="utf-8")
     return model_path, meta_path
 
 
-def train(dataset_id: str, out: str | Path, *, epochs: int = 30, seed: int = 0,
-          max_seconds: float = 120.0, log: Any = None) -> tuple[Path, Path]:  # fmt: skip
-    """Load the dataset, fit the MLP, write the agent (module docstring)."""
+def train(dataset_id: str, out: str | Path, *, plain: bool = False, epochs: int = 10,
+          seed: int = 0, max_seconds: float = 120.0, run: int | None = None,
+          log: Any = None) -> tuple[Path, Path]:  # fmt: skip
+    """Load the dataset, fit the MLP, write the agent (module docstring); ``plain``: the
+    env's observation alone into the raw action."""
+    import gymnasium as gym
     import minari
+
+    from agents.horizons import action_filter
 
     dataset = minari.load_dataset(dataset_id)
     env_id = dataset.spec.env_spec.id
-    obs, act = transitions(dataset)
+    memory = None if plain else memory_of(env_id)
+    filter_s = None if plain else round(action_filter(env_id), 5)
     t0 = time.perf_counter()
+    obs, act = transitions(dataset, memory, gym.make(env_id))
+    t1 = time.perf_counter()
     net, stats = fit(obs, act, epochs=epochs, seed=seed, max_seconds=max_seconds, log=log)
-    seconds = time.perf_counter() - t0
     return save(net, stats, env_id, out, dataset_id,
-                {"transitions": len(obs), "epochs": epochs, "seed": seed,
-                 "seconds": round(seconds, 1)})  # fmt: skip
+                {"transitions": len(obs), "epochs": epochs, "seed": seed, "plain": plain,
+                 "memory_seconds": round(t1 - t0, 1),
+                 "seconds": round(time.perf_counter() - t1, 1)},
+                memory, filter_s, run)  # fmt: skip
+
+
+def zoo_dataset_id(env_id: str) -> str:
+    """The id of the shipped clones' dataset of ``env_id``."""
+    from agents import datasets
+
+    name = datasets.dataset_name(ZOO_DATASET["policy"], noise=ZOO_DATASET["noise"])
+    return datasets.dataset_id(env_id, name)
+
+
+def rebuild_zoo(env_ids: list[str], out: str | Path, log: Any = None) -> list[Path]:
+    """The shipped clones of ``env_ids`` (module docstring); their model files."""
+    from minari.storage import get_dataset_path
+
+    from agents import datasets
+
+    written = []
+    for env_id in env_ids:
+        did = zoo_dataset_id(env_id)
+        if not Path(get_dataset_path(did)).is_dir():
+            d = ZOO_DATASET
+            datasets.record(env_id, d["policy"], d["episodes"], d["seed"], noise=d["noise"],
+                            log=log)  # fmt: skip
+        for run in range(ZOO_RUNS):
+            written.append(train(did, out, seed=run, run=run or None, log=log)[0])
+    return written
 
 
 def _positive(kind: type, what: str):
@@ -178,15 +267,37 @@ def _positive(kind: type, what: str):
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(prog="python -m agents.behaviour_cloning",
                                  description=(__doc__ or "").split("\n")[0])  # fmt: skip
-    ap.add_argument("--dataset", required=True, help="a Minari dataset id")
-    ap.add_argument("--out", required=True, help="folder of the agent's files")
+    ap.add_argument("--dataset", help="a Minari dataset id")
+    ap.add_argument("--out", help="folder of the agent's files (with --zoo: default "
+                    "agents/zoo)")  # fmt: skip
+    ap.add_argument("--zoo", action="store_true",
+                    help="rebuild the shipped clones (module docstring), recording their "
+                    "datasets where missing")  # fmt: skip
+    ap.add_argument("--env", action="append", dest="envs", metavar="ID",
+                    help="with --zoo: a plant (repeatable; default every plant)")
     ap.add_argument("--data-dir", default=None, metavar="DIR",
                     help="Minari's data folder (default: MINARI_DATASETS_PATH, else "
                     "~/.minari/datasets)")  # fmt: skip
-    ap.add_argument("--epochs", type=_positive(int, "--epochs"), default=30)
+    ap.add_argument("--epochs", type=_positive(int, "--epochs"), default=10)
     ap.add_argument("--max-minutes", type=_positive(float, "--max-minutes"), default=2.0)
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--run", type=_positive(int, "--run"), default=None, metavar="K",
+                    help="write run K's files (<env>__bc__runK), as steamtemp-train --runs "
+                    "names them")  # fmt: skip
+    ap.add_argument("--plain", action="store_true",
+                    help="the env's observation alone into the raw action: no controller "
+                    "memory, no output filter")  # fmt: skip
     args = ap.parse_args(argv)
+    if args.zoo == (args.dataset is not None):
+        ap.error("give one of --dataset ID or --zoo")
+    if args.envs and not args.zoo:
+        ap.error("argument --env: only with --zoo (a dataset names its plant)")
+    if not args.zoo and args.out is None:
+        ap.error("argument --out is required with --dataset")
+    try:
+        env_ids = [envs_.resolve_id(e) for e in args.envs or steamtemp_gym.ENV_IDS]
+    except ValueError as exc:
+        ap.error(f"argument --env: {exc}")
     try:
         import minari  # noqa: F401
     except ImportError:
@@ -194,6 +305,14 @@ def main(argv: list[str] | None = None) -> int:
     if args.data_dir is not None:
         os.environ["MINARI_DATASETS_PATH"] = str(Path(args.data_dir).resolve())
     from minari.storage import get_dataset_path
+
+    say = lambda m: print(m, file=sys.stderr)  # noqa: E731
+    if args.zoo:
+        import agents
+
+        for model in rebuild_zoo(env_ids, args.out or agents.ZOO, log=say):
+            print(model)
+        return 0
 
     try:
         found = Path(get_dataset_path(args.dataset)).is_dir()
@@ -203,9 +322,9 @@ def main(argv: list[str] | None = None) -> int:
         ap.error(f"argument --dataset: no dataset {args.dataset!r} in "
                  f"{os.environ.get('MINARI_DATASETS_PATH', '~/.minari/datasets')} "
                  "(python -m agents.datasets makes one)")  # fmt: skip
-    model, meta = train(args.dataset, args.out, epochs=args.epochs, seed=args.seed,
-                        max_seconds=60.0 * args.max_minutes,
-                        log=lambda m: print(m, file=sys.stderr))  # fmt: skip
+    model, meta = train(args.dataset, args.out, plain=args.plain, epochs=args.epochs,
+                        seed=args.seed, max_seconds=60.0 * args.max_minutes, run=args.run,
+                        log=say)  # fmt: skip
     print(f"{model} and {meta}: score it with steamtemp-leaderboard --policies "
           f"zoo:{args.out}")
     return 0

@@ -16,6 +16,17 @@ episode is, with probability F, ``cascade_pi`` at a tuning drawn from the search
 its knobs (``CascadePI.KNOBS``: every gain and integral time factor log-uniform in
 0.25-4, so from sluggish to oscillating), else the policy.
 
+``--noise S`` injects noise into the policy's actions, as DART does (Laskey, Lee, Fox,
+Dragan and Goldberg, "DART: noise injection for robust imitation learning", CoRL 2017):
+per valve a first-order low-pass Gaussian noise of standard deviation S (a fraction of the
+stroke) and time constant :data:`NOISE_FACTOR` times the plant's time scale (dead time +
+lag, agents/horizons.py), added to the policy's action and clipped to the valve's range.
+The env gets the noisy action and the dataset records it as the action (the transitions
+are the plant's); each step's info ``policy_action`` holds what the policy chose before
+the noise, the label behaviour cloning learns from (agents/behaviour_cloning.py). So the
+data visit the states around the expert's path a clone drifts into, labelled with what the
+expert does there; the name gets ``-noisy``.
+
 Reference scores: the dataset's evaluation env is the plant under a named scenario
 (``--eval-scenario``, default ``load_ramp_100_50``); ``ref_min_score`` and
 ``ref_max_score`` are the mean returns of ``cascade_pi_ff`` and the oracle there over
@@ -43,7 +54,7 @@ import numpy as np
 
 import baselines
 import steamtemp_gym
-from agents import specs
+from agents import horizons, specs
 from agents.evaluation import run_episode
 from agents.leaderboard import references, summary
 from agents.training import git_revision
@@ -61,6 +72,13 @@ EVAL_SEEDS = (0, 1, 2, 3, 4)
 DETUNED = "cascade_pi"
 AUTHOR = "steamtemp_gym contributors"
 MAX_EPISODES = 100_000
+#: The injected noise's time constant as a fraction of the plant's time scale (dead time +
+#: lag, ``agents.horizons.time_scale``): 29 s on SupercriticalFSH.
+NOISE_FACTOR = 0.125
+#: The largest noise (standard deviation, fraction of the valve stroke) ``--noise`` takes.
+MAX_NOISE = 0.5
+#: The info key of the policy's own action in a dataset with injected noise.
+POLICY_ACTION = "policy_action"
 _NOT_NAME = re.compile(r"[^A-Za-z0-9_-]+")
 
 
@@ -69,12 +87,12 @@ def plant_name(env_id: str) -> str:
     return gym.spec(env_id).name
 
 
-def dataset_name(policy: str, mixed: float | None = None) -> str:
+def dataset_name(policy: str, mixed: float | None = None, noise: float | None = None) -> str:
     """The dataset name of a policy: its name with every run of characters Minari refuses
     in a name written ``-`` (``sb3:ppo`` -> ``sb3-ppo``), ``-mixed`` appended for a mixed
-    dataset."""
+    dataset and ``-noisy`` for one with injected noise."""
     name = _NOT_NAME.sub("-", policy).strip("-") or "policy"
-    return f"{name}-mixed" if mixed else name
+    return name + ("-mixed" if mixed else "") + ("-noisy" if noise else "")
 
 
 def dataset_id(env_id: str, name: str, version: int = 0) -> str:
@@ -116,8 +134,73 @@ def episode_plan(policy: str, episodes: int, seed: int,
     return out
 
 
+class PolicyActionInfo(gym.Wrapper):
+    """Puts the action the dataset's policy chose (``chosen``, set before each step) in the
+    step's info as :data:`POLICY_ACTION`; NaN in a reset's info (no action yet)."""
+
+    def __init__(self, env: gym.Env) -> None:
+        super().__init__(env)
+        self.chosen: np.ndarray | None = None
+
+    def reset(self, **kwargs: Any):
+        obs, info = self.env.reset(**kwargs)
+        self.chosen = None
+        return obs, {**info, POLICY_ACTION: np.full(self.action_space.shape, np.nan)}
+
+    def step(self, action: Any):
+        if self.chosen is None:
+            raise ValueError("PolicyActionInfo.step: no chosen action set for this step")
+        chosen, self.chosen = self.chosen, None
+        obs, reward, terminated, truncated, info = self.env.step(action)
+        return obs, reward, terminated, truncated, {**info, POLICY_ACTION: chosen}
+
+
+class NoisyPolicy:
+    """A policy's actions plus low-pass Gaussian noise (``--noise``, module docstring).
+
+    Args:
+        policy: The policy (agents.specs' ``make``).
+        label: The :class:`PolicyActionInfo` under the collector, told each chosen action.
+        sigma: The noise's standard deviation, a fraction of the valve stroke.
+        tau_s: Its time constant (s).
+        dt_s: The control interval (s).
+    """
+
+    def __init__(self, policy: Any, label: PolicyActionInfo, sigma: float, tau_s: float,
+                 dt_s: float) -> None:  # fmt: skip
+        self.policy, self.label = policy, label
+        self.scale = 2.0 * sigma  # actions span the stroke as [-1, 1]
+        self.a = float(np.exp(-dt_s / tau_s))
+        self.rng = np.random.default_rng(0)
+        self.noise: np.ndarray | None = None
+
+    def seed(self, seed: int) -> None:
+        """Draw the next episode's noise from ``seed`` (the episode's seed)."""
+        self.rng = np.random.default_rng([seed, 0xDA27])
+
+    def reset(self) -> None:
+        self.policy.reset()
+        self.noise = None
+
+    def predict(self, observation: Any, state: Any = None, episode_start: Any = None,
+                deterministic: bool = True) -> tuple[np.ndarray, Any]:  # fmt: skip
+        action, state = self.policy.predict(observation, state, episode_start, deterministic)
+        action = np.asarray(action, dtype=np.float64)
+        white = self.rng.standard_normal(action.shape) * self.scale
+        if self.noise is None or np.any(episode_start):  # from the stationary distribution
+            self.noise = white
+        else:
+            self.noise = self.a * self.noise + np.sqrt(1.0 - self.a**2) * white
+        noisy = np.clip(action + self.noise, -1.0, 1.0)
+        self.label.chosen = action.copy()
+        if hasattr(self.policy, "applied"):  # its estimator follows the command applied
+            self.policy.applied(noisy)
+        return noisy.astype(np.float32), state
+
+
 def record(env_id: str, policy: str, episodes: int, seed: int = 0, *,
-           mixed: float | None = None, name: str | None = None, version: int = 0,
+           mixed: float | None = None, noise: float | None = None,
+           name: str | None = None, version: int = 0,
            eval_scenario: str = EVAL_SCENARIO, eval_seeds: tuple[int, ...] = EVAL_SEEDS,
            author: str = AUTHOR, code_permalink: str | None = None,
            log: Any = None) -> Any:  # fmt: skip
@@ -139,13 +222,17 @@ def record(env_id: str, policy: str, episodes: int, seed: int = 0, *,
         raise ValueError(f"seed must be an integer >= 0, got {seed!r}")
     if mixed is not None and not (isinstance(mixed, float | int) and 0.0 < mixed <= 1.0):
         raise ValueError(f"mixed must be a fraction in (0, 1], got {mixed!r}")
+    if noise is not None and not (isinstance(noise, float | int) and not isinstance(noise, bool)
+                                  and 0.0 < noise <= MAX_NOISE):  # fmt: skip
+        raise ValueError(f"noise must be a fraction of the stroke in (0, {MAX_NOISE}], got "
+                         f"{noise!r}")  # fmt: skip
     spec = specs.parse(policy)
     if not spec.available(env_id):
         raise ValueError(f"policy {policy!r} has no agent for {env_id}")
     scenarios.resolve(eval_scenario, env_id)  # a bad name fails before anything runs
     if eval_scenario == scenarios.RANDOM:
         raise ValueError("the evaluation scenario must be a fixed one, not 'random'")
-    did = dataset_id(env_id, name or dataset_name(policy, mixed), version)
+    did = dataset_id(env_id, name or dataset_name(policy, mixed, noise), version)
     minari.dataset.minari_dataset.parse_dataset_id(did)  # Minari's own rules
     if Path(get_dataset_path(did)).exists():
         raise ValueError(f"dataset {did} exists already in {get_dataset_path(did)}; delete "
@@ -158,7 +245,10 @@ def record(env_id: str, policy: str, episodes: int, seed: int = 0, *,
         f"{time.perf_counter() - t0:.1f} s)")
     t1 = time.perf_counter()
     plan = episode_plan(policy, episodes, seed, mixed)
-    env = minari.DataCollector(gym.make(env_id, scenario=scenarios.RANDOM), record_infos=True)
+    plant_env = gym.make(env_id, scenario=scenarios.RANDOM)
+    label = PolicyActionInfo(plant_env) if noise else None
+    env = minari.DataCollector(label or plant_env, record_infos=True)
+    tau_s = NOISE_FACTOR * sum(horizons.time_scale(env_id)) if noise else None
     built: dict[str, Any] = {}
     for ep in plan:
         if "knobs" in ep:
@@ -167,9 +257,13 @@ def record(env_id: str, policy: str, episodes: int, seed: int = 0, *,
             if policy not in built:
                 built[policy] = spec.make(env_id, env.unwrapped)
             pol = built[policy]
+        if label is not None:
+            pol = NoisyPolicy(pol, label, noise, tau_s, env.unwrapped.plant.dt_s)
+            pol.seed(ep["seed"])
+            ep["noise"] = {"sigma": noise, "tau_s": tau_s}
         ep["return"] = _episode(env, pol, ep["seed"])
-    say(f"{episodes} episodes of {policy if not mixed else f'{policy} mixed {mixed:g}'} on "
-        f"{env_id} random, seeds {seed}-{seed + episodes - 1}: "
+    what = policy + (f" mixed {mixed:g}" if mixed else "") + (f" noise {noise:g}" if noise else "")
+    say(f"{episodes} episodes of {what} on {env_id} random, seeds {seed}-{seed + episodes - 1}: "
         f"{time.perf_counter() - t1:.1f} s")
     eval_env = gym.make(env_id, scenario=eval_scenario)
     description = (
@@ -178,6 +272,9 @@ def record(env_id: str, policy: str, episodes: int, seed: int = 0, *,
         + (f"; each episode with probability {mixed:g} by {DETUNED} at a tuning drawn "
            "log-uniform from its knobs' box (factors 0.25-4 on every gain and integral "
            "time) instead: the steamtemp_episodes metadata names each" if mixed else "")
+        + (f"; low-pass Gaussian noise of standard deviation {noise:g} of the stroke and "
+           f"time constant {tau_s:.1f} s added to every action (DART); the info "
+           f"'{POLICY_ACTION}' holds the policy's action before it" if noise else "")
         + f". Infos recorded (cost: the safe-RL constraint cost). eval_env: {env_id} "
         f"under '{eval_scenario}'; ref_min_score / ref_max_score: the mean returns of "
         f"cascade_pi_ff and the oracle there over seeds {list(eval_seeds)}, the "
@@ -231,6 +328,18 @@ def _fraction(text: str) -> float:
     return v
 
 
+def _noise(text: str) -> float:
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"a fraction of the stroke in (0, {MAX_NOISE}], got "
+                                         f"{text!r}") from None  # fmt: skip
+    if not 0.0 < v <= MAX_NOISE:
+        raise argparse.ArgumentTypeError(f"a fraction of the stroke in (0, {MAX_NOISE}], got "
+                                         f"{text!r}")  # fmt: skip
+    return v
+
+
 def _seeds(text: str) -> tuple[int, ...]:
     try:
         seeds = tuple(dict.fromkeys(int(s) for s in text.split(",") if s.strip()))
@@ -259,6 +368,10 @@ def make_parser() -> argparse.ArgumentParser:
     ap.add_argument("--mixed", type=_fraction, default=None, metavar="F",
                     help=f"mixed quality: each episode by {DETUNED} at a random tuning with "
                     "probability F, else by --policy; the name gets -mixed")  # fmt: skip
+    ap.add_argument("--noise", type=_noise, default=None, metavar="S",
+                    help="inject low-pass Gaussian noise of standard deviation S (fraction "
+                    "of the stroke) into the actions (DART); the policy's own action is in "
+                    f"the info '{POLICY_ACTION}'; the name gets -noisy")  # fmt: skip
     ap.add_argument("--name", default=None, help="the dataset name (default: from the policy)")
     ap.add_argument("--version", type=_int(0, 10**6, "--version"), default=0,
                     help="the dataset version (default: 0)")
@@ -301,15 +414,16 @@ def main(argv: list[str] | None = None) -> int:
         os.environ["MINARI_DATASETS_PATH"] = str(Path(args.data_dir).resolve())
     from minari.storage import get_dataset_path
 
-    did = dataset_id(env_id, args.name or dataset_name(args.policy, args.mixed), args.version)
+    did = dataset_id(env_id, args.name or dataset_name(args.policy, args.mixed, args.noise),
+                     args.version)  # fmt: skip
     if Path(get_dataset_path(did)).exists():
         ap.error(f"dataset {did} exists already in {get_dataset_path(did)}; delete it "
                  "(minari delete) or give another --version or --name")  # fmt: skip
     t0 = time.perf_counter()
     dataset = record(env_id, args.policy, args.episodes, args.seed, mixed=args.mixed,
-                     name=args.name, version=args.version, eval_scenario=args.eval_scenario,
-                     eval_seeds=args.eval_seeds, author=args.author,
-                     log=lambda m: print(m, file=sys.stderr))  # fmt: skip
+                     noise=args.noise, name=args.name, version=args.version,
+                     eval_scenario=args.eval_scenario, eval_seeds=args.eval_seeds,
+                     author=args.author, log=lambda m: print(m, file=sys.stderr))  # fmt: skip
     path = Path(get_dataset_path(did))
     size = sum(f.stat().st_size for f in path.rglob("*") if f.is_file())
     print(f"{did}: {dataset.total_episodes} episodes, {dataset.total_steps} steps, "

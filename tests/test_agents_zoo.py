@@ -13,7 +13,7 @@ import pytest
 
 import agents
 import steamtemp_gym
-from agents import files, train_config, train_runs
+from agents import behaviour_cloning, files, train_config, train_runs
 from agents.evaluation import run_episode
 from agents.leaderboard.plan import _available
 
@@ -29,7 +29,8 @@ def test_every_plant_has_a_shipped_agent_with_three_training_runs(env_id):
 
 
 def test_every_algorithm_says_what_kind_of_agent_it_trains():
-    assert set(agents.KINDS) == set(train_config.ALGOS)
+    # the training algorithms, and behaviour cloning from an offline dataset
+    assert set(agents.KINDS) == {*train_config.ALGOS, behaviour_cloning.ALGO}
     assert {agents.kind(a) for _, a in agents.shipped()} <= set(agents.KINDS.values())
     assert agents.kind("ppo_residual").startswith("residual over ")
     assert agents.kind("my_algo") == "trained agent"

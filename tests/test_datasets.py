@@ -2,7 +2,9 @@
 (agents/behaviour_cloning.py): a dataset of two episodes made by the command, read back
 with Minari (episodes, infos with the cost, metadata); its reference scores are the
 leaderboard's score ends and Minari's normalized score is the leaderboard's; bad flags are
-refused before anything is written; a cloned agent is scored by the leaderboard."""
+refused before anything is written; a dataset with injected noise records the plant's
+transitions and labels them with the policy's own actions; a cloned agent (with the
+controller memory, or plain) is scored by the leaderboard."""
 
 from __future__ import annotations
 
@@ -19,11 +21,12 @@ pytest.importorskip("h5py", reason="Minari's HDF5 storage (minari[hdf5])")
 import gymnasium as gym  # noqa: E402
 
 import baselines  # noqa: E402
-from agents import behaviour_cloning, datasets, stats  # noqa: E402
+from agents import behaviour_cloning, datasets, horizons, stats  # noqa: E402
 from agents.evaluation import run_episode  # noqa: E402
 from agents.files import find  # noqa: E402
 from agents.leaderboard import cli  # noqa: E402
 from agents.leaderboard.records import EPISODES, read_record  # noqa: E402
+from agents.wrappers import ControllerMemory  # noqa: E402
 
 ENV = "steamtemp/Cascade300MW-v0"
 SCENARIO = "load_ramp_100_50"
@@ -127,6 +130,9 @@ def test_a_cloned_agent_is_a_trained_agents_files_scored_by_the_leaderboard(
     assert (files.env_id, files.algo) == (ENV, "bc")
     meta = json.loads(files.meta[0].read_text())
     assert meta["dataset"] == DATASET and meta["sb3_class"] == "TD3"
+    # the imitation agents' observation pipeline: controller memory and output filter
+    assert meta["memory"] == behaviour_cloning.memory_of(ENV)
+    assert meta["action_filter_s"] == round(horizons.action_filter(ENV), 5) > 0
     policy = files.load()
     assert policy.actor is not None  # the MLP in float64 NumPy
     obs, _ = behaviour_cloning.transitions(dataset)
@@ -150,6 +156,9 @@ def _refused(capsys, *args: str) -> str:
     (["--policy", "cascade_pi_ff", "--episodes", "two"], "--episodes must be an integer"),
     (["--policy", "cascade_pi_ff", "--seed", "-1"], "--seed must be in 0"),
     (["--policy", "cascade_pi_ff", "--mixed", "1.5"], "a fraction in (0, 1]"),
+    (["--policy", "cascade_pi_ff", "--noise", "0"], "a fraction of the stroke in (0, 0.5]"),
+    (["--policy", "cascade_pi_ff", "--noise", "0.6"], "a fraction of the stroke in (0, 0.5]"),
+    (["--policy", "cascade_pi_ff", "--noise", "much"], "a fraction of the stroke"),
     (["--policy", "no_such_policy"], "unknown policy 'no_such_policy'"),
     (["--policy", "cascade_pi_ff", "--env", "NoSuchPlant-v0"], "argument --env"),
     (["--policy", "cascade_pi_ff", "--eval-scenario", "random"], "not 'random'"),
@@ -185,3 +194,85 @@ def test_a_mixed_dataset_draws_its_episodes_from_the_seed():
     assert [p["seed"] for p in plan] == list(range(7, 207))
     assert datasets.dataset_name("sb3:ppo") == "sb3-ppo"
     assert datasets.dataset_name("mpc_linear", 0.5) == "mpc_linear-mixed"
+
+
+NOISY = "steamtemp/Cascade300MW/cascade_pi_ff-noisy-v0"
+
+
+@pytest.fixture(scope="module")
+def noisy(data_dir):
+    assert datasets.main(["--env", "Cascade300MW-v0", "--policy", "cascade_pi_ff",
+                          "--episodes", "1", "--seed", "3", "--eval-seeds", "0",
+                          "--noise", "0.05", "--data-dir", str(data_dir)]) == 0  # fmt: skip
+    return minari.load_dataset(NOISY)
+
+
+def test_injected_noise_drives_the_plant_and_the_policys_own_action_is_the_label(noisy):
+    (ep,) = list(noisy.iterate_episodes())
+    label = ep.infos[datasets.POLICY_ACTION]
+    assert np.isnan(label[0]).all()  # the reset's: no action yet
+    label = label[1:]
+    # the label is what the policy chose on the recorded observations
+    env = gym.make(ENV, scenario="random")
+    policy = baselines.make("cascade_pi_ff", env)
+    policy.reset()
+    chosen = [policy.predict(o, episode_start=np.array([i == 0]))[0]
+              for i, o in enumerate(ep.observations[:-1])]  # fmt: skip
+    np.testing.assert_array_equal(np.asarray(chosen, np.float64).reshape(label.shape), label)
+    # the recorded actions are the noisy ones the plant got: they reproduce its rewards
+    env.reset(seed=3)
+    rewards = [env.step(a)[1] for a in ep.actions]
+    np.testing.assert_array_equal(rewards, ep.rewards)
+    noise = np.asarray(ep.actions, np.float64) - label
+    free = np.abs(np.asarray(ep.actions)) < 1.0  # where the clip did not act
+    assert 0.05 < noise[free].std() < 0.2  # 0.05 of the stroke is 0.1 in action units
+    lag1 = np.corrcoef(noise[:-1, 0], noise[1:, 0])[0, 1]
+    assert lag1 > 0.9  # low-pass: a time constant of many control intervals
+    meta = noisy.storage.metadata
+    assert "DART" in meta["description"]
+    (plan,) = json.loads(meta["steamtemp_episodes"])
+    tau = datasets.NOISE_FACTOR * sum(horizons.time_scale(ENV))
+    assert plan["noise"] == {"sigma": 0.05, "tau_s": pytest.approx(tau)}
+    # behaviour cloning learns from the label
+    _, y = behaviour_cloning.transitions(noisy)
+    np.testing.assert_array_equal(y, label.reshape(y.shape))
+
+
+def test_the_same_flags_give_the_same_noise(noisy, data_dir):
+    again = datasets.record(ENV, "cascade_pi_ff", 1, 3, noise=0.05, eval_seeds=(0,), version=1)
+    (a,), (b,) = list(noisy.iterate_episodes()), list(again.iterate_episodes())
+    np.testing.assert_array_equal(a.actions, b.actions)
+
+
+def test_the_clones_memory_is_the_agents_and_plain_has_none(noisy, tmp_path):
+    env = gym.make(ENV)
+    memory = behaviour_cloning.memory_of(ENV)
+    x, y = behaviour_cloning.transitions(noisy, memory, env)
+    plain_x, _ = behaviour_cloning.transitions(noisy)
+    # the env's observation first, then the memory, restarted with the episode
+    np.testing.assert_array_equal(x[:, : plain_x.shape[1]], plain_x)
+    online = ControllerMemory(gym.make(ENV), **memory).observation_space.shape
+    assert x.shape == (len(y), *online) and online[0] > plain_x.shape[1]
+    model, meta = behaviour_cloning.train(NOISY, tmp_path, plain=True, epochs=1, run=2)
+    assert model.name == "steamtemp__Cascade300MW-v0__bc__run2.zip"
+    doc = json.loads(meta.read_text())
+    assert doc["memory"] is None and doc["action_filter_s"] is None and doc["run"] == 2
+    (files,) = find(tmp_path)
+    files.check()
+
+
+def test_the_zoo_command_records_the_dataset_and_fits_three_runs(monkeypatch, tmp_path):
+    monkeypatch.setenv("MINARI_DATASETS_PATH", str(tmp_path / "data"))
+    monkeypatch.setattr(behaviour_cloning, "ZOO_DATASET",
+                        {"policy": "cascade_pi_ff", "episodes": 1, "seed": 3, "noise": 0.05})
+    assert behaviour_cloning.main(["--zoo", "--env", "Cascade300MW-v0",
+                                   "--out", str(tmp_path / "zoo")]) == 0  # fmt: skip
+    assert minari.load_dataset(NOISY).total_episodes == 1  # recorded, it was missing
+    runs = find(tmp_path / "zoo")
+    assert sorted(f.model.name for f in runs) == [
+        "steamtemp__Cascade300MW-v0__bc.zip", "steamtemp__Cascade300MW-v0__bc__run1.zip",
+        "steamtemp__Cascade300MW-v0__bc__run2.zip"]  # fmt: skip
+    seeds = [json.loads(f.meta[0].read_text())["training"]["seed"] for f in runs]
+    assert sorted(seeds) == [0, 1, 2]
+    for f in runs:
+        f.check()
