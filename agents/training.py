@@ -375,6 +375,10 @@ def train(env_id: str, algo: str, hyperparams: Path | None = None, timesteps: in
         return _imitation(env_id, algo, cls, path, hp, seed, run, n_envs, total, out,
                           reference, venv, quiet, max_minutes, tensorboard)  # fmt: skip
     model = _sb3_model(cls, hp, venv, seed, tensorboard)
+    if price is not None and getattr(model, "replay_buffer", None) is not None:
+        from agents.travel_price import price_replay
+
+        price_replay(model, price)  # charged when sampled, at the price of the moment
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     name = stem(env_id, algo, run)

@@ -19,7 +19,12 @@ policy acts deterministically, and the rollout's own travel is mostly exploratio
 deterministic policy; a price on it rose to its bound and the agent froze the valve).
 Off-policy algorithms (SAC, TD3) collect a step at a time: their price moves every
 :data:`OFF_POLICY_EVERY` transitions, on the deterministic action along the states their
-replay buffer took in since. ``target``
+replay buffer took in since. Their replay buffer holds the scored reward and charges the
+price as it is when a batch is sampled (:class:`PricedReplayBuffer`): a charge made at
+collection would stay in the buffer long after the price moved, so that the critic would
+learn a mixture of old prices and the price would overshoot (measured with TD3 on
+Cascade300MW: it rose to its bound of 100 while the agent's travel stayed 2-4x the
+reference's, then the agent froze the valve). ``target``
 is below the budget (:data:`TARGET`, the tuner's margin, agents/tuning_terms.py) because
 travel on unseen scenarios spreads about the training travel.
 
@@ -35,6 +40,7 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
+from stable_baselines3.common.buffers import ReplayBuffer
 from stable_baselines3.common.vec_env.base_vec_env import VecEnv, VecEnvWrapper
 
 from agents.tuning_terms import TUNING_TRAVEL_BUDGET
@@ -59,6 +65,9 @@ class VecTravelPrice(VecEnvWrapper):
     """
 
     def __init__(self, venv: VecEnv, env: Any, reference_rate: float, price: float) -> None:
+        #: Whether the rewards it returns carry the charge (False: a replay buffer charges
+        #: them when it samples, :func:`price_replay`).
+        self.charge = True
         if not (np.isfinite(reference_rate) and reference_rate > 0):
             raise ValueError(f"reference travel rate must be > 0, got {reference_rate!r}")
         if not (np.isfinite(price) and PRICE_MIN <= price <= PRICE_MAX):
@@ -73,12 +82,13 @@ class VecTravelPrice(VecEnvWrapper):
         self._last: np.ndarray | None = None
         self._travel, self._steps = 0.0, 0
 
-    def _opening(self, obs: np.ndarray) -> np.ndarray:
+    def opening(self, obs: np.ndarray) -> np.ndarray:
+        """The valves' openings in (raw, possibly memory-extended) observations ``obs``."""
         return np.asarray(obs)[..., self.i_valve] * self.v_scale + self.v_center
 
     def reset(self) -> np.ndarray:
         obs = self.venv.reset()
-        self._last = self._opening(obs)
+        self._last = self.opening(obs)
         return obs
 
     def step_async(self, actions: np.ndarray) -> None:
@@ -86,15 +96,17 @@ class VecTravelPrice(VecEnvWrapper):
 
     def step_wait(self):
         obs, rew, dones, infos = self.venv.step_wait()
-        now = self._opening(obs)
+        now = self.opening(obs)
         end = now.copy()
         for b in np.flatnonzero(dones):  # an ended row's move is to its final opening
-            end[b] = self._opening(infos[b]["terminal_observation"])
+            end[b] = self.opening(infos[b]["terminal_observation"])
         move = np.abs(end - self._last).sum(axis=1)
         self._last = now
         self._travel += float(move.sum())
         self._steps += move.size
-        return obs, (rew - self.price * move).astype(np.float32), dones, infos
+        if self.charge:
+            rew = rew - self.price * move
+        return obs, np.asarray(rew, dtype=np.float32), dones, infos
 
     def ratio(self) -> float:
         """Travel per second since the last call over the reference's (then restarts)."""
@@ -170,6 +182,54 @@ def _collected(model: Any, recent: int | None) -> tuple[np.ndarray, np.ndarray] 
     return np.asarray(obs), starts
 
 
+class PricedReplayBuffer(ReplayBuffer):
+    """SB3's replay buffer, holding the scored reward of each transition, whose samples are
+    charged the travel price of ``price`` at the time they are drawn: the reward less
+    ``price`` times the valves' travel from the observation to the next (a decision's,
+    when actions repeat: a held position, move or filter target moves each valve one way
+    within it, so that is its travel). SB3's sampling otherwise (uniform over the stored
+    transitions and the rows, normalization by the VecNormalize it is given).
+
+    Args:
+        *args, **kwargs: SB3's ``ReplayBuffer`` arguments (``optimize_memory_usage``
+            refused: next observations are read from their own array).
+        price: The wrapper whose price and observation layout count.
+    """
+
+    def __init__(self, *args: Any, price: VecTravelPrice, **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        if self.optimize_memory_usage:
+            raise ValueError("a priced replay buffer needs optimize_memory_usage=False")
+        self.price = price
+
+    def _get_samples(self, batch_inds: np.ndarray, env: Any = None) -> Any:
+        from stable_baselines3.common.type_aliases import ReplayBufferSamples
+
+        # the global generator, as SB3 samples (seeded by the model's set_random_seed)
+        rows = np.random.randint(0, high=self.n_envs, size=(len(batch_inds),))  # noqa: NPY002
+        obs = self.observations[batch_inds, rows, :]
+        nxt = self.next_observations[batch_inds, rows, :]
+        travel = np.abs(self.price.opening(nxt) - self.price.opening(obs)).sum(axis=-1)
+        reward = self.rewards[batch_inds, rows] - self.price.price * travel
+        done = self.dones[batch_inds, rows] * (1.0 - self.timeouts[batch_inds, rows])
+        data = (self._normalize_obs(obs, env), self.actions[batch_inds, rows, :],
+                self._normalize_obs(nxt, env), done.reshape(-1, 1),
+                self._normalize_reward(reward.reshape(-1, 1), env))  # fmt: skip
+        return ReplayBufferSamples(*tuple(map(self.to_torch, data)))
+
+
+def price_replay(model: Any, price: VecTravelPrice) -> None:
+    """Give the off-policy ``model`` (before it learns) a :class:`PricedReplayBuffer` of its
+    buffer's size and spaces, and make ``price`` return the scored reward."""
+    if model.replay_buffer.size():
+        raise ValueError("price_replay: the model's replay buffer holds transitions already")
+    model.replay_buffer = PricedReplayBuffer(
+        model.buffer_size, model.observation_space, model.action_space, device=model.device,
+        n_envs=model.n_envs, optimize_memory_usage=model.optimize_memory_usage, price=price,
+        **(model.replay_buffer_kwargs or {}))  # fmt: skip
+    price.charge = False
+
+
 #: Transitions between two price updates of an off-policy algorithm, whose rollouts are a
 #: step or a few: a PPO rollout's (512 steps of 8 envs).
 OFF_POLICY_EVERY = 4096
@@ -210,4 +270,5 @@ def price_callback(wrapper: VecTravelPrice, log: list, max_move: float | None = 
     return Price()
 
 
-__all__ = ["OFF_POLICY_EVERY", "TARGET", "VecTravelPrice", "policy_travel", "price_callback"]
+__all__ = ["OFF_POLICY_EVERY", "TARGET", "PricedReplayBuffer", "VecTravelPrice",
+           "policy_travel", "price_callback", "price_replay"]  # fmt: skip

@@ -1,11 +1,12 @@
 """From an offline dataset to a leaderboard row: record mpc_linear on SupercriticalFSH's
-training distribution in Minari's format, clone it with a small MLP, score the clone.
+training distribution in Minari's format, with noise injected into its actions (DART),
+clone it with an MLP on the controller memory, score the clone.
 
 Run from the project's root with the [offline] extra installed (docs/offline.md):
 
-    python examples/offline_bc.py --data-dir minari_data --episodes 100
+    python examples/offline_bc.py --data-dir minari_data --episodes 96
 
-It writes the dataset ``steamtemp/SupercriticalFSH/mpc_linear-v0`` (kept if it exists),
+It writes the dataset ``steamtemp/SupercriticalFSH/mpc_linear-noisy-v0`` (kept if it exists),
 the agent's files in ``bc_agent/`` and the leaderboard run in ``bc_leaderboard/``.
 """
 
@@ -19,13 +20,14 @@ from agents import behaviour_cloning, datasets
 from agents.leaderboard import cli
 
 ENV, POLICY = "SupercriticalFSH-v0", "mpc_linear"
-DATASET = "steamtemp/SupercriticalFSH/mpc_linear-v0"
+NOISE = "0.05"  # of the valve stroke
+DATASET = "steamtemp/SupercriticalFSH/mpc_linear-noisy-v0"
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--data-dir", default="minari_data")
-    ap.add_argument("--episodes", default="100")
+    ap.add_argument("--episodes", default="96")
     ap.add_argument("--seeds", default="0,1,2", help="the leaderboard's seeds")
     args = ap.parse_args()
     os.environ["MINARI_DATASETS_PATH"] = str(Path(args.data_dir).resolve())
@@ -34,7 +36,7 @@ def main() -> None:
     # 1. the dataset (python -m agents.datasets)
     if not Path(get_dataset_path(DATASET)).exists():
         datasets.main(["--env", ENV, "--policy", POLICY, "--episodes", args.episodes,
-                       "--data-dir", args.data_dir])  # fmt: skip
+                       "--noise", NOISE, "--data-dir", args.data_dir])  # fmt: skip
     # 2. behaviour cloning, written as a trained agent's files (python -m agents.behaviour_cloning)
     behaviour_cloning.train(DATASET, "bc_agent", log=print)
     # 3. the leaderboard row: zoo:bc_agent next to the expert it cloned

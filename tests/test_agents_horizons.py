@@ -128,12 +128,12 @@ def test_price_charges_the_travel_and_measures_its_rate():
     for venv in (priced, plain):
         venv.seed(0)
         venv.reset()
-    opening = priced._opening(priced.reset())
+    opening = priced.opening(priced.reset())
     plain.reset()
     stroke = np.ones((2, 1))
     r_priced = priced.step(stroke)[1]
     obs, r_plain, _, _ = plain.step(stroke)
-    move = np.abs(priced._opening(obs) - opening).sum(axis=1)
+    move = np.abs(priced.opening(obs) - opening).sum(axis=1)
     assert np.all(move > 0)
     np.testing.assert_allclose(r_priced, r_plain - 2.0 * move, rtol=1e-6)
     dt = base.venv.unwrapped.plant.dt_s
@@ -258,6 +258,47 @@ def test_an_off_policy_travel_is_the_deterministic_actions_travel_along_its_last
     assert policy_travel(model, None, recent=None) is None  # no window: the rollout's travel
     model.replay_buffer.full, model.replay_buffer.pos = False, 3
     assert policy_travel(model, None, recent=4) is None  # fewer steps held than asked for
+
+
+def test_an_off_policy_buffer_holds_the_scored_reward_and_charges_the_price_it_samples_at():
+    """The priced replay buffer: the wrapper hands over the scored reward (the same as an
+    unpriced env's), and a sampled transition's reward is it less the price of the moment
+    times the valves' travel from its observation to the next."""
+    from stable_baselines3 import TD3
+
+    from agents.travel_price import PricedReplayBuffer, price_replay
+
+    priced, _ = _priced(2.0)
+    plain = NativeVecEnv(ENV_ID, 2, scenario=Scenario(name="short", duration_s=20.0))
+    model = TD3("MlpPolicy", priced, buffer_size=64, learning_starts=0, device="cpu",
+                policy_kwargs={"net_arch": [8]}, seed=0)  # fmt: skip
+    price_replay(model, priced)
+    buf = model.replay_buffer
+    assert isinstance(buf, PricedReplayBuffer) and not priced.charge
+    for venv in (priced, plain):
+        venv.seed(0)
+    obs, _ = priced.reset(), plain.reset()
+    rng = np.random.default_rng(0)
+    for _ in range(6):
+        a = rng.uniform(-1, 1, size=(2, 1)).astype(np.float32)
+        nxt, rew, done, infos = priced.step(a)
+        np.testing.assert_array_equal(rew, plain.step(a)[1])  # the scored reward
+        buf.add(obs, nxt, a, rew, done, infos)
+        obs = nxt
+    idx = np.arange(6)
+    for price in (2.0, 7.5):  # the rows are drawn from numpy's global generator, as SB3's
+        priced.price = price
+        np.random.seed(1)  # noqa: NPY002
+        got = buf._get_samples(idx)
+        np.random.seed(1)  # noqa: NPY002
+        rows = np.random.randint(0, high=2, size=6)  # noqa: NPY002
+        travel = np.abs(priced.opening(buf.next_observations[idx, rows])
+                        - priced.opening(buf.observations[idx, rows])).sum(axis=-1)  # fmt: skip
+        assert np.all(travel > 0)
+        want = buf.rewards[idx, rows] - price * travel
+        np.testing.assert_allclose(got.rewards.numpy().ravel(), want, rtol=1e-6)
+    with pytest.raises(ValueError, match="holds transitions"):
+        price_replay(model, priced)
 
 
 def test_an_off_policy_agents_price_moves_on_its_deterministic_travel(tmp_path):
