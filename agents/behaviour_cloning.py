@@ -23,8 +23,11 @@ What the clone sees and learns, by default as the imitation agents (agents/imita
 ``--plain`` clones the env's observation alone into the raw action (no memory, no filter).
 
 ``python -m agents.behaviour_cloning --zoo`` rebuilds the shipped clones (``sb3:bc``): per
-plant, the dataset :data:`ZOO_DATASET` (recorded where Minari's data folder lacks it) and
-:data:`ZOO_RUNS` runs with fit seeds 0, 1, 2 into ``agents/zoo``.
+plant, the datasets :data:`ZOO_DATASET` at each noise of :data:`ZOO_NOISES` (recorded where
+Minari's data folder lacks them), a clone of each validated as the agents' checkpoints are
+(agents/validation.py: the best return within the tuner's travel bound, else the least
+travel), and :data:`ZOO_RUNS` runs (fit seeds 0, 1, 2) from the chosen one into
+``agents/zoo``. How much noise a clone needs differs by plant (docs/offline.md).
 """
 
 from __future__ import annotations
@@ -51,7 +54,9 @@ MEMORY = {"integral_time_s": 60.0, "integral_limit_K": 40.0, "history": 8,
           "history_stride": "plant", "history_signals": "observation", "rates": True}  # fmt: skip
 #: The dataset of the shipped clones (agents/datasets.py ``record``'s arguments): 96 episodes
 #: of mpc_linear on the training distribution with noise of 5 % of the stroke injected.
-ZOO_DATASET = {"policy": "mpc_linear", "episodes": 96, "seed": 0, "noise": 0.05}
+ZOO_DATASET = {"policy": "mpc_linear", "episodes": 96, "seed": 0}
+#: The noises (fraction of the stroke) of the datasets the shipped clones choose from.
+ZOO_NOISES = (0.05, 0.1, 0.2)
 #: Runs of each shipped clone, as steamtemp-train's zoo has for every agent.
 ZOO_RUNS = 3
 #: The standardization's epsilon and clip, as SB3's VecNormalize defaults.
@@ -224,29 +229,62 @@ def train(dataset_id: str, out: str | Path, *, plain: bool = False, epochs: int 
                 memory, filter_s, run)  # fmt: skip
 
 
-def zoo_dataset_id(env_id: str) -> str:
-    """The id of the shipped clones' dataset of ``env_id``."""
+def zoo_dataset_id(env_id: str, noise: float) -> str:
+    """The id of the shipped clones' dataset of ``env_id`` with ``noise``."""
     from agents import datasets
 
-    name = datasets.dataset_name(ZOO_DATASET["policy"], noise=ZOO_DATASET["noise"])
+    name = datasets.dataset_name(ZOO_DATASET["policy"], noise=noise)
     return datasets.dataset_id(env_id, name)
+
+
+def choose_noise(env_id: str, log: Any = None) -> tuple[str, dict[str, Any]]:
+    """(dataset id, record) of ``env_id``'s shipped clones: each dataset of
+    :data:`ZOO_NOISES` (recorded where missing) cloned with seed 0 and validated; the
+    best by agents.validation.better_checkpoint within the tuner's travel bound."""
+    import tempfile
+
+    from minari.storage import get_dataset_path
+
+    import baselines
+    from agents import datasets
+    from agents.files import find
+    from agents.tuning_terms import TUNING_TRAVEL_BUDGET
+    from agents.validation import better_checkpoint, validate
+
+    ref = validate(env_id, lambda v: baselines.make(baselines.INDUSTRIAL_REFERENCE, v))
+    tried, best, chosen = {}, {}, None
+    for noise in ZOO_NOISES:
+        did = zoo_dataset_id(env_id, noise)
+        if not Path(get_dataset_path(did)).is_dir():
+            d = ZOO_DATASET
+            datasets.record(env_id, d["policy"], d["episodes"], d["seed"], noise=noise,
+                            log=log)  # fmt: skip
+        with tempfile.TemporaryDirectory() as tmp:
+            train(did, tmp, log=None)
+            (files,) = find(tmp)
+            score = validate(env_id, files.load())
+        score["travel_ratio"] = score["valve_travel"] / ref["valve_travel"]
+        tried[f"{noise:g}"] = {k: score[k] for k in ("return", "travel_ratio")}
+        if log:
+            log(f"{did}: validation return {score['return']:.1f}, travel "
+                f"{score['travel_ratio']:.2f}x")  # fmt: skip
+        if better_checkpoint(score, best, TUNING_TRAVEL_BUDGET):
+            best.update(score)
+            chosen = did
+    return chosen, {"noises": tried, "dataset": chosen, "reference_return": ref["return"]}
 
 
 def rebuild_zoo(env_ids: list[str], out: str | Path, log: Any = None) -> list[Path]:
     """The shipped clones of ``env_ids`` (module docstring); their model files."""
-    from minari.storage import get_dataset_path
-
-    from agents import datasets
-
     written = []
     for env_id in env_ids:
-        did = zoo_dataset_id(env_id)
-        if not Path(get_dataset_path(did)).is_dir():
-            d = ZOO_DATASET
-            datasets.record(env_id, d["policy"], d["episodes"], d["seed"], noise=d["noise"],
-                            log=log)  # fmt: skip
+        did, record = choose_noise(env_id, log)
         for run in range(ZOO_RUNS):
-            written.append(train(did, out, seed=run, run=run or None, log=log)[0])
+            model, meta = train(did, out, seed=run, run=run or None, log=log)
+            doc = json.loads(meta.read_text(encoding="utf-8"))
+            doc["noise_choice"] = record
+            meta.write_text(json.dumps(doc, indent=1) + "\n", encoding="utf-8")
+            written.append(model)
     return written
 
 

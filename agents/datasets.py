@@ -25,7 +25,8 @@ The env gets the noisy action and the dataset records it as the action (the tran
 are the plant's); each step's info ``policy_action`` holds what the policy chose before
 the noise, the label behaviour cloning learns from (agents/behaviour_cloning.py). So the
 data visit the states around the expert's path a clone drifts into, labelled with what the
-expert does there; the name gets ``-noisy``.
+expert does there; the name gets ``-noisy`` and the noise in percent of the stroke
+(``--noise 0.05``: ``mpc_linear-noisy5``).
 
 Reference scores: the dataset's evaluation env is the plant under a named scenario
 (``--eval-scenario``, default ``load_ramp_100_50``); ``ref_min_score`` and
@@ -90,9 +91,11 @@ def plant_name(env_id: str) -> str:
 def dataset_name(policy: str, mixed: float | None = None, noise: float | None = None) -> str:
     """The dataset name of a policy: its name with every run of characters Minari refuses
     in a name written ``-`` (``sb3:ppo`` -> ``sb3-ppo``), ``-mixed`` appended for a mixed
-    dataset and ``-noisy`` for one with injected noise."""
+    dataset and ``-noisy<percent of the stroke>`` for one with injected noise
+    (``-noisy5``)."""
     name = _NOT_NAME.sub("-", policy).strip("-") or "policy"
-    return name + ("-mixed" if mixed else "") + ("-noisy" if noise else "")
+    name += ("-mixed" if mixed else "") + (f"-noisy{100 * noise:g}" if noise else "")
+    return _NOT_NAME.sub("-", name)
 
 
 def dataset_id(env_id: str, name: str, version: int = 0) -> str:
@@ -371,7 +374,7 @@ def make_parser() -> argparse.ArgumentParser:
     ap.add_argument("--noise", type=_noise, default=None, metavar="S",
                     help="inject low-pass Gaussian noise of standard deviation S (fraction "
                     "of the stroke) into the actions (DART); the policy's own action is in "
-                    f"the info '{POLICY_ACTION}'; the name gets -noisy")  # fmt: skip
+                    f"the info '{POLICY_ACTION}'; the name gets -noisy<percent>")  # fmt: skip
     ap.add_argument("--name", default=None, help="the dataset name (default: from the policy)")
     ap.add_argument("--version", type=_int(0, 10**6, "--version"), default=0,
                     help="the dataset version (default: 0)")

@@ -21,11 +21,12 @@ pytest.importorskip("h5py", reason="Minari's HDF5 storage (minari[hdf5])")
 import gymnasium as gym  # noqa: E402
 
 import baselines  # noqa: E402
-from agents import behaviour_cloning, datasets, horizons, stats  # noqa: E402
+from agents import behaviour_cloning, datasets, horizons, stats, validation  # noqa: E402
 from agents.evaluation import run_episode  # noqa: E402
 from agents.files import find  # noqa: E402
 from agents.leaderboard import cli  # noqa: E402
 from agents.leaderboard.records import EPISODES, read_record  # noqa: E402
+from agents.tuning_terms import TUNING_TRAVEL_BUDGET  # noqa: E402
 from agents.wrappers import ControllerMemory  # noqa: E402
 
 ENV = "steamtemp/Cascade300MW-v0"
@@ -194,9 +195,11 @@ def test_a_mixed_dataset_draws_its_episodes_from_the_seed():
     assert [p["seed"] for p in plan] == list(range(7, 207))
     assert datasets.dataset_name("sb3:ppo") == "sb3-ppo"
     assert datasets.dataset_name("mpc_linear", 0.5) == "mpc_linear-mixed"
+    assert datasets.dataset_name("mpc_linear", noise=0.05) == "mpc_linear-noisy5"
+    assert datasets.dataset_name("sb3:ppo", 0.5, 0.025) == "sb3-ppo-mixed-noisy2-5"
 
 
-NOISY = "steamtemp/Cascade300MW/cascade_pi_ff-noisy-v0"
+NOISY = "steamtemp/Cascade300MW/cascade_pi_ff-noisy5-v0"
 
 
 @pytest.fixture(scope="module")
@@ -261,18 +264,28 @@ def test_the_clones_memory_is_the_agents_and_plain_has_none(noisy, tmp_path):
     files.check()
 
 
-def test_the_zoo_command_records_the_dataset_and_fits_three_runs(monkeypatch, tmp_path):
+def test_the_zoo_command_chooses_the_noise_on_validation_and_fits_three_runs(
+        monkeypatch, tmp_path):  # fmt: skip
     monkeypatch.setenv("MINARI_DATASETS_PATH", str(tmp_path / "data"))
     monkeypatch.setattr(behaviour_cloning, "ZOO_DATASET",
-                        {"policy": "cascade_pi_ff", "episodes": 1, "seed": 3, "noise": 0.05})
+                        {"policy": "cascade_pi_ff", "episodes": 1, "seed": 3})
+    monkeypatch.setattr(behaviour_cloning, "ZOO_NOISES", (0.05, 0.2))
     assert behaviour_cloning.main(["--zoo", "--env", "Cascade300MW-v0",
                                    "--out", str(tmp_path / "zoo")]) == 0  # fmt: skip
-    assert minari.load_dataset(NOISY).total_episodes == 1  # recorded, it was missing
+    for noise in ("5", "20"):  # recorded: they were missing
+        assert minari.load_dataset(f"steamtemp/Cascade300MW/cascade_pi_ff-noisy{noise}-v0")
     runs = find(tmp_path / "zoo")
     assert sorted(f.model.name for f in runs) == [
         "steamtemp__Cascade300MW-v0__bc.zip", "steamtemp__Cascade300MW-v0__bc__run1.zip",
         "steamtemp__Cascade300MW-v0__bc__run2.zip"]  # fmt: skip
-    seeds = [json.loads(f.meta[0].read_text())["training"]["seed"] for f in runs]
-    assert sorted(seeds) == [0, 1, 2]
+    metas = [json.loads(f.meta[0].read_text()) for f in runs]
+    assert sorted(m["training"]["seed"] for m in metas) == [0, 1, 2]
+    choice = metas[0]["noise_choice"]
+    assert set(choice["noises"]) == {"0.05", "0.2"}
+    # the chosen dataset is the better validated clone, as a checkpoint is chosen
+    a, b = (choice["noises"][k] for k in ("0.05", "0.2"))
+    want = "20" if validation.better_checkpoint(b, a, TUNING_TRAVEL_BUDGET) else "5"
+    assert choice["dataset"] == f"steamtemp/Cascade300MW/cascade_pi_ff-noisy{want}-v0"
+    assert all(m["dataset"] == choice["dataset"] for m in metas)
     for f in runs:
         f.check()
