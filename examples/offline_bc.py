@@ -6,7 +6,7 @@ Run from the project's root with the [offline] extra installed (docs/offline.md)
 
     python examples/offline_bc.py --data-dir minari_data --episodes 96
 
-It writes the dataset ``steamtemp/SupercriticalFSH/mpc_linear-noisy-v0`` (kept if it exists),
+It writes the dataset ``steamtemp/SupercriticalFSH/mpc_linear-noisy5-v0`` (kept if it exists),
 the agent's files in ``bc_agent/`` and the leaderboard run in ``bc_leaderboard/``.
 """
 
@@ -21,7 +21,7 @@ from agents.leaderboard import cli
 
 ENV, POLICY = "SupercriticalFSH-v0", "mpc_linear"
 NOISE = "0.05"  # of the valve stroke
-DATASET = "steamtemp/SupercriticalFSH/mpc_linear-noisy-v0"
+DATASET = "steamtemp/SupercriticalFSH/mpc_linear-noisy5-v0"
 
 
 def main() -> None:
