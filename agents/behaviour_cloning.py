@@ -97,7 +97,14 @@ def transitions(dataset: Any, memory: dict[str, Any] | None = None,
     return np.concatenate(obs), np.concatenate(act)
 
 
-def fit(obs: np.ndarray, act: np.ndarray, *, epochs: int = 30, batch: int = 256,
+def standardization(x: np.ndarray) -> dict[str, Any]:
+    """Frozen VecNormalize statistics of the observations ``x`` (agents.policy
+    ``normalize_obs``): their mean and variance, SB3's epsilon and clip."""
+    return {"mean": x.mean(axis=0).tolist(), "var": x.var(axis=0).tolist(),
+            "epsilon": EPSILON, "clip_obs": CLIP_OBS}  # fmt: skip
+
+
+def fit(obs: np.ndarray, act: np.ndarray, *, epochs: int = 10, batch: int = 256,
         lr: float = 1e-3, seed: int = 0, max_seconds: float = 120.0,
         log: Any = None) -> tuple[Any, dict[str, Any]]:  # fmt: skip
     """The MLP (a torch Sequential) fitted to ``act`` from standardized ``obs``, and the
@@ -110,8 +117,7 @@ def fit(obs: np.ndarray, act: np.ndarray, *, epochs: int = 30, batch: int = 256,
     if obs.ndim != 2 or act.ndim != 2 or len(obs) != len(act) or not len(obs):
         raise ValueError(f"observations {obs.shape} and actions {act.shape} must be 2-d arrays "
                          "of as many rows, at least one")  # fmt: skip
-    stats = {"mean": obs.mean(axis=0).tolist(), "var": obs.var(axis=0).tolist(),
-             "epsilon": EPSILON, "clip_obs": CLIP_OBS}  # fmt: skip
+    stats = standardization(obs)
     torch.set_num_threads(1)  # one core: a minute or two for 100 episodes
     torch.manual_seed(seed)
     x = torch.as_tensor(normalize_obs(obs, stats), dtype=torch.float32)
@@ -282,7 +288,7 @@ def rebuild_zoo(env_ids: list[str], out: str | Path, log: Any = None) -> list[Pa
         for run in range(ZOO_RUNS):
             model, meta = train(did, out, seed=run, run=run or None, log=log)
             doc = json.loads(meta.read_text(encoding="utf-8"))
-            doc["noise_choice"] = record
+            doc["run"], doc["noise_choice"] = run, record
             meta.write_text(json.dumps(doc, indent=1) + "\n", encoding="utf-8")
             written.append(model)
     return written

@@ -98,14 +98,6 @@ def collect(env_id: str, expert_name: str, memory: dict, seeds: list[int], beta:
     return tuple(np.concatenate(p) for p in zip(*pairs, strict=True))
 
 
-def _standardization(x: np.ndarray) -> dict[str, Any]:
-    """Frozen VecNormalize statistics of the observations ``x`` (agents.policy)."""
-    from agents.behaviour_cloning import CLIP_OBS, EPSILON
-
-    return {"mean": x.mean(axis=0).tolist(), "var": x.var(axis=0).tolist(),
-            "epsilon": EPSILON, "clip_obs": CLIP_OBS}  # fmt: skip
-
-
 def _learner(model: Any, stats: dict[str, Any] | None) -> Any:
     """The model's deterministic action of a raw memory-extended observation."""
     from agents.policy import MlpActor, normalize_obs
@@ -143,6 +135,7 @@ def train(env_id: str, algo: str, hp: dict[str, Any], seed: int, n_envs: int,
     Training episodes: seeds ``seed + i * n_envs + k`` in iteration i."""
     from stable_baselines3 import PPO
 
+    from agents.behaviour_cloning import standardization
     from agents.policy import AgentPolicy
     from agents.tuning_terms import TUNING_TRAVEL_BUDGET
     from agents.validation import better_checkpoint, validate
@@ -163,7 +156,7 @@ def train(env_id: str, algo: str, hp: dict[str, Any], seed: int, n_envs: int,
         seeds = [seed + i * n_envs + k for k in range(n_envs)]
         data.append(collect(env_id, expert, memory, seeds, beta, _learner(model, stats), rng,
                             filter_s))  # fmt: skip
-        stats = stats or _standardization(data[0][0])
+        stats = stats or standardization(data[0][0])
         mse = _fit(net, data, stats, settings, seed + i)
         score = validate(env_id, AgentPolicy(model, native, memory=memory, obs_norm=stats,
                                              action_filter_s=filter_s))  # fmt: skip
@@ -186,7 +179,8 @@ def train(env_id: str, algo: str, hp: dict[str, Any], seed: int, n_envs: int,
 
 def frozen_normalization(venv: Any, stats: dict[str, Any], gamma: float) -> Any:
     """SB3's VecNormalize over ``venv`` with the observations standardized by the frozen
-    ``stats`` (:func:`_standardization`'s) and the rewards by their running return scale."""
+    ``stats`` (agents.behaviour_cloning.standardization's) and the rewards by their running
+    return scale."""
     from stable_baselines3.common.running_mean_std import RunningMeanStd
     from stable_baselines3.common.vec_env import VecNormalize
 
