@@ -57,8 +57,8 @@ import baselines
 import steamtemp_gym
 from agents import horizons, specs
 from agents.evaluation import run_episode
+from agents.files import git_revision
 from agents.leaderboard import references, summary
-from agents.training import git_revision
 from baselines.cascade_pi import CascadePI
 from steamtemp_gym import envs as envs_
 from steamtemp_gym import scenarios

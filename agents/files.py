@@ -35,6 +35,7 @@ import hashlib
 import json
 import pickle
 import re
+import subprocess
 import zipfile
 from dataclasses import dataclass
 from pathlib import Path
@@ -136,6 +137,17 @@ class AgentFiles:
                            residual_base=base, action_filter_s=filter_s,
                            tied_valves=tied, action_repeat=repeat)  # fmt: skip
 
+
+
+def git_revision() -> str:
+    """The git commit of this checkout (recorded in a trained agent's or a dataset's
+    metadata), "unknown" outside a git checkout."""
+    try:
+        done = subprocess.run(["git", "rev-parse", "HEAD"], cwd=Path(__file__).parent,
+                              capture_output=True, text=True, check=True)  # fmt: skip
+        return done.stdout.strip()
+    except (OSError, subprocess.CalledProcessError):
+        return "unknown"
 
 @functools.lru_cache(maxsize=64)
 def _env(env_id: str) -> Any:

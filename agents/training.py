@@ -6,7 +6,6 @@ docstring of agents/train.py).
 from __future__ import annotations
 
 import json
-import subprocess
 import sys
 import time
 from collections.abc import Callable
@@ -16,7 +15,7 @@ from typing import Any
 import numpy as np
 
 import steamtemp_gym
-from agents.files import steamtemp_paths, stem
+from agents.files import git_revision, steamtemp_paths, stem
 from agents.train_config import (
     EXPERTS,
     FINE_TUNED,
@@ -39,15 +38,6 @@ def _schedule(value: Any):
         v0 = float(value[4:])
         return lambda progress_remaining: progress_remaining * v0
     return value
-
-
-def git_revision() -> str:
-    try:
-        done = subprocess.run(["git", "rev-parse", "HEAD"], cwd=Path(__file__).parent,
-                              capture_output=True, text=True, check=True)  # fmt: skip
-        return done.stdout.strip()
-    except (OSError, subprocess.CalledProcessError):
-        return "unknown"
 
 
 def _shown_path(path: Path) -> str:
