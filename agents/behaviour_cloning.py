@@ -10,14 +10,15 @@ trained agent (agents/policy.py: the actor in float64 NumPy). docs/offline.md.
 
 What the clone sees and learns, by default as the imitation agents (agents/imitation.py):
 
-- **observation**: the env's, with the controller memory :data:`MEMORY` (every observed
-  signal over the plant's dead time and lag, the load and setpoint rates, the error
-  integral) computed along each recorded episode as the agent computes it when it acts,
-  standardized with the data's mean and variance (frozen VecNormalize statistics);
+- **observation**: the env's, with the controller memory of the :data:`IMITATION` entry
+  (every observed signal over the plant's dead time and lag, the load and setpoint rates,
+  the error integral) computed along each recorded episode as the agent computes it when
+  it acts (the episodes of one length side by side), standardized with the data's mean
+  and variance (frozen VecNormalize statistics);
 - **label**: the action the dataset's policy chose: the info ``policy_action`` where the
   dataset injected noise (agents/datasets.py ``--noise``), else the recorded action;
-- **output**: a valve position through the first-order filter of the imitation agents
-  (time constant ``agents.horizons.action_filter``, 9-14 s), so that the clone does not
+- **output**: a valve position through the first-order filter of the same entry (time
+  constant ``agents.horizons.action_filter``, 9-14 s), so that the clone does not
   stroke the valve on every measurement's noise.
 
 ``--plain`` clones the env's observation alone into the raw action (no memory, no filter).
@@ -48,10 +49,9 @@ from steamtemp_gym import envs as envs_
 
 ALGO = "bc"
 HIDDEN = (128, 128)
-#: The controller memory of the clone: the imitation agents' (agents/hyperparams/
-#: ppo_imitation_mpc.yml), its stride read from the plant.
-MEMORY = {"integral_time_s": 60.0, "integral_limit_K": 40.0, "history": 8,
-          "history_stride": "plant", "history_signals": "observation", "rates": True}  # fmt: skip
+#: The entry whose controller memory and output filter the clone takes: the imitation
+#: agents' (agents/hyperparams/ppo_imitation_mpc.yml).
+IMITATION = "ppo_imitation_mpc"
 #: The dataset of the shipped clones (agents/datasets.py ``record``'s arguments): 96 episodes
 #: of mpc_linear on the training distribution with noise of 5 % of the stroke injected.
 ZOO_DATASET = {"policy": "mpc_linear", "episodes": 96, "seed": 0}
@@ -63,13 +63,23 @@ ZOO_RUNS = 3
 EPSILON, CLIP_OBS = 1e-8, 10.0
 
 
-def memory_of(env_id: str) -> dict[str, Any]:
-    """:data:`MEMORY` with its stride for ``env_id`` (agents.horizons.from_plant)."""
+def _imitation_entry(env_id: str) -> dict[str, Any]:
+    """The :data:`IMITATION` entry of ``env_id`` with its plant rules applied."""
     from agents.horizons import from_plant
-    from agents.memory import MEMORY_WRAPPER
+    from agents.train_config import HYPERPARAMS, read_hyperparams
 
-    return from_plant(env_id, {"env_wrapper": {MEMORY_WRAPPER: MEMORY}})["env_wrapper"][
-        MEMORY_WRAPPER]
+    path = HYPERPARAMS / f"{IMITATION}.yml"
+    return from_plant(env_id, read_hyperparams(path, env_id, IMITATION))
+
+
+def memory_of(env_id: str) -> dict[str, Any]:
+    """The clone's controller-memory options on ``env_id``: the imitation agents'."""
+    return _imitation_entry(env_id)["env_wrapper"]
+
+
+def filter_of(env_id: str) -> float:
+    """The clone's output filter time constant (s) on ``env_id``: the imitation agents'."""
+    return _imitation_entry(env_id)["action_filter_s"]
 
 
 def transitions(dataset: Any, memory: dict[str, Any] | None = None,
@@ -82,18 +92,22 @@ def transitions(dataset: Any, memory: dict[str, Any] | None = None,
     from agents.memory import MemoryConfig
     from agents.wrappers import MemoryState
 
-    state = MemoryState(env, MemoryConfig.from_kwargs(memory)) if memory is not None else None
     obs, act = [], []
     for ep in dataset.iterate_episodes():
-        o = np.asarray(ep.observations, dtype=np.float64)[:-1]
-        if state is not None:
-            o = np.concatenate([state(o[i : i + 1], np.array([i == 0])) for i in range(len(o))])
         infos = ep.infos if isinstance(ep.infos, dict) else {}
         label = infos[POLICY_ACTION][1:] if POLICY_ACTION in infos else ep.actions
-        obs.append(o)
+        obs.append(np.asarray(ep.observations, dtype=np.float64)[:-1])
         act.append(np.asarray(label, dtype=np.float64).reshape(len(ep.actions), -1))
     if not obs:
         raise ValueError(f"dataset {dataset.spec.dataset_id} holds no episode")
+    if memory is not None:  # episodes of one length side by side, one row each
+        config = MemoryConfig.from_kwargs(memory)
+        for n in {len(o) for o in obs}:
+            same = [i for i, o in enumerate(obs) if len(o) == n]
+            state, batch = MemoryState(env, config), np.stack([obs[i] for i in same])
+            x = np.stack([state(batch[:, k], np.full(len(same), k == 0)) for k in range(n)], 1)
+            for j, i in enumerate(same):
+                obs[i] = x[j]
     return np.concatenate(obs), np.concatenate(act)
 
 
@@ -218,12 +232,10 @@ def train(dataset_id: str, out: str | Path, *, plain: bool = False, epochs: int 
     import gymnasium as gym
     import minari
 
-    from agents.horizons import action_filter
-
     dataset = minari.load_dataset(dataset_id)
     env_id = dataset.spec.env_spec.id
     memory = None if plain else memory_of(env_id)
-    filter_s = None if plain else round(action_filter(env_id), 5)
+    filter_s = None if plain else filter_of(env_id)
     t0 = time.perf_counter()
     obs, act = transitions(dataset, memory, gym.make(env_id))
     t1 = time.perf_counter()
@@ -243,12 +255,12 @@ def zoo_dataset_id(env_id: str, noise: float) -> str:
     return datasets.dataset_id(env_id, name)
 
 
-def choose_noise(env_id: str, log: Any = None) -> tuple[str, dict[str, Any]]:
-    """(dataset id, record) of ``env_id``'s shipped clones: each dataset of
-    :data:`ZOO_NOISES` (recorded where missing) cloned with seed 0 and validated; the
-    best by agents.validation.better_checkpoint within the tuner's travel bound."""
-    import tempfile
-
+def choose_noise(env_id: str, staging: Path,
+                 log: Any = None) -> tuple[str, dict[str, Any], Path]:  # fmt: skip
+    """(dataset id, record, folder of its clone) of ``env_id``'s shipped clones: each
+    dataset of :data:`ZOO_NOISES` (recorded where missing) cloned with seed 0 into a folder
+    of ``staging`` and validated; the best by agents.validation.better_checkpoint within
+    the tuner's travel bound."""
     from minari.storage import get_dataset_path
 
     import baselines
@@ -258,17 +270,17 @@ def choose_noise(env_id: str, log: Any = None) -> tuple[str, dict[str, Any]]:
     from agents.validation import better_checkpoint, validate
 
     ref = validate(env_id, lambda v: baselines.make(baselines.INDUSTRIAL_REFERENCE, v))
-    tried, best, chosen = {}, {}, None
+    tried, best, chosen, folder = {}, {}, None, None
     for noise in ZOO_NOISES:
         did = zoo_dataset_id(env_id, noise)
         if not Path(get_dataset_path(did)).is_dir():
             d = ZOO_DATASET
             datasets.record(env_id, d["policy"], d["episodes"], d["seed"], noise=noise,
                             log=log)  # fmt: skip
-        with tempfile.TemporaryDirectory() as tmp:
-            train(did, tmp, log=None)
-            (files,) = find(tmp)
-            score = validate(env_id, files.load())
+        here = staging / f"{noise:g}"
+        train(did, here, log=None)
+        (files,) = find(here)
+        score = validate(env_id, files.load())
         score["travel_ratio"] = score["valve_travel"] / ref["valve_travel"]
         tried[f"{noise:g}"] = {k: score[k] for k in ("return", "travel_ratio")}
         if log:
@@ -276,21 +288,34 @@ def choose_noise(env_id: str, log: Any = None) -> tuple[str, dict[str, Any]]:
                 f"{score['travel_ratio']:.2f}x")  # fmt: skip
         if better_checkpoint(score, best, TUNING_TRAVEL_BUDGET):
             best.update(score)
-            chosen = did
-    return chosen, {"noises": tried, "dataset": chosen, "reference_return": ref["return"]}
+            chosen, folder = did, here
+    record = {"noises": tried, "dataset": chosen, "reference_return": ref["return"]}
+    return chosen, record, folder
 
 
 def rebuild_zoo(env_ids: list[str], out: str | Path, log: Any = None) -> list[Path]:
-    """The shipped clones of ``env_ids`` (module docstring); their model files."""
+    """The shipped clones of ``env_ids`` (module docstring); their model files. Run 0 is
+    the clone the noise was chosen with; runs 1 and on are fitted from its dataset."""
+    import shutil
+    import tempfile
+
     written = []
     for env_id in env_ids:
-        did, record = choose_noise(env_id, log)
-        for run in range(ZOO_RUNS):
-            model, meta = train(did, out, seed=run, run=run or None, log=log)
-            doc = json.loads(meta.read_text(encoding="utf-8"))
-            doc["run"], doc["noise_choice"] = run, record
-            meta.write_text(json.dumps(doc, indent=1) + "\n", encoding="utf-8")
-            written.append(model)
+        with tempfile.TemporaryDirectory() as tmp:
+            did, record, first = choose_noise(env_id, Path(tmp), log)
+            for run in range(ZOO_RUNS):
+                model, meta = steamtemp_paths(out, env_id, ALGO, run or None)
+                if run == 0:
+                    model.parent.mkdir(parents=True, exist_ok=True)
+                    for src, dst in zip(steamtemp_paths(first, env_id, ALGO), (model, meta),
+                                        strict=True):  # fmt: skip
+                        shutil.copyfile(src, dst)
+                else:
+                    train(did, out, seed=run, run=run, log=log)
+                doc = json.loads(meta.read_text(encoding="utf-8"))
+                doc["run"], doc["noise_choice"] = run, record
+                meta.write_text(json.dumps(doc, indent=1) + "\n", encoding="utf-8")
+                written.append(model)
     return written
 
 

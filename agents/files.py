@@ -138,7 +138,6 @@ class AgentFiles:
                            tied_valves=tied, action_repeat=repeat)  # fmt: skip
 
 
-
 def git_revision() -> str:
     """The git commit of this checkout (recorded in a trained agent's or a dataset's
     metadata), "unknown" outside a git checkout."""
@@ -148,6 +147,7 @@ def git_revision() -> str:
         return done.stdout.strip()
     except (OSError, subprocess.CalledProcessError):
         return "unknown"
+
 
 @functools.lru_cache(maxsize=64)
 def _env(env_id: str) -> Any:
