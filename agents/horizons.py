@@ -18,6 +18,8 @@ The rules (docs/agents.md, "Horizons from the plant"):
   (the advantage of a move sees its effect begin), lambda at most :data:`GAE_LAMBDA_MAX`;
 - history: the controller memory's samples span the time scale;
 - output filter: a time constant of :data:`FILTER_FACTOR` times the time scale;
+- exploration noise of off-policy agents (``noise_type: lowpass``, agents/exploration.py):
+  a time constant of :data:`EXPLORATION_FACTOR` times the time scale;
 - action repeat (agents/repeat.py): the agent decides every :data:`REPEAT_FACTOR` of the
   dead time (at least every interval), the usual sampling of a dead-time process (four to
   ten samples per dead time); with an action repeat of k intervals the discount and the
@@ -40,6 +42,11 @@ GAE_LAMBDA_MAX = 0.995
 #: of the time scale: 9-14 s, a lag the loop barely sees that cuts a step-to-step jitter's
 #: valve travel to its 7-33 % (the interval over the filter's time constant).
 FILTER_FACTOR = 0.04
+#: The time constant of off-policy agents' low-pass exploration noise (``noise_tau_s:
+#: plant``) as a multiple of the time scale: 181-344 s, so that a noise of 5 % of the
+#: stroke moves the valves about twice as much as the industrial reference does (white
+#: noise of the same size: 20-70 times).
+EXPLORATION_FACTOR = 1.0
 #: The decision interval (``action_repeat``, agents/repeat.py) as a fraction of the dead
 #: time: FSH, MIMO 2 intervals, Benson 1, Drum 3, Cascade300MW 11.
 REPEAT_FACTOR = 0.1
@@ -89,6 +96,12 @@ def action_filter(env_id: str) -> float:
     return FILTER_FACTOR * sum(time_scale(env_id))
 
 
+def exploration_time_constant(env_id: str) -> float:
+    """The low-pass exploration noise's time constant in s: :data:`EXPLORATION_FACTOR`
+    times the time scale."""
+    return EXPLORATION_FACTOR * sum(time_scale(env_id))
+
+
 def history_stride(env_id: str, history: int) -> int:
     """Control steps between the memory's ``history`` samples so that they span the time
     scale (at least 1)."""
@@ -104,10 +117,11 @@ PLANT = "plant"
 
 def from_plant(env_id: str, hp: dict) -> dict:
     """``hp`` (an entry of an RL Zoo hyperparameter file) with every ``plant`` value of
-    ``action_repeat``, ``gamma``, ``gae_lambda``, ``action_filter_s`` and the controller
-    memory's ``history_stride`` replaced by the rule's (:func:`action_repeat`,
-    :func:`discount` and :func:`gae_lambda` per decision, :func:`action_filter`,
-    :func:`history_stride`); the entry states the rule instead of numbers."""
+    ``action_repeat``, ``gamma``, ``gae_lambda``, ``action_filter_s``, ``noise_tau_s`` and
+    the controller memory's ``history_stride`` replaced by the rule's
+    (:func:`action_repeat`, :func:`discount` and :func:`gae_lambda` per decision,
+    :func:`action_filter`, :func:`exploration_time_constant`, :func:`history_stride`); the
+    entry states the rule instead of numbers."""
     from agents.repeat import check_repeat
 
     out = dict(hp)
@@ -115,7 +129,8 @@ def from_plant(env_id: str, hp: dict) -> dict:
         out["action_repeat"] = action_repeat(env_id)
     k = check_repeat(out.get("action_repeat", 1))
     rules = {"gamma": lambda e: discount(e, k), "gae_lambda": lambda e: gae_lambda(e, k),
-             "action_filter_s": action_filter}  # fmt: skip
+             "action_filter_s": action_filter,
+             "noise_tau_s": exploration_time_constant}  # fmt: skip
     for key, rule in rules.items():
         if out.get(key) == PLANT:
             out[key] = round(rule(env_id), 5)
@@ -136,5 +151,5 @@ def _memory_from_plant(env_id: str, item: object) -> object:
     return {name: {**kwargs, "history_stride": history_stride(env_id, kwargs.get("history", 4))}}
 
 
-__all__ = ["PLANT", "action_filter", "action_repeat", "discount", "from_plant", "gae_lambda",
-           "history_stride", "time_scale"]  # fmt: skip
+__all__ = ["PLANT", "action_filter", "action_repeat", "discount", "exploration_time_constant",
+           "from_plant", "gae_lambda", "history_stride", "time_scale"]  # fmt: skip

@@ -5,6 +5,7 @@ checked before anything trains (agents/train.py's module docstring gives the key
 from __future__ import annotations
 
 import ast
+import math
 from pathlib import Path
 from typing import Any
 
@@ -75,7 +76,7 @@ HYPERPARAMS = Path(__file__).with_name("hyperparams")
 #: one core, the project's budget per training run.
 MAX_RUN_MINUTES = 20
 SPECIAL = ("n_timesteps", "n_envs", "policy", "normalize", "env_wrapper", "policy_kwargs",
-           "noise_type", "noise_std", "residual_scale", "max_move", "train_reward",
+           "noise_type", "noise_std", "noise_tau_s", "residual_scale", "max_move", "train_reward",
            "plant_randomization", "travel_price", "residual_base", "action_filter_s",
            "critic_warmup_steps", "tied_valves", "action_repeat", "max_minutes",
            *IMITATION_KEYS)  # fmt: skip
@@ -257,6 +258,15 @@ def read_hyperparams(path: Path, env_id: str, algo: str) -> dict[str, Any]:
         hp["env_wrapper"] = memory_options(hp["env_wrapper"]) if "env_wrapper" in hp else None
     except ValueError as exc:
         raise ConfigError(str(exc)) from None
-    if hp.get("noise_type") not in (None, "normal"):
-        raise ConfigError(f"noise_type: only 'normal' is supported, got {hp['noise_type']!r}")
+    if hp.get("noise_type") not in (None, "normal", "lowpass"):
+        raise ConfigError(f"noise_type: 'normal' or 'lowpass', got {hp['noise_type']!r}")
+    tau = hp.get("noise_tau_s")
+    if (hp.get("noise_type") == "lowpass") != (tau is not None):
+        raise ConfigError("noise_tau_s (seconds, or plant) goes with noise_type: lowpass, "
+                          f"and only with it; got noise_type {hp.get('noise_type')!r}, "
+                          f"noise_tau_s {tau!r}")  # fmt: skip
+    if tau is not None and not (isinstance(tau, (int, float)) and not isinstance(tau, bool)
+                                and math.isfinite(tau) and tau > 0):  # fmt: skip
+        raise ConfigError(f"noise_tau_s must be a positive number of seconds or plant, "
+                          f"got {tau!r}")  # fmt: skip
     return hp

@@ -82,17 +82,24 @@ def _checked_input(env_id: str, algo: str, hyperparams: Path | None, timesteps: 
 
 
 def _sb3_model(cls: Any, hp: dict[str, Any], venv: Any, seed: int,
-               tensorboard: str | None) -> Any:  # fmt: skip
+               tensorboard: str | None, decision_s: float | None = None) -> Any:  # fmt: skip
     """The SB3 model of ``cls`` on ``venv``: the constructor's hyperparameters, the learning
-    rate schedule and, where configured, SAC/TD3's Gaussian action noise."""
+    rate schedule and, where configured, SAC/TD3's Gaussian action noise: white
+    (``normal``) or low-pass with time constant ``noise_tau_s`` (``lowpass``,
+    agents/exploration.py; ``decision_s``: the seconds between decisions)."""
     from stable_baselines3.common.noise import NormalActionNoise
+
+    from agents.exploration import LowPassActionNoise
 
     kwargs = {k: v for k, v in hp.items() if k not in SPECIAL}
     kwargs["learning_rate"] = _schedule(kwargs.get("learning_rate", 3e-4))
+    n_u = venv.action_space.shape[0]
+    sigma = hp.get("noise_std", 0.1) * np.ones(n_u)
     if hp.get("noise_type") == "normal":
-        n_u = venv.action_space.shape[0]
-        kwargs["action_noise"] = NormalActionNoise(np.zeros(n_u), hp.get("noise_std", 0.1)
-                                                   * np.ones(n_u))  # fmt: skip
+        kwargs["action_noise"] = NormalActionNoise(np.zeros(n_u), sigma)
+    elif hp.get("noise_type") == "lowpass":
+        kwargs["action_noise"] = LowPassActionNoise(
+            sigma, float(np.exp(-decision_s / hp["noise_tau_s"])))
     model = cls(hp.get("policy", "MlpPolicy"), venv, seed=seed, device="cpu", verbose=0,
                 policy_kwargs=hp["policy_kwargs"] or None, tensorboard_log=tensorboard,
                 **kwargs)  # fmt: skip
@@ -364,7 +371,8 @@ def train(env_id: str, algo: str, hyperparams: Path | None = None, timesteps: in
     if algo in EXPERTS:
         return _imitation(env_id, algo, cls, path, hp, seed, run, n_envs, total, out,
                           reference, venv, quiet, max_minutes, tensorboard)  # fmt: skip
-    model = _sb3_model(cls, hp, venv, seed, tensorboard)
+    decision_s = steamtemp_gym.plants.make(env_id).dt_s * hp.get("action_repeat", 1)
+    model = _sb3_model(cls, hp, venv, seed, tensorboard, decision_s)
     if price is not None and getattr(model, "replay_buffer", None) is not None:
         from agents.travel_price import price_replay
 
