@@ -57,6 +57,7 @@ import baselines
 import steamtemp_gym
 from agents import horizons, specs
 from agents.evaluation import run_episode
+from agents.exploration import low_pass
 from agents.files import git_revision
 from agents.leaderboard import references, summary
 from baselines.cascade_pi import CascadePI
@@ -193,7 +194,7 @@ class NoisyPolicy:
         if self.noise is None or np.any(episode_start):  # from the stationary distribution
             self.noise = white
         else:
-            self.noise = self.a * self.noise + np.sqrt(1.0 - self.a**2) * white
+            self.noise = low_pass(self.noise, self.a, white)
         noisy = np.clip(action + self.noise, -1.0, 1.0)
         self.label.chosen = action.copy()
         if hasattr(self.policy, "applied"):  # its estimator follows the command applied

@@ -24,8 +24,9 @@ from stable_baselines3.common.noise import ActionNoise
 
 
 def low_pass(x: np.ndarray, a: float, white: np.ndarray) -> np.ndarray:
-    """One step of the unit-variance AR(1) recursion from ``x`` with innovation ``white``."""
-    return a * x + np.sqrt(1.0 - a * a) * white
+    """One step of the AR(1) recursion from ``x`` with innovation ``white`` (of the
+    stationary spread; also the noise of agents/datasets.py's ``--noise``)."""
+    return a * x + np.sqrt(1.0 - a**2) * white
 
 
 class LowPassActionNoise(ActionNoise):
@@ -47,10 +48,12 @@ class LowPassActionNoise(ActionNoise):
         self.reset()
 
     def reset(self) -> None:
-        self.x = np.random.normal(size=self.sigma.shape)  # the stationary spread
+        # SB3's noises draw from NumPy's global generator, which its seed sets
+        self.x = np.random.normal(size=self.sigma.shape)  # noqa: NPY002 - the stationary spread
 
     def __call__(self) -> np.ndarray:
-        self.x = low_pass(self.x, self.a, np.random.normal(size=self.sigma.shape))
+        white = np.random.normal(size=self.sigma.shape)  # noqa: NPY002 - as SB3's noises
+        self.x = low_pass(self.x, self.a, white)
         return self.sigma * self.x
 
     def __repr__(self) -> str:

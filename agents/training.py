@@ -126,24 +126,30 @@ def zero_output(model: Any) -> None:
             layer.bias.zero_()
 
 
+def scored_policy(model: Any, venv: Any, native: Any, hp: dict[str, Any]) -> Any:
+    """The policy the leaderboard would score of ``model`` as it is now: its deterministic
+    action through the entry's memory, normalization (frozen at the moment), moves,
+    filter, ties and action repeat (agents/policy.py)."""
+    from agents.policy import AgentPolicy
+
+    return AgentPolicy(model, native, memory=hp["env_wrapper"], obs_norm=_obs_stats(venv),
+                       residual_scale=hp.get("residual_scale"),
+                       residual_base=hp.get("residual_base"), max_move=hp.get("max_move"),
+                       action_filter_s=hp.get("action_filter_s"),
+                       tied_valves=hp.get("tied_valves"),
+                       action_repeat=hp.get("action_repeat"))  # fmt: skip
+
+
 def _checkpointing(model: Any, venv: Any, native: Any, hp: dict[str, Any], env_id: str,
                    reference: dict[str, float], total: int, curve: list, best: dict,
                    save_to: Path, offset: int = 0) -> Callable[[int, float], None]:  # fmt: skip
     """``evaluate(steps, wall)``: validate the model as it is, add the result to ``curve``,
     and where it beats ``best`` (:func:`better_checkpoint`) keep it there and save the model
     to ``save_to``; ``offset``: what the run trained on before (added to ``steps``)."""
-    from agents.policy import AgentPolicy
     from agents.tuning_terms import TUNING_TRAVEL_BUDGET
 
     def evaluate(steps: int, wall: float) -> None:
-        policy = AgentPolicy(model, native, memory=hp["env_wrapper"], obs_norm=_obs_stats(venv),
-                             residual_scale=hp.get("residual_scale"),
-                             residual_base=hp.get("residual_base"),
-                             max_move=hp.get("max_move"),
-                             action_filter_s=hp.get("action_filter_s"),
-                             tied_valves=hp.get("tied_valves"),
-                             action_repeat=hp.get("action_repeat"))  # fmt: skip
-        score = validate(env_id, policy)
+        score = validate(env_id, scored_policy(model, venv, native, hp))
         score["travel_ratio"] = score["valve_travel"] / reference["valve_travel"]
         curve.append({"timesteps": offset + steps, "fraction": steps / total, "wall_s": wall,
                       **score})  # fmt: skip
@@ -393,7 +399,7 @@ def train(env_id: str, algo: str, hyperparams: Path | None = None, timesteps: in
     callbacks = [_progress(evaluate, curve, total, t0, name, quiet, max_minutes)]
     if price is not None:
         from agents.moves import filter_gain, tie_map
-        from agents.travel_price import price_callback
+        from agents.travel_price import price_callback, travel_probe
 
         filter_s, repeat = hp.get("action_filter_s"), hp.get("action_repeat") or 1
         plant = native.unwrapped.plant
@@ -401,8 +407,13 @@ def train(env_id: str, algo: str, hyperparams: Path | None = None, timesteps: in
         alpha = (None if filter_s is None
                  else 1.0 - (1.0 - filter_gain(plant.dt_s, filter_s)) ** repeat)  # fmt: skip
         expand = tie_map(tuple(plant.valves), hp.get("tied_valves"))
+        probe = None
+        if getattr(model, "replay_buffer", None) is not None:  # off-policy: in closed loop
+            def probe(k: int) -> float:
+                return travel_probe(env_id, scored_policy(model, venv, native, hp), k,
+                                    reference["travel_per_s"])  # fmt: skip
         callbacks.append(price_callback(price, prices, hp.get("max_move"), alpha, expand,
-                                        repeat))  # fmt: skip
+                                        repeat, probe))  # fmt: skip
     if hp.get("critic_warmup_steps"):
         callbacks.append(critic_warmup(hp["critic_warmup_steps"]))
     model.learn(total_timesteps=total, callback=callbacks, progress_bar=False)

@@ -18,8 +18,14 @@ policy acts deterministically, and the rollout's own travel is mostly exploratio
 (measured on the FSH: 8x the reference's before training against 0.2-1.8x for the
 deterministic policy; a price on it rose to its bound and the agent froze the valve).
 Off-policy algorithms (SAC, TD3) collect a step at a time: their price moves every
-:data:`OFF_POLICY_EVERY` transitions, on the deterministic action along the states their
-replay buffer took in since. Their replay buffer holds the scored reward and charges the
+:data:`OFF_POLICY_EVERY` transitions, on the travel of the scored policy in closed loop
+(:func:`travel_probe`: :data:`PROBE_EPISODES` episodes of the ``random`` scenario, new
+seeds each time). Read along the states of their exploring rollouts instead, as for PPO,
+it was 10 to 20 times what the same policy moved in closed loop on the four boilers
+(TD3 with position actions: 2.7-4 times the reference's along the replay buffer's
+states against 0.17-0.27 times on the validation episodes, SupercriticalFSH and
+DrumBoilerSH): an actor that acts on the valve openings it observes follows the noise
+that moved them. Their replay buffer holds the scored reward and charges the
 price as it is when a batch is sampled (:class:`PricedReplayBuffer`): a charge made at
 collection would stay in the buffer long after the price moved, so that the critic would
 learn a mixture of old prices and the price would overshoot (measured with TD3 on
@@ -124,11 +130,9 @@ class VecTravelPrice(VecEnvWrapper):
 
 
 def policy_travel(model: Any, max_move: float | None, alpha: float | None = None,
-                  expand: np.ndarray | None = None,
-                  recent: int | None = None) -> float | None:  # fmt: skip
-    """Valve travel per decision of ``model``'s deterministic action along the states it
-    last collected (None if it holds none): PPO's rollout buffer, or the last ``recent``
-    steps of an off-policy algorithm's replay buffer (SAC's, TD3's). Position actions move
+                  expand: np.ndarray | None = None) -> float | None:  # fmt: skip
+    """Valve travel per decision of ``model``'s deterministic action along the states of its
+    last rollout (PPO's rollout buffer; None without one). Position actions move
     the valves by half the change of the action (actions in [-1, 1]), incremental ones by
     ``max_move`` times the action, filtered ones (``alpha``: the output filter's gain per
     decision, agents/moves.py ``LowPassState``) by the change of the filtered position,
@@ -137,10 +141,10 @@ def policy_travel(model: Any, max_move: float | None, alpha: float | None = None
     (agents/moves.py ``tie_map``), None for one action per valve."""
     import torch
 
-    got = _collected(model, recent)
-    if got is None:
+    buf = getattr(model, "rollout_buffer", None)
+    if buf is None or not getattr(buf, "full", False):
         return None
-    obs, starts = got  # (steps, rows, n) normalized observations acted on; (steps, rows)
+    obs, starts = buf.observations, buf.episode_starts  # (steps, rows, n); (steps, rows)
     with torch.no_grad():
         x = torch.as_tensor(obs.reshape(-1, obs.shape[-1]), dtype=torch.float32,
                             device=model.device)  # fmt: skip
@@ -160,26 +164,6 @@ def policy_travel(model: Any, max_move: float | None, alpha: float | None = None
     move = 0.5 * np.abs(np.diff(a, axis=0)).sum(axis=-1)  # (steps - 1, rows)
     counts = starts[1:] == 0  # a move into a new episode is not a move
     return float(move[counts].mean()) if counts.any() else 0.0
-
-
-def _collected(model: Any, recent: int | None) -> tuple[np.ndarray, np.ndarray] | None:
-    """(normalized observations (steps, rows, n), episode starts (steps, rows)) of the states
-    ``model`` last collected, oldest first (:func:`policy_travel`); None without them."""
-    buf = getattr(model, "rollout_buffer", None)
-    if buf is not None:
-        return (buf.observations, buf.episode_starts) if getattr(buf, "full", False) else None
-    buf = getattr(model, "replay_buffer", None)
-    held = 0 if buf is None else (buf.buffer_size if buf.full else buf.pos)
-    if recent is None or recent < 2 or held < recent:
-        return None
-    idx = (buf.pos - recent + np.arange(recent)) % buf.buffer_size
-    obs = buf.observations[idx]  # stored before the normalization, which sampling applies
-    norm = model.get_vec_normalize_env()
-    if norm is not None:
-        obs = norm.normalize_obs(obs)
-    starts = np.ones(buf.dones[idx].shape, dtype=np.float32)
-    starts[1:] = buf.dones[idx][:-1]  # the step after an episode's last starts the next
-    return np.asarray(obs), starts
 
 
 class PricedReplayBuffer(ReplayBuffer):
@@ -233,42 +217,62 @@ def price_replay(model: Any, price: VecTravelPrice) -> None:
 #: Transitions between two price updates of an off-policy algorithm, whose rollouts are a
 #: step or a few: a PPO rollout's (512 steps of 8 envs).
 OFF_POLICY_EVERY = 4096
+#: Episodes of each closed-loop travel probe (:func:`travel_probe`), and the first seed of
+#: the probes (probe k runs seeds PROBE_SEED + PROBE_EPISODES k + i, apart from the
+#: validation's and the training's).
+PROBE_EPISODES = 4
+PROBE_SEED = 2_000_000
+
+
+def travel_probe(env_id: str, policy: Any, k: int, reference_rate: float) -> float:
+    """The travel per second of ``policy`` (the scored one) over ``reference_rate`` (the
+    reference's), in closed loop on :data:`PROBE_EPISODES` episodes of the ``random``
+    scenario, the k-th probe's seeds (a measurement cost of about 0.1 CPU s per episode
+    and 4,096 transitions)."""
+    from agents.validation import validate
+
+    seed = PROBE_SEED + PROBE_EPISODES * k
+    return validate(env_id, policy, n=PROBE_EPISODES, seed=seed)["travel_per_s"] / reference_rate
 
 
 def price_callback(wrapper: VecTravelPrice, log: list, max_move: float | None = None,
                    alpha: float | None = None, expand: np.ndarray | None = None,
-                   repeat: int = 1) -> Any:  # fmt: skip
+                   repeat: int = 1, probe: Any = None) -> Any:  # fmt: skip
     """SB3 callback: at each rollout's end, :meth:`VecTravelPrice.update` on the travel of
     the policy's deterministic action (:func:`policy_travel`, per decision of ``repeat``
     control intervals, agents/repeat.py; ``alpha``: the filter's gain per decision; the
     rollout's own travel where the algorithm keeps no rollout buffer), appending
-    ``(timesteps, ratio of the policy, ratio of the rollout, price)`` to ``log``. An
-    off-policy algorithm's price moves every :data:`OFF_POLICY_EVERY` transitions, on the
-    deterministic action along the states collected since."""
+    ``(timesteps, ratio of the policy, ratio of the rollout, price)`` to ``log``. With
+    ``probe`` (an off-policy algorithm's: update k -> the scored policy's travel ratio in
+    closed loop, :func:`travel_probe`) the price moves every :data:`OFF_POLICY_EVERY`
+    transitions, on that."""
     from stable_baselines3.common.callbacks import BaseCallback
 
     class Price(BaseCallback):
         last = 0
 
-        def _on_step(self) -> bool:
-            return True
-
         def _on_rollout_end(self) -> None:
-            recent = None
-            if getattr(self.model, "rollout_buffer", None) is None:
+            if probe is not None:
                 if self.num_timesteps - self.last < OFF_POLICY_EVERY:
                     return
-                recent = (self.num_timesteps - self.last) // self.training_env.num_envs
                 self.last = self.num_timesteps
+                rollout = wrapper.ratio()
+                r, p = wrapper.update(probe(len(log)))
+                log.append((self.num_timesteps, r, rollout, p))
+                return
             rollout = wrapper.ratio()
-            per_step = policy_travel(self.model, max_move, alpha, expand, recent)
+            per_step = policy_travel(self.model, max_move, alpha, expand)
             own = (rollout if per_step is None
                    else per_step / (wrapper.dt * repeat) / wrapper.reference_rate)  # fmt: skip
             r, p = wrapper.update(own)
             log.append((self.num_timesteps, r, rollout, p))
 
+        def _on_step(self) -> bool:
+            return True
+
     return Price()
 
 
-__all__ = ["OFF_POLICY_EVERY", "TARGET", "PricedReplayBuffer", "VecTravelPrice",
-           "policy_travel", "price_callback", "price_replay"]  # fmt: skip
+__all__ = ["OFF_POLICY_EVERY", "PROBE_EPISODES", "PROBE_SEED", "TARGET", "PricedReplayBuffer",
+           "VecTravelPrice", "policy_travel", "price_callback", "price_replay",
+           "travel_probe"]  # fmt: skip

@@ -13,11 +13,12 @@ VALIDATION_SEED = 1_000_000
 N_VALIDATION = 16
 
 
-def validate(env_id: str, policy, n: int = N_VALIDATION) -> dict[str, float]:
+def validate(env_id: str, policy, n: int = N_VALIDATION,
+             seed: int = VALIDATION_SEED) -> dict[str, float]:  # fmt: skip
     """Mean return, IAE and valve travel of ``policy`` over the validation episodes (default
     reward), run as one batch in the native vector env by agents.evaluation.run_batch (row k
-    is ``gym.make(env_id, scenario="random")`` reset with seed VALIDATION_SEED + k, bit for
-    bit). ``policy``: a Policy, or a factory ``venv -> Policy``."""
+    is ``gym.make(env_id, scenario="random")`` reset with seed ``seed`` + k, bit for bit).
+    ``policy``: a Policy, or a factory ``venv -> Policy``."""
     import gymnasium as gym
 
     from agents.evaluation import run_batch
@@ -26,7 +27,7 @@ def validate(env_id: str, policy, n: int = N_VALIDATION) -> dict[str, float]:
                         scenario="random")  # fmt: skip
     if not hasattr(policy, "predict"):
         policy = policy(venv)
-    runs = run_batch(venv, policy, [VALIDATION_SEED + k for k in range(n)])
+    runs = run_batch(venv, policy, [seed + k for k in range(n)])
     venv.close()
     out = {key: float(np.mean([r["metrics"][key] for r in runs]))
            for key in ("return", "iae_K_s", "valve_travel")}  # fmt: skip

@@ -220,44 +220,22 @@ def test_policy_travel_is_the_deterministic_actions_travel_along_the_rollout():
         2 * 0.05 * np.abs(np.clip(a, -1, 1)).mean())  # fmt: skip
 
 
-class _OffPolicy:
-    """An off-policy model: a replay buffer of raw observations (the first entry the
-    deterministic action after the normalization, which subtracts 1) and its done flags."""
+def test_an_off_policy_travel_probe_is_the_scored_policys_closed_loop_travel():
+    """Probe k: the policy's travel per second over the reference's on the probe episodes
+    (new seeds each probe, apart from the validation's), as validation measures it."""
+    from agents.travel_price import PROBE_EPISODES, PROBE_SEED, travel_probe
+    from agents.validation import VALIDATION_SEED, validate
+    from baselines.cascade_pi import CascadePI
 
-    def __init__(self, actions: np.ndarray, dones: np.ndarray, pos: int) -> None:
-        import types
+    env_id = "steamtemp/Cascade300MW-v0"
+    assert PROBE_SEED >= VALIDATION_SEED + 1000
+    def make(venv):
+        return CascadePI(venv)
 
-        obs = np.concatenate([actions[..., None] + 1.0, np.zeros((*actions.shape, 2))], axis=-1)
-        self.replay_buffer = types.SimpleNamespace(
-            observations=obs.astype(np.float32), dones=dones.astype(np.float32),
-            buffer_size=len(actions), pos=pos, full=True)  # fmt: skip
-        self.policy, self.device = _Policy(), "cpu"
-
-    def get_vec_normalize_env(self):
-        import types
-
-        return types.SimpleNamespace(normalize_obs=lambda o: o - np.array([1.0, 0.0, 0.0]))
-
-
-def test_an_off_policy_travel_is_the_deterministic_actions_travel_along_its_last_steps():
-    """The last ``recent`` steps of the (circular) replay buffer, oldest first, normalized
-    as sampling does; a done flag starts the next step's episode."""
-    from agents.travel_price import policy_travel
-
-    # buffer rows in time order 3, 4, 0, 1, 2 (pos = 3: the next write), one env
-    a_time = np.array([0.9, 0.0, 0.5, -0.5, -0.5])
-    dones_time = np.array([0, 0, 1, 0, 0])  # the episode ends at the third step
-    order = np.array([3, 4, 0, 1, 2])
-    a = np.empty(5)
-    d = np.empty(5)
-    a[order], d[order] = a_time, dones_time
-    model = _OffPolicy(a[:, None], d[:, None], pos=3)
-    # the last 4 steps: 0.0, 0.5 | -0.5, -0.5: moves 0.25, (new episode), 0
-    assert policy_travel(model, None, recent=4) == pytest.approx(np.mean([0.25, 0.0]))
-    assert policy_travel(model, 0.05, recent=4) == pytest.approx(0.05 * np.mean([0, .5, .5, .5]))
-    assert policy_travel(model, None, recent=None) is None  # no window: the rollout's travel
-    model.replay_buffer.full, model.replay_buffer.pos = False, 3
-    assert policy_travel(model, None, recent=4) is None  # fewer steps held than asked for
+    first = travel_probe(env_id, make, 0, 1e-3)
+    want = validate(env_id, make, n=PROBE_EPISODES, seed=PROBE_SEED)["travel_per_s"]
+    assert first == pytest.approx(want / 1e-3, rel=1e-12)
+    assert travel_probe(env_id, make, 1, 1e-3) != first
 
 
 def test_an_off_policy_buffer_holds_the_scored_reward_and_charges_the_price_it_samples_at():
