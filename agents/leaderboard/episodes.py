@@ -75,6 +75,18 @@ def _ok_row(u: Unit, seed: int, metrics: dict) -> dict:
 
 
 def run_unit(u: Unit) -> tuple[list[dict], dict | None]:
+    """:func:`_run_unit` with this process's BLAS and OpenMP thread pools limited to one
+    thread: a policy's linear algebra then gives the same result bit for bit whatever the
+    core count or ``OPENBLAS_NUM_THREADS`` (measured: mpc_evarx's returns on
+    BoilerTurbineMIMO's ``slow_firing_lag_sensor`` differed in the ninth digit between one
+    and two BLAS threads). The leaderboard's parallelism is across units."""
+    from threadpoolctl import threadpool_limits
+
+    with threadpool_limits(limits=1):
+        return _run_unit(u)
+
+
+def _run_unit(u: Unit) -> tuple[list[dict], dict | None]:
     """Rows of a unit (one per seed, in order) and the trace of ``u.trace_seed``.
 
     The seeds run side by side in the native vector env (:func:`run_batch`); if anything
