@@ -377,8 +377,8 @@ def train(env_id: str, algo: str, hyperparams: Path | None = None, timesteps: in
     if algo in EXPERTS:
         return _imitation(env_id, algo, cls, path, hp, seed, run, n_envs, total, out,
                           reference, venv, quiet, max_minutes, tensorboard)  # fmt: skip
-    decision_s = steamtemp_gym.plants.make(env_id).dt_s * hp.get("action_repeat", 1)
-    model = _sb3_model(cls, hp, venv, seed, tensorboard, decision_s)
+    plant, repeat = native.unwrapped.plant, hp.get("action_repeat") or 1
+    model = _sb3_model(cls, hp, venv, seed, tensorboard, plant.dt_s * repeat)
     if price is not None and getattr(model, "replay_buffer", None) is not None:
         from agents.travel_price import price_replay
 
@@ -401,8 +401,7 @@ def train(env_id: str, algo: str, hyperparams: Path | None = None, timesteps: in
         from agents.moves import filter_gain, tie_map
         from agents.travel_price import price_callback, travel_probe
 
-        filter_s, repeat = hp.get("action_filter_s"), hp.get("action_repeat") or 1
-        plant = native.unwrapped.plant
+        filter_s = hp.get("action_filter_s")
         # the filter's gain per decision: it runs every interval on the held position
         alpha = (None if filter_s is None
                  else 1.0 - (1.0 - filter_gain(plant.dt_s, filter_s)) ** repeat)  # fmt: skip

@@ -251,24 +251,23 @@ def price_callback(wrapper: VecTravelPrice, log: list, max_move: float | None = 
     class Price(BaseCallback):
         last = 0
 
+        def _on_step(self) -> bool:
+            return True
+
         def _on_rollout_end(self) -> None:
             if probe is not None:
                 if self.num_timesteps - self.last < OFF_POLICY_EVERY:
                     return
                 self.last = self.num_timesteps
-                rollout = wrapper.ratio()
-                r, p = wrapper.update(probe(len(log)))
-                log.append((self.num_timesteps, r, rollout, p))
-                return
             rollout = wrapper.ratio()
-            per_step = policy_travel(self.model, max_move, alpha, expand)
-            own = (rollout if per_step is None
-                   else per_step / (wrapper.dt * repeat) / wrapper.reference_rate)  # fmt: skip
+            if probe is not None:
+                own = probe(len(log))
+            else:
+                per_step = policy_travel(self.model, max_move, alpha, expand)
+                own = (rollout if per_step is None
+                       else per_step / (wrapper.dt * repeat) / wrapper.reference_rate)  # fmt: skip
             r, p = wrapper.update(own)
             log.append((self.num_timesteps, r, rollout, p))
-
-        def _on_step(self) -> bool:
-            return True
 
     return Price()
 
