@@ -16,7 +16,7 @@ ZOO = Path(__file__).with_name("zoo")
 
 #: What kind of agent each algorithm's entry trains: the question "does RL beat the
 #: controllers" has one answer per kind.
-KINDS = {"ppo": "model-free", "sac": "model-free", "td3": "model-free",
+KINDS = {"ppo": "model-free", "sac": "model-free", "td3": "model-free", "trpo": "model-free",
          "recurrentppo": "model-free", "sac_caps": "model-free",
          "ppo_residual": "residual over cascade_pi_ff",
          "ppo_residual_pi": "residual over cascade_pi_ff_tuned",

@@ -19,9 +19,9 @@ from agents.wrappers import memory_options
 #: Algorithm names: SB3's PPO, SAC, TD3, PPO as a residual on a base controller
 #: (:data:`RESIDUAL_BASES`; each its own YAML file, whose entries need ``residual_scale``)
 #: PPO imitating a causal expert by DAgger (agents/imitation.py), the same fine-tuned by PPO
-#: (``_rl``) and sb3-contrib's
+#: (``_rl``), and sb3-contrib's TRPO (a trust-region natural policy gradient) and
 #: RecurrentPPO (an LSTM policy: the memory is learned instead of given by agents.wrappers).
-ALGOS = ("ppo", "sac", "td3", "ppo_residual", "ppo_residual_pi", "ppo_residual_mpc",
+ALGOS = ("ppo", "sac", "td3", "trpo", "ppo_residual", "ppo_residual_pi", "ppo_residual_mpc",
          "ppo_imitation_mpc", "ppo_imitation_mpc_rl", "recurrentppo", "sac_caps")  # fmt: skip
 #: The base controller of each residual algorithm (agents/residual.py): observed by the
 #: agent and told the applied command; None: ``ppo_residual``'s legacy form (the industrial
@@ -89,7 +89,7 @@ class ConfigError(ValueError):
 def algo_class(algo: str):
     if algo not in ALGOS:
         raise ConfigError(f"unknown algo {algo!r}; valid: {list(ALGOS)}")
-    names = {"recurrentppo": "RecurrentPPO", "sac_caps": "SACCAPS"}  # the rest: PPO, SAC, TD3
+    names = {"recurrentppo": "RecurrentPPO", "sac_caps": "SACCAPS"}  # the rest: PPO, SAC, TD3, TRPO
     try:
         return model_class(names.get(algo, algo.split("_")[0].upper()))
     except ValueError as exc:
