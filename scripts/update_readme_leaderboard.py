@@ -13,7 +13,9 @@ Reads ``<out>/leaderboard.json`` (the current schema version) and writes, betwee
 - README.md ``trend:start`` / ``trend:end``: the picture at the top, one trend plot of
   ``<out>/plots`` copied to ``docs/img/leaderboard_trend.png``, with its caption;
 - docs/agents.md ``zoo:start`` / ``zoo:end``: the trained agents against the baselines
-  (``agents_markdown``);
+  (``agents_markdown``); ``training:start`` / ``training:end``: what each agent of the
+  shipped zoo trained, in decisions and wall time, read from the zoo's own files
+  (``training_markdown``);
 - docs/baselines.md ``baselines:start`` / ``baselines:end``: every baseline's IAE, valve
   travel, reversals and rejected episodes per plant (``baselines_markdown``);
 - docs/baselines.md ``compare:start`` / ``compare:end``: per plant and scenario,
@@ -35,6 +37,7 @@ import json
 import shutil
 from pathlib import Path
 
+from agents import ZOO
 from agents.leaderboard import mismatch, plots, report
 from agents.leaderboard.summary import SCHEMA_VERSION, ZERO
 
@@ -50,6 +53,7 @@ PARETO_IMAGE = ROOT / "docs" / "img" / "leaderboard_pareto.png"
 START, END = "<!-- leaderboard:start", "<!-- leaderboard:end -->"
 TREND_START, TREND_END = "<!-- trend:start", "<!-- trend:end -->"
 ZOO_START, ZOO_END = "<!-- zoo:start", "<!-- zoo:end -->"
+TRAIN_START, TRAIN_END = "<!-- training:start", "<!-- training:end -->"
 BASE_START, BASE_END = "<!-- baselines:start", "<!-- baselines:end -->"
 CMP_START, CMP_END = "<!-- compare:start", "<!-- compare:end -->"
 REAL_START, REAL_END = "<!-- realism:start", "<!-- realism:end -->"
@@ -128,6 +132,8 @@ def main(argv: list[str] | None = None) -> None:
     text = replace(text, TREND_START, TREND_END, picture(args.plot), README.name)
     zoo = f"{ZOO_START} {_GEN}\n\n" + report.agents_markdown(doc) + "\n" + ZOO_END
     agents_text = replace(AGENTS_PAGE.read_text(), ZOO_START, ZOO_END, zoo, AGENTS_PAGE.name)
+    budget = f"{TRAIN_START} {_GEN}\n\n" + report.training_markdown(ZOO) + "\n" + TRAIN_END
+    agents_text = replace(agents_text, TRAIN_START, TRAIN_END, budget, AGENTS_PAGE.name)
     cmp = f"{CMP_START} {_GEN}\n\n" + report.comparison_markdown(doc, COMPARED) + "\n" + CMP_END
     baselines_text = replace(BASELINES_PAGE.read_text(), CMP_START, CMP_END, cmp,
                              BASELINES_PAGE.name)  # fmt: skip

@@ -24,6 +24,7 @@ SMALL = {
     "sac": {"learning_starts": 300, "batch_size": 64, "train_freq": 8, "gradient_steps": 1},
     "td3": {"learning_starts": 300, "batch_size": 64, "train_freq": 8, "gradient_steps": 1,
             "noise_type": "normal", "noise_std": 0.1},
+    "trpo": {"n_steps": 128, "batch_size": 64, "n_critic_updates": 2},
     "ppo_residual": {"n_steps": 128, "batch_size": 64, "n_epochs": 2, "residual_scale": 0.2},
     "ppo_residual_mpc": {"n_steps": 128, "batch_size": 64, "n_epochs": 2, "residual_scale": 0.2},
     "ppo_imitation_mpc": {"dagger_iterations": 2, "fit_epochs": 1, "move_weight": 0.01},
@@ -39,6 +40,7 @@ STEPS = {
     "ppo": 2048,
     "sac": 1200,
     "td3": 1200,
+    "trpo": 2048,
     "ppo_residual": 1024,
     "ppo_residual_mpc": 1024,
     "ppo_imitation_mpc": 1,
@@ -53,7 +55,8 @@ MEMORY = [{"agents.wrappers.ControllerMemory": {"integral_time_s": 60.0, "histor
 def _yaml(tmp_path: Path, algo: str, **extra) -> Path:
     hp = {"n_envs": 4, "policy": "MlpPolicy", "normalize": "dict(norm_obs=True)",
           "env_wrapper": MEMORY, "policy_kwargs": "dict(net_arch=dict(pi=[16], vf=[16]))"
-          if algo.startswith("ppo") else "dict(net_arch=[16])", **SMALL[algo], **extra}  # fmt: skip
+          if algo.startswith(("ppo", "trpo")) else "dict(net_arch=[16])",
+          **SMALL[algo], **extra}  # fmt: skip
     if algo == "recurrentppo":  # the LSTM is its memory
         del hp["env_wrapper"]
     path = tmp_path / f"{algo}.yml"
@@ -112,7 +115,7 @@ def test_smoke_training_writes_model_and_metadata(trained, algo):
     assert meta["git_revision"] and meta["wall_time_s"] > 0
 
 
-@pytest.mark.parametrize("algo", ["ppo", "sac", "recurrentppo", "ppo_residual_mpc",
+@pytest.mark.parametrize("algo", ["ppo", "sac", "trpo", "recurrentppo", "ppo_residual_mpc",
                                   "ppo_imitation_mpc", "ppo_imitation_mpc_rl"])  # fmt: skip
 def test_loaded_policy_reproduces_validation_and_is_deterministic(trained, algo):
     pol = agents.load(ENV_ID, algo, zoo=trained[algo])

@@ -58,7 +58,7 @@ def test_unknown_agent_lists_the_shipped_ones():
 
 
 #: RL Zoo's algo name of each shipped YAML file (the residual is our extension: not RL Zoo's).
-RL_ZOO_ALGO = {"ppo": "ppo", "sac": "sac", "td3": "td3", "recurrentppo": "ppo_lstm"}
+RL_ZOO_ALGO = {"ppo": "ppo", "sac": "sac", "td3": "td3", "trpo": "trpo", "recurrentppo": "ppo_lstm"}
 
 
 @pytest.mark.slow

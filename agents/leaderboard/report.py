@@ -289,6 +289,47 @@ def agents_markdown(summary: dict[str, Any]) -> str:
     return "\n".join(lines + _table(header, body)) + "\n"
 
 
+def training_markdown(directory: Any) -> str:
+    """What each trained agent in ``directory`` (steamtemp-train's files: the zoo) cost and
+    reached, over its runs: decisions trained, those of the chosen checkpoint, wall time,
+    and that checkpoint's validation return and travel (the reference's return on the same
+    episodes alongside); an offline clone (agents/behaviour_cloning.py) its transitions,
+    epochs and fit time. The zoo's training-budget table of docs/agents.md."""
+    import json
+
+    import agents
+    from agents.files import steamtemp_paths, zoo_runs
+
+    def span(xs: list[float], fmt: str) -> str:
+        lo, hi = fmt.format(min(xs)), fmt.format(max(xs))
+        return lo if lo == hi else f"{lo} to {hi}"
+
+    header = ["plant", "agent", "kind", "runs", "decisions trained", "decisions at the chosen "
+              "checkpoint", "wall time per run [min]", "validation return (reference's)",
+              "validation travel / reference's"]  # fmt: skip
+    body = []
+    for (env_id, algo), runs in sorted(zoo_runs(directory).items()):
+        metas = [json.loads(steamtemp_paths(directory, env_id, algo, k or None)[1].read_text())
+                 for k in runs]  # fmt: skip
+        plant, kind = env_id.split("/")[-1], agents.kind(algo)
+        if "timesteps_trained" not in metas[0]:  # an offline clone
+            t = [m["training"] for m in metas]
+            body.append([plant, f"sb3:{algo}", kind, str(len(runs)),
+                         f"offline: {span([x['transitions'] / 1e3 for x in t], '{:.0f}')}k "
+                         f"transitions x {span([x['epochs'] for x in t], '{:d}')} epochs", "-",
+                         span([x["seconds"] / 60 for x in t], "{:.1f}"), "-", "-"])  # fmt: skip
+            continue
+        v = [m["validation"] for m in metas]
+        body.append([plant, f"sb3:{algo}", kind, str(len(runs)),
+                     span([m["timesteps_trained"] / 1e6 for m in metas], "{:.2f}") + "M",
+                     span([m["timesteps_of_best"] / 1e6 for m in metas], "{:.2f}") + "M",
+                     span([m["wall_time_s"] / 60 for m in metas], "{:.1f}"),
+                     span([x["best"]["return"] for x in v], "{:.1f}")
+                     + f" ({span([x['reference']['return'] for x in v], '{:.1f}')})",
+                     span([x["best"]["travel_ratio"] for x in v], "{:.2f}") + "x"])  # fmt: skip
+    return "\n".join(_table(header, body)) + "\n"
+
+
 def baselines_markdown(summary: dict[str, Any]) -> str:
     """Every baseline on every plant: mean IAE of the main steam, valve travel relative to
     the reference's and valve reversals, over scenario x seed (the actuator columns of
