@@ -77,8 +77,8 @@ HYPERPARAMS = Path(__file__).with_name("hyperparams")
 MAX_RUN_MINUTES = 20
 SPECIAL = ("n_timesteps", "n_envs", "policy", "normalize", "env_wrapper", "policy_kwargs",
            "noise_type", "noise_std", "noise_tau_s", "residual_scale", "max_move", "train_reward",
-           "plant_randomization", "travel_price", "residual_base", "action_filter_s",
-           "critic_warmup_steps", "tied_valves", "action_repeat", "max_minutes",
+           "plant_randomization", "travel_price", "price_probe_every", "residual_base",
+           "action_filter_s", "critic_warmup_steps", "tied_valves", "action_repeat", "max_minutes",
            *IMITATION_KEYS)  # fmt: skip
 
 
@@ -224,6 +224,14 @@ def read_hyperparams(path: Path, env_id: str, algo: str) -> dict[str, Any]:
         if not (ok and PRICE_MIN <= v <= PRICE_MAX):
             raise ConfigError(f"--hyperparams {path}: travel_price (the starting price per "
                               f"valve stroke) must be a number in [{PRICE_MIN}, {PRICE_MAX}], "
+                              f"got {v!r}")  # fmt: skip
+    if "price_probe_every" in hp:
+        v = hp["price_probe_every"]
+        if "travel_price" not in hp:
+            raise ConfigError(f"--hyperparams {path}: price_probe_every needs travel_price")
+        if not (isinstance(v, int) and not isinstance(v, bool) and v >= 1):
+            raise ConfigError(f"--hyperparams {path}: price_probe_every (transitions between "
+                              f"two closed-loop travel probes) must be a positive integer, "
                               f"got {v!r}")  # fmt: skip
     if "plant_randomization" in hp:
         from steamtemp_gym.plants import perturb

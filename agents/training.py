@@ -399,20 +399,22 @@ def train(env_id: str, algo: str, hyperparams: Path | None = None, timesteps: in
     callbacks = [_progress(evaluate, curve, total, t0, name, quiet, max_minutes)]
     if price is not None:
         from agents.moves import filter_gain, tie_map
-        from agents.travel_price import price_callback, travel_probe
+        from agents.travel_price import OFF_POLICY_EVERY, price_callback, travel_probe
 
         filter_s = hp.get("action_filter_s")
         # the filter's gain per decision: it runs every interval on the held position
         alpha = (None if filter_s is None
                  else 1.0 - (1.0 - filter_gain(plant.dt_s, filter_s)) ** repeat)  # fmt: skip
         expand = tie_map(tuple(plant.valves), hp.get("tied_valves"))
-        probe = None
+        probe, every = None, hp.get("price_probe_every")
         if getattr(model, "replay_buffer", None) is not None:  # off-policy: in closed loop
+            every = every or OFF_POLICY_EVERY
+        if every:
             def probe(k: int) -> float:
                 return travel_probe(env_id, scored_policy(model, venv, native, hp), k,
                                     reference["travel_per_s"])  # fmt: skip
         callbacks.append(price_callback(price, prices, hp.get("max_move"), alpha, expand,
-                                        repeat, probe))  # fmt: skip
+                                        repeat, probe, every))  # fmt: skip
     if hp.get("critic_warmup_steps"):
         callbacks.append(critic_warmup(hp["critic_warmup_steps"]))
     model.learn(total_timesteps=total, callback=callbacks, progress_bar=False)

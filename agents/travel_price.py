@@ -237,15 +237,17 @@ def travel_probe(env_id: str, policy: Any, k: int, reference_rate: float) -> flo
 
 def price_callback(wrapper: VecTravelPrice, log: list, max_move: float | None = None,
                    alpha: float | None = None, expand: np.ndarray | None = None,
-                   repeat: int = 1, probe: Any = None) -> Any:  # fmt: skip
+                   repeat: int = 1, probe: Any = None,
+                   every: int = OFF_POLICY_EVERY) -> Any:  # fmt: skip
     """SB3 callback: at each rollout's end, :meth:`VecTravelPrice.update` on the travel of
     the policy's deterministic action (:func:`policy_travel`, per decision of ``repeat``
     control intervals, agents/repeat.py; ``alpha``: the filter's gain per decision; the
     rollout's own travel where the algorithm keeps no rollout buffer), appending
     ``(timesteps, ratio of the policy, ratio of the rollout, price)`` to ``log``. With
-    ``probe`` (an off-policy algorithm's: update k -> the scored policy's travel ratio in
-    closed loop, :func:`travel_probe`) the price moves every :data:`OFF_POLICY_EVERY`
-    transitions, on that."""
+    ``probe`` (update k -> the scored policy's travel ratio in closed loop,
+    :func:`travel_probe`: an off-policy algorithm's, or an on-policy entry's with
+    ``price_probe_every``) the price moves at the first rollout's end after every
+    ``every`` transitions, on that."""
     from stable_baselines3.common.callbacks import BaseCallback
 
     class Price(BaseCallback):
@@ -256,7 +258,7 @@ def price_callback(wrapper: VecTravelPrice, log: list, max_move: float | None = 
 
         def _on_rollout_end(self) -> None:
             if probe is not None:
-                if self.num_timesteps - self.last < OFF_POLICY_EVERY:
+                if self.num_timesteps - self.last < every:
                     return
                 self.last = self.num_timesteps
             rollout = wrapper.ratio()

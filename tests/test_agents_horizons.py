@@ -298,3 +298,30 @@ def test_an_off_policy_agents_price_moves_on_its_deterministic_travel(tmp_path):
     assert [c[0] for c in course] == [OFF_POLICY_EVERY, 2 * OFF_POLICY_EVERY]
     assert all(c[1] != c[2] for c in course)  # the policy's travel, not the rollout's
     assert course[-1][3] != 0.1 and meta["action_repeat"] == 2
+
+
+def test_an_on_policy_price_can_read_the_closed_loop_travel(tmp_path):
+    """PPO with ``price_probe_every``: the price moves at the first rollout's end after
+    every that many transitions, on the scored policy's travel in closed loop (not on its
+    rollout buffer's states); bad values are refused before training."""
+    env_id = "steamtemp/Cascade300MW-v0"
+    entry = {"n_envs": 4, "policy": "MlpPolicy", "normalize": "dict(norm_obs=True)",
+             "n_steps": 64, "batch_size": 64, "n_epochs": 1,
+             "policy_kwargs": "dict(net_arch=dict(pi=[8], vf=[8]))", "max_move": 0.05,
+             "action_repeat": 2, "travel_price": 0.1, "price_probe_every": 512}  # fmt: skip
+    path = tmp_path / "ppo.yml"
+    for bad, match in ((0, "positive integer"), (1.5, "positive integer"),
+                       (True, "positive integer")):  # fmt: skip
+        path.write_text(yaml.safe_dump({env_id: {**entry, "price_probe_every": bad}}))
+        with pytest.raises(ValueError, match=match):
+            train_config.read_hyperparams(path, env_id, "ppo")
+    path.write_text(yaml.safe_dump({env_id: {k: v for k, v in entry.items()
+                                             if k != "travel_price"}}))  # fmt: skip
+    with pytest.raises(ValueError, match="needs travel_price"):
+        train_config.read_hyperparams(path, env_id, "ppo")
+    path.write_text(yaml.safe_dump({env_id: entry}))
+    meta = training.train(env_id, "ppo", path, timesteps=4 * 256, seed=0, out=tmp_path,
+                          quiet=True)  # fmt: skip
+    course = meta["travel_price"]["course"]
+    assert [c[0] for c in course] == [512, 1024]  # rollouts of 256 transitions
+    assert all(c[1] != c[2] for c in course)  # the scored policy's travel, not the rollout's
