@@ -25,7 +25,9 @@ it was 10 to 20 times what the same policy moved in closed loop on the four boil
 (TD3 with position actions: 2.7-4 times the reference's along the replay buffer's
 states against 0.17-0.27 times on the validation episodes, SupercriticalFSH and
 DrumBoilerSH): an actor that acts on the valve openings it observes follows the noise
-that moved them. Their replay buffer holds the scored reward and charges the
+that moved them. An on-policy entry may read its travel in closed loop too
+(``price_probe_every``: the price then moves at the first rollout's end after every that
+many transitions). Their replay buffer holds the scored reward and charges the
 price as it is when a batch is sampled (:class:`PricedReplayBuffer`): a charge made at
 collection would stay in the buffer long after the price moved, so that the critic would
 learn a mixture of old prices and the price would overshoot (measured with TD3 on
