@@ -379,7 +379,8 @@ def train(env_id: str, algo: str, hyperparams: Path | None = None, timesteps: in
                           reference, venv, quiet, max_minutes, tensorboard)  # fmt: skip
     plant, repeat = native.unwrapped.plant, hp.get("action_repeat") or 1
     model = _sb3_model(cls, hp, venv, seed, tensorboard, plant.dt_s * repeat)
-    if price is not None and getattr(model, "replay_buffer", None) is not None:
+    off_policy = getattr(model, "replay_buffer", None) is not None
+    if price is not None and off_policy:
         from agents.travel_price import price_replay
 
         price_replay(model, price)  # charged when sampled, at the price of the moment
@@ -407,7 +408,7 @@ def train(env_id: str, algo: str, hyperparams: Path | None = None, timesteps: in
                  else 1.0 - (1.0 - filter_gain(plant.dt_s, filter_s)) ** repeat)  # fmt: skip
         expand = tie_map(tuple(plant.valves), hp.get("tied_valves"))
         probe, every = None, hp.get("price_probe_every")
-        if getattr(model, "replay_buffer", None) is not None:  # off-policy: in closed loop
+        if off_policy:  # always in closed loop
             every = every or OFF_POLICY_EVERY
         if every:
             def probe(k: int) -> float:

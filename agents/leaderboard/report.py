@@ -298,7 +298,7 @@ def training_markdown(directory: Any) -> str:
     import json
 
     import agents
-    from agents.files import steamtemp_paths, zoo_runs
+    from agents.files import steamtemp_files, zoo_runs
 
     def span(xs: list[float], fmt: str) -> str:
         lo, hi = fmt.format(min(xs)), fmt.format(max(xs))
@@ -309,7 +309,7 @@ def training_markdown(directory: Any) -> str:
               "validation travel / reference's"]  # fmt: skip
     body = []
     for (env_id, algo), runs in sorted(zoo_runs(directory).items()):
-        metas = [json.loads(steamtemp_paths(directory, env_id, algo, k or None)[1].read_text())
+        metas = [json.loads(steamtemp_files(directory, env_id, algo, k).meta[0].read_text())
                  for k in runs]  # fmt: skip
         plant, kind = env_id.split("/")[-1], agents.kind(algo)
         if "timesteps_trained" not in metas[0]:  # an offline clone
