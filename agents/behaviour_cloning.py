@@ -263,13 +263,12 @@ def choose_noise(env_id: str, staging: Path,
     the tuner's travel bound."""
     from minari.storage import get_dataset_path
 
-    import baselines
     from agents import datasets
     from agents.files import find
     from agents.tuning_terms import TUNING_TRAVEL_BUDGET
-    from agents.validation import better_checkpoint, validate
+    from agents.validation import better_checkpoint, reference_result, scored
 
-    ref = validate(env_id, lambda v: baselines.make(baselines.INDUSTRIAL_REFERENCE, v))
+    ref = reference_result(env_id)
     tried, best, chosen, folder = {}, {}, None, None
     for noise in ZOO_NOISES:
         did = zoo_dataset_id(env_id, noise)
@@ -280,8 +279,7 @@ def choose_noise(env_id: str, staging: Path,
         here = staging / f"{noise:g}"
         train(did, here, log=None)
         (files,) = find(here)
-        score = validate(env_id, files.load())
-        score["travel_ratio"] = score["valve_travel"] / ref["valve_travel"]
+        score = scored(env_id, files.load(), ref)
         tried[f"{noise:g}"] = {k: score[k] for k in ("return", "travel_ratio")}
         if log:
             log(f"{did}: validation return {score['return']:.1f}, travel "

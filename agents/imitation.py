@@ -138,7 +138,7 @@ def train(env_id: str, algo: str, hp: dict[str, Any], seed: int, n_envs: int,
     from agents.behaviour_cloning import standardization
     from agents.policy import AgentPolicy
     from agents.tuning_terms import TUNING_TRAVEL_BUDGET
-    from agents.validation import better_checkpoint, validate
+    from agents.validation import better_checkpoint, scored
     from agents.vec_env import make_training_env
 
     settings = {k: hp.get(k, IMITATION_DEFAULTS[k]) for k in DAGGER_KEYS}
@@ -158,9 +158,8 @@ def train(env_id: str, algo: str, hp: dict[str, Any], seed: int, n_envs: int,
                             filter_s))  # fmt: skip
         stats = stats or standardization(data[0][0])
         mse = _fit(net, data, stats, settings, seed + i)
-        score = validate(env_id, AgentPolicy(model, native, memory=memory, obs_norm=stats,
-                                             action_filter_s=filter_s))  # fmt: skip
-        score["travel_ratio"] = score["valve_travel"] / reference["valve_travel"]
+        score = scored(env_id, AgentPolicy(model, native, memory=memory, obs_norm=stats,
+                                           action_filter_s=filter_s), reference)  # fmt: skip
         wall, pairs = time.monotonic() - t0, int(sum(len(d[0]) for d in data))
         curve.append({"timesteps": pairs, "fraction": (i + 1) / settings["dagger_iterations"],
                       "wall_s": wall, **score})  # fmt: skip

@@ -28,14 +28,17 @@ starts. Validation, the leaderboard and every score use the env's default reward
 
 Training runs on the ``random`` scenario distribution through the native vector env
 (agents.vec_env), with the controller memory and VecNormalize when configured. At every
-eighth of the budget (and at a --max-minutes stop) the agent is evaluated (agents.evaluation) on
-``random`` validation episodes with seeds from :data:`VALIDATION_SEED` (training envs
-use ``--seed`` + i: never the same draws; never the leaderboard's scenarios); the best
-one is kept: the highest validation return among the checkpoints within the tuned
-baselines' margin under the leaderboard's valve-travel budget (mean travel at most
+sixteenth of the budget (and at a --max-minutes stop) the agent is evaluated
+(agents.evaluation) on ``random`` validation episodes with seeds from
+:data:`VALIDATION_SEED` (training envs use ``--seed`` + i: never the same draws; never the
+leaderboard's scenarios) and runs the baseline tuner's commissioning checks
+(agents.validation); the best one is kept: the highest validation return among the
+checkpoints that pass their checks and stay within the tuned baselines' margin under the
+leaderboard's valve-travel budget (mean travel at most
 ``agents.tuning_terms.TUNING_TRAVEL_BUDGET`` = 1.7 times ``cascade_pi_ff``'s on the same
-validation episodes), or, if none is, the one of least travel. With ``--max-minutes`` the
-agent is also validated at every eighth of that time; an entry's ``max_minutes`` is its
+validation episodes), or, if none does, one that passes its checks, then the one of least
+travel (agents.validation.better_checkpoint). With ``--max-minutes`` the
+agent is also validated at every sixteenth of that time; an entry's ``max_minutes`` is its
 runs' wall-time budget where ``--max-minutes`` is not given. Output in ``--out``:
 ``<env>__<algo>.zip`` (the best SB3 model) and ``<env>__<algo>.json`` (env id, package
 version, git revision, hyperparameters, seed, timesteps, wall time, the validation curve

@@ -1,5 +1,5 @@
 """One training run of steamtemp-train: the training envs, the SB3 model, validation at
-every eighth of the budget with the best checkpoint kept, and the run's metadata (module
+every sixteenth of the budget with the best checkpoint kept, and the run's metadata (module
 docstring of agents/train.py).
 """
 
@@ -26,11 +26,18 @@ from agents.train_config import (
     algo_class,
     read_hyperparams,
 )
-from agents.validation import N_VALIDATION, VALIDATION_SEED, better_checkpoint, validate  # noqa: F401 - re-exported
+from agents.validation import (  # noqa: F401 - re-exported
+    N_VALIDATION,
+    VALIDATION_SEED,
+    better_checkpoint,
+    reference_result,
+    scored,
+    validate,
+)
 from agents.vec_env import make_training_env  # noqa: F401 - re-exported
 
-#: Where in the budget the agent is validated (and the best kept): every eighth.
-EVAL_FRACTIONS = tuple(k / 8 for k in range(1, 9))
+#: Where in the budget the agent is validated (and the best kept): every sixteenth.
+EVAL_FRACTIONS = tuple(k / 16 for k in range(1, 17))
 
 
 def _schedule(value: Any):
@@ -149,8 +156,7 @@ def _checkpointing(model: Any, venv: Any, native: Any, hp: dict[str, Any], env_i
     from agents.tuning_terms import TUNING_TRAVEL_BUDGET
 
     def evaluate(steps: int, wall: float) -> None:
-        score = validate(env_id, scored_policy(model, venv, native, hp))
-        score["travel_ratio"] = score["valve_travel"] / reference["valve_travel"]
+        score = scored(env_id, scored_policy(model, venv, native, hp), reference)
         curve.append({"timesteps": offset + steps, "fraction": steps / total, "wall_s": wall,
                       **score})  # fmt: skip
         # within the tuned baselines' margin under the budget (agents/tuning_terms.py)
@@ -172,7 +178,7 @@ def _progress(evaluate: Callable[[int, float], None], curve: list, total: int, t
         def __init__(self) -> None:
             super().__init__()
             self.marks = [int(f * total) for f in EVAL_FRACTIONS]
-            # with a time budget, also every eighth of it (the budget may end the run first)
+            # with a time budget, also every sixteenth of it (the budget may end the run first)
             self.clock = ([] if max_minutes is None else
                           [60.0 * max_minutes * f for f in EVAL_FRACTIONS[:-1]])  # fmt: skip
             self.last_line = 0.0
@@ -219,8 +225,10 @@ def _metadata(env_id: str, algo: str, cls: Any, revision: str, path: Path,
         "timesteps_of_best": best["timesteps"], "wall_time_s": wall_s,
         "validation": {"scenario": "random", "seeds": [VALIDATION_SEED + k
                        for k in range(N_VALIDATION)], "best": {k: best[k] for k in
-                       ("return", "iae_K_s", "valve_travel", "travel_ratio")},
-                       "reference": {"policy": baselines.INDUSTRIAL_REFERENCE, **reference},
+                       ("return", "iae_K_s", "valve_travel", "travel_ratio", "check",
+                        "check_travel_ratio")},
+                       "reference": {"policy": baselines.INDUSTRIAL_REFERENCE,
+                                     **{k: v for k, v in reference.items() if k != "checks"}},
                        "travel_budget": TUNING_TRAVEL_BUDGET, "curve": curve},
         "normalization": best["obs_norm"], "memory": hp["env_wrapper"],
         "residual_scale": hp.get("residual_scale"), "residual_base": hp.get("residual_base"),
@@ -369,9 +377,7 @@ def train(env_id: str, algo: str, hyperparams: Path | None = None, timesteps: in
     import torch
 
     torch.set_num_threads(1)  # one core per run (a shared machine; small networks)
-    import baselines
-
-    reference = validate(env_id, lambda v: baselines.make(baselines.INDUSTRIAL_REFERENCE, v))
+    reference = reference_result(env_id)
     venv, native, price = make_training_env(env_id, n_envs, seed, hp,
                                             reference_rate=reference["travel_per_s"])  # fmt: skip
     if algo in EXPERTS:

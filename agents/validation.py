@@ -1,8 +1,19 @@
-"""The validation of a training run: the episodes every agent is validated on, and which
-validated checkpoint a run keeps (agents/train.py's module docstring).
+"""The validation of a training run: the episodes every agent is validated on, the
+commissioning checks every checkpoint must pass, and which validated checkpoint a run keeps
+(agents/train.py's module docstring).
+
+The validation episodes (``random`` scenario) change load and disturbances to their end, so
+they never show a loop that keeps oscillating once the plant is quiet. Every checkpoint
+therefore also runs the baseline tuner's commissioning checks (agents/tuning_terms.py: at
+both ends of the load range, a setpoint and a heat-absorption step followed by a quiet
+stretch, five noise seeds each) and is judged against the industrial reference on the same
+episodes as every tuned baseline is (a trip, a limit cycle in the quiet stretch, valve
+travel beyond the realism bound).
 """
 
 from __future__ import annotations
+
+from typing import Any
 
 import numpy as np
 
@@ -36,16 +47,48 @@ def validate(env_id: str, policy, n: int = N_VALIDATION,
     return out
 
 
-def better_checkpoint(new: dict[str, float], best: dict[str, float], budget: float) -> bool:
+def reference_result(env_id: str) -> dict[str, Any]:
+    """The industrial reference's (``cascade_pi_ff``) :func:`validate` result on ``env_id``,
+    and under ``checks`` its metrics on the commissioning checks (the unit of
+    :func:`scored`'s travel ratio and the judge of its checks)."""
+    import baselines
+    from agents.tuning_terms import check_metrics
+
+    def make(v):
+        return baselines.make(baselines.INDUSTRIAL_REFERENCE, v)
+
+    return {**validate(env_id, make), "checks": check_metrics(env_id, make)}
+
+
+def scored(env_id: str, policy, ref: dict[str, Any]) -> dict[str, Any]:
+    """:func:`validate` of ``policy`` (a Policy) with ``travel_ratio`` (its valve travel over
+    the reference's ``ref``, :func:`reference_result`), and its commissioning checks: ``check``,
+    what a plant engineer would reject in them ("" if nothing), and ``check_travel_ratio``,
+    the largest travel ratio to the reference's over them."""
+    from agents.tuning_terms import check_breach, check_metrics
+
+    out: dict[str, Any] = validate(env_id, policy)
+    out["travel_ratio"] = out["valve_travel"] / ref["valve_travel"]
+    out["check"], out["check_travel_ratio"] = check_breach(
+        check_metrics(env_id, lambda venv: policy), ref["checks"])  # fmt: skip
+    return out
+
+
+def better_checkpoint(new: dict[str, Any], best: dict[str, Any], budget: float) -> bool:
     """Whether validation result ``new`` beats ``best`` (both with ``return`` and
-    ``travel_ratio``): within the travel budget first, then the higher return; outside it,
-    the lower travel."""
+    ``travel_ratio``, and ``check`` where the checks ran): a checkpoint within the travel
+    budget that passes its checks first, by the higher return; then one that passes its
+    checks; then one within the budget, by the higher return; otherwise the lower travel."""
     if not best:
         return True
-    ok_new, ok_best = new["travel_ratio"] <= budget, best["travel_ratio"] <= budget
-    if ok_new != ok_best:
-        return ok_new
-    return new["return"] > best["return"] if ok_new else new["travel_ratio"] < best["travel_ratio"]
+
+    def rank(s: dict[str, Any]) -> tuple:
+        within, passed = s["travel_ratio"] <= budget, not s.get("check")
+        return (within and passed, passed, within,
+                s["return"] if within else -s["travel_ratio"])  # fmt: skip
+
+    return rank(new) > rank(best)
 
 
-__all__ = ["N_VALIDATION", "VALIDATION_SEED", "better_checkpoint", "validate"]
+__all__ = ["N_VALIDATION", "VALIDATION_SEED", "better_checkpoint", "reference_result", "scored",
+           "validate"]  # fmt: skip

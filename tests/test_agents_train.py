@@ -109,6 +109,11 @@ def test_smoke_training_writes_model_and_metadata(trained, algo):
         if training.better_checkpoint(c, chosen, meta["validation"]["travel_budget"]):
             chosen = c
     assert meta["validation"]["best"]["return"] == chosen["return"]
+    # every checkpoint ran the commissioning checks; the kept one passes them if any does
+    assert all(isinstance(c["check"], str) and c["check_travel_ratio"] > 0
+               for c in meta["validation"]["curve"])  # fmt: skip
+    if any(not c["check"] for c in meta["validation"]["curve"]):
+        assert meta["validation"]["best"]["check"] == ""
     ref = meta["validation"]["reference"]
     assert ref["policy"] == "cascade_pi_ff" and ref["valve_travel"] > 0
     assert chosen["travel_ratio"] == pytest.approx(chosen["valve_travel"] / ref["valve_travel"])
@@ -229,6 +234,23 @@ def test_checkpoints_within_the_travel_budget_come_first():
     assert training.better_checkpoint(b, a, 2.0) and not training.better_checkpoint(a, b, 2.0)
     assert training.better_checkpoint(c, b, 2.0) and not training.better_checkpoint(d, c, 2.0)
     assert training.better_checkpoint(d, a, 2.0)  # both over: the lower travel
+
+
+def test_checkpoints_that_fail_the_commissioning_checks_come_after_those_that_pass():
+    """A checkpoint that limit-cycles (or trips, or strokes the valves) in the commissioning
+    checks loses to one that passes them, whatever its return and travel; between two that
+    fail, the one within the travel budget wins."""
+    passes = {"return": -80.0, "travel_ratio": 1.5, "check": ""}
+    cycles = {"return": -40.0, "travel_ratio": 1.2, "check": "at 35 % load, seed 1: quiet p2p"}
+    over = {"return": -90.0, "travel_ratio": 2.5, "check": ""}
+    over_cycles = {"return": -30.0, "travel_ratio": 2.5, "check": "tripped"}
+    assert training.better_checkpoint(passes, cycles, 2.0)
+    assert not training.better_checkpoint(cycles, passes, 2.0)
+    assert training.better_checkpoint(over, cycles, 2.0)  # passing first, then the budget
+    assert training.better_checkpoint(cycles, over_cycles, 2.0)
+    assert not training.better_checkpoint(over_cycles, cycles, 2.0)
+    # no checks run (an older record): judged as passing
+    assert not training.better_checkpoint({"return": -90.0, "travel_ratio": 1.5}, passes, 2.0)
 
 
 def test_train_reward_is_checked_and_applies_to_the_training_envs_only(tmp_path):
