@@ -38,7 +38,8 @@ leaderboard's valve-travel budget (mean travel at most
 ``agents.tuning_terms.TUNING_TRAVEL_BUDGET`` = 1.7 times ``cascade_pi_ff``'s on the same
 validation episodes), or, if none does, one that passes its checks, then the one of least
 travel (agents.validation.better_checkpoint). With ``--max-minutes`` the
-agent is also validated at every sixteenth of that time; an entry's ``max_minutes`` is its
+agent is validated at every sixteenth of that time instead (and at the end of the step
+budget, where that ends the run first); an entry's ``max_minutes`` is its
 runs' wall-time budget where ``--max-minutes`` is not given. Output in ``--out``:
 ``<env>__<algo>.zip`` (the best SB3 model) and ``<env>__<algo>.json`` (env id, package
 version, git revision, hyperparameters, seed, timesteps, wall time, the validation curve

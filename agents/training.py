@@ -169,16 +169,18 @@ def _checkpointing(model: Any, venv: Any, native: Any, hp: dict[str, Any], env_i
 
 def _progress(evaluate: Callable[[int, float], None], curve: list, total: int, t0: float,
               name: str, quiet: bool, max_minutes: float | None) -> Any:  # fmt: skip
-    """The SB3 callback of a run: ``evaluate`` at every mark of :data:`EVAL_FRACTIONS` and at
-    a ``max_minutes`` stop (which ends the training), a progress line on stderr every 10 s
-    unless ``quiet``."""
+    """The SB3 callback of a run: ``evaluate`` at every mark of :data:`EVAL_FRACTIONS` of the
+    step budget ``total``, or with ``max_minutes`` at those of the time budget and at the
+    end of whichever budget ends the run (a time stop ends the training), a progress line
+    on stderr every 10 s unless ``quiet``."""
     from stable_baselines3.common.callbacks import BaseCallback
 
     class Progress(BaseCallback):
         def __init__(self) -> None:
             super().__init__()
-            self.marks = [int(f * total) for f in EVAL_FRACTIONS]
-            # with a time budget, also every sixteenth of it (the budget may end the run first)
+            # with a time budget the step budget's marks would only add validations: its end
+            self.marks = ([int(f * total) for f in EVAL_FRACTIONS] if max_minutes is None
+                          else [total])  # fmt: skip
             self.clock = ([] if max_minutes is None else
                           [60.0 * max_minutes * f for f in EVAL_FRACTIONS[:-1]])  # fmt: skip
             self.last_line = 0.0

@@ -206,13 +206,14 @@ def test_realism_counts_the_episodes_a_plant_engineer_would_reject():
 
 def test_training_table_gives_each_agent_s_budget_over_its_runs(tmp_path):
     """The zoo's training-budget table: one row per agent over its runs, the ranges of the
-    runs' own metadata (hand-made runs: 1.2M and 2.5M decisions, 10 and 12.5 minutes)."""
+    runs' own metadata (hand-made runs: 1.2M and 2.5M decisions, 10 and 12.5 minutes; the
+    first run's checkpoint passed its commissioning checks, the second's limit-cycled)."""
     best = {"return": -50.0, "iae_K_s": 1.0, "valve_travel": 1.0, "travel_ratio": 1.0}
-    for run, (steps, minutes, ret) in enumerate([(1_200_000, 10.0, -50.0),
-                                                  (2_500_000, 12.5, -40.0)]):  # fmt: skip
+    for run, (steps, minutes, ret, check) in enumerate([
+            (1_200_000, 10.0, -50.0, ""), (2_500_000, 12.5, -40.0, "quiet p2p 3 K")]):  # fmt: skip
         meta = {"timesteps_trained": steps, "timesteps_of_best": steps // 2,
                 "wall_time_s": 60 * minutes,
-                "validation": {"best": {**best, "return": ret},
+                "validation": {"best": {**best, "return": ret, "check": check},
                                "reference": {"return": -90.0}}}  # fmt: skip
         stem = f"steamtemp__{ENV.split('/')[-1]}__trpo" + (f"__run{run}" if run else "")
         (tmp_path / f"{stem}.json").write_text(json.dumps(meta))
@@ -220,4 +221,5 @@ def test_training_table_gives_each_agent_s_budget_over_its_runs(tmp_path):
     lines = report.training_markdown(tmp_path).splitlines()
     assert len(lines) == 3
     assert lines[2] == (f"| {ENV.split('/')[-1]} | sb3:trpo | model-free | 2 | 1.20 to 2.50M | "
-                        "0.60 to 1.25M | 10.0 to 12.5 | -50.0 to -40.0 (-90.0) | 1.00x |")
+                        "0.60 to 1.25M | 10.0 to 12.5 | -50.0 to -40.0 (-90.0) | 1.00x | "
+                        "1 of 2 runs |")

@@ -329,6 +329,9 @@ def test_an_entrys_max_minutes_bounds_its_runs_where_the_command_does_not(tmp_pa
     meta = training.train(ENV, "ppo", yml, timesteps=128, seed=0, out=tmp_path, quiet=True,
                           max_minutes=5.0)  # fmt: skip
     assert meta["timesteps_trained"] == 128
+    # a run under a time budget is validated at its marks of that budget and at the end of
+    # the step budget, not also at the marks of the step budget
+    assert [c["timesteps"] for c in meta["validation"]["curve"]] == [128]
 
 
 @pytest.mark.parametrize("bad", [0, -1, 21, "ten", True])

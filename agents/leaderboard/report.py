@@ -292,9 +292,11 @@ def agents_markdown(summary: dict[str, Any]) -> str:
 def training_markdown(directory: Any) -> str:
     """What each trained agent in ``directory`` (steamtemp-train's files: the zoo) cost and
     reached, over its runs: decisions trained, those of the chosen checkpoint, wall time,
-    and that checkpoint's validation return and travel (the reference's return on the same
-    episodes alongside); an offline clone (agents/behaviour_cloning.py) its transitions,
-    epochs and fit time. The zoo's training-budget table of docs/agents.md."""
+    that checkpoint's validation return and travel (the reference's return on the same
+    episodes alongside) and how many runs' chosen checkpoints passed the commissioning
+    checks (agents/validation.py; "-" for runs trained before checkpoints ran them); an
+    offline clone (agents/behaviour_cloning.py) its transitions, epochs and fit time. The
+    zoo's training-budget table of docs/agents.md."""
     import json
 
     import agents
@@ -306,7 +308,7 @@ def training_markdown(directory: Any) -> str:
 
     header = ["plant", "agent", "kind", "runs", "decisions trained", "decisions at the chosen "
               "checkpoint", "wall time per run [min]", "validation return (reference's)",
-              "validation travel / reference's"]  # fmt: skip
+              "validation travel / reference's", "commissioning checks passed"]  # fmt: skip
     body = []
     for (env_id, algo), runs in sorted(zoo_runs(directory).items()):
         metas = [json.loads(steamtemp_files(directory, env_id, algo, k).meta[0].read_text())
@@ -317,16 +319,20 @@ def training_markdown(directory: Any) -> str:
             body.append([plant, f"sb3:{algo}", kind, str(len(runs)),
                          f"offline: {span([x['transitions'] / 1e3 for x in t], '{:.0f}')}k "
                          f"transitions x {span([x['epochs'] for x in t], '{:d}')} epochs", "-",
-                         span([x["seconds"] / 60 for x in t], "{:.1f}"), "-", "-"])  # fmt: skip
+                         span([x["seconds"] / 60 for x in t], "{:.1f}"), "-", "-",
+                         "-"])  # fmt: skip
             continue
         v = [m["validation"] for m in metas]
+        checked = [x["best"]["check"] for x in v if "check" in x["best"]]
         body.append([plant, f"sb3:{algo}", kind, str(len(runs)),
                      span([m["timesteps_trained"] / 1e6 for m in metas], "{:.2f}") + "M",
                      span([m["timesteps_of_best"] / 1e6 for m in metas], "{:.2f}") + "M",
                      span([m["wall_time_s"] / 60 for m in metas], "{:.1f}"),
                      span([x["best"]["return"] for x in v], "{:.1f}")
                      + f" ({span([x['reference']['return'] for x in v], '{:.1f}')})",
-                     span([x["best"]["travel_ratio"] for x in v], "{:.2f}") + "x"])  # fmt: skip
+                     span([x["best"]["travel_ratio"] for x in v], "{:.2f}") + "x",
+                     f"{sum(not c for c in checked)} of {len(v)} runs" if checked
+                     else "-"])  # fmt: skip
     return "\n".join(_table(header, body)) + "\n"
 
 
