@@ -32,7 +32,6 @@ from agents.validation import (  # noqa: F401 - re-exported
     better_checkpoint,
     reference_result,
     scored,
-    validate,
 )
 from agents.vec_env import make_training_env  # noqa: F401 - re-exported
 
