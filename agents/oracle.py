@@ -29,6 +29,17 @@ Deterministic given the episode: each row's random draws come from a generator s
 the row's noise key and step counter, so a row gets the same plan alone or in a batch,
 in the single env or in the vector env.
 
+At least the causal controllers, by construction: when a row's episode starts (or its
+state is not where the oracle left it), the oracle plays the whole rest of the episode on a
+copy of the row three times, with its receding-horizon CEM and with each of the
+:data:`INCUMBENTS` (``mpc_linear``, the best causal controller of the leaderboard, and
+``cascade_pi_ff``, the score's 0) acting on the copy's observations, and commits to the
+command sequence of the highest return. The row then replays it, and as the copy's future is
+the row's, bit for bit, the row's return is the committed one: never below an incumbent's on
+the same episode, and the CEM's where the CEM wins (as before, to the bit). An optimizer
+that knows the future chooses among whole command sequences; the incumbents' are two more
+candidates. The incumbents cost about a tenth of the CEM's rollouts.
+
 The budget (samples, iterations, horizon, knots, replanning interval) was chosen by
 measurement: docs/leaderboard.md, "The oracle", gives the return as the budget doubles.
 """
@@ -41,9 +52,14 @@ from typing import Any
 
 import numpy as np
 
-from steamtemp_gym.envs.core import Core
+import baselines
+from steamtemp_gym.envs.core import Core, check_action
 from steamtemp_gym.envs.kernels import E_DUR, E_TIME
 from steamtemp_gym.envs.snapshot import copy_rows, planning_core
+
+#: The causal controllers whose whole-episode command sequences compete with the CEM's
+#: (module docstring): the leaderboard's best causal controller and the score's 0.
+INCUMBENTS = ("mpc_linear", baselines.INDUSTRIAL_REFERENCE)
 
 
 @dataclass(frozen=True)
@@ -82,50 +98,42 @@ class Budget:
             raise ValueError("oracle budget: knot_s and replan_s must not exceed horizon_s")
 
 
-class Oracle:
-    """Clairvoyant CEM-MPC on the env's own kernel (module docstring).
+class Planner:
+    """The receding-horizon CEM on the rows of one core (module docstring): :meth:`act`
+    gives every row's next commands, replanning the rows that are due.
 
     Args:
-        env: The env (single or native vector env) whose rows it acts on and reads.
+        src: The core whose rows it plans for and reads.
         budget: The optimizer's budget (:class:`Budget`).
     """
 
-    def __init__(self, env: Any, budget: Budget | None = None) -> None:
-        u = env.unwrapped
-        if not isinstance(getattr(u, "core", None), Core):
-            raise ValueError("the oracle acts on a steamtemp_gym env (SteamTempEnv or the "
-                             f"native vector env), got {type(u).__name__}")  # fmt: skip
-        self.src: Core = u.core
-        self.budget = budget or Budget()
-        plant = self.src.plant
+    def __init__(self, src: Core, budget: Budget) -> None:
+        self.src, self.budget = src, budget
+        plant = src.plant
         dt = plant.dt_s
-        b = self.budget
+        b = budget
         self.H = max(1, round(b.horizon_s / dt))
         self.T = round(b.tail_s / dt)
         self.K = max(1, round(b.knot_s / dt))
         self.R = max(1, round(b.replan_s / dt))
         self.n_knots = math.ceil(self.H / self.K) + 1
         self.n_u = plant.n_u
-        self.samples = self.budget.samples * math.ceil(self.n_u / 2)
+        self.samples = b.samples * math.ceil(self.n_u / 2)
         # knot k sits at step k K of the plan; command of plan step h by linear interpolation
         t = np.arange(self.H) / self.K
         k0 = np.minimum(t.astype(np.int64), self.n_knots - 2)
         self._k0, self._w = k0, (t - k0)[:, None]
         self._core: Core | None = None
-        self.reset()
+        B = src.B
+        self.plan = np.zeros((B, self.H, self.n_u))  # commands of each row's plan
+        self.knots = np.zeros((B, self.n_knots, self.n_u))  # its knots
+        self.start = np.full(B, -1, dtype=np.int64)  # step counter at each row's plan start
 
-    def reset(self) -> None:
-        self.plan: np.ndarray | None = None  # (rows, H, n_u) commands of each row's plan
-        self.knots: np.ndarray | None = None  # (rows, n_knots, n_u) its knots
-        self.start = np.zeros(0, dtype=np.int64)  # step counter at each row's plan start
-
-    # ---------------------------------------------------------------------- planning
     def _planner(self) -> Core:
-        """The planning core (rows x samples rows), made once per source batch size; its
-        rows simulate the plants of the rows copied into them (snapshot.planning_core)."""
-        n = self.src.B * self.samples
-        if self._core is None or self._core.B != n:
-            self._core = planning_core(self.src, n)
+        """The planning core (rows x samples rows); its rows simulate the plants of the rows
+        copied into them (snapshot.planning_core)."""
+        if self._core is None:
+            self._core = planning_core(self.src, self.src.B * self.samples)
         return self._core
 
     def _commands(self, knots: np.ndarray) -> np.ndarray:
@@ -197,26 +205,148 @@ class Oracle:
             mean[j] = self._commands(self.knots[r])[t]
         return mean
 
-    def predict(self, observation, state=None, episode_start=None, deterministic=True):
-        """The next commands of each row's plan, replanning where due (module docstring)."""
-        obs = np.asarray(observation)
-        B = self.src.B
-        if obs.shape[: obs.ndim - 1] != ((B,) if obs.ndim == 2 else ()):
-            raise ValueError(f"the oracle's env has {B} row(s); observation shape {obs.shape}")
-        if self.plan is None or self.plan.shape[0] != B:
-            self.plan = np.zeros((B, self.H, self.n_u))
-            self.knots = np.zeros((B, self.n_knots, self.n_u))
-            self.start = np.full(B, -1, dtype=np.int64)
-        age = self.src.counter - self.start
-        due = (self.start < 0) | (age < 0) | (age >= self.R) | (self.src.counter == 0)
-        if episode_start is not None:
-            due |= np.broadcast_to(np.asarray(episode_start, dtype=bool), (B,))
-        rows = np.flatnonzero(due)
+    def act(self, due: np.ndarray | None = None) -> np.ndarray:
+        """Every row's next commands as actions in [-1, 1] (float32), replanning the rows
+        whose plan is due (or flagged in ``due``)."""
+        counter = self.src.counter
+        age = counter - self.start
+        due_ = (self.start < 0) | (age < 0) | (age >= self.R) | (counter == 0)
+        if due is not None:
+            due_ |= due
+        rows = np.flatnonzero(due_)
         if rows.size:
             best = self._optimize(rows, self._shifted(rows))
             self.knots[rows] = best
             self.plan[rows] = self._commands(best)
-            self.start[rows] = self.src.counter[rows]
-        age = self.src.counter - self.start
-        action = (2.0 * self.plan[np.arange(B), age] - 1.0).astype(np.float32)
+            self.start[rows] = counter[rows]
+        age = counter - self.start
+        return (2.0 * self.plan[np.arange(self.src.B), age] - 1.0).astype(np.float32)
+
+
+@dataclass
+class Committed:
+    """A row's committed command sequence from step ``start`` of its episode on: the
+    actions (steps, n_u) and the rewards and observations after each, of the rollout it
+    won (``source``: ``"cem"`` or an incumbent's name)."""
+
+    key: int
+    start: int
+    actions: np.ndarray
+    rewards: np.ndarray
+    observations: np.ndarray
+    source: str
+    returns: dict[str, float]
+
+
+def rollout(core: Core, act: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Run every row of ``core`` to its episode's end (a trip or the end of its scenario),
+    ``act(observations, first) -> actions`` deciding. Returns the actions (steps, rows,
+    n_u) as the core took them, the rewards (steps, rows), the observations after each
+    step and each row's number of steps; rows that ended keep stepping until the last one
+    ends (their rewards there are 0)."""
+    n = core.B
+    shape = (n, core.plant.n_u)
+    alive = np.ones(n, dtype=bool)
+    steps = np.zeros(n, dtype=np.int64)
+    acts, rews, obs = [], [], []
+    while alive.any():
+        a = check_action(act(core.obs.copy(), not acts), shape)
+        core.step(a)
+        acts.append(np.array(a, dtype=np.float64))
+        rews.append(np.where(alive, core.out[:, 0], 0.0))
+        obs.append(core.obs.copy())
+        steps += alive
+        alive &= (core.out[:, 1] == 0.0) & (core.out[:, 2] == 0.0)
+    return np.asarray(acts), np.asarray(rews), np.asarray(obs), steps
+
+
+class Oracle:
+    """Clairvoyant CEM-MPC on the env's own kernel, at least the causal controllers of
+    :data:`INCUMBENTS` on every episode (module docstring).
+
+    Args:
+        env: The env (single or native vector env) whose rows it acts on and reads.
+        budget: The optimizer's budget (:class:`Budget`).
+        incumbents: Baseline names whose closed-loop episodes compete with the CEM's
+            (default :data:`INCUMBENTS`; ``()``: the CEM alone).
+    """
+
+    def __init__(self, env: Any, budget: Budget | None = None,
+                 incumbents: tuple[str, ...] = INCUMBENTS) -> None:  # fmt: skip
+        u = env.unwrapped
+        if not isinstance(getattr(u, "core", None), Core):
+            raise ValueError("the oracle acts on a steamtemp_gym env (SteamTempEnv or the "
+                             f"native vector env), got {type(u).__name__}")  # fmt: skip
+        unknown = [n for n in incumbents if n not in baselines.NAMES]
+        if isinstance(incumbents, str) or unknown:
+            raise ValueError(f"oracle incumbents must be a tuple of baseline names "
+                             f"({', '.join(baselines.NAMES)}), got {incumbents!r}")  # fmt: skip
+        self.env, self.src = env, u.core
+        self.budget = budget or Budget()
+        self.incumbents = tuple(incumbents)
+        self._policies: list[Any] | None = None
+        self.reset()
+
+    def reset(self) -> None:
+        self.committed: list[Committed | None] = [None] * self.src.B
+        self._next = np.full(self.src.B, -1, dtype=np.int64)  # the counter each row is due at
+
+    def _incumbent_policies(self) -> list[Any]:
+        """The incumbents, commissioned once on the env (as the leaderboard makes them)."""
+        if self._policies is None:
+            self._policies = [baselines.make(n, self.env) for n in self.incumbents]
+        return self._policies
+
+    def _commit(self, rows: np.ndarray) -> None:
+        """Roll the rest of each row's episode out on copies, by the CEM and by each
+        incumbent, and commit to the best (module docstring)."""
+        n = len(rows)
+        shadow = planning_core(self.src, n)
+        dst = np.arange(n)
+        copy_rows(self.src, rows, shadow, dst)
+        planner = Planner(shadow, self.budget)
+        runs = {"cem": rollout(shadow, lambda obs, first: planner.act())}
+        for name, policy in zip(self.incumbents, self._incumbent_policies(), strict=True):
+            copy_rows(self.src, rows, shadow, dst)
+            policy.reset()
+            runs[name] = rollout(shadow, lambda obs, first, p=policy: p.predict(
+                obs, episode_start=np.full(n, first), deterministic=True)[0])
+        for j, r in enumerate(rows):
+            # summed in order, as the evaluation adds; a tie keeps the CEM's
+            totals = {name: float(np.cumsum(run[1][: run[3][j], j])[-1])
+                      for name, run in runs.items()}  # fmt: skip
+            best = max(totals, key=totals.get)
+            acts, rew, obs, steps = runs[best]
+            k = steps[j]
+            self.committed[r] = Committed(
+                int(self.src.key[r]), int(self.src.counter[r]), acts[:k, j].copy(),
+                rew[:k, j].copy(), obs[:k, j].copy(), best, totals)
+
+    def predict(self, observation, state=None, episode_start=None, deterministic=True):
+        """The next commands of each row's committed sequence, committing where due: a new
+        episode, or a row not where its committed sequence left it (a restored snapshot,
+        another episode). A row whose episode has ended holds its last commands."""
+        obs = np.asarray(observation)
+        src = self.src
+        B = src.B
+        if obs.shape[: obs.ndim - 1] != ((B,) if obs.ndim == 2 else ()):
+            raise ValueError(f"the oracle's env has {B} row(s); observation shape {obs.shape}")
+        if len(self.committed) != B:
+            self.reset()
+        counter, key = src.counter, src.key
+        ended = (counter > 0) & ((src.out[:, 1] != 0.0) | (src.out[:, 2] != 0.0))
+        due = np.array([not ended[r] and (
+            (c := self.committed[r]) is None or counter[r] == 0 or c.key != int(key[r])
+            or counter[r] != self._next[r]) for r in range(B)])  # fmt: skip
+        if episode_start is not None:
+            due |= np.broadcast_to(np.asarray(episode_start, dtype=bool), (B,))
+        rows = np.flatnonzero(due)
+        if rows.size:
+            self._commit(rows)
+        action = src.U_prev * 2.0 - 1.0  # an ended row's last commands
+        for r, c in enumerate(self.committed):
+            i = int(counter[r]) - c.start if c is not None else -1
+            if 0 <= i < len(c.actions) and not (ended[r] and not due[r]):
+                action[r] = c.actions[i]
+                self._next[r] = counter[r] + 1
         return (action if obs.ndim == 2 else action[0]), None

@@ -13,7 +13,7 @@ import baselines
 import steamtemp_gym
 from agents.evaluation import run_batch, run_episode
 from agents.leaderboard.episodes import _make_policy
-from agents.oracle import Budget, Oracle
+from agents.oracle import INCUMBENTS, Budget, Oracle
 from steamtemp_gym import plants
 from steamtemp_gym.envs.snapshot import copy_rows
 from steamtemp_gym.plants import perturb
@@ -96,10 +96,10 @@ STEP = Scenario(name="oracle_step", duration_s=600.0, load=((0.0, 1.0), (300.0, 
 @pytest.mark.parametrize("env_id", steamtemp_gym.ENV_IDS)
 def test_the_oracle_plans_on_each_rows_drawn_plant(env_id):
     """With ``plant_randomization`` (here drawing the plant of a model-mismatch variant's
-    factors):
-    a rollout of the oracle's plan from a copy of the row's state, on its planning core, is
-    the episode the env then runs, bit for bit; and its return is the one on an env made
-    with the drawn parameters."""
+    factors): the episode the env runs is the rollout the oracle committed to on its copy
+    of the row, bit for bit (observations and rewards); and its return is the one on an env
+    made with the drawn parameters. (The CEM alone: the incumbents are commissioned on
+    the env's nominal plant, which differs between the two envs.)"""
     factors = next(iter(perturb.VARIANT_FACTORS[env_id].values()))
     dt = plants.plant_class(env_id).Params().dt_s
     budget = Budget(horizon_s=60 * dt, tail_s=0.0, knot_s=10 * dt, replan_s=5 * dt, samples=4,
@@ -108,31 +108,88 @@ def test_the_oracle_plans_on_each_rows_drawn_plant(env_id):
                    plant_randomization={g: (k, k) for g, k in factors.items()})  # fmt: skip
     made = gym.make(env_id, scenario=STEP, params=perturb.scaled(env_id, {}, factors))
     u = env.unwrapped
-    oracle = Oracle(env, budget)
+    oracle = Oracle(env, budget, incumbents=())
     obs, _ = env.reset(seed=0)
     assert u.episode_plant.params == made.unwrapped.plant.params != u.plant.params
-    rollouts, executed, done = [], [], False
+    executed, done = [], False
     while not done:
         action, _ = oracle.predict(obs)
-        if oracle.start[0] == u.core.counter[0]:  # a new plan: roll it out from a copy
-            core = oracle._planner()
-            copy_rows(u.core, np.zeros(core.B, dtype=np.int64), core, np.arange(core.B))
-            roll = []
-            for cmd in oracle.plan[0][: oracle.R]:
-                core.step(np.tile((2.0 * cmd - 1.0).astype(np.float32), (core.B, 1)))
-                roll.append((core.obs[0].copy(), core.out[0, 0]))
-            rollouts.append((len(executed), roll))
         obs, r, term, trunc, _ = env.step(action)
         executed.append((obs, r))
         done = term or trunc
-    assert len(rollouts) > 10
-    for t0, roll in rollouts:
-        for (o, r), (eo, er) in zip(roll, executed[t0:], strict=False):
-            np.testing.assert_array_equal(o, eo)
-            assert r == er
+    c = oracle.committed[0]
+    assert c.start == 0 and len(c.actions) == len(executed) > 100
+    np.testing.assert_array_equal(np.array([o for o, _ in executed]), c.observations)
+    np.testing.assert_array_equal(np.array([r for _, r in executed]), c.rewards)
     drawn = sum(r for _, r in executed)
-    alone = run_episode(made, Oracle(made, budget), 0)["metrics"]["return"]
+    alone = run_episode(made, Oracle(made, budget, incumbents=()), 0)["metrics"]["return"]
     assert drawn == alone  # summed in the same order: bit for bit
+
+
+#: A CEM that can hardly move the valves from where they start: the incumbents win.
+WEAK = Budget(horizon_s=60.0, tail_s=0.0, knot_s=30.0, replan_s=60.0, samples=2, iterations=1,
+              sigma0=0.005)  # fmt: skip
+
+
+@pytest.mark.parametrize("env_id", ["steamtemp/SupercriticalFSH-v0", "steamtemp/Cascade300MW-v0"])
+def test_the_oracle_is_at_least_each_incumbent_by_construction(env_id):
+    """Where its CEM loses (a budget too small to plan), the oracle's episode is the best
+    incumbent's, bit for bit: its return is what ``mpc_linear`` or ``cascade_pi_ff`` returns
+    on that episode alone, and at least each of theirs. With no incumbents it is the CEM's."""
+    env = gym.make(env_id, scenario=SHORT)
+    oracle = Oracle(env, WEAK)
+    got = run_episode(env, oracle, 0)["metrics"]["return"]
+    c = oracle.committed[0]
+    theirs = {n: run_episode(env, baselines.make(n, env), 0)["metrics"]["return"]
+              for n in INCUMBENTS}  # fmt: skip
+    assert c.source in INCUMBENTS and c.returns["cem"] < got
+    assert got == theirs[c.source] == max(theirs.values())
+    cem = run_episode(env, Oracle(env, WEAK, incumbents=()), 0)["metrics"]["return"]
+    assert cem == c.returns["cem"] < got
+
+
+def test_the_oracle_with_incumbents_is_its_cem_where_the_cem_wins():
+    """The incumbents only add candidates: where the CEM's sequence is best, the episode is
+    the one the CEM alone runs, to the bit."""
+    env = gym.make("steamtemp/Cascade300MW-v0", scenario=SHORT)
+    budget = Budget(horizon_s=120.0, knot_s=20.0, replan_s=10.0, samples=6, iterations=2)
+    oracle = Oracle(env, budget)
+    got = run_episode(env, oracle, 1)
+    assert oracle.committed[0].source == "cem"
+    alone = run_episode(env, Oracle(env, budget, incumbents=()), 1)
+    for k in got["trace"]:
+        np.testing.assert_array_equal(got["trace"][k], alone["trace"][k], err_msg=k)
+
+
+def test_the_oracle_commits_again_where_its_row_was_moved():
+    """Restored to an earlier state of its episode, the row is not where the committed
+    sequence left it: the oracle commits afresh from there, and the rest of the episode is
+    the new committed rollout."""
+    env = gym.make("steamtemp/Cascade300MW-v0", scenario=SHORT)
+    budget = Budget(horizon_s=120.0, knot_s=20.0, replan_s=10.0, samples=4, iterations=1)
+    oracle = Oracle(env, budget, incumbents=())
+    obs, _ = env.reset(seed=2)
+    rewards, snap = [], None
+    for t in range(400):
+        if t == 200:
+            snap = env.unwrapped.snapshot()
+        obs, r, *_ = env.step(oracle.predict(obs)[0])
+        rewards.append(r)
+    obs = env.unwrapped.restore(snap)
+    again = []
+    for _ in range(200):
+        obs, r, *_ = env.step(oracle.predict(obs)[0])
+        again.append(r)
+    c = oracle.committed[0]
+    assert c.start == 200 and c.source == "cem"
+    assert again == c.rewards[:200].tolist()
+
+
+def test_bad_incumbents_are_refused():
+    env = gym.make("steamtemp/Cascade300MW-v0", scenario=SHORT)
+    for bad in (("no_such_controller",), "mpc_linear"):
+        with pytest.raises(ValueError, match="incumbents"):
+            Oracle(env, incumbents=bad)
 
 
 def test_copy_rows_refuses_a_plain_core_for_drawn_plants():

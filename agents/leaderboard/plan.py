@@ -28,6 +28,7 @@ from agents import specs, stats
 from agents.leaderboard import mismatch, summary
 from agents.leaderboard.isolated import PolicyFailed, PolicyProcess
 from agents.leaderboard.records import EPISODES, SCHEMA, Key
+from agents.oracle import INCUMBENTS
 from steamtemp_gym import envs as envs_
 from steamtemp_gym import scenarios
 from steamtemp_gym.checks import head, tail
@@ -265,7 +266,10 @@ def _policy_digest(env_id: str, name: str) -> str:
     code and of a baseline's stored tuning, a trained agent's files or a factory's module
     (agents/specs.py)."""
     if name in _REFERENCE_MODULES:
-        return f"{name}:{specs.code_digest(_REFERENCE_MODULES[name])}"
+        own = f"{name}:{specs.code_digest(_REFERENCE_MODULES[name])}"
+        if name == summary.ONE:  # its incumbents' episodes are candidates of its own
+            own += "".join(f"+{specs.parse(i).digest(env_id)}" for i in INCUMBENTS)
+        return own
     return specs.parse(name).digest(env_id)
 
 
