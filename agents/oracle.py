@@ -205,15 +205,12 @@ class Planner:
             mean[j] = self._commands(self.knots[r])[t]
         return mean
 
-    def act(self, due: np.ndarray | None = None) -> np.ndarray:
+    def act(self) -> np.ndarray:
         """Every row's next commands as actions in [-1, 1] (float32), replanning the rows
-        whose plan is due (or flagged in ``due``)."""
+        whose plan is due."""
         counter = self.src.counter
         age = counter - self.start
-        due_ = (self.start < 0) | (age < 0) | (age >= self.R) | (counter == 0)
-        if due is not None:
-            due_ |= due
-        rows = np.flatnonzero(due_)
+        rows = np.flatnonzero((self.start < 0) | (age < 0) | (age >= self.R) | (counter == 0))
         if rows.size:
             best = self._optimize(rows, self._shifted(rows))
             self.knots[rows] = best
@@ -288,8 +285,10 @@ class Oracle:
         self.reset()
 
     def reset(self) -> None:
-        self.committed: list[Committed | None] = [None] * self.src.B
-        self._next = np.full(self.src.B, -1, dtype=np.int64)  # the counter each row is due at
+        B = self.src.B
+        self.committed: list[Committed | None] = [None] * B
+        self._next = np.full(B, -1, dtype=np.int64)  # the counter each row is due at
+        self._key = np.full(B, -1, dtype=np.int64)  # the noise key of its committed episode
 
     def _incumbent_policies(self) -> list[Any]:
         """The incumbents, commissioned once on the env (as the leaderboard makes them)."""
@@ -321,6 +320,7 @@ class Oracle:
             self.committed[r] = Committed(
                 int(self.src.key[r]), int(self.src.counter[r]), acts[:k, j].copy(),
                 rew[:k, j].copy(), obs[:k, j].copy(), best, totals)
+            self._key[r] = self.src.key[r]
 
     def predict(self, observation, state=None, episode_start=None, deterministic=True):
         """The next commands of each row's committed sequence, committing where due: a new
@@ -333,20 +333,17 @@ class Oracle:
             raise ValueError(f"the oracle's env has {B} row(s); observation shape {obs.shape}")
         if len(self.committed) != B:
             self.reset()
-        counter, key = src.counter, src.key
+        counter = src.counter
         ended = (counter > 0) & ((src.out[:, 1] != 0.0) | (src.out[:, 2] != 0.0))
-        due = np.array([not ended[r] and (
-            (c := self.committed[r]) is None or counter[r] == 0 or c.key != int(key[r])
-            or counter[r] != self._next[r]) for r in range(B)])  # fmt: skip
+        due = (counter == 0) | (src.key != self._key) | (counter != self._next)
         if episode_start is not None:
             due |= np.broadcast_to(np.asarray(episode_start, dtype=bool), (B,))
-        rows = np.flatnonzero(due)
+        rows = np.flatnonzero(due & ~ended)
         if rows.size:
             self._commit(rows)
         action = src.U_prev * 2.0 - 1.0  # an ended row's last commands
-        for r, c in enumerate(self.committed):
-            i = int(counter[r]) - c.start if c is not None else -1
-            if 0 <= i < len(c.actions) and not (ended[r] and not due[r]):
-                action[r] = c.actions[i]
-                self._next[r] = counter[r] + 1
+        for r in np.flatnonzero(~ended):
+            c = self.committed[r]
+            action[r] = c.actions[counter[r] - c.start]
+        self._next = np.where(ended, self._next, counter + 1)
         return (action if obs.ndim == 2 else action[0]), None
