@@ -33,6 +33,7 @@ from __future__ import annotations
 import functools
 import hashlib
 import json
+import os
 import pickle
 import re
 import subprocess
@@ -254,13 +255,25 @@ def zoo_runs(directory: Path) -> dict[tuple[str, str], list[int]]:
     Raises:
         ValueError: a model .zip with its .json whose stem :func:`parse_stem` refuses.
     """
-    out: dict[tuple[str, str], set[int]] = {}
     d = Path(directory)
-    for f in sorted(d.glob("*.zip")) if d.is_dir() else []:
-        if f.with_suffix(".json").is_file():
-            env_id, algo, run = parse_stem(f.stem)
+    if not d.is_dir():
+        return {}
+    found = _zoo_runs(str(d.resolve()), tuple(sorted(os.listdir(d))))
+    return {k: list(v) for k, v in found.items()}
+
+
+@functools.lru_cache(maxsize=64)
+def _zoo_runs(directory: str, names: tuple[str, ...]) -> dict[tuple[str, str], tuple[int, ...]]:
+    """:func:`zoo_runs` of a folder holding ``names`` (memoized: a leaderboard asks it
+    for every unit of every trained agent)."""
+    out: dict[tuple[str, str], set[int]] = {}
+    for name in names:
+        stem = name.removesuffix(".zip")
+        if (stem != name and not name.startswith(".")  # what glob("*.zip") finds
+                and os.path.isfile(os.path.join(directory, f"{stem}.json"))):  # fmt: skip
+            env_id, algo, run = parse_stem(stem)
             out.setdefault((env_id, algo), set()).add(0 if run is None else run)
-    return {k: sorted(v) for k, v in out.items()}
+    return {k: tuple(sorted(v)) for k, v in out.items()}
 
 
 def steamtemp_files(directory: Path, env_id: str, algo: str, run: int = 0) -> AgentFiles:

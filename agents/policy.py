@@ -104,7 +104,8 @@ def normalize_obs(obs: np.ndarray, stats: dict[str, Any] | None) -> np.ndarray:
     if not stats:
         return obs
     z = (obs - np.asarray(stats["mean"])) / np.sqrt(np.asarray(stats["var"]) + stats["epsilon"])
-    return np.clip(z, -stats["clip_obs"], stats["clip_obs"]).astype(np.float32)
+    clip = stats["clip_obs"]
+    return np.minimum(np.maximum(z, -clip), clip).astype(np.float32)
 
 
 class AgentPolicy:
@@ -155,7 +156,8 @@ class AgentPolicy:
         self.memory = None
         if memory is not None:
             self.memory = MemoryState(env, MemoryConfig.from_kwargs(memory))
-        self.obs_norm = obs_norm
+        self.obs_norm = obs_norm and {**obs_norm, **{k: np.asarray(obs_norm[k], dtype=np.float64)
+                                                     for k in ("mean", "var")}}  # fmt: skip
         self.residual_scale = residual_scale
         self.base = None
         if residual_scale is not None:

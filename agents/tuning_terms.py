@@ -202,8 +202,9 @@ def _corner_episodes(env_id: str) -> list[tuple[int, dict[str, float]]]:
     return [(i, c) for i in range(len(COMMISSIONING_CHECKS)) for c in robust_corners(env_id)]
 
 
-def corner_check_metrics(env_id: str,
-                         make_policy: Any) -> tuple[list[dict[str, Any]], list[dict[str, Any]]]:  # fmt: skip
+def corner_check_metrics(
+    env_id: str, make_policy: Any
+) -> tuple[list[dict[str, Any]], list[dict[str, Any]]]:
     """Metrics of one policy, commissioned on the nominal plant of each commissioning check,
     on that check (seed ``CHECK_SEEDS[0]``): on the nominal plant (one per check) and on
     every corner plant (in the order of :func:`_corner_episodes`)."""

@@ -80,8 +80,15 @@ class MemoryState:
         # their observations' normalization
         self.i_rate = np.array([names.index("load_demand"), names.index("setpoint_C")])
         self.a_rate = float(np.exp(-self.dt / config.rate_filter_s))
+        self.integral_step = self.dt / config.integral_time_s
         self._integral = np.zeros((0, 1 + len(second)))
-        self._buf = np.zeros((0, 0, 0))  # (rows, samples kept, sampled signals)
+        # the history as a ring of the last `keep` samples of every row (rows, keep, signals):
+        # the newest at `_head`, the one j steps back at (_head - j) mod keep
+        self.keep = config.history * config.history_stride + 1
+        lags = config.history_stride * np.arange(1, config.history + 1)
+        self._past = (np.arange(self.keep)[:, None] - lags) % self.keep  # per head
+        self._buf = np.zeros((0, self.keep, self.i_sample.size))
+        self._head = 0
         self._rate = np.zeros((0, 2))
         self._last = np.zeros((0, 2))
 
@@ -96,35 +103,32 @@ class MemoryState:
         obs = np.asarray(obs)
         n = obs.shape[0]
         c = self.config
-        keep = c.history * c.history_stride + 1
         if self._integral.shape[0] != n:
             self._integral = np.zeros((n, 1 + self.i_sec.size))
-            self._buf = np.zeros((n, keep, self.i_sample.size))
+            self._buf = np.zeros((n, self.keep, self.i_sample.size))
             self._rate, self._last = np.zeros((n, 2)), np.zeros((n, 2))
             restart = np.ones(n, dtype=bool)
-        elif restart is None:
-            restart = np.zeros(n, dtype=bool)
         sample = obs[:, self.i_sample]
         now = obs[:, self.i_rate]
-        if restart.any():
+        if restart is not None and restart.any():
             self._integral[restart] = 0.0
             self._buf[restart] = sample[restart, None, :]
             self._rate[restart] = 0.0
             self._last[restart] = now[restart]
+        parts = [obs]
         if c.integral:
-            e_K = obs[:, [self.i_err]] * self.e_scale
+            e_K = obs[:, self.i_err : self.i_err + 1] * self.e_scale
             if self.i_sec.size:
                 measured = obs[:, self.i_sec] * self.sec_scale + self.sec_center
                 e_K = np.concatenate([e_K, self.sp_sec - measured], axis=1)
-            step = e_K * (self.dt / c.integral_time_s)
+            step = e_K * self.integral_step
             opening = obs[:, self.i_valve] * self.v_scale + self.v_center
             at_stop = ((opening <= STOP_MARGIN) | (opening >= 1.0 - STOP_MARGIN)).all(axis=1)
-            grows = np.abs(self._integral + step) > np.abs(self._integral)
-            step[at_stop[:, None] & grows] = 0.0
-            self._integral = np.clip(self._integral + step, -c.integral_limit_K,
-                                     c.integral_limit_K)  # fmt: skip
-        parts = [obs]
-        if c.integral:
+            if at_stop.any():
+                grows = np.abs(self._integral + step) > np.abs(self._integral)
+                step[at_stop[:, None] & grows] = 0.0
+            limit = c.integral_limit_K
+            self._integral = np.minimum(np.maximum(self._integral + step, -limit), limit)
             parts.append(self._integral / self.i_scale)
         if c.rates:
             self._rate = (self.a_rate * self._rate
@@ -132,19 +136,20 @@ class MemoryState:
             self._last = now
             parts.append(self._rate)
         if c.history:
-            self._buf = np.roll(self._buf, 1, axis=1)
-            self._buf[:, 0] = sample
-            past = self._buf[:, c.history_stride :: c.history_stride]  # (n, history, k)
-            parts.append(past.reshape(n, -1))
+            self._head = (self._head + 1) % self.keep
+            self._buf[:, self._head] = sample
+            parts.append(self._buf[:, self._past[self._head]].reshape(n, -1))
         return np.concatenate(parts, axis=1).astype(obs.dtype, copy=False)
 
     def state(self) -> tuple[np.ndarray, ...]:
-        """A copy of (integral, history buffer, rates, last rate inputs) (to extend a
-        terminal observation)."""
-        return tuple(a.copy() for a in (self._integral, self._buf, self._rate, self._last))
+        """A copy of (integral, history ring, rates, last rate inputs, the ring's head) (to
+        extend a terminal observation)."""
+        return (*(a.copy() for a in (self._integral, self._buf, self._rate, self._last)),
+                self._head)  # fmt: skip
 
-    def set_state(self, state: tuple[np.ndarray, ...]) -> None:
-        self._integral, self._buf, self._rate, self._last = (a.copy() for a in state)
+    def set_state(self, state: tuple) -> None:
+        *arrays, self._head = state
+        self._integral, self._buf, self._rate, self._last = (a.copy() for a in arrays)
 
 
 def _measured(names: list[str], true_name: str) -> int:

@@ -321,8 +321,8 @@ INFEASIBLE = {
         "on the model (quiet peak-to-peak 2.6-4.6 K against the reference's 1.3-2.1 K); the "
         "13 that pass them (move suppression 1e-4 to 1.8e-4, travel 1.59-2.07x) cost 6.7-8.4x "
         "their nominal cost on a corner plant, where they stroke the valves up to 10.6x "
-        "as far as the reference at 35 % load; the stored knobs are the least infeasible (0.704 at 1.67x, "
-        "6.73x on its worst corner)"),
+        "as far as the reference at 35 % load; the stored knobs are the least infeasible "
+        "(0.704 at 1.67x, 6.73x on its worst corner)"),
 }
 
 

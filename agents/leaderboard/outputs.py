@@ -39,6 +39,7 @@ class Plots:
         self.pending = Counter(u.env_id for u in units)
         self.traces: dict[tuple[str, str], dict[str, dict]] = {}
         self.trace_run: dict[tuple[str, str, str], int] = {}  # the run of a trace kept
+        self._shown: dict[str, tuple[list[str], dict[str, str]]] = {}
 
     def add(self, u: Unit, trace: dict | None) -> None:
         if trace is not None and u.policy in references.POLICIES and u.trace_seed is not None:
@@ -62,7 +63,13 @@ class Plots:
         references.save_traces(path, kept)
 
     def shown(self, env_id: str) -> tuple[list[str], dict[str, str]]:
-        """The policies a plant's trends show and their legend notes (rank and score)."""
+        """The policies a plant's trends show and their legend notes (rank and score),
+        summarized once per plant: its plots are drawn when all its episodes have finished."""
+        if env_id not in self._shown:
+            self._shown[env_id] = self._summarize_shown(env_id)
+        return self._shown[env_id]
+
+    def _summarize_shown(self, env_id: str) -> tuple[list[str], dict[str, str]]:
         rows = [r for r in _grid_rows(self.out, self.plan) if r["env"] == env_id]
         ok = [r for r in rows if not r.get("error")]
         plant = (summarize(ok, _run_info(self.plan, [env_id]))[0]["plants"][env_id]
