@@ -108,16 +108,25 @@ def free_response(abc: tuple[np.ndarray, ...], dy: np.ndarray, du: np.ndarray,
     Delta w from t back, newest first.
     """
     a, b, c = abc
-    dy, ddw = dy.copy(), ddw.copy()
-    du = np.vstack([du_now[None], du])
+    # each history in a buffer, newest first from row N - k at step k: the rows above it
+    # take what the steps to come add (the output changes computed, zero bias moves, the
+    # load step's end), so that no step copies a history
+    Y = np.zeros((N + len(dy), dy.shape[1]))
+    Y[N:] = dy
+    U = np.zeros((N + 1 + len(du), du.shape[1]))
+    U[N], U[N + 1 :] = du_now, du
+    W = np.zeros(N + len(ddw))
+    W[N:] = ddw
+    if 1 <= n_hold <= N:
+        W[N - n_hold] = -dw_now
+    n_y, n_u, n_w = len(dy), 1 + len(du), len(ddw)
     out, y = np.zeros((N, a.shape[0])), np.zeros(a.shape[0])
     for k in range(N):
-        d = advance(a, b, c, dy, du, ddw)
+        i = N - k
+        d = advance(a, b, c, Y[i : i + n_y], U[i : i + n_u], W[i : i + n_w])
         y = y + d
         out[k] = y
-        dy = np.vstack([d[None], dy[:-1]])
-        du = np.vstack([np.zeros_like(du[:1]), du[:-1]])
-        ddw = np.concatenate([[-dw_now if k + 1 == n_hold else 0.0], ddw[:-1]])
+        Y[i - 1] = d
     return out
 
 
