@@ -33,7 +33,8 @@ VERSION = PYPROJECT["project"]["version"]
 
 
 def test_license_citation_and_changelog_agree_with_pyproject():
-    assert PYPROJECT["project"]["license"] == {"text": "MIT"}
+    assert PYPROJECT["project"]["license"] == "MIT"  # an SPDX expression (PEP 639)
+    assert PYPROJECT["project"]["license-files"] == ["LICENSE"]
     text = (ROOT / "LICENSE").read_text()
     assert text.startswith("MIT License") and "steamtemp_gym contributors" in text
     cff = yaml.safe_load((ROOT / "CITATION.cff").read_text())
