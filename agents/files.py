@@ -268,9 +268,10 @@ def _zoo_runs(directory: str, names: tuple[str, ...]) -> dict[tuple[str, str], t
     for every unit of every trained agent)."""
     out: dict[tuple[str, str], set[int]] = {}
     for name in names:
+        if not name.endswith(".zip") or name.startswith("."):  # what glob("*.zip") finds
+            continue
         stem = name.removesuffix(".zip")
-        if (stem != name and not name.startswith(".")  # what glob("*.zip") finds
-                and os.path.isfile(os.path.join(directory, f"{stem}.json"))):  # fmt: skip
+        if os.path.isfile(os.path.join(directory, f"{stem}.json")):
             env_id, algo, run = parse_stem(stem)
             out.setdefault((env_id, algo), set()).add(0 if run is None else run)
     return {k: tuple(sorted(v)) for k, v in out.items()}

@@ -104,8 +104,7 @@ def normalize_obs(obs: np.ndarray, stats: dict[str, Any] | None) -> np.ndarray:
     if not stats:
         return obs
     z = (obs - np.asarray(stats["mean"])) / np.sqrt(np.asarray(stats["var"]) + stats["epsilon"])
-    clip = stats["clip_obs"]
-    return np.minimum(np.maximum(z, -clip), clip).astype(np.float32)
+    return np.clip(z, -stats["clip_obs"], stats["clip_obs"]).astype(np.float32)
 
 
 class AgentPolicy:
@@ -156,8 +155,10 @@ class AgentPolicy:
         self.memory = None
         if memory is not None:
             self.memory = MemoryState(env, MemoryConfig.from_kwargs(memory))
-        self.obs_norm = obs_norm and {**obs_norm, **{k: np.asarray(obs_norm[k], dtype=np.float64)
-                                                     for k in ("mean", "var")}}  # fmt: skip
+        self.obs_norm = None  # the statistics as arrays once, not at every step
+        if obs_norm:
+            self.obs_norm = {**obs_norm, "mean": np.asarray(obs_norm["mean"], dtype=np.float64),
+                             "var": np.asarray(obs_norm["var"], dtype=np.float64)}  # fmt: skip
         self.residual_scale = residual_scale
         self.base = None
         if residual_scale is not None:

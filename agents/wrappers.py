@@ -127,8 +127,8 @@ class MemoryState:
             if at_stop.any():
                 grows = np.abs(self._integral + step) > np.abs(self._integral)
                 step[at_stop[:, None] & grows] = 0.0
-            limit = c.integral_limit_K
-            self._integral = np.minimum(np.maximum(self._integral + step, -limit), limit)
+            self._integral = np.clip(self._integral + step, -c.integral_limit_K,
+                                     c.integral_limit_K)  # fmt: skip
             parts.append(self._integral / self.i_scale)
         if c.rates:
             self._rate = (self.a_rate * self._rate

@@ -111,15 +111,15 @@ def free_response(abc: tuple[np.ndarray, ...], dy: np.ndarray, du: np.ndarray,
     # each history in a buffer, newest first from row N - k at step k: the rows above it
     # take what the steps to come add (the output changes computed, zero bias moves, the
     # load step's end), so that no step copies a history
-    Y = np.zeros((N + len(dy), dy.shape[1]))
-    Y[N:] = dy
-    U = np.zeros((N + 1 + len(du), du.shape[1]))
-    U[N], U[N + 1 :] = du_now, du
-    W = np.zeros(N + len(ddw))
-    W[N:] = ddw
-    if 1 <= n_hold <= N:
-        W[N - n_hold] = -dw_now
     n_y, n_u, n_w = len(dy), 1 + len(du), len(ddw)
+    Y = np.zeros((N + n_y, dy.shape[1]))
+    Y[N:] = dy
+    U = np.zeros((N + n_u, du.shape[1]))
+    U[N], U[N + 1 :] = du_now, du
+    W = np.zeros(N + n_w)
+    W[N:] = ddw
+    if 1 <= n_hold <= N:  # Delta w ends after n_hold intervals
+        W[N - n_hold] = -dw_now
     out, y = np.zeros((N, a.shape[0])), np.zeros(a.shape[0])
     for k in range(N):
         i = N - k
