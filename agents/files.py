@@ -115,7 +115,7 @@ class AgentFiles:
         """The agent as a Policy (agents.policy.AgentPolicy) on a new env of its id."""
         import gymnasium as gym
 
-        from agents.policy import AgentPolicy, model_class
+        from agents.policy import AgentPolicy
 
         memory = self._memory()
         if self.layout == STEAMTEMP:
@@ -132,7 +132,8 @@ class AgentFiles:
             pkl = [f for f in self.meta if f.name == "vecnormalize.pkl"]
             if pkl:
                 norm = _vecnormalize_stats(pkl[0])
-        model = model_class(cls).load(self.model, device="cpu")
+        st = self.model.stat()
+        model = _model(cls, str(self.model), (st.st_size, st.st_mtime_ns))
         return AgentPolicy(model, gym.make(self.env_id), memory=memory, obs_norm=norm,
                            residual_scale=residual, max_move=max_move,
                            residual_base=base, action_filter_s=filter_s,
@@ -148,6 +149,16 @@ def git_revision() -> str:
         return done.stdout.strip()
     except (OSError, subprocess.CalledProcessError):
         return "unknown"
+
+
+@functools.lru_cache(maxsize=32)
+def _model(cls: str, path: str, stat: tuple) -> Any:
+    """The SB3 model of class ``cls`` in file ``path``, read once per process and state
+    (size, modification time) of the file: a leaderboard loads an agent for every scenario,
+    and its policies only read the model."""
+    from agents.policy import model_class
+
+    return model_class(cls).load(path, device="cpu")
 
 
 @functools.lru_cache(maxsize=64)

@@ -57,12 +57,12 @@ saturates. The policy sees exactly the observation an agent sees.
 
 from __future__ import annotations
 
-import functools
 import json
 from typing import Any
 
 import numpy as np
 
+from baselines.commissioned import commissioned
 from baselines.identification import FOPDT, simc_pi, step_test
 from baselines.loops import input_filter, observation_layout, pi_position, restart_rows
 from baselines.tuning import Knob
@@ -85,7 +85,7 @@ def _env(env_id: str, params_json: str, scenario: Any):
     return gym.make(env_id, scenario=scenario, params=json.loads(params_json))
 
 
-@functools.lru_cache(maxsize=64)
+@commissioned(maxsize=64)
 def _tuning(
     env_id: str, params_json: str, load: float = 1.0
 ) -> tuple[tuple[float, float, float, float], ...]:
@@ -117,7 +117,7 @@ def _tuning(
     return tuple(out)
 
 
-@functools.lru_cache(maxsize=16)
+@commissioned(maxsize=16)
 def inner_schedule(env_id: str, params_json: str, signal: str) -> tuple[np.ndarray, np.ndarray]:
     """(loads, measured ``signal``) of the undisturbed steady states at SCHEDULE_LOADS."""
     temps = []
@@ -152,7 +152,7 @@ def _ramp_run(env: Any, pol: CascadePI) -> tuple[np.ndarray, ...]:
             return np.array(L), np.array(V), np.array(F), np.array(E)
 
 
-@functools.lru_cache(maxsize=64)
+@commissioned(maxsize=64)
 def commissioned_tuning(env_id: str, params_json: str) -> np.ndarray:
     """(loops, 4) fixed (Kc_o, Ti_o, Kc_i, Ti_i) for the whole load range: per loop the
     SIMC gain of smallest magnitude and the longest integral time of the step tests at
@@ -176,7 +176,7 @@ def gain_table(env_id: str, params_json: str) -> np.ndarray:
     return g
 
 
-@functools.lru_cache(maxsize=16)
+@commissioned(maxsize=16)
 def _feedforward(
     env_id: str, params_json: str, scheduled: bool = False
 ) -> tuple[np.ndarray, float]:
@@ -280,6 +280,8 @@ class CascadePI:
         self.a_ff = float(np.exp(-self.dt / self.ff_tau))  # load filter of the feed-forward
         self._st: dict[str, np.ndarray] | None = None
         self.inner_setpoint = np.zeros((1, len(self.loops)))  # last r per row and loop
+        self.loop_gains = self.gains[None]  # last (rows or 1, loops, 4) gains, _row_gains's
+        self._gains_at: tuple[np.ndarray, np.ndarray] | None = None  # (load, its gains)
 
     def reset(self) -> None:
         self._st = None
@@ -302,6 +304,9 @@ class CascadePI:
         """(rows or 1, loops, 4) gains (Kc_o, Ti_o, Kc_i, Ti_i) at each row's load demand."""
         if self.gain_schedule is None:
             return self.gains[None]
+        last = self._gains_at  # the load holds between ramps: the last gains again
+        if last is not None and np.array_equal(load, last[0]):
+            return last[1]
         loads, table = self.gain_schedule
         x = np.clip(load, loads[0], loads[-1])
         k = np.clip(np.searchsorted(loads, x) - 1, 0, len(loads) - 2)
@@ -310,6 +315,8 @@ class CascadePI:
         for kc, ki in ((0, 1), (2, 3)):  # Ki back to Ti (inf: no integral)
             g[..., ki] = np.divide(g[..., kc], g[..., ki], out=np.full_like(g[..., ki], np.inf),
                                    where=g[..., ki] != 0.0)  # fmt: skip
+        g.flags.writeable = False  # returned again while the load holds
+        self._gains_at = (np.array(load, dtype=float), g)
         return g
 
     def _bumpless(self, st: dict[str, np.ndarray], g: np.ndarray, restart: np.ndarray) -> None:
@@ -345,7 +352,7 @@ class CascadePI:
         e_main = yf[:, self.i_err]  # setpoint - measured outlet (filtered)
         v = st["v0"].copy()
         self.inner_setpoint = np.full_like(v, np.nan)
-        gains = self._row_gains(load)
+        gains = self.loop_gains = self._row_gains(load)
         if self.gain_schedule is not None:
             self._bumpless(st, gains, restart)
         for j, (inner, outer) in enumerate(self.loops):

@@ -33,7 +33,6 @@ zero; the signed gain physics fixes is the first lobe of the response
 
 from __future__ import annotations
 
-import functools
 import json
 from collections.abc import Callable
 from typing import Any
@@ -41,6 +40,7 @@ from typing import Any
 import numpy as np
 
 from baselines.cascade_pi import CascadePI
+from baselines.commissioned import commissioned
 from baselines.evarx import (
     ARX_LOADS,
     EE_ITERS,
@@ -156,7 +156,7 @@ def repeated(load: tuple, times: int, gap_s: float = 300.0) -> tuple:
     return tuple((t + r * T, L) for r in range(times) for t, L in load)
 
 
-@functools.lru_cache(maxsize=16)
+@commissioned(maxsize=16)
 def closed_loop_steps(env_id: str, params_json: str = "{}") -> np.ndarray:
     """Step tests of the real closed loop (module docstring): (len(STEP_LOADS), N, n_out,
     n_act) responses per unit bias, sampled at the model interval after the step
@@ -183,7 +183,7 @@ def closed_loop_steps(env_id: str, params_json: str = "{}") -> np.ndarray:
     return out
 
 
-@functools.lru_cache(maxsize=16)
+@commissioned(maxsize=16)
 def identify(env_id: str, params_json: str = "{}") -> dict[str, Any]:
     """EV-ARX and interpolated-ARX models of a plant with their validation numbers (cached).
 

@@ -52,7 +52,6 @@ baselines/fao.py, "Units of the bias").
 
 from __future__ import annotations
 
-import functools
 import json
 from typing import Any
 
@@ -60,6 +59,7 @@ import numpy as np
 from scipy.linalg import expm
 
 from baselines.cascade_pi import FILTER_S, inner_schedule
+from baselines.commissioned import commissioned
 from baselines.identification import FOPDT, simc_pi, step_test
 from steamtemp_gym import plants
 from steamtemp_gym._jit import njit
@@ -171,7 +171,7 @@ def _fsh_par(plant: SupercriticalFSH) -> np.ndarray:
     ])  # fmt: skip
 
 
-@functools.lru_cache(maxsize=8)
+@commissioned(maxsize=8)
 def _fsh_nominal(env_id: str, params_json: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(U_3, h_e^nom, h_a^nom) of the undisturbed steady states at the schedule loads."""
     sig = {s: inner_schedule(env_id, params_json, s)[1] for s in (
@@ -186,7 +186,7 @@ def _fsh_nominal(env_id: str, params_json: str) -> tuple[np.ndarray, np.ndarray,
     return sig["steam_flow_kg_s"] / par[2], h0, ha
 
 
-@functools.lru_cache(maxsize=8)
+@commissioned(maxsize=8)
 def _fsh_unit_K(env_id: str, params_json: str) -> tuple[np.ndarray, np.ndarray]:
     """(U_3, K per normalized unit): the attemperator-outlet temperature change that moves
     the FSH inlet enthalpy by one normalized unit, h_a0 - h_e0 = 217.8 kJ/kg, i.e.
@@ -207,7 +207,7 @@ def _pi_from_response(t: np.ndarray, y: np.ndarray, du: float, dt: float) -> tup
     return simc_pi(model)
 
 
-@functools.lru_cache(maxsize=8)
+@commissioned(maxsize=8)
 def _fsh_observer_gains(env_id: str, params_json: str) -> tuple[np.ndarray, np.ndarray]:
     """(Kc in W/K, Ti in s) of the U_2 estimator at each schedule load (gain-scheduled on
     U_3): SIMC on the observer model's response of the predicted measurement to a +5 %
@@ -302,7 +302,7 @@ class FSHObserver:
 
 
 # ---------------------------------------------------------- generic linear observer (eq. 1)
-@functools.lru_cache(maxsize=16)
+@commissioned(maxsize=16)
 def _section_model(env_id: str, params_json: str, j: int) -> tuple[float, float, float]:
     """(K, T_s, Delta T_0) of the section inner -> measured outlet of MAIN loop j.
 
@@ -319,7 +319,7 @@ def _section_model(env_id: str, params_json: str, j: int) -> tuple[float, float,
     return mo.K / mi.K, max(d / N_DIV, plant.dt_s), dT0
 
 
-@functools.lru_cache(maxsize=16)
+@commissioned(maxsize=16)
 def _linear_observer(env_id: str, params_json: str, j: int):
     """(Ad, Bd, K, Delta T_0, Kc, Ti): ZOH model of eq. (1) (nu = 1) and its w estimator."""
     plant = plants.make(env_id, **json.loads(params_json))

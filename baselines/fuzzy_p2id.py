@@ -85,13 +85,13 @@ it pushes.
 
 from __future__ import annotations
 
-import functools
 from typing import Any
 
 import numpy as np
 
 from baselines import tuning
 from baselines.cascade_pi import CascadePI
+from baselines.commissioned import commissioned
 from baselines.loops import input_filter, observation_layout, pi_position, restart_rows
 from baselines.tuning import Knob
 from steamtemp_gym.plants.base import MAIN, SCHEDULED
@@ -182,7 +182,7 @@ def control_system() -> Any:
     return ctrl.ControlSystem(rules)
 
 
-@functools.lru_cache(maxsize=1)
+@commissioned(maxsize=1)
 def surface() -> tuple[np.ndarray, float]:
     """(F on the SURFACE_N^2 grid recentred to [-1, 1], slope s0 of f per unit input at 0).
 

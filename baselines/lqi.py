@@ -89,7 +89,6 @@ absorption settles at the step's size. Named scenarios: docs/baselines.md.
 
 from __future__ import annotations
 
-import functools
 import json
 from typing import Any
 
@@ -98,6 +97,7 @@ from scipy.linalg import solve_discrete_are
 
 from baselines import tuning
 from baselines.cascade_pi import CascadePI
+from baselines.commissioned import commissioned
 from baselines.linear_models import interp_rows, kalman_gain, reachable, steady_point
 from baselines.loops import into_stop, observation_layout, restart_rows
 from baselines.tuning import Knob
@@ -183,7 +183,7 @@ def steady_targets(
     return Nu_q, inv @ (Bm @ Nu_q + bq), Nu_r, inv @ (Bm @ Nu_r)
 
 
-@functools.lru_cache(maxsize=32)
+@commissioned(maxsize=32)
 def design(env_id: str, params_json: str, knobs: tuple[float, ...] | None = None
            ) -> dict[str, Any]:  # fmt: skip
     """The scheduled LQI design of a plant (cached): per grid load the scaled, reduced

@@ -137,6 +137,7 @@ class _QP:
                           l=np.full(nc, -np.inf), u=np.full(nc, np.inf),
                           **OSQP_SETTINGS)  # fmt: skip
         self.key: int | None = None
+        self.rho_moved = False  # whether the last solve adapted rho away from the setting's
 
     def solve(self, key: int, H: np.ndarray, A: np.ndarray, g: np.ndarray, lo: np.ndarray,
               hi: np.ndarray, warm: tuple | None) -> Any:  # fmt: skip
@@ -148,10 +149,13 @@ class _QP:
             self.key = key
         else:
             s.update(q=g, l=lo, u=hi)
-        s.update_settings(rho=OSQP_SETTINGS["rho"])
+        if self.rho_moved:  # back to the setting's rho (a new factorization)
+            s.update_settings(rho=OSQP_SETTINGS["rho"])
         if warm is not None:
             s.warm_start(x=warm[0], y=warm[1])
-        return s.solve(raise_error=False)
+        res = s.solve(raise_error=False)
+        self.rho_moved = getattr(res.info, "rho_updates", 1) > 0
+        return res
 
 
 # -- the controller ------------------------------------------------------------------------

@@ -39,12 +39,12 @@ from the first observation and valve openings.
 
 from __future__ import annotations
 
-import functools
 import json
 from typing import Any, NamedTuple
 
 import numpy as np
 
+from baselines.commissioned import commissioned
 from baselines.linear_models import balanced_basis, kalman_gain, reachable, steady_point
 from steamtemp_gym import plants
 
@@ -279,7 +279,7 @@ def _grid_model(model: tuple, T: np.ndarray, Ti: np.ndarray, W: np.ndarray, V: n
     }  # fmt: skip
 
 
-@functools.lru_cache(maxsize=16)
+@commissioned(maxsize=16)
 def design(env_id: str, params_json: str, noise_K: float = NOISE_K,
            heat_std: float = HEAT_STD) -> dict[str, Any]:  # fmt: skip
     """The MPC of a plant (cached): per grid load the reduced augmented model, Kalman gain,

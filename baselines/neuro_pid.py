@@ -289,7 +289,7 @@ class NeuroPID:
         else:
             u_new = np.full((n, nm), float(self.force_u))
         v0 = st["y0"][:, self.i_valve]
-        pi_gains = self.pi._row_gains(load) if self.p_inner is None else None
+        pi_gains = self.pi.loop_gains  # the inner PIs' scheduled gains at this step's load
         for c, j in enumerate(self.main):
             i_in = self.inner[c]
             vj = v0[:, j]

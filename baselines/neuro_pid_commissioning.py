@@ -28,13 +28,13 @@ paper's online training does.
 
 from __future__ import annotations
 
-import functools
 import json
 from typing import Any
 
 import numpy as np
 
 from baselines.cascade_pi import FILTER_S, GAIN_LOADS, simc_pi
+from baselines.commissioned import commissioned
 from baselines.identification import FOPDT
 from steamtemp_gym.metrics import step_response_metrics
 from steamtemp_gym.plants.base import MAIN
@@ -56,7 +56,7 @@ def inner_p_valve_per_K(plant: Any) -> float | None:
     return None if pct is None else pct / 100.0
 
 
-@functools.lru_cache(maxsize=48)
+@commissioned(maxsize=48)
 def outer_models(controller: type, env_id: str, params_json: str,
                  load: float = 1.0) -> tuple[FOPDT | None, ...]:  # fmt: skip
     """Per action: FOPDT of inner setpoint -> measured outlet (MAIN loops) at ``load``, else
@@ -96,7 +96,7 @@ def outer_models(controller: type, env_id: str, params_json: str,
     return tuple(out)
 
 
-@functools.lru_cache(maxsize=16)
+@commissioned(maxsize=16)
 def commissioning_gains(controller: type, env_id: str, params_json: str) -> np.ndarray:
     """(len(GAIN_LOADS), actions, 4) table: (k_p0, k_i0, k_d0) of eq. (4) per action at each
     load of :data:`GAIN_LOADS` (zeros off MAIN), and the loop direction (sign of the outer

@@ -82,9 +82,11 @@ def base_dir() -> Path:
     return Path(xdg) / "steamtemp_gym"
 
 
-def _code_digest(roots: list[Path], memo: Path) -> str:
-    """The provenance digest (steamtemp_gym/provenance.py: docstring-free syntax trees) of
-    the Python files under ``roots`` and numba's version.
+def _code_digest(roots: list[Path], memo: Path, *extra: str,
+                 suffixes: tuple[str, ...] = (".py",)) -> str:  # fmt: skip
+    """The provenance digest (steamtemp_gym/provenance.py: docstring-free syntax trees; other
+    files as bytes) of the files under ``roots`` with these ``suffixes`` (not in
+    :data:`_NO_KERNELS` folders), numba's version and the ``extra`` strings.
 
     Parsing takes ~0.5 s, so the result is memoized in the file ``memo`` under a key of
     the files' paths, sizes and modification times (an installed package never moves).
@@ -92,10 +94,11 @@ def _code_digest(roots: list[Path], memo: Path) -> str:
     files = sorted(
         f
         for root in roots
-        for f in root.rglob("*.py")
-        if not set(f.relative_to(root).parts[:-1]) & set(_NO_KERNELS)
+        for f in root.rglob("*")
+        if f.suffix in suffixes and not set(f.relative_to(root).parts[:-1]) & set(_NO_KERNELS)
     )
-    stats = hashlib.sha256(numba.__version__.encode())
+    extra = (f"numba {numba.__version__}", *extra)
+    stats = hashlib.sha256("|".join(extra).encode())
     for f in files:
         st = f.stat()
         stats.update(f"{f}|{st.st_size}|{st.st_mtime_ns}\n".encode())
@@ -108,7 +111,7 @@ def _code_digest(roots: list[Path], memo: Path) -> str:
         known = {}
     if isinstance(known.get(key), str):
         return known[key]
-    digest = provenance.digest(files, f"numba {numba.__version__}", root=roots[0].parent)
+    digest = provenance.digest(files, *extra, root=roots[0].parent)
     known = dict(list(known.items())[-(_MEMO_SIZE - 1):])
     known[key] = digest
     try:
@@ -121,10 +124,11 @@ def _code_digest(roots: list[Path], memo: Path) -> str:
     return known[key]
 
 
-def _prune(base: Path, current: Path) -> None:
-    """Remove other versions' folders beyond the KEEP most recent, unused for GRACE_S."""
+def _prune(base: Path, current: Path, kind: str = "numba") -> None:
+    """Remove other versions' ``<kind>-*`` folders beyond the KEEP most recent, unused for
+    GRACE_S."""
     others = []
-    for d in base.glob("numba-*"):
+    for d in base.glob(f"{kind}-*"):
         if d == current or not d.is_dir():
             continue
         stamp = d / _STAMP
@@ -134,6 +138,25 @@ def _prune(base: Path, current: Path) -> None:
     for used, d in others[KEEP:]:
         if now - used > GRACE_S:
             shutil.rmtree(d, ignore_errors=True)
+
+
+def versioned_folder(kind: str, roots: list[Path], *extra: str,
+                     suffixes: tuple[str, ...] = (".py",)) -> Path | None:  # fmt: skip
+    """``<cache>/<kind>-<key>``, the folder of this version of the code under ``roots`` (the
+    key of :func:`_code_digest` over those files and ``extra``), made, stamped used, and the
+    other versions' ``<kind>-*`` folders pruned like the kernels'; None where it cannot be
+    written (a read-only cache)."""
+    base = base_dir()
+    key = _code_digest(roots, base / "code_keys.json", *extra, suffixes=suffixes)
+    current = base / f"{kind}-{key}"
+    if not _can_write(current):
+        return None
+    try:
+        (current / _STAMP).touch()
+        _prune(base, current, kind)
+    except OSError as exc:
+        log.debug("steamtemp_gym: cache folder %s not stamped or pruned: %s", current, exc)
+    return current
 
 
 @dataclass(frozen=True)
