@@ -76,6 +76,42 @@ def test_batched_predict_equals_unbatched_bit_for_bit(env_id):
     assert batched.stats["failures"] == 0
 
 
+
+def test_the_solver_called_directly_acts_as_through_osqps_wrapper(monkeypatch):
+    """The QP goes to OSQP's compiled solver directly (``_QP.core``); through the public
+    wrapper (an osqp without it) every action is the same to the bit, along a ramp with
+    noise where the local models, the QP matrices and OSQP's adapted rho change."""
+    from baselines import mpc_linear
+
+    sc = dataclasses.replace(RAMP, **NAMED_DISTURBANCES)
+
+    def actions() -> tuple[np.ndarray, int]:
+        env = gym.make("steamtemp/BoilerTurbineMIMO-v0", scenario=sc)
+        pol = MPCLinear(env)
+        obs, _ = env.reset(seed=3)
+        out, start = [], True
+        for _ in range(120):
+            a, _ = pol.predict(obs, episode_start=np.array([start]))
+            start = False
+            out.append(a)
+            obs, *_ = env.step(a)
+        return np.array(out), pol.stats["iterations"]
+
+    direct, iters = actions()
+    init = mpc_linear._QP.__init__
+    made = []
+
+    def wrapped_only(self, H, A):
+        init(self, H, A)
+        assert self.core is not None  # the osqp of this environment has it
+        self.core = None
+        made.append(self)
+
+    monkeypatch.setattr(mpc_linear._QP, "__init__", wrapped_only)
+    wrapped, iters_w = actions()
+    assert made and iters_w == iters
+    np.testing.assert_array_equal(direct, wrapped)
+
 def _scenario(name: str):
     return heldout.load(name) if heldout.is_heldout(name) else name
 

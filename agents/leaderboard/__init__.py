@@ -16,6 +16,13 @@ each importing only those listed before it:
 - ``cli``: the argument parser and :func:`main`.
 """
 
-from agents.leaderboard.cli import main
-
 __all__ = ["main"]
+
+
+def main(argv: list[str] | None = None) -> None:
+    """The ``steamtemp-leaderboard`` command (:func:`agents.leaderboard.cli.main`), imported
+    when called: ``python -m agents.leaderboard.<module>`` then runs a module the package
+    has not already imported."""
+    from agents.leaderboard.cli import main as run
+
+    run(argv)
