@@ -33,8 +33,10 @@ from pathlib import Path
 #: The folder that holds steamtemp_gym (and, beside it, baselines and agents).
 ROOT = Path(__file__).resolve().parent.parent
 #: Modules of steamtemp_gym that no trajectory depends on (drawing, docs, the command line,
-#: the ahead-of-time compile command), left out of every scope with the testing package.
-NO_DYNAMICS = ("render.py", "docs.py", "__main__.py", "precompile.py", "provenance.py")
+#: the ahead-of-time compile command, where the compile cache lives), left out of every
+#: scope with the testing package.
+NO_DYNAMICS = ("render.py", "docs.py", "__main__.py", "precompile.py", "provenance.py",
+               "_cache.py")  # fmt: skip
 _NO_DYNAMICS_PACKAGES = ("testing",)
 #: Length of a digest (hex characters).
 LENGTH = 16
