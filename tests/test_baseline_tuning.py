@@ -6,6 +6,7 @@ from __future__ import annotations
 import functools
 import json
 from dataclasses import dataclass, replace
+from types import SimpleNamespace
 
 import gymnasium as gym
 import numpy as np
@@ -338,7 +339,8 @@ def _current_terms_pairs() -> list:
 @pytest.mark.parametrize(("name", "env_id"), _current_terms_pairs())
 def test_every_stored_tuning_was_chosen_under_the_current_terms(name, env_id):
     """Each stored tuning was searched with the robustness check and the travel margin:
-    the file records those terms, and its result keeps them on the training episodes."""
+    the file records those terms, its result keeps them on the training episodes, and the
+    search replayed on its stored evaluations under the current terms is the stored one."""
     rec = json.loads(tuning.path(name).read_text())
     terms = rec["terms"]
     assert terms.get("robustness") == {"plants": "corners of the parameter ranges",
@@ -350,6 +352,44 @@ def test_every_stored_tuning_was_chosen_under_the_current_terms(name, env_id):
     res = rec["plants"][env_id]
     assert res["feasible"] and res["travel_ratio"] <= tt.TUNING_TRAVEL_BUDGET
     assert res["robust_ratio"] is not None and res["robust_ratio"] <= tt.ROBUST_COST_MAX
+    # the search the current terms make, replayed on the stored evaluations and checks:
+    # it must meet only candidates the stored search met, in the same order, and end at
+    # its result (a term that refused a move the stored search made would leave its path)
+    rows = {}  # knobs met twice: the time they were checked, if one was
+    for r in res["history"]:
+        if r["check"] is not None or bt._key(r["knobs"]) not in rows:
+            rows[bt._key(r["knobs"])] = r
+
+    def row(knobs):
+        r = rows.get(bt._key(knobs))
+        assert r is not None, f"the search under the current terms meets {knobs}, never stored"
+        return r
+
+    def breach(ms, refs):
+        if not ms:  # the reference's own
+            return "", 1.0
+        assert row(ms)["check"] is not None, f"{ms} checked now, not in the stored search"
+        return row(ms)["check"], float("nan")
+
+    def robust(env, make, refs):
+        r = row(make(None))
+        ratio = np.nan if r["robust_ratio"] is None else r["robust_ratio"]
+        return ratio, r.get("robust_breach", "")
+
+    stub = SimpleNamespace(make=lambda name, env, **knobs: knobs, factory=baselines.factory)
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(bt, "baselines", stub)
+        mp.setattr(bt, "ends", lambda env_id: {})
+        mp.setattr(bt, "evaluate", lambda name, env_id, values, e: bt.Evaluation(
+            dict(values), row(values)["score"], row(values)["travel_ratio"],
+            row(values)["trips"]))  # fmt: skip
+        mp.setattr(bt, "check_metrics", lambda env_id, make: make(None))
+        mp.setattr(bt, "check_breach", breach)
+        mp.setattr(bt, "corner_check_metrics", lambda env_id, make: (None, None))
+        mp.setattr(bt, "robustness", robust)
+        again = bt.search(name, env_id)
+    assert [r["knobs"] for r in again["history"]] == [r["knobs"] for r in res["history"]]
+    assert again["knobs"] == res["knobs"]
 
 
 def test_the_search_starts_from_the_best_of_the_defaults_and_the_declared_alternatives(
