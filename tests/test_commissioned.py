@@ -79,12 +79,10 @@ def test_a_corrupt_or_partial_file_is_computed_again(cache):
     assert pickle.loads(path.read_bytes())["K"].tobytes() == value["K"].tobytes()
 
 
-@pytest.mark.skipif(os.name != "posix" or os.geteuid() == 0, reason="root writes anywhere")
-def test_a_read_only_cache_computes_in_the_process(monkeypatch, tmp_path):
-    ro = tmp_path / "ro"
-    ro.mkdir()
-    ro.chmod(0o500)
-    monkeypatch.setenv("STEAMTEMP_GYM_CACHE_DIR", str(ro))
+def _computed_in_each_process(monkeypatch, where) -> None:
+    """With the cache at ``where``, which cannot be written: no folder, and a result is
+    computed again once the process's own memo is gone."""
+    monkeypatch.setenv("STEAMTEMP_GYM_CACHE_DIR", str(where))
     memo_module.folder.cache_clear()
     try:
         design, calls = _counted()
@@ -94,39 +92,48 @@ def test_a_read_only_cache_computes_in_the_process(monkeypatch, tmp_path):
         assert memo_module.folder() is None and len(calls) == 2
     finally:
         memo_module.folder.cache_clear()
+
+
+@pytest.mark.skipif(os.name != "posix" or os.geteuid() == 0, reason="root writes anywhere")
+def test_a_read_only_cache_computes_in_the_process(monkeypatch, tmp_path):
+    ro = tmp_path / "ro"
+    ro.mkdir()
+    ro.chmod(0o500)
+    try:
+        _computed_in_each_process(monkeypatch, ro)
+    finally:
         ro.chmod(0o700)
 
 
 def test_an_unwritable_cache_computes_in_the_process(monkeypatch, tmp_path):
     blocker = tmp_path / "file"
     blocker.write_text("not a folder")
-    monkeypatch.setenv("STEAMTEMP_GYM_CACHE_DIR", str(blocker))
-    memo_module.folder.cache_clear()
-    try:
-        design, calls = _counted()
-        design("plant-a", 0.1)
-        design.cache_clear()
-        design("plant-a", 0.1)
-        assert memo_module.folder() is None and len(calls) == 2
-    finally:
-        memo_module.folder.cache_clear()
+    _computed_in_each_process(monkeypatch, blocker)
 
 
 _CHILD = """
-import sys, time
+import sys
 from baselines.cascade_pi import commissioned_tuning
-t = time.process_time()
 g = commissioned_tuning("steamtemp/BensonSubcritical-v0", "{}")
-sys.stdout.write(g.tobytes().hex() + " " + repr(time.process_time() - t))
+sys.stdout.write(f"{g.shape} {g.tobytes().hex()}")
 """
 
 
 def test_a_second_process_reads_what_the_first_commissioned(tmp_path):
-    """Two processes on one cache: the second reads the first's SIMC tuning, the same to
-    the bit, and the folder is named for the code's version."""
+    """Two processes on one cache: the first commissions the SIMC tuning and stores it in
+    the folder of this code's version, the second reads the file instead of commissioning
+    (shown by a stored value it could not have computed)."""
     env = {**os.environ, "STEAMTEMP_GYM_CACHE_DIR": str(tmp_path)}
-    runs = [subprocess.run([sys.executable, "-c", _CHILD], env=env, capture_output=True,
-                           text=True, check=True).stdout.split() for _ in range(2)]  # fmt: skip
-    assert runs[0][0] == runs[1][0]
+
+    def run() -> list[str]:
+        return subprocess.run([sys.executable, "-c", _CHILD], env=env, capture_output=True,
+                              text=True, check=True).stdout.split(" ", 2)  # fmt: skip
+
+    first = run()
     (folder,) = tmp_path.glob("commissioning-*")
-    assert any(folder.glob("baselines.cascade_pi.commissioned_tuning-*.pkl"))
+    (stored,) = folder.glob("baselines.cascade_pi.commissioned_tuning-*.pkl")
+    tuning = pickle.loads(stored.read_bytes())
+    assert tuning.tobytes().hex() == first[-1] and tuning.shape[1] == 4  # (loops, 4)
+    marked = np.full_like(tuning, 7.0)
+    stored.write_bytes(pickle.dumps(marked))
+    assert run()[-1] == marked.tobytes().hex()
