@@ -140,6 +140,19 @@ def _prune(base: Path, current: Path, kind: str = "numba") -> None:
             shutil.rmtree(d, ignore_errors=True)
 
 
+def _use(base: Path, current: Path, kind: str) -> bool:
+    """Make ``current``, stamp it used and prune the other ``<kind>-*`` folders; whether it
+    can be written (False: a read-only cache, nothing changed)."""
+    if not _can_write(current):
+        return False
+    try:
+        (current / _STAMP).touch()
+        _prune(base, current, kind)
+    except OSError as exc:
+        log.debug("steamtemp_gym: cache folder %s not stamped or pruned: %s", current, exc)
+    return True
+
+
 def versioned_folder(kind: str, roots: list[Path], *extra: str,
                      suffixes: tuple[str, ...] = (".py",)) -> Path | None:  # fmt: skip
     """``<cache>/<kind>-<key>``, the folder of this version of the code under ``roots`` (the
@@ -149,14 +162,7 @@ def versioned_folder(kind: str, roots: list[Path], *extra: str,
     base = base_dir()
     key = _code_digest(roots, base / "code_keys.json", *extra, suffixes=suffixes)
     current = base / f"{kind}-{key}"
-    if not _can_write(current):
-        return None
-    try:
-        (current / _STAMP).touch()
-        _prune(base, current, kind)
-    except OSError as exc:
-        log.debug("steamtemp_gym: cache folder %s not stamped or pruned: %s", current, exc)
-    return current
+    return current if _use(base, current, kind) else None
 
 
 @dataclass(frozen=True)
@@ -225,13 +231,8 @@ def configure(version: str) -> Path:
     roots = [Path(__file__).parent]  # baselines' kernels call no other baselines module's
     base = base_dir()
     current = base / f"numba-{version}-{_code_digest(roots, base / 'code_keys.json')}"
-    if _can_write(current):
+    if _use(base, current, "numba"):
         _FOLDER = Folder(current, True, current)
-        try:
-            (current / _STAMP).touch()
-            _prune(base, current)
-        except OSError as exc:
-            log.debug("steamtemp_gym: cache folder %s not stamped or pruned: %s", current, exc)
     else:
         _FOLDER = Folder(current, False, _links(current))
     return current
