@@ -15,6 +15,7 @@ from pathlib import Path
 import gymnasium as gym
 import numpy as np
 import pytest
+import yaml
 
 import agents
 import baselines
@@ -26,6 +27,7 @@ from agents.evaluation import run_batch, run_episode
 from agents.leaderboard import backends, cli, episodes, mismatch, records, trends
 from agents.leaderboard.plan import DEFAULT_SCENARIOS, REFERENCE, build_plan
 from agents.leaderboard.summary import REFERENCES, SCHEMA_VERSION, ZERO
+from steamtemp_gym import scenarios
 
 SCHEMA = Path(__file__).parents[1] / "docs" / "leaderboard_schema.json"
 
@@ -443,6 +445,74 @@ def test_run_batch_is_identical_to_run_episode():
             for k in a["trace"]:
                 np.testing.assert_array_equal(a["trace"][k], b["trace"][k], err_msg=name)
     assert serial[0]["metrics"]["tripped"] == 1.0  # the frozen valve trips on it
+
+
+def test_rows_of_their_own_scenarios_equal_run_episode():
+    """Rows of different scenarios side by side in one vector env (the leaderboard's
+    batches: episodes.RowScenarios) give each scenario's single-env traces bit for bit."""
+    sc = [scenarios.Scenario.from_dict(yaml.safe_load(TINY)),
+          scenarios.Scenario.from_dict(yaml.safe_load(TINY.replace("0.95", "0.9")))]  # fmt: skip
+    rows, seeds = [sc[1], sc[0], sc[1]], [3, 7, 7]
+    venv = gym.make_vec(ENV, num_envs=3, vectorization_mode="vector_entry_point", scenario=sc[0])
+    venv = episodes.RowScenarios(venv, rows)
+    for name in ("cascade_pi_ff", "lqi", "mpc_linear"):
+        batch = run_batch(venv, episodes._make_policy(name, ENV, venv), seeds)
+        for s, row, b in zip(seeds, rows, batch, strict=True):
+            env = gym.make(ENV, scenario=row)
+            a = run_episode(env, episodes._make_policy(name, ENV, env), s)
+            assert a["metrics"] == b["metrics"], name
+            for k in a["trace"]:
+                np.testing.assert_array_equal(a["trace"][k], b["trace"][k], err_msg=name)
+    assert batch[1]["metrics"] != batch[2]["metrics"]  # the scenario, not the seed, differs
+    with pytest.raises(ValueError, match="2 scenarios for 3 sub-envs"):
+        episodes.RowScenarios(venv.env, rows[:2])
+
+
+OWN = str(Path(__file__).parents[1] / "examples" / "my_controller.py") + ":make_controller"
+
+
+def _unit(spec, sc, policy="lqi", params=None):
+    return episodes.Unit(ENV, spec, sc, policy, [0, 1], "fp", 0, params=params)
+
+
+def test_batches_group_a_shipped_policy_s_scenarios_of_equal_length():
+    """A batch: one shipped policy's units on one env's nominal plant whose scenarios last
+    as long; the oracle, the EV-ARX MPCs (episodes.ALONE), a mismatch variant, a policy of
+    a process of its own and the drawn scenario ``random`` run alone."""
+    short = scenarios.Scenario.from_dict(yaml.safe_load(TINY))
+    other = scenarios.Scenario.from_dict(yaml.safe_load(TINY.replace("0.95", "0.9")))
+    long = scenarios.Scenario.from_dict(yaml.safe_load(TINY.replace("60", "120")))
+    units = [_unit("a", short), _unit("b", long), _unit("c", other), _unit("a", short, "fao_sf"),
+             _unit("c", other, "fao_sf"), _unit("a", short, "oracle"), _unit("c", other, "oracle"),
+             _unit("a", short, "mpc_arx"), _unit("c", other, "mpc_arx"),
+             _unit("m", short, params={"k": 1}), _unit("n", other, params={"k": 1}),
+             _unit("a", short, OWN), _unit("c", other, OWN),
+             _unit("r", "random"), _unit("s", "random")]  # fmt: skip
+    got = [[(u.spec, u.policy) for u in b] for b in episodes.batches(units)]
+    assert got == [[("a", "lqi"), ("c", "lqi")], [("b", "lqi")],
+                   [("a", "fao_sf"), ("c", "fao_sf")], [("a", "oracle")], [("c", "oracle")],
+                   [("a", "mpc_arx")], [("c", "mpc_arx")],
+                   [("m", "lqi")], [("n", "lqi")], [("a", OWN)],
+                   [("c", OWN)], [("r", "lqi")], [("s", "lqi")]]  # fmt: skip
+
+
+def test_a_batch_that_raises_runs_its_units_then_seeds_alone(tmp_path, fake_policies):
+    """Two scenarios of one length run as one batch; when it raises, only the failing
+    episode is a failed row, and the others equal a run without the failure."""
+    paths = []
+    for i, text in enumerate((TINY, TINY.replace("0.95", "0.9"))):
+        paths.append(tmp_path / f"tiny{i}.yaml")
+        paths[-1].write_text(text)
+    flags = {"--seeds": "0,1", "--policies": "flaky", "--scenarios": f"{paths[0]},{paths[1]}"}
+    lb.main(_args(paths[0], tmp_path / "ok", **flags))
+    fake_policies[("flaky", 1)] = RuntimeError("controller diverged")
+    with pytest.raises(SystemExit):
+        lb.main(_args(paths[0], tmp_path / "bad", **flags))
+    ok, bad = _board(tmp_path / "ok"), _board(tmp_path / "bad")
+    failed = [(r["scenario"], r["seed"]) for r in bad if "error" in r]
+    assert failed == [(str(paths[0]), 1), (str(paths[1]), 1)]
+    assert [r for r in bad if "error" not in r] == [r for r in ok if r["seed"] == 0
+                                                   or r["policy"] != "flaky"]  # fmt: skip
 
 
 def test_parallel_rows_equal_in_process_rows(tiny, tmp_path):

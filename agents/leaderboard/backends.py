@@ -1,6 +1,7 @@
-"""Where the units of a leaderboard run execute: ``--jobs`` local worker processes (or this
-process), or one Ray task per unit (``--backend ray``, agents/ray_backend.py); the rows are
-appended to the record as units finish, with a progress bar on stderr.
+"""Where the units of a leaderboard run execute, in batches (agents/leaderboard/episodes.py
+``batches``): ``--jobs`` local worker processes (or this process), or one Ray task per
+batch (``--backend ray``, agents/ray_backend.py); the rows are appended to the record as
+batches finish, with a progress bar on stderr.
 """
 
 from __future__ import annotations
@@ -11,7 +12,7 @@ import sys
 import time
 
 from agents import ray_backend
-from agents.leaderboard.episodes import Unit, run_unit
+from agents.leaderboard.episodes import Unit, batches, run_units
 from agents.leaderboard.isolated import (
     PARENT_POLL_S,  # noqa: F401 - the workers' poll, too
     start_method,
@@ -70,19 +71,20 @@ def _worker_start(parent: int) -> None:
 
 
 def _local_results(units: list[Unit], jobs: int):
-    """(unit, run_unit's result) as they finish, in ``jobs`` local processes."""
-    if jobs <= 1 or len(units) <= 1:
-        for u in units:
-            yield u, run_unit(u)
+    """(unit, run_unit's result) as their batches finish, in ``jobs`` local processes."""
+    work = batches(units)
+    if jobs <= 1 or len(work) <= 1:
+        for batch in work:
+            yield from zip(batch, run_units(batch), strict=True)
         return
     import multiprocessing as mp
     from concurrent.futures import as_completed
 
     with _pool(jobs) as pool:
-        futures = {pool.submit(run_unit, u): u for u in units}
+        futures = {pool.submit(run_units, b): b for b in work}
         try:
             for fut in as_completed(futures):
-                yield futures[fut], fut.result()
+                yield from zip(futures[fut], fut.result(), strict=True)
         except BaseException:
             for f in futures:
                 f.cancel()
@@ -92,9 +94,10 @@ def _local_results(units: list[Unit], jobs: int):
 
 
 def _ray_results(units: list[Unit], jobs: int, address: str | None):
-    """(unit, run_unit's result) as they finish, each unit a Ray task (one CPU): on a new
-    local Ray with ``jobs`` CPUs, or on the cluster at ``address``."""
-    return ray_backend.results(run_unit, units, jobs, address)
+    """(unit, run_unit's result) as their batches finish, each batch a Ray task (one CPU):
+    on a new local Ray with ``jobs`` CPUs, or on the cluster at ``address``."""
+    for batch, results in ray_backend.results(run_units, batches(units), jobs, address):
+        yield from zip(batch, results, strict=True)
 
 
 def _execute(plan: Plan, units: list[Unit], jobs: int, record: Record, on_trace,
