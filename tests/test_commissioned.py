@@ -11,6 +11,7 @@ import sys
 
 import numpy as np
 import pytest
+from threadpoolctl import threadpool_info, threadpool_limits
 
 from baselines import commissioned as memo_module
 from baselines.cascade_pi import CascadePI
@@ -92,6 +93,36 @@ def _computed_in_each_process(monkeypatch, where) -> None:
         assert memo_module.folder() is None and len(calls) == 2
     finally:
         memo_module.folder.cache_clear()
+
+
+def _blas_threads() -> dict:
+    @commissioned(maxsize=1)
+    def design(tag: str) -> int:
+        np.linalg.eigvals(np.eye(3))  # BLAS/LAPACK loaded and used
+        return max(p["num_threads"] for p in threadpool_info() if p["user_api"] == "blas")
+
+    return design
+
+
+@pytest.mark.parametrize("where", ["cache", "no cache"])
+def test_a_result_is_computed_on_one_blas_thread_whatever_the_caller(monkeypatch, tmp_path,
+                                                                     where):  # fmt: skip
+    """The stored result does not depend on the caller's thread pools: the function runs
+    on one BLAS thread under a caller on two, with or without the disk cache."""
+    monkeypatch.setenv("STEAMTEMP_GYM_CACHE_DIR",
+                       str(tmp_path if where == "cache" else tmp_path / "file"))  # fmt: skip
+    if where == "no cache":
+        (tmp_path / "file").write_text("not a folder")
+    memo_module.folder.cache_clear()
+    try:
+        with threadpool_limits(limits=2, user_api="blas"):
+            caller = max(p["num_threads"] for p in threadpool_info() if p["user_api"] == "blas")
+            inside = _blas_threads()(where)
+        stored = memo_module.folder() is not None
+    finally:
+        memo_module.folder.cache_clear()
+    assert stored == (where == "cache")
+    assert caller == 2 and inside == 1
 
 
 @pytest.mark.skipif(os.name != "posix" or os.geteuid() == 0, reason="root writes anywhere")
