@@ -61,7 +61,8 @@ def close(policy: Any) -> None:
 
 @dataclass
 class Unit:
-    """One policy on one env and scenario for several seeds: one batch of the vector env."""
+    """One policy on one env and scenario for several seeds, the rows of the vector env that
+    a batch of units runs (:func:`batches`)."""
 
     env_id: str
     spec: str  # the scenario as given (row label)
@@ -76,9 +77,10 @@ class Unit:
 
 
 class RowScenarios(gym.vector.VectorWrapper):
-    """A native vector env whose reset starts each row under a scenario of its own (a masked
-    reset per scenario, with the row's seed: row i is then the single env of its scenario
-    seeded with its seed, bit for bit); autoresets return to the env's own scenario."""
+    """A native vector env whose reset starts each row under a scenario of its own: a masked
+    reset per scenario with the seeds given, so that row i is the single env of its
+    scenario seeded with its seed, bit for bit (tests/test_leaderboard.py); autoresets
+    return to the env's own scenario."""
 
     def __init__(self, env: Any, scenarios: list[Any]) -> None:
         super().__init__(env)
