@@ -145,65 +145,60 @@ def batches(units: list[Unit]) -> list[list[Unit]]:
 
 
 def _run_units(batch: list[Unit]) -> list[tuple[list[dict], dict | None]]:
-    """:func:`run_units` (its docstring), each seed a row of one vector env; if anything
-    raises there, each unit runs on its own (:func:`_run_unit`) so that only the episodes
-    that fail are recorded as failed."""
-    if len(batch) == 1:
-        return [_run_unit(batch[0])]
-    u0 = batch[0]
-    for module in u0.imports:  # a spawned worker or a Ray task has not imported them
+    """:func:`run_units` (its docstring). Every seed of the batch is a row of one native
+    vector env (:func:`_side_by_side`). If anything raises there, a batch of several units
+    runs each unit on its own, and a unit each seed alone (:func:`_seed_by_seed`, identical
+    results), so that only the episodes that fail are recorded as failed. A policy of a
+    process of its own that does not answer in time fails every seed with the timeout
+    (alone, each would take as long)."""
+    for module in batch[0].imports:  # a spawned worker or a Ray task has not imported them
         importlib.import_module(module)
-    seeds = [s for u in batch for s in u.seeds]
-    rows_of = [u.scenario for u in batch for _ in u.seeds]
     try:
-        venv = RowScenarios(make_env(u0.env_id, u0.scenario, len(seeds)), rows_of)
-        policy = make_policy(u0.policy, u0.env_id, venv, u0.scenario, len(seeds))
-        results = run_batch(venv, policy, seeds)
-    except Exception:  # noqa: BLE001 - isolate the failing units below
-        return [_run_unit(u) for u in batch]
+        return _side_by_side(batch)
+    except PolicyTimeout as exc:
+        return [([_error_row((u.env_id, u.spec, u.policy, s), u.fingerprint, exc)
+                  for s in u.seeds], None) for u in batch]  # fmt: skip
+    except Exception:  # noqa: BLE001 - isolate the failing units, then seeds, below
+        if len(batch) > 1:
+            return [out for u in batch for out in _run_units([u])]
+        return [_seed_by_seed(batch[0])]
+
+
+def _side_by_side(batch: list[Unit]) -> list[tuple[list[dict], dict | None]]:
+    """Each unit's rows and trace, all seeds rows of one vector env (:func:`run_batch`),
+    each row under its unit's scenario. The units share env, policy and plant (batches); a
+    policy that is not shipped is built and acts in a process of its own on a
+    commissioning env of its own (:class:`PolicyProcess`)."""
+    u0 = batch[0]
+    seeds = [s for u in batch for s in u.seeds]
+    plant = {"params": u0.params} if u0.params else {}
+    n, own = len(seeds), own_process(u0.policy)
+    unit = make_env(u0.env_id, u0.scenario, n, **plant)
+    if len(batch) > 1:
+        unit = RowScenarios(unit, [u.scenario for u in batch for _ in u.seeds])
+    # the nominal plant (a policy of its own process commissions on an env of its own)
+    model = make_env(u0.env_id, u0.scenario, n) if plant and not own else unit
+    policy = make_policy(u0.policy, u0.env_id, model, u0.scenario, n, u0.imports, u0.timeout,
+                         n)  # fmt: skip
+    try:
+        results = run_batch(unit, policy, seeds)
+    finally:
+        close(policy)
     out, i = [], 0
     for u in batch:
-        mine, i = results[i: i + len(u.seeds)], i + len(u.seeds)
+        mine, i = results[i : i + len(u.seeds)], i + len(u.seeds)
         rows = [_ok_row(u, s, r["metrics"]) for s, r in zip(u.seeds, mine, strict=True)]
         keep = mine[u.seeds.index(u.trace_seed)]["trace"] if u.trace_seed is not None else None
         out.append((rows, keep))
     return out
 
 
-def _run_unit(u: Unit) -> tuple[list[dict], dict | None]:
-    """Rows of a unit (one per seed, in order) and the trace of ``u.trace_seed``.
-
-    The seeds run side by side in the native vector env (:func:`run_batch`); if anything
-    raises there, each seed runs alone (:func:`run_episode`, identical results) so that
-    only the episodes that fail are recorded as failed. A policy that is not shipped is
-    built and acts in a process of its own on a commissioning env of its own
-    (:class:`PolicyProcess`); when it does not answer in time every seed fails with the
-    timeout (alone, each would take as long).
-    """
-    for module in u.imports:  # a spawned worker or a Ray task has not imported them
-        importlib.import_module(module)
+def _seed_by_seed(u: Unit) -> tuple[list[dict], dict | None]:
+    """Rows of a unit and the trace of ``u.trace_seed``, each seed alone in a single env
+    (:func:`run_episode`); a seed that raises is a failed row."""
     trace = None
     plant = {"params": u.params} if u.params else {}
-    n, own = len(u.seeds), own_process(u.policy)
-    try:
-        unit = make_env(u.env_id, u.scenario, n, **plant)
-        # the nominal plant (a policy of its own process commissions on an env of its own)
-        model = make_env(u.env_id, u.scenario, n) if plant and not own else unit
-        policy = make_policy(u.policy, u.env_id, model, u.scenario, n, u.imports, u.timeout, n)
-        try:
-            results = run_batch(unit, policy, u.seeds)
-        finally:
-            close(policy)
-    except PolicyTimeout as exc:
-        return [_error_row((u.env_id, u.spec, u.policy, s), u.fingerprint, exc)
-                for s in u.seeds], None  # fmt: skip
-    except Exception:  # noqa: BLE001 - isolate the failing seeds below
-        results = None
-    if results is not None:
-        rows = [_ok_row(u, s, r["metrics"]) for s, r in zip(u.seeds, results, strict=True)]
-        if u.trace_seed is not None:
-            trace = results[u.seeds.index(u.trace_seed)]["trace"]
-        return rows, trace
+    own = own_process(u.policy)
     env = make_env(u.env_id, u.scenario, **plant)
     model = make_env(u.env_id, u.scenario) if plant and not own else env
     try:
