@@ -49,39 +49,27 @@ measures them: 0.01 on the drum unit, whose travel at 0.003 is 1.79 times the re
 on the heat step, 0.003 on the FSH, whose travel at 0.001 is 2.08 times, 0.001 on the
 others, at 0.5-1.3 times).
 
-Robustness: the estimator's assumed thermocouple noise (``filter_noise_K``, NOISE_K =
-0.25 K by default, the named scenarios' noise) and heat-absorption variability
-(``heat_std``, HEAT_STD) are knobs. At the named scenarios' values the filter follows each
-thermocouple reading closely, and on a unit faster or of higher gain than its model the
-loop of estimate and target becomes unstable (Cascade300MW's ``high_gain_fast`` variant,
-sections 1.3x the gain and 0.7x the time constants: a growing oscillation of 110 s period,
-the valve stroking end to end, whatever the move suppression, 1e-4 to 1); a detuned filter
-(a larger assumed noise, a slower disturbance) trusts the model's prediction more and
-keeps it stable there (``filter_noise_K`` 10 K, ``heat_std`` 0.005 on ``load_ramp_100_50``:
-worst variant 1.14x the nominal cost instead of 24x, at 1.18x the nominal cost). The
-benchmark's tuner chooses them, and the move suppression, under its robustness check on
-the corner plants of the documented parameter ranges (docs/baseline_tuning.md); it starts
-from the commissioning rule, from the filter detuned to 10 times the named noise, from the
-filter detuned to 20 times with the least move suppression and target weight
-(``knob_alternatives``) and from three times the rule's move suppression.
+Robustness: the filter's assumed thermocouple noise (``filter_noise_K``, by default the
+named scenarios' 0.25 K) and heat-absorption variability (``heat_std``) are knobs. A filter
+that follows each reading closely makes the loop of estimate and target oscillate on a
+unit faster or of higher gain than its model; a detuned one trusts the model's prediction
+more. The design rule (baselines/mpc_linear_robustness.py, ``robust=True``): the smallest
+assumed noise at or above the given one with which every mode of the linear closed loop
+keeps a damping ratio of 0.02 on every vertex of the documented parameter ranges, at
+35-100 % load. The benchmark's tuner chooses the knobs, the rule applied, under its
+robustness check on the corner plants (docs/baseline_tuning.md).
 
 OSQP, one solver per row (set up at its episode start, so a row acts the same alone or in
 a batch and a reset forgets everything), warm-started from the row's last solution and
 started from the same rho each solve (adaptive rho on a fixed iteration count), matrices
 updated only when the rounded load changes. The first move is applied (rate-limited and
 clipped); a solve that does not succeed within 400 iterations holds the valves
-(``stats["failures"]``). A call
-whose estimate comes out non-finite (a non-finite observation) raises ValueError and
-leaves the policy's state as it was.
+(``stats["failures"]``). A call whose estimate comes out non-finite (a non-finite
+observation) raises ValueError and leaves the policy's state as it was.
 
-Measured (docs/baselines.md: seeds 0-4, every plant, the six named and six held-out
-scenarios, against ``cascade_pi_ff``): a better return in all 60 plant x scenario cells
-(summed over the 12 scenarios: FSH -573 vs -1203, Benson -135 vs -324, MIMO -1618 vs
--3959, Drum -537 vs -1314, Cascade -3287 vs -3602), no trip, the quiet-stretch
-peak-to-peak within max(2x, 1.5 K) everywhere; valve travel within 2x in 59 cells, 2.09x
-on the MIMO heat_imbalance_step (the damper at its stop, the sprays dithering at theirs).
-Offset after a constant +5 % heat-absorption step (tests/test_mpc_linear.py): <= 5e-4 K on
-every plant, 1-5 K with ``disturbance_model=False``.
+Measured: docs/baselines.md and docs/robustness.md. Offset after a constant +5 %
+heat-absorption step (tests/test_mpc_linear.py): <= 5e-4 K on every plant, 1-5 K with
+``disturbance_model=False``.
 """
 
 from __future__ import annotations
@@ -96,6 +84,7 @@ import scipy.sparse as sp
 from baselines import tuning
 from baselines.loops import observation_layout, restart_rows
 from baselines.mpc_linear_design import GRID_LOADS, HEAT_STD, NOISE_K, design
+from baselines.mpc_linear_robustness import robust_filter_noise
 from baselines.tuning import Knob
 
 #: The local model and its QP are those of the load rounded to this (fraction of rated).
@@ -200,6 +189,8 @@ class MPCLinear:
             HEAT_STD). A larger filter noise or smaller variability detunes the estimator:
             it trusts the model's prediction more than each new measurement, which keeps the
             loop stable on a unit faster or of higher gain than its model.
+        robust: Raise ``filter_noise_K`` to the design rule's (module docstring);
+            ``robustness`` holds (the noise used, the least damping ratio, where).
     """
 
     #: Searched by agents.baseline_tuning from the commissioning rule's values.
@@ -231,7 +222,7 @@ class MPCLinear:
 
     def __init__(self, env: Any, disturbance_model: bool = True, move_weight: float | None = None,
                  u_weight: float | None = None, filter_noise_K: float | None = None,
-                 heat_std: float | None = None) -> None:  # fmt: skip
+                 heat_std: float | None = None, robust: bool = True) -> None:  # fmt: skip
         u = env.unwrapped
         plant = u.plant
         base = tuning.stored_or("mpc_linear", plant.id, self.knob_defaults(plant.id))
@@ -244,6 +235,14 @@ class MPCLinear:
                 raise ValueError(f"{name} must be a positive finite number, got {v!r}")
         move_weight, u_weight = k["move_weight"], k["u_weight"]
         params = json.dumps(getattr(u, "params_overrides", {}) or {}, sort_keys=True)
+        if not isinstance(robust, bool):
+            raise ValueError(f"robust must be True or False, got {robust!r}")
+        #: (filter noise used, least damping ratio over the vertices, where) of the rule
+        self.robustness: tuple[float, float, str] | None = None
+        if robust:
+            self.robustness = robust_filter_noise(
+                type(self), plant.id, params, *(float(k[n]) for n in given))
+            k["filter_noise_K"] = self.robustness[0]
         self.d = d = design(plant.id, params, float(k["filter_noise_K"]), float(k["heat_std"]))
         self.estimate_disturbances = bool(disturbance_model)
         self._weights = (float(move_weight), float(u_weight))
