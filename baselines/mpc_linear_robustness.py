@@ -87,9 +87,12 @@ def closed_loop(ctrl: Any, plant: Any, load: float) -> np.ndarray:
 
 def damping(matrix: np.ndarray, dt: float) -> float:
     """The least damping ratio of the modes of a discrete-time ``matrix`` (interval
-    ``dt``): -Re(s)/|s| of s = log(lambda)/dt; below 0 for a growing mode."""
-    s = np.log(np.linalg.eigvals(matrix).astype(complex)) / dt
-    return float(np.min(-s.real / np.maximum(np.abs(s), 1e-300)))
+    ``dt``): -Re(s)/|s| of s = log(lambda)/dt; below 0 for a growing mode, 1 for a mode that
+    dies within one interval (lambda = 0, e.g. a pure delay's)."""
+    ev = np.linalg.eigvals(matrix).astype(complex)
+    ev = ev[np.abs(ev) > 1e-12]
+    s = np.log(ev) / dt
+    return float(np.min(-s.real / np.maximum(np.abs(s), 1e-300), initial=1.0))
 
 
 def vertices(env_id: str) -> list[dict[str, float]]:
@@ -124,13 +127,16 @@ def robust_filter_noise(cls: type, env_id: str, params_json: str, move_weight: f
     class, built with ``robust=False`` on the env of ``env_id`` with ``params_json``."""
     env = gym.make(env_id, params=json.loads(params_json))
     best = (-np.inf, filter_noise_K, "")
-    for k in range(MAX_STEPS + 1):
-        noise = filter_noise_K * NOISE_STEP**k
-        ctrl = cls(env, move_weight=move_weight, u_weight=u_weight, filter_noise_K=noise,
-                   heat_std=heat_std, robust=False)  # fmt: skip
-        zeta, where = worst_damping(ctrl, env_id, params_json)
-        if zeta >= ZETA_MIN:
-            return noise, zeta, where
-        if zeta > best[0]:
-            best = (zeta, noise, where)
+    try:
+        for k in range(MAX_STEPS + 1):
+            noise = filter_noise_K * NOISE_STEP**k
+            ctrl = cls(env, move_weight=move_weight, u_weight=u_weight, filter_noise_K=noise,
+                       heat_std=heat_std, robust=False)  # fmt: skip
+            zeta, where = worst_damping(ctrl, env_id, params_json)
+            if zeta >= ZETA_MIN:
+                return noise, zeta, where
+            if zeta > best[0]:
+                best = (zeta, noise, where)
+    finally:
+        env.close()
     return best[1], best[0], best[2]

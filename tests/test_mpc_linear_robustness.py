@@ -78,3 +78,11 @@ def test_robust_must_be_a_bool():
     env = gym.make(CASCADE)
     with pytest.raises(ValueError, match="robust"):
         MPCLinear(env, robust="yes")
+
+
+def test_damping_of_growing_decaying_and_dead_modes():
+    """A mode that dies within one interval (a pure delay's eigenvalue 0) is fully damped,
+    a growing oscillation below 0, a decaying one between."""
+    assert rob.damping(np.array([[0.0, 1.0], [0.0, 0.0]]), 1.0) == 1.0
+    rot = np.array([[np.cos(0.1), -np.sin(0.1)], [np.sin(0.1), np.cos(0.1)]])
+    assert rob.damping(1.01 * rot, 1.0) < 0.0 < rob.damping(0.99 * rot, 1.0) < 1.0
