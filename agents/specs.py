@@ -81,6 +81,16 @@ class Spec:
         leaderboard runs every other policy in a process of its own)."""
         return self.kind == SHIPPED or (self.kind == BASELINE and self.target in baselines.SHIPPED)
 
+    @property
+    def is_factory(self) -> bool:
+        """Whether it is a user's ``module:callable`` factory."""
+        return self.kind == FACTORY
+
+    @property
+    def needs_extra(self) -> bool:
+        """Whether building it needs the agents extra (Stable-Baselines3, torch)."""
+        return self.kind in (SHIPPED, FILES)
+
     def available(self, env_id: str) -> bool:
         """Whether it can act on ``env_id``."""
         return self.envs is None or env_id in self.envs
@@ -211,6 +221,22 @@ def parse(name: str) -> Spec:
         return _files_spec(name, name)
     raise ValueError(f"unknown policy {_show(name)}; valid names: {', '.join(baselines.NAMES)}, "
                      f"{', '.join(shipped_names())}; a policy is {FORMS}")  # fmt: skip
+
+
+def everyday_names() -> list[str]:
+    """What ``steamtemp-check --policy all`` stands for: every baseline."""
+    return list(baselines.NAMES)
+
+
+def listing() -> list[str]:
+    """The baselines and the shipped trained agents, as ``python -m steamtemp_gym`` lists
+    them."""
+    where: dict[str, list[str]] = {}
+    for env_id, algo in agents.shipped():
+        where.setdefault(f"{SB3_PREFIX}{algo}", []).append(env_id.split("/")[-1])
+    lines = [f"Baselines (baselines.make(name, env)): {', '.join(baselines.NAMES)}", "",
+             "Shipped trained agents (agents.load(id, algo); need the agents extra):"]
+    return lines + [f"  {name}: {', '.join(ids)}" for name, ids in sorted(where.items())]
 
 
 def _show(name: Any) -> str:

@@ -61,7 +61,7 @@ def closed_loop(ctrl: Any, plant: Any, load: float) -> np.ndarray:
     Ap, Bp, Cp, Dp = plant.linearize(load, outputs=observed)
     keep = reachable(Ap, Bp)
     A, B, C, D = Ap[np.ix_(keep, keep)], Bp[keep], Cp[:, keep], Dp
-    n_x, n_z, n_u, r = A.shape[0], m["Az"].shape[0], ctrl.n_u, d["r"]
+    n_z, n_u, r = m["Az"].shape[0], ctrl.n_u, d["r"]
     nv = len(d["moves"]) * n_u
     first = np.linalg.solve(m["H"][:nv, :nv], np.eye(nv))[:n_u]  # du_0 = -first @ g
     n_pts = len(d["pts"])

@@ -26,7 +26,7 @@ except PackageNotFoundError:  # running from a source tree
 CACHE_DIR = _cache.configure(__version__)
 _cache.announce_compiles()
 
-from steamtemp_gym.plants import PLANTS  # noqa: E402
+from steamtemp_gym.catalog import PLANTS  # noqa: E402
 
 #: Every registered env id, in the order of the reference documents.
 ENV_IDS: tuple[str, ...] = tuple(PLANTS)

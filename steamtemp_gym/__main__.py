@@ -13,7 +13,7 @@ import sys
 def report() -> str:
     """The listing (module docstring)."""
     import steamtemp_gym
-    from steamtemp_gym import envs, plants, scenarios
+    from steamtemp_gym import envs, plants, policy_sources, scenarios
     from steamtemp_gym.scenarios import heldout
 
     common = [n for n in scenarios.names() if n != scenarios.RANDOM]
@@ -30,17 +30,10 @@ def report() -> str:
               f"  held-out: {', '.join(heldout.PREFIX + n for n in heldout.NAMES)}",
               f"  {scenarios.RANDOM} (the seeded training distribution, the default), or a "
               "YAML file"]  # fmt: skip
-    try:
-        import agents
-        import baselines
-    except ImportError:  # an installation without them
+    source = policy_sources.find()
+    if source is None:  # an installation without policies
         return "\n".join(lines) + "\n"
-    lines += ["", f"Baselines (baselines.make(name, env)): {', '.join(baselines.NAMES)}"]
-    shipped: dict[str, list[str]] = {}
-    for env_id, algo in agents.shipped():
-        shipped.setdefault(f"sb3:{algo}", []).append(env_id.split("/")[-1])
-    lines += ["", "Shipped trained agents (agents.load(id, algo); need the agents extra):"]
-    lines += [f"  {name}: {', '.join(where)}" for name, where in sorted(shipped.items())]
+    lines += ["", *source.listing()]
     lines += ["", "Commands: steamtemp-leaderboard --help, steamtemp-check --help, "
               "steamtemp-train --help; reference pages: docs/envs/."]  # fmt: skip
     return "\n".join(lines) + "\n"

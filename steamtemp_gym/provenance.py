@@ -120,8 +120,9 @@ def plant_files(module: str, root: Path | None = None) -> list[Path]:
 
 def _shared_plant_modules(plants: Path) -> list[str]:
     """The modules directly in steamtemp_gym/plants that are no plant of their own: those
-    that define no subclass of ``Plant`` (a plant module's class is listed in PLANTS)."""
-    registry = (plants / "__init__.py").read_text()
+    that define no subclass of ``Plant`` (a plant module's class is listed in the catalog,
+    steamtemp_gym/catalog.py)."""
+    registry = (plants.parent / "catalog.py").read_text()
     out = []
     for f in plants.glob("*.py"):
         if f.stem == "__init__" or f"steamtemp_gym.plants.{f.stem}:" not in registry:

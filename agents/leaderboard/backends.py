@@ -23,12 +23,14 @@ from agents.leaderboard.records import Record
 
 
 class Progress:
-    """A progress bar with ETA over episodes on stderr (a line per 10 % when not a tty)."""
+    """A progress bar with ETA over episodes on ``stream`` (the stderr of the moment it is
+    made, by default; a line per 10 % when not a tty)."""
 
-    def __init__(self, total: int, stream=sys.stderr) -> None:
-        self.total, self.done, self.stream = total, 0, stream
+    def __init__(self, total: int, stream=None) -> None:
+        self.stream = sys.stderr if stream is None else stream
+        self.total, self.done = total, 0
         self.t0 = time.time()
-        self.tty = stream.isatty()
+        self.tty = self.stream.isatty()
         self.last_pct = -10
 
     def update(self, n: int) -> None:

@@ -1,8 +1,8 @@
-"""The plants, one module or package each; :data:`PLANTS` maps every env id to its plant class.
+"""The plants, one module or package each; the catalog (steamtemp_gym/catalog.py,
+re-exported here as :data:`PLANTS` and :func:`plant_class`) maps every env id to its class.
 
-Adding a plant = one module (or package) here plus one entry in :data:`PLANTS` (the id is
-registered with Gymnasium by ``steamtemp_gym/__init__.py``). A large plant is a package
-with one task per module (``supercritical_fsh/``, ``benson_subcritical/``,
+Adding a plant = one module (or package) here plus one line in :data:`PLANTS`. A large
+plant is a package with one task per module (``supercritical_fsh/``, ``benson_subcritical/``,
 ``boiler_turbine_mimo/``, ``drum_boiler/``: ``params``, ``layout``, ``kernel``,
 ``steady_state``, ``calibration``, ``plant``), its ``__init__`` carrying the model's
 description and re-exporting its names.
@@ -15,31 +15,11 @@ before its registry of shared named scenarios.
 
 from __future__ import annotations
 
-import importlib
 from collections.abc import Mapping
 
-from steamtemp_gym import scenarios
+from steamtemp_gym.catalog import PLANTS, plant_class
 from steamtemp_gym.plants.base import Plant
 from steamtemp_gym.scenarios import Scenario
-
-#: env id -> "module:Class" of its plant (imported lazily).
-PLANTS: dict[str, str] = {
-    "steamtemp/SupercriticalFSH-v0": "steamtemp_gym.plants.supercritical_fsh:SupercriticalFSH",
-    "steamtemp/BensonSubcritical-v0": "steamtemp_gym.plants.benson_subcritical:BensonSubcritical",
-    "steamtemp/BoilerTurbineMIMO-v0": "steamtemp_gym.plants.boiler_turbine_mimo:BoilerTurbineMIMO",
-    "steamtemp/DrumBoilerSH-v0": "steamtemp_gym.plants.drum_boiler:DrumBoilerSH",
-    "steamtemp/Cascade300MW-v0": "steamtemp_gym.plants.cascade_300mw:Cascade300MW",
-}
-
-
-def plant_class(plant_id: str) -> type[Plant]:
-    """The plant class of an env id; ValueError listing the known ids otherwise."""
-    try:
-        path = PLANTS[plant_id]
-    except (KeyError, TypeError):
-        raise ValueError(f"unknown plant id {plant_id!r}; valid ids: {sorted(PLANTS)}") from None
-    module, cls = path.split(":")
-    return getattr(importlib.import_module(module), cls)
 
 
 def own_scenarios(plant_id: str) -> Mapping[str, Scenario]:
@@ -48,9 +28,9 @@ def own_scenarios(plant_id: str) -> Mapping[str, Scenario]:
     return plant_class(plant_id).scenarios
 
 
-scenarios.registry.use_plant_scenarios(own_scenarios)
-
-
 def make(plant_id: str, **params) -> Plant:
     """A plant instance with parameter overrides (ValueError on unknown or impossible values)."""
     return plant_class(plant_id)(**params)
+
+
+__all__ = ["PLANTS", "Plant", "make", "own_scenarios", "plant_class"]

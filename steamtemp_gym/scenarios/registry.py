@@ -2,8 +2,8 @@
 into a Scenario.
 
 For a plant id, names are looked up first in the named scenarios the plant declares (the
-``scenarios`` attribute of its class, found through the lookup that ``steamtemp_gym.plants``
-installs with :func:`use_plant_scenarios`, so this package never imports the plants), then
+``scenarios`` attribute of its class, found through the catalog of plants,
+steamtemp_gym/catalog.py, which imports a plant only when asked for it), then
 in the registry (:func:`register`), which holds the scenarios shared by every plant
 (``library.py``) and those users register.
 
@@ -15,8 +15,9 @@ ending in ``.yaml`` / ``.yml``.
 from __future__ import annotations
 
 import os
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 
+from steamtemp_gym import catalog
 from steamtemp_gym.scenarios.model import Scenario, _clip, _describe, _excerpt
 from steamtemp_gym.scenarios.yaml_loader import _as_path, load_yaml
 
@@ -28,26 +29,9 @@ HELDOUT_PREFIX = "heldout:"
 _REGISTRY: dict[str, tuple[Scenario, tuple[str, ...] | None]] = {}
 
 
-def _no_plant_scenarios(plant_id: str) -> Mapping[str, Scenario]:
-    """No plant declares scenarios (until steamtemp_gym.plants installs its lookup)."""
-    return {}
-
-
-#: plant id -> the named scenarios the plant declares (``Plant.scenarios``); raises
-#: ValueError for an unknown plant id. Installed by steamtemp_gym.plants.
-_plant_scenarios: Callable[[str], Mapping[str, Scenario]] = _no_plant_scenarios
-
-
-def use_plant_scenarios(lookup: Callable[[str], Mapping[str, Scenario]]) -> None:
-    """Make :func:`names`, :func:`get` and :func:`resolve` look up a plant's own named
-    scenarios with ``lookup(plant_id)`` (before the registry) when given a plant id."""
-    global _plant_scenarios
-    _plant_scenarios = lookup
-
-
 def _own(plant_id: str | None) -> Mapping[str, Scenario]:
     """The named scenarios ``plant_id`` declares (none for None)."""
-    return {} if plant_id is None else _plant_scenarios(plant_id)
+    return {} if plant_id is None else catalog.plant_class(plant_id).scenarios
 
 
 def check_name(name: str) -> None:

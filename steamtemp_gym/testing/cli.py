@@ -19,14 +19,17 @@ from collections.abc import Sequence
 
 import gymnasium as gym
 
+from steamtemp_gym import policy_sources
 from steamtemp_gym.testing import guard
 from steamtemp_gym.testing.runner import CHECK_NAMES, Result, bound_checks, run, unchecked
 from steamtemp_gym.testing.subjects import short_id
 
 
 def _parser() -> argparse.ArgumentParser:
-    import baselines
-
+    source = policy_sources.find()
+    names = ("a policy factory module:callable (env -> Policy; module a dotted name or a .py "
+             "file): no policy source is installed" if source is None else
+             f"{source.FORMS}; 'all' for {', '.join(source.everyday_names())}")  # fmt: skip
     p = argparse.ArgumentParser(
         prog="steamtemp-check",
         description="Check that env ids (plants, variants) and controllers honour every "
@@ -38,10 +41,7 @@ def _parser() -> argparse.ArgumentParser:
                    "every steamtemp id, steamtemp_gym.ENV_IDS)")
     p.add_argument("--policy", action="append", default=[], metavar="NAME",
                    help="also run the policy checks of this policy on each id (repeatable): "
-                   f"a baseline ({', '.join(baselines.NAMES)}; 'all' for every one), "
-                   "sb3:<algo> (a shipped trained agent), zoo:DIR or a path to a trained "
-                   "agent's files (steamtemp-train --out, an RL Zoo run), or module:callable "
-                   "(a factory env -> Policy; module a dotted name or a .py file)")
+                   + names)
     p.add_argument("--scenario", action="append", default=[], metavar="SCENARIO",
                    help="run check_completes_a_scenario under this scenario instead of "
                    "setpoint_step (repeatable): a scenario name, heldout:<name>, random or a "
@@ -91,17 +91,16 @@ def _check_scenarios(parser: argparse.ArgumentParser, specs: list[str], ids: lis
 
 
 def _check_policies(parser: argparse.ArgumentParser, policies: list[str], ids: list[str]) -> None:
-    """Every --policy parses (agents/specs.py); a factory's policy is built on the first id
-    and must have predict and reset."""
+    """Every --policy parses (the installed policy source, steamtemp_gym/policy_sources.py);
+    a factory's policy is built on the first id and must have predict and reset."""
     import steamtemp_gym
-    from agents import specs
 
     for name in policies:
         try:
-            spec = specs.parse(name)
+            spec = policy_sources.parse(name)
         except ValueError as exc:
             parser.error(f"--policy: {exc} (or 'all')")
-        if spec.kind == specs.FACTORY:
+        if spec.is_factory:
             env_id = (ids or steamtemp_gym.ENV_IDS)[0]
             try:
                 spec.make(env_id, gym.make(env_id))
@@ -121,8 +120,6 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 def _main(argv: Sequence[str] | None) -> int:
-    import baselines
-
     parser = _parser()
     args = parser.parse_args(argv)
     for module in args.modules:
@@ -135,7 +132,9 @@ def _main(argv: Sequence[str] | None) -> int:
                 raise
             parser.error(f"--import {module}: {guard.describe(exc, 'the module')}")
     args.ids = [_env_id(parser, i) for i in args.ids]
-    policies = list(baselines.NAMES) if "all" in args.policy else args.policy
+    if "all" in args.policy and policy_sources.find() is None:
+        parser.error("--policy all: no policy source is installed")
+    policies = policy_sources.find().everyday_names() if "all" in args.policy else args.policy
     _check_policies(parser, policies, args.ids)
     bad = [c for c in args.check or () if c not in CHECK_NAMES]
     if bad:

@@ -13,6 +13,7 @@ from typing import Any
 import gymnasium as gym
 from gymnasium.vector import SyncVectorEnv
 
+from steamtemp_gym import policy_sources
 from steamtemp_gym.testing import guard
 
 
@@ -80,7 +81,7 @@ def resolve_env(env: str | Callable[..., gym.Env] | EnvTarget) -> EnvTarget:
 
 @dataclass(frozen=True)
 class PolicyTarget:
-    """A policy under check: a baseline name (``baselines.make(name, env)``) or a factory
+    """A policy under check: a policy name (steamtemp_gym/policy_sources.py) or a factory
     ``make(env) -> Policy`` (env: a single or a vector env)."""
 
     label: str
@@ -97,18 +98,15 @@ class PolicyTarget:
 def resolve_policy(policy: str | Callable[[Any], Any] | PolicyTarget) -> PolicyTarget:
     """A PolicyTarget of a policy name or a factory (ValueError listing the names otherwise).
 
-    Names are those of ``steamtemp-leaderboard --policies`` (agents/specs.py): a baseline
+    Names are looked up in the installed policy source (steamtemp_gym/policy_sources.py;
+    steamtemp-gym's own takes the names of ``steamtemp-leaderboard --policies``: a baseline
     name, a shipped trained agent ``sb3:<algo>`` (the plant's own), ``zoo:DIR`` or a path
-    to a trained agent's files, or ``module:callable``. They are looked up in ``baselines``
-    and ``agents`` (shipped in the same distribution; imported only here, so the
-    environments do not depend on them). A name not available for an env's plant (an
-    agent trained on another plant) skips the checks there."""
+    to a trained agent's files, or ``module:callable``). A name not available for an env's
+    plant (an agent trained on another plant) skips the checks there."""
     if isinstance(policy, PolicyTarget):
         return policy
     if isinstance(policy, str):
-        from agents import specs
-
-        specs.parse(policy)  # a bad name fails here, listing every form
+        policy_sources.parse(policy)  # a bad name fails here, listing every form
         return PolicyTarget(policy, policy, functools.partial(_make_named, policy))
     if callable(policy):
         return PolicyTarget(getattr(policy, "__name__", repr(policy)), None, policy)
@@ -118,9 +116,7 @@ def resolve_policy(policy: str | Callable[[Any], Any] | PolicyTarget) -> PolicyT
 def _make_named(name: str, env: Any) -> Any:
     """The policy ``name`` for the env: for its registered id, else for its plant's (a
     variant's base); CheckSkipped where it is available for neither."""
-    from agents import specs
-
-    spec = specs.parse(name)
+    spec = policy_sources.parse(name)
     u = env.unwrapped
     ids = [i for i in (getattr(getattr(u, "spec", None), "id", None), u.plant.id) if i]
     env_id = next((i for i in ids if spec.available(i)), None)
@@ -130,7 +126,7 @@ def _make_named(name: str, env: Any) -> Any:
     try:
         return spec.make(env_id, env)
     except ImportError as exc:
-        if spec.kind not in (specs.SHIPPED, specs.FILES):
+        if not spec.needs_extra:
             raise
         raise CheckSkipped(f"{name} needs the agents extra ({exc})") from exc
 
