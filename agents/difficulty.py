@@ -29,13 +29,13 @@ import numpy as np
 from agents.evaluation import run_episode
 from baselines.cascade_pi import CascadePI, CascadePIFF
 from baselines.identification import step_test
-from steamtemp_gym import scenarios
+from steamtemp_gym import plants, scenarios
 from steamtemp_gym.plants.base import MAIN
 
 REFERENCE_POLICIES = ("frozen", "random", "cascade_pi", "cascade_pi_2x", "cascade_pi_ff")
 COLUMNS = ("max_abs_dev_K", "iae_K_s", "time_outside_5K_s", "spray_used_kg", "valve_travel",
            "return", "tripped")  # fmt: skip
-#: Peak |e| band (K) of cascade PI on the two 5 %/min ramps, per plant kind.
+#: Peak |e| band (K) of cascade PI on the two 5 %/min ramps, per boiler circulation.
 PI_RAMP_PEAK_K = {"once_through": (4.0, 10.0), "drum": (3.0, 8.0)}
 TARGETS = {
     "frozen_ramp_peak_min_K": 20.0,
@@ -43,13 +43,14 @@ TARGETS = {
     "cascade300_pi_std_K": (1.0, 2.5),
     "ff_peak_reduction_min": 0.25,
 }
-#: Plant kind of each id (the cascade transfer-function plant has no ramp band).
-KIND = {
-    "steamtemp/SupercriticalFSH-v0": "once_through",
-    "steamtemp/BensonSubcritical-v0": "once_through",
-    "steamtemp/BoilerTurbineMIMO-v0": "once_through",
-    "steamtemp/DrumBoilerSH-v0": "drum",
-}
+
+
+def ramp_band(env_id: str) -> tuple[float, float] | None:
+    """The cascade PI's ramp-peak band (K) of a plant by its circulation
+    (``Plant.circulation``); None for a plant without one (no ramp band)."""
+    kind = plants.plant_class(env_id).circulation
+    return None if kind is None else PI_RAMP_PEAK_K[kind]
+
 RAMPS = ("load_ramp_100_50", "load_ramp_50_100")
 #: Field range of Tu/Tg of the true outlet after a last-stage spray step (field step tests:
 #: about 0.3), and the largest the thermocouple reading may show.

@@ -2,7 +2,7 @@
 
 Every policy is built (commissioned) on the NOMINAL env of each plant and then run,
 unchanged, on the nominal plant and on each variant of
-``steamtemp_gym.plants.perturb.MISMATCH`` (``gym.make(id, params=variant)``): a baseline's
+``steamtemp_gym.plants.perturb.mismatch(id)`` (``gym.make(id, params=variant)``): a baseline's
 step tests and feed-forward fit see the model, the episodes see the unit. Scenarios:
 ``load_ramp_100_50`` and one held-out scenario (``--heldout``). The seeds of a policy,
 plant and scenario run side by side in the native vector env (agents/evaluation.py).
@@ -67,11 +67,12 @@ def make_parser() -> argparse.ArgumentParser:
 
 def _envs(ap: argparse.ArgumentParser, name: str | None) -> list[str]:
     if name is None:
-        return [e for e in steamtemp_gym.ENV_IDS if e in perturb.MISMATCH]
+        return [e for e in steamtemp_gym.ENV_IDS if perturb.variant_factors(e)]
     env_id = _env_id(name)
-    if env_id not in perturb.MISMATCH:
+    if env_id not in steamtemp_gym.ENV_IDS or not perturb.variant_factors(env_id):
+        valid = [e for e in steamtemp_gym.ENV_IDS if perturb.variant_factors(e)]
         ap.error(f"argument --env: {name[:100]!r} is not a plant with mismatch variants; "
-                 f"valid: {sorted(perturb.MISMATCH)}")  # fmt: skip
+                 f"valid: {valid}")  # fmt: skip
     return [env_id]
 
 
@@ -97,7 +98,7 @@ def evaluate(env_id: str, policy: str, scenario: str, seeds: list[int]) -> dict[
     nominal = venv()
     pol = _make_policy(policy, env_id, nominal)  # commissioned on the model
     out = {}
-    for name, params in [(NOMINAL, None), *perturb.MISMATCH[env_id].items()]:
+    for name, params in [(NOMINAL, None), *perturb.mismatch(env_id).items()]:
         rows = run_batch(nominal if params is None else venv(params), pol, seeds)
         out[name] = (float(np.mean([r["metrics"]["return"] for r in rows])),
                      int(sum(r["metrics"]["tripped"] > 0 for r in rows)))  # fmt: skip
@@ -114,7 +115,7 @@ def table(env_id: str, results: dict[str, dict[str, dict[str, Any]]],
     lines = [f"### {env_id}", "", "| " + " | ".join(head) + " |",
              "|" + "---|" * len(head)]  # fmt: skip
     for pol, by_sc in results.items():
-        for v in [NOMINAL, *perturb.MISMATCH[env_id]]:
+        for v in [NOMINAL, *perturb.variant_factors(env_id)]:
             cells = [pol, v]
             trips = 0
             for s in scenario_names:

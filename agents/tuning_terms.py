@@ -6,7 +6,6 @@ episodes, the score's ends on them (the reference's and the oracle's returns, st
 
 from __future__ import annotations
 
-import itertools
 import json
 from typing import Any
 
@@ -128,15 +127,9 @@ def ends(env_id: str, compute: bool = True) -> dict[str, Any]:
 
 def robust_corners(env_id: str) -> list[dict[str, float]]:
     """The robustness check's plants of ``env_id``: per corner of the uncertainty box, each
-    parameter group's factor (:data:`ROBUST_MARGIN` inside each end of its range, log
-    scale), the groups in ``perturb.GROUPS`` order, the low ends first."""
-    groups = list(perturb.GROUPS.get(env_id, {}))
-    ends_ = []
-    for g in groups:
-        lo, hi = (np.log(f) for f in perturb.RANGES[g])
-        mid, half = 0.5 * (lo + hi), 0.5 * (hi - lo) * (1.0 - ROBUST_MARGIN)
-        ends_.append((float(np.exp(mid - half)), float(np.exp(mid + half))))
-    return [dict(zip(groups, c, strict=True)) for c in itertools.product(*ends_)]
+    parameter group's factor, :data:`ROBUST_MARGIN` inside each end of its range
+    (``perturb.corners``)."""
+    return perturb.corners(env_id, ROBUST_MARGIN)
 
 
 def robustness(env_id: str, make_policy: Any,

@@ -70,8 +70,9 @@ outputs, so the defaults are the benchmark's common tuning (agents/baseline_tuni
 stored in baselines/tuned/lqi.json), started from these commissioning values (:func:`start`):
 du_max = 0.1 of the stroke, e_max_K = 1 K,
 ti_factor = 1, heat_walk = 1.6e-3 (the named scenarios' coloured heat-absorption
-disturbance, std 0.02 and 300 s, as a random walk). Per plant (``PLANT_DEFAULTS``), chosen
-by hand so that the valve travel stays within 3x cascade_pi_ff's on the named and held-out
+disturbance, std 0.02 and 300 s, as a random walk). Per plant (declared on the plant class,
+``commissioning["lqi"]``), chosen by hand so that the valve travel stays within 3x
+cascade_pi_ff's on the named and held-out
 scenarios (3 seeds): e_max_K = 3 K on SupercriticalFSH (1 K: up to 5.6x), 4 K on
 DrumBoilerSH (1 K: up to 7.7x, 3 K: 3.3x), 2 K on Cascade300MW (1 K: 3.7x);
 ti_factor = 0.5 on BensonSubcritical (at 1 the quiet stretch after load_ramp_100_50 swings
@@ -117,12 +118,6 @@ V_REL = 0.01
 P_REL = 0.002
 #: Defaults of the knobs (all chosen; see the module docstring) and the plants' own.
 DEFAULTS = {"du_max": 0.1, "e_max_K": 1.0, "ti_factor": 1.0, "heat_walk": 1.6e-3}
-PLANT_DEFAULTS = {
-    "steamtemp/SupercriticalFSH-v0": {"e_max_K": 3.0},
-    "steamtemp/DrumBoilerSH-v0": {"e_max_K": 4.0},
-    "steamtemp/Cascade300MW-v0": {"e_max_K": 2.0},
-    "steamtemp/BensonSubcritical-v0": {"ti_factor": 0.5},
-}
 KNOBS = (
     Knob("du_max", 0.01, 1.0),
     Knob("e_max_K", 0.1, 100.0),
@@ -133,7 +128,7 @@ KNOBS = (
 
 def start(env_id: str) -> dict[str, float]:
     """The commissioning values of the knobs on a plant (the common tuning's start)."""
-    own = PLANT_DEFAULTS.get(env_id, {})
+    own = plants.plant_class(env_id).commissioning.get("lqi", {})
     return {k.name: own.get(k.name, DEFAULTS[k.name]) for k in KNOBS}
 
 

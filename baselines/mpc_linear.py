@@ -40,9 +40,10 @@ time, one slack per scored temperature)::
 
 with weights per K^2 of every scored temperature (the reward weights them alike), R =
 MOVE_WEIGHT N_POINTS g^2 and S = U_WEIGHT g^2, g the actuator's steady effect (K per
-stroke) at that load. MOVE_WEIGHT is the move suppression, per plant (``MOVE_WEIGHTS``):
-the smallest of ``MOVE_WEIGHT_LADDER`` = 0.01, 0.003, 0.001 whose valve travel stays
-within ``TRAVEL_RATIO_MAX`` = 1.7 times that of ``cascade_pi_ff`` on two
+stroke) at that load. MOVE_WEIGHT is the move suppression, per plant (declared on the plant
+class, ``commissioning["mpc_linear"]["move_weight"]``): the smallest of
+``MOVE_WEIGHT_LADDER`` = 0.01, 0.003, 0.001 whose valve travel stays within
+``TRAVEL_RATIO_MAX`` = 1.7 times that of ``cascade_pi_ff`` on two
 commissioning tests (a -5 % heat-absorption step and cascade_pi's feed-forward ramp, both
 with the named scenarios' noise; not evaluation scenarios; benchmarks/mpc_linear_tuning.py
 measures them: 0.01 on the drum unit, whose travel at 0.003 is 1.79 times the reference's
@@ -83,25 +84,23 @@ import scipy.sparse as sp
 
 from baselines import tuning
 from baselines.loops import observation_layout, restart_rows
-from baselines.mpc_linear_design import GRID_LOADS, HEAT_STD, NOISE_K, design
+from baselines.mpc_linear_design import (
+    GRID_LOADS,
+    HEAT_STD,
+    NOISE_K,
+    design,
+    rule_move_weight,
+)
 from baselines.mpc_linear_robustness import robust_filter_noise
 from baselines.tuning import Knob
 
 #: The local model and its QP are those of the load rounded to this (fraction of rated).
 LOAD_QUANTUM = 0.01
-#: Move suppression per plant (module docstring: the commissioning rule; benchmarks/
-#: mpc_linear_tuning.py measures it) and the weight of the steady target.
-MOVE_WEIGHTS = {
-    "steamtemp/SupercriticalFSH-v0": 0.003,
-    "steamtemp/BensonSubcritical-v0": 0.001,
-    "steamtemp/BoilerTurbineMIMO-v0": 0.001,
-    "steamtemp/DrumBoilerSH-v0": 0.01,
-    "steamtemp/Cascade300MW-v0": 0.001,
-}
-#: The candidates of the rule, largest first, and the travel bound it keeps (x cascade_pi_ff).
-MOVE_WEIGHT_LADDER = (0.01, 0.003, 0.001)
+#: The travel bound the commissioning rule keeps (x cascade_pi_ff).
 TRAVEL_RATIO_MAX = 1.7  # the 2x budget less the tuner's margin (docs/baseline_tuning.md)
 U_WEIGHT = 0.01
+
+
 #: Soft output bounds |y - r| <= BAND_K + s (the reward's inner band), their costs.
 BAND_K = 5.0
 RHO_SLACK, RHO_SLACK_L = 1e2, 1e1
@@ -184,7 +183,7 @@ class MPCLinear:
             filter_noise_K: the thermocouple noise (K) the Kalman filter assumes; heat_std:
             the heat-absorption variability it assumes (the ``KNOBS``; default: the
             benchmark's stored tuning, baselines/tuned/mpc_linear.json, where the plant has
-            one, else the commissioning rule's MOVE_WEIGHTS entry, U_WEIGHT and the named
+            one, else the commissioning rule's move suppression, U_WEIGHT and the named
             scenarios' noise and disturbance, baselines/mpc_linear_design.py NOISE_K and
             HEAT_STD). A larger filter noise or smaller variability detunes the estimator:
             it trusts the model's prediction more than each new measurement, which keeps the
@@ -202,7 +201,7 @@ class MPCLinear:
     def knob_defaults(env_id: str) -> dict[str, float]:
         """The commissioning rule's move suppression and U_WEIGHT, and the filter of the
         named scenarios' noise and disturbance."""
-        return {"move_weight": MOVE_WEIGHTS.get(env_id, MOVE_WEIGHT_LADDER[1]),
+        return {"move_weight": rule_move_weight(env_id),
                 "u_weight": U_WEIGHT, "filter_noise_K": NOISE_K, "heat_std": HEAT_STD}  # fmt: skip
 
     @staticmethod
@@ -213,7 +212,7 @@ class MPCLinear:
         of the knobs' boxes (a slow estimator with a fast regulator: the estimate no
         longer follows each reading, so the moves need little suppression); and three
         times the commissioning rule's move suppression."""
-        rule = MOVE_WEIGHTS.get(env_id, MOVE_WEIGHT_LADDER[1])
+        rule = rule_move_weight(env_id)
         lo = {k.name: k.lo for k in MPCLinear.KNOBS}
         return [{"filter_noise_K": 10.0 * NOISE_K, "heat_std": HEAT_STD / 4.0},
                 {"filter_noise_K": 20.0 * NOISE_K, "heat_std": HEAT_STD / 4.0,

@@ -64,6 +64,9 @@ HSV_TOL, MAX_ORDER = 1e-4, 40
 #: step; state process noise W_REL times the inputs' typical sizes.
 NOISE_K, V_REL = 0.25, 0.002
 HEAT_STD, HEAT_TAU_S = 0.02, 300.0
+#: The move suppressions the commissioning rule chooses among, largest first (baselines/
+#: mpc_linear.py, module docstring).
+MOVE_WEIGHT_LADDER = (0.01, 0.003, 0.001)
 P_REL = 0.002
 W_REL = 0.1
 #: Horizon: multiples of the slowest 63 % time, clipped (s); points; move instants.
@@ -173,6 +176,13 @@ def _load_path(sL: np.ndarray, hr: np.ndarray, pts: np.ndarray, n_hold: int,
         f[n] = (f[n - 1] + np.where((i_r > 0)[:, None], hr[np.maximum(i_r, 0)], 0.0)
                 + dt * np.where((i_l > 0)[:, None], sL[np.maximum(i_l, 0)], 0.0))  # fmt: skip
     return f
+
+
+def rule_move_weight(env_id: str) -> float:
+    """The commissioning rule's move suppression on a plant: what the plant declares
+    (``commissioning["mpc_linear"]["move_weight"]``), else the middle of the ladder."""
+    own = plants.plant_class(env_id).commissioning.get("mpc_linear", {})
+    return own.get("move_weight", MOVE_WEIGHT_LADDER[1])
 
 
 class _Layout(NamedTuple):

@@ -31,7 +31,6 @@ a loop unstable here strokes the valves end to end on that unit.
 
 from __future__ import annotations
 
-import itertools
 import json
 from typing import Any
 
@@ -95,19 +94,13 @@ def damping(matrix: np.ndarray, dt: float) -> float:
     return float(np.min(-s.real / np.maximum(np.abs(s), 1e-300), initial=1.0))
 
 
-def vertices(env_id: str) -> list[dict[str, float]]:
-    """The group factors of every vertex of the plant's documented ranges."""
-    groups = list(perturb.plant_groups(env_id))
-    ends = itertools.product(*[perturb.RANGES[g] for g in groups])
-    return [dict(zip(groups, e, strict=True)) for e in ends]
-
-
 def worst_damping(ctrl: Any, env_id: str, params_json: str) -> tuple[float, str]:
-    """(least damping ratio, where) of ``ctrl``'s loop over :func:`vertices` x :data:`LOADS`,
+    """(least damping ratio, where) of ``ctrl``'s loop over the vertices of the plant's
+    documented ranges (``perturb.corners``) x :data:`LOADS`,
     each vertex's plant the model (``params_json``) with its groups scaled."""
     base = json.loads(params_json)
     worst, where = np.inf, ""
-    for factors in vertices(env_id):
+    for factors in perturb.corners(env_id):
         plant = plants.make(env_id, **perturb.scaled(env_id, base, factors))
         for load in LOADS:
             z = damping(closed_loop(ctrl, plant, load), plant.dt_s)

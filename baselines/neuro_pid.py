@@ -43,9 +43,10 @@ valve (``spray_max_kg_s``), so one reading has to give. Read as 8 kg/s per K (th
 paper's inner loop gain 16.1 kept), G_C2 strokes the valve by 0.89 of its travel per K
 of thermocouple noise, and that loop has 22 deg of phase margin at T_s = 1 s with no
 measurement filter and none behind a 3 s one (unstable). This module keeps the paper's
-number in the paper's unit of position: G_C2 = 8 % of stroke per K
-(:data:`INNER_P_PCT_PER_K`), 0.72 kg/s per K on the plant, an inner loop gain of 1.45
-at rated load (2.9 at 50 %, 4.1 at 35 %: the leading-section gain grows as 1/load) with
+number in the paper's unit of position: G_C2 = 8 % of stroke per K (declared by
+Cascade300MW: ``commissioning["neuro_pid"]["inner_p_pct_per_K"]``), 0.72 kg/s per K on the
+plant, an inner loop gain of 1.45 at rated load (2.9 at 50 %, 4.1 at 35 %: the
+leading-section gain grows as 1/load) with
 a phase margin of 103 deg at rated load and 49 deg at 35 % behind the filter; the inner
 closed loop (poles (-1 +- 1.2 j) / 16 s at rated load) stays well faster than the
 outer 4 x 22.3 s lags, as Section 2 asks. The P acts on the intermediate temperature
@@ -64,7 +65,8 @@ SIMC PI and load-scheduled: baselines/neuro_pid_commissioning.py.
 
 Disturbance inputs. Cascade300MW-v0 measures the paper's omega (outer, K) and omega_2
 (inner, kg/s): the observation entries ``omega_K`` and ``omega2_kg_s``. The other plants
-have no such signals; the net gets the measured proxies of :data:`PROXIES`: the firing
+have no such signals; the net gets the measured proxies its plant declares
+(``commissioning["neuro_pid"]["disturbance_signals"]``): the firing
 rate minus the load demand (heat release ahead of or behind the steam flow: the outer,
 heat-absorption disturbance; in units of the load-demand scale 0.25), the load-demand
 rate (first-order filter 60 s, 5 %/min -> 1) and the attemperator inlet temperature
@@ -111,14 +113,6 @@ from baselines.neuro_pid_net import (
 from baselines.tuning import Knob
 from steamtemp_gym.plants.base import MAIN
 
-#: Measured disturbance inputs (omega, omega_2) per plant; see the module docstring.
-PROXIES = {
-    "steamtemp/Cascade300MW-v0": ("omega_K", "omega2_kg_s"),
-    "steamtemp/SupercriticalFSH-v0": ("firing_minus_load", "attemp_in_temp_C"),
-    "steamtemp/DrumBoilerSH-v0": ("firing_minus_load", "attemp_in_temp_C"),
-    "steamtemp/BensonSubcritical-v0": ("load_rate", "sh3_out_temp_meas_C"),
-    "steamtemp/BoilerTurbineMIMO-v0": ("firing_minus_load", "load_rate"),
-}
 LOAD_RATE_FILTER_S, LOAD_RATE_UNIT = 60.0, 0.05 / 60.0  # 5 %/min -> 1
 ERR_SCALE_K = 20.0  # the observation's error scale (steamtemp_gym.signals.T0_K)
 #: Learning rates at which the nets adapt alike without saturating (training episodes move
@@ -171,7 +165,8 @@ class NeuroPID:
         self.inner = [names.index(plant.control_loops[j][0]) if plant.control_loops[j][0]
                       else None for j in self.main]  # fmt: skip
         self.p_inner = inner_p_valve_per_K(plant)
-        prox = PROXIES.get(plant.id) or (
+        own = plant.commissioning.get("neuro_pid", {})
+        prox = own.get("disturbance_signals") or (
             "firing_minus_load" if self.i_fire is not None else "load_rate",
             "load_rate",
         )

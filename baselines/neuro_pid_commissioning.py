@@ -40,9 +40,6 @@ from steamtemp_gym.metrics import step_response_metrics
 from steamtemp_gym.plants.base import MAIN
 from steamtemp_gym.scenarios import Scenario
 
-#: Paper's secondary P controller G_C2 = 8 (Section 5), read as % of valve stroke per K of
-#: the (filtered) intermediate temperature, on its own plant (module docstring).
-INNER_P_PCT_PER_K = {"steamtemp/Cascade300MW-v0": 8.0}
 #: Initial derivative gain of eq. (4) (K per K): the commissioning tuning is a PI, g cannot
 #: output 0; 0.05 is a derivative time of ~0.1 s at the claim plant's k_p0 (negligible).
 KD0 = 0.05
@@ -51,8 +48,10 @@ STEP_K, STEP_DURATION_S = 2.0, 2400.0
 
 
 def inner_p_valve_per_K(plant: Any) -> float | None:
-    """The paper's G_C2 in valve stroke (fraction) per K on its plant, None elsewhere."""
-    pct = INNER_P_PCT_PER_K.get(plant.id)
+    """The paper's G_C2 (Section 5: G_C2 = 8, read as % of valve stroke per K of the
+    filtered intermediate temperature) in valve stroke (fraction) per K, on the plant that
+    declares it (``commissioning["neuro_pid"]["inner_p_pct_per_K"]``), None elsewhere."""
+    pct = plant.commissioning.get("neuro_pid", {}).get("inner_p_pct_per_K")
     return None if pct is None else pct / 100.0
 
 

@@ -1,4 +1,5 @@
-"""The commissioning tests that choose mpc_linear's move suppression (MOVE_WEIGHTS).
+"""The commissioning tests that choose mpc_linear's move suppression (declared by each plant,
+``commissioning["mpc_linear"]``).
 
     python benchmarks/mpc_linear_tuning.py [--envs a,b] [--seed 0]
 
@@ -23,7 +24,8 @@ import baselines
 import steamtemp_gym
 from agents.evaluation import run_episode
 from baselines.cascade_pi import FF_RAMP
-from baselines.mpc_linear import MOVE_WEIGHT_LADDER, MOVE_WEIGHTS, TRAVEL_RATIO_MAX, MPCLinear
+from baselines.mpc_linear import TRAVEL_RATIO_MAX, MPCLinear
+from baselines.mpc_linear_design import MOVE_WEIGHT_LADDER, rule_move_weight
 from steamtemp_gym.scenarios import NAMED_DISTURBANCES, Scenario
 
 TESTS = (
@@ -64,8 +66,8 @@ def main(argv: list[str] | None = None) -> None:
             if fits:
                 ok.append(w)
         choice = min(ok) if ok else max(MOVE_WEIGHT_LADDER)
-        print(f"\n{env_id}: rule gives {choice:g}; MOVE_WEIGHTS has "
-              f"{MOVE_WEIGHTS.get(env_id)}\n", flush=True)  # fmt: skip
+        print(f"\n{env_id}: rule gives {choice:g}; the plant declares "
+              f"{rule_move_weight(env_id)}\n", flush=True)  # fmt: skip
 
 
 if __name__ == "__main__":

@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 
 import baselines
+import steamtemp_gym
 from agents import baseline_tuning as bt
 from agents import stats
 from agents import tuning_terms as tt
@@ -88,7 +89,8 @@ def test_the_robustness_checks_plants_lie_inside_the_ranges_and_are_no_named_var
     """The check's plants are the corners of the documented ranges less the margin: every
     combination of the groups' two directions, strictly inside each range, and none of
     them a named model-mismatch variant (those stay an evaluation)."""
-    for env_id, groups in perturb.GROUPS.items():
+    for env_id in steamtemp_gym.ENV_IDS:
+        groups = perturb.plant_groups(env_id)
         corners = tt.robust_corners(env_id)
         assert len(corners) == 2 ** len(groups)
         assert len({tuple(sorted(c.items())) for c in corners}) == len(corners)
@@ -97,7 +99,7 @@ def test_the_robustness_checks_plants_lie_inside_the_ranges_and_are_no_named_var
             for g, f in c.items():
                 lo, hi = perturb.RANGES[g]
                 assert lo < f < hi
-        for v in perturb.VARIANT_FACTORS[env_id].values():
+        for v in perturb.variant_factors(env_id).values():
             assert all(any(abs(c.get(g, 1.0) - f) > 1e-6 for g, f in v.items())
                        for c in corners)  # fmt: skip
 

@@ -12,17 +12,19 @@ import pytest
 
 import steamtemp_gym
 from agents.difficulty import (
-    KIND,
     RAMPS,
     TARGETS,
     TU_TG_MEASURED_MAX,
     TU_TG_TRUE,
     evaluate,
+    ramp_band,
     spray_step_dead_time,
 )
 from steamtemp_gym import scenarios
 
 IDS = steamtemp_gym.ENV_IDS
+#: The plants with a steam-water circuit (``Plant.circulation``): a ramp band and a spray.
+BOILERS = [i for i in IDS if ramp_band(i) is not None]
 
 
 @pytest.mark.parametrize("env_id", IDS)
@@ -31,9 +33,9 @@ def test_frozen_valve_drifts_far_on_the_load_ramp(env_id):
     assert m["max_abs_dev_K"] >= TARGETS["frozen_ramp_peak_min_K"]
 
 
-@pytest.mark.parametrize("env_id", [i for i in IDS if i in KIND])
+@pytest.mark.parametrize("env_id", BOILERS)
 def test_cascade_pi_peak_on_the_ramps_is_in_the_field_band(env_id):
-    lo, hi = TARGETS["pi_ramp_peak_K"][KIND[env_id]]
+    lo, hi = ramp_band(env_id)
     for sc in RAMPS:
         m = evaluate(env_id, "cascade_pi", sc)
         assert lo <= m["max_abs_dev_K"] <= hi, (sc, m["max_abs_dev_K"])
@@ -51,7 +53,7 @@ FF_SHORT = {
 @pytest.mark.parametrize(
     "env_id",
     [pytest.param(i, marks=pytest.mark.xfail(strict=True, reason=FF_SHORT[i])) if i in FF_SHORT
-     else i for i in IDS if i in KIND],
+     else i for i in BOILERS],
 )  # fmt: skip
 def test_load_feedforward_shows_headroom_over_cascade_pi(env_id):
     """A better-informed controller (the load demand is observed) beats plain PI clearly."""
@@ -76,7 +78,7 @@ def test_cascade300_pi_error_std_is_of_the_papers_order():
 
 
 @pytest.mark.parametrize("load", [1.0, 0.5])
-@pytest.mark.parametrize("env_id", [i for i in IDS if i in KIND])
+@pytest.mark.parametrize("env_id", BOILERS)
 def test_spray_step_has_the_field_dead_time(env_id, load):
     """Last-stage spray step: Tu/Tg of the true turbine-inlet temperature in the field range
     (the main-steam line; without it 0.02-0.06), the thermocouple reading a bit above."""

@@ -44,7 +44,7 @@ def test_a_mismatch_row_is_the_model_commissioned_policy_on_the_variant(runs):
     variant = "high_gain_slow"
     row = next(r for r in doc["episodes"] if r["policy"] == ZERO
                and r["scenario"] == mismatch.PREFIX + variant)  # fmt: skip
-    params = perturb.MISMATCH[ENV][variant]
+    params = perturb.mismatch(ENV)[variant]
     unit = gym.make(ENV, scenario=mismatch.SCENARIO, params=params)
     model = gym.make(ENV, scenario=mismatch.SCENARIO)
     want = run_episode(unit, episodes._make_policy(ZERO, ENV, model), 0)["metrics"]["return"]
@@ -61,7 +61,7 @@ def test_rows_policies_and_scores(runs):
     jsonschema.validate(doc, json.loads(SCHEMA.read_text()))
     jsonschema.validate(plain, json.loads(SCHEMA.read_text()))
     mis = [r for r in doc["episodes"] if mismatch.is_label(r["scenario"])]
-    variants = list(perturb.MISMATCH[ENV])
+    variants = list(perturb.mismatch(ENV))
     assert sorted({(r["policy"], r["scenario"]) for r in mis}) == sorted(
         (p, mismatch.PREFIX + v) for p in ("cascade_pi", ZERO) for v in variants
     )
@@ -106,7 +106,7 @@ def test_summary_by_hand():
     """Two training runs and two seeds: the ratio pairs each variant episode with the same
     run's and seed's nominal one; the best admissible non-baseline policy per variant is
     set against the industrial reference; a policy without nominal episodes gets no ratio."""
-    v1, v2 = list(perturb.MISMATCH[FSH])[:2]
+    v1, v2 = list(perturb.mismatch(FSH))[:2]
     ramp, m1, m2 = mismatch.SCENARIO, mismatch.PREFIX + v1, mismatch.PREFIX + v2
     rows = [
         _row(ZERO, ramp, 0, -100),
@@ -164,7 +164,7 @@ def test_flags_decide_the_mismatch_rows(tmp_path):
         )
 
     p = plan("--scenarios", "load_ramp_100_50")
-    labels = [mismatch.PREFIX + v for v in perturb.MISMATCH[ENV]]
+    labels = [mismatch.PREFIX + v for v in perturb.mismatch(ENV)]
     assert p.scenarios_of(ENV) == ["load_ramp_100_50", *labels]
     assert p.policies_of(ENV, labels[0]) == ["cascade_pi", ZERO]
     assert "oracle" in p.policies_of(ENV, "load_ramp_100_50")

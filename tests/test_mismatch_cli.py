@@ -36,7 +36,7 @@ def test_a_run_writes_the_robustness_table(tmp_path, capsys):
     text = out.read_text()
     assert text in capsys.readouterr().out
     rows = [line.split(" | ") for line in text.splitlines() if line.startswith("| cascade_pi |")]
-    assert [r[1] for r in rows] == ["nominal", *perturb.MISMATCH[BENSON]]
+    assert [r[1] for r in rows] == ["nominal", *perturb.mismatch(BENSON)]
     assert rows[0][3] == "1.00" and rows[0][5] == "1.00"  # nominal relative to itself
     for r in rows:
         ramp, rel = float(r[2]), float(r[3])

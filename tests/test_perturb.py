@@ -97,19 +97,20 @@ def test_bad_option_values_raise(value, match):
 
 
 def test_groups_ranges_and_variants_are_consistent():
-    for env_id in [i for i in IDS if i in perturb.GROUPS]:
+    for env_id in [i for i in IDS if plant_class(i).perturbation_groups]:
         params = plant_class(env_id).Params
         hints = typing.get_type_hints(params)
-        fields = [n for names in perturb.GROUPS[env_id].values() for n in names]
+        groups = perturb.plant_groups(env_id)
+        fields = [n for names in groups.values() for n in names]
         assert len(fields) == len(set(fields)), env_id  # a field in one group only
-        for g, names in perturb.GROUPS[env_id].items():
+        for g, names in groups.items():
             assert g in perturb.RANGES
             for n in names:
                 assert hints[n] is float, (env_id, n)
-        variants = perturb.MISMATCH[env_id]
-        assert 3 <= len(variants) <= 4 and set(variants) == set(perturb.VARIANT_FACTORS[env_id])
+        variants = perturb.mismatch(env_id)
+        assert 3 <= len(variants) <= 4 and list(variants) == list(perturb.variant_factors(env_id))
         for v, p in variants.items():
-            factors = perturb.VARIANT_FACTORS[env_id][v]
+            factors = perturb.variant_factors(env_id)[v]
             assert p == pytest.approx(perturb.scaled(env_id, {}, factors), rel=1e-12), v
             for g, k in factors.items():
                 lo, hi = perturb.RANGES[g]
@@ -117,9 +118,10 @@ def test_groups_ranges_and_variants_are_consistent():
 
 
 def _skip_without_variants(env_id: str) -> None:
-    if env_id not in perturb.MISMATCH:
-        pytest.skip(f"{env_id} has no model-mismatch variants; declare its groups and "
-                    f"variants in steamtemp_gym/plants/perturb.py")  # fmt: skip
+    if not perturb.variant_factors(env_id):
+        pytest.skip(f"{env_id} has no model-mismatch variants; declare its "
+                    "perturbation_groups and mismatch_variants on its plant class "
+                    "(steamtemp_gym/plants/perturb.py)")  # fmt: skip
 
 
 @pytest.mark.parametrize("env_id", IDS)
@@ -129,7 +131,7 @@ def test_every_variant_passes_the_start_check(env_id):
     _skip_without_variants(env_id)
     from agents.leaderboard.plan import DEFAULT_SCENARIOS
 
-    for v, p in perturb.MISMATCH[env_id].items():
+    for v, p in perturb.mismatch(env_id).items():
         env = gym.make(env_id, params=p)
         for sc in DEFAULT_SCENARIOS:
             obs, _ = env.reset(seed=0, options={"scenario": sc})
@@ -268,7 +270,7 @@ def test_cascade_pi_ff_commissioned_nominal_holds_every_variant(env_id):
     res = run_episode(nominal, policy, 0)
     assert res["metrics"]["tripped"] == 0.0
     nominal_last = _peaks(res["trace"])[1]
-    for v, p in perturb.MISMATCH[env_id].items():
+    for v, p in perturb.mismatch(env_id).items():
         env = gym.make(env_id, scenario="load_ramp_100_50", params=p)
         res = run_episode(env, policy, 0)
         assert res["metrics"]["tripped"] == 0.0, v

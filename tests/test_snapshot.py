@@ -193,7 +193,7 @@ def _corruptions(snap, env_id: str) -> list[tuple[str, dict, str]]:
         return x
 
     other_env = next(e for e in steamtemp_gym.ENV_IDS if e != env_id)
-    variant = next(iter(perturb.MISMATCH[env_id].values()))
+    variant = next(iter(perturb.mismatch(env_id).values()))
     other_params = plant_class(env_id).Params(**variant)
     mt = np.random.MT19937(0).state
     bad_pcg = {**snap.rng_states[0], "state": {"state": "x", "inc": 1}}

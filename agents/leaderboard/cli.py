@@ -187,7 +187,7 @@ def make_parser() -> argparse.ArgumentParser:
     ap.add_argument("--no-mismatch", action="store_true",
                     help="leave out the model-mismatch episodes (every policy but the "
                     "references, commissioned on the nominal plant, on each variant of "
-                    "perturb.MISMATCH under load_ramp_100_50; run when load_ramp_100_50 is "
+                    "the model-mismatch set under load_ramp_100_50; run when load_ramp_100_50 is "
                     "among --scenarios) and the robustness column (default: off)")  # fmt: skip
     ap.add_argument("--travel-budget", type=str, default=str(stats.TRAVEL_BUDGET),
                     metavar="X", help="a policy is admissible on a plant when its mean valve "

@@ -4,7 +4,7 @@ A controller is commissioned on a model and then runs a unit that differs from i
 leaderboard therefore also runs every policy but the references, commissioned on the
 NOMINAL plant (a baseline's step tests and feed-forward fit see the model; a trained
 agent is the file it is), unchanged on each variant of
-:data:`steamtemp_gym.plants.perturb.MISMATCH` under :data:`SCENARIO`, on the run's seeds.
+:func:`steamtemp_gym.plants.perturb.mismatch` under :data:`SCENARIO`, on the run's seeds.
 Such a row's scenario is labelled ``mismatch:<variant>``; these rows are kept out of the
 normalized score, the ranking and the realism count.
 
@@ -25,6 +25,7 @@ import numpy as np
 
 import baselines
 from agents import specs
+from steamtemp_gym import catalog
 from steamtemp_gym.plants import perturb
 
 #: Row label prefix of a mismatch episode: ``mismatch:<variant>``.
@@ -34,8 +35,12 @@ SCENARIO = "load_ramp_100_50"
 
 
 def labels(env_id: str) -> dict[str, dict[str, Any]]:
-    """``mismatch:<variant>`` -> the variant's ``params`` for ``env_id`` (empty if none)."""
-    return {PREFIX + v: dict(p) for v, p in perturb.MISMATCH.get(env_id, {}).items()}
+    """``mismatch:<variant>`` -> the variant's ``params`` for ``env_id`` (empty for a plant
+    without variants and for a registered variant id: its parameters are not the plant's
+    defaults that the mismatch set scales)."""
+    if env_id not in catalog.PLANTS:
+        return {}
+    return {PREFIX + v: p for v, p in perturb.mismatch(env_id).items()}
 
 
 def is_label(scenario: str) -> bool:
@@ -63,7 +68,8 @@ def summarize(rows: list[dict], env_id: str, policies: dict[str, Any], zero: str
                 by[name][r["scenario"][len(PREFIX) :]].append(r)
     if not by and not failed:
         return None
-    variants = list(perturb.MISMATCH.get(env_id, {})) or sorted({v for d in by.values() for v in d})
+    declared = [v[len(PREFIX) :] for v in labels(env_id)]
+    variants = declared or sorted({v for d in by.values() for v in d})
     out: dict[str, Any] = {}
     for name in dict.fromkeys([*by, *failed]):
         entry: dict[str, Any] = {"episodes": 0, "trips": 0, "failed": failed[name],

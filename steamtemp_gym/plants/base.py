@@ -118,6 +118,20 @@ class Plant:
     scenarios: ClassVar[Mapping[str, Any]] = {}
     extra_info: ClassVar[tuple[str, ...]] = ()
     design_spray: ClassVar[str | None] = None
+    #: Parameter groups of ``plant_randomization`` and the mismatch set: group (a name of
+    #: ``perturb.RANGES``) -> the ``Params`` fields its factor scales (plants/perturb.py).
+    perturbation_groups: ClassVar[Mapping[str, tuple[str, ...]]] = {}
+    #: The named model-mismatch variants: variant -> {group: factor} (plants/perturb.py).
+    mismatch_variants: ClassVar[Mapping[str, Mapping[str, float]]] = {}
+    #: The boiler's circulation, "once_through" or "drum" (None: a model without the
+    #: steam-water circuit, e.g. transfer functions); agents/difficulty.py sets its
+    #: cascade-PI ramp targets by it.
+    circulation: ClassVar[str | None] = None
+    #: What the baselines' commissioning rules take from this plant: rule -> values, each
+    #: documented by the rule (``mpc_linear``: ``move_weight``; ``lqi``: knob values;
+    #: ``neuro_pid``: ``disturbance_signals``, ``inner_p_pct_per_K``). A rule without an
+    #: entry commissions the plant by its own defaults.
+    commissioning: ClassVar[Mapping[str, Mapping[str, Any]]] = {}
     trip_band_K: ClassVar[tuple[float, float]] = TRIP_BAND_K
     default_duration_s: ClassVar[float] = 3600.0
     #: Params field holding the main-steam setpoint (C); overrides ``setpoint_C``.

@@ -3,7 +3,7 @@ model-mismatch set.
 
 A controller commissioned on a model meets a unit whose heat transfer, metal, firing lags
 and thermowells differ from the model's by tens of per cent. The parameter fields of each
-plant that carry one such physical meaning form a *group* (:data:`GROUPS`); a perturbed
+plant that carry one such physical meaning form a *group*; a perturbed
 plant multiplies every field of a group by the group's factor.
 
 - ``heat_transfer``: the heat-transfer coefficients (steam-side films, tube-bank kA,
@@ -19,8 +19,11 @@ plant multiplies every field of a group by the group's factor.
   functions): the gains and time constants of its leading and inertia sections.
 
 :data:`RANGES` holds the default factor range of each group (``plant_randomization=True``).
-:data:`MISMATCH` holds fixed perturbed variants of each plant, each a ``params`` dict of
-``gym.make`` within those ranges (docs/robustness.md).
+Each plant declares its groups (``Plant.perturbation_groups``: group -> its fields) and its
+named model-mismatch variants (``Plant.mismatch_variants``: variant -> group factors within
+those ranges; the boilers' are :data:`BOILER_VARIANTS`); :func:`mismatch` turns them into
+the public model-mismatch set, a ``params`` dict of ``gym.make`` per variant
+(docs/robustness.md).
 
 Draws (:func:`draw_plant`): one factor per group, log-uniform in its range (so 0.5..2 is
 as likely slower as faster), from a generator seeded by the episode's noise key, so an
@@ -32,19 +35,15 @@ same key, at most :data:`MAX_DRAWS` times; then ValueError names the parameters.
 from __future__ import annotations
 
 import dataclasses
+import itertools
 import math
 from collections.abc import Callable, Mapping
 from typing import Any
 
 import numpy as np
 
+from steamtemp_gym import catalog
 from steamtemp_gym.checks import is_finite, is_real
-
-FSH = "steamtemp/SupercriticalFSH-v0"
-BENSON = "steamtemp/BensonSubcritical-v0"
-BTM = "steamtemp/BoilerTurbineMIMO-v0"
-DRUM = "steamtemp/DrumBoilerSH-v0"
-CASCADE = "steamtemp/Cascade300MW-v0"
 
 #: Default factor range (lo, hi) of each group.
 RANGES: dict[str, tuple[float, float]] = {
@@ -56,127 +55,18 @@ RANGES: dict[str, tuple[float, float]] = {
     "section_time_constants": (0.7, 1.3),
 }
 
-#: plant id -> group -> the parameter fields (of the plant's Params) the group scales.
-GROUPS: dict[str, dict[str, tuple[str, ...]]] = {
-    FSH: {
-        "heat_transfer": ("alpha_nom_W_m2K",),
-        "metal_heat_capacity": ("c_metal_J_kgK",),
-        "firing_lag": ("tau_mill_s", "tau_firing_s"),
-        "sensor_lag": ("tau_tc1_s", "tau_tc2_s"),
-    },
-    BENSON: {
-        "heat_transfer": (
-            "kA_eco_MW_K",
-            "kA_evap_MW_K",
-            "kA_sh1_MW_K",
-            "kA_sh2_MW_K",
-            "kA_sh3_MW_K",
-            "kA_sh4_MW_K",
-            "kA_rh_MW_K",
-        ),  # fmt: skip
-        "metal_heat_capacity": ("c_metal_J_kgK",),
-        "firing_lag": ("tau_furnace_s",),
-        "sensor_lag": ("tau_tc1_s", "tau_tc2_s"),
-    },
-    BTM: {
-        "heat_transfer": (
-            "alpha_sh_W_m2K",
-            "alpha_rh_W_m2K",
-            "platen_kA_film_MW_K",
-            "platen_kA_wall_MW_K",
-        ),  # fmt: skip
-        "metal_heat_capacity": ("c_metal_J_kgK", "platen_metal_MJ_K"),
-        "firing_lag": ("tau_mill_s", "tau_firing_s"),
-        "sensor_lag": ("tau_tc1_s", "tau_tc2_s"),
-    },
-    DRUM: {
-        "heat_transfer": ("alpha_nom_W_m2K",),
-        "metal_heat_capacity": ("c_metal_J_kgK", "C_p_J_kgK"),
-        "firing_lag": ("tau_mill_s", "tau_firing_s"),
-        "sensor_lag": ("tau_tc1_s", "tau_tc2_s"),
-    },
-    CASCADE: {
-        "section_gains": ("lead_gain_K_s_kg", "inertia_gain"),
-        "section_time_constants": ("lead_time_s", "inertia_time_s"),
-    },
-}
-
-#: Factors of the named variants of the four boilers (group -> factor).
-_BOILER_VARIANTS = {
+#: The named variants of a boiler (variant -> group -> factor), the ends of the ranges in
+#: pairs a plant engineer meets: a fouled unit with heavy metal, a clean one with light
+#: metal, slow and fast firing with slow and fast thermowells.
+BOILER_VARIANTS: dict[str, dict[str, float]] = {
     "fouled_heavy_metal": {"heat_transfer": 0.8, "metal_heat_capacity": 1.25},
     "clean_light_metal": {"heat_transfer": 1.2, "metal_heat_capacity": 0.75},
     "slow_firing_lag_sensor": {"firing_lag": 1.5, "sensor_lag": 2.0},
     "fast_firing_lag_sensor": {"firing_lag": 0.5, "sensor_lag": 0.5},
 }
-#: Factors of the named variants of Cascade300MW.
-_CASCADE_VARIANTS = {
-    "high_gain_slow": {"section_gains": 1.3, "section_time_constants": 1.3},
-    "high_gain_fast": {"section_gains": 1.3, "section_time_constants": 0.7},
-    "low_gain_slow": {"section_gains": 0.7, "section_time_constants": 1.3},
-    "low_gain_fast": {"section_gains": 0.7, "section_time_constants": 0.7},
-}
-#: plant id -> variant -> group factors (what :data:`MISMATCH` is made of).
-VARIANT_FACTORS: dict[str, dict[str, dict[str, float]]] = {
-    FSH: _BOILER_VARIANTS, BENSON: _BOILER_VARIANTS, BTM: _BOILER_VARIANTS,
-    DRUM: _BOILER_VARIANTS, CASCADE: _CASCADE_VARIANTS,
-}  # fmt: skip
-
-#: plant id -> variant -> ``params`` of ``gym.make`` (the default values times the
-#: variant's factors of :data:`VARIANT_FACTORS`), the public model-mismatch set.
-MISMATCH: dict[str, dict[str, dict[str, float]]] = {
-    FSH: {
-        "fouled_heavy_metal": {"alpha_nom_W_m2K": 2800.0, "c_metal_J_kgK": 687.5},
-        "clean_light_metal": {"alpha_nom_W_m2K": 4200.0, "c_metal_J_kgK": 412.5},
-        "slow_firing_lag_sensor": {"tau_mill_s": 90.0, "tau_firing_s": 135.0,
-                                   "tau_tc1_s": 10.0, "tau_tc2_s": 40.0},
-        "fast_firing_lag_sensor": {"tau_mill_s": 30.0, "tau_firing_s": 45.0,
-                                   "tau_tc1_s": 2.5, "tau_tc2_s": 10.0},
-    },
-    BENSON: {
-        "fouled_heavy_metal": {"kA_eco_MW_K": 9.6, "kA_evap_MW_K": 32.0, "kA_sh1_MW_K": 4.8,
-                               "kA_sh2_MW_K": 4.0, "kA_sh3_MW_K": 4.0, "kA_sh4_MW_K": 4.4,
-                               "kA_rh_MW_K": 4.0, "c_metal_J_kgK": 687.5},
-        "clean_light_metal": {"kA_eco_MW_K": 14.4, "kA_evap_MW_K": 48.0, "kA_sh1_MW_K": 7.2,
-                              "kA_sh2_MW_K": 6.0, "kA_sh3_MW_K": 6.0, "kA_sh4_MW_K": 6.6,
-                              "kA_rh_MW_K": 6.0, "c_metal_J_kgK": 412.5},
-        "slow_firing_lag_sensor": {"tau_furnace_s": 30.0, "tau_tc1_s": 10.0,
-                                   "tau_tc2_s": 40.0},
-        "fast_firing_lag_sensor": {"tau_furnace_s": 10.0, "tau_tc1_s": 2.5,
-                                   "tau_tc2_s": 10.0},
-    },
-    BTM: {
-        "fouled_heavy_metal": {"alpha_sh_W_m2K": 4800.0, "alpha_rh_W_m2K": 1200.0,
-                               "platen_kA_film_MW_K": 3.52, "platen_kA_wall_MW_K": 2.2,
-                               "c_metal_J_kgK": 750.0, "platen_metal_MJ_K": 151.25},
-        "clean_light_metal": {"alpha_sh_W_m2K": 7200.0, "alpha_rh_W_m2K": 1800.0,
-                              "platen_kA_film_MW_K": 5.28, "platen_kA_wall_MW_K": 3.3,
-                              "c_metal_J_kgK": 450.0, "platen_metal_MJ_K": 90.75},
-        "slow_firing_lag_sensor": {"tau_mill_s": 150.0, "tau_firing_s": 22.5,
-                                   "tau_tc1_s": 10.0, "tau_tc2_s": 40.0},
-        "fast_firing_lag_sensor": {"tau_mill_s": 50.0, "tau_firing_s": 7.5,
-                                   "tau_tc1_s": 2.5, "tau_tc2_s": 10.0},
-    },
-    DRUM: {
-        "fouled_heavy_metal": {"alpha_nom_W_m2K": 2800.0, "c_metal_J_kgK": 687.5,
-                               "C_p_J_kgK": 687.5},
-        "clean_light_metal": {"alpha_nom_W_m2K": 4200.0, "c_metal_J_kgK": 412.5,
-                              "C_p_J_kgK": 412.5},
-        "slow_firing_lag_sensor": {"tau_mill_s": 90.0, "tau_firing_s": 90.0,
-                                   "tau_tc1_s": 10.0, "tau_tc2_s": 40.0},
-        "fast_firing_lag_sensor": {"tau_mill_s": 30.0, "tau_firing_s": 30.0,
-                                   "tau_tc1_s": 2.5, "tau_tc2_s": 10.0},
-    },
-    CASCADE: {
-        "high_gain_slow": {"lead_gain_K_s_kg": 2.613, "inertia_gain": 2.717,
-                           "lead_time_s": 20.8, "inertia_time_s": 28.99},
-        "high_gain_fast": {"lead_gain_K_s_kg": 2.613, "inertia_gain": 2.717,
-                           "lead_time_s": 11.2, "inertia_time_s": 15.61},
-        "low_gain_slow": {"lead_gain_K_s_kg": 1.407, "inertia_gain": 1.463,
-                          "lead_time_s": 20.8, "inertia_time_s": 28.99},
-        "low_gain_fast": {"lead_gain_K_s_kg": 1.407, "inertia_gain": 1.463,
-                          "lead_time_s": 11.2, "inertia_time_s": 15.61},
-    },
-}  # fmt: skip
+#: Significant digits of a mismatch variant's parameter values: the product of a default
+#: and a factor stated as its decimal value (0.8 x 12 MW/K is 9.6, not 9.600000000000001).
+DIGITS = 12
 
 #: Draws tried per episode before a draw that fails raises.
 MAX_DRAWS = 8
@@ -184,13 +74,33 @@ MAX_DRAWS = 8
 _STREAM = 0x706C616E74  # "plant"
 
 
-def plant_groups(plant_id: str) -> dict[str, tuple[str, ...]]:
-    """The groups of ``plant_id`` (ValueError for a plant without any)."""
-    try:
-        return GROUPS[plant_id]
-    except (KeyError, TypeError):
+def plant_groups(plant_id: str) -> Mapping[str, tuple[str, ...]]:
+    """The groups ``plant_id``'s plant declares (``Plant.perturbation_groups``); ValueError
+    for an unknown id or a plant without any."""
+    groups = catalog.plant_class(plant_id).perturbation_groups
+    if not groups:
+        have = [i for i in catalog.PLANTS if catalog.plant_class(i).perturbation_groups]
         raise ValueError(f"plant_randomization: no parameter groups for {plant_id!r}; "
-                         f"plants with groups: {sorted(GROUPS)}") from None  # fmt: skip
+                         f"plants with groups: {have}")  # fmt: skip
+    return groups
+
+
+def variant_factors(plant_id: str) -> Mapping[str, Mapping[str, float]]:
+    """The named mismatch variants ``plant_id``'s plant declares (``Plant.mismatch_variants``:
+    variant -> group -> factor; empty for a plant without any); ValueError for an unknown
+    id."""
+    return catalog.plant_class(plant_id).mismatch_variants
+
+
+def mismatch(plant_id: str) -> dict[str, dict[str, float]]:
+    """The public model-mismatch set of ``plant_id``: variant -> ``params`` of ``gym.make``,
+    each field of the variant's groups at its default times the group's factor (to
+    :data:`DIGITS` significant digits); empty for a plant without variants."""
+    out = {}
+    for v, factors in variant_factors(plant_id).items():
+        params = scaled(plant_id, {}, factors)
+        out[v] = {k: float(f"{x:.{DIGITS}g}") for k, x in params.items()}
+    return out
 
 
 def parse(plant_id: str, option: Any) -> dict[str, tuple[float, float]] | None:
@@ -258,15 +168,30 @@ def scaled(plant_id: str, base: Mapping[str, Any], factors: Mapping[str, float]
     """``base`` (parameter overrides of ``gym.make``'s ``params``) with every field of each
     group of ``factors`` set to its value (the override, else the default) times the
     group's factor."""
-    from steamtemp_gym import plants
-
-    defaults = {f.name: f.default for f in dataclasses.fields(plants.plant_class(plant_id).Params)}
+    defaults = {f.name: f.default for f in dataclasses.fields(catalog.plant_class(plant_id).Params)}
     out = dict(base)
     groups = plant_groups(plant_id)
     for g, k in factors.items():
         for name in groups[g]:
             out[name] = float(base.get(name, defaults[name])) * k
     return out
+
+
+def corners(plant_id: str, margin: float = 0.0) -> list[dict[str, float]]:
+    """Every corner of ``plant_id``'s box of group factors (its declared groups, each over
+    its :data:`RANGES` range): the ends themselves for ``margin`` 0, else ``margin`` (a
+    fraction of the half-width, log scale) inside each end. Groups in the plant's order,
+    the low ends first; one empty corner for a plant without groups."""
+    groups = list(catalog.plant_class(plant_id).perturbation_groups)
+    ends = []
+    for g in groups:
+        lo, hi = RANGES[g]
+        if margin:
+            lo, hi = np.log(lo), np.log(hi)
+            mid, half = 0.5 * (lo + hi), 0.5 * (hi - lo) * (1.0 - margin)
+            lo, hi = float(np.exp(mid - half)), float(np.exp(mid + half))
+        ends.append((lo, hi))
+    return [dict(zip(groups, c, strict=True)) for c in itertools.product(*ends)]
 
 
 def episode_rng(key: int, attempt: int) -> np.random.Generator:
@@ -282,14 +207,12 @@ def draw_plant(plant_id: str, base: Mapping[str, Any], ranges: dict[str, tuple[f
     Raises:
         ValueError: no draw passed; names the groups, their factors and parameters.
     """
-    from steamtemp_gym import plants
-
     tried = []
     for attempt in range(MAX_DRAWS):
         factors = draw_factors(ranges, episode_rng(key, attempt))
         params = scaled(plant_id, base, factors)
         try:
-            plant = plants.make(plant_id, **params)
+            plant = catalog.plant_class(plant_id)(**params)
         except ValueError as exc:
             tried.append(f"{_factor_text(factors)}: {str(exc)[:120]}")
             continue

@@ -8,6 +8,7 @@ from steamtemp_gym.plants.benson_subcritical.kernel import step
 from steamtemp_gym.plants.benson_subcritical.layout import OUTPUTS
 from steamtemp_gym.plants.benson_subcritical.params import BensonParams
 from steamtemp_gym.plants.benson_subcritical.steady_state import steady as _steady
+from steamtemp_gym.plants.perturb import BOILER_VARIANTS
 
 
 class BensonSubcritical(Plant):
@@ -35,6 +36,20 @@ class BensonSubcritical(Plant):
         ("attemp2_out_temp_meas_C", MAIN),  # last stage: cascade on the main steam
     )
     design_spray = "design_spray_kg_s"
+    circulation = "once_through"
+    perturbation_groups = {
+        "heat_transfer": ("kA_eco_MW_K", "kA_evap_MW_K", "kA_sh1_MW_K", "kA_sh2_MW_K",
+                          "kA_sh3_MW_K", "kA_sh4_MW_K", "kA_rh_MW_K"),
+        "metal_heat_capacity": ("c_metal_J_kgK",),
+        "firing_lag": ("tau_furnace_s",),
+        "sensor_lag": ("tau_tc1_s", "tau_tc2_s"),
+    }  # fmt: skip
+    mismatch_variants = BOILER_VARIANTS
+    commissioning = {
+        "mpc_linear": {"move_weight": 0.001},
+        "lqi": {"ti_factor": 0.5},
+        "neuro_pid": {"disturbance_signals": ("load_rate", "sh3_out_temp_meas_C")},
+    }
 
     def kernel(self):
         return step

@@ -8,6 +8,7 @@ from steamtemp_gym.plants.boiler_turbine_mimo.kernel import ACTUATORS, KERNELS, 
 from steamtemp_gym.plants.boiler_turbine_mimo.layout import OUTPUTS
 from steamtemp_gym.plants.boiler_turbine_mimo.params import BoilerTurbineParams
 from steamtemp_gym.plants.boiler_turbine_mimo.steady_state import steady as _steady
+from steamtemp_gym.plants.perturb import BOILER_VARIANTS
 
 _FUEL_BIAS_ACTION = Signal(
     "fuel_bias_cmd",
@@ -44,6 +45,19 @@ class BoilerTurbineMIMO(Plant):
     valves = ("sp1_valve", "sp2_valve", "rgd_damper")
     sprays = ("sp1_flow_kg_s", "sp2_flow_kg_s")
     design_spray = "design_spray_kg_s"
+    circulation = "once_through"
+    perturbation_groups = {
+        "heat_transfer": ("alpha_sh_W_m2K", "alpha_rh_W_m2K", "platen_kA_film_MW_K",
+                          "platen_kA_wall_MW_K"),
+        "metal_heat_capacity": ("c_metal_J_kgK", "platen_metal_MJ_K"),
+        "firing_lag": ("tau_mill_s", "tau_firing_s"),
+        "sensor_lag": ("tau_tc1_s", "tau_tc2_s"),
+    }  # fmt: skip
+    mismatch_variants = BOILER_VARIANTS
+    commissioning = {
+        "mpc_linear": {"move_weight": 0.001},
+        "neuro_pid": {"disturbance_signals": ("firing_minus_load", "load_rate")},
+    }
     # kept short: every info key costs about 1 us per env step
     extra_info = (
         "reheat_temp_C",

@@ -32,6 +32,24 @@ class Cascade300MW(Plant):
     setpoint_C = 535.0
     control_loops = (("intermediate_temp_C", MAIN),)
     design_spray = "design_spray_kg_s"
+    perturbation_groups = {
+        "section_gains": ("lead_gain_K_s_kg", "inertia_gain"),
+        "section_time_constants": ("lead_time_s", "inertia_time_s"),
+    }
+    #: The corners of the two groups' ranges.
+    mismatch_variants = {
+        "high_gain_slow": {"section_gains": 1.3, "section_time_constants": 1.3},
+        "high_gain_fast": {"section_gains": 1.3, "section_time_constants": 0.7},
+        "low_gain_slow": {"section_gains": 0.7, "section_time_constants": 1.3},
+        "low_gain_fast": {"section_gains": 0.7, "section_time_constants": 0.7},
+    }
+    commissioning = {
+        "mpc_linear": {"move_weight": 0.001},
+        "lqi": {"e_max_K": 2.0},
+        # the paper's omega and omega_2, and its secondary P controller G_C2 = 8 %/K
+        "neuro_pid": {"disturbance_signals": ("omega_K", "omega2_kg_s"),
+                      "inner_p_pct_per_K": 8.0},
+    }  # fmt: skip
     extra_info = ("intermediate_temp_C", "omega_K", "omega2_kg_s", "outer_disturbance_K")
     default_duration_s = 3600.0
 

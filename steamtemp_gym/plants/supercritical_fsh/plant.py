@@ -6,6 +6,7 @@ from steamtemp_gym.plants.base import (
     Plant,
     Signal,
 )
+from steamtemp_gym.plants.perturb import BOILER_VARIANTS
 from steamtemp_gym.plants.supercritical_fsh.calibration import _pack
 from steamtemp_gym.plants.supercritical_fsh.kernel import KERNELS
 from steamtemp_gym.plants.supercritical_fsh.layout import IP, IX, OUTPUTS
@@ -23,6 +24,19 @@ class SupercriticalFSH(Plant):
     outputs = OUTPUTS
     setpoint_C = 593.0
     design_spray = "design_spray_kg_s"
+    circulation = "once_through"
+    perturbation_groups = {
+        "heat_transfer": ("alpha_nom_W_m2K",),
+        "metal_heat_capacity": ("c_metal_J_kgK",),
+        "firing_lag": ("tau_mill_s", "tau_firing_s"),
+        "sensor_lag": ("tau_tc1_s", "tau_tc2_s"),
+    }
+    mismatch_variants = BOILER_VARIANTS
+    commissioning = {
+        "mpc_linear": {"move_weight": 0.003},
+        "lqi": {"e_max_K": 3.0},
+        "neuro_pid": {"disturbance_signals": ("firing_minus_load", "attemp_in_temp_C")},
+    }
     extra_info = ("attemp_out_temp_C", "heat_absorption_MW", "pressure_MPa", "steam_flow_kg_s")
 
     pack = staticmethod(_pack)
