@@ -38,7 +38,7 @@ import shutil
 from pathlib import Path
 
 from agents import ZOO
-from agents.leaderboard import mismatch, plots, report
+from agents.leaderboard import mismatch, pages, pareto, report
 from agents.leaderboard.summary import SCHEMA_VERSION, ZERO
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -127,34 +127,34 @@ def main(argv: list[str] | None = None) -> None:
     trends = sorted(p.name for p in (out / "plots").glob("*__*.png"))
     if args.plot not in trends:
         ap.error(f"argument --plot: {args.plot!r} not in {out / 'plots'}; valid: {trends}")
-    pareto = out / "plots" / plots.PARETO
-    text = replace(README.read_text(), START, END, section(doc, pareto.exists()), README.name)
+    figure = out / "plots" / pareto.PARETO
+    text = replace(README.read_text(), START, END, section(doc, figure.exists()), README.name)
     text = replace(text, TREND_START, TREND_END, picture(args.plot), README.name)
     zoo = f"{ZOO_START} {_GEN}\n\n" + report.agents_markdown(doc) + "\n" + ZOO_END
     agents_text = replace(AGENTS_PAGE.read_text(), ZOO_START, ZOO_END, zoo, AGENTS_PAGE.name)
-    budget = f"{TRAIN_START} {_GEN}\n\n" + report.training_markdown(ZOO) + "\n" + TRAIN_END
+    budget = f"{TRAIN_START} {_GEN}\n\n" + pages.training_markdown(ZOO) + "\n" + TRAIN_END
     agents_text = replace(agents_text, TRAIN_START, TRAIN_END, budget, AGENTS_PAGE.name)
-    cmp = f"{CMP_START} {_GEN}\n\n" + report.comparison_markdown(doc, COMPARED) + "\n" + CMP_END
+    cmp = f"{CMP_START} {_GEN}\n\n" + pages.comparison_markdown(doc, COMPARED) + "\n" + CMP_END
     baselines_text = replace(BASELINES_PAGE.read_text(), CMP_START, CMP_END, cmp,
                              BASELINES_PAGE.name)  # fmt: skip
-    real = f"{REAL_START} {_GEN}\n\n" + report.realism_markdown(doc) + "\n" + REAL_END
+    real = f"{REAL_START} {_GEN}\n\n" + pages.realism_markdown(doc) + "\n" + REAL_END
     baselines_text = replace(baselines_text, REAL_START, REAL_END, real, BASELINES_PAGE.name)
-    base = f"{BASE_START} {_GEN}\n\n" + report.baselines_markdown(doc) + "\n" + BASE_END
+    base = f"{BASE_START} {_GEN}\n\n" + pages.baselines_markdown(doc) + "\n" + BASE_END
     baselines_text = replace(baselines_text, BASE_START, BASE_END, base, BASELINES_PAGE.name)
     robust = f"{MIS_START} {_GEN}\n\n" + mismatch.markdown(doc, ZERO) + "\n" + MIS_END
     robustness_text = replace(ROBUSTNESS_PAGE.read_text(), MIS_START, MIS_END, robust,
                               ROBUSTNESS_PAGE.name)  # fmt: skip
     IMAGE.parent.mkdir(parents=True, exist_ok=True)
     shutil.copyfile(out / "plots" / args.plot, IMAGE)
-    if pareto.exists():
-        shutil.copyfile(pareto, PARETO_IMAGE)
+    if figure.exists():
+        shutil.copyfile(figure, PARETO_IMAGE)
     README.write_text(text)
     AGENTS_PAGE.write_text(agents_text)
     BASELINES_PAGE.write_text(baselines_text)
     ROBUSTNESS_PAGE.write_text(robustness_text)
     print(f"README.md, docs/agents.md, docs/baselines.md and docs/robustness.md updated; "
           f"{IMAGE.relative_to(ROOT)} from {args.plot}"
-          + (f", {PARETO_IMAGE.relative_to(ROOT)}" if pareto.exists() else ""))  # fmt: skip
+          + (f", {PARETO_IMAGE.relative_to(ROOT)}" if figure.exists() else ""))  # fmt: skip
 
 
 if __name__ == "__main__":

@@ -17,7 +17,7 @@ import pytest
 from matplotlib.colors import to_rgb
 
 import baselines
-from agents.leaderboard import plots, report, trends
+from agents.leaderboard import pareto, plots, report, trends
 from agents.leaderboard.summary import REFERENCES, TABLE_METRICS, ZERO, summarize
 
 AGENTS = ("sb3:ppo", "sb3:sac", "sb3:sac_caps", "zoo:runs/a", "mine:make")
@@ -32,6 +32,7 @@ def figures(monkeypatch):
         out.append(fig)
 
     monkeypatch.setattr(plots, "save", keep)
+    monkeypatch.setattr(pareto, "save", keep)
     yield out
     import matplotlib.pyplot as plt
 
@@ -241,9 +242,9 @@ def test_the_pareto_front_keeps_the_policies_no_other_beats_on_both():
     points = {"cheap": (0.5, -0.3), "ref": (1.0, 0.0), "worse": (1.2, -0.1),  # ref beats it
               "good": (1.5, 0.4), "same_travel_less": (1.5, 0.2), "best": (1.9, 0.8),
               "costly_no_gain": (1.95, 0.8), "twin": (1.5, 0.4)}  # fmt: skip
-    assert plots.pareto_front(points) == ["cheap", "ref", "good", "best"]  # "good" < "twin"
-    assert plots.pareto_front({}) == []
-    assert plots.pareto_front({"a": (1.0, 0.0)}) == ["a"]
+    assert pareto.pareto_front(points) == ["cheap", "ref", "good", "best"]  # "good" < "twin"
+    assert pareto.pareto_front({}) == []
+    assert pareto.pareto_front({"a": (1.0, 0.0)}) == ["a"]
 
 
 def _pareto_summary(budget: float = 2.0) -> dict:
@@ -266,7 +267,7 @@ def _pareto_summary(budget: float = 2.0) -> dict:
 
 
 def test_the_pareto_figure_draws_the_budget_the_front_and_its_labels(figures, tmp_path):
-    plots.pareto(tmp_path / plots.PARETO, _pareto_summary())
+    pareto.pareto(tmp_path / pareto.PARETO, _pareto_summary())
     (fig,) = figures
     ax = fig.axes[0]
     labels = {t.get_text() for t in ax.texts if t.get_text()}
@@ -275,7 +276,7 @@ def test_the_pareto_figure_draws_the_budget_the_front_and_its_labels(figures, tm
     assert f"mpc_linear {report.INADMISSIBLE} 2.04x" in labels  # over the budget, unbeaten
     assert "fao_sf" not in labels and not any(t.startswith("lqi") for t in labels)
     assert "frozen_valve (0.0x, -10.00)" in labels  # below the axis: at its edge, its value
-    assert ax.get_ylim()[0] >= plots.PARETO_FLOOR - 0.05
+    assert ax.get_ylim()[0] >= pareto.PARETO_FLOOR - 0.05
     budget = [ln for ln in ax.get_lines() if list(ln.get_xdata()) == [2.0, 2.0]]
     assert len(budget) == 1 and budget[0].get_linestyle() == "--"
     (stairs,) = [ln for ln in ax.get_lines() if ln.get_label().startswith("Pareto front")]
@@ -295,7 +296,7 @@ def test_the_labels_of_the_pareto_figure_do_not_overlap(figures, tmp_path):
                                "admissible": True, "rank": 1,
                                "normalized_score": {"iqm": est}}  # fmt: skip
     s["run"]["policies"]["e"] = list(pols)
-    plots.pareto(tmp_path / plots.PARETO, s)
+    pareto.pareto(tmp_path / pareto.PARETO, s)
     (fig,) = figures
     ax = fig.axes[0]
     renderer = fig.canvas.get_renderer()
@@ -315,5 +316,5 @@ def test_the_rebuild_writes_the_pareto_figure(tmp_path):
     for r in rows:
         r["metrics"]["valve_travel"] = 1.0 if r["policy"] != "mpc_linear" else 2.5
     summary, _ = summarize(rows, run)
-    path = plots.pareto(tmp_path / "plots" / plots.PARETO, summary)
+    path = pareto.pareto(tmp_path / "plots" / pareto.PARETO, summary)
     assert path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"

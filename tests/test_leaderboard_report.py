@@ -10,7 +10,7 @@ from pathlib import Path
 import pytest
 
 from agents import stats
-from agents.leaderboard import report
+from agents.leaderboard import pages, report
 from agents.leaderboard.summary import ONE, ORDER_RULE, ZERO, summarize
 
 ENV = "steamtemp/SupercriticalFSH-v0"
@@ -72,7 +72,7 @@ def test_the_budget_is_the_run_s_and_the_tables_show_ratio_and_mark():
 
 
 def test_the_comparison_table_puts_the_policies_side_by_side_per_scenario():
-    md = report.comparison_markdown(_summary(), ["fine", "cascade_pi", "absent"])
+    md = pages.comparison_markdown(_summary(), ["fine", "cascade_pi", "absent"])
     assert "#### SupercriticalFSH-v0" in md and "each cell is fine / cascade_pi / absent" in md
     rows = {ln.split(" | ")[0].lstrip("| "): ln for ln in md.splitlines() if ln.startswith("| a")}
     # scenario a: returns -59.9 and -109.9 (seed means), IAE 60 and 110, travel 3.80 and 1.50;

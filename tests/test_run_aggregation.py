@@ -16,7 +16,7 @@ import pytest
 from run_records import ENV, FIXED, rows, run_info
 
 from agents import stats
-from agents.leaderboard import report
+from agents.leaderboard import pages, report
 from agents.leaderboard.records import strict
 from agents.leaderboard.summary import summarize
 
@@ -197,8 +197,8 @@ def test_realism_counts_the_episodes_a_plant_engineer_would_reject():
         f"{AGENT} b seed 1: travel 6.50 = 3.25x the reference's 2.00",
         f"{AGENT} c seed 3: tripped"]
     assert all("realism" not in pol[p] for p in ("cascade_pi_ff", "oracle"))
-    assert "1/12" in report.baselines_markdown(s)
-    md = report.realism_markdown(s)  # baselines only: the agent is not listed
+    assert "1/12" in pages.baselines_markdown(s)
+    md = pages.realism_markdown(s)  # baselines only: the agent is not listed
     assert "0 of 1 baseline-plant pairs have no episode" in md
     assert ("| `cascade_pi` | SupercriticalFSH-v0 | 1/12 | a seed 2: quiet p2p 2.50 K against "
             "the reference's 1.00 K |") in md and AGENT not in md
@@ -218,7 +218,7 @@ def test_training_table_gives_each_agent_s_budget_over_its_runs(tmp_path):
         stem = f"steamtemp__{ENV.split('/')[-1]}__trpo" + (f"__run{run}" if run else "")
         (tmp_path / f"{stem}.json").write_text(json.dumps(meta))
         (tmp_path / f"{stem}.zip").write_bytes(b"")
-    lines = report.training_markdown(tmp_path).splitlines()
+    lines = pages.training_markdown(tmp_path).splitlines()
     assert len(lines) == 3
     assert lines[2] == (f"| {ENV.split('/')[-1]} | sb3:trpo | model-free | 2 | 1.20 to 2.50M | "
                         "0.60 to 1.25M | 10.0 to 12.5 | -50.0 to -40.0 (-90.0) | 1.00x | "

@@ -13,7 +13,7 @@ from typing import Any
 import steamtemp_gym
 from agents import specs, stats
 from agents.evaluation import run_episode
-from agents.leaderboard import episodes, mismatch, plots, references, report, trends
+from agents.leaderboard import episodes, mismatch, pareto, plots, references, report, trends
 from agents.leaderboard.episodes import Unit
 from agents.leaderboard.plan import Plan
 from agents.leaderboard.records import EPISODES, _latest, dumps, read_record
@@ -164,7 +164,7 @@ def _rebuild(out: Path, plan: Plan, figures: bool = True) -> tuple[list[dict], d
         (out / "plots").mkdir(parents=True, exist_ok=True)
         plots.bars(out / "plots" / "scores.png", summary)
         if any(norm.values()):
-            plots.pareto(out / "plots" / plots.PARETO, summary)
+            pareto.pareto(out / "plots" / pareto.PARETO, summary)
             plots.profiles(out / "plots" / "profiles.png", norm, len(plan.seeds),
                            order=plots.figure_order(summary), highlight={
                                e: plots.trend_policies(summary["plants"][e],

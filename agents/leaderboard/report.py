@@ -2,8 +2,8 @@
 (agents/leaderboard/summary.py): the headline table (policy x plant), the trained agents
 against the baselines, the robustness to model mismatch (agents/leaderboard/mismatch.py),
 the ranking and per-scenario tables of each plant and the failed episodes; also the README's
-and docs' generated tables (scripts/update_readme_leaderboard.py). Described in
-docs/leaderboard.md.
+headline and the zoo's table of docs/agents.md (the other generated tables of the docs:
+agents/leaderboard/pages.py). Described in docs/leaderboard.md.
 """
 
 from __future__ import annotations
@@ -56,7 +56,7 @@ def num(v: float | None, decimals: int = 2, scale: float = 1.0) -> str:
     return text[1:] if text.startswith("-") and float(text) == 0.0 else text
 
 
-def _col(key: str, v: float | None) -> str:
+def cell(key: str, v: float | None) -> str:
     _, scale, decimals = COLUMNS[key]
     return num(v, decimals, scale)
 
@@ -122,7 +122,7 @@ def ratio(r: float, limit: float | None = None, decimals: int = 1) -> str:
     return f"{r:.{d}f}x"
 
 
-def _travel(pe: dict[str, Any], limit: float | None = None) -> str:
+def travel_cell(pe: dict[str, Any], limit: float | None = None) -> str:
     return ratio(pe["travel_ratio"], limit) if "travel_ratio" in pe else "-"
 
 
@@ -149,9 +149,9 @@ def _headline_cell(pe: dict[str, Any], limit: float) -> str:
         return "-"
     why = inadmissible_reason(pe, limit)
     if why:
-        travel = "" if "travel" in why else f", travel {_travel(pe, limit)}"
+        travel = "" if "travel" in why else f", travel {travel_cell(pe, limit)}"
         return f"{_ci(est)} {INADMISSIBLE} {why}{travel}"
-    return f"{_ci(est)} ({pe['rank']}), travel {_travel(pe, limit)}"
+    return f"{_ci(est)} ({pe['rank']}), travel {travel_cell(pe, limit)}"
 
 
 def admissibility_note(summary: dict[str, Any]) -> str:
@@ -192,7 +192,7 @@ def headline_rows(summary: dict[str, Any]) -> tuple[list[str], list[list[str]]]:
     return header, rows
 
 
-def _table(header: list[str], rows: list[list[str]]) -> list[str]:
+def table_lines(header: list[str], rows: list[list[str]]) -> list[str]:
     return ["| " + " | ".join(header) + " |", "|" + "---|" * len(header),
             *["| " + " | ".join(r) + " |" for r in rows]]  # fmt: skip
 
@@ -207,7 +207,7 @@ def headline_markdown(summary: dict[str, Any], margins: bool = True) -> str:
              f"scenario); (k) = rank among the policies admissible on that plant; "
              f"{admissibility_note(summary)}"
              + (f" {RUNS_NOTE}" if _multi_run(summary) else ""), ""]  # fmt: skip
-    lines += _table(*headline_rows(summary))
+    lines += table_lines(*headline_rows(summary))
     if margins:
         lines += ["", *margin_markdown(summary)]
     return "\n".join(lines) + "\n"
@@ -232,7 +232,7 @@ def margin_markdown(summary: dict[str, Any]) -> list[str]:
     return [f"Mean return over scenario × seed of the score's ends (the oracle's margin is "
             f"the achievable improvement; where it is below {stats.MIN_SPAN:.0%} of "
             f"{ZERO}'s cost the scale is held there: floored):", "",
-            *_table(header, body)]  # fmt: skip
+            *table_lines(header, body)]  # fmt: skip
 
 
 def _iqm_score(entry: dict[str, Any]) -> float:
@@ -251,11 +251,11 @@ def agents_markdown(summary: dict[str, Any]) -> str:
     """Per plant, each trained agent (``sb3:*``, with its kind) against ``cascade_pi`` and
     the best other baseline (by the IQM of the normalized score): IQM normalized score with
     its CI, mean return and mean IAE over scenario × seed, trips and the episodes a plant
-    engineer would reject (:func:`_rejected`). The zoo table of docs/agents.md."""
+    engineer would reject (:func:`rejected_cell`). The zoo table of docs/agents.md."""
     n = len(summary["run"]["seeds"])
     multi = _multi_run(summary)
     lines = [f"{stat_label(n)}; return and IAE: means over scenario × seed. **Bold**: the "
-             f"best of the plant's rows; {admissibility_note(summary)} {_rejected_note()}"
+             f"best of the plant's rows; {admissibility_note(summary)} {rejected_note()}"
              + (f" {RUNS_NOTE}" if multi else ""), ""]  # fmt: skip
     header = ["plant", "policy", "kind", "IQM norm. score", *(["runs"] if multi else []),
               "mean return", COLUMNS["iae_K_s"][0], f"travel / {ZERO}'s", "trips",
@@ -276,96 +276,20 @@ def agents_markdown(summary: dict[str, Any]) -> str:
         for k in picks:
             e, met = pols[k], pols[k]["metrics"]
             score = _ci(e.get("normalized_score", {}).get("iqm"))
-            ret, iae = _col("return", met.get("return")), _col("iae_K_s", met.get("iae_K_s"))
+            ret, iae = cell("return", met.get("return")), cell("iae_K_s", met.get("iae_K_s"))
             spread = [_run_range(e.get("normalized_score", {}).get("iqm"))] if multi else []
             body.append([env_id.split("/")[-1],
                          f"{k} (best baseline)" if k == best_base else k, _kind(k),
                          f"**{score}**" if k == top else score, *spread,
                          f"**{ret}**" if met.get("return") == best_ret else ret,
                          f"**{iae}**" if met.get("iae_K_s") == best_iae else iae,
-                         _travel(e, limit) + (f" {INADMISSIBLE}" if e.get("admissible")
+                         travel_cell(e, limit) + (f" {INADMISSIBLE}" if e.get("admissible")
                                               is False else ""), str(e["trips"]),
-                         _rejected(e)])  # fmt: skip
-    return "\n".join(lines + _table(header, body)) + "\n"
+                         rejected_cell(e)])  # fmt: skip
+    return "\n".join(lines + table_lines(header, body)) + "\n"
 
 
-def training_markdown(directory: Any) -> str:
-    """What each trained agent in ``directory`` (steamtemp-train's files: the zoo) cost and
-    reached, over its runs: decisions trained, those of the chosen checkpoint, wall time,
-    that checkpoint's validation return and travel (the reference's return on the same
-    episodes alongside) and how many runs' chosen checkpoints passed the commissioning
-    checks (agents/validation.py; "-" for runs trained before checkpoints ran them); an
-    offline clone (agents/behaviour_cloning.py) its transitions, epochs and fit time. The
-    zoo's training-budget table of docs/agents.md."""
-    import json
-
-    import agents
-    from agents.files import steamtemp_files, zoo_runs
-
-    def span(xs: list[float], fmt: str) -> str:
-        lo, hi = fmt.format(min(xs)), fmt.format(max(xs))
-        return lo if lo == hi else f"{lo} to {hi}"
-
-    header = ["plant", "agent", "kind", "runs", "decisions trained", "decisions at the chosen "
-              "checkpoint", "wall time per run [min]", "validation return (reference's)",
-              "validation travel / reference's", "commissioning checks passed"]  # fmt: skip
-    body = []
-    for (env_id, algo), runs in sorted(zoo_runs(directory).items()):
-        metas = [json.loads(steamtemp_files(directory, env_id, algo, k).meta[0].read_text())
-                 for k in runs]  # fmt: skip
-        plant, kind = env_id.split("/")[-1], agents.kind(algo)
-        if "timesteps_trained" not in metas[0]:  # an offline clone
-            t = [m["training"] for m in metas]
-            body.append([plant, f"sb3:{algo}", kind, str(len(runs)),
-                         f"offline: {span([x['transitions'] / 1e3 for x in t], '{:.0f}')}k "
-                         f"transitions x {span([x['epochs'] for x in t], '{:d}')} epochs", "-",
-                         span([x["seconds"] / 60 for x in t], "{:.1f}"), "-", "-",
-                         "-"])  # fmt: skip
-            continue
-        v = [m["validation"] for m in metas]
-        checked = [x["best"]["check"] for x in v if "check" in x["best"]]
-        body.append([plant, f"sb3:{algo}", kind, str(len(runs)),
-                     span([m["timesteps_trained"] / 1e6 for m in metas], "{:.2f}") + "M",
-                     span([m["timesteps_of_best"] / 1e6 for m in metas], "{:.2f}") + "M",
-                     span([m["wall_time_s"] / 60 for m in metas], "{:.1f}"),
-                     span([x["best"]["return"] for x in v], "{:.1f}")
-                     + f" ({span([x['reference']['return'] for x in v], '{:.1f}')})",
-                     span([x["best"]["travel_ratio"] for x in v], "{:.2f}") + "x",
-                     f"{sum(not c for c in checked)} of {len(v)} runs" if checked
-                     else "-"])  # fmt: skip
-    return "\n".join(_table(header, body)) + "\n"
-
-
-def baselines_markdown(summary: dict[str, Any]) -> str:
-    """Every baseline on every plant: mean IAE of the main steam, valve travel relative to
-    the reference's and valve reversals, over scenario x seed (the actuator columns of
-    docs/baselines.md's valve-activity table); † = not admissible."""
-    plants = list(summary["plants"])
-    header = ["baseline", *[f"{p.split('/')[-1]}: IAE [K s] / travel / reversals / rejected"
-                            for p in plants]]  # fmt: skip
-    body = []
-    limit = budget(summary)
-    for name in baselines.NAMES:
-        cells = []
-        for env_id in plants:
-            pe = summary["plants"][env_id]["policies"].get(name)
-            if pe is None:
-                cells.append("-")
-                continue
-            met = pe["metrics"]
-            mark = f" {INADMISSIBLE}" if pe.get("admissible") is False else ""
-            cells.append(f"{num(met.get('iae_K_s'), 0)} / {_travel(pe, limit)} / "
-                         f"{num(met.get('valve_reversals'), 0)} / "
-                         f"{_rejected(pe)}{mark}")  # fmt: skip
-        if any(c != "-" for c in cells):
-            body.append([f"`{name}`", *cells])
-    n = len(summary["run"]["seeds"])
-    lines = [f"Means over scenario × seed ({n} seeds); {admissibility_note(summary)[:-1]}; "
-             f"{_rejected_note()}", ""]  # fmt: skip
-    return "\n".join(lines + _table(header, body)) + "\n"
-
-
-def _rejected_note() -> str:
+def rejected_note() -> str:
     """What the tables' ``rejected`` column counts."""
     return (f"rejected: the episodes a plant engineer would reject against cascade_pi_ff's "
             f"on the same scenario and seed (a trip, valve travel above "
@@ -373,71 +297,10 @@ def _rejected_note() -> str:
             f"after the last scheduled change).")  # fmt: skip
 
 
-def _rejected(pe: dict[str, Any]) -> str:
+def rejected_cell(pe: dict[str, Any]) -> str:
     """``k/n``: a policy's rejected episodes of those compared (``-`` where none were)."""
     r = pe.get("realism")
     return f"{r['breaches']}/{r['episodes']}" if r else "-"
-
-
-def realism_markdown(summary: dict[str, Any]) -> str:
-    """Every baseline-plant pair with an episode a plant engineer would reject
-    (:func:`agents.stats.realism_breach` against ``cascade_pi_ff`` on the same scenario and
-    seed): how many of its episodes, and the first of them with their numbers."""
-    rows, clean = [], 0
-    for name in baselines.NAMES:
-        for env_id, plant in summary["plants"].items():
-            r = plant["policies"].get(name, {}).get("realism")
-            if not r:
-                continue
-            if not r["breaches"]:
-                clean += 1
-                continue
-            listed = "; ".join(x.split(" ", 1)[1] for x in r["listed"])
-            more = "; ..." if r["breaches"] > len(r["listed"]) else ""
-            rows.append([f"`{name}`", env_id.split("/")[-1], f"{r['breaches']}/{r['episodes']}",
-                         listed + more])  # fmt: skip
-    n = len(summary["run"]["seeds"])
-    head = (
-        f"Over every scenario and seed ({n} seeds) of the run, {clean} of "
-        f"{clean + len(rows)} baseline-plant pairs have no episode a plant engineer would "
-        f"reject against `cascade_pi_ff`'s on the same scenario and seed (a trip, valve "
-        f"travel above {num(stats.REALISM_TRAVEL_MAX, 0)}x, or a limit cycle in the quiet "
-        f"stretch: the quiet peak-to-peak above max(2x the reference's, 1.5 K))."
-    )
-    if not rows:
-        return head + "\n"
-    return (
-        "\n".join(
-            [
-                head + " The others:",
-                "",
-                *_table(["baseline", "plant", "rejected", "first episodes"], rows),
-            ]
-        )
-        + "\n"
-    )
-
-
-#: The columns of :func:`comparison_markdown`, in order.
-COMPARISON_METRICS = ("return", "iae_K_s", "valve_travel", "quiet_p2p_K")
-
-
-def comparison_markdown(summary: dict[str, Any], policies: list[str]) -> str:
-    """Per plant and scenario, the mean over seeds of the return, IAE, valve travel and
-    quiet peak-to-peak of each of ``policies``, side by side (``a / b / c`` per cell; "-"
-    where a policy was not run or a metric does not apply)."""
-    n = len(summary["run"]["seeds"])
-    lines = [f"Means over seeds ({n} seeds); each cell is {' / '.join(policies)}; quiet "
-             "p2p: the main-steam error's peak-to-peak over the quiet stretch after the "
-             "scenario's last scheduled change (- where it does not apply).", ""]  # fmt: skip
-    header = ["scenario", *(COLUMNS[m][0] for m in COMPARISON_METRICS)]
-    for env_id, plant in summary["plants"].items():
-        body = []
-        for sc, cells in plant["scenarios"].items():
-            body.append([sc, *(" / ".join(_col(m, cells.get(p, {}).get(m)) for p in policies)
-                               for m in COMPARISON_METRICS)])  # fmt: skip
-        lines += [f"#### {env_id.split('/')[-1]}", "", *_table(header, body), ""]
-    return "\n".join(lines)
 
 
 def markdown(summary: dict[str, Any], rows: list[dict]) -> str:
@@ -490,10 +353,10 @@ def markdown(summary: dict[str, Any], rows: list[dict]) -> str:
                          _ci(ns.get("mean")),
                          _ci(e["return"]["iqm"], 0),
                          _ci(e.get(f"p_improvement_over_{VERSUS}")),
-                         *(_col(k, met.get(k)) for k in RANK_METRICS), travel,
-                         _col("valve_reversals", met.get("valve_reversals")), verdict,
+                         *(cell(k, met.get(k)) for k in RANK_METRICS), travel,
+                         cell("valve_reversals", met.get("valve_reversals")), verdict,
                          str(e["trips"]), str(e["failed"])])  # fmt: skip
-        lines += _table(header, body) + [""]
+        lines += table_lines(header, body) + [""]
         lines += ["<details><summary>per scenario (mean over seeds)</summary>", ""]
         for sc, cells in p["scenarios"].items():
             ref = p["reference"][sc]
@@ -505,9 +368,9 @@ def markdown(summary: dict[str, Any], rows: list[dict]) -> str:
             lines += [f"### {env_id.split('/')[-1]} - {sc}", "", f"Normalized score: {note}.", ""]
             header = ["policy", "seeds", "norm. score", *(COLUMNS[m][0] for m in cols), "trips"]
             body = [[k, str(c["seeds"]), num(c.get("normalized_score")),
-                     *[_col(m, c.get(m)) for m in cols], str(c["trips"])]
+                     *[cell(m, c.get(m)) for m in cols], str(c["trips"])]
                     for k, c in cells.items()]  # fmt: skip
-            lines += _table(header, body) + [""]
+            lines += table_lines(header, body) + [""]
         lines += ["</details>", ""]
     failed = [r for r in rows if r.get("error")]
     if failed:
@@ -515,7 +378,7 @@ def markdown(summary: dict[str, Any], rows: list[dict]) -> str:
         body = [[r["env"], r["scenario"], r["policy"], str(r["seed"]),
                  head(str(r["error"]), 160).replace("|", "\\|").replace("\n", " ")]
                 for r in failed]  # fmt: skip
-        lines += _table(["env", "scenario", "policy", "seed", "error"], body) + [""]
+        lines += table_lines(["env", "scenario", "policy", "seed", "error"], body) + [""]
     return "\n".join(lines)
 
 
