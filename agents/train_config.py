@@ -133,6 +133,20 @@ def read_hyperparams(path: Path, env_id: str, algo: str) -> dict[str, Any]:
         ConfigError: unreadable or malformed YAML, no entry for env_id, unknown keys.
     """
     cls = algo_class(algo)
+    hp = _entry(path, env_id)
+    _check_keys(path, hp, algo, cls)
+    _check_action_form(path, hp, env_id, algo)
+    _check_run(path, hp, algo)
+    _check_training_terms(path, hp, env_id)
+    _check_imitation_entry(path, hp, algo)
+    hp = _completed(path, hp, algo)
+    _check_noise(hp)
+    return hp
+
+
+def _entry(path: Path, env_id: str) -> dict[str, Any]:
+    """The entry of env_id in the YAML file, its ``plant`` settings read from the plant's
+    time scale."""
     try:
         doc = yaml.safe_load(Path(path).read_text(encoding="utf-8"))
     except (OSError, yaml.YAMLError) as exc:
@@ -147,9 +161,13 @@ def read_hyperparams(path: Path, env_id: str, algo: str) -> dict[str, Any]:
     from agents.horizons import from_plant
 
     try:
-        hp = from_plant(env_id, hp)  # "plant": the setting read from the plant's time scale
+        return from_plant(env_id, hp)  # "plant": the setting read from the plant's time scale
     except ValueError as exc:
         raise ConfigError(f"--hyperparams {path}: {exc}") from None
+
+
+def _constructor_keys(cls: Any) -> set[str]:
+    """The keyword arguments of the algorithm class's constructor, less env and policy."""
     import inspect
 
     ctor = set()
@@ -158,13 +176,23 @@ def read_hyperparams(path: Path, env_id: str, algo: str) -> dict[str, Any]:
         ctor |= {n for n, p in params.items() if p.kind not in (p.VAR_POSITIONAL, p.VAR_KEYWORD)}
         if not any(p.kind == p.VAR_KEYWORD for p in params.values()):
             break
-    ctor -= {"self", "env", "policy"}
+    return ctor - {"self", "env", "policy"}
+
+
+def _check_keys(path: Path, hp: dict[str, Any], algo: str, cls: Any) -> None:
+    """ConfigError for a key that is neither RL Zoo's nor the constructor's."""
+    ctor = _constructor_keys(cls)
     unknown = sorted(set(hp) - set(SPECIAL) - ctor)
     if unknown:
         raise ConfigError(
             f"--hyperparams {path}: unknown key(s) {unknown} for {algo}; valid: "
             f"{sorted(ctor | set(SPECIAL))}"
         )
+
+
+def _check_action_form(path: Path, hp: dict[str, Any], env_id: str, algo: str) -> None:
+    """ConfigError for a bad or conflicting setting of the action's form: residual
+    (residual_scale), incremental (max_move), filtered (action_filter_s), tied valves."""
     if ("residual_scale" in hp) != (algo in RESIDUAL_BASES):
         raise ConfigError(f"--hyperparams {path}: residual_scale is required for a residual "
                           f"algo ({list(RESIDUAL_BASES)}) and only there (algo {algo!r})")
@@ -191,6 +219,11 @@ def read_hyperparams(path: Path, env_id: str, algo: str) -> dict[str, Any]:
         from steamtemp_gym.plants import plant_class  # the valves of the default options
 
         _checked(path, tie_map, tuple(plant_class(env_id).valves), hp["tied_valves"])
+
+
+def _check_run(path: Path, hp: dict[str, Any], algo: str) -> None:
+    """ConfigError for a bad run budget (max_minutes), action_repeat on a recurrent policy
+    or a bad critic warm-up (critic_warmup_steps, PPO only)."""
     if "max_minutes" in hp:
         v = hp["max_minutes"]
         ok = isinstance(v, (int, float)) and not isinstance(v, bool)
@@ -209,6 +242,11 @@ def read_hyperparams(path: Path, env_id: str, algo: str) -> dict[str, Any]:
         if algo.split("_")[0] != "ppo":
             raise ConfigError(f"--hyperparams {path}: critic_warmup_steps is for PPO's "
                               f"actor and critic, not {algo!r}")  # fmt: skip
+
+
+def _check_training_terms(path: Path, hp: dict[str, Any], env_id: str) -> None:
+    """ConfigError for a bad training reward, travel price, plant randomization or
+    discount (gamma, gae_lambda)."""
     if "train_reward" in hp:
         from steamtemp_gym.rewards import RewardConfig
 
@@ -242,6 +280,11 @@ def read_hyperparams(path: Path, env_id: str, algo: str) -> dict[str, Any]:
         if not (isinstance(v, (int, float)) and not isinstance(v, bool) and 0 < v <= 1):
             raise ConfigError(f"--hyperparams {path}: {key} must be a number in (0, 1] or "
                               f"'plant' (read from the plant's time scale), got {v!r}")
+
+
+def _check_imitation_entry(path: Path, hp: dict[str, Any], algo: str) -> None:
+    """ConfigError for an imitation key outside an imitation algo, a bad imitation setting
+    or an action form its expert does not act in."""
     given = sorted(set(hp) & set(IMITATION_KEYS))
     if given and algo not in EXPERTS:
         raise ConfigError(f"--hyperparams {path}: {given} only for an imitation algo "
@@ -254,6 +297,11 @@ def read_hyperparams(path: Path, env_id: str, algo: str) -> dict[str, Any]:
                               "positions in every interval as its expert does (no max_move, "
                               "residual_scale, travel_price, tied_valves or "
                               "action_repeat)")  # fmt: skip
+
+
+def _completed(path: Path, hp: dict[str, Any], algo: str) -> dict[str, Any]:
+    """A copy of the entry with the algo's residual base and its policy_kwargs, normalize
+    and env_wrapper parsed."""
     if "residual_base" in hp:
         raise ConfigError(f"--hyperparams {path}: residual_base is set by the algo "
                           f"({RESIDUAL_BASES}), not in the file")  # fmt: skip
@@ -266,6 +314,11 @@ def read_hyperparams(path: Path, env_id: str, algo: str) -> dict[str, Any]:
         hp["env_wrapper"] = memory_options(hp["env_wrapper"]) if "env_wrapper" in hp else None
     except ValueError as exc:
         raise ConfigError(str(exc)) from None
+    return hp
+
+
+def _check_noise(hp: dict[str, Any]) -> None:
+    """ConfigError for a bad exploration noise (noise_type, noise_tau_s)."""
     if hp.get("noise_type") not in (None, "normal", "lowpass"):
         raise ConfigError(f"noise_type: 'normal' or 'lowpass', got {hp['noise_type']!r}")
     tau = hp.get("noise_tau_s")
@@ -277,4 +330,3 @@ def read_hyperparams(path: Path, env_id: str, algo: str) -> dict[str, Any]:
                                 and math.isfinite(tau) and tau > 0):  # fmt: skip
         raise ConfigError(f"noise_tau_s must be a positive number of seconds or plant, "
                           f"got {tau!r}")  # fmt: skip
-    return hp

@@ -24,7 +24,8 @@ error is e_i = r - F(T_inner + b) = (r - F b) - F T_inner, with F the loop's 5 s
 measurement filter (FILTER_S). The effective inner setpoint is thus r - F b; nothing else
 of the loop (gains, outer loop, anti-windup, bumpless start) changes.
 
-Observer (FAO, section 3.2): on the paper's plant the n = 3 division model of the FSH
+Observer (FAO, section 3.2): on the paper's plant (the one that declares
+``commissioning["fao"]["observer"] = "divisions"``) the n = 3 division model of the FSH
 on the plant's steam tables, elsewhere an identified linear n-division section; each
 estimates the unmeasured heat absorption by a SIMC-tuned PI law on its output error
 (baselines/fao_observer.py).
@@ -100,7 +101,6 @@ from baselines.loops import input_filter, observation_layout, restart_rows
 from baselines.tuning import Knob
 from steamtemp_gym.plants.base import MAIN
 from steamtemp_gym.plants.ndivision import feedback_gains
-from steamtemp_gym.plants.supercritical_fsh import SupercriticalFSH
 
 #: The SF pole factor (section 5, item 1).
 NU = 1.0 / 3.0
@@ -147,7 +147,7 @@ class FaoCompensated:
         for j, (inner, outer) in enumerate(plant.control_loops):
             if outer != MAIN or inner is None:
                 continue  # SCHEDULED / inner-only / damper loops: conventional CascadePI
-            if isinstance(plant, SupercriticalFSH):
+            if plant.commissioning.get("fao", {}).get("observer") == "divisions":
                 obs_ = FSHObserver(env, names, params)
             else:
                 obs_ = LinearObserver(env, names, params, j)

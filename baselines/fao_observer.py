@@ -66,7 +66,6 @@ from steamtemp_gym._jit import njit
 from steamtemp_gym.metrics import step_response_metrics
 from steamtemp_gym.plants.attemperator import mix, protected_spray_out
 from steamtemp_gym.plants.ndivision import state_space
-from steamtemp_gym.plants.supercritical_fsh import IP, SupercriticalFSH, spray_water
 from steamtemp_gym.steam import P_MAX, P_MIN, T_MAX, T_MIN, T_dTdh_ph, T_ph, Tsat_p, h_pT, rho_ph
 
 K0 = 273.15
@@ -78,20 +77,19 @@ DH0_J_KG, DT0_K = 217.8e3, 68.5
 
 # -- the FSH observer (eq. 9) --------------------------------------------------------------
 @njit(cache=True, error_model="numpy")
-def _fsh_inlet(T_up_C, w_sp, W, p, W_nom, P):
+def _fsh_inlet(T_up_C, w_sp, W, p, h_sp, margin_K):
     """FSH inlet enthalpy (J/kg) per row: the plant's attemperator balance (``mix``) of the
-    measured upstream steam and spray with the plant's spray water at the measured flow
-    (``spray_water`` of the FSH plant, P its packed parameters; no offset known)."""
+    measured upstream steam and spray with the plant's spray water ``h_sp`` at the measured
+    flow (``spray_water_enthalpy`` of the plant; no offset known)."""
     n = W.shape[0]
     h0 = np.empty(n)
     for b in range(n):
-        h_sp = spray_water(P, min(max(W[b] / W_nom, 0.05), 1.3), 0.0)[0]
         h_up = h_pT(p[b], T_up_C[b] + K0)
         # the plant's attemperator protection: a measured spray flow that would wet the
         # steam (only from a faulty signal) is capped as the interlock caps the real one
-        h_min = h_pT(p[b], Tsat_p(p[b]) + P[IP.MARG])
-        ws = protected_spray_out(min(max(w_sp[b], 0.0), 0.5 * W[b]), W[b], h_up, h_sp, h_min)
-        h0[b] = mix(W[b] - ws, h_up, ws, h_sp)[1]
+        h_min = h_pT(p[b], Tsat_p(p[b]) + margin_K)
+        ws = protected_spray_out(min(max(w_sp[b], 0.0), 0.5 * W[b]), W[b], h_up, h_sp[b], h_min)
+        h0[b] = mix(W[b] - ws, h_up, ws, h_sp[b])[1]
     return h0
 
 
@@ -158,7 +156,7 @@ def _fsh_observer_step(S, h0, W, p, Q, par, dt, n_sub, first):
         S[b, 7 + nl] += (S[b, 6 + nl] - S[b, 7 + nl]) * (1.0 - np.exp(-dt / par[6]))
 
 
-def _fsh_par(plant: SupercriticalFSH) -> np.ndarray:
+def _fsh_par(plant: Any) -> np.ndarray:
     """Observer parameters (see _fsh_observer_step) from the plant's FSHParams."""
     pp = plant.params
     a_metal = np.pi / 4.0 * (pp.tube_od_m**2 - pp.tube_id_m**2)
@@ -180,8 +178,10 @@ def _fsh_nominal(env_id: str, params_json: str) -> tuple[np.ndarray, np.ndarray,
     plant = plants.make(env_id, **json.loads(params_json))
     par = _fsh_par(plant)
     p = sig["pressure_MPa"] * 1e6
-    h0 = _fsh_inlet(sig["attemp_in_temp_C"], sig["spray_flow_kg_s"], sig["steam_flow_kg_s"],
-                    p, par[2], plant.P)  # fmt: skip
+    W = sig["steam_flow_kg_s"]
+    h_sp = plant.spray_water_enthalpy(W / par[2])
+    h0 = _fsh_inlet(sig["attemp_in_temp_C"], sig["spray_flow_kg_s"], W, p, h_sp,
+                    plant.params.attemp_margin_K)  # fmt: skip
     ha = np.array([h_pT(pi, T + K0) for pi, T in zip(p, sig["outlet_temp_meas_C"], strict=True)])
     return sig["steam_flow_kg_s"] / par[2], h0, ha
 
@@ -241,7 +241,7 @@ class FSHObserver:
     def __init__(self, env: Any, names: list[str], params_json: str) -> None:
         plant = env.unwrapped.plant
         self.par = _fsh_par(plant)
-        self.P = plant.P
+        self.plant = plant
         self.nl = int(self.par[7])
         self.dt = plant.dt_s
         self.ix = [names.index(s) for s in (
@@ -266,7 +266,8 @@ class FSHObserver:
         W = np.clip(W, 0.05 * self.par[2], 1.3 * self.par[2])
         T_up = np.clip(T_up, T_MIN - K0, T_MAX - K0)
         T_meas = np.clip(T_meas, T_MIN - K0, T_MAX - K0)
-        h0 = _fsh_inlet(T_up, w_sp, W, p, self.par[2], self.P)
+        h_sp = self.plant.spray_water_enthalpy(W / self.par[2])
+        h0 = _fsh_inlet(T_up, w_sp, W, p, h_sp, self.plant.params.attemp_margin_K)
         n = y.shape[0]
         if self.S.shape[0] != n:
             self.S = np.zeros((n, 8 + self.nl))

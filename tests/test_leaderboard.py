@@ -16,6 +16,7 @@ import gymnasium as gym
 import numpy as np
 import pytest
 import yaml
+from processes import alive, children
 
 import agents
 import baselines
@@ -617,19 +618,6 @@ def test_resume_refuses_a_hand_edited_row_without_metrics(tiny, tmp_path, fake_p
     assert "line 1" in err and "metrics lack" in err and "Traceback" not in err
 
 
-def _children(pid: int) -> list[int]:
-    path = Path(f"/proc/{pid}/task/{pid}/children")
-    return [int(c) for c in path.read_text().split()] if path.exists() else []
-
-
-def _alive(pid: int) -> bool:
-    """Running (not a zombie waiting for a parent that does not reap it)."""
-    try:
-        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] != "Z"
-    except (FileNotFoundError, ProcessLookupError, IndexError):
-        return False
-
-
 def _start_cli(out: Path, *extra: str):
     """The leaderboard CLI in a process of its own (two workers, two policies of long
     units) once its workers run, with its worker processes' ids."""
@@ -643,7 +631,7 @@ def _start_cli(out: Path, *extra: str):
     proc = subprocess.Popen(args, cwd=Path(__file__).parents[1], stdout=subprocess.DEVNULL,
                             stderr=subprocess.PIPE, text=True)  # fmt: skip
     deadline = time.monotonic() + 60
-    while len(workers := _children(proc.pid)) < 2 and time.monotonic() < deadline:
+    while len(workers := children(proc.pid)) < 2 and time.monotonic() < deadline:
         assert proc.poll() is None, proc.stderr.read()
         time.sleep(0.1)
     assert len(workers) >= 2, "no worker processes"
@@ -663,12 +651,12 @@ def test_workers_end_with_the_leaderboard(tmp_path, sig):
         proc.communicate(timeout=60)  # drains stderr, which could otherwise block the child
         assert proc.returncode == (143 if sig == "SIGTERM" else -signal.SIGKILL)
         deadline = time.monotonic() + 5 * backends.PARENT_POLL_S + 3
-        while any(_alive(w) for w in workers) and time.monotonic() < deadline:
+        while any(alive(w) for w in workers) and time.monotonic() < deadline:
             time.sleep(0.1)
-        assert not any(_alive(w) for w in workers), f"workers {workers} outlived the run"
+        assert not any(alive(w) for w in workers), f"workers {workers} outlived the run"
     finally:
         for w in workers:
-            if _alive(w):
+            if alive(w):
                 os.kill(w, signal.SIGKILL)
         if proc.poll() is None:
             proc.kill()

@@ -20,6 +20,7 @@ from pathlib import Path
 import gymnasium as gym
 import numpy as np
 import pytest
+from processes import alive, children
 
 from agents import leaderboard as lb
 from agents.evaluation import run_batch
@@ -307,19 +308,6 @@ def test_policy_process_answers_bit_for_bit():
     assert not proc.is_alive()
 
 
-def _children(pid: int) -> list[int]:
-    path = Path(f"/proc/{pid}/task/{pid}/children")
-    return [int(c) for c in path.read_text().split()] if path.exists() else []
-
-
-def _alive(pid: int) -> bool:
-    """Running (not a zombie waiting for a parent that does not reap it)."""
-    try:
-        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] != "Z"
-    except (FileNotFoundError, ProcessLookupError, IndexError):
-        return False
-
-
 # slow: under the full parallel suite (two workers, each plant compiling) the run did not
 # exit within 60 s of the SIGINT in two of three runs here, and the xdist worker then
 # crashed on its next test; alone or with its file it passes in seconds (runs with -m slow)
@@ -335,7 +323,7 @@ def test_ctrl_c_still_stops_the_run_and_ends_the_policys_process(files, tmp_path
     try:
         deadline = time.monotonic() + 60
         record = out / records.EPISODES  # opened once the plan is made: the run's process
-        while not (record.exists() and (children := _children(proc.pid))):
+        while not (record.exists() and (kids := children(proc.pid))):
             assert proc.poll() is None, proc.stderr.read()
             assert time.monotonic() < deadline, "no policy process"
             time.sleep(0.1)
@@ -347,9 +335,9 @@ def test_ctrl_c_still_stops_the_run_and_ends_the_policys_process(files, tmp_path
         assert proc.returncode == 130, err
         assert "--resume" in err
         deadline = time.monotonic() + 5
-        while any(_alive(c) for c in children) and time.monotonic() < deadline:
+        while any(alive(c) for c in kids) and time.monotonic() < deadline:
             time.sleep(0.1)
-        assert not any(_alive(c) for c in children), "the policy's process outlived the run"
+        assert not any(alive(c) for c in kids), "the policy's process outlived the run"
         rows = [json.loads(x) for x in record.read_text().splitlines()]
         assert not any(r.get("error") for r in rows)
     finally:

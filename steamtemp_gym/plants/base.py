@@ -65,6 +65,17 @@ class Signal:
     description: str = ""
 
 
+def design_spray_signal(center: float, scale: float, description: str) -> Signal:
+    """The hidden output ``design_spray_kg_s`` of a plant with a design spray
+    (``Plant.design_spray``): the spray its design schedule passes at this load."""
+    return Signal("design_spray_kg_s", "kg/s", center, scale, observed=False,
+                  description=description)  # fmt: skip
+
+
+#: The hidden coal-mill output of a plant with a mill lag (fraction of rated fuel).
+MILL_OUTPUT = Signal("mill_output", "1", 0.75, 0.3, observed=False, description="coal to burners")
+
+
 def nominal_disturbances(load: float) -> np.ndarray:
     """(1, N_DIST) disturbances of the undisturbed plant at ``load``: no load rate, no
     heat-absorption bias, clean (fouling 1), spray water at its design temperature."""
@@ -129,7 +140,8 @@ class Plant:
     circulation: ClassVar[str | None] = None
     #: What the baselines' commissioning rules take from this plant: rule -> values, each
     #: documented by the rule (``mpc_linear``: ``move_weight``; ``lqi``: knob values;
-    #: ``neuro_pid``: ``disturbance_signals``, ``inner_p_pct_per_K``). A rule without an
+    #: ``neuro_pid``: ``disturbance_signals``, ``inner_p_pct_per_K``; ``fao``: ``observer``,
+    #: "divisions" where the FAO paper's own observer model applies). A rule without an
     #: entry commissions the plant by its own defaults.
     commissioning: ClassVar[Mapping[str, Mapping[str, Any]]] = {}
     trip_band_K: ClassVar[tuple[float, float]] = TRIP_BAND_K

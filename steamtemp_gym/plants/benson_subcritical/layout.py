@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from steamtemp_gym.plants.base import Signal
+from steamtemp_gym.plants.base import Signal, design_spray_signal
 from steamtemp_gym.plants.copies import Copy
 from steamtemp_gym.slots import blocks, slots
 
@@ -47,14 +47,7 @@ OUTPUTS = (
         description="evaporator length fraction where boiling starts",
     ),
     Signal("metal_temp_max_C", "C", 580.0, 40.0, observed=False, description="SH1-SH4"),
-    Signal(
-        "design_spray_kg_s",
-        "kg/s",
-        14.0,
-        10.0,
-        observed=False,
-        description="total spray of the design openings at this load",
-    ),
+    design_spray_signal(14.0, 10.0, "total spray of the design openings at this load"),
     Signal(
         "sh4_out_temp_C",
         "C",

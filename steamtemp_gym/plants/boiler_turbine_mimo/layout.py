@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from steamtemp_gym.plants.base import Signal
+from steamtemp_gym.plants.base import Signal, design_spray_signal
 from steamtemp_gym.plants.boiler_turbine_mimo.params import BoilerTurbineParams
 from steamtemp_gym.plants.copies import Copy, kelvin
 from steamtemp_gym.plants.superheater import chain_pattern, pipe_pattern
@@ -35,14 +35,7 @@ OUTPUTS = (
     Signal("heat_absorption_MW", "MW", 450.0, 200.0, observed=False, description="SH, hidden"),
     Signal("reheat_heat_MW", "MW", 300.0, 150.0, observed=False, description="hidden"),
     Signal("metal_temp_max_C", "C", 620.0, 40.0, observed=False),
-    Signal(
-        "design_spray_kg_s",
-        "kg/s",
-        30.0,
-        20.0,
-        observed=False,
-        description="total spray of the design openings at this steam flow",
-    ),  # fmt: skip
+    design_spray_signal(30.0, 20.0, "total spray of the design openings at this steam flow"),
     Signal(
         "final_sh_out_temp_C",
         "C",

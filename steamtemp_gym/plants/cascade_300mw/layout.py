@@ -4,7 +4,7 @@ z (steamtemp_gym/slots.py)."""
 
 from __future__ import annotations
 
-from steamtemp_gym.plants.base import Signal
+from steamtemp_gym.plants.base import Signal, design_spray_signal
 from steamtemp_gym.slots import slots
 
 #: The physical outputs, in the order of z.
@@ -37,14 +37,7 @@ OUTPUTS = (
         observed=False,
         description="heat-absorption input q at the inertia section (hidden)",
     ),
-    Signal(
-        "design_spray_kg_s",
-        "kg/s",
-        4.0,
-        4.0,
-        observed=False,
-        description="spray holding 535 C undisturbed at this load",
-    ),
+    design_spray_signal(4.0, 4.0, "spray holding 535 C undisturbed at this load"),
 )
 #: Index of each output in z, by name.
 IZ = slots("CascadeOutputs", *(s.name for s in OUTPUTS))

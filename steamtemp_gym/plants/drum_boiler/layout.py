@@ -6,7 +6,7 @@ from __future__ import annotations
 
 from steamtemp_gym._jit import njit
 from steamtemp_gym.plants import drum as dr
-from steamtemp_gym.plants.base import Signal
+from steamtemp_gym.plants.base import MILL_OUTPUT, Signal, design_spray_signal
 from steamtemp_gym.plants.copies import Copy, kelvin
 from steamtemp_gym.plants.superheater import chain_pattern, pipe_pattern
 from steamtemp_gym.slots import blocks, slots
@@ -32,11 +32,10 @@ OUTPUTS = (
     Signal("metal_temp_max_C", "C", 540.0, 40.0, observed=False),
     Signal("riser_exit_quality", "1", 0.05, 0.02, observed=False),
     Signal("downcomer_flow_kg_s", "kg/s", 1150.0, 100.0, observed=False),
-    Signal("design_spray_kg_s", "kg/s", 2.0, 2.0, observed=False,
-           description="scheduled design spray (function generator over load)"),
+    design_spray_signal(2.0, 2.0, "scheduled design spray (function generator over load)"),
     Signal("sh2_outlet_temp_C", "C", 505.0, 20.0, observed=False,
            description="final SH outlet, ahead of the outlet header and main-steam line"),
-    Signal("mill_output", "1", 0.75, 0.3, observed=False, description="coal to burners"),
+    MILL_OUTPUT,
 )  # fmt: skip
 #: Index of each output in z, by name.
 IZ = slots("DrumOutputs", *(s.name for s in OUTPUTS))

@@ -4,6 +4,8 @@ they share (see the package docstring for the model)."""
 
 from __future__ import annotations
 
+import numpy as np
+
 from steamtemp_gym._jit import njit
 from steamtemp_gym.plants.attemperator import mix, protected_spray_out, spray_flow
 from steamtemp_gym.plants.base import (
@@ -53,6 +55,16 @@ def spray_water(P, lw, dT):
     cp = _table(P, IP.CPFW, lw)
     h = _table(P, IP.HFW, lw) + dT * (cp + 0.5 * dT * _table(P, IP.DCPFW, lw))
     return h, _table(P, IP.RHOFW, lw), P[IP.DPB] * lw * lw
+
+
+@njit(cache=True, error_model="numpy")
+def spray_enthalpies(P, flow_fraction):
+    """Spray-water enthalpy (J/kg, no temperature offset) at each steam-flow fraction,
+    clipped to the tables' 0.05-1.3 as the plant clips its own."""
+    out = np.empty(flow_fraction.shape[0])
+    for b in range(out.shape[0]):
+        out[b] = spray_water(P, min(max(flow_fraction[b], 0.05), 1.3), 0.0)[0]
+    return out
 
 
 @njit(cache=True, error_model="numpy")

@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 
 from steamtemp_gym._jit import njit
-from steamtemp_gym.plants.base import Signal
+from steamtemp_gym.plants.base import MILL_OUTPUT, Signal, design_spray_signal
 from steamtemp_gym.plants.copies import Copy, kelvin
 from steamtemp_gym.slots import blocks, slots
 
@@ -25,14 +25,8 @@ OUTPUTS = (
     Signal("firing_rate", "1", 0.75, 0.3, description="fuel flow, fraction of rated"),
     Signal("heat_absorption_MW", "MW", 100.0, 50.0, observed=False, description="hidden"),
     Signal("metal_temp_max_C", "C", 620.0, 40.0, observed=False),
-    Signal(
-        "design_spray_kg_s",
-        "kg/s",
-        14.0,
-        14.0,
-        observed=False,
-        description="spray the FWR schedule is designed for: design fraction x flow",
-    ),
+    design_spray_signal(14.0, 14.0, "spray the FWR schedule is designed for: design "
+                        "fraction x flow"),  # fmt: skip
     Signal(
         "fsh_outlet_temp_C",
         "C",
@@ -41,7 +35,7 @@ OUTPUTS = (
         observed=False,
         description="FSH outlet, ahead of the outlet header and main-steam line",
     ),
-    Signal("mill_output", "1", 0.75, 0.3, observed=False, description="coal to burners"),
+    MILL_OUTPUT,
 )
 #: Index of each output in z, by name.
 IZ = slots("FSHOutputs", *(s.name for s in OUTPUTS))

@@ -2,13 +2,17 @@
 
 from __future__ import annotations
 
+from typing import Any
+
+import numpy as np
+
 from steamtemp_gym.plants.base import (
     Plant,
     Signal,
 )
 from steamtemp_gym.plants.perturb import BOILER_VARIANTS
 from steamtemp_gym.plants.supercritical_fsh.calibration import _pack
-from steamtemp_gym.plants.supercritical_fsh.kernel import KERNELS
+from steamtemp_gym.plants.supercritical_fsh.kernel import KERNELS, spray_enthalpies
 from steamtemp_gym.plants.supercritical_fsh.layout import IP, IX, OUTPUTS
 from steamtemp_gym.plants.supercritical_fsh.params import FSHParams
 from steamtemp_gym.plants.supercritical_fsh.steady_state import steady as _steady
@@ -36,6 +40,9 @@ class SupercriticalFSH(Plant):
         "mpc_linear": {"move_weight": 0.003},
         "lqi": {"e_max_K": 3.0},
         "neuro_pid": {"disturbance_signals": ("firing_minus_load", "attemp_in_temp_C")},
+        # the FAO paper's own plant: its n-division IF97 observer reads this plant's tube
+        # bank and spray water (baselines/fao_observer.py)
+        "fao": {"observer": "divisions"},
     }
     extra_info = ("attemp_out_temp_C", "heat_absorption_MW", "pressure_MPa", "steam_flow_kg_s")
 
@@ -44,3 +51,8 @@ class SupercriticalFSH(Plant):
     kernels = KERNELS
     actuators = ((IX.V, IP.TAUV, IP.RATEV),)
     setpoint_param = "T_out_C"
+
+    def spray_water_enthalpy(self, flow_fraction: Any) -> np.ndarray:
+        """The spray water's enthalpy (J/kg; the feed-pump discharge, no temperature
+        offset) at each steam-flow fraction of rated (clipped to 0.05-1.3)."""
+        return spray_enthalpies(self.P, np.asarray(flow_fraction, dtype=np.float64).ravel())
