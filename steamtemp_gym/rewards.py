@@ -45,38 +45,37 @@ from dataclasses import asdict, dataclass, fields
 import numpy as np
 
 from steamtemp_gym._jit import njit
-from steamtemp_gym.checks import is_finite, is_real, key_list
+from steamtemp_gym.checks import check_fields, key_list, ranged
 from steamtemp_gym.slots import slots
 
 #: Largest weight accepted (every weight is >= 0): with the trip band and these ranges every
 #: per-step reward is finite (|e| is bounded by the steam tables' range, about 800 K).
 MAX_WEIGHT = 1e4
-#: Ranges of the options that are not weights (K; the trip penalty, a one-off cost).
-RANGES = {"T0_K": (0.1, 1000.0), "band_K": (0.0, 500.0), "trip_penalty": (0.0, 1e6)}
+
+
+def _weight(default: float) -> float:
+    """A weight's field: ``default``, accepted in [0, :data:`MAX_WEIGHT`]."""
+    return ranged(default, 0.0, MAX_WEIGHT)
 
 
 @dataclass(frozen=True)
 class RewardConfig:
-    """Weights of the default reward (see module docstring)."""
+    """Weights of the default reward (see module docstring), each in [0, MAX_WEIGHT]; the
+    temperature scale, the band (K) and the trip penalty (a one-off cost) in ranges of
+    their own."""
 
-    T0_K: float = 20.0
-    w_abs: float = 1.0
-    w_sq: float = 0.0
-    band_K: float = 5.0
-    w_band: float = 1.0
-    w_spray: float = 0.02
-    w_move: float = 0.1
-    trip_penalty: float = 100.0
-    w_secondary: float = 1.0
+    T0_K: float = ranged(20.0, 0.1, 1000.0)
+    w_abs: float = _weight(1.0)
+    w_sq: float = _weight(0.0)
+    band_K: float = ranged(5.0, 0.0, 500.0)
+    w_band: float = _weight(1.0)
+    w_spray: float = _weight(0.02)
+    w_move: float = _weight(0.1)
+    trip_penalty: float = ranged(100.0, 0.0, 1e6)
+    w_secondary: float = _weight(1.0)
 
     def __post_init__(self) -> None:
-        for f in fields(self):
-            v = getattr(self, f.name)
-            lo, hi = RANGES.get(f.name, (0.0, MAX_WEIGHT))
-            if not is_real(v):
-                raise ValueError(f"reward option {f.name!r} must be a number, got {v!r}")
-            if not (is_finite(v) and lo <= v <= hi):
-                raise ValueError(f"reward option {f.name!r} must be in [{lo:g}, {hi:g}], got {v!r}")
+        check_fields(self, "reward option {name!r}")
 
     @classmethod
     def from_options(cls, options: dict | RewardConfig | None) -> RewardConfig:

@@ -18,3 +18,16 @@ class Model:
         assert len(x) == self.shape[0]
         self.calls += 1
         return self.rng.uniform(-1.5, 1.5, self.shape).astype(np.float32), None
+
+
+def ppo_yaml(tmp_path, env_id: str, n_steps: int, **extra):
+    """An RL-Zoo YAML file of a tiny PPO on ``env_id`` (``n_steps`` per rollout and batch,
+    one epoch, 8-unit nets) with the entries ``extra``; its path."""
+    import yaml
+
+    hp = {"n_envs": 2, "policy": "MlpPolicy", "normalize": "dict(norm_obs=True)",
+          "n_steps": n_steps, "batch_size": n_steps, "n_epochs": 1,
+          "policy_kwargs": "dict(net_arch=dict(pi=[8], vf=[8]))", **extra}  # fmt: skip
+    path = tmp_path / "ppo.yml"
+    path.write_text(yaml.safe_dump({env_id: hp}))
+    return path

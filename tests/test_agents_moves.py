@@ -9,7 +9,7 @@ import json
 
 import numpy as np
 import pytest
-from stand_ins import Model
+from stand_ins import Model, ppo_yaml
 
 from agents.moves import LowPassState, MoveState, VecMoves, command_state
 from agents.policy import AgentPolicy
@@ -166,14 +166,7 @@ def test_commands_before_a_start_are_refused(native):
 
 
 def _ppo_yaml(tmp_path, **extra):
-    import yaml
-
-    hp = {"n_envs": 2, "policy": "MlpPolicy", "normalize": "dict(norm_obs=True)",
-          "n_steps": 64, "batch_size": 64, "n_epochs": 1,
-          "policy_kwargs": "dict(net_arch=dict(pi=[8], vf=[8]))", **extra}  # fmt: skip
-    path = tmp_path / "ppo.yml"
-    path.write_text(yaml.safe_dump({ENV: hp}))
-    return path
+    return ppo_yaml(tmp_path, ENV, 64, **extra)
 
 
 def test_an_incremental_agent_trains_and_acts_within_its_move_bound(tmp_path):

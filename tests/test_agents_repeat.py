@@ -7,8 +7,7 @@ import json
 
 import numpy as np
 import pytest
-import yaml
-from stand_ins import Model
+from stand_ins import Model, ppo_yaml
 
 import steamtemp_gym
 from agents import horizons
@@ -175,12 +174,7 @@ def test_plant_action_repeat_in_an_entry_sets_the_per_decision_discount():
 
 
 def _ppo_yaml(tmp_path, **extra):
-    hp = {"n_envs": 2, "policy": "MlpPolicy", "normalize": "dict(norm_obs=True)",
-          "n_steps": 32, "batch_size": 32, "n_epochs": 1,
-          "policy_kwargs": "dict(net_arch=dict(pi=[8], vf=[8]))", **extra}  # fmt: skip
-    path = tmp_path / "ppo.yml"
-    path.write_text(yaml.safe_dump({ENV: hp}))
-    return path
+    return ppo_yaml(tmp_path, ENV, 32, **extra)
 
 
 def test_an_agent_with_action_repeat_trains_and_acts_every_k_intervals(tmp_path):

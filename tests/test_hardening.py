@@ -262,10 +262,14 @@ def test_reward_options_accept_any_real_number():
 
 
 def test_reward_is_finite_at_the_largest_accepted_weights():
-    from steamtemp_gym.rewards import MAX_WEIGHT, RANGES
+    import dataclasses
 
+    from steamtemp_gym.rewards import MAX_WEIGHT, RewardConfig
+
+    ranges = {f.name: f.metadata["range"] for f in dataclasses.fields(RewardConfig)}
     big = {f: MAX_WEIGHT for f in ("w_abs", "w_sq", "w_band", "w_spray", "w_move", "w_secondary")}
-    big.update(T0_K=RANGES["T0_K"][0], trip_penalty=RANGES["trip_penalty"][1], band_K=0.0)
+    assert all(ranges[f][1] == MAX_WEIGHT for f in big)
+    big.update(T0_K=ranges["T0_K"][0], trip_penalty=ranges["trip_penalty"][1], band_K=0.0)
     env = gym.make("steamtemp/Cascade300MW-v0", scenario="load_ramp_100_50", reward=big)
     env.reset(seed=0)
     for k in range(600):
