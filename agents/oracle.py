@@ -54,8 +54,7 @@ import numpy as np
 
 import baselines
 from steamtemp_gym.envs.core import Core, check_action
-from steamtemp_gym.envs.kernels import E_DUR, E_TIME
-from steamtemp_gym.envs.snapshot import copy_rows, planning_core
+from steamtemp_gym.envs.snapshot import copy_rows, env_core, planning_core
 
 #: The causal controllers whose whole-episode command sequences compete with the CEM's
 #: (module docstring): the leaderboard's best causal controller and the score's 0.
@@ -154,14 +153,14 @@ class Planner:
         A[n:] = 0.0
         ret = np.zeros(n)
         alive = np.ones(n, dtype=bool)
-        left = core.ep[:n, E_DUR] - core.ep[:n, E_TIME]  # time to the episode's end
+        left = core.time_left()[:n]
         for h in range(self.H + self.T):
             alive &= left > 1e-9
             if h < self.H:  # the tail holds the last commands
                 A[:n] = (2.0 * U[:, h] - 1.0).astype(np.float32)  # as predict hands them out
             core.step(A)
-            ret += np.where(alive, core.out[:n, 0], 0.0)
-            alive &= core.out[:n, 1] == 0.0  # a trip ends the row's episode
+            ret += np.where(alive, core.reward[:n], 0.0)
+            alive &= core.trip[:n] == 0  # a trip ends the row's episode
             left -= self.src.plant.dt_s
         return ret.reshape(len(rows), S)
 
@@ -170,8 +169,8 @@ class Planner:
         b = self.budget
         n = len(rows)
         sigma = np.full_like(mean, b.sigma0)
-        rngs = [np.random.default_rng([int(self.src.key[r]), int(self.src.counter[r])])
-                for r in rows]  # fmt: skip
+        keys, steps = self.src.noise_keys(), self.src.steps()
+        rngs = [np.random.default_rng([int(keys[r]), int(steps[r])]) for r in rows]
         best, best_ret = mean.copy(), np.full(n, -np.inf)
         for _ in range(b.iterations):
             eps = np.stack([g.standard_normal((self.samples - 1, *mean.shape[1:]))
@@ -195,11 +194,12 @@ class Planner:
     def _shifted(self, rows: np.ndarray) -> np.ndarray:
         """Warm start of each row: its plan shifted to now, held at its end (a new
         episode: the commands held at its start)."""
-        U = self.src.U_prev[rows]
+        U = self.src.held_commands()[rows]
         mean = np.repeat(U[:, None, :], self.n_knots, axis=1)
+        counter = self.src.steps()
         for j, r in enumerate(rows):
-            age = int(self.src.counter[r] - self.start[r])
-            if self.start[r] < 0 or age < 0 or age > self.H or self.src.counter[r] == 0:
+            age = int(counter[r] - self.start[r])
+            if self.start[r] < 0 or age < 0 or age > self.H or counter[r] == 0:
                 continue
             t = np.minimum(age + np.arange(self.n_knots) * self.K, self.H - 1)
             mean[j] = self._commands(self.knots[r])[t]
@@ -208,7 +208,7 @@ class Planner:
     def act(self) -> np.ndarray:
         """Every row's next commands as actions in [-1, 1] (float32), replanning the rows
         whose plan is due."""
-        counter = self.src.counter
+        counter = self.src.steps()
         age = counter - self.start
         rows = np.flatnonzero((self.start < 0) | (age < 0) | (age >= self.R) | (counter == 0))
         if rows.size:
@@ -250,10 +250,10 @@ def rollout(core: Core, act: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, n
         a = check_action(act(core.obs.copy(), not acts), shape)
         core.step(a)
         acts.append(np.array(a, dtype=np.float64))
-        rews.append(np.where(alive, core.out[:, 0], 0.0))
+        rews.append(np.where(alive, core.reward, 0.0))
         obs.append(core.obs.copy())
         steps += alive
-        alive &= (core.out[:, 1] == 0.0) & (core.out[:, 2] == 0.0)
+        alive &= ~core.ended()
     return np.asarray(acts), np.asarray(rews), np.asarray(obs), steps
 
 
@@ -270,15 +270,15 @@ class Oracle:
 
     def __init__(self, env: Any, budget: Budget | None = None,
                  incumbents: tuple[str, ...] = INCUMBENTS) -> None:  # fmt: skip
-        u = env.unwrapped
-        if not isinstance(getattr(u, "core", None), Core):
-            raise ValueError("the oracle acts on a steamtemp_gym env (SteamTempEnv or the "
-                             f"native vector env), got {type(u).__name__}")  # fmt: skip
+        try:
+            src = env_core(env)
+        except ValueError as exc:
+            raise ValueError(f"the oracle acts on a steamtemp_gym env: {exc}") from None
         unknown = [n for n in incumbents if n not in baselines.NAMES]
         if isinstance(incumbents, str) or unknown:
             raise ValueError(f"oracle incumbents must be a tuple of baseline names "
                              f"({', '.join(baselines.NAMES)}), got {incumbents!r}")  # fmt: skip
-        self.env, self.src = env, u.core
+        self.env, self.src = env, src
         self.budget = budget or Budget()
         self.incumbents = tuple(incumbents)
         self._policies: list[Any] | None = None
@@ -300,6 +300,7 @@ class Oracle:
         """Roll the rest of each row's episode out on copies, by the CEM and by each
         incumbent, and commit to the best (module docstring)."""
         n = len(rows)
+        keys, counter = self.src.noise_keys(), self.src.steps()
         shadow = planning_core(self.src, n)
         dst = np.arange(n)
         copy_rows(self.src, rows, shadow, dst)
@@ -317,10 +318,9 @@ class Oracle:
             best = max(totals, key=totals.get)
             acts, rew, obs, steps = runs[best]
             k = steps[j]
-            self.committed[r] = Committed(
-                int(self.src.key[r]), int(self.src.counter[r]), acts[:k, j].copy(),
-                rew[:k, j].copy(), obs[:k, j].copy(), best, totals)
-            self._key[r] = self.src.key[r]
+            self.committed[r] = Committed(int(keys[r]), int(counter[r]), acts[:k, j].copy(),
+                                          rew[:k, j].copy(), obs[:k, j].copy(), best, totals)
+            self._key[r] = keys[r]
 
     def predict(self, observation, state=None, episode_start=None, deterministic=True):
         """The next commands of each row's committed sequence, committing where due: a new
@@ -333,15 +333,15 @@ class Oracle:
             raise ValueError(f"the oracle's env has {B} row(s); observation shape {obs.shape}")
         if len(self.committed) != B:
             self.reset()
-        counter = src.counter
-        ended = (counter > 0) & ((src.out[:, 1] != 0.0) | (src.out[:, 2] != 0.0))
-        due = (counter == 0) | (src.key != self._key) | (counter != self._next)
+        counter = src.steps()
+        ended = (counter > 0) & src.ended()
+        due = (counter == 0) | (src.noise_keys() != self._key) | (counter != self._next)
         if episode_start is not None:
             due |= np.broadcast_to(np.asarray(episode_start, dtype=bool), (B,))
         rows = np.flatnonzero(due & ~ended)
         if rows.size:
             self._commit(rows)
-        action = src.U_prev * 2.0 - 1.0  # an ended row's last commands
+        action = src.held_commands() * 2.0 - 1.0  # an ended row's last commands
         for r in np.flatnonzero(~ended):
             c = self.committed[r]
             action[r] = c.actions[counter[r] - c.start]

@@ -54,6 +54,7 @@ import numpy as np
 import steamtemp_gym
 from steamtemp_gym._jit import njit
 from steamtemp_gym.envs.kernels import advance, schedules, to_commands
+from steamtemp_gym.envs.state import ROW_FIELDS
 from steamtemp_gym.plants import threads
 from steamtemp_gym.plants.integrator import block_solve
 from steamtemp_gym.plants.specialize import specialize
@@ -295,16 +296,15 @@ def profile(env_id: str, batch: int, seconds: float, rounds: int, counts, sample
 
     sched_args = (core.slot, core.ep, core.bp_t, core.bp_v, core.bp_n, plant.setpoint_C,
                   core.ou.copy(), core.D.copy(), core.sp.copy())  # fmt: skip
-    adv = (X0.copy(), Z.copy(), core.U.copy(), core.U_prev.copy(), core.slot, core.bp_t,
-           core.bp_v, core.bp_n, core.ep.copy(), core.ou.copy(), core.key, core.counter.copy(),
-           core.ints, core.cfg, core.obs_cs, core.D.copy(), core.sp.copy(), core.obs.copy(),
-           core.meas.copy(), core.out.copy(), core.info.copy())  # fmt: skip
+    # advance on copies of the rows' arrays (X and Z as the plant step found them)
+    adv = core.state._replace(**{f: getattr(core, f).copy() for f in ROW_FIELDS})
+    adv = adv._replace(X=X0.copy(), Z=Z.copy())
     timers = {
         "env step": (env_step, batch),
         "commands": (lambda r: [to_commands(a, core.U) for _ in range(r)], batch),
         "plant step": (plant_step, batch),
         "schedules": (lambda r: _schedules_loop(*sched_args, r), batch),
-        "advance": (lambda r: [advance(*adv) for _ in range(r)], batch),
+        "advance": (lambda r: [advance(adv) for _ in range(r)], batch),
     }
     mod = sys.modules[plant.kernel().__module__]
     fns = getattr(type(plant), "kernels", None) or (getattr(mod, "rhs", None),

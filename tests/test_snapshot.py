@@ -127,16 +127,16 @@ def test_bad_snapshots_and_rows_are_refused_and_change_nothing():
 # ------------------------------------------------- a failed restore or reset changes nothing
 #: Caches that a failed call may fill without changing any row: the scenarios whose start
 #: check passed, the per-block kernel arguments and the compiled entry points.
-_CACHES = ("_feasible", "_block_args", "_entries", "_row_entries", "_advance_args")
+_CACHES = ("_feasible", "_block_args", "_entries", "_row_entries")
 
 
 def _whole_state(env) -> dict:
-    """Every piece of state of an env: each array of its core, the scenario, plant and
-    factors of each row (the objects themselves), the schedule slots, the generators'
-    states and the episode flags."""
+    """Every piece of state of an env: each array of its core (those of its EnvState
+    included), the scenario, plant and factors of each row (the objects themselves), the
+    schedule slots, the generators' states and the episode flags."""
     u = env.unwrapped
     out = {}
-    for name, v in vars(u.core).items():
+    for name, v in [*vars(u.core).items(), *u.core.state._asdict().items()]:
         if name in _CACHES:
             continue
         if isinstance(v, np.ndarray):

@@ -1,7 +1,7 @@
 """The batched simulation core shared by SteamTempEnv (a batch of one) and the vector env:
-the state of B rows of one plant, each under its own scenario, their schedule tables, reset
-to a steady start, the step (the plant's kernel, then :func:`envs.kernels.advance`) and
-the info values.
+the state of B rows of one plant (envs/state.py), each under its own scenario, their
+schedule tables, reset to a steady start, the step (the plant's kernel, then
+:func:`envs.kernels.advance`), the info values and what a planner reads of each row.
 """
 
 from __future__ import annotations
@@ -14,21 +14,29 @@ import numpy as np
 from steamtemp_gym import scenarios as sc
 from steamtemp_gym._jit import entry_point
 from steamtemp_gym.checks import is_real
-from steamtemp_gym.envs.cost import COST_DOC, COST_KEYS
+from steamtemp_gym.envs.cost import COST_DOC
 from steamtemp_gym.envs.kernels import (
-    ADVANCE_ROWS,
-    E_NOISE,
-    MIN_BREAKPOINTS,
+    E_DUR,
+    E_TIME,
     N_CH,
     OU_CHANNEL,
     TRIP_REASONS,
-    H,
     advance,
     fill_info,
     observe,
     ou_coefficients,
     schedules,
     to_commands,
+)
+from steamtemp_gym.envs.state import (
+    INFO_TAIL,
+    ROW_POSITIONS,
+    EnvState,
+    StateFields,
+    info_sources,
+    new_state,
+    outputs,
+    with_tables,
 )
 from steamtemp_gym.plants.base import (
     N_DIST,
@@ -44,8 +52,6 @@ _TRIP_NAMES = np.array(TRIP_REASONS)
 #: plant engineers read): further away the valves are saturated at t = 0 and the episode
 #: starts as a disturbance nobody can correct.
 START_BAND_K = 5.0
-#: The values every info carries after the plant's own outputs (Core.info's last columns).
-INFO_TAIL = ("measured_temp_C", "time_s", "setpoint_C", "load", "spray_flow_kg_s", *COST_KEYS)
 #: Unit and meaning of the info values every plant has (the others are plant outputs).
 INFO_DOC = {
     "outlet_temp_C": ("C", "true main-steam temperature (the trip band applies to it)"),
@@ -63,18 +69,15 @@ INFO_DOC = {
 }  # fmt: skip
 
 
-def info_sources(plant: Any) -> list[tuple[str, str]]:
-    """(info key, the plant output it reads) of the info values taken from the plant's
-    outputs, in order; :data:`INFO_TAIL` and ``trip_reason`` follow them. With several
-    valves, ``spray_valve`` holds every valve's opening."""
-    return ([("outlet_temp_C", plant.outlet),
-             ("measured_temp_noise_free_C", plant.outlet_measured),
-             ("spray_valve", plant.valves[0])]
-            + [(name, name) for name in plant.extra_info])  # fmt: skip
-
-
-class Core:
+class Core(StateFields):
     """Batched state of B copies of one plant under per-row scenarios.
+
+    Its arrays are those of ``state`` (:class:`~steamtemp_gym.envs.state.EnvState`), each
+    also an attribute of the same name. A planner reads a row's position and the last
+    step's outcome through :meth:`time_left`, :meth:`ended`, :meth:`held_commands`,
+    :meth:`noise_keys` and :meth:`steps` and the arrays ``reward``, ``trip`` (the trip code,
+    :data:`TRIP_REASONS` index; 0: none) and ``truncated`` of the last step (read them, do
+    not write them); envs/snapshot.py makes its planning cores and copies rows into them.
 
     Args:
         plant: The plant instance (parameters fixed).
@@ -86,91 +89,38 @@ class Core:
         self.plant = plant
         self.B = batch
         self.signals = for_plant(plant)
-        B, n_x, n_z, n_u = batch, plant.n_x, plant.n_z, plant.n_u
-        self.X = np.zeros((B, n_x))
-        self.Z = np.zeros((B, n_z))
-        self.U = np.zeros((B, n_u))
-        self.U_prev = np.zeros((B, n_u))
-        self.D = np.zeros((B, N_DIST))
-        self.sp = np.zeros(B)
-        self.ep = np.zeros((B, 5))
-        self.ou = np.zeros(B)
-        self.key = np.zeros(B, dtype=np.uint64)
-        self.counter = np.zeros(B, dtype=np.int64)
-        self.out = np.zeros((B, 3))
-        self.meas = np.zeros(B)
+        obs_cs = np.array([[s.center, s.scale, float(s.noisy)] for s in self.signals.observation],
+                          dtype=np.float64)  # fmt: skip
+        out = outputs(plant)
+        self.state: EnvState = new_state(plant, batch, reward_cfg, obs_cs, out)
         # schedule tables: one slot per distinct scenario in use (rows share identical ones)
-        self.slot = np.zeros(B, dtype=np.int64)
         self._slots: dict[sc.Scenario, list[int]] = {}  # scenario -> [slot, rows using it]
-        self._free: list[int] = []
+        self._free: list[int] = list(range(self.bp_t.shape[0]))
         self._feasible: set[sc.Scenario] = set()  # scenarios whose start check passed
-        self._alloc_schedules(1, MIN_BREAKPOINTS)
-        observed = [i for i, s in enumerate(plant.outputs) if s.observed]
-        if len(observed) >= OU_CHANNEL:
-            raise ValueError(f"{plant.id}: at most {OU_CHANNEL - 1} observed outputs")
-        self.obs = np.zeros((B, len(observed) + 3), dtype=np.float64)
-        self.obs_cs = np.array(
-            [[s.center, s.scale, float(s.noisy)] for s in self.signals.observation],
-            dtype=np.float64,
-        )
-        idx = plant.index
-        self.i_out = idx[plant.outlet]
-        self.valve_idx = [idx[v] for v in plant.valves]
-        self.spray_idx = [idx[s] for s in plant.sprays]
-        self.scenario: list[sc.Scenario | None] = [None] * B
-        info_idx = [(key, idx[source]) for key, source in info_sources(plant)]
-        lists = (observed, self.valve_idx, self.spray_idx,
-                 [idx[name] for name, _ in plant.secondary], [i for _, i in info_idx])  # fmt: skip
-        starts = np.cumsum([len(H)] + [len(v) for v in lists]).tolist()
-        self.ints = np.array(
-            [self.i_out, idx[plant.outlet_measured],
-             idx[plant.design_spray] if plant.design_spray else -1, *starts]
-            + [i for v in lists for i in v],
-            dtype=np.int64,
-        )  # fmt: skip
-        #: the info values of every row, written by advance and reset_row (fill_info); the
-        #: names of its columns
-        self.info = np.zeros((B, len(info_idx) + len(INFO_TAIL)))
-        self._info_columns = [name for name, _ in info_idx] + list(INFO_TAIL)
+        self.i_out = plant.index[plant.outlet]
+        self.valve_idx, self.spray_idx = out.valves, out.sprays
+        self.scenario: list[sc.Scenario | None] = [None] * batch
+        #: the names of the info columns
+        self._info_columns = [name for name, _ in info_sources(plant)] + list(INFO_TAIL)
         self._make_info = dict_maker(self._info_columns)
-        #: fill_info's index arguments for reset_row (advance takes them from ints)
-        self._info_idx = (np.array([i for _, i in info_idx], dtype=np.int64),
-                          np.array(self.spray_idx, dtype=np.int64))  # fmt: skip
-        spray_scale = plant.outputs[self.spray_idx[0]].scale if self.spray_idx else 1.0
-        trip_lo, trip_hi = plant.trip_band_K
-        self.cfg = np.concatenate(
-            [[plant.dt_s, plant.setpoint_C, trip_lo, trip_hi, spray_scale], reward_cfg.to_array(),
-             [sp for _, sp in plant.secondary]]
-        )  # fmt: skip
         #: the valve openings' columns of Z for info (several valves): a slice when they are
         #: adjacent (a copy of a slice costs a third of fancy indexing), else an index array
         v = self.valve_idx
         adjacent = v == list(range(v[0], v[0] + len(v)))
         self._valves = (None if len(v) < 2
                         else slice(v[0], v[0] + len(v)) if adjacent else np.array(v))  # fmt: skip
-        #: arguments of the kernels, built once (the arrays keep their identity; the
-        #: schedule tables are reallocated by _alloc_schedules, which clears the second)
+        #: the plant kernel's arguments, built once (the arrays keep their identity)
         self._plant_args = (plant.step_args(self.X, self.U, self.D, self.Z)
                             if type(plant).step is Plant.step else None)  # fmt: skip
-        self._advance_args: tuple | None = None
         #: compiled entry points of (plant kernel or None, advance) for those arguments
         self._entries: tuple | None = None
         self._no_trips = np.full(batch, TRIP_REASONS[0], dtype=_TRIP_NAMES.dtype)
 
     def _alloc_schedules(self, n_slots: int, k: int) -> None:
-        """(Re)allocate the schedule tables for n_slots scenarios of k breakpoints, keeping
+        """Reallocate the schedule tables for n_slots scenarios of k breakpoints, keeping
         the slots in use."""
-        old = getattr(self, "bp_t", None)
-        bp_t, bp_v = np.zeros((n_slots, N_CH, k)), np.zeros((n_slots, N_CH, k))
-        bp_n = np.ones((n_slots, N_CH), dtype=np.int64)
-        if old is not None:
-            n0, k0 = old.shape[0], old.shape[2]
-            bp_t[:n0, :, :k0], bp_v[:n0, :, :k0], bp_n[:n0] = old, self.bp_v, self.bp_n
-            self._free += list(range(n0, n_slots))
-        else:
-            self._free = list(range(n_slots))
-        self.bp_t, self.bp_v, self.bp_n = bp_t, bp_v, bp_n
-        self._advance_args = None
+        self._free += list(range(self.bp_t.shape[0], n_slots))
+        self.state = with_tables(self.state, n_slots, k)
 
     def assign_scenario(self, b: int, scenario: sc.Scenario) -> None:
         """Make row b run ``scenario`` (its schedules packed into a table slot); the row's
@@ -303,8 +253,9 @@ class Core:
         self.ou[b] = scenario.heat_absorption_noise_std * gauss(np.uint64(key), 0, OU_CHANNEL)
         self.key[b] = np.uint64(key)
         self.counter[b] = 0
-        self.out[b] = 0.0
-        schedules(*self._schedules_args(b))
+        self.reward[b], self.trip[b], self.truncated[b] = 0.0, 0, False
+        schedules(b, self.slot[b], 0.0, self.bp_t, self.bp_v, self.bp_n, self.plant.setpoint_C,
+                  self.ou, self.D, self.sp)  # fmt: skip
         r = slice(b, b + 1)
         plant = self.row_plant(b)
         plant.seed_rows(self.X[r], self.key[r])
@@ -312,34 +263,8 @@ class Core:
         plant.step(self.X[r], self.U[r], self.D[r], self.Z[r], dt=0.0)  # outputs of it
         self.U[b] = self.Z[b, self.valve_idx]
         self.U_prev[b] = self.U[b]
-        observe(*self._observe_args(b))
-        fill_info(*self._fill_info_args(b))
-
-    def _fill_info_args(self, b: int) -> tuple:
-        """The arguments of ``fill_info`` for row b."""
-        # cost 0: the info of a reset closes no control interval
-        return (b, self.Z, *self._info_idx, self.meas, self.ep, self.sp, self.D, 0.0, self.info)
-
-    def _schedules_args(self, b: int) -> tuple:
-        """The arguments of ``schedules`` for row b at t = 0."""
-        return (b, self.slot[b], 0.0, self.bp_t, self.bp_v, self.bp_n, self.plant.setpoint_C,
-                self.ou, self.D, self.sp)  # fmt: skip
-
-    def _observe_args(self, b: int) -> tuple:
-        """The arguments of ``observe`` for row b."""
-        ints = self.ints
-        return (b, self.Z, ints[ints[H.obs] : ints[H.valves]], self.obs_cs, ints[H.measured],
-                self.key, self.counter, self.ep[b, E_NOISE], self.sp, self.D, self.obs,
-                self.meas)  # fmt: skip
-
-    def _step_args(self) -> tuple:
-        """The arguments of ``advance`` (built once; see _alloc_schedules)."""
-        if self._advance_args is None:
-            self._advance_args = (self.X, self.Z, self.U, self.U_prev, self.slot, self.bp_t,
-                                  self.bp_v, self.bp_n, self.ep, self.ou, self.key, self.counter,
-                                  self.ints, self.cfg, self.obs_cs, self.D, self.sp, self.obs,
-                                  self.meas, self.out, self.info)  # fmt: skip
-        return self._advance_args
+        observe(b, self.state)
+        fill_info(b, self.state, 0.0)  # cost 0: the info of a reset closes no interval
 
     def compile_calls(self) -> list[tuple[Any, tuple]]:
         """(kernel, arguments) of the compiled calls of a reset and a step but the plant's
@@ -348,12 +273,14 @@ class Core:
         compiles or loads from the cache (tests/test_precompile.py checks it loads them all).
         """
         actions = [np.zeros((self.B, self.plant.n_u), dtype=t) for t in (np.float32, np.float64)]
-        return [(schedules, self._schedules_args(0)),
+        s = self.state
+        return [(schedules, (0, s.slot[0], 0.0, s.bp_t, s.bp_v, s.bp_n, self.plant.setpoint_C,
+                             s.ou, s.D, s.sp)),
                 (gauss, (np.uint64(0), 0, OU_CHANNEL)),
-                (observe, self._observe_args(0)),
-                (fill_info, self._fill_info_args(0)),
+                (observe, (0, s)),
+                (fill_info, (0, s, 0.0)),
                 *[(to_commands, (a, self.U)) for a in actions],
-                (advance, self._step_args()),
+                (advance, (s,)),
                 (self.plant.kernel(), self.plant.step_args(self.X, self.U, self.D, self.Z))]
 
     def step(self, A: np.ndarray) -> None:
@@ -364,23 +291,26 @@ class Core:
         """
         if not to_commands(A, self.U):
             raise non_finite_action(A)
-        args = self._advance_args or self._step_args()
-        if self.B >= MIN_SPLIT_ROWS:
-            self.plant.step(self.X, self.U, self.D, self.Z)
-            run_rows(advance, args, per_row=ADVANCE_ROWS)
-            return
-        # few rows: the compiled entry points directly, with arguments built once (saves
-        # 1.3 us of a 10 us step at B=1, and numba's type dispatch 0.6 us more), unless the
-        # plant's class has a step of its own. The arguments are this core's own arrays,
-        # whose types never change, so the entry points fixed at the first step stay right.
+        # the compiled entry points directly, with arguments built once (saves 1.3 us of a
+        # 10 us step at B=1, and numba's type dispatch 0.6 us more), unless the plant's class
+        # has a step of its own. The arguments are this core's own arrays, whose types never
+        # change, so the entry points fixed at the first step stay right.
         entries = self._entries
         if entries is None:
-            entries = self._entries = self._entry_points(args)
-        if entries[0] is None:
+            entries = self._entries = self._entry_points()
+        if self.B >= MIN_SPLIT_ROWS:  # blocks of rows on several threads
             self.plant.step(self.X, self.U, self.D, self.Z)
+            run_rows(self._advance_rows, self.state, per_row=ROW_POSITIONS)
+        elif entries[0] is None:
+            self.plant.step(self.X, self.U, self.D, self.Z)
+            entries[1](self.state)
         else:
             entries[0](*self._plant_args)
-        entries[1](*args)
+            entries[1](self.state)
+
+    def _advance_rows(self, *fields: np.ndarray) -> None:
+        """``advance`` on the state of the fields of an EnvState (of a block of rows)."""
+        self._entries[1](EnvState(*fields))  # type: ignore[index]
 
     def __getstate__(self) -> dict:
         """Pickle and deepcopy without the compiled entry points (made again at a step) and
@@ -391,11 +321,11 @@ class Core:
         self.__dict__.update(state)
         self._make_info = dict_maker(self._info_columns)
 
-    def _entry_points(self, advance_args: tuple) -> tuple:
+    def _entry_points(self) -> tuple:
         """(plant kernel or None, advance): their compiled entry points (_jit.entry_point)."""
         kernel = (None if self._plant_args is None
                   else entry_point(self.plant.kernel(), self._plant_args))  # fmt: skip
-        return kernel, entry_point(advance, advance_args)
+        return kernel, entry_point(advance, (self.state,))
 
     def info_row(self, b: int) -> dict[str, float | np.ndarray]:
         """Physical values of row b in engineering units (floats; an array for several valves).
@@ -405,7 +335,7 @@ class Core:
         (its lag, without the noise); ``trip_reason`` is "" or one of :data:`TRIP_REASONS`.
         """
         info = self._make_info(self.info[b].tolist())
-        info["trip_reason"] = TRIP_REASONS[int(self.out[b, 1])]
+        info["trip_reason"] = TRIP_REASONS[self.trip[b]]
         if self._valves is not None:
             info["spray_valve"] = self.Z[b, self._valves].copy()
         return info
@@ -413,12 +343,35 @@ class Core:
     def info_columns(self) -> dict[str, np.ndarray]:
         """Physical values of every row, in engineering units (arrays of shape (B,) or (B, k))."""
         info = self._make_info(self.info.T.copy())  # views of one fresh array
-        codes = self.out[:, 1]
-        info["trip_reason"] = (_TRIP_NAMES[codes.astype(np.int64)] if np.count_nonzero(codes)
+        codes = self.trip
+        info["trip_reason"] = (_TRIP_NAMES[codes] if np.count_nonzero(codes)
                                else self._no_trips.copy())  # fmt: skip
         if self._valves is not None:
             info["spray_valve"] = self.Z[:, self._valves].copy()
         return info
+
+
+    def time_left(self) -> np.ndarray:
+        """(B,) seconds from each row's time to the end of its scenario (0 or less: ended)."""
+        return self.ep[:, E_DUR] - self.ep[:, E_TIME]
+
+    def ended(self) -> np.ndarray:
+        """(B,) bool: whether each row's last step ended its episode (a trip or the end of
+        its scenario)."""
+        return (self.trip != 0) | self.truncated
+
+    def held_commands(self) -> np.ndarray:
+        """(B, n_u) copy of the commands each row holds (openings in [0, 1]: those of its
+        last step, or of its steady start after a reset)."""
+        return self.U_prev.copy()
+
+    def noise_keys(self) -> np.ndarray:
+        """(B,) copy of each row's noise key (uint64; it names the row's episode)."""
+        return self.key.copy()
+
+    def steps(self) -> np.ndarray:
+        """(B,) copy of each row's number of steps since its reset (int64)."""
+        return self.counter.copy()
 
 
 def non_finite_action(A: np.ndarray) -> ValueError:

@@ -49,14 +49,14 @@ def run_corners(env_id: str, num_envs: int = 16, steps: int = 500, seed: int = 0
             a = np.sign(rng.uniform(-1.0, 1.0, a.shape))
         core.step(a)
         counts["steps"] += num_envs
-        bad = ~(np.isfinite(core.obs).all(axis=1) & np.isfinite(core.out[:, 0]))
+        bad = ~(np.isfinite(core.obs).all(axis=1) & np.isfinite(core.reward))
         counts["non_finite"] += int(bad.sum())
         valves = core.Z[:, core.valve_idx]
         counts["out_of_range"] += int(((np.abs(core.obs) > OBS_LIMIT).any(axis=1)
                                        | (valves < 0).any(axis=1)
                                        | (valves > 1).any(axis=1)).sum())  # fmt: skip
-        for b in np.flatnonzero((core.out[:, 1] > 0) | (core.out[:, 2] > 0)):
-            code = int(core.out[b, 1])
+        for b in np.flatnonzero(core.ended()):
+            code = int(core.trip[b])
             if code:
                 counts["trips"][TRIP_REASONS[code]] += 1
             start(int(b))

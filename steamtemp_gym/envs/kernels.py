@@ -22,8 +22,6 @@ batch size. Plants with internal random disturbances get the same key through
 
 from __future__ import annotations
 
-import inspect
-
 import numpy as np
 
 from steamtemp_gym import scenarios as sc
@@ -39,18 +37,18 @@ N_CH = len(sc.CHANNELS)
 # channel indices (order of scenarios.CHANNELS)
 C_LOAD, C_SP, C_BIAS, C_FOUL, C_SPRAYT = 0, 1, 2, 3, 4
 MIN_BREAKPOINTS = 64
-#: per-row episode values in Core.ep
+#: per-row episode values in EnvState.ep (envs/state.py)
 E_TIME, E_DUR, E_NOISE, E_OU_A, E_OU_B = 0, 1, 2, 3, 4
-#: Core.ints: the output indices of the outlet, its measurement and the design spray (-1:
+#: EnvState.ints: the output indices of the outlet, its measurement and the design spray (-1:
 #: the plant declares none), then where each index list of ints starts (``end``: where the
 #: last one ends); the lists are output indices of the observed signals, valves, sprays,
 #: secondary temperatures and info values.
 H = slots("IntsHeader", "outlet", "measured", "design_spray", "obs", "valves", "sprays",
           "secondary", "info", "end")  # fmt: skip
-#: Core.cfg: these scalars, then the reward weights (rewards.W) and the secondary setpoints.
+#: EnvState.cfg: these scalars, then the reward weights (rewards.W) and the secondary setpoints.
 CFG = slots("Config", "dt", "setpoint", "trip_below_K", "trip_above_K", "spray_scale")
 N_CFG = len(CFG)
-#: Why an episode terminated (``info["trip_reason"]``; Core.out[:, 1] holds the index): the
+#: Why an episode terminated (``info["trip_reason"]``; EnvState.trip holds the index): the
 #: true outlet above or below the plant's trip band, or the plant left its valid region (a
 #: non-finite state or output; its observation is then 0 and its reward that of a trip at
 #: the lower band edge).
@@ -59,9 +57,6 @@ TRIP_ABOVE, TRIP_BELOW, TRIP_NON_FINITE = 1, 2, 3
 #: counter-based random channel of the coloured heat-absorption disturbance (observation
 #: noise uses channels 0 .. n_obs - 1)
 OU_CHANNEL = 31
-#: advance's arguments whose first axis is the batch (the rest are shared by every row).
-ADVANCE_ROW_ARGS = ("X", "Z", "U", "U_prev", "slot", "ep", "ou", "key", "counter", "D", "sp",
-                    "obs", "meas", "out", "info")  # fmt: skip
 
 
 @njit(cache=True, error_model="numpy")
@@ -96,28 +91,31 @@ def schedules(b, s, t, bp_t, bp_v, bp_n, sp_nom, ou, D, sp):
 
 
 @njit(cache=True, error_model="numpy")
-def observe(b, Z, obs_idx, obs_cs, i_meas, key, counter, noise, sp, D, obs, meas_out):
-    """Write the normalized observation of row b (noisy measurements, setpoint, error, load).
+def observe(b, s):
+    """Write the normalized observation ``s.obs[b]`` of row b of the state ``s`` (noisy
+    measurements, setpoint, error, load), its noise of standard deviation
+    ``s.ep[b, E_NOISE]`` (K).
 
-    ``noise`` is row b's noise standard deviation (K).
-
-    ``meas_out[b]`` receives what the outlet thermocouple reported (noise included). A
+    ``s.meas[b]`` receives what the outlet thermocouple reported (noise included). A
     non-finite value (a plant that left its valid region; the step then trips) is observed
     as 0 (the signal's centre), so no NaN ever reaches an agent.
     """
+    ints, obs, obs_cs, sp = s.ints, s.obs, s.obs_cs, s.sp
+    obs_idx = ints[ints[H.obs] : ints[H.valves]]
+    i_meas, noise = ints[H.measured], s.ep[b, E_NOISE]
     n = obs_idx.shape[0]
     meas = 0.0
     for j in range(n):
-        v = Z[b, obs_idx[j]]
+        v = s.Z[b, obs_idx[j]]
         if obs_cs[j, 2] > 0.0 and noise > 0.0:
-            v += noise * gauss(key[b], counter[b], j)
+            v += noise * gauss(s.key[b], s.counter[b], j)
         if obs_idx[j] == i_meas:
             meas = v
         obs[b, j] = _normalized(v, obs_cs[j, 0], obs_cs[j, 1])
-    meas_out[b] = meas
+    s.meas[b] = meas
     obs[b, n] = _normalized(sp[b], obs_cs[n, 0], obs_cs[n, 1])
     obs[b, n + 1] = _normalized(sp[b] - meas, 0.0, T0_K)
-    obs[b, n + 2] = _normalized(D[b, D_LOAD], 0.75, 0.25)
+    obs[b, n + 2] = _normalized(s.D[b, D_LOAD], 0.75, 0.25)
 
 
 @njit(cache=True, error_model="numpy")
@@ -136,60 +134,49 @@ def ou_coefficients(std: float, tau_s: float, dt: float) -> tuple[float, float]:
 
 
 @njit(cache=True, error_model="numpy", nogil=True)  # threads: plants/threads.py
-def advance(X, Z, U, U_prev, slot, bp_t, bp_v, bp_n, ep, ou, key, counter, ints, cfg, obs_cs, D,
-            sp, obs, meas, out, info):  # fmt: skip
-    """Everything after the plant step, for every row (see module docstring).
-
-    Args:
-        slot: (B,) schedule-table slot of each row (rows running the same scenario share one).
-        ep: (B, 5) per-row [time_s, duration_s, noise_std_C, ou_a, ou_b] (ou_coefficients);
-            time advanced in place.
-        ou: (B,) coloured heat-absorption disturbance, advanced in place.
-        ints: Output indices, laid out as :data:`H` says.
-        cfg: The scalars of :data:`CFG`, the reward weights, the secondary setpoints.
-        meas: (B,) written: the outlet thermocouple's reading (noise included).
-        out: (B, 3) written: [reward, trip code (TRIP_REASONS index; 0: running), truncated].
-        info: (B, n_info + len(INFO_TAIL)) written: the row's info values (:func:`fill_info`),
-            the previous error read from it first for the interval's cost (envs/cost.py).
+def advance(s):
+    """Everything after the plant step, for every row of the state ``s`` (envs/state.py:
+    EnvState; see module docstring): time (``s.ep``), the coloured disturbance (``s.ou``)
+    and the counter advanced in place; the schedules, observation, thermocouple reading,
+    info values (:func:`fill_info`; the previous error read from ``s.info`` first for the
+    interval's cost, envs/cost.py), reward, trip code (:data:`TRIP_REASONS` index; 0:
+    running) and truncation written; the commands kept in ``s.U_prev``.
     """
-    i_out, i_meas, i_design = ints[H.outlet], ints[H.measured], ints[H.design_spray]
-    obs_idx = ints[ints[H.obs] : ints[H.valves]]
+    X, Z, U, U_prev, ep, ints, cfg = s.X, s.Z, s.U, s.U_prev, s.ep, s.ints, s.cfg
+    i_out, i_design = ints[H.outlet], ints[H.design_spray]
     s_idx = ints[ints[H.sprays] : ints[H.secondary]]
     sec_idx = ints[ints[H.secondary] : ints[H.info]]
-    info_idx = ints[ints[H.info] : ints[H.end]]
+    n_info = ints[H.end] - ints[H.info]
     dt, sp_nom, s_scale = cfg[CFG.dt], cfg[CFG.setpoint], cfg[CFG.spray_scale]
     trip_lo, trip_hi = cfg[CFG.trip_below_K], cfg[CFG.trip_above_K]
     w = cfg[N_CFG : N_CFG + N_WEIGHTS]
     sec_sp = cfg[N_CFG + N_WEIGHTS :]
+    counter, ou, sp = s.counter, s.ou, s.sp
     for b in range(Z.shape[0]):
         counter[b] += 1
         ep[b, E_TIME] = counter[b] * dt  # counted, not summed: no drift over long episodes
         if ep[b, E_OU_B] > 0.0:
-            ou[b] = ep[b, E_OU_A] * ou[b] + ep[b, E_OU_B] * gauss(key[b], counter[b], OU_CHANNEL)
-        schedules(b, slot[b], ep[b, E_TIME], bp_t, bp_v, bp_n, sp_nom, ou, D, sp)
-        observe(b, Z, obs_idx, obs_cs, i_meas, key, counter, ep[b, E_NOISE], sp, D, obs, meas)
+            ou[b] = ep[b, E_OU_A] * ou[b] + ep[b, E_OU_B] * gauss(s.key[b], counter[b],
+                                                                  OU_CHANNEL)  # fmt: skip
+        schedules(b, s.slot[b], ep[b, E_TIME], s.bp_t, s.bp_v, s.bp_n, sp_nom, ou, s.D, sp)
+        observe(b, s)
         # the cost of the interval from the last info's error to this step's (envs/cost.py)
-        cost = interval_cost(_info_error(b, info, info_idx.shape[0]), Z[b, i_out] - sp[b])
-        fill_info(b, Z, info_idx, s_idx, meas, ep, sp, D, cost, info)
+        cost = interval_cost(_info_error(b, s.info, n_info), Z[b, i_out] - sp[b])
+        fill_info(b, s, cost)
         e = sp[b] - Z[b, i_out]
         code = TRIP_ABOVE if e < -trip_hi else (TRIP_BELOW if e > trip_lo else 0)
         if not (_finite(X, b) and _finite(Z, b)):
             code = TRIP_NON_FINITE
         term = code != 0
-        out[b, 1] = code
-        out[b, 2] = 1.0 if ep[b, E_TIME] >= ep[b, E_DUR] - 1e-9 else 0.0
+        s.trip[b] = code
+        s.truncated[b] = ep[b, E_TIME] >= ep[b, E_DUR] - 1e-9
         if code == TRIP_NON_FINITE:
-            out[b, 0] = non_finite_reward(trip_lo, w)
+            s.reward[b] = non_finite_reward(trip_lo, w)
         else:
-            out[b, 0] = row_reward(b, Z, U, U_prev, e, term, s_idx, i_design, s_scale, sec_idx,
-                                   sec_sp, w)  # fmt: skip
+            s.reward[b] = row_reward(b, Z, U, U_prev, e, term, s_idx, i_design, s_scale,
+                                     sec_idx, sec_sp, w)  # fmt: skip
         for j in range(U.shape[1]):
             U_prev[b, j] = U[b, j]
-
-
-#: Positions of :data:`ADVANCE_ROW_ARGS` among advance's arguments (plants/threads.run_rows).
-ADVANCE_ROWS = tuple(i for i, name in enumerate(inspect.signature(advance.py_func).parameters)
-                     if name in ADVANCE_ROW_ARGS)  # fmt: skip
 
 
 @njit(cache=True, error_model="numpy")
@@ -202,16 +189,20 @@ def _finite(A, b):
 
 
 @njit(cache=True, error_model="numpy")
-def fill_info(b, Z, cols, sprays, meas, ep, sp, D, cost, info):
-    """Fill info[b]: Z's columns ``cols`` of row b, then (:data:`INFO_TAIL`) the measured
-    temperature, time, setpoint, load, the sum of the spray columns ``sprays`` and the
-    interval's ``cost`` twice (the total and its one component, envs/cost.py)."""
+def fill_info(b, s, cost):
+    """Fill ``s.info[b]`` of the state ``s``: row b's outputs of the info columns of
+    ``s.ints``, then (envs/state.py: INFO_TAIL) the measured temperature, time, setpoint,
+    load, the sum of the spray outputs and the interval's ``cost`` twice (the total and its
+    one component, envs/cost.py)."""
+    ints, Z, info, D = s.ints, s.Z, s.info, s.D
+    cols = ints[ints[H.info] : ints[H.end]]
+    sprays = ints[ints[H.sprays] : ints[H.secondary]]
     k = cols.shape[0]
     for j in range(k):
         info[b, j] = Z[b, cols[j]]
-    info[b, k] = meas[b]
-    info[b, k + 1] = ep[b, E_TIME]
-    info[b, k + 2] = sp[b]
+    info[b, k] = s.meas[b]
+    info[b, k + 1] = s.ep[b, E_TIME]
+    info[b, k + 2] = s.sp[b]
     info[b, k + 3] = D[b, D_LOAD]
     spray = 0.0
     for j in range(sprays.shape[0]):
@@ -224,7 +215,7 @@ def fill_info(b, Z, cols, sprays, meas, ep, sp, D, cost, info):
 @njit(cache=True, error_model="numpy")
 def _info_error(b, info, k):
     """``outlet_temp_C - setpoint_C`` of row b's info (k: the number of plant columns; the
-    first is the outlet, core.info_sources), the error :func:`fill_info` last wrote."""
+    first is the outlet, state.info_sources), the error :func:`fill_info` last wrote."""
     return info[b, 0] - info[b, k + 2]
 
 

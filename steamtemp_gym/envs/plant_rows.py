@@ -109,11 +109,11 @@ class PlantRowsCore(Core):
         entries = self._row_entries
         if entries is None:
             entries = self._row_entries = (entry_point(self.plant.kernel(), blocks[0]),
-                                           entry_point(advance, self._step_args()))  # fmt: skip
+                                           entry_point(advance, (self.state,)))  # fmt: skip
         kernel = entries[0]
         for args in blocks:
             kernel(*args)
-        entries[1](*(self._advance_args or self._step_args()))
+        entries[1](self.state)
 
     def __getstate__(self) -> dict:
         """As Core's, without the per-block kernel arguments (views of the row arrays, made

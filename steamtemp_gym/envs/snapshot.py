@@ -38,7 +38,8 @@ the field, and change nothing.
 
 Planners that copy rows often use :func:`planning_core` and :func:`copy_rows` (no
 Snapshot in between): the copied rows take their scenario and their plant along, a
-``plant_randomization`` row its drawn one.
+``plant_randomization`` row its drawn one. :func:`env_core` gives the core of an env to
+copy from; what a planner reads of a core's rows is listed in envs/core.py: Core.
 """
 
 from __future__ import annotations
@@ -52,13 +53,14 @@ import numpy as np
 from steamtemp_gym import scenarios as sc
 from steamtemp_gym.envs.core import Core
 from steamtemp_gym.envs.plant_rows import PlantRowsCore
+from steamtemp_gym.envs.state import ROW_FIELDS
 from steamtemp_gym.rewards import RewardConfig
 
 #: The bit generator of the envs' per-row episode generators (gymnasium.utils.seeding).
 GENERATOR = np.random.PCG64
-#: The per-row arrays of envs/core.py:Core that make a row's state (first axis: the row).
-ROW_ARRAYS = ("X", "Z", "U", "U_prev", "D", "sp", "ep", "ou", "key", "counter", "out", "meas",
-              "obs", "info")  # fmt: skip
+#: The per-row arrays of envs/core.py:Core that make a row's state (first axis: the row;
+#: the schedule-table slot follows the row's scenario).
+ROW_ARRAYS = tuple(name for name in ROW_FIELDS if name != "slot")
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -91,11 +93,14 @@ class Snapshot:
         return len(self.rows)
 
 
-def row_indices(rows: Any, n_rows: int, what: str = "rows") -> np.ndarray:
-    """``rows`` (None: all, an int, or an iterable of ints) as an index array of distinct
-    rows in [0, n_rows); ValueError naming the problem otherwise."""
+def row_indices(rows: Any, n_rows: int, what: str = "rows", distinct: bool = True) -> np.ndarray:
+    """``rows`` (None: all, an int, or an iterable of ints) as an index array of rows in
+    [0, n_rows), distinct unless ``distinct`` is False; ValueError naming the problem
+    otherwise."""
     if rows is None:
         return np.arange(n_rows)
+    if isinstance(rows, np.ndarray) and rows.ndim == 1 and rows.dtype.kind in "iu":
+        rows = rows.tolist()  # Python integers, checked below
     if isinstance(rows, (int, np.integer)) and not isinstance(rows, (bool, np.bool_)):
         rows = [rows]
     if isinstance(rows, (str, bytes)) or not isinstance(rows, (Iterable, np.ndarray)):
@@ -113,7 +118,7 @@ def row_indices(rows: Any, n_rows: int, what: str = "rows") -> np.ndarray:
     if outside:
         raise ValueError(f"{what} {outside[:5]} out of range for {n_rows} row(s)")
     out = np.array(ints, dtype=np.int64)
-    if np.unique(out).size != out.size:
+    if distinct and np.unique(out).size != out.size:
         raise ValueError(f"{what} has duplicates: {out.tolist()[:20]}")
     return out
 
@@ -295,28 +300,65 @@ def own_rows(core: Any) -> bool:
     return isinstance(core, PlantRowsCore)
 
 
+def env_core(env: Any) -> Core:
+    """The batched core of a steamtemp_gym env (SteamTempEnv or the native vector env,
+    wrapped or not), whose rows a planner copies (:func:`copy_rows`) and reads (Core).
+
+    Raises:
+        ValueError: any other env.
+    """
+    u = getattr(env, "unwrapped", env)
+    core = getattr(u, "core", None)
+    if not isinstance(core, Core):
+        raise ValueError("expected a steamtemp_gym env (SteamTempEnv or the native vector "
+                         f"env), got {type(u).__name__}")  # fmt: skip
+    return core
+
+
 def planning_core(src: Any, batch: int) -> Core:
     """A core of ``batch`` rows to plan from rows of ``src`` (:func:`copy_rows`): of its
     plant object and reward weights; where ``src``'s rows simulate plants of their own
-    (plant_randomization), one whose rows take the plants of the rows copied into them."""
+    (plant_randomization), one whose rows take the plants of the rows copied into them.
+
+    Raises:
+        ValueError: ``src`` is not a Core or ``batch`` not a positive integer.
+    """
+    if not isinstance(src, Core):
+        raise ValueError(f"planning_core plans from a Core (env_core(env)), got "
+                         f"{type(src).__name__}")  # fmt: skip
+    if not isinstance(batch, (int, np.integer)) or isinstance(batch, (bool, np.bool_)) or (
+            batch < 1):  # fmt: skip
+        raise ValueError(f"planning_core: batch must be a positive integer, got {batch!r}")
     if own_rows(src):
-        core = PlantRowsCore(src.plant, batch, RewardConfig(), src.ranges, src.base)
+        core = PlantRowsCore(src.plant, int(batch), RewardConfig(), src.ranges, src.base)
     else:
-        core = Core(src.plant, batch, RewardConfig())
+        core = Core(src.plant, int(batch), RewardConfig())
     core.cfg[:] = src.cfg  # the env's own reward weights
     return core
 
 
-def copy_rows(src: Any, src_rows: np.ndarray, dst: Any, dst_rows: np.ndarray) -> None:
+def copy_rows(src: Any, src_rows: Any, dst: Any, dst_rows: Any) -> None:
     """Copy the state of ``src_rows`` of one core into ``dst_rows`` of another, each row
     with its scenario and its plant: a planner's fan-out without a Snapshot in between
-    (the caller owns both cores; make ``dst`` with :func:`planning_core`).
+    (the caller owns both cores; make ``dst`` with :func:`planning_core`). A source row
+    may be copied into several rows.
 
     Raises:
-        ValueError: ``dst`` simulates one plant and a copied row another (a row of a
-            plant_randomization env into a plain Core); nothing is copied.
+        ValueError: nothing is copied if either core is not a Core or the two simulate
+            different plants, the rows are not integer rows of their core (``dst_rows``
+            distinct) of equal numbers, a source row was never reset, or ``dst`` simulates
+            one plant and a copied row another (a row of a plant_randomization env into a
+            plain Core).
     """
-    src_rows, dst_rows = np.asarray(src_rows).tolist(), np.asarray(dst_rows).tolist()
+    _check_copy(src, dst)
+    src_rows = row_indices(src_rows, src.B, "copy_rows: source rows", distinct=False).tolist()
+    dst_rows = row_indices(dst_rows, dst.B, "copy_rows: destination rows").tolist()
+    if len(src_rows) != len(dst_rows):
+        raise ValueError(f"copy_rows: {len(src_rows)} source row(s) into {len(dst_rows)} "
+                         "destination row(s)")  # fmt: skip
+    never = sorted({i for i in src_rows if src.scenario[i] is None})
+    if never:
+        raise ValueError(f"copy_rows: source rows {never[:5]} were never reset")
     drawn, per_row = own_rows(src), own_rows(dst)
     if not per_row:
         copied = map(src.row_plant, set(src_rows)) if drawn else (src.plant,)
@@ -332,3 +374,13 @@ def copy_rows(src: Any, src_rows: np.ndarray, dst: Any, dst_rows: np.ndarray) ->
             plant = src.row_plant(i)
             if dst.plants[b] is not plant:
                 dst.set_plant(b, plant, src.factors[i] if drawn else None)
+
+
+def _check_copy(src: Any, dst: Any) -> None:
+    """Raise ValueError unless ``src`` and ``dst`` are cores of one plant's kind and sizes."""
+    for name, core in (("source", src), ("destination", dst)):
+        if not isinstance(core, Core):
+            raise ValueError(f"copy_rows: the {name} must be a Core, got {type(core).__name__}")
+    if src.plant.id != dst.plant.id or src.X.shape[1:] != dst.X.shape[1:]:
+        raise ValueError(f"copy_rows: rows of {src.plant.id} cannot be copied into a core of "
+                         f"{dst.plant.id}")  # fmt: skip

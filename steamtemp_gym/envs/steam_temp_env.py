@@ -149,8 +149,8 @@ class SteamTempEnv(gym.Env):
         if self._needs_reset:
             raise RuntimeError("call reset() before step() (and after the episode ends)")
         self.core.step(check_action(action, self._shape, single=True))
-        r, code, trunc = self.core.out[0].tolist()
-        terminated, truncated = code > 0.5, trunc > 0.5
+        s = self.core.state
+        r, terminated, truncated = s.reward.item(0), s.trip.item(0) != 0, s.truncated.item(0)
         self._needs_reset = terminated or truncated
         info = self._info()
         if self._display is not None:

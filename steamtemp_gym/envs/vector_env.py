@@ -188,9 +188,9 @@ class SteamTempVectorEnv(VectorEnv):
                 "DISABLED reset them first: reset(options={'reset_mask': mask})"
             )
         self.core.step(check_action(actions, self._shape))
-        rewards = self.core.out[:, 0].copy()
-        terminated = self.core.out[:, 1] > 0.5  # a trip code
-        truncated = self.core.out[:, 2] > 0.5
+        rewards = self.core.reward.copy()
+        terminated = self.core.trip != 0  # a trip code
+        truncated = self.core.truncated.copy()
         if done_before.size:  # NEXT_STEP: the rows that ended last step start afresh
             self._reset_rows(done_before)
             rewards[done_before] = 0.0
