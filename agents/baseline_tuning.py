@@ -238,9 +238,7 @@ def search(
     x0 = np.array([k.to_unit(start[k.name]) for k in ks])
     stored = {_key(r["knobs"]): r for r in replay or ()}
     replayed = 0
-
-    refs = check_metrics(env_id, lambda env: baselines.make(ZERO, env))
-    corner_refs = corner_check_metrics(env_id, lambda env: baselines.make(ZERO, env))[1]
+    confirm = _confirmer(name, env_id, log)
 
     def evaluate_at(u: np.ndarray) -> Evaluation:
         nonlocal replayed
@@ -254,35 +252,15 @@ def search(
         if np.array_equal(u, x0) and stored:
             r = stored.get(_key(values))
             same = r is not None and (r["score"], r["travel_ratio"], r["trips"]) == (
-                res.score,
-                res.travel_ratio,
-                res.trips,
-            )
+                res.score, res.travel_ratio, res.trips)  # fmt: skip
             if not same:
                 stored.clear()
             if log:
                 log(f"{name} {env_id}: replay {'valid' if same else 'refused: start differs'}")
         if log:
-            log(
-                f"{name} {env_id}: score {res.score:.4f} travel x{res.travel_ratio:.2f} "
-                f"trips {res.trips}"
-            )
+            log(f"{name} {env_id}: score {res.score:.4f} travel x{res.travel_ratio:.2f} "
+                f"trips {res.trips}")  # fmt: skip
         return res
-
-    def confirm(u: np.ndarray, res: Evaluation) -> Evaluation:
-        ms = check_metrics(env_id, lambda env: baselines.make(name, env, **res.knobs))
-        breach, ratio = check_breach(ms, refs)
-        if log:
-            log(f"{name} {env_id}: commissioning checks {breach or 'passed'}")
-        res = replace(res, check=breach, check_travel_ratio=ratio)
-        if breach:
-            return res
-        robust, breach = robustness(env_id, lambda env: baselines.make(name, env, **res.knobs),
-                                    corner_refs)  # fmt: skip
-        if log:
-            log(f"{name} {env_id}: robustness: worst corner plant's cost x{robust:.2f} the "
-                f"nominal's{'; ' + breach if breach else ''}")
-        return replace(res, robust_ratio=robust, robust_breach=breach)
 
     # the controller's alternative starts (a robust design), each judged in full; the
     # search begins at the best of them and the defaults
@@ -311,6 +289,30 @@ def search(
                   "robust_ratio": _finite(history[0][1].robust_ratio)},
         "history": [_row(r) for _, r in history],
     }
+
+
+def _confirmer(name: str, env_id: str, log: Any) -> Any:
+    """:func:`compass`'s ``confirm`` for controller ``name`` on ``env_id``: the commissioning
+    checks against the reference's and, once they pass, the robustness check."""
+    refs = check_metrics(env_id, lambda env: baselines.make(ZERO, env))
+    corner_refs = corner_check_metrics(env_id, lambda env: baselines.make(ZERO, env))[1]
+
+    def confirm(u: np.ndarray, res: Evaluation) -> Evaluation:
+        ms = check_metrics(env_id, lambda env: baselines.make(name, env, **res.knobs))
+        breach, ratio = check_breach(ms, refs)
+        if log:
+            log(f"{name} {env_id}: commissioning checks {breach or 'passed'}")
+        res = replace(res, check=breach, check_travel_ratio=ratio)
+        if breach:
+            return res
+        robust, breach = robustness(env_id, lambda env: baselines.make(name, env, **res.knobs),
+                                    corner_refs)  # fmt: skip
+        if log:
+            log(f"{name} {env_id}: robustness: worst corner plant's cost x{robust:.2f} the "
+                f"nominal's{'; ' + breach if breach else ''}")
+        return replace(res, robust_ratio=robust, robust_breach=breach)
+
+    return confirm
 
 
 def _key(knobs: dict[str, float]) -> tuple[tuple[str, float], ...]:

@@ -216,16 +216,15 @@ def record(env_id: str, policy: str, episodes: int, seed: int = 0, *,
             dataset id that exists already; nothing is written then.
     """
     import minari
+    from minari.storage import get_dataset_path
 
     env_id = envs_.resolve_id(env_id)
-    _check_counts(episodes, seed, mixed, noise)
-    spec = specs.parse(policy)
-    if not spec.available(env_id):
-        raise ValueError(f"policy {policy!r} has no agent for {env_id}")
-    scenarios.resolve(eval_scenario, env_id)  # a bad name fails before anything runs
-    if eval_scenario == scenarios.RANDOM:
-        raise ValueError("the evaluation scenario must be a fixed one, not 'random'")
-    did = _new_dataset_id(env_id, name or dataset_name(policy, mixed, noise), version)
+    spec = _check_arguments(env_id, policy, episodes, seed, mixed, noise, eval_scenario)
+    did = dataset_id(env_id, name or dataset_name(policy, mixed, noise), version)
+    minari.dataset.minari_dataset.parse_dataset_id(did)  # Minari's own rules
+    if Path(get_dataset_path(did)).exists():
+        raise ValueError(f"dataset {did} exists already in {get_dataset_path(did)}; delete "
+                         "it (minari delete) or give another --version or --name")  # fmt: skip
     say = log or (lambda msg: None)
     t0 = time.perf_counter()
     lo, hi, taken = reference_scores(env_id, eval_scenario, tuple(eval_seeds))
@@ -238,60 +237,6 @@ def record(env_id: str, policy: str, episodes: int, seed: int = 0, *,
     label = PolicyActionInfo(plant_env) if noise else None
     env = minari.DataCollector(label or plant_env, record_infos=True)
     tau_s = NOISE_FACTOR * sum(horizons.time_scale(env_id)) if noise else None
-    _record_plan(env, plan, env_id, policy, spec, label, noise, tau_s)
-    what = policy + (f" mixed {mixed:g}" if mixed else "") + (f" noise {noise:g}" if noise else "")
-    say(f"{episodes} episodes of {what} on {env_id} random, seeds {seed}-{seed + episodes - 1}: "
-        f"{time.perf_counter() - t1:.1f} s")
-    eval_env = gym.make(env_id, scenario=eval_scenario)
-    description = _description(env_id, policy, episodes, seed, mixed, noise, tau_s,
-                               eval_scenario, eval_seeds)  # fmt: skip
-    with warnings.catch_warnings():  # the one field left out: no e-mail address
-        warnings.filterwarnings("ignore", message="`author_email` is set to None")
-        dataset = env.create_dataset(
-            dataset_id=did, eval_env=eval_env, algorithm_name=policy, author=author,
-            code_permalink=code_permalink or _permalink(), ref_min_score=lo,
-            ref_max_score=hi, num_episodes_average_score=len(eval_seeds),
-            description=description,
-            requirements=[f"steamtemp-gym=={steamtemp_gym.__version__}"],
-        )  # fmt: skip
-    dataset.storage.update_metadata({"steamtemp_episodes": json.dumps(plan)})
-    env.close()
-    return dataset
-
-
-def _check_counts(episodes: Any, seed: Any, mixed: Any, noise: Any) -> None:
-    """ValueError for a bad episode count, seed, mixed fraction or noise."""
-    if isinstance(episodes, bool) or not isinstance(episodes, int) or not (
-            1 <= episodes <= MAX_EPISODES):  # fmt: skip
-        raise ValueError(f"episodes must be an integer in 1..{MAX_EPISODES}, got {episodes!r}")
-    if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
-        raise ValueError(f"seed must be an integer >= 0, got {seed!r}")
-    if mixed is not None and not (isinstance(mixed, float | int) and 0.0 < mixed <= 1.0):
-        raise ValueError(f"mixed must be a fraction in (0, 1], got {mixed!r}")
-    if noise is not None and not (isinstance(noise, float | int) and not isinstance(noise, bool)
-                                  and 0.0 < noise <= MAX_NOISE):  # fmt: skip
-        raise ValueError(f"noise must be a fraction of the stroke in (0, {MAX_NOISE}], got "
-                         f"{noise!r}")  # fmt: skip
-
-
-def _new_dataset_id(env_id: str, name: str, version: int) -> str:
-    """The dataset id, checked by Minari's rules; ValueError if it exists already."""
-    import minari
-    from minari.storage import get_dataset_path
-
-    did = dataset_id(env_id, name, version)
-    minari.dataset.minari_dataset.parse_dataset_id(did)  # Minari's own rules
-    if Path(get_dataset_path(did)).exists():
-        raise ValueError(f"dataset {did} exists already in {get_dataset_path(did)}; delete "
-                         "it (minari delete) or give another --version or --name")  # fmt: skip
-    return did
-
-
-def _record_plan(env: Any, plan: list[dict[str, Any]], env_id: str, policy: str, spec: Any,
-                 label: PolicyActionInfo | None, noise: float | None,
-                 tau_s: float | None) -> None:  # fmt: skip
-    """Run the plan's episodes through the collector ``env``, each by its policy (with the
-    noise if ``label``); adds to each episode of the plan its noise and return."""
     built: dict[str, Any] = {}
     for ep in plan:
         if "knobs" in ep:
@@ -305,14 +250,11 @@ def _record_plan(env: Any, plan: list[dict[str, Any]], env_id: str, policy: str,
             pol.seed(ep["seed"])
             ep["noise"] = {"sigma": noise, "tau_s": tau_s}
         ep["return"] = _episode(env, pol, ep["seed"])
-
-
-def _description(env_id: str, policy: str, episodes: int, seed: int, mixed: float | None,
-                 noise: float | None, tau_s: float | None, eval_scenario: str,
-                 eval_seeds: tuple[int, ...]) -> str:  # fmt: skip
-    """The dataset's description: its episodes, their policy and noise, and its reference
-    scores."""
-    return (
+    what = policy + (f" mixed {mixed:g}" if mixed else "") + (f" noise {noise:g}" if noise else "")
+    say(f"{episodes} episodes of {what} on {env_id} random, seeds {seed}-{seed + episodes - 1}: "
+        f"{time.perf_counter() - t1:.1f} s")
+    eval_env = gym.make(env_id, scenario=eval_scenario)
+    description = (
         f"{episodes} episodes of {policy} on {env_id}, scenario 'random' (the training "
         f"distribution, a fresh draw per episode), seeds {seed}..{seed + episodes - 1}"
         + (f"; each episode with probability {mixed:g} by {DETUNED} at a tuning drawn "
@@ -327,6 +269,42 @@ def _description(env_id: str, policy: str, episodes: int, seed: int, mixed: floa
         "leaderboard's score ends (0 and 1). steamtemp_gym "
         f"{steamtemp_gym.__version__}, python -m agents.datasets."
     )
+    with warnings.catch_warnings():  # the one field left out: no e-mail address
+        warnings.filterwarnings("ignore", message="`author_email` is set to None")
+        dataset = env.create_dataset(
+            dataset_id=did, eval_env=eval_env, algorithm_name=policy, author=author,
+            code_permalink=code_permalink or _permalink(), ref_min_score=lo,
+            ref_max_score=hi, num_episodes_average_score=len(eval_seeds),
+            description=description,
+            requirements=[f"steamtemp-gym=={steamtemp_gym.__version__}"],
+        )  # fmt: skip
+    dataset.storage.update_metadata({"steamtemp_episodes": json.dumps(plan)})
+    env.close()
+    return dataset
+
+
+def _check_arguments(env_id: str, policy: str, episodes: Any, seed: Any, mixed: Any,
+                     noise: Any, eval_scenario: str) -> Any:  # fmt: skip
+    """ValueError for a bad count, seed, fraction, policy or evaluation scenario of
+    :func:`record`; else the policy's spec (agents/specs.py)."""
+    if isinstance(episodes, bool) or not isinstance(episodes, int) or not (
+            1 <= episodes <= MAX_EPISODES):  # fmt: skip
+        raise ValueError(f"episodes must be an integer in 1..{MAX_EPISODES}, got {episodes!r}")
+    if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
+        raise ValueError(f"seed must be an integer >= 0, got {seed!r}")
+    if mixed is not None and not (isinstance(mixed, float | int) and 0.0 < mixed <= 1.0):
+        raise ValueError(f"mixed must be a fraction in (0, 1], got {mixed!r}")
+    if noise is not None and not (isinstance(noise, float | int) and not isinstance(noise, bool)
+                                  and 0.0 < noise <= MAX_NOISE):  # fmt: skip
+        raise ValueError(f"noise must be a fraction of the stroke in (0, {MAX_NOISE}], got "
+                         f"{noise!r}")  # fmt: skip
+    spec = specs.parse(policy)
+    if not spec.available(env_id):
+        raise ValueError(f"policy {policy!r} has no agent for {env_id}")
+    scenarios.resolve(eval_scenario, env_id)  # a bad name fails before anything runs
+    if eval_scenario == scenarios.RANDOM:
+        raise ValueError("the evaluation scenario must be a fixed one, not 'random'")
+    return spec
 
 
 def _episode(env: Any, policy: Any, seed: int) -> float:

@@ -158,65 +158,7 @@ def pareto(path: Path, summary: dict[str, Any]) -> Path:
     with plt.rc_context(RC):
         fig, axes = plt.subplots(rows, cols, figsize=(5.8 * cols, 4.8 * rows), squeeze=False)
         for ax, env_id in zip(axes.flat, plants, strict=False):
-            pols = summary["plants"][env_id]["policies"]
-            pts = _points(pols)
-            ranked = {p: v for p, v in pts.items() if p not in REFERENCES}
-            ok = {p: v for p, v in ranked.items() if pols[p].get("admissible") is not False}
-            front = pareto_front(ok)
-            over = [p for p in pareto_front(ranked) if p not in ok]  # beats the front, † only
-            cis = [pols[p]["normalized_score"]["iqm"]["ci95"] for p in ranked]
-            lo = max(min([PARETO_SCORES[0], *(c[0] for c in cis)]), PARETO_FLOOR) - 0.05
-            hi = max([PARETO_SCORES[1], *(c[1] + 0.05 for c in cis)])
-            far = max([limit * 1.25, *(v[0] for v in pts.values())])
-            right = min(far, limit * 2.0) * 1.06
-            ax.set_xlim(0.0, right)
-            ax.set_ylim(lo, hi)
-            ax.axvspan(limit, right, color="#d62728", alpha=0.06, lw=0)
-            ax.axvline(limit, color="#d62728", lw=1.2, ls="--")
-            ax.text(limit, hi, f" budget {limit:g}x", color="#d62728", ha="left", va="top",
-                    fontsize=8)  # fmt: skip
-            ax.axhline(0, color="k", lw=0.6)
-            ax.axhline(1, color="k", lw=0.6, ls=":")
-            if front:
-                xs = [ok[p][0] for p in front] + [limit]
-                ys = [ok[p][1] for p in front]
-                ax.step(xs, [*ys, ys[-1]], where="post", color="k", lw=1.4, zorder=2,
-                        label="Pareto front of the admissible policies")  # fmt: skip
-            anchors, lines = [], []
-            if front:  # the staircase's corners
-                lines.append([c for k, y in enumerate(ys) for c in ((xs[k], y), (xs[k + 1], y))])
-            for p, (x, y) in pts.items():
-                shown_x, shown_y = min(x, right), min(max(y, lo), hi)
-                ci = pols[p]["normalized_score"]["iqm"]["ci95"]
-                labelled = p in front or p in over or p in REFERENCES or p == ZERO
-                color = colors[p] if labelled else "0.6"
-                hollow = pols[p].get("admissible") is False
-                marker = "*" if p == ONE else "s" if p in (ZERO, *REFERENCES) else "o"
-                edge = x > right or y < lo
-                if edge:
-                    marker = ">" if x > right else "v"
-                ax.errorbar([shown_x], [shown_y],
-                            yerr=None if edge else [[y - max(ci[0], lo)], [min(ci[1], hi) - y]],
-                            fmt=marker, ms=9 if marker == "*" else 6 if labelled else 4,
-                            color=color, mfc="white" if hollow else color, mew=1.2,
-                            elinewidth=0.9, capsize=2, zorder=3 if labelled else 1,
-                            clip_on=False)  # fmt: skip
-                if not edge:
-                    lines.append([(shown_x, max(ci[0], lo)), (shown_x, min(ci[1], hi))])
-                if labelled:
-                    text = short_name(p) + (f" {INADMISSIBLE}" if hollow else "")
-                    if hollow and x > limit and not edge:
-                        text += f" {ratio(x, limit)}"
-                    if edge:
-                        text += f" ({x:.1f}x, {y:.2f})"
-                    anchor = (shown_x, shown_y, text, {"fontsize": 8, "color": _dark(color)})
-                    anchors.insert(0 if edge else len(anchors), anchor)  # fewer places first
-            lines.append([(limit, lo), (limit, hi)])
-            _place_labels(ax, anchors, lines)
-            ax.set_title(short_env(env_id))
-            ax.set_xlabel(f"valve travel over {ZERO}'s [ratio, ×]")
-            ax.set_ylabel(f"IQM normalized score\n(0 = {ZERO}, 1 = {ONE})")
-            ax.grid(alpha=0.3)
+            _pareto_panel(ax, env_id, summary["plants"][env_id]["policies"], colors, limit)
         spare = list(axes.flat)[len(plants) :]
         for ax in spare:
             ax.axis("off")
@@ -230,3 +172,93 @@ def pareto(path: Path, summary: dict[str, Any]) -> Path:
         fig.tight_layout()
         save(fig, path, bbox_inches="tight")
     return path
+
+
+def _pareto_panel(ax: Any, env_id: str, pols: dict[str, Any], colors: dict[str, str],
+                  limit: float) -> None:  # fmt: skip
+    """One plant's panel of :func:`pareto`: its policies ``pols`` (the summary's) against
+    the travel budget ``limit``, the Pareto front joined, the labels placed."""
+    pts = _points(pols)
+    ranked = {p: v for p, v in pts.items() if p not in REFERENCES}
+    ok = {p: v for p, v in ranked.items() if pols[p].get("admissible") is not False}
+    front = pareto_front(ok)
+    over = [p for p in pareto_front(ranked) if p not in ok]  # beats the front, † only
+    cis = [pols[p]["normalized_score"]["iqm"]["ci95"] for p in ranked]
+    lo = max(min([PARETO_SCORES[0], *(c[0] for c in cis)]), PARETO_FLOOR) - 0.05
+    hi = max([PARETO_SCORES[1], *(c[1] + 0.05 for c in cis)])
+    far = max([limit * 1.25, *(v[0] for v in pts.values())])
+    view = (lo, hi, min(far, limit * 2.0) * 1.06)
+    _draw_budget(ax, limit, view)
+    lines = _draw_front(ax, [ok[p] for p in front], limit)
+    anchors = []
+    for p, xy in pts.items():
+        labelled = p in front or p in over or p in REFERENCES or p == ZERO
+        color = colors[p] if labelled else "0.6"
+        _draw_point(ax, p, xy, pols[p], color, labelled, limit, view, anchors, lines)
+    lines.append([(limit, lo), (limit, hi)])
+    _place_labels(ax, anchors, lines)
+    ax.set_title(short_env(env_id))
+    ax.set_xlabel(f"valve travel over {ZERO}'s [ratio, ×]")
+    ax.set_ylabel(f"IQM normalized score\n(0 = {ZERO}, 1 = {ONE})")
+    ax.grid(alpha=0.3)
+
+
+def _draw_budget(ax: Any, limit: float, view: tuple[float, float, float]) -> None:
+    """Set the panel's axes to ``view`` (lowest and highest score, right edge of the travel)
+    and draw the travel budget ``limit`` (the region over it shaded) and the score's 0 and 1."""
+    lo, hi, right = view
+    ax.set_xlim(0.0, right)
+    ax.set_ylim(lo, hi)
+    ax.axvspan(limit, right, color="#d62728", alpha=0.06, lw=0)
+    ax.axvline(limit, color="#d62728", lw=1.2, ls="--")
+    ax.text(limit, hi, f" budget {limit:g}x", color="#d62728", ha="left", va="top",
+            fontsize=8)  # fmt: skip
+    ax.axhline(0, color="k", lw=0.6)
+    ax.axhline(1, color="k", lw=0.6, ls=":")
+
+
+def _draw_front(ax: Any, front: list[tuple[float, float]], limit: float) -> list[Any]:
+    """Draw the Pareto front (its points' (travel ratio, score) in order of travel) as a
+    staircase to the budget ``limit``; its corners as the one polyline the labels avoid
+    (none without a front)."""
+    if not front:
+        return []
+    xs = [x for x, _ in front] + [limit]
+    ys = [y for _, y in front]
+    ax.step(xs, [*ys, ys[-1]], where="post", color="k", lw=1.4, zorder=2,
+            label="Pareto front of the admissible policies")  # fmt: skip
+    return [[c for k, y in enumerate(ys) for c in ((xs[k], y), (xs[k + 1], y))]]
+
+
+def _draw_point(ax: Any, p: str, xy: tuple[float, float], pe: dict[str, Any], color: str,
+                labelled: bool, limit: float, view: tuple[float, float, float],
+                anchors: list[Any], lines: list[Any]) -> None:  # fmt: skip
+    """Draw policy ``p`` at ``xy`` (travel ratio, score) with its 95 % CI (``pe``: its
+    summary entry), hollow where not admissible; a point beyond ``view`` sits at its edge
+    as a triangle. Adds its CI bar to ``lines`` and, if ``labelled``, its label to
+    ``anchors`` (a label at the edge first: it has fewer places)."""
+    lo, hi, right = view
+    x, y = xy
+    shown_x, shown_y = min(x, right), min(max(y, lo), hi)
+    ci = pe["normalized_score"]["iqm"]["ci95"]
+    hollow = pe.get("admissible") is False
+    marker = "*" if p == ONE else "s" if p in (ZERO, *REFERENCES) else "o"
+    edge = x > right or y < lo
+    if edge:
+        marker = ">" if x > right else "v"
+    ax.errorbar([shown_x], [shown_y],
+                yerr=None if edge else [[y - max(ci[0], lo)], [min(ci[1], hi) - y]],
+                fmt=marker, ms=9 if marker == "*" else 6 if labelled else 4,
+                color=color, mfc="white" if hollow else color, mew=1.2,
+                elinewidth=0.9, capsize=2, zorder=3 if labelled else 1,
+                clip_on=False)  # fmt: skip
+    if not edge:
+        lines.append([(shown_x, max(ci[0], lo)), (shown_x, min(ci[1], hi))])
+    if labelled:
+        text = short_name(p) + (f" {INADMISSIBLE}" if hollow else "")
+        if hollow and x > limit and not edge:
+            text += f" {ratio(x, limit)}"
+        if edge:
+            text += f" ({x:.1f}x, {y:.2f})"
+        anchor = (shown_x, shown_y, text, {"fontsize": 8, "color": _dark(color)})
+        anchors.insert(0 if edge else len(anchors), anchor)  # fewer places first
