@@ -23,6 +23,8 @@ from steamtemp_gym.envs.kernels import (
     TRIP_REASONS,
     advance,
     fill_info,
+    info_indices,
+    obs_indices,
     observe,
     ou_coefficients,
     schedules,
@@ -263,8 +265,9 @@ class Core(StateFields):
         plant.step(self.X[r], self.U[r], self.D[r], self.Z[r], dt=0.0)  # outputs of it
         self.U[b] = self.Z[b, self.valve_idx]
         self.U_prev[b] = self.U[b]
-        observe(b, self.state)
-        fill_info(b, self.state, 0.0)  # cost 0: the info of a reset closes no interval
+        observe(b, self.state, *obs_indices(self.state.ints))
+        # cost 0: the info of a reset closes no interval
+        fill_info(b, self.state, *info_indices(self.state.ints), 0.0)
 
     def compile_calls(self) -> list[tuple[Any, tuple]]:
         """(kernel, arguments) of the compiled calls of a reset and a step but the plant's
@@ -277,8 +280,10 @@ class Core(StateFields):
         return [(schedules, (0, s.slot[0], 0.0, s.bp_t, s.bp_v, s.bp_n, self.plant.setpoint_C,
                              s.ou, s.D, s.sp)),
                 (gauss, (np.uint64(0), 0, OU_CHANNEL)),
-                (observe, (0, s)),
-                (fill_info, (0, s, 0.0)),
+                (obs_indices, (s.ints,)),
+                (info_indices, (s.ints,)),
+                (observe, (0, s, *obs_indices(s.ints))),
+                (fill_info, (0, s, *info_indices(s.ints), 0.0)),
                 *[(to_commands, (a, self.U)) for a in actions],
                 (advance, (s,)),
                 (self.plant.kernel(), self.plant.step_args(self.X, self.U, self.D, self.Z))]

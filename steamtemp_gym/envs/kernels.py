@@ -91,18 +91,17 @@ def schedules(b, s, t, bp_t, bp_v, bp_n, sp_nom, ou, D, sp):
 
 
 @njit(cache=True, error_model="numpy")
-def observe(b, s):
+def observe(b, s, obs_idx, i_meas):
     """Write the normalized observation ``s.obs[b]`` of row b of the state ``s`` (noisy
     measurements, setpoint, error, load), its noise of standard deviation
-    ``s.ep[b, E_NOISE]`` (K).
+    ``s.ep[b, E_NOISE]`` (K); ``obs_idx``: the observed outputs, ``i_meas``: the outlet
+    thermocouple's (:func:`obs_indices`).
 
     ``s.meas[b]`` receives what the outlet thermocouple reported (noise included). A
     non-finite value (a plant that left its valid region; the step then trips) is observed
     as 0 (the signal's centre), so no NaN ever reaches an agent.
     """
-    ints, obs, obs_cs, sp = s.ints, s.obs, s.obs_cs, s.sp
-    obs_idx = ints[ints[H.obs] : ints[H.valves]]
-    i_meas, noise = ints[H.measured], s.ep[b, E_NOISE]
+    obs, obs_cs, sp, noise = s.obs, s.obs_cs, s.sp, s.ep[b, E_NOISE]
     n = obs_idx.shape[0]
     meas = 0.0
     for j in range(n):
@@ -144,9 +143,10 @@ def advance(s):
     """
     X, Z, U, U_prev, ep, ints, cfg = s.X, s.Z, s.U, s.U_prev, s.ep, s.ints, s.cfg
     i_out, i_design = ints[H.outlet], ints[H.design_spray]
-    s_idx = ints[ints[H.sprays] : ints[H.secondary]]
+    obs_idx, i_meas = obs_indices(ints)
+    info_idx, s_idx = info_indices(ints)
     sec_idx = ints[ints[H.secondary] : ints[H.info]]
-    n_info = ints[H.end] - ints[H.info]
+    n_info = info_idx.shape[0]
     dt, sp_nom, s_scale = cfg[CFG.dt], cfg[CFG.setpoint], cfg[CFG.spray_scale]
     trip_lo, trip_hi = cfg[CFG.trip_below_K], cfg[CFG.trip_above_K]
     w = cfg[N_CFG : N_CFG + N_WEIGHTS]
@@ -159,10 +159,10 @@ def advance(s):
             ou[b] = ep[b, E_OU_A] * ou[b] + ep[b, E_OU_B] * gauss(s.key[b], counter[b],
                                                                   OU_CHANNEL)  # fmt: skip
         schedules(b, s.slot[b], ep[b, E_TIME], s.bp_t, s.bp_v, s.bp_n, sp_nom, ou, s.D, sp)
-        observe(b, s)
+        observe(b, s, obs_idx, i_meas)
         # the cost of the interval from the last info's error to this step's (envs/cost.py)
         cost = interval_cost(_info_error(b, s.info, n_info), Z[b, i_out] - sp[b])
-        fill_info(b, s, cost)
+        fill_info(b, s, info_idx, s_idx, cost)
         e = sp[b] - Z[b, i_out]
         code = TRIP_ABOVE if e < -trip_hi else (TRIP_BELOW if e > trip_lo else 0)
         if not (_finite(X, b) and _finite(Z, b)):
@@ -189,14 +189,12 @@ def _finite(A, b):
 
 
 @njit(cache=True, error_model="numpy")
-def fill_info(b, s, cost):
-    """Fill ``s.info[b]`` of the state ``s``: row b's outputs of the info columns of
-    ``s.ints``, then (envs/state.py: INFO_TAIL) the measured temperature, time, setpoint,
-    load, the sum of the spray outputs and the interval's ``cost`` twice (the total and its
-    one component, envs/cost.py)."""
-    ints, Z, info, D = s.ints, s.Z, s.info, s.D
-    cols = ints[ints[H.info] : ints[H.end]]
-    sprays = ints[ints[H.sprays] : ints[H.secondary]]
+def fill_info(b, s, cols, sprays, cost):
+    """Fill ``s.info[b]`` of the state ``s``: row b's outputs ``cols``, then (envs/state.py:
+    INFO_TAIL) the measured temperature, time, setpoint, load, the sum of the spray outputs
+    ``sprays`` and the interval's ``cost`` twice (the total and its one component,
+    envs/cost.py); the index arrays of :func:`info_indices`."""
+    Z, info, D = s.Z, s.info, s.D
     k = cols.shape[0]
     for j in range(k):
         info[b, j] = Z[b, cols[j]]
@@ -210,6 +208,18 @@ def fill_info(b, s, cost):
     info[b, k + 4] = spray
     info[b, k + 5] = cost
     info[b, k + 6] = cost
+
+
+@njit(cache=True, error_model="numpy")
+def obs_indices(ints):
+    """(the observed outputs, the outlet thermocouple's output) of the index table ``ints``."""
+    return ints[ints[H.obs] : ints[H.valves]], ints[H.measured]
+
+
+@njit(cache=True, error_model="numpy")
+def info_indices(ints):
+    """(the info columns' outputs, the spray outputs) of the index table ``ints``."""
+    return ints[ints[H.info] : ints[H.end]], ints[ints[H.sprays] : ints[H.secondary]]
 
 
 @njit(cache=True, error_model="numpy")
