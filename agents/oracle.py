@@ -53,6 +53,7 @@ from typing import Any
 import numpy as np
 
 import baselines
+from steamtemp_gym.checks import check_fields, ranged
 from steamtemp_gym.envs.core import Core, check_action
 from steamtemp_gym.envs.snapshot import copy_rows, env_core, planning_core
 
@@ -63,34 +64,27 @@ INCUMBENTS = ("mpc_linear", baselines.INDUSTRIAL_REFERENCE)
 
 @dataclass(frozen=True)
 class Budget:
-    """What one oracle decision may spend (module docstring)."""
+    """What one oracle decision may spend (module docstring): positive durations (s) and
+    spreads, counts of at least one."""
 
-    horizon_s: float = 240.0
+    horizon_s: float = ranged(240.0, 0.0, math.inf, above=True)
     #: after the horizon the rollouts go on this long with the plan's last commands held, and
     #: the rewards there count: a plan must not buy savings at its end (less spray) with a
     #: temperature excursion that only its dead time and lag hide beyond the horizon
-    tail_s: float = 240.0
-    knot_s: float = 30.0
-    replan_s: float = 20.0
+    tail_s: float = ranged(240.0, 0.0, math.inf)
+    knot_s: float = ranged(30.0, 0.0, math.inf, above=True)
+    replan_s: float = ranged(20.0, 0.0, math.inf, above=True)
     #: candidates per replan and iteration for a plant with one or two actuators; the
     #: search space has knots x actuators dimensions, and plants with three or four
     #: actuators get twice as many (``ceil(n_u / 2)`` times)
-    samples: int = 8
-    iterations: int = 4
-    elites: int = 2
-    sigma0: float = 0.05
-    sigma_min: float = 0.005
+    samples: int = ranged(8, 1, math.inf)
+    iterations: int = ranged(4, 1, math.inf)
+    elites: int = ranged(2, 1, math.inf)
+    sigma0: float = ranged(0.05, 0.0, math.inf, above=True)
+    sigma_min: float = ranged(0.005, 0.0, math.inf, above=True)
 
     def __post_init__(self) -> None:
-        for name in ("horizon_s", "tail_s", "knot_s", "replan_s", "sigma0", "sigma_min"):
-            v = getattr(self, name)
-            if not (isinstance(v, (int, float)) and math.isfinite(v) and v >= 0) or (
-                    v == 0 and name != "tail_s"):  # fmt: skip
-                raise ValueError(f"oracle budget {name} must be a positive number, got {v!r}")
-        for name in ("samples", "iterations", "elites"):
-            v = getattr(self, name)
-            if not (isinstance(v, int) and not isinstance(v, bool) and v >= 1):
-                raise ValueError(f"oracle budget {name} must be a positive integer, got {v!r}")
+        check_fields(self, "oracle budget {name}")
         if self.elites > self.samples:
             raise ValueError(f"oracle budget: elites ({self.elites}) > samples ({self.samples})")
         if self.knot_s > self.horizon_s or self.replan_s > self.horizon_s:

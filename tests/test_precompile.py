@@ -39,7 +39,7 @@ def test_a_precompiled_plant_loads_every_step_kernel_from_the_cache(tmp_path):
     out = subprocess.run([sys.executable, "-c", _USE, "steamtemp/Cascade300MW-v0"], env=env,
                          check=True, capture_output=True, text=True)  # fmt: skip
     stats = json.loads(out.stdout.strip().splitlines()[-1])
-    assert len(stats) == 7  # to_commands twice (float32, float64 actions)
+    assert len(stats) == 9  # to_commands twice (float32, float64 actions)
     for name, (hits, misses) in stats.items():
         assert misses == 0 and hits >= 1 + (name == "to_commands"), (name, hits, misses)
     assert "compiling" not in out.stderr
