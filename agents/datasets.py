@@ -366,8 +366,9 @@ def make_parser() -> argparse.ArgumentParser:
     doc = __doc__ or ""
     ap = argparse.ArgumentParser(prog="python -m agents.datasets", description=doc.split("\n")[0],
                                  epilog="docs/offline.md")  # fmt: skip
-    ap.add_argument("--env", default="SupercriticalFSH-v0",
-                    help="the plant's env id, with or without steamtemp/ (default: %(default)s)")
+    ap.add_argument("--env", default=steamtemp_gym.ENV_IDS[0].split("/")[-1],
+                    help="the plant's env id, with or without steamtemp/ (default: the first "
+                    "plant, %(default)s)")
     ap.add_argument("--policy", required=True,
                     help="the policy that acts: " + specs.FORMS)
     ap.add_argument("--episodes", type=_int(1, MAX_EPISODES, "--episodes"), default=20,
