@@ -163,8 +163,10 @@ def source_digest(env_id: str) -> str:
     files are its part of a fingerprint (:meth:`Spec.digest`), so editing one baseline
     reruns its rows only, editing one plant that plant's, a docstring nothing."""
     module = plants.PLANTS[env_id].split(":")[0] if env_id in plants.PLANTS else None
-    if module is None:  # a plant registered from outside the package
-        return f"{code_digest(EVALUATION)}:{provenance.digest(provenance.package_files())}"
+    outside = provenance.outside_plant_files(env_id)
+    if module is None or outside:  # a variant id, or a plant registered from outside
+        files = [*provenance.package_files(), *outside]
+        return f"{code_digest(EVALUATION)}:{provenance.digest(files)}"
     return provenance.digest([*provenance.plant_files(module),
                               *provenance.module_files(EVALUATION, POLICY_PACKAGES)])
 

@@ -37,7 +37,7 @@ import numpy as np
 import scipy
 
 import steamtemp_gym
-from steamtemp_gym import _cache
+from steamtemp_gym import _cache, provenance
 
 #: The packages whose code a commissioning result depends on.
 _ROOTS = (Path(steamtemp_gym.__file__).resolve().parent, Path(__file__).resolve().parent)
@@ -84,6 +84,9 @@ def commissioned(maxsize: int = 16):
             if where is None:
                 return _one_thread(fn, args, kwargs)
             text = name + _key(args) + _key(tuple(sorted(kwargs.items())))
+            # a plant registered from outside the package: its code is in no folder's key
+            outside = [provenance.outside_plant_files(a) for a in args]
+            text += "".join(provenance.digest(files) for files in outside if files)
             path = where / f"{name}-{hashlib.sha256(text.encode()).hexdigest()[:24]}.pkl"
             try:
                 with open(path, "rb") as f:

@@ -26,18 +26,40 @@ except PackageNotFoundError:  # running from a source tree
 CACHE_DIR = _cache.configure(__version__)
 _cache.announce_compiles()
 
-from steamtemp_gym.catalog import PLANTS  # noqa: E402
+from steamtemp_gym import catalog  # noqa: E402
 
-#: Every registered env id, in the order of the reference documents.
-ENV_IDS: tuple[str, ...] = tuple(PLANTS)
+#: Every registered env id: the catalog's plants in the order of the reference documents,
+#: then those added with :func:`register_plant`.
+ENV_IDS: tuple[str, ...] = tuple(catalog.PLANTS)
 
-for _id in ENV_IDS:
-    if _id not in gym.registry:
+
+def _register(plant_id: str) -> None:
+    if plant_id not in gym.registry:
         gym.register(
-            id=_id,
+            id=plant_id,
             entry_point="steamtemp_gym.envs.steam_temp_env:SteamTempEnv",
             vector_entry_point="steamtemp_gym.envs.vector_env:SteamTempVectorEnv",
-            kwargs={"plant_id": _id},
+            kwargs={"plant_id": plant_id},
         )
 
-__all__ = ["ENV_IDS", "__version__"]
+
+def register_plant(plant_id: str, entry: str) -> None:
+    """Add a plant of your own: ``entry`` (``"module:Class"``, a subclass of
+    ``steamtemp_gym.plants.Plant`` whose ``id`` is ``plant_id``) enters the catalog,
+    :data:`ENV_IDS` and Gymnasium's registry, as the package's own plants do. The
+    registry-wide checks then cover it (docs/architecture.md, "Adding a plant").
+
+    Raises:
+        ValueError: an id that is taken or not of the form ``namespace/Name-vN``, an entry
+            that cannot be imported or is no such class; nothing is registered.
+    """
+    global ENV_IDS
+    catalog.add(plant_id, entry)
+    _register(plant_id)
+    ENV_IDS = tuple(catalog.PLANTS)
+
+
+for _id in ENV_IDS:
+    _register(_id)
+
+__all__ = ["ENV_IDS", "__version__", "register_plant"]

