@@ -48,6 +48,12 @@ def add(plant_id: str, entry: str) -> None:
     PLANTS[plant_id] = entry
 
 
+def packaged(plant_id: str) -> bool:
+    """Whether ``plant_id`` is one of this package's own plants (its class in
+    ``steamtemp_gym.plants``), not one added with ``register_plant``."""
+    return PLANTS.get(plant_id, "").startswith("steamtemp_gym.plants.")
+
+
 def plant_class(plant_id: str) -> type[Plant]:
     """The plant class of an env id; ValueError listing the known ids otherwise."""
     try:

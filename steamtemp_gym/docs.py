@@ -247,7 +247,7 @@ def index() -> str:
     from steamtemp_gym import plants
 
     rows = []
-    for env_id in steamtemp_gym.ENV_IDS:
+    for env_id in _packaged(steamtemp_gym.ENV_IDS):
         cls = plants.plant_class(env_id)
         module = importlib.import_module(plants.PLANTS[env_id].split(":")[0])
         rows.append([f"[{env_id}]({page_name(env_id)})", cls.source,
@@ -264,10 +264,18 @@ def index() -> str:
 
 
 def pages() -> dict[str, str]:
-    """File name -> page of every env id of the suite, and the index ``README.md``."""
+    """File name -> page of every env id of the suite, and the index ``README.md`` (the
+    package's own plants: a plant registered from outside has no page here)."""
     import steamtemp_gym
 
-    return {"README.md": index(), **{page_name(i): page(i) for i in steamtemp_gym.ENV_IDS}}
+    return {"README.md": index(),
+            **{page_name(i): page(i) for i in _packaged(steamtemp_gym.ENV_IDS)}}  # fmt: skip
+
+
+def _packaged(ids: tuple[str, ...]) -> list[str]:
+    from steamtemp_gym import catalog
+
+    return [i for i in ids if catalog.packaged(i)]
 
 
 def main(argv: list[str] | None = None) -> int:

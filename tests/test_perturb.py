@@ -107,8 +107,9 @@ def test_groups_ranges_and_variants_are_consistent():
             assert g in perturb.RANGES
             for n in names:
                 assert hints[n] is float, (env_id, n)
-        variants = perturb.mismatch(env_id)
-        assert 3 <= len(variants) <= 4 and list(variants) == list(perturb.variant_factors(env_id))
+        variants = perturb.mismatch(env_id)  # none, or three or four
+        assert len(variants) in (0, 3, 4)
+        assert list(variants) == list(perturb.variant_factors(env_id))
         for v, p in variants.items():
             factors = perturb.variant_factors(env_id)[v]
             assert p == pytest.approx(perturb.scaled(env_id, {}, factors), rel=1e-12), v
