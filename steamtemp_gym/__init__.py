@@ -54,7 +54,9 @@ def register_plant(plant_id: str, entry: str) -> None:
             that cannot be imported or is no such class; nothing is registered.
     """
     global ENV_IDS
-    catalog.add(plant_id, entry)
+    from steamtemp_gym.plants.base import Plant
+
+    catalog.add(plant_id, entry, Plant)
     _register(plant_id)
     ENV_IDS = tuple(catalog.PLANTS)
 

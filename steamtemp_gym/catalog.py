@@ -11,10 +11,6 @@ from __future__ import annotations
 
 import importlib
 import re
-from typing import TYPE_CHECKING
-
-if TYPE_CHECKING:
-    from steamtemp_gym.plants.base import Plant
 
 #: env id -> "module:Class" of its plant.
 PLANTS: dict[str, str] = {
@@ -26,10 +22,11 @@ PLANTS: dict[str, str] = {
 }
 
 
-def add(plant_id: str, entry: str) -> None:
+def add(plant_id: str, entry: str, base: type) -> None:
     """Add ``plant_id`` -> ``entry`` (``"module:Class"``) after checking that the id is new
-    and of the form ``namespace/Name-vN`` and that the class is a Plant of that id;
-    ValueError otherwise, nothing added (``steamtemp_gym.register_plant``)."""
+    and of the form ``namespace/Name-vN`` and that the class is a subclass of ``base`` (the
+    Plant class) of that id; ValueError otherwise, nothing added
+    (``steamtemp_gym.register_plant``)."""
     if not isinstance(plant_id, str) or not re.fullmatch(r"[\w.-]+/[\w.-]+-v\d+", plant_id):
         raise ValueError(f"a plant id is namespace/Name-vN, got {str(plant_id)[:80]!r}")
     if plant_id in PLANTS:
@@ -39,9 +36,7 @@ def add(plant_id: str, entry: str) -> None:
         cls = getattr(importlib.import_module(module), name) if module and name else None
     except (ImportError, AttributeError) as exc:
         raise ValueError(f"plant entry {entry!r}: {exc}") from None
-    from steamtemp_gym.plants.base import Plant
-
-    is_plant = isinstance(cls, type) and issubclass(cls, Plant)
+    is_plant = isinstance(cls, type) and issubclass(cls, base)
     if not is_plant or getattr(cls, "id", None) != plant_id:
         raise ValueError(f"plant entry {str(entry)[:80]!r} must name a subclass of Plant "
                          f"whose id is {plant_id!r}")  # fmt: skip
@@ -54,8 +49,9 @@ def packaged(plant_id: str) -> bool:
     return PLANTS.get(plant_id, "").startswith("steamtemp_gym.plants.")
 
 
-def plant_class(plant_id: str) -> type[Plant]:
-    """The plant class of an env id; ValueError listing the known ids otherwise."""
+def plant_class(plant_id: str) -> type:
+    """The plant class (a subclass of ``steamtemp_gym.plants.Plant``) of an env id;
+    ValueError listing the known ids otherwise."""
     try:
         path = PLANTS[plant_id]
     except (KeyError, TypeError):
