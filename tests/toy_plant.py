@@ -74,9 +74,15 @@ IX = slots("ToyStates", "V", "TCA", "TCO", "LAG")
 
 
 @njit(cache=True)
+def _load(d):
+    """The row's load, within the 20-120 % the toy's schedules cover."""
+    return min(max(d[D_LOAD], 0.2), 1.2)
+
+
+@njit(cache=True)
 def _inputs(v, d, P):
     """(attemperator outlet temperature C, the heat rise K, spray kg/s) at opening v."""
-    load = min(max(d[D_LOAD], 0.2), 1.2)
+    load = _load(d)
     w = v * P[IP.WMAX]
     t_a = P[IP.TIN] - P[IP.COOL] * (w - P[IP.WDES] * load)
     rise = P[IP.RISE] * d[D_FOULING] * (1.0 + d[D_HEAT_BIAS])
@@ -89,7 +95,7 @@ def step(X, U, D, P, jrow, jcol, dt, n_sub, Z):  # noqa: N803
     n = int(P[IP.NL])
     for b in range(X.shape[0]):
         x, d = X[b], D[b]
-        load = min(max(d[D_LOAD], 0.2), 1.2)
+        load = _load(d)
         h = dt / n_sub
         for _ in range(n_sub if dt > 0.0 else 0):
             x[IX.V] += (min(max(U[b, 0], 0.0), 1.0) - x[IX.V]) * (1.0 - math.exp(-h / P[IP.TAUV]))

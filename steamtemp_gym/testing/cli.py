@@ -132,9 +132,12 @@ def _main(argv: Sequence[str] | None) -> int:
                 raise
             parser.error(f"--import {module}: {guard.describe(exc, 'the module')}")
     args.ids = [_env_id(parser, i) for i in args.ids]
-    if "all" in args.policy and policy_sources.find() is None:
-        parser.error("--policy all: no policy source is installed")
-    policies = policy_sources.find().everyday_names() if "all" in args.policy else args.policy
+    policies = args.policy
+    if "all" in policies:
+        source = policy_sources.find()
+        if source is None:
+            parser.error("--policy all: no policy source is installed")
+        policies = source.everyday_names()
     _check_policies(parser, policies, args.ids)
     bad = [c for c in args.check or () if c not in CHECK_NAMES]
     if bad:
