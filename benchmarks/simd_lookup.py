@@ -33,19 +33,9 @@ import numpy as np
 from numba import carray, float64, njit
 
 from steamtemp_gym.steam import T_rho_ph
+from steamtemp_gym.steam import tables as tb
 from steamtemp_gym.steam.cubic import _hermite
 from steamtemp_gym.steam.fast import _fbasis_h, _fval
-from steamtemp_gym.steam.tables import (
-    _FH0,
-    _FHINV,
-    _FNH,
-    _FNP,
-    _FP0,
-    _FPINV,
-    _FR_PTR,
-    _FT_PTR,
-    _FT_SHAPE,
-)
 
 SIG = (float64[::1],) * 5
 
@@ -53,13 +43,13 @@ SIG = (float64[::1],) * 5
 def _batch(P, H, T, dT, R):  # noqa: N803
     """T, dT/dh and rho of every row (P Pa, H J/kg) on the fast table, cells located
     branch-free."""
-    ft = carray(_FT_PTR(), _FT_SHAPE)
-    fr = carray(_FR_PTR(), _FT_SHAPE)
+    ft = carray(tb._FT_PTR(), tb._FT_SHAPE)
+    fr = carray(tb._FR_PTR(), tb._FT_SHAPE)
     for k in range(P.shape[0]):
-        x = min(max((min(P[k] * 1e-6, 35.0) - _FP0) * _FPINV, 0.0), float(_FNP))
-        i = min(int(x), _FNP - 1)
-        y = min(max((H[k] * 1e-3 - _FH0) * _FHINV, 0.0), float(_FNH))
-        j = min(int(y), _FNH - 1)
+        x = min(max((min(P[k] * 1e-6, 35.0) - tb._FP0) * tb._FPINV, 0.0), float(tb._FNP))
+        i = min(int(x), tb._FNP - 1)
+        y = min(max((H[k] * 1e-3 - tb._FH0) * tb._FHINV, 0.0), float(tb._FNH))
+        j = min(int(y), tb._FNH - 1)
         a = _hermite(x - i)
         b, e = _fbasis_h(y - j)
         T[k], dT_kJ = _fval(ft, i, j, a, b, e)

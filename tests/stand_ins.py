@@ -31,3 +31,17 @@ def ppo_yaml(tmp_path, env_id: str, n_steps: int, **extra):
     path = tmp_path / "ppo.yml"
     path.write_text(yaml.safe_dump({env_id: hp}))
     return path
+
+
+def refused_entry(tmp_path, env_id: str, algo: str, entry: dict, match: str) -> None:
+    """Assert that reading the RL-Zoo entry ``{"policy": "MlpPolicy", **entry}`` of
+    ``env_id`` for ``algo`` raises a ConfigError matching ``match``."""
+    import pytest
+    import yaml
+
+    from agents import train_config
+
+    path = tmp_path / "refused.yml"
+    path.write_text(yaml.safe_dump({env_id: {"policy": "MlpPolicy", **entry}}))
+    with pytest.raises(train_config.ConfigError, match=match):
+        train_config.read_hyperparams(path, env_id, algo)

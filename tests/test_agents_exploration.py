@@ -7,6 +7,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import yaml
+from stand_ins import refused_entry
 
 from agents import horizons, train_config, training
 from agents.exploration import LowPassActionNoise
@@ -63,10 +64,7 @@ def test_plant_sets_the_time_constant_to_the_time_scale():
     ({"noise_type": "lowpass", "noise_tau_s": True}, "positive"),
 ])  # fmt: skip
 def test_bad_noise_settings_are_config_errors(tmp_path, entry, match):
-    path = tmp_path / "td3.yml"
-    path.write_text(yaml.safe_dump({ENV_ID: {"policy": "MlpPolicy", **entry}}))
-    with pytest.raises(train_config.ConfigError, match=match):
-        train_config.read_hyperparams(path, ENV_ID, "td3")
+    refused_entry(tmp_path, ENV_ID, "td3", entry, match)
 
 
 def test_td3_explores_with_the_low_pass_noise_per_decision(tmp_path):

@@ -8,6 +8,7 @@ import gymnasium as gym
 import numpy as np
 import pytest
 import yaml
+from stand_ins import refused_entry
 
 import steamtemp_gym
 from agents import horizons, train_config, training
@@ -161,10 +162,7 @@ def test_price_rises_over_the_target_and_falls_under_it_within_bounds():
 
 @pytest.mark.parametrize("bad", [0.0, -1.0, PRICE_MAX * 2, "0.1", True, float("nan")])
 def test_bad_travel_price_is_a_config_error(tmp_path, bad):
-    path = tmp_path / "ppo.yml"
-    path.write_text(yaml.safe_dump({ENV_ID: {"policy": "MlpPolicy", "travel_price": bad}}))
-    with pytest.raises(train_config.ConfigError, match="travel_price"):
-        train_config.read_hyperparams(path, ENV_ID, "ppo")
+    refused_entry(tmp_path, ENV_ID, "ppo", {"travel_price": bad}, "travel_price")
     with pytest.raises(ValueError, match="travel price must be in"):
         _priced(bad if isinstance(bad, float) else -1.0)
 

@@ -7,7 +7,7 @@ import gymnasium as gym
 import numpy as np
 import pytest
 import torch
-import yaml
+from stand_ins import refused_entry
 
 import baselines
 from agents import imitation, train_config
@@ -100,17 +100,11 @@ def test_the_move_term_pulls_the_learners_moves_to_the_experts():
     ({"fit_epochs": 2.5}, "fit_epochs"), ({"max_move": 0.05}, "positions"),
 ])  # fmt: skip
 def test_bad_imitation_entries_are_config_errors(tmp_path, extra, match):
-    f = tmp_path / "im.yml"
-    f.write_text(yaml.safe_dump({ENV_ID: {"policy": "MlpPolicy", **extra}}))
-    with pytest.raises(train_config.ConfigError, match=match):
-        train_config.read_hyperparams(f, ENV_ID, "ppo_imitation_mpc")
+    refused_entry(tmp_path, ENV_ID, "ppo_imitation_mpc", extra, match)
 
 
 def test_imitation_keys_are_refused_for_another_algo(tmp_path):
-    f = tmp_path / "ppo.yml"
-    f.write_text(yaml.safe_dump({ENV_ID: {"policy": "MlpPolicy", "dagger_iterations": 3}}))
-    with pytest.raises(train_config.ConfigError, match="only for an imitation algo"):
-        train_config.read_hyperparams(f, ENV_ID, "ppo")
+    refused_entry(tmp_path, ENV_ID, "ppo", {"dagger_iterations": 3}, "only for an imitation algo")
 
 
 @pytest.mark.parametrize(("algo", "extra", "match"), [
@@ -122,10 +116,7 @@ def test_imitation_keys_are_refused_for_another_algo(tmp_path):
     ("ppo_imitation_mpc_rl", {"dagger_minutes": "x"}, "dagger_minutes"),
 ])  # fmt: skip
 def test_bad_fine_tuning_entries_are_config_errors(tmp_path, algo, extra, match):
-    f = tmp_path / "im.yml"
-    f.write_text(yaml.safe_dump({ENV_ID: {"policy": "MlpPolicy", **extra}}))
-    with pytest.raises(train_config.ConfigError, match=match):
-        train_config.read_hyperparams(f, ENV_ID, algo)
+    refused_entry(tmp_path, ENV_ID, algo, extra, match)
 
 
 def test_fine_tuning_keeps_the_frozen_standardization_and_moves_the_reward_scale():

@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 import torch
 import yaml
+from stand_ins import refused_entry
 
 import baselines
 from agents import horizons, train_config, training
@@ -154,15 +155,12 @@ def test_residual_entries_take_their_base_from_the_algo_and_plant_settings_from_
                 assert hp["gamma"] == round(horizons.discount(env_id), 5)
                 assert hp["gae_lambda"] == round(horizons.gae_lambda(env_id), 5)
                 assert hp["env_wrapper"]["history_stride"] == horizons.history_stride(env_id, 8)
-    f = tmp_path / "bad.yml"
-    entry = {"residual_scale": 0.2, "policy": "MlpPolicy"}
+    entry = {"residual_scale": 0.2}
     for hp, match in (({**entry, "residual_base": "mpc_linear"}, "set by the algo"),
-                      ({"policy": "MlpPolicy"}, "residual_scale is required"),
+                      ({}, "residual_scale is required"),
                       ({**entry, "residual_scale": 5.0}, "residual_scale must be"),
                       ({**entry, "gamma": "plnt"}, "gamma")):  # fmt: skip
-        f.write_text(yaml.safe_dump({ENV_ID: hp}))
-        with pytest.raises(train_config.ConfigError, match=match):
-            train_config.read_hyperparams(f, ENV_ID, "ppo_residual_mpc")
+        refused_entry(tmp_path, ENV_ID, "ppo_residual_mpc", hp, match)
 
 
 def test_the_actor_holds_still_while_the_critic_warms_up():
@@ -190,7 +188,4 @@ def test_the_actor_holds_still_while_the_critic_warms_up():
     (100, "sac", "critic_warmup_steps is for PPO"),
 ])  # fmt: skip
 def test_bad_critic_warmups_are_refused(tmp_path, value, algo, match):
-    f = tmp_path / "w.yml"
-    f.write_text(yaml.safe_dump({ENV_ID: {"policy": "MlpPolicy", "critic_warmup_steps": value}}))
-    with pytest.raises(train_config.ConfigError, match=match):
-        train_config.read_hyperparams(f, ENV_ID, algo)
+    refused_entry(tmp_path, ENV_ID, algo, {"critic_warmup_steps": value}, match)

@@ -23,6 +23,7 @@ from scipy.optimize import least_squares
 from steamtemp_gym import scenarios
 from steamtemp_gym.envs.kernels import schedules
 from steamtemp_gym.plants import benson_subcritical as bs
+from steamtemp_gym.plants.benson_subcritical.layout import ITB
 from steamtemp_gym.plants.valve import valve_travel
 from steamtemp_gym.steam import cp_pT
 
@@ -332,7 +333,7 @@ def test_design_spray_and_the_schedule_error():
     print(f"\n50 %: design spray {Z[0, bs.IZ.design_spray_kg_s]:.2f} kg/s, steady {w:.2f} kg/s")
     design = Z[0, bs.IZ.design_spray_kg_s]
     assert abs(w - design) > 0.1 * design  # the documented mismatch
-    assert bs.h_ev_setpoint(PLANT.P, 0.5) - bs._table(PLANT.P, bs.ITB.HEV, 0.5) == pytest.approx(
+    assert bs.h_ev_setpoint(PLANT.P, 0.5) - bs._table(PLANT.P, ITB.HEV, 0.5) == pytest.approx(
         PLANT.params.fwr_schedule_error_kJ_kg * 1e3
     )
     # a design-spray plant (no schedule error) holds the setpoint with design openings

@@ -13,6 +13,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import yaml
+from stand_ins import refused_entry
 
 import agents
 from agents import files, specs, stats, train, train_config, train_runs, training
@@ -336,7 +337,4 @@ def test_an_entrys_max_minutes_bounds_its_runs_where_the_command_does_not(tmp_pa
 
 @pytest.mark.parametrize("bad", [0, -1, 21, "ten", True])
 def test_bad_max_minutes_in_an_entry_is_refused(tmp_path, bad):
-    yml = tmp_path / "ppo.yml"
-    yml.write_text(yaml.safe_dump({ENV: {**TINY_PPO[ENV], "max_minutes": bad}}))
-    with pytest.raises(train_config.ConfigError, match="max_minutes"):
-        train_config.read_hyperparams(yml, ENV, "ppo")
+    refused_entry(tmp_path, ENV, "ppo", {**TINY_PPO[ENV], "max_minutes": bad}, "max_minutes")

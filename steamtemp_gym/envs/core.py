@@ -294,7 +294,8 @@ class Core(StateFields):
         Raises:
             ValueError: A holds NaN or infinite values (nothing is changed).
         """
-        if not to_commands(A, self.U):
+        s = self.state  # its fields read directly: a property per field costs 25 ns
+        if not to_commands(A, s.U):
             raise non_finite_action(A)
         # the compiled entry points directly, with arguments built once (saves 1.3 us of a
         # 10 us step at B=1, and numba's type dispatch 0.6 us more), unless the plant's class
@@ -304,14 +305,14 @@ class Core(StateFields):
         if entries is None:
             entries = self._entries = self._entry_points()
         if self.B >= MIN_SPLIT_ROWS:  # blocks of rows on several threads
-            self.plant.step(self.X, self.U, self.D, self.Z)
-            run_rows(self._advance_rows, self.state, per_row=ROW_POSITIONS)
+            self.plant.step(s.X, s.U, s.D, s.Z)
+            run_rows(self._advance_rows, s, per_row=ROW_POSITIONS)
         elif entries[0] is None:
-            self.plant.step(self.X, self.U, self.D, self.Z)
-            entries[1](self.state)
+            self.plant.step(s.X, s.U, s.D, s.Z)
+            entries[1](s)
         else:
             entries[0](*self._plant_args)
-            entries[1](self.state)
+            entries[1](s)
 
     def _advance_rows(self, *fields: np.ndarray) -> None:
         """``advance`` on the state of the fields of an EnvState (of a block of rows)."""
@@ -339,20 +340,22 @@ class Core(StateFields):
         the observation), ``measured_temp_noise_free_C`` the thermocouple's own temperature
         (its lag, without the noise); ``trip_reason`` is "" or one of :data:`TRIP_REASONS`.
         """
-        info = self._make_info(self.info[b].tolist())
-        info["trip_reason"] = TRIP_REASONS[self.trip[b]]
+        s = self.state
+        info = self._make_info(s.info[b].tolist())
+        info["trip_reason"] = TRIP_REASONS[s.trip.item(b)]
         if self._valves is not None:
-            info["spray_valve"] = self.Z[b, self._valves].copy()
+            info["spray_valve"] = s.Z[b, self._valves].copy()
         return info
 
     def info_columns(self) -> dict[str, np.ndarray]:
         """Physical values of every row, in engineering units (arrays of shape (B,) or (B, k))."""
-        info = self._make_info(self.info.T.copy())  # views of one fresh array
-        codes = self.trip
+        s = self.state
+        info = self._make_info(s.info.T.copy())  # views of one fresh array
+        codes = s.trip
         info["trip_reason"] = (_TRIP_NAMES[codes] if np.count_nonzero(codes)
                                else self._no_trips.copy())  # fmt: skip
         if self._valves is not None:
-            info["spray_valve"] = self.Z[:, self._valves].copy()
+            info["spray_valve"] = s.Z[:, self._valves].copy()
         return info
 
 
@@ -385,9 +388,15 @@ def non_finite_action(A: np.ndarray) -> ValueError:
 
 
 def dict_maker(keys: list[str]) -> Any:
-    """The function ``v -> {keys[0]: v[0], keys[1]: v[1], ...}`` (the info dict of a step)."""
-    keys = tuple(keys)
-    return lambda v: dict(zip(keys, v, strict=False))  # v holds one value per key
+    """The function ``v -> {keys[0]: v[0], keys[1]: v[1], ...}`` (the info dict of a step).
+
+    It is a dict display with the keys as constants, which Python builds in one instruction:
+    half the time of ``dict(zip(keys, v))`` for the 14-20 values of an info (0.3 us a step).
+    """
+    if not all(isinstance(k, str) for k in keys):
+        raise ValueError(f"info keys must be strings, got {keys!r}")
+    items = ", ".join(f"{k!r}: v[{i}]" for i, k in enumerate(keys))
+    return eval(f"lambda v: {{{items}}}")  # noqa: S307 - a display of repr()'d strings
 
 
 def check_action(action: Any, shape: tuple[int, ...], single: bool = False) -> np.ndarray:

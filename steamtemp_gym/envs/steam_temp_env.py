@@ -155,7 +155,7 @@ class SteamTempEnv(gym.Env):
         info = self._info()
         if self._display is not None:
             self._display.add(info)
-        return self.core.obs[0].copy(), r, terminated, truncated, info
+        return s.obs[0].copy(), r, terminated, truncated, info
 
     def _info(self) -> dict[str, Any]:
         return self.core.info_row(0)

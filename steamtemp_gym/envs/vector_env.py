@@ -188,9 +188,10 @@ class SteamTempVectorEnv(VectorEnv):
                 "DISABLED reset them first: reset(options={'reset_mask': mask})"
             )
         self.core.step(check_action(actions, self._shape))
-        rewards = self.core.reward.copy()
-        terminated = self.core.trip != 0  # a trip code
-        truncated = self.core.truncated.copy()
+        s = self.core.state
+        rewards = s.reward.copy()
+        terminated = s.trip != 0  # a trip code
+        truncated = s.truncated.copy()
         if done_before.size:  # NEXT_STEP: the rows that ended last step start afresh
             self._reset_rows(done_before)
             rewards[done_before] = 0.0
@@ -206,7 +207,7 @@ class SteamTempVectorEnv(VectorEnv):
         info = self._info()
         if final is not None:
             info.update(final)
-        return self.core.obs.copy(), rewards, terminated, truncated, info
+        return s.obs.copy(), rewards, terminated, truncated, info
 
     def _final(self, done: np.ndarray) -> dict[str, Any]:
         """``final_obs`` and ``final_info`` (with masks) of the rows that just ended."""

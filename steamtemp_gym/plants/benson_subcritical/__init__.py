@@ -158,17 +158,7 @@ from steamtemp_gym.plants.benson_subcritical.kernel import (
     rhs,
     step,
 )
-from steamtemp_gym.plants.benson_subcritical.layout import (
-    IF,
-    IP,
-    ISEN,
-    ITB,
-    IX,
-    IZ,
-    N_TAB,
-    NF,
-    OUTPUTS,
-)
+from steamtemp_gym.plants.benson_subcritical.layout import IP, IX, IZ, OUTPUTS
 from steamtemp_gym.plants.benson_subcritical.params import P_SHARE, SEC, SECTIONS, BensonParams
 from steamtemp_gym.plants.benson_subcritical.plant import BensonSubcritical
 from steamtemp_gym.plants.benson_subcritical.steady_state import (
@@ -184,6 +174,7 @@ __all__ = [
     "rhs", "derivatives", "outputs", "project", "step", "steady", "firing", "fuel_demand",
     "p_setpoint", "h_ev_setpoint", "cold_reheat", "design_spray", "section_enthalpies",
     "section_temperatures", "_pack", "_reheat", "_table",
-    # the layout: outputs and the named slots of P, x, z, section blocks, tables, thermowells
-    "OUTPUTS", "IP", "IX", "IZ", "IF", "ITB", "ISEN", "NF", "N_TAB",
+    # the layout: outputs and the named slots of P, x and z (the section blocks, tables and
+    # thermowells in the layout module)
+    "OUTPUTS", "IP", "IX", "IZ",
 ]  # fmt: skip
