@@ -57,12 +57,11 @@ What is taken and how it is generalized:
   saturated to [0, 1]; anti-windup by conditional integration (z frozen while a MAIN
   valve is at a limit and the error would push it further).
 - Actuators: the LQI moves the actuators whose loop is on the main-steam error
-  (``control_loops`` outer == MAIN: the only spray of DrumBoilerSH, SupercriticalFSH
-  and Cascade300MW; the last-stage sprays of Benson and MIMO). The other actuators
-  (SCHEDULED first-stage sprays, the MIMO reheat damper) keep cascade_pi's loops, whose
-  applied commands enter the estimator as known inputs. On DrumBoilerSH the drum loops
-  (pressure on firing, level on feedwater) are part of the plant and of its
-  linearization.
+  (``control_loops`` outer == MAIN: a plant's only spray, or its last-stage spray where
+  it has two stages). The other actuators (SCHEDULED first-stage sprays, a reheat
+  damper) keep cascade_pi's loops, whose applied commands enter the estimator as known
+  inputs. A plant's own loops (a drum's pressure on firing and level on feedwater) are
+  part of the plant and of its linearization.
 
 Knobs (``KNOBS``; constructor keywords, None = default): du_max, e_max_K, ti_factor,
 heat_walk. The thesis's weights (eq. 37) lost their digits and belong to its drum
@@ -70,13 +69,10 @@ outputs, so the defaults are the benchmark's common tuning (agents/baseline_tuni
 stored in baselines/tuned/lqi.json), started from these commissioning values (:func:`start`):
 du_max = 0.1 of the stroke, e_max_K = 1 K,
 ti_factor = 1, heat_walk = 1.6e-3 (the named scenarios' coloured heat-absorption
-disturbance, std 0.02 and 300 s, as a random walk). Per plant (declared on the plant class,
-``commissioning["lqi"]``), chosen by hand so that the valve travel stays within 3x
-cascade_pi_ff's on the named and held-out
-scenarios (3 seeds): e_max_K = 3 K on SupercriticalFSH (1 K: up to 5.6x), 4 K on
-DrumBoilerSH (1 K: up to 7.7x, 3 K: 3.3x), 2 K on Cascade300MW (1 K: 3.7x);
-ti_factor = 0.5 on BensonSubcritical (at 1 the quiet stretch after load_ramp_100_50 swings
-2.46 K against its bound of 2.4 K).
+disturbance, std 0.02 and 300 s, as a random walk). A plant may declare other starting
+values (``commissioning["lqi"]`` on its class, each with the measurement that chose it),
+chosen by hand so that the valve travel stays within 3x cascade_pi_ff's on the named and
+held-out scenarios (3 seeds) and the quiet stretch after a ramp passes its check.
 
 Measured. Linearization (tests/test_linearize.py): the linear model's response to a
 1 % valve step matches the env's over 60 steps within 0.3 % of the peak on every observed

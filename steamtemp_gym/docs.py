@@ -246,8 +246,8 @@ def index() -> str:
     import steamtemp_gym
     from steamtemp_gym import plants
 
-    rows = []
-    for env_id in _packaged(steamtemp_gym.ENV_IDS):
+    rows, ids = [], list(_packaged(steamtemp_gym.ENV_IDS))
+    for env_id in ids:
         cls = plants.plant_class(env_id)
         module = importlib.import_module(plants.PLANTS[env_id].split(":")[0])
         rows.append([f"[{env_id}]({page_name(env_id)})", cls.source,
@@ -256,10 +256,10 @@ def index() -> str:
     out = ["# Environments", "", _HEADER, "",
            "One page per env id: its observation and action signals with units and scaling, "
            "its info keys, the scenarios it takes and its parameters with their sources.", "",
-           "`import steamtemp_gym` registers the ids; `gym.make(\"steamtemp_gym:steamtemp/"
-           "Cascade300MW-v0\")` (Gymnasium's `module:id` form) imports it first, for code "
-           "and tools that take only an id string (`gym.make_vec` takes the same form; RL "
-           "Zoo's `--gym-packages steamtemp_gym` does the import instead).", ""]
+           f"`import steamtemp_gym` registers the ids; `gym.make(\"steamtemp_gym:{ids[0]}\")` "
+           "(Gymnasium's `module:id` form) imports it first, for code and tools that take "
+           "only an id string (`gym.make_vec` takes the same form; RL Zoo's `--gym-packages "
+           "steamtemp_gym` does the import instead).", ""]
     return "\n".join(out + _table(["id", "after", "actions", "plant"], rows)) + "\n"
 
 

@@ -31,6 +31,53 @@ def _imports(path: Path) -> list[tuple[int, str]]:
     return out
 
 
+def _docstrings(tree: ast.AST) -> set[int]:
+    return {id(body[0].value) for node in ast.walk(tree)
+            if isinstance(body := getattr(node, "body", None), list) and body
+            and isinstance(body[0], ast.Expr) and isinstance(body[0].value, ast.Constant)}  # fmt: skip
+
+
+def _code_words(tree: ast.AST) -> list[tuple[int, str]]:
+    """(line, text) of every name, attribute, imported module and string constant but the
+    docstrings of a module's syntax tree."""
+    docs, out = _docstrings(tree), []
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Name):
+            out.append((node.lineno, node.id))
+        elif isinstance(node, ast.Attribute):
+            out.append((node.lineno, node.attr))
+        elif isinstance(node, ast.Import | ast.ImportFrom):
+            out += [(node.lineno, a.name) for a in node.names]
+            out += [(node.lineno, node.module)] if getattr(node, "module", None) else []
+        elif isinstance(node, ast.Constant) and isinstance(node.value, str) and (
+                id(node) not in docs):  # fmt: skip
+            out.append((node.lineno, node.value))
+    return out
+
+
+def test_no_code_outside_a_plants_package_names_a_plant():
+    """A plant's facts are declared in its package: outside it, only the catalog's lines
+    name a plant (docstrings, which cite the papers' plants and give examples, aside)."""
+    from steamtemp_gym.catalog import PLANTS, packaged
+
+    ids = [env_id for env_id in PLANTS if packaged(env_id)]
+    own = {PLANTS[i].split(":")[0].split(".")[2] for i in ids}  # the plants' packages
+    # their classes and ids (the ids' names are the classes')
+    names = own | {PLANTS[i].split(":")[1] for i in ids} | {i.split("/")[1][:-3] for i in ids}
+    assert len(names) == 2 * len(ids) >= 10, names
+    bad = []
+    for package in sorted(ALLOWED):
+        for f in sorted((ROOT / package).rglob("*.py")):
+            rel = f.relative_to(ROOT)
+            if rel.as_posix() == "steamtemp_gym/catalog.py" or (
+                    rel.parts[:2] == ("steamtemp_gym", "plants")
+                    and (rel.parts[2] if len(rel.parts) > 3 else f.stem) in own):  # fmt: skip
+                continue
+            bad += [f"{rel}:{line} {text[:60]!r}" for line, text in _code_words(ast.parse(f.read_bytes()))
+                    if any(name in text for name in names)]  # fmt: skip
+    assert not bad, bad
+
+
 @pytest.mark.parametrize("package", sorted(ALLOWED))
 def test_a_package_imports_only_the_packages_below_it(package):
     own = set(ALLOWED) - {package} - ALLOWED[package]

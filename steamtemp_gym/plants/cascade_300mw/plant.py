@@ -45,6 +45,7 @@ class Cascade300MW(Plant):
     }
     commissioning = {
         "mpc_linear": {"move_weight": 0.001},
+        # LQI's valve travel 3.7x cascade_pi_ff's at its default e_max_K = 1 K, within 3x at 2
         "lqi": {"e_max_K": 2.0},
         # the paper's omega and omega_2, and its secondary P controller G_C2 = 8 %/K
         "neuro_pid": {"disturbance_signals": ("omega_K", "omega2_kg_s"),

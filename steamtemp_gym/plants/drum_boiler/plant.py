@@ -30,6 +30,8 @@ class DrumBoilerSH(Plant):
     mismatch_variants = BOILER_VARIANTS
     commissioning = {
         "mpc_linear": {"move_weight": 0.01},
+        # LQI's valve travel up to 7.7x cascade_pi_ff's at its default e_max_K = 1 K, 3.3x at
+        # 3 K, within 3x at 4 K (named and held-out scenarios, 3 seeds)
         "lqi": {"e_max_K": 4.0},
         "neuro_pid": {"disturbance_signals": ("firing_minus_load", "attemp_in_temp_C")},
     }
