@@ -91,31 +91,30 @@ def schedules(b, s, t, bp_t, bp_v, bp_n, sp_nom, ou, D, sp):
 
 
 @njit(cache=True, error_model="numpy")
-def observe(b, Z, D, sp, ep, key, counter, obs_cs, obs_idx, i_meas, obs, meas):
-    """Write the normalized observation ``obs[b]`` of row b (noisy measurements, setpoint,
-    error, load) from the state's arrays (envs/state.py: EnvState), its noise of standard
-    deviation ``ep[b, E_NOISE]`` (K); ``obs_idx``: the observed outputs, ``i_meas``: the
-    outlet thermocouple's (:func:`obs_indices`). It takes only the arrays it reads and
-    writes: each array of a compiled function's signature costs compile time.
+def observe(b, s, obs_idx, i_meas):
+    """Write the normalized observation ``s.obs[b]`` of row b of the state ``s`` (noisy
+    measurements, setpoint, error, load), its noise of standard deviation
+    ``s.ep[b, E_NOISE]`` (K); ``obs_idx``: the observed outputs, ``i_meas``: the outlet
+    thermocouple's (:func:`obs_indices`).
 
-    ``meas[b]`` receives what the outlet thermocouple reported (noise included). A
+    ``s.meas[b]`` receives what the outlet thermocouple reported (noise included). A
     non-finite value (a plant that left its valid region; the step then trips) is observed
     as 0 (the signal's centre), so no NaN ever reaches an agent.
     """
-    noise = ep[b, E_NOISE]
+    obs, obs_cs, sp, noise = s.obs, s.obs_cs, s.sp, s.ep[b, E_NOISE]
     n = obs_idx.shape[0]
-    v_meas = 0.0
+    meas = 0.0
     for j in range(n):
-        v = Z[b, obs_idx[j]]
+        v = s.Z[b, obs_idx[j]]
         if obs_cs[j, 2] > 0.0 and noise > 0.0:
-            v += noise * gauss(key[b], counter[b], j)
+            v += noise * gauss(s.key[b], s.counter[b], j)
         if obs_idx[j] == i_meas:
-            v_meas = v
+            meas = v
         obs[b, j] = _normalized(v, obs_cs[j, 0], obs_cs[j, 1])
-    meas[b] = v_meas
+    s.meas[b] = meas
     obs[b, n] = _normalized(sp[b], obs_cs[n, 0], obs_cs[n, 1])
-    obs[b, n + 1] = _normalized(sp[b] - v_meas, 0.0, T0_K)
-    obs[b, n + 2] = _normalized(D[b, D_LOAD], 0.75, 0.25)
+    obs[b, n + 1] = _normalized(sp[b] - meas, 0.0, T0_K)
+    obs[b, n + 2] = _normalized(s.D[b, D_LOAD], 0.75, 0.25)
 
 
 @njit(cache=True, error_model="numpy")
@@ -160,10 +159,10 @@ def advance(s):
             ou[b] = ep[b, E_OU_A] * ou[b] + ep[b, E_OU_B] * gauss(s.key[b], counter[b],
                                                                   OU_CHANNEL)  # fmt: skip
         schedules(b, s.slot[b], ep[b, E_TIME], s.bp_t, s.bp_v, s.bp_n, sp_nom, ou, s.D, sp)
-        observe(b, Z, s.D, sp, ep, s.key, counter, s.obs_cs, obs_idx, i_meas, s.obs, s.meas)
+        observe(b, s, obs_idx, i_meas)
         # the cost of the interval from the last info's error to this step's (envs/cost.py)
         cost = interval_cost(_info_error(b, s.info, n_info), Z[b, i_out] - sp[b])
-        fill_info(b, Z, s.D, sp, ep, s.meas, info_idx, s_idx, cost, s.info)
+        fill_info(b, s, info_idx, s_idx, cost)
         e = sp[b] - Z[b, i_out]
         code = TRIP_ABOVE if e < -trip_hi else (TRIP_BELOW if e > trip_lo else 0)
         if not (_finite(X, b) and _finite(Z, b)):
@@ -190,17 +189,18 @@ def _finite(A, b):
 
 
 @njit(cache=True, error_model="numpy")
-def fill_info(b, Z, D, sp, ep, meas, cols, sprays, cost, info):
-    """Fill ``info[b]`` from the state's arrays: row b's outputs ``cols``, then
-    (envs/state.py: INFO_TAIL) the measured temperature, time, setpoint, load, the sum of
-    the spray outputs ``sprays`` and the interval's ``cost`` twice (the total and its one
-    component, envs/cost.py); the index arrays of :func:`info_indices`."""
+def fill_info(b, s, cols, sprays, cost):
+    """Fill ``s.info[b]`` of the state ``s``: row b's outputs ``cols``, then (envs/state.py:
+    INFO_TAIL) the measured temperature, time, setpoint, load, the sum of the spray outputs
+    ``sprays`` and the interval's ``cost`` twice (the total and its one component,
+    envs/cost.py); the index arrays of :func:`info_indices`."""
+    Z, info, D = s.Z, s.info, s.D
     k = cols.shape[0]
     for j in range(k):
         info[b, j] = Z[b, cols[j]]
-    info[b, k] = meas[b]
-    info[b, k + 1] = ep[b, E_TIME]
-    info[b, k + 2] = sp[b]
+    info[b, k] = s.meas[b]
+    info[b, k + 1] = s.ep[b, E_TIME]
+    info[b, k + 2] = s.sp[b]
     info[b, k + 3] = D[b, D_LOAD]
     spray = 0.0
     for j in range(sprays.shape[0]):
