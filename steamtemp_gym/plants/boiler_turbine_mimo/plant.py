@@ -58,7 +58,8 @@ class BoilerTurbineMIMO(Plant):
         "mpc_linear": {"move_weight": 0.001},
         "neuro_pid": {"disturbance_signals": ("firing_minus_load", "load_rate")},
     }
-    # kept short: every info key costs about 1 us per env step
+    # kept short: every info key costs time on every env step (about 0.05 us in the single
+    # env, 0.15 us in the vector env at one row)
     extra_info = (
         "reheat_temp_C",
         "sp1_out_temp_C",
