@@ -265,9 +265,18 @@ class Core(StateFields):
         plant.step(self.X[r], self.U[r], self.D[r], self.Z[r], dt=0.0)  # outputs of it
         self.U[b] = self.Z[b, self.valve_idx]
         self.U_prev[b] = self.U[b]
-        observe(b, self.state, *obs_indices(self.state.ints))
-        # cost 0: the info of a reset closes no interval
-        fill_info(b, self.state, *info_indices(self.state.ints), 0.0)
+        observe_args, info_args = self._output_args(b)
+        observe(*observe_args)
+        fill_info(*info_args)
+
+    def _output_args(self, b: int) -> tuple[tuple, tuple]:
+        """The arguments of :func:`observe` and :func:`fill_info` for row b at its start
+        (cost 0: the info of a reset closes no interval)."""
+        s = self.state
+        obs_idx, i_meas = obs_indices(s.ints)
+        cols, sprays = info_indices(s.ints)
+        return ((b, s.Z, s.D, s.sp, s.ep, s.key, s.counter, s.obs_cs, obs_idx, i_meas, s.obs,
+                 s.meas), (b, s.Z, s.D, s.sp, s.ep, s.meas, cols, sprays, 0.0, s.info))  # fmt: skip
 
     def compile_calls(self) -> list[tuple[Any, tuple]]:
         """(kernel, arguments) of the compiled calls of a reset and a step but the plant's
@@ -282,8 +291,7 @@ class Core(StateFields):
                 (gauss, (np.uint64(0), 0, OU_CHANNEL)),
                 (obs_indices, (s.ints,)),
                 (info_indices, (s.ints,)),
-                (observe, (0, s, *obs_indices(s.ints))),
-                (fill_info, (0, s, *info_indices(s.ints), 0.0)),
+                *zip((observe, fill_info), self._output_args(0), strict=True),
                 *[(to_commands, (a, self.U)) for a in actions],
                 (advance, (s,)),
                 (self.plant.kernel(), self.plant.step_args(self.X, self.U, self.D, self.Z))]
