@@ -40,10 +40,7 @@ from steamtemp_gym.envs.state import (
     outputs,
     with_tables,
 )
-from steamtemp_gym.plants.base import (
-    N_DIST,
-    Plant,
-)
+from steamtemp_gym.plants.base import N_DIST, Plant
 from steamtemp_gym.plants.threads import MIN_SPLIT_ROWS, run_rows
 from steamtemp_gym.rewards import RewardConfig
 from steamtemp_gym.rng import gauss
@@ -246,11 +243,8 @@ class Core(StateFields):
         """Start row b on ``scenario`` and ``key`` with the plant ``drawn`` for them by
         :meth:`episode_plant` (nothing here can fail)."""
         self.assign_scenario(b, scenario)
-        ou_ab = ou_coefficients(
-            scenario.heat_absorption_noise_std,
-            scenario.heat_absorption_noise_tau_s,
-            self.plant.dt_s,
-        )
+        ou_ab = ou_coefficients(scenario.heat_absorption_noise_std,
+                                scenario.heat_absorption_noise_tau_s, self.plant.dt_s)  # fmt: skip
         self.ep[b] = (0.0, scenario.duration_s, scenario.noise_std_C, *ou_ab)
         self.ou[b] = scenario.heat_absorption_noise_std * gauss(np.uint64(key), 0, OU_CHANNEL)
         self.key[b] = np.uint64(key)
