@@ -47,12 +47,16 @@ measurement: docs/leaderboard.md, "The oracle", gives the return as the budget d
 from __future__ import annotations
 
 import math
+import sys
+import time
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 import baselines
+from agents import optima, optimum
 from steamtemp_gym.checks import check_fields, ranged
 from steamtemp_gym.envs.core import Core, check_action
 from steamtemp_gym.envs.snapshot import copy_rows, env_core, planning_core
@@ -214,11 +218,37 @@ class Planner:
         return (2.0 * self.plan[np.arange(self.src.B), age] - 1.0).astype(np.float32)
 
 
+#: How the oracle finds each episode's command sequence: ``"optimum"``, the clairvoyant
+#: whole-episode optimum (agents/optimum.py; stored ones replayed), or ``"cem"``, the
+#: receding-horizon search alone (a lower bound of the optimum, for quick looks).
+ENGINES = ("optimum", "cem")
+#: The engine of the leaderboard's oracle unless ``--oracle`` says otherwise.
+DEFAULT_ENGINE = "cem"
+
+
+class Replay:
+    """A policy that plays a fixed sequence of actions (steps, n_u) in a single env, one per
+    step from its reset on, then holds the last."""
+
+    def __init__(self, actions: np.ndarray) -> None:
+        self.actions = np.asarray(actions, dtype=np.float32)
+        self.i = 0
+
+    def reset(self) -> None:
+        self.i = 0
+
+    def predict(self, observation, state=None, episode_start=None, deterministic=True):
+        a = self.actions[min(self.i, len(self.actions) - 1)]
+        self.i += 1
+        return a.copy(), None
+
+
 @dataclass
 class Committed:
     """A row's committed command sequence from step ``start`` of its episode on: the
     actions (steps, n_u) and the rewards and observations after each, of the rollout it
-    won (``source``: ``"cem"`` or an incumbent's name)."""
+    won (``source``: ``"cem"`` or an incumbent's name), and every candidate's return and
+    actions."""
 
     key: int
     start: int
@@ -227,6 +257,9 @@ class Committed:
     observations: np.ndarray
     source: str
     returns: dict[str, float]
+    #: every candidate's actions (steps, n_u), the winner's included: the warm starts of
+    #: the whole-episode optimum (agents/optimum.py)
+    sequences: dict[str, np.ndarray]
 
 
 def rollout(core: Core, act: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -260,10 +293,13 @@ class Oracle:
         budget: The optimizer's budget (:class:`Budget`).
         incumbents: Baseline names whose closed-loop episodes compete with the CEM's
             (default :data:`INCUMBENTS`; ``()``: the CEM alone).
+        engine: ``"optimum"`` or ``"cem"`` (:data:`ENGINES`).
+        store: Where the ``optimum`` engine finds stored optima (agents/optima.py).
     """
 
     def __init__(self, env: Any, budget: Budget | None = None,
-                 incumbents: tuple[str, ...] = INCUMBENTS) -> None:  # fmt: skip
+                 incumbents: tuple[str, ...] = INCUMBENTS, engine: str = "cem",
+                 store: Path = optima.STORE) -> None:  # fmt: skip
         try:
             src = env_core(env)
         except ValueError as exc:
@@ -272,6 +308,9 @@ class Oracle:
         if isinstance(incumbents, str) or unknown:
             raise ValueError(f"oracle incumbents must be a tuple of baseline names "
                              f"({', '.join(baselines.NAMES)}), got {incumbents!r}")  # fmt: skip
+        if engine not in ENGINES:
+            raise ValueError(f"oracle engine must be one of {ENGINES}, got {engine!r}")
+        self.engine, self.store = engine, Path(store)
         self.env, self.src = env, src
         self.budget = budget or Budget()
         self.incumbents = tuple(incumbents)
@@ -291,6 +330,91 @@ class Oracle:
         return self._policies
 
     def _commit(self, rows: np.ndarray) -> None:
+        """Commit each row to its episode's command sequence: with the ``optimum`` engine
+        the stored optimum where it replays (:meth:`_stored`), else the whole-episode
+        optimum solved now from the CEM's and the incumbents' sequences (:meth:`_solve`);
+        with the ``cem`` engine the best of those."""
+        if self.engine == "optimum":
+            rows = self._stored(rows)
+        if rows.size:
+            self._commit_cem(rows)
+        if self.engine == "optimum":
+            for r in rows:
+                self._solve(int(r))
+
+    def _play(self, rows: np.ndarray, sequences: list[np.ndarray]) -> tuple:
+        """:func:`rollout` of copies of ``rows`` each playing its sequence of actions (its
+        last action held after its end)."""
+        n = len(rows)
+        shadow = planning_core(self.src, n)
+        copy_rows(self.src, rows, shadow, np.arange(n))
+        step = [0]
+
+        def act(obs: np.ndarray, first: bool) -> np.ndarray:
+            i = step[0]
+            step[0] += 1
+            return np.stack([a[min(i, len(a) - 1)] for a in sequences])
+
+        return rollout(shadow, act)
+
+    def _keep(self, r: int, j: int, run: tuple, source: str, returns: dict,
+              sequences: dict) -> None:  # fmt: skip
+        """Commit row r to row j of ``run`` (a :func:`rollout`)."""
+        acts, rew, obs, steps = run
+        k = steps[j]
+        self.committed[r] = Committed(int(self.src.noise_keys()[r]), int(self.src.steps()[r]),
+                                      acts[:k, j].copy(), rew[:k, j].copy(), obs[:k, j].copy(),
+                                      source, returns, sequences)  # fmt: skip
+        self._key[r] = self.src.noise_keys()[r]
+
+    def _stored(self, rows: np.ndarray) -> np.ndarray:
+        """Commit the rows at their episode's start whose stored optimum (agents/optima.py)
+        replays to its stored return bit for bit; returns the other rows."""
+        keys, counter = self.src.noise_keys(), self.src.steps()
+        found = {}
+        for r in rows.tolist():
+            record = None if counter[r] else optima.find(
+                self.src.plant.id, self.src.scenario[r], int(keys[r]), self.store)
+            a = None if record is None else optima.actions(record, self.store)
+            if a is not None:
+                found[r] = (record, a)
+        if not found:
+            return rows
+        run = self._play(np.array(list(found)), [a for _, a in found.values()])
+        for j, (r, (record, a)) in enumerate(found.items()):
+            total = float(np.cumsum(run[1][: run[3][j], j])[-1])  # summed in order
+            if total == record["return"]:
+                self._keep(r, j, run, "stored optimum", {"stored optimum": total},
+                           {"stored optimum": a})  # fmt: skip
+            else:
+                print(f"oracle: the stored optimum of {self.src.plant.id} "
+                      f"{record['scenario']} seed {record['seed']} replays to {total!r}, not "
+                      f"its stored {record['return']!r} (the plant's code has changed): "
+                      "solving it anew", file=sys.stderr, flush=True)  # fmt: skip
+        return np.array([r for r in rows.tolist() if self.committed[r] is None
+                         or self._key[r] != keys[r] or self.committed[r].start != counter[r]],
+                        dtype=np.int64)  # fmt: skip
+
+    def _solve(self, r: int) -> None:
+        """Commit row r to the whole-episode optimum from its state (agents/optimum.py),
+        warm started by the sequences of its CEM commit, saying so on stderr."""
+        c = self.committed[r]
+        scenario = self.src.scenario[r]
+        zero = c.returns.get(baselines.INDUSTRIAL_REFERENCE, min(c.returns.values()))
+        print(f"oracle: solving the clairvoyant optimum of {self.src.plant.id} "
+              f"{scenario.name!r} (noise key {c.key}) from step {c.start}: a few minutes of "
+              "one core", file=sys.stderr, flush=True)  # fmt: skip
+        t0 = time.process_time()
+        out = optimum.solve(optimum.episode(self.src, r), c.sequences, c.returns, zero)
+        run = self._play(np.array([r]), [out["actions"]])
+        returns = {**c.returns, "optimum": out["return"]}
+        self._keep(r, 0, run, "optimum", returns, {**c.sequences, "optimum": out["actions"]})
+        print(f"oracle: done in {time.process_time() - t0:.0f} s of CPU: return "
+              f"{out['return']:.4f} (CEM {c.returns.get('cem', float('nan')):.4f}); certificate "
+              f"{'holds' if out['certificate']['holds'] else 'fails'}", file=sys.stderr,
+              flush=True)  # fmt: skip
+
+    def _commit_cem(self, rows: np.ndarray) -> None:
         """Roll the rest of each row's episode out on copies, by the CEM and by each
         incumbent, and commit to the best (module docstring)."""
         n = len(rows)
@@ -312,8 +436,10 @@ class Oracle:
             best = max(totals, key=totals.get)
             acts, rew, obs, steps = runs[best]
             k = steps[j]
+            sequences = {name: run[0][: run[3][j], j].copy() for name, run in runs.items()}
             self.committed[r] = Committed(int(keys[r]), int(counter[r]), acts[:k, j].copy(),
-                                          rew[:k, j].copy(), obs[:k, j].copy(), best, totals)
+                                          rew[:k, j].copy(), obs[:k, j].copy(), best, totals,
+                                          sequences)  # fmt: skip
             self._key[r] = keys[r]
 
     def predict(self, observation, state=None, episode_start=None, deterministic=True):

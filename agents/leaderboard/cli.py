@@ -110,6 +110,7 @@ from agents.leaderboard.plan import (
     build_plan,
 )
 from agents.leaderboard.records import EPISODES, Record, _latest, read_record
+from agents.oracle import DEFAULT_ENGINE, ENGINES
 from steamtemp_gym.checks import head
 from steamtemp_gym.testing import guard
 
@@ -181,6 +182,12 @@ def make_parser() -> argparse.ArgumentParser:
     ap.add_argument("--import", dest="modules", action="append", default=[], metavar="MODULE",
                     help="import this module first, in every worker too (one that registers "
                     "baselines, scenarios or env variants; repeatable)")  # fmt: skip
+    ap.add_argument("--oracle", choices=ENGINES, default=DEFAULT_ENGINE,
+                    help="what makes the score's 1: 'optimum', the certified clairvoyant "
+                    "optimum of each episode (stored for the default scenarios and seeds, "
+                    "replayed; any other episode is solved, a few minutes of one core each), "
+                    "or 'cem', the receding-horizon CEM search (faster; a lower bound of "
+                    "the optimum, and every output says so) (default: %(default)s)")  # fmt: skip
     ap.add_argument("--no-oracle", action="store_true",
                     help="leave the oracle out (its episodes are the run's longest); the "
                     "normalized score is then not computed (default: off)")  # fmt: skip

@@ -24,15 +24,15 @@ from agents.leaderboard import summary
 from agents.leaderboard.isolated import PolicyFailed, PolicyProcess, PolicyTimeout, make_env
 from agents.leaderboard.plan import REFERENCE, Plan
 from agents.leaderboard.records import Key
-from agents.oracle import Oracle
+from agents.oracle import DEFAULT_ENGINE, Oracle
 from steamtemp_gym.checks import head
 
 
-def _make_policy(name: str, env_id: str, env):
+def _make_policy(name: str, env_id: str, env, oracle: str = DEFAULT_ENGINE):
     if name == REFERENCE:
         return FrozenValves(env)
     if name == summary.ONE:
-        return Oracle(env)
+        return Oracle(env, engine=oracle)
     return specs.parse(name).make(env_id, env)
 
 
@@ -44,13 +44,13 @@ def own_process(name: str) -> bool:
 
 def make_policy(name: str, env_id: str, env: Any, scenario: Any, num_envs: int | None = None,
                 imports: tuple[str, ...] = (), timeout: float | None = None,
-                episodes: int = 1) -> Any:  # fmt: skip
+                episodes: int = 1, oracle: str = DEFAULT_ENGINE) -> Any:  # fmt: skip
     """The policy ``name`` to act on ``env`` (of ``num_envs`` rows, None: a single env): a
     shipped one built here on ``env``, any other a :class:`PolicyProcess` (commissioned on
     an env of its own made with ``scenario``; close it)."""
     if own_process(name):
         return PolicyProcess(name, env_id, scenario, num_envs, imports, timeout, episodes)
-    return _make_policy(name, env_id, env)
+    return _make_policy(name, env_id, env, oracle)
 
 
 def close(policy: Any) -> None:
@@ -74,6 +74,7 @@ class Unit:
     imports: tuple[str, ...] = ()  # modules to import first (--import)
     params: dict | None = None  # a mismatch variant's plant; the policy sees the nominal one
     timeout: float | None = None  # --episode-timeout (s) of a policy in a process of its own
+    oracle: str = DEFAULT_ENGINE  # --oracle: the oracle's engine
 
 
 class RowScenarios(gym.vector.VectorWrapper):
@@ -179,7 +180,7 @@ def _side_by_side(batch: list[Unit]) -> list[tuple[list[dict], dict | None]]:
     # the nominal plant (a policy of its own process commissions on an env of its own)
     model = make_env(u0.env_id, u0.scenario, n) if plant and not own else unit
     policy = make_policy(u0.policy, u0.env_id, model, u0.scenario, n, u0.imports, u0.timeout,
-                         n)  # fmt: skip
+                         n, u0.oracle)  # fmt: skip
     try:
         results = run_batch(unit, policy, seeds)
     finally:
@@ -202,7 +203,7 @@ def _seed_by_seed(u: Unit) -> tuple[list[dict], dict | None]:
     env = make_env(u.env_id, u.scenario, **plant)
     model = make_env(u.env_id, u.scenario) if plant and not own else env
     try:
-        policy = None if own else _make_policy(u.policy, u.env_id, model)
+        policy = None if own else _make_policy(u.policy, u.env_id, model, u.oracle)
     except Exception as exc:  # noqa: BLE001 - every seed of it fails alike
         policy = exc
     rows = []
@@ -254,7 +255,8 @@ def _units(plan: Plan, done: dict) -> list[Unit]:
                 if todo:
                     keep = plan.seeds[0] if plan.seeds[0] in todo and params is None else None
                     out.append(Unit(env_id, sc, plan.resolved[env_id, sc], name, todo, fp, keep,
-                                    plan.imports, params, plan.episode_timeout))  # fmt: skip
+                                    plan.imports, params, plan.episode_timeout,
+                                    plan.oracle))  # fmt: skip
     return sorted(out, key=lambda u: u.policy != summary.ONE)  # stable: run order otherwise
 
 

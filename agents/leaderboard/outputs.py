@@ -143,7 +143,7 @@ def _run_info(plan: Plan, envs: list[str] | None = None) -> dict[str, Any]:
             "seeds": plan.seeds, "steamtemp_gym_version": steamtemp_gym.__version__,
             "n_bootstrap": stats.N_BOOTSTRAP, "confidence": stats.CONFIDENCE,
             "reference": REFERENCE, "versus": VERSUS,
-            "travel_budget": plan.travel_budget,
+            "travel_budget": plan.travel_budget, "oracle": plan.oracle,
             "mismatch": {e: [v.removeprefix(mismatch.PREFIX) for v in plan.variants.get(e, {})]
                          for e in envs or plan.envs if plan.variants.get(e)}}  # fmt: skip
 

@@ -28,7 +28,7 @@ from agents import specs, stats
 from agents.leaderboard import mismatch, summary
 from agents.leaderboard.isolated import PolicyFailed, PolicyProcess
 from agents.leaderboard.records import EPISODES, SCHEMA, Key
-from agents.oracle import INCUMBENTS
+from agents.oracle import DEFAULT_ENGINE, INCUMBENTS
 from steamtemp_gym import envs as envs_
 from steamtemp_gym import scenarios
 from steamtemp_gym.checks import head, tail
@@ -72,6 +72,7 @@ class Plan:
     episode_timeout: float | None = EPISODE_TIMEOUT_S  # --episode-timeout
     #: env -> mismatch label -> the variant's params (agents/leaderboard/mismatch.py)
     variants: dict[str, dict[str, dict]] = field(default_factory=dict)
+    oracle: str = DEFAULT_ENGINE  # --oracle: the engine of the score's 1 (agents/oracle.py)
 
     def scenarios_of(self, env_id: str) -> list[str]:
         """The run's scenarios on ``env_id``, then its mismatch labels."""
@@ -261,14 +262,16 @@ def _check_out(ap: argparse.ArgumentParser, out: Path, resume: bool) -> None:
 _REFERENCE_MODULES = {summary.ONE: "agents.oracle", REFERENCE: "agents.difficulty"}
 
 
-def _policy_digest(env_id: str, name: str) -> str:
+def _policy_digest(env_id: str, name: str, oracle: str = DEFAULT_ENGINE) -> str:
     """The policy's part of the fingerprint: the name, with the provenance digest of its
     code and of a baseline's stored tuning, a trained agent's files or a factory's module
-    (agents/specs.py)."""
+    (agents/specs.py); the oracle's with its engine and the code of the optimizer."""
     if name in _REFERENCE_MODULES:
         own = f"{name}:{specs.code_digest(_REFERENCE_MODULES[name])}"
         if name == summary.ONE:  # its incumbents' episodes are candidates of its own
             own += "".join(f"+{specs.parse(i).digest(env_id)}" for i in INCUMBENTS)
+            if oracle != "cem":
+                own += f"+{oracle}:{specs.code_digest('agents.optimum')}"
         return own
     return specs.parse(name).digest(env_id)
 
@@ -286,10 +289,11 @@ def fingerprint(env_id: str, scenario: Any, policy_digest: str, source_digest: s
     return hashlib.sha256(text.encode()).hexdigest()[:16]
 
 
-def episode_fingerprint(env_id: str, scenario: str, name: str) -> str:
+def episode_fingerprint(env_id: str, scenario: str, name: str,
+                        oracle: str = DEFAULT_ENGINE) -> str:  # fmt: skip
     """The fingerprint :func:`build_plan` gives the episodes of policy ``name`` on the
     nominal plant of ``env_id`` under ``scenario`` (a name as ``--scenarios`` takes it)."""
-    return fingerprint(env_id, _resolve(scenario, env_id), _policy_digest(env_id, name),
+    return fingerprint(env_id, _resolve(scenario, env_id), _policy_digest(env_id, name, oracle),
                        specs.source_digest(env_id))  # fmt: skip
 
 
@@ -348,7 +352,8 @@ def build_plan(ap: argparse.ArgumentParser, args: argparse.Namespace) -> Plan:
                     f"{head(str(exc), 1000)}"  # the message lists every form
                 )
     plan = Plan(envs=envs, scenarios=scs, seeds=seeds, policies=pols, resolved=resolved,
-                imports=imports, travel_budget=budget, episode_timeout=timeout)  # fmt: skip
+                imports=imports, travel_budget=budget, episode_timeout=timeout,
+                oracle=getattr(args, "oracle", DEFAULT_ENGINE))  # fmt: skip
     if not args.no_mismatch and mismatch.SCENARIO in scs:
         for env_id in envs:
             plan.variants[env_id] = mismatch.labels(env_id)
@@ -356,7 +361,8 @@ def build_plan(ap: argparse.ArgumentParser, args: argparse.Namespace) -> Plan:
                 resolved[env_id, label] = resolved[env_id, mismatch.SCENARIO]
     for env_id in envs:
         source = specs.source_digest(env_id)
-        digests = {name: _policy_digest(env_id, name) for name in pols[env_id]}  # once per env
+        digests = {name: _policy_digest(env_id, name, plan.oracle)
+                   for name in pols[env_id]}  # once per env  # fmt: skip
         for sc in scs:
             try:
                 plan.envs_made[env_id, sc] = gym.make(env_id, scenario=resolved[env_id, sc])

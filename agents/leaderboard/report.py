@@ -17,6 +17,7 @@ from agents import stats
 from agents.leaderboard import mismatch
 from agents.leaderboard.summary import (
     ONE,
+    ONE_LABELS,
     ORDER_RULE,
     REFERENCE,
     REFERENCES,
@@ -197,13 +198,18 @@ def table_lines(header: list[str], rows: list[list[str]]) -> list[str]:
             *["| " + " | ".join(r) + " |" for r in rows]]  # fmt: skip
 
 
+def one_label(summary: dict[str, Any]) -> str:
+    """What the score's 1 is in the run of ``summary`` (agents/oracle.py: ONE_LABELS)."""
+    return ONE_LABELS[summary["run"].get("oracle", "cem")]
+
+
 def headline_markdown(summary: dict[str, Any], margins: bool = True) -> str:
     """The headline table with its label (also in the README), and below it the score's
     ends per plant (:func:`margin_markdown`) unless ``margins`` is False."""
     n = len(summary["run"]["seeds"])
     lines = [f"{order_note()} Score: {stat_label(n)}: the share of the achievable improvement "
              f"over the industrial reference that a policy realizes (0 = {ZERO}, the cascade a "
-             f"commissioned unit runs; 1 = {ONE}, the clairvoyant NMPC on the true plant; per "
+             f"commissioned unit runs; 1 = {ONE}, {one_label(summary)}; per "
              f"scenario); (k) = rank among the policies admissible on that plant; "
              f"{admissibility_note(summary)}"
              + (f" {RUNS_NOTE}" if _multi_run(summary) else ""), ""]  # fmt: skip
@@ -312,8 +318,8 @@ def markdown(summary: dict[str, Any], rows: list[dict]) -> str:
              "Return: the default reward summed over an episode (higher is better). "
              f"Normalized score per scenario: (R - R0) / (R1 - R0) with R0 the mean return "
              f"over seeds of {ZERO} (the industrial reference: load-scheduled cascade PI "
-             f"with load feed-forward) and R1 that of {ONE} (the clairvoyant NMPC on the "
-             f"true plant, an upper bound on any causal controller): the share of the "
+             f"with load feed-forward) and R1 that of {ONE} ({one_label(summary)}; "
+             f"no causal controller can exceed the optimum): the share of the "
              f"achievable improvement a policy realizes, negative when it is worse than "
              f"{ZERO}. {ONE} and {REFERENCE} (every actuator held at its reset opening) are "
              "references, listed and never ranked.",

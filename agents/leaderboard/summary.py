@@ -36,6 +36,14 @@ SCHEMA_VERSION = 8
 ZERO = baselines.INDUSTRIAL_REFERENCE
 #: The 1: the clairvoyant NMPC on the true plant (agents/oracle.py).
 ONE = "oracle"
+#: What the 1 is, by the oracle's engine (agents/oracle.py: ENGINES; every output of the
+#: leaderboard says which).
+ONE_LABELS = {
+    "optimum": "the clairvoyant optimum of each episode on the true plant, certified "
+    "(agents/optimum)",
+    "cem": "a receding-horizon CEM search on the true plant (--oracle cem): a lower bound of "
+    "the clairvoyant optimum",
+}
 #: Policies listed and plotted but never ranked (not admissible controllers).
 REFERENCES = ("oracle", "frozen_valve")
 REFERENCE = "frozen_valve"
