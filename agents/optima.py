@@ -15,6 +15,8 @@ and that episode is solved anew.
 
 from __future__ import annotations
 
+import contextlib
+import fcntl
 import functools
 import hashlib
 import json
@@ -80,6 +82,18 @@ def find(env_id: str, scenario: Any, noise_key: int, store: Path = STORE) -> dic
     return _by_episode(store, stamp).get((env_id, scenario_digest(scenario), int(noise_key)))
 
 
+@contextlib.contextmanager
+def locked(store: Path):
+    """Hold the store's lock (writers of the index take it, so lines are never lost)."""
+    store.mkdir(parents=True, exist_ok=True)
+    with open(store / ".lock", "a") as f:
+        fcntl.flock(f, fcntl.LOCK_EX)
+        try:
+            yield
+        finally:
+            fcntl.flock(f, fcntl.LOCK_UN)
+
+
 def write(store: Path, line: str, file: str, a: np.ndarray) -> None:
     """Append an episode's record (``line``, its JSON) and write its actions to ``file``
     (the actions first: a record never names a file that is not there)."""
@@ -88,5 +102,18 @@ def write(store: Path, line: str, file: str, a: np.ndarray) -> None:
     with open(tmp, "wb") as f:
         np.save(f, a, allow_pickle=False)
     os.replace(tmp, store / ACTIONS / file)
-    with open(store / INDEX, "a", encoding="utf-8") as f:
+    with locked(store), open(store / INDEX, "a", encoding="utf-8") as f:
         f.write(line + "\n")
+
+
+def update(store: Path, key: tuple[str, str, int], fields: dict, dumps: Any) -> None:
+    """Set ``fields`` in the stored record of episode ``key`` (env id, scenario, seed),
+    rewriting the index with one line per episode in a stable order (``dumps``: the JSON
+    writer of the records)."""
+    with locked(store):
+        records = load(store)
+        records[key] = {**records[key], **fields}
+        text = "".join(dumps(records[k], sort_keys=True) + "\n" for k in sorted(records, key=str))
+        tmp = store / (INDEX + ".tmp")
+        tmp.write_text(text, encoding="utf-8")
+        os.replace(tmp, store / INDEX)

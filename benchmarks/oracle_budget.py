@@ -21,9 +21,10 @@ import gymnasium as gym
 import numpy as np
 
 import steamtemp_gym  # noqa: F401  (registers the ids)
+from agents.cem import Budget
 from agents.evaluation import run_batch
 from agents.leaderboard.plan import _resolve, parse_seeds
-from agents.oracle import Budget, Oracle
+from agents.oracle import Oracle
 from baselines.cascade_pi import CascadePIFF
 
 

@@ -74,8 +74,8 @@ def fake_policies(monkeypatch):
     monkeypatch.setattr(baselines, "SHIPPED", (*baselines.SHIPPED, "frozen", "flaky"))
     real = episodes._make_policy
 
-    def make(name, env_id, env):
-        return Scripted(env, name) if name in ("frozen", "flaky") else real(name, env_id, env)
+    def make(name, env_id, env, *rest):
+        return Scripted(env, name) if name in ("frozen", "flaky") else real(name, env_id, env, *rest)
 
     monkeypatch.setattr(episodes, "_make_policy", make)
     monkeypatch.setattr(Scripted, "FAIL", {})
@@ -146,6 +146,7 @@ BAD_FLAGS = [
     ({"--travel-budget": "0"}, ["--travel-budget", "> 0", "'0'"]),
     ({"--travel-budget": "nan"}, ["--travel-budget", "finite"]),
     ({"--travel-budget": "two"}, ["--travel-budget", "'two'"]),
+    ({"--oracle": "mpc"}, ["--oracle", "'mpc'", "optimum", "cem"]),
 ]
 
 
@@ -429,6 +430,22 @@ def test_outputs_are_strict_json_that_follows_the_schema(tiny, tmp_path, fake_po
     with pytest.raises(jsonschema.ValidationError):  # the schema is not vacuous
         bad = dict(doc, schema_version=1)
         jsonschema.validate(bad, json.loads(SCHEMA.read_text()))
+
+
+@pytest.mark.parametrize("engine", ["optimum", "cem"])
+def test_every_output_names_the_oracles_engine(tiny, tmp_path, fake_policies, engine):
+    """``--oracle optimum`` scores against the whole-episode optimum (solved here: the tiny
+    episodes are not stored), ``--oracle cem`` against the CEM search, and leaderboard.json
+    and leaderboard.md say which; the oracle's return is above the frozen valves'."""
+    out = tmp_path / engine
+    lb.main([*_args(tiny, out, oracle="1"), f"--oracle={engine}"])
+    doc = _strict_load(out / "leaderboard.json")
+    assert doc["run"]["oracle"] == engine
+    md = (out / "leaderboard.md").read_text()
+    assert ("a lower bound of the clairvoyant optimum" in md) == (engine == "cem")
+    assert ("the clairvoyant optimum of each episode" in md) == (engine == "optimum")
+    ret = {r["policy"]: r["metrics"]["return"] for r in _jsonl(out / records.EPISODES)}
+    assert ret["oracle"] > ret["frozen"]
 
 
 def test_run_batch_is_identical_to_run_episode():

@@ -11,9 +11,10 @@ from tunings import missing
 import agents
 import baselines
 import steamtemp_gym
+from agents.cem import Budget
 from agents.evaluation import run_batch, run_episode
 from agents.leaderboard.episodes import _make_policy
-from agents.oracle import INCUMBENTS, Budget, Oracle
+from agents.oracle import INCUMBENTS, Oracle
 from steamtemp_gym import plants
 from steamtemp_gym.envs.snapshot import copy_rows
 from steamtemp_gym.plants import perturb

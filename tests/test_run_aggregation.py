@@ -3,8 +3,9 @@ of agents/stats.py (training runs, then episodes within each) on hand-computable
 and the report's one row per agent over run x scenario x seed (agents/leaderboard/summary.py)
 on hand-made records; with one run the summary is the one-run report's, number for number
 (tests/data/one_run_summary.json: the summary the report wrote before it knew training
-runs, on the record of tests/run_records.py, and its markdown as the version-8 report
-writes it: the same numbers under the headline's new order, captions and last column)."""
+runs, on the record of tests/run_records.py, and its markdown as the version-9 report
+writes it: the same numbers under the headline's new order, captions and last column, the
+1 named by the oracle's engine)."""
 
 from __future__ import annotations
 
@@ -99,7 +100,7 @@ def _summary(offsets: dict, spread: bool = True) -> tuple[dict, list[dict]]:
 def test_one_run_gives_the_one_run_summary(run):
     gold = json.loads(GOLDEN.read_text())
     s, r = _summary({run: 0.0})
-    assert s["schema_version"] == gold["summary"]["schema_version"] + 3 == 8
+    assert s["schema_version"] == gold["summary"]["schema_version"] + 4 == 9
     for pe in s["plants"][ENV]["policies"].values():  # the record predates this entry
         pe.pop("realism", None)
     assert s["plants"] == gold["summary"]["plants"]

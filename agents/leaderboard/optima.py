@@ -6,12 +6,15 @@ episode: resumable, each episode written as it ends::
     python -m agents.leaderboard.optima --envs BensonSubcritical-v0 --seeds 0
 
 Episodes run seed by seed across every plant and scenario, so a partial store covers every
-plant.
+plant. ``--certify`` recomputes the certificates of the stored episodes
+(agents/optimum/certificate.py: ``certify``) and ``--check`` runs the independent check
+(``independent_check``) on them, each writing its result into the episode's record.
 """
 
 from __future__ import annotations
 
 import argparse
+import functools
 import os
 import sys
 import time
@@ -87,7 +90,7 @@ def _solve(item: tuple[str, str, int]) -> tuple[dict, np.ndarray]:
         "scenario": name,
         "seed": seed,
         "noise_key": int(core.noise_keys()[0]),
-        "scenario_digest": optima.scenario_digest(scenario),
+        "scenario_digest": optima.scenario_digest(core.scenario[0]),  # "random": the drawn one
         "return": R,
         "zero": out["zero"],
         "tripped": out["tripped"],
@@ -103,20 +106,78 @@ def _solve(item: tuple[str, str, int]) -> tuple[dict, np.ndarray]:
     return record, a
 
 
-def _results(items: list, jobs: int, backend: str):
+def assess(
+    item: tuple[str, str, int], check: bool = False, store: Path = optima.STORE
+) -> dict | str:
+    """The certificate of a stored episode's optimum with the current code (and, with
+    ``check``, the independent check's gain), on one thread: the fields to set in its
+    record. A failure is returned as its traceback."""
+    import traceback
+
+    import gymnasium as gym
+    from threadpoolctl import threadpool_limits
+
+    from agents import optimum
+    from agents.optimum import search
+    from steamtemp_gym.envs.snapshot import env_core
+    from steamtemp_gym.plants.threads import set_threads
+
+    set_threads(1)
+    try:
+        with threadpool_limits(limits=1):
+            r = optima.load(store)[item]
+            env = gym.make(r["env"], scenario=scenarios.resolve(r["scenario"], r["env"]))
+            env.reset(seed=r["seed"])
+            ep = optimum.episode(env_core(env))
+            a = optima.actions(r, store)
+            U = (a.astype(np.float64) + 1.0) / 2.0
+            best = max(r["paths"], key=lambda p: p["final"])["start"]
+            t0 = time.process_time()
+            cert = optimum.certify(
+                ep,
+                U,
+                r["return"],
+                r["zero"],
+                r["paths"],
+                best,
+                search.smoothing(search.CONTINUATION[-1]),
+                search.LEVEL_SMOOTHING,
+            )
+            out = {"certificate": {**cert, "cpu_s": time.process_time() - t0}}
+            if check:
+                t0 = time.process_time()
+                gain, log = optimum.independent_check(ep, a)
+                out["independent_check"] = {
+                    "gain": gain,
+                    "share": gain / cert["headroom"],
+                    "levels": log,
+                    "cpu_s": time.process_time() - t0,
+                }
+            return out
+    except Exception:  # noqa: BLE001 - reported by the caller
+        return traceback.format_exc()
+
+
+def _results(items: list, jobs: int, backend: str, fn=None):
+    fn = fn or solve_episode
     if backend == "ray":
         from agents import ray_backend
 
-        yield from ray_backend.results(solve_episode, items, jobs)
+        yield from ray_backend.results(fn, items, jobs)
     elif jobs <= 1:
         for it in items:
-            yield it, solve_episode(it)
+            yield it, fn(it)
     else:
         import multiprocessing as mp
         from concurrent.futures import ProcessPoolExecutor, as_completed
 
-        with ProcessPoolExecutor(jobs, mp_context=mp.get_context("spawn")) as pool:
-            futures = {pool.submit(solve_episode, it): it for it in items}
+        from agents.leaderboard.isolated import watch_parent
+
+        context = mp.get_context("spawn")  # a worker ends with this process (watch_parent)
+        with ProcessPoolExecutor(
+            jobs, mp_context=context, initializer=watch_parent, initargs=(os.getpid(),)
+        ) as pool:
+            futures = {pool.submit(fn, it): it for it in items}
             for f in as_completed(futures):
                 yield futures[f], f.result()
 
@@ -134,6 +195,16 @@ def main(argv: list[str] | None = None) -> int:
         "--store", type=Path, default=optima.STORE, help="the store (default: the package's)"
     )
     ap.add_argument("--limit", type=int, default=None, help="solve at most this many episodes")
+    ap.add_argument(
+        "--certify",
+        action="store_true",
+        help="recompute the certificates of the stored episodes instead",
+    )
+    ap.add_argument(
+        "--check",
+        action="store_true",
+        help="with --certify: also run the independent check on them",
+    )
     args = ap.parse_args(argv)
     import steamtemp_gym
 
@@ -150,6 +221,10 @@ def main(argv: list[str] | None = None) -> int:
     seeds = plan_.parse_seeds(ap, args.seeds)
     names = [s.strip() for s in args.scenarios.split(",") if s.strip()]
     done = optima.load(args.store)
+    if args.check and not args.certify:
+        ap.error("argument --check: only with --certify")
+    if args.certify:
+        return _certify(args, [it for it in episodes(envs, names, seeds) if it in done])
     todo = [it for it in episodes(envs, names, seeds) if it not in done]
     if args.limit is not None:
         todo = todo[: args.limit]
@@ -163,16 +238,44 @@ def main(argv: list[str] | None = None) -> int:
             continue
         record, a = result
         optima.write(args.store, dumps(record, sort_keys=True), record["actions_file"], a)
-        c = record["certificate"]
         print(
-            f"[{n}/{len(todo)} {time.time() - t0:7.0f} s] {item[0].split('/')[-1]} {item[1]} "
-            f"seed {item[2]}: R1 {record['return']:.4f} (CEM {record['warm_starts']['cem']:.4f},"
-            f" zero {record['zero']:.4f}) cpu {record['cpu_s']:.0f} s, certificate "
-            f"{'holds' if c['holds'] else 'FAILS'} (gain {c['first_order_gain']:.4f}, "
-            f"refinement {c['last_refinement']:.4f}, starts {c['starts_agree']})",
+            f"[{n}/{len(todo)} {time.time() - t0:7.0f} s] {_describe(item, record)}",
             file=sys.stderr,
             flush=True,
         )
+    return 1 if failed else 0
+
+
+def _describe(item: tuple[str, str, int], record: dict) -> str:
+    """One line on a solved episode: its return, the CEM's and the 0, CPU, certificate."""
+    c = record["certificate"]
+    return (
+        f"{item[0].split('/')[-1]} {item[1]} seed {item[2]}: R1 {record['return']:.4f} "
+        f"(CEM {record['warm_starts']['cem']:.4f}, zero {record['zero']:.4f}), "
+        f"{record['cpu_s']:.0f} s of CPU; certificate {'holds' if c['holds'] else 'FAILS'} "
+        f"(step {c['step_gain']:.1e}, refinement {c['last_refinement']:.1e}, "
+        f"starts {c['starts_agree']:.1e})"
+    )
+
+
+def _certify(args: argparse.Namespace, items: list) -> int:
+    """--certify: each stored episode's certificate (and --check) into its record."""
+    if args.limit is not None:
+        items = items[: args.limit]
+    fn = functools.partial(assess, check=args.check, store=args.store)
+    failed = 0
+    for n, (item, out) in enumerate(_results(items, args.jobs, args.backend, fn), 1):
+        if isinstance(out, str):
+            failed += 1
+            print(f"[{n}/{len(items)}] {item}: FAILED\n{out}", file=sys.stderr, flush=True)
+            continue
+        optima.update(args.store, item, out, dumps)
+        c, ic = out["certificate"], out.get("independent_check")
+        print(f"[{n}/{len(items)}] {item[0].split('/')[-1]} {item[1]} seed {item[2]}: "
+              f"certificate {'holds' if c['holds'] else 'FAILS'} (step {c['step_gain']:.2e}, "
+              f"refinement {c['last_refinement']:.2e}, starts {c['starts_agree']})"
+              + (f", independent check {ic['share']:.2e}" if ic else ""),
+              file=sys.stderr, flush=True)  # fmt: skip
     return 1 if failed else 0
 
 

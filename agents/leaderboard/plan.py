@@ -361,8 +361,7 @@ def build_plan(ap: argparse.ArgumentParser, args: argparse.Namespace) -> Plan:
                 resolved[env_id, label] = resolved[env_id, mismatch.SCENARIO]
     for env_id in envs:
         source = specs.source_digest(env_id)
-        digests = {name: _policy_digest(env_id, name, plan.oracle)
-                   for name in pols[env_id]}  # once per env  # fmt: skip
+        digests = {n: _policy_digest(env_id, n, plan.oracle) for n in pols[env_id]}  # per env
         for sc in scs:
             try:
                 plan.envs_made[env_id, sc] = gym.make(env_id, scenario=resolved[env_id, sc])

@@ -31,7 +31,7 @@ from agents import specs, stats
 from agents.leaderboard import mismatch
 
 #: Version of leaderboard.json's format (docs/leaderboard_schema.json).
-SCHEMA_VERSION = 8
+SCHEMA_VERSION = 9
 #: The 0 of the normalized score: the cascade as a commissioned unit runs it.
 ZERO = baselines.INDUSTRIAL_REFERENCE
 #: The 1: the clairvoyant NMPC on the true plant (agents/oracle.py).

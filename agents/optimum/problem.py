@@ -18,6 +18,7 @@ from typing import Any
 
 import numpy as np
 
+from steamtemp_gym._jit import njit
 from steamtemp_gym.envs.core import Core
 from steamtemp_gym.envs.kernels import CFG, N_CFG, H
 from steamtemp_gym.envs.snapshot import copy_rows, planning_core
@@ -270,9 +271,9 @@ class Linearization:
     Cx: np.ndarray
     Cu: np.ndarray
     #: largest command change (opening) for which the Jacobians are reused
-    reach: float = 0.02
+    reach: float = 0.05
     #: evaluations left before they are made anew
-    uses: int = 10
+    uses: int = 30
 
     def covers(self, U: np.ndarray, cols: np.ndarray) -> bool:
         return (
@@ -311,11 +312,29 @@ def value_and_gradient(
     gz = gZ[:, cols]
     gx = np.einsum("tk,tkn->tn", gz, Cx)
     g = gU + np.einsum("tk,tkm->tm", gz, Cu)
-    mu = np.zeros(ep.plant.n_x)
-    for t in range(ep.T - 1, -1, -1):
-        g[t] += mu @ B[t]
-        mu = mu @ A[t] + gx[t]
+    _adjoint(A, B, gx, g)
     return J, g
+
+
+@njit(cache=True)
+def _adjoint(A, B, gx, g):
+    """The backward recursion: mu_T = 0, g_t += B_t' mu_{t+1}, mu_t = A_t' mu_{t+1} + gx_t
+    (mu_t: the gradient of the rewards after step t - 1 with respect to the state x_t)."""
+    T, n = gx.shape
+    mu = np.zeros(n)
+    nxt = np.zeros(n)
+    for t in range(T - 1, -1, -1):
+        for j in range(B.shape[2]):
+            acc = 0.0
+            for i in range(n):
+                acc += mu[i] * B[t, i, j]
+            g[t, j] += acc
+        for j in range(n):
+            acc = gx[t, j]
+            for i in range(n):
+                acc += mu[i] * A[t, i, j]
+            nxt[j] = acc
+        mu, nxt = nxt, mu
 
 
 def to_actions(U: np.ndarray) -> np.ndarray:

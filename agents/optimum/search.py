@@ -136,10 +136,6 @@ class Path:
     final: float = -math.inf
 
 
-#: The certificate's tolerances, in shares of the episode's headroom.
-CERTIFICATE = {"first_order_gain": 0.01, "last_refinement": 0.01, "starts_agree": 0.005}
-
-
 def solve(
     ep: Episode,
     starts: dict[str, np.ndarray],
