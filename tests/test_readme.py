@@ -59,21 +59,40 @@ def test_quick_start_runs_and_prints_the_kpis(tmp_path):
 
 
 def test_the_two_commands_are_the_ones_ci_runs():
+    """The README's two commands are make targets that set everything up and run the
+    leaderboard and the tests; CI runs the test command itself; the manual install below
+    takes PyTorch's CPU build and compiles the plants ahead."""
     blocks = [b.strip() for b in _blocks(_section("The two commands"), "bash")]
-    assert blocks == ["steamtemp-leaderboard --out leaderboard_out", "python -m pytest -n 2 -q"]
-    ci = (ROOT / ".ci" / "run").read_text()
-    assert "\npython -m pytest -n 2 -q\n" in ci and 'pip install -q -e ".[test]"' in ci
-    install = _blocks(_section("Install"), "bash")[0]
+    assert blocks == ["make leaderboard\nmake test"]
+    make = (ROOT / "Makefile").read_text()
+    assert "\nleaderboard: setup\n\t$(BIN)/steamtemp-leaderboard --out $(OUT)\n" in make
+    assert "\ntest: setup\n\t$(BIN)/python -m pytest -n 2 -q\n" in make
+    for step in ("-m venv", "--index-url $(TORCH_INDEX)", '-e ".[test]"',
+                 "-m steamtemp_gym.precompile"):  # fmt: skip
+        assert step in make, step
+    assert "\nmake test\n" in (ROOT / ".ci" / "run").read_text()
+    install = _blocks(_section("Your own environment"), "bash")[0]
     assert "pip install torch==2.13.0 --index-url https://download.pytorch.org/whl/cpu" in install
     assert 'pip install -e ".[test]"' in install
-    # the install compiles the plants ahead, as CI does before the tests
     assert "python -m steamtemp_gym.precompile" in install
-    assert "\npython -m steamtemp_gym.precompile\npython -m pytest -n 2 -q\n" in ci
+
+
+def test_make_refuses_a_python_older_than_3_10(tmp_path):
+    """The set-up names the Python it needs and stops before making anything."""
+    fake = tmp_path / "python3.9"
+    fake.write_text("#!/bin/sh\nexec python3 -c 'import sys; sys.exit(1)'\n")
+    fake.chmod(0o755)
+    venv = tmp_path / "venv"
+    argv = ["make", "-C", str(ROOT), "setup", f"PYTHON={fake}", f"VENV={venv}"]
+    proc = subprocess.run(argv, capture_output=True, text=True)
+    assert proc.returncode != 0
+    assert "needs Python >= 3.10" in proc.stdout + proc.stderr
+    assert not venv.exists()
 
 
 def test_readme_is_a_guide():
     text = README.read_text(encoding="utf-8")
-    assert len(text.splitlines()) <= 300  # about 250, and the generated tables
+    assert len(text.splitlines()) <= 250
     assert not re.search(r"\[00\d\]", text)  # sources by the names of docs/references.md
     for link in re.findall(r"\]\(((?:docs|examples)/[^)#]+)", text):
         assert (ROOT / link).exists(), link
