@@ -17,8 +17,9 @@ take them: one parser for both, so a name means the same policy everywhere.
   dotted module importable from ``sys.path`` (``PYTHONPATH=.`` adds the current directory)
   or a ``.py`` file; ``callable`` may be dotted (``MyController.create``).
 
-:func:`parse` checks a name (importing a factory's module, finding an agent's files and
-checking that its model fits the observation and action spaces of the env it names);
+:func:`parse` checks a name (finding a factory's module file without importing it, an
+agent's files, and checking that its model fits the observation and action spaces of the
+env it names);
 :meth:`Spec.make` builds the policy for an env; :func:`check_built` checks what a factory
 returns; :meth:`Spec.digest` is what the leaderboard's fingerprint hashes: the name, with
 a baseline's stored tuning on the env, or the hash of a trained agent's files or of a
@@ -29,6 +30,7 @@ from __future__ import annotations
 
 import hashlib
 import importlib
+import importlib.machinery
 import importlib.util
 import json
 import re
@@ -124,10 +126,8 @@ class Spec:
             return (f"{self.name}:{_agent(self.target, env_id).digest()}:"
                     f"{code_digest(AGENT_MODULE)}")  # fmt: skip
         if self.kind == FACTORY:
-            module = _module(self.name, self.target.rsplit(":", 1)[0])
-            path = getattr(module, "__file__", None)
-            if path:
-                return self.name + ":" + provenance.file_digest(Path(path))
+            path = module_file(self.name, self.target.rsplit(":", 1)[0])
+            return self.name + ":" + provenance.file_digest(path)
         return self.name
 
 
@@ -217,7 +217,7 @@ def parse(name: str) -> Spec:
         return _files_spec(name, name[len(ZOO_PREFIX):])
     m = _FACTORY.match(name)
     if m:
-        _factory(name, name)
+        module_file(name, m.group("module"))  # found, not imported (module_file)
         return Spec(name, FACTORY, name)
     if "/" in name or "\\" in name or name.endswith(".zip"):
         return _files_spec(name, name)
@@ -315,6 +315,44 @@ def _agent(path: str, env_id: str):
         if f.env_id == env_id:
             return f
     raise ValueError(f"{path!r} holds no trained agent for {env_id}")
+
+
+def module_file(name: str, ref: str) -> Path:
+    """The source file of a factory's module (a dotted name or a ``.py`` file), found the
+    way an import would find it but without running any of its code or its packages':
+    the leaderboard names, checks and fingerprints a user's policy from its file, and
+    imports it only in the policy's own process (agents/leaderboard/isolated.py).
+
+    Raises:
+        ValueError: no such file or module, naming it.
+    """
+    if ref.endswith(".py"):
+        path = Path(ref).resolve()
+        if not path.is_file():
+            raise ValueError(f"policy {_show(name)}: cannot import {ref!r}: no file {ref!r}")
+        return path
+    parts, spec, done = ref.split("."), None, []
+    for part in parts:
+        done.append(part)
+        full = ".".join(done)
+        known = sys.modules.get(full)
+        if known is not None and getattr(known, "__spec__", None) is not None:
+            spec = known.__spec__
+        else:
+            where = None if spec is None else spec.submodule_search_locations
+            if spec is not None and where is None:  # a module, not a package: no submodules
+                spec = None
+            else:
+                spec = importlib.machinery.PathFinder.find_spec(full, where)
+        if spec is None:
+            raise ValueError(
+                f"policy {_show(name)}: cannot import {ref!r}: no module named {full!r} on "
+                "sys.path (PYTHONPATH=. adds the current directory)"
+            )
+    origin = getattr(spec, "origin", None)
+    if not origin or not Path(origin).is_file():
+        raise ValueError(f"policy {_show(name)}: cannot import {ref!r}: it has no source file")
+    return Path(origin)
 
 
 def _module(name: str, ref: str):

@@ -343,3 +343,83 @@ def test_ctrl_c_still_stops_the_run_and_ends_the_policys_process(files, tmp_path
     finally:
         if proc.poll() is None:
             proc.kill()
+
+
+# ------------------------------------------- a factory's module never runs in the leaderboard
+PATCHER = """
+import numpy as np
+
+from agents.leaderboard import episodes
+
+_real = episodes._ok_row
+
+
+def _forged(u, seed, metrics):
+    return _real(u, seed, dict(metrics, **{"return": 1e6}))
+
+
+episodes._ok_row = _forged  # scores every row of the process that imports this module
+
+
+class Shut:
+    def __init__(self, env):
+        pass
+
+    def reset(self):
+        pass
+
+    def predict(self, observation, state=None, episode_start=None, deterministic=True):
+        return -np.ones(np.shape(observation)[:-1] + (1,), dtype=np.float32), None
+
+
+def make(env):
+    return Shut(env)
+"""
+
+
+def test_a_factory_module_that_patches_the_scoring_at_import_changes_nothing(tmp_path):
+    """A module that replaces the leaderboard's row builder when imported: the leaderboard
+    never imports it (its name, checks and fingerprint come from its file), so every row,
+    its own included, is scored as in a clean run (it forged 1.19 from -6.81 and ranked
+    first when the leaderboard imported it)."""
+    (tmp_path / "patcher.py").write_text(PATCHER)
+    (tmp_path / "tiny.yaml").write_text(TINY)
+    real = episodes._ok_row
+    out = tmp_path / "out"
+    lb.main(["--envs", ENV, "--policies", f"cascade_pi,{tmp_path / 'patcher.py'}:make",
+             "--scenarios", str(tmp_path / "tiny.yaml"), "--seeds", "0", "--jobs", "1",
+             "--no-oracle", "--out", str(out)])  # fmt: skip
+    assert episodes._ok_row is real
+    assert "patcher" not in sys.modules
+    rows = _rows(out)
+    assert rows["make", 0]["metrics"]["return"] < 0  # the valve held shut, scored as it is
+    clean = tmp_path / "clean"
+    lb.main(["--envs", ENV, "--policies", "cascade_pi", "--scenarios",
+             str(tmp_path / "tiny.yaml"), "--seeds", "0", "--jobs", "1", "--no-oracle",
+             "--out", str(clean)])  # fmt: skip
+    for key, row in _rows(clean).items():
+        assert rows[key]["metrics"] == row["metrics"], key
+
+
+@pytest.mark.parametrize(("body", "words"), [
+    ("import os\nos._exit(0)\n", ["process ended (exit code 0) during its build"]),
+    ("import time\ntime.sleep(1000)\n", ["did not answer its build within 3 s"]),
+])  # fmt: skip
+def test_a_factory_module_that_ends_or_hangs_at_import_is_a_bad_policies_value(
+        tmp_path, capsys, body, words):  # fmt: skip
+    """os._exit at import ended the run with status 0, no output and no --out; a sleep at
+    import hung it past --episode-timeout. Now the module is first imported in the policy's
+    own process, at the run's check of its policies: an argparse error naming it, in about
+    the timeout, and nothing is written."""
+    (tmp_path / "hostile.py").write_text(body + "\ndef make(env):\n    return None\n")
+    (tmp_path / "tiny.yaml").write_text(TINY)
+    out = tmp_path / "out"
+    t0 = time.monotonic()
+    with pytest.raises(SystemExit) as exc:
+        lb.main(["--envs", ENV, "--policies", f"{tmp_path / 'hostile.py'}:make",
+                 "--scenarios", str(tmp_path / "tiny.yaml"), "--seeds", "0", "--no-oracle",
+                 "--episode-timeout", "3", "--out", str(out)])  # fmt: skip
+    err = capsys.readouterr().err
+    assert exc.value.code == 2 and "argument --policies" in err, err
+    assert all(w in err for w in words), err
+    assert not out.exists() and time.monotonic() - t0 < 60
