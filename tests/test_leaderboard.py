@@ -75,7 +75,9 @@ def fake_policies(monkeypatch):
     real = episodes._make_policy
 
     def make(name, env_id, env, *rest):
-        return Scripted(env, name) if name in ("frozen", "flaky") else real(name, env_id, env, *rest)
+        if name in ("frozen", "flaky"):
+            return Scripted(env, name)
+        return real(name, env_id, env, *rest)
 
     monkeypatch.setattr(episodes, "_make_policy", make)
     monkeypatch.setattr(Scripted, "FAIL", {})

@@ -24,7 +24,7 @@ from processes import alive, children
 
 from agents import leaderboard as lb
 from agents.evaluation import run_batch
-from agents.leaderboard import episodes, isolated, records
+from agents.leaderboard import episodes, isolated, records, sandbox
 from agents.leaderboard.plan import EPISODE_TIMEOUT_S
 
 ROOT = Path(__file__).parents[1]
@@ -423,3 +423,75 @@ def test_a_factory_module_that_ends_or_hangs_at_import_is_a_bad_policies_value(
     assert exc.value.code == 2 and "argument --policies" in err, err
     assert all(w in err for w in words), err
     assert not out.exists() and time.monotonic() - t0 < 60
+
+
+# ------------------------------------ a policy cannot kill the run or rewrite its record
+HOSTILE = POLICIES + """
+
+import signal
+
+
+def _kill_the_run():
+    os.kill(os.getppid(), signal.SIGKILL)  # the leaderboard, or the process that relays it
+
+
+def _kill_everything():
+    os.kill(-1, signal.SIGKILL)  # every process it may signal
+
+
+def _rewrite_the_record():
+    path = os.path.join(os.environ["STEAMTEMP_LEADERBOARD_OUT"], "episodes.jsonl")
+    with open(path, "a") as f:
+        f.write('{"env": "forged"}\\n')
+
+
+def kills_the_run(env):
+    return Scripted(env, _kill_the_run)
+
+
+def kills_everything(env):
+    return Scripted(env, _kill_everything)
+
+
+def rewrites_the_record(env):
+    return Scripted(env, _rewrite_the_record)
+"""
+
+
+@pytest.mark.skipif(sandbox.available() is not None, reason=f"no sandbox: {sandbox.available()}")
+@pytest.mark.parametrize(("hostile", "fails"), [
+    ("kills_the_run", None), ("kills_everything", "ProcessLookupError: [Errno 3] No such process"),
+    ("rewrites_the_record", "Read-only file system"),
+])  # fmt: skip
+def test_a_policy_can_neither_kill_the_run_nor_rewrite_its_record(tmp_path, hostile, fails):
+    """A policy that signals its parent (SIGKILL ended the run with status 137, and --resume
+    reran it forever), every process it may, or appends to the run's episodes.jsonl
+    (found from its parent's command line, it multiplied cascade_pi_ff's returns by 10):
+    in its walls (agents/leaderboard/sandbox.py) its signals reach no process but itself,
+    which as its namespace's first process ignores them (kill(-1) finds no process at all),
+    and the record is read-only to it.
+    Every other row equals a clean run's; the run ends as it would without the attack (0),
+    or as with any failing policy (1) where the attack raised in its predict. The run is a
+    process of its own here: without the walls the test's would be killed."""
+    (tmp_path / "pols.py").write_text(HOSTILE)
+    (tmp_path / "tiny.yaml").write_text(TINY)
+
+    def run(out: Path, policies: str) -> subprocess.CompletedProcess:
+        argv = [sys.executable, "-m", "agents.leaderboard", "--envs", ENV, "--policies",
+                policies, "--scenarios", str(tmp_path / "tiny.yaml"), "--seeds", "0,1",
+                "--jobs", "1", "--no-oracle", "--out", str(out)]  # fmt: skip
+        return subprocess.run(argv, cwd=ROOT, capture_output=True, text=True, timeout=600)
+
+    attacked = run(tmp_path / "out", f"cascade_pi,{tmp_path / 'pols.py'}:{hostile}")
+    assert attacked.returncode == (1 if fails else 0), attacked.stderr[-2000:]
+    rows = _rows(tmp_path / "out")
+    for s in (0, 1):
+        if fails:
+            assert fails in rows[hostile, s]["error"], rows[hostile, s]["error"]
+        else:
+            assert rows[hostile, s]["metrics"] is not None
+    clean = run(tmp_path / "clean", "cascade_pi")
+    assert clean.returncode == 0, clean.stderr[-2000:]
+    for key, row in _rows(tmp_path / "clean").items():
+        assert rows[key]["metrics"] == row["metrics"], key
+    assert "forged" not in (tmp_path / "out" / records.EPISODES).read_text()

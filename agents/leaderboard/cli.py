@@ -98,9 +98,10 @@ from typing import Any
 
 import steamtemp_gym
 from agents import ray_backend, stats
-from agents.leaderboard import references, report
+from agents.leaderboard import references, report, sandbox
 from agents.leaderboard.backends import _execute
-from agents.leaderboard.episodes import _finished, _units
+from agents.leaderboard.episodes import _finished, _units, own_process
+from agents.leaderboard.isolated import OUT_ENV
 from agents.leaderboard.outputs import Plots, _rebuild
 from agents.leaderboard.plan import (
     _EXCERPT,
@@ -277,6 +278,19 @@ def _use_stored_references(plan: Any, done: dict, record: Record) -> None:
               file=sys.stderr)  # fmt: skip
 
 
+def _say_what_walls_hold(plan: Any) -> None:
+    """A note at the start of a run with a policy in a process of its own where the OS
+    allows no namespaces (agents/leaderboard/sandbox.py): what does not hold then."""
+    if not any(own_process(p) for pols in plan.policies.values() for p in pols):
+        return
+    why = sandbox.available()
+    if why:
+        print(f"note: no sandbox for the policies that run in a process of their own ({why}): "
+              "they run in a session of their own under a memory limit, but could signal "
+              "this run and write its --out directory (docs/leaderboard.md, isolation)",
+              file=sys.stderr)  # fmt: skip
+
+
 def main(argv: list[str] | None = None) -> None:
     """Run the leaderboard (see the module docstring)."""
     with guard.watch():  # a policy module's own KeyboardInterrupt is not a Ctrl-C
@@ -293,7 +307,9 @@ def _main(argv: list[str] | None) -> None:
         ap.error("argument --ray-address: only with --backend ray")
     if args.backend == "ray" and not ray_backend.installed():
         ap.error(f"argument --backend: ray is not installed; {ray_backend.INSTALL}")
+    os.environ[OUT_ENV] = str(Path(args.out).resolve())  # read-only to a policy's process
     plan = build_plan(ap, args)
+    _say_what_walls_hold(plan)
     out = Path(args.out)
     try:
         out.mkdir(parents=True, exist_ok=True)

@@ -35,8 +35,12 @@ from typing import Any
 
 import gymnasium as gym
 
+from agents.leaderboard import sandbox
 from steamtemp_gym.testing import guard
 
+#: The environment variable naming the run's output directory, which a policy's process
+#: sees read-only (agents/leaderboard/sandbox.py); the leaderboard sets it at its start.
+OUT_ENV = "STEAMTEMP_LEADERBOARD_OUT"
 #: How often a child process checks that the process that started it is alive (s).
 PARENT_POLL_S = 0.5
 
@@ -229,7 +233,10 @@ def _serve(conn: Any, name: str, env_id: str, scenario: Any, num_envs: int | Non
     the policy fails (its failure is sent, then the process ends)."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C stops the leaderboard, which ends this
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
-    watch_parent(parent)
+    out = os.environ.get(OUT_ENV)
+    # from here on in the walls, or as near as the OS allows; the watch of the leaderboard
+    # stays outside them (a thread started before would keep the process out)
+    sandbox.enter((out,) if out else (), parent, lambda: watch_parent(parent), PARENT_POLL_S)
     from agents import specs
 
     try:
