@@ -449,6 +449,15 @@ def kills_the_run(env):
     return Scripted(env, _kill_the_run)
 
 
+class Bulky(Scripted):
+    def predict(self, observation, state=None, episode_start=None, deterministic=True):
+        return super().predict(observation)[0], np.zeros(10_000_000)  # 80 MB of state
+
+
+def bulky(env):
+    return Bulky(env)
+
+
 def kills_everything(env):
     return Scripted(env, _kill_everything)
 
@@ -462,6 +471,7 @@ def rewrites_the_record(env):
 @pytest.mark.parametrize(("hostile", "fails"), [
     ("kills_the_run", None), ("kills_everything", "ProcessLookupError: [Errno 3] No such process"),
     ("rewrites_the_record", "Read-only file system"),
+    ("bulky", "larger than 64 MiB: refused before it is read"),
 ])  # fmt: skip
 def test_a_policy_can_neither_kill_the_run_nor_rewrite_its_record(tmp_path, hostile, fails):
     """A policy that signals its parent (SIGKILL ended the run with status 137, and --resume
@@ -469,7 +479,8 @@ def test_a_policy_can_neither_kill_the_run_nor_rewrite_its_record(tmp_path, host
     (found from its parent's command line, it multiplied cascade_pi_ff's returns by 10):
     in its walls (agents/leaderboard/sandbox.py) its signals reach no process but itself,
     which as its namespace's first process ignores them (kill(-1) finds no process at all),
-    and the record is read-only to it.
+    and the record is read-only to it. An answer of 80 MB (one of 400 MB raised the run's
+    peak memory from 271 MB to 1,364 MB) is refused before it is read.
     Every other row equals a clean run's; the run ends as it would without the attack (0),
     or as with any failing policy (1) where the attack raised in its predict. The run is a
     process of its own here: without the walls the test's would be killed."""

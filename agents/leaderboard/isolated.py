@@ -41,6 +41,9 @@ from steamtemp_gym.testing import guard
 #: The environment variable naming the run's output directory, which a policy's process
 #: sees read-only (agents/leaderboard/sandbox.py); the leaderboard sets it at its start.
 OUT_ENV = "STEAMTEMP_LEADERBOARD_OUT"
+#: The largest answer a policy's process may send (bytes, pickled): an action is a few
+#: numbers per row, a recurrent policy's state a few arrays of them.
+ANSWER_BYTES = 64 * 2**20
 #: How often a child process checks that the process that started it is alive (s).
 PARENT_POLL_S = 0.5
 
@@ -191,8 +194,19 @@ class PolicyProcess:
                 raise PolicyTimeout(f"timed out: the policy did not answer its {what} within "
                                     f"{limit:g} s{n} (--episode-timeout {self.timeout:g}); its "
                                     "process was ended")  # fmt: skip
-            data = self._conn.recv_bytes()
-        except (EOFError, OSError):
+            data = self._conn.recv_bytes(ANSWER_BYTES)
+        except OSError as exc:
+            if self._proc.is_alive() and "bad message length" in str(exc):
+                self.close()
+                raise PolicyFailed(f"the policy's answer to its {what} is larger than "
+                                   f"{ANSWER_BYTES // 2**20} MiB: refused before it is read "
+                                   "(an action is a few numbers per row)") from None  # fmt: skip
+            self._proc.join(5)
+            code = self._proc.exitcode
+            self.close()
+            raise PolicyFailed(f"the policy's process ended (exit code {code}) during its "
+                               f"{what}") from None  # fmt: skip
+        except EOFError:
             self._proc.join(5)
             code = self._proc.exitcode
             self.close()
