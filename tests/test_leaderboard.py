@@ -234,6 +234,29 @@ def test_corrupt_record_line_is_an_error_on_resume(tiny, tmp_path, fake_policies
     assert "line 1" in err and "--resume" in err and "Traceback" not in err
 
 
+@pytest.mark.parametrize("value", ["1e308", "true", "-2e15"])
+def test_a_row_with_a_return_no_episode_gives_is_an_error_on_resume(
+        tiny, tmp_path, fake_policies, capsys, value):  # fmt: skip
+    """A row appended to the record with a return of 1e308 or true was taken by --resume,
+    and the run then crashed in matplotlib; now it is an argparse error naming the line and
+    the file is left as it was."""
+    out = tmp_path / "out"
+    lb.main(_args(tiny, out, **{"--seeds": "0"}))
+    lines = (out / records.EPISODES).read_text().splitlines()
+    row = json.loads(lines[0])
+    forged = json.dumps({**row, "metrics": {**row["metrics"]}})
+    forged = forged.replace(f'"return": {json.dumps(row["metrics"]["return"])}',
+                            f'"return": {value}')  # fmt: skip
+    text = "\n".join([*lines, forged, lines[0]]) + "\n"
+    (out / records.EPISODES).write_text(text)
+    with pytest.raises(SystemExit) as exc:
+        lb.main([*_args(tiny, out, **{"--seeds": "0"}), "--resume"])
+    assert exc.value.code == 2
+    err = capsys.readouterr().err
+    assert f"line {len(lines) + 1}" in err and "return" in err and "Traceback" not in err, err
+    assert (out / records.EPISODES).read_text() == text
+
+
 def test_duplicates_are_dropped_in_order(tiny, tmp_path, fake_policies, capsys):
     ap = cli.make_parser()
     flags = {

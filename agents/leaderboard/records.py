@@ -95,10 +95,22 @@ def _row(line: bytes) -> dict:
     missing = [k for k in metric_keys(plants.plant_class(row["env"]).secondary) if k not in metrics]
     if missing:
         raise ValueError(f"metrics lack {missing[:5]}{' ...' if len(missing) > 5 else ''}")
-    bad = [k for k, v in metrics.items() if v is not None and not isinstance(v, (int, float))]
+    bad = [k for k, v in metrics.items() if v is not None and not _metric_value(v)]
     if bad:
-        raise ValueError(f"metrics {bad[:5]} are not numbers")
+        raise ValueError(f"metrics {bad[:5]} are not numbers an episode gives (a bool, or "
+                         f"beyond {METRIC_BOUND:g} in magnitude)")  # fmt: skip
     return row
+
+
+#: No metric of an episode is larger in magnitude (a return is at most the trip penalty,
+#: 1e6, plus 1e4 per step at the largest reward weights).
+METRIC_BOUND = 1e15
+
+
+def _metric_value(v: object) -> bool:
+    """Whether ``v`` is a number an episode's metric can take (not a bool, not beyond
+    :data:`METRIC_BOUND`)."""
+    return isinstance(v, (int, float)) and not isinstance(v, bool) and abs(v) <= METRIC_BOUND
 
 
 def _reject_constant(name: str) -> None:
