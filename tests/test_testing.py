@@ -368,6 +368,14 @@ def test_a_factory_ending_the_process_is_a_bad_policy(tmp_path, capsys):
     assert "SystemExit: 4 (raised by the factory" in capsys.readouterr().err
 
 
+def test_nothing_selected_is_an_error_not_a_pass(capsys):
+    """--no-env-checks with no --policy checked 0 things and exited 0."""
+    with pytest.raises(SystemExit) as exc:
+        main([CASCADE, "--no-env-checks", "--quick"])
+    assert exc.value.code == 2
+    assert "nothing to check" in capsys.readouterr().err
+
+
 def test_a_subject_whose_every_check_was_skipped_is_not_a_pass(capsys, monkeypatch):
     """A shipped agent checked on a plant it was not trained for checks nothing: exit 1,
     naming the subject and why (it printed '0 passed, 0 failed, 8 skipped' and exited 0)."""

@@ -148,6 +148,10 @@ def _main(argv: Sequence[str] | None) -> int:
     _check_scenarios(parser, args.scenario, ids)
     checks = bound_checks(policies, args.quick, env=not args.no_env_checks, only=args.check,
                           scenarios=args.scenario)  # fmt: skip
+    if not checks:
+        parser.error("nothing to check: --no-env-checks leaves the env's checks out and no "
+                     "--policy (or --check) selects a policy's; drop --no-env-checks or "
+                     "name a policy")  # fmt: skip
     t0, results = time.perf_counter(), []
     for env_id in ids:
         for check in checks:
