@@ -57,7 +57,11 @@ def register_plant(plant_id: str, entry: str) -> None:
     from steamtemp_gym.plants.base import Plant
 
     catalog.add(plant_id, entry, Plant)
-    _register(plant_id)
+    try:
+        _register(plant_id)
+    except Exception as exc:  # noqa: BLE001 - Gymnasium's refusal: the catalog as before
+        del catalog.PLANTS[plant_id]
+        raise ValueError(f"plant id {plant_id!r}: Gymnasium refuses it: {exc}") from None
     ENV_IDS = tuple(catalog.PLANTS)
 
 

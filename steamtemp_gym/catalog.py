@@ -27,20 +27,50 @@ def add(plant_id: str, entry: str, base: type) -> None:
     and of the form ``namespace/Name-vN`` and that the class is a subclass of ``base`` (the
     Plant class) of that id; ValueError otherwise, nothing added
     (``steamtemp_gym.register_plant``)."""
-    if not isinstance(plant_id, str) or not re.fullmatch(r"[\w.-]+/[\w.-]+-v\d+", plant_id):
-        raise ValueError(f"a plant id is namespace/Name-vN, got {str(plant_id)[:80]!r}")
+    valid = re.fullmatch(r"[\w.-]+/[\w.-]+-v(0|[1-9]\d*)", plant_id) if isinstance(
+        plant_id, str) else None  # fmt: skip
+    if not valid:
+        raise ValueError(f"a plant id is namespace/Name-vN (N without leading zeros), got "
+                         f"{str(plant_id)[:80]!r}")  # fmt: skip
     if plant_id in PLANTS:
         raise ValueError(f"plant id {plant_id!r} is taken (by {PLANTS[plant_id]})")
+    taken = _gymnasium_owner(plant_id)
+    if taken:
+        raise ValueError(f"plant id {plant_id!r} is taken in Gymnasium's registry ({taken})")
     module, _, name = entry.partition(":") if isinstance(entry, str) else ("", "", "")
     try:
         cls = getattr(importlib.import_module(module), name) if module and name else None
-    except (ImportError, AttributeError) as exc:
-        raise ValueError(f"plant entry {entry!r}: {exc}") from None
+    except BaseException as exc:  # noqa: BLE001 - the module's own failure, SystemExit too
+        if isinstance(exc, KeyboardInterrupt):
+            raise
+        raise ValueError(f"plant entry {str(entry)[:80]!r}: {type(exc).__name__}: "
+                         f"{str(exc)[:300]}") from None  # fmt: skip
     is_plant = isinstance(cls, type) and issubclass(cls, base)
     if not is_plant or getattr(cls, "id", None) != plant_id:
         raise ValueError(f"plant entry {str(entry)[:80]!r} must name a subclass of Plant "
                          f"whose id is {plant_id!r}")  # fmt: skip
+    try:
+        cls.skeleton()
+    except Exception as exc:  # noqa: BLE001 - a declaration it lacks or gets wrong
+        raise ValueError(f"plant entry {str(entry)[:80]!r} is not a complete plant (its "
+                         f"declarations, docs/architecture.md): {type(exc).__name__}: "
+                         f"{str(exc)[:300]}") from None  # fmt: skip
     PLANTS[plant_id] = entry
+
+
+def _gymnasium_owner(plant_id: str) -> str:
+    """The entry point of an env in Gymnasium's registry that ``plant_id`` would replace or
+    clash with (the same namespace, name and version as Gymnasium parses them, or a
+    versioned id whose unversioned name is registered), "" if none."""
+    import gymnasium as gym
+    from gymnasium.envs.registration import parse_env_id
+
+    ns, name, version = parse_env_id(plant_id)
+    for key, spec in gym.envs.registry.items():
+        other = parse_env_id(key)
+        if other[:2] == (ns, name) and other[2] in (version, None):
+            return f"{key}: {spec.entry_point}"
+    return ""
 
 
 def packaged(plant_id: str) -> bool:

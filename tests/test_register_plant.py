@@ -34,8 +34,28 @@ def test_the_toy_plant_is_registered_as_the_package_plants_are():
     ("test/Other-v0", "toy_plant", "must name a subclass of Plant"),
     ("test/Other-v0", "toy_plant:ToyParams", "must name a subclass of Plant"),
     ("test/Other-v0", "toy_plant:ToyLags", "whose id is 'test/Other-v0'"),
+    # Gymnasium reads -v00 as -v0: it replaced the shipped env, fingerprints and all
+    ("steamtemp/SupercriticalFSH-v00", "toy_plant:ToyLags", "without leading zeros"),
+    # an id Gymnasium already holds, or whose unversioned name it holds
+    ("test/CartPole-v1", "toy_plant:ToyLags", "taken in Gymnasium's registry"),
+    ("test/Unversioned-v0", "toy_plant:ToyLags", "taken in Gymnasium's registry"),
+    # a module that fails at import in any way, and a Plant with no declarations
+    ("test/Other-v0", "hostile_plants_raise:X", "RuntimeError: at import"),
+    ("test/Other-v0", "hostile_plants_syntax:X", "SyntaxError"),
+    ("test/Other-v0", "hostile_plants_exit:X", "SystemExit"),
+    ("test/Bare-v0", "hostile_plants:Bare", "not a complete plant"),
 ])  # fmt: skip
-def test_a_bad_registration_is_refused_and_registers_nothing(plant_id, entry, match):
+def test_a_bad_registration_is_refused_and_registers_nothing(plant_id, entry, match, tmp_path,
+                                                            monkeypatch):  # fmt: skip
+    (tmp_path / "hostile_plants.py").write_text(
+        "from steamtemp_gym.plants import Plant\n\n\nclass Bare(Plant):\n    id = 'test/Bare-v0'\n"
+    )
+    (tmp_path / "hostile_plants_raise.py").write_text("raise RuntimeError('at import')\n")
+    (tmp_path / "hostile_plants_syntax.py").write_text("def (:\n")
+    (tmp_path / "hostile_plants_exit.py").write_text("raise SystemExit(3)\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    for name in ("test/CartPole-v1", "test/Unversioned"):
+        monkeypatch.setitem(gym.registry, name, gym.registry["CartPole-v1"])
     ids, plants_, envs = steamtemp_gym.ENV_IDS, dict(catalog.PLANTS), set(gym.registry)
     with pytest.raises(ValueError, match=match):
         steamtemp_gym.register_plant(plant_id, entry)
