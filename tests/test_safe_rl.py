@@ -185,9 +185,19 @@ def test_cost_limit_of_every_named_scenario():
     assert cost_limit(ramp, 2.0) == 0.05 * ramp.duration_s / 2.0
     mine = sc.Scenario(name="mine", duration_s=600.0)
     assert cost_limit(mine, 1) == DEFAULT_COST_LIMIT_SHARE * 600.0
+    trip = sc.resolve("heldout:mill_trip", "steamtemp/SupercriticalFSH-v0")
+    assert cost_limit(trip, 2.0) == COST_LIMIT_SHARE["mill_trip"] * trip.duration_s / 2.0
 
 
-@pytest.mark.parametrize("dt", [0.0, -1.0, math.nan, math.inf, True, "2", None])
+def test_a_scenario_of_ones_own_under_a_shipped_name_gets_the_default_share():
+    """A YAML named ``mill_trip`` got that scenario's 0.45 share; docs/safe_rl.md promises
+    any scenario of one's own the default 0.10."""
+    mine = sc.Scenario(name="mill_trip", duration_s=600.0)
+    assert COST_LIMIT_SHARE["mill_trip"] != DEFAULT_COST_LIMIT_SHARE
+    assert cost_limit(mine, 2.0) == DEFAULT_COST_LIMIT_SHARE * 600.0 / 2.0
+
+
+@pytest.mark.parametrize("dt", [0.0, -1.0, math.nan, math.inf, True, "2", None, 1e-320])
 def test_cost_limit_refuses_a_bad_interval(dt):
     with pytest.raises(ValueError, match="dt_s"):
         cost_limit(sc.get("setpoint_step"), dt)

@@ -26,6 +26,7 @@ episode's control intervals (:data:`COST_LIMIT_SHARE` by scenario name,
 
 from __future__ import annotations
 
+import functools
 import math
 from typing import Any
 
@@ -88,12 +89,13 @@ def interval_cost(e0: float, e1: float) -> float:
 
 def cost_limit(scenario: Any, dt_s: float) -> float:
     """The default limit of an episode's summed cost on ``scenario`` at control interval
-    ``dt_s`` (s): its share (:data:`COST_LIMIT_SHARE` by name, else
-    :data:`DEFAULT_COST_LIMIT_SHARE`) of the episode's ``duration_s / dt_s`` intervals.
+    ``dt_s`` (s): its share (:data:`COST_LIMIT_SHARE` for the package's scenario of that
+    name, else :data:`DEFAULT_COST_LIMIT_SHARE`: a YAML file or Scenario of one's own, even
+    under a shipped scenario's name) of the episode's ``duration_s / dt_s`` intervals.
 
     Raises:
         ValueError: ``scenario`` is not a Scenario, or ``dt_s`` is not a positive finite
-            number.
+            number or so small that the limit is not finite.
     """
     if not isinstance(scenario, Scenario):
         raise ValueError(f"cost_limit needs a Scenario, got {type(scenario).__name__}")
@@ -101,4 +103,28 @@ def cost_limit(scenario: Any, dt_s: float) -> float:
             not (math.isfinite(dt_s) and dt_s > 0)):  # fmt: skip
         raise ValueError(f"dt_s must be a positive finite number of seconds, got {dt_s!r}")
     share = COST_LIMIT_SHARE.get(scenario.name, DEFAULT_COST_LIMIT_SHARE)
-    return share * scenario.duration_s / float(dt_s)
+    if share != DEFAULT_COST_LIMIT_SHARE and not _shipped(scenario):
+        share = DEFAULT_COST_LIMIT_SHARE  # a scenario of its own under a shipped one's name
+    limit = share * scenario.duration_s / float(dt_s)
+    if not math.isfinite(limit):
+        raise ValueError(f"dt_s {dt_s!r} is too small: the limit of a {scenario.duration_s:g} s "
+                         "episode would not be finite")  # fmt: skip
+    return limit
+
+
+@functools.lru_cache(maxsize=256)
+def _shipped(scenario: Scenario) -> bool:
+    """Whether ``scenario`` is the package's scenario of its name (named or held-out, for
+    some plant or none), not a scenario of one's own that bears the name."""
+    # imported here: the scenario registry reads the plant catalog, whose plants import the
+    # env core, which imports this module
+    from steamtemp_gym import catalog, scenarios
+
+    for spec in (scenario.name, scenarios.HELDOUT_PREFIX + scenario.name):
+        for plant_id in (None, *catalog.PLANTS):
+            try:
+                if scenarios.resolve(spec, plant_id) == scenario:
+                    return True
+            except ValueError:
+                continue
+    return False
