@@ -117,3 +117,28 @@ def test_without_a_design_spray_the_reward_charges_all_spray(monkeypatch):
         spray = core.Z[0, core.spray_idx].sum()
         assert spray > 0.0
         assert r == pytest.approx(-spray / scale, rel=1e-12)
+
+
+@pytest.mark.parametrize("seed", ["a", -1, 1.5, True, np.bool_(True), np.float64(2.0)])
+def test_a_bad_seed_is_the_same_value_error_in_the_single_and_the_vector_env(seed):
+    """The single env raised Gymnasium's Error for 'a', -1 and 1.5 and took True; the
+    vector env refused True. Now both raise ValueError and change nothing."""
+    env = gym.make("steamtemp/Cascade300MW-v0")
+    obs, _ = env.reset(seed=4)
+    with pytest.raises(ValueError, match="seed"):
+        env.reset(seed=seed)
+    venv = gym.make_vec("steamtemp/Cascade300MW-v0", num_envs=2,
+                        vectorization_mode="vector_entry_point")  # fmt: skip
+    with pytest.raises(ValueError, match="seed"):
+        venv.reset(seed=seed)
+    np.testing.assert_array_equal(env.unwrapped.core.obs[0], obs)
+
+
+def test_a_numpy_integer_seed_is_its_integer_in_the_single_and_the_vector_env():
+    env = gym.make("steamtemp/Cascade300MW-v0")
+    a = env.reset(seed=np.int64(3))[0]
+    b = env.reset(seed=3)[0]
+    venv = gym.make_vec("steamtemp/Cascade300MW-v0", num_envs=1,
+                        vectorization_mode="vector_entry_point")  # fmt: skip
+    np.testing.assert_array_equal(a, b)
+    np.testing.assert_array_equal(venv.reset(seed=np.int64(3))[0][0], b)

@@ -18,7 +18,7 @@ import gymnasium as gym
 import numpy as np
 
 from steamtemp_gym import scenarios as sc
-from steamtemp_gym.checks import key_list
+from steamtemp_gym.checks import is_integer, key_list
 from steamtemp_gym.envs import options as opts
 from steamtemp_gym.envs import snapshot as snap_
 from steamtemp_gym.envs.core import Core, check_action
@@ -119,6 +119,11 @@ class SteamTempEnv(gym.Env):
         """Start an episode (module docstring); all or nothing: if it cannot start (a
         ValueError: a scenario or drawn plant that cannot hold its start), the env, its
         episode and its generator are as before."""
+        if seed is not None:  # the vector env's rule: an integer >= 0, numpy's too, no bool
+            if not (is_integer(seed) and seed >= 0):
+                raise ValueError(f"seed must be None or a non-negative integer, got "
+                                 f"{str(seed)[:100]!r} ({type(seed).__name__})")  # fmt: skip
+            seed = int(seed)
         spec = scenario_option(options, self._scenario_spec, self.plant.id)
         rng, rng_seed = self._np_random, self._np_random_seed
         rng_state = None if rng is None else rng.bit_generator.state
