@@ -23,6 +23,7 @@ Without any source the checker takes policy factories only.
 
 from __future__ import annotations
 
+import sys
 from importlib.metadata import entry_points
 from typing import Any
 
@@ -30,6 +31,7 @@ from typing import Any
 GROUP = "steamtemp_gym.policies"
 _ATTRS = ("parse", "FORMS", "everyday_names", "listing")
 _registered: list[Any] = []
+_warned: set[str] = set()
 
 
 def _check(source: Any, where: str) -> Any:
@@ -55,16 +57,29 @@ def unregister(source: Any) -> None:
 
 def find() -> Any | None:
     """The policy source in use: the last registered, else the first declared under
-    :data:`GROUP` (by entry-point name), else None."""
+    :data:`GROUP` (by entry-point name) that loads and has every attribute (a broken one is
+    passed over, said once on stderr), else None."""
     if _registered:
         return _registered[0]
     for ep in sorted(entry_points(group=GROUP), key=lambda e: e.name):
+        where = f"{ep.name} = {ep.value}"
         try:
-            source = ep.load()
+            return _check(ep.load(), where)
         except ImportError:  # declared by a distribution whose code is not importable here
             continue
-        return _check(source, f"{ep.name} = {ep.value}")
+        except KeyboardInterrupt:
+            raise
+        except BaseException as exc:  # noqa: BLE001 - a broken source: said, and passed over
+            _warn(where, exc)
     return None
+
+
+def _warn(where: str, exc: BaseException) -> None:
+    """Say once on stderr that the declared source ``where`` is passed over, and why."""
+    if where not in _warned:
+        _warned.add(where)
+        print(f"note: the policy source {where} (entry point group {GROUP}) is passed over: "
+              f"{type(exc).__name__}: {str(exc)[:200]}", file=sys.stderr)  # fmt: skip
 
 
 def parse(name: str) -> Any:
