@@ -322,6 +322,24 @@ def test_a_non_finite_trip_restores():
     running = dataclasses.replace(snap, waiting=np.zeros(1, dtype=bool))
     with pytest.raises(ValueError, match="NaN"):
         other.unwrapped.restore(running)
+    assert np.isfinite(snap.arrays["obs"]).all()  # the env's own snapshot hands out no NaN
+
+
+@pytest.mark.parametrize("field", ["obs", "reward"])
+def test_a_waiting_row_that_would_hand_out_nan_is_refused(field):
+    """restore() of a snapshot whose waiting row holds NaN in its observation or reward
+    gave an observation the env itself never produces; now it is refused, changing nothing."""
+    env = gym.make("steamtemp/Cascade300MW-v0", scenario=SHORT)
+    env.reset(seed=0)
+    snap = env.unwrapped.snapshot()
+    arrays = {k: v.copy() for k, v in snap.arrays.items()}
+    arrays[field][0] = np.nan
+    forged = dataclasses.replace(snap, arrays=arrays, waiting=np.ones(1, dtype=bool))
+    other = gym.make("steamtemp/Cascade300MW-v0", scenario=SHORT)
+    obs, _ = other.reset(seed=1)
+    with pytest.raises(ValueError, match=f"arrays\\['{field}'\\].*NaN"):
+        other.unwrapped.restore(forged)
+    np.testing.assert_array_equal(other.unwrapped.core.obs[0], obs)
 
 
 #: Ranges of Cascade300MW's section gains whose draws cannot hold most starts.

@@ -61,6 +61,10 @@ GENERATOR = np.random.PCG64
 #: The per-row arrays of envs/core.py:Core that make a row's state (first axis: the row;
 #: the schedule-table slot follows the row's scenario).
 ROW_ARRAYS = tuple(name for name in ROW_FIELDS if name != "slot")
+#: The arrays a restored row hands out (its observation and reward): finite in every row,
+#: a waiting one included (a row that tripped on a non-finite state holds NaN in its plant
+#: state and outputs only).
+HANDED_OUT = ("obs", "reward")
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -276,6 +280,9 @@ def _check_arrays(core: Any, arrays: Any, n: int, waiting: np.ndarray) -> None:
         if a.dtype.kind == "f" and not np.isfinite(a[running]).all():
             raise ValueError(f"snapshot's arrays[{name!r}] holds NaN or infinite values in a "
                              "running row")  # fmt: skip
+        if name in HANDED_OUT and not np.isfinite(a).all():  # the env never hands these out
+            raise ValueError(f"snapshot's arrays[{name!r}] holds NaN or infinite values (the "
+                             "env's observations and rewards are finite in every row)")  # fmt: skip
         if name == "counter" and (a < 0).any():
             raise ValueError(f"snapshot's arrays['counter'] must be >= 0, got {a.tolist()[:5]}")
 
