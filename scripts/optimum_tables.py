@@ -74,6 +74,11 @@ def tables(store: Path = optima.STORE) -> str:
             f"| {100 * grow:.0f} % | {mpc_old:.2f} -> {mpc_new:.2f} "
             f"| {np.mean(cpu):.0f}, {np.max(cpu):.0f} |"
         )
+    total = sum(r["cpu_s"] for r in records)
+    lines += ["", f"CPU of the {len(records)} stored episodes: {total / 3600:.1f} h of one core "
+              f"in all, {total / max(len(records), 1):.0f} s an episode (warm starts, both "
+              "refined starts and the certificate; `python -m agents.leaderboard.optima "
+              "--jobs N` spreads them over N cores, `--backend ray` over a cluster)."]
     failing = [r for r in records if not r["certificate"]["holds"]]
     lines += [
         "",
