@@ -399,10 +399,10 @@ def test_policy_that_cannot_be_built_fails_its_episodes_only(
 ):
     make = episodes._make_policy
 
-    def broken(name, env_id, env):
+    def broken(name, env_id, env, *rest):
         if name == "flaky":
             raise ValueError("no such tuning")
-        return make(name, env_id, env)
+        return make(name, env_id, env, *rest)
 
     monkeypatch.setattr(episodes, "_make_policy", broken)
     out = tmp_path / "out"

@@ -54,7 +54,7 @@ def _edit(path: Path, old: str, new: str) -> None:
 def test_the_digests_read_the_copy(tree):
     """Sanity: the fixture's copy is what the digests hash (an edit there shows)."""
     before = _digests()
-    _edit(tree / "agents" / "oracle.py", "import math\n", "import math\n_PROBE = 1\n")
+    _edit(tree / "agents" / "oracle.py", "import sys\n", "import sys\n_PROBE = 1\n")
     after = _digests()
     assert {k for k in before if before[k] != after[k]} == {
         (e, "oracle") for e in OWN}  # fmt: skip
