@@ -331,6 +331,17 @@ def _positive(kind: type, what: str):
     return parse
 
 
+def _seed(text: str) -> int:
+    """``--seed``: an integer in [0, 2**32), what numpy and torch take."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not an integer: {text[:40]!r}") from None
+    if not 0 <= value < 2**32:
+        raise argparse.ArgumentTypeError(f"{text[:40]} is outside [0, 2**32)")
+    return value
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(prog="python -m agents.behaviour_cloning",
                                  description=(__doc__ or "").split("\n")[0])  # fmt: skip
@@ -347,7 +358,7 @@ def main(argv: list[str] | None = None) -> int:
                     "~/.minari/datasets)")  # fmt: skip
     ap.add_argument("--epochs", type=_positive(int, "--epochs"), default=10)
     ap.add_argument("--max-minutes", type=_positive(float, "--max-minutes"), default=2.0)
-    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--seed", type=_seed, default=0)
     ap.add_argument("--run", type=_positive(int, "--run"), default=None, metavar="K",
                     help="write run K's files (<env>__bc__runK), as steamtemp-train --runs "
                     "names them")  # fmt: skip
@@ -361,6 +372,9 @@ def main(argv: list[str] | None = None) -> int:
         ap.error("argument --env: only with --zoo (a dataset names its plant)")
     if not args.zoo and args.out is None:
         ap.error("argument --out is required with --dataset")
+    for flag, path in (("--out", args.out), ("--data-dir", args.data_dir)):
+        if path is not None and Path(path).exists() and not Path(path).is_dir():
+            ap.error(f"argument {flag}: {str(path)[:200]!r} is a file, not a folder")
     try:
         env_ids = [envs_.resolve_id(e) for e in args.envs or steamtemp_gym.ENV_IDS]
     except ValueError as exc:
@@ -389,9 +403,13 @@ def main(argv: list[str] | None = None) -> int:
         ap.error(f"argument --dataset: no dataset {args.dataset!r} in "
                  f"{os.environ.get('MINARI_DATASETS_PATH', '~/.minari/datasets')} "
                  "(python -m agents.datasets makes one)")  # fmt: skip
-    model, meta = train(args.dataset, args.out, plain=args.plain, epochs=args.epochs,
-                        seed=args.seed, max_seconds=60.0 * args.max_minutes, run=args.run,
-                        log=say)  # fmt: skip
+    try:
+        model, meta = train(args.dataset, args.out, plain=args.plain, epochs=args.epochs,
+                            seed=args.seed, max_seconds=60.0 * args.max_minutes, run=args.run,
+                            log=say)  # fmt: skip
+    except (ValueError, OSError, KeyError, IndexError, TypeError) as exc:  # its files' fault
+        ap.error(f"argument --dataset: {args.dataset!r} cannot be learnt from: "
+                 f"{type(exc).__name__}: {str(exc)[:300]}")  # fmt: skip
     print(f"{model} and {meta}: score it with steamtemp-leaderboard --policies "
           f"zoo:{args.out}")
     return 0

@@ -401,6 +401,9 @@ def make_parser() -> argparse.ArgumentParser:
 def main(argv: list[str] | None = None) -> int:
     ap = make_parser()
     args = ap.parse_args(argv)
+    if args.data_dir is not None and Path(args.data_dir).exists() and not Path(
+            args.data_dir).is_dir():  # fmt: skip
+        ap.error(f"argument --data-dir: {str(args.data_dir)[:200]!r} is a file, not a folder")
     try:
         import minari  # noqa: F401
     except ImportError:
