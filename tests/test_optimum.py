@@ -90,7 +90,8 @@ def test_the_adjoint_gradient_matches_finite_differences_of_the_return(env_id):
 def test_the_search_never_returns_less_than_its_best_start_and_certifies_itself():
     """On a short Benson episode: from the held commands and a worse start, the optimum's
     exact return is above both, its certificate is computed from two paths, and the
-    independent finite-difference refinement adds less than 1 % of the headroom."""
+    independent finite-difference refinement adds less than 1 % of the headroom to it
+    (from the held commands it finds a good part of the way)."""
     env_id = "steamtemp/BensonSubcritical-v0"
     _, ep = _episode(env_id, seed=3)
     held = optimum.to_actions(np.repeat(ep.u_init[None], ep.T, axis=0))
@@ -105,6 +106,9 @@ def test_the_search_never_returns_less_than_its_best_start_and_certifies_itself(
     assert [p["start"] for p in out["paths"]] == ["held", "worse"]
     gain, _ = optimum.independent_check(ep, out["actions"], knots_s=(60.0, 20.0), iterations=2)
     assert gain <= 0.01 * cert["headroom"], (gain, cert)
+    # the check can fail: from the held commands it finds much of the headroom
+    power, _ = optimum.independent_check(ep, held, knots_s=(60.0, 20.0), iterations=2)
+    assert power > 0.05 * (out["return"] - returns["held"]), power
 
 
 def test_the_oracle_takes_a_stored_optimum_only_where_it_replays(tmp_path, capsys):
