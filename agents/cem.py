@@ -125,8 +125,7 @@ class Planner:
         rngs = [np.random.default_rng([int(keys[r]), int(steps[r])]) for r in rows]
         best, best_ret = mean.copy(), np.full(n, -np.inf)
         for _ in range(b.iterations):
-            eps = np.stack([g.standard_normal((self.samples - 1, *mean.shape[1:]))
-                            for g in rngs])  # fmt: skip
+            eps = np.stack([g.standard_normal((self.samples - 1, *mean.shape[1:])) for g in rngs])
             cand = np.empty((n, self.samples, *mean.shape[1:]))
             cand[:, 1:] = np.clip(mean[:, None] + sigma[:, None] * eps, 0.0, 1.0)
             cand[:, 0] = best

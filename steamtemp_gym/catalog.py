@@ -27,11 +27,15 @@ def add(plant_id: str, entry: str, base: type) -> None:
     and of the form ``namespace/Name-vN`` and that the class is a subclass of ``base`` (the
     Plant class) of that id; ValueError otherwise, nothing added
     (``steamtemp_gym.register_plant``)."""
-    valid = re.fullmatch(r"[\w.-]+/[\w.-]+-v(0|[1-9]\d*)", plant_id) if isinstance(
-        plant_id, str) else None  # fmt: skip
+    valid = (
+        re.fullmatch(r"[\w.-]+/[\w.-]+-v(0|[1-9]\d*)", plant_id)
+        if isinstance(plant_id, str)
+        else None
+    )
     if not valid:
-        raise ValueError(f"a plant id is namespace/Name-vN (N without leading zeros), got "
-                         f"{str(plant_id)[:80]!r}")  # fmt: skip
+        raise ValueError(
+            f"a plant id is namespace/Name-vN (N without leading zeros), got {str(plant_id)[:80]!r}"
+        )
     if plant_id in PLANTS:
         raise ValueError(f"plant id {plant_id!r} is taken (by {PLANTS[plant_id]})")
     taken = _gymnasium_owner(plant_id)
@@ -43,8 +47,9 @@ def add(plant_id: str, entry: str, base: type) -> None:
     except BaseException as exc:  # noqa: BLE001 - the module's own failure, SystemExit too
         if isinstance(exc, KeyboardInterrupt):
             raise
-        raise ValueError(f"plant entry {str(entry)[:80]!r}: {type(exc).__name__}: "
-                         f"{str(exc)[:300]}") from None  # fmt: skip
+        raise ValueError(
+            f"plant entry {str(entry)[:80]!r}: {type(exc).__name__}: {str(exc)[:300]}"
+        ) from None
     is_plant = isinstance(cls, type) and issubclass(cls, base)
     if not is_plant or getattr(cls, "id", None) != plant_id:
         raise ValueError(f"plant entry {str(entry)[:80]!r} must name a subclass of Plant "
@@ -52,9 +57,11 @@ def add(plant_id: str, entry: str, base: type) -> None:
     try:
         cls.skeleton()
     except Exception as exc:  # noqa: BLE001 - a declaration it lacks or gets wrong
-        raise ValueError(f"plant entry {str(entry)[:80]!r} is not a complete plant (its "
-                         f"declarations, docs/architecture.md): {type(exc).__name__}: "
-                         f"{str(exc)[:300]}") from None  # fmt: skip
+        raise ValueError(
+            f"plant entry {str(entry)[:80]!r} is not a complete plant (its "
+            f"declarations, docs/architecture.md): {type(exc).__name__}: "
+            f"{str(exc)[:300]}"
+        ) from None
     PLANTS[plant_id] = entry
 
 

@@ -78,8 +78,11 @@ def _warn(where: str, exc: BaseException) -> None:
     """Say once on stderr that the declared source ``where`` is passed over, and why."""
     if where not in _warned:
         _warned.add(where)
-        print(f"note: the policy source {where} (entry point group {GROUP}) is passed over: "
-              f"{type(exc).__name__}: {str(exc)[:200]}", file=sys.stderr)  # fmt: skip
+        print(
+            f"note: the policy source {where} (entry point group {GROUP}) is passed over: "
+            f"{type(exc).__name__}: {str(exc)[:200]}",
+            file=sys.stderr,
+        )
 
 
 def parse(name: str) -> Any:

@@ -127,8 +127,9 @@ def test_a_bad_seed_is_the_same_value_error_in_the_single_and_the_vector_env(see
     obs, _ = env.reset(seed=4)
     with pytest.raises(ValueError, match="seed"):
         env.reset(seed=seed)
-    venv = gym.make_vec("steamtemp/Cascade300MW-v0", num_envs=2,
-                        vectorization_mode="vector_entry_point")  # fmt: skip
+    venv = gym.make_vec(
+        "steamtemp/Cascade300MW-v0", num_envs=2, vectorization_mode="vector_entry_point"
+    )
     with pytest.raises(ValueError, match="seed"):
         venv.reset(seed=seed)
     np.testing.assert_array_equal(env.unwrapped.core.obs[0], obs)
@@ -138,7 +139,8 @@ def test_a_numpy_integer_seed_is_its_integer_in_the_single_and_the_vector_env():
     env = gym.make("steamtemp/Cascade300MW-v0")
     a = env.reset(seed=np.int64(3))[0]
     b = env.reset(seed=3)[0]
-    venv = gym.make_vec("steamtemp/Cascade300MW-v0", num_envs=1,
-                        vectorization_mode="vector_entry_point")  # fmt: skip
+    venv = gym.make_vec(
+        "steamtemp/Cascade300MW-v0", num_envs=1, vectorization_mode="vector_entry_point"
+    )
     np.testing.assert_array_equal(a, b)
     np.testing.assert_array_equal(venv.reset(seed=np.int64(3))[0][0], b)

@@ -35,7 +35,8 @@ def test_behaviour_cloning_names_the_bad_flag(case, a_file, tmp_path, capsys):
 
 def test_datasets_names_a_data_dir_that_is_a_file(a_file, capsys):
     with pytest.raises(SystemExit) as exc:
-        datasets.main(["--env", "SupercriticalFSH-v0", "--policy", "mpc_linear",
-                       "--data-dir", str(a_file)])  # fmt: skip
+        datasets.main(
+            ["--env", "SupercriticalFSH-v0", "--policy", "mpc_linear", "--data-dir", str(a_file)]
+        )
     err = capsys.readouterr().err
     assert exc.value.code == 2 and "argument --data-dir" in err and "is a file" in err, err

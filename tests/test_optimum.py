@@ -123,11 +123,16 @@ def test_the_oracle_takes_a_stored_optimum_only_where_it_replays(tmp_path, capsy
     assert solved.committed[0].source == "optimum"
     assert "solving the clairvoyant optimum" in capsys.readouterr().err
     a = solved.committed[0].actions.astype(np.float32)
-    record = {"env": env_id, "scenario": sc.name, "seed": 7,
-              "noise_key": int(solved.committed[0].key),
-              "scenario_digest": optima.scenario_digest(sc), "return": first,
-              "actions_file": optima.file_name(env_id, sc.name, 7),
-              "actions_sha": optima.actions_digest(a)}  # fmt: skip
+    record = {
+        "env": env_id,
+        "scenario": sc.name,
+        "seed": 7,
+        "noise_key": int(solved.committed[0].key),
+        "scenario_digest": optima.scenario_digest(sc),
+        "return": first,
+        "actions_file": optima.file_name(env_id, sc.name, 7),
+        "actions_sha": optima.actions_digest(a),
+    }
     optima.write(tmp_path, json.dumps(record), record["actions_file"], a)
     stored = Oracle(env, engine="optimum", store=tmp_path)
     assert run_episode(env, stored, 7)["metrics"]["return"] == first

@@ -27,8 +27,9 @@ def _raises():
 @pytest.fixture(params=["raises", "lacks_parse"])
 def broken(request, monkeypatch):
     load = _raises if request.param == "raises" else (lambda: types.SimpleNamespace(FORMS=""))
-    monkeypatch.setattr(policy_sources, "entry_points",
-                        lambda group: [_Broken(request.param, load)])  # fmt: skip
+    monkeypatch.setattr(
+        policy_sources, "entry_points", lambda group: [_Broken(request.param, load)]
+    )
     monkeypatch.setattr(policy_sources, "_registered", [])
     monkeypatch.setattr(policy_sources, "_warned", set())
     return request.param

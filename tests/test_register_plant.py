@@ -45,8 +45,9 @@ def test_the_toy_plant_is_registered_as_the_package_plants_are():
     ("test/Other-v0", "hostile_plants_exit:X", "SystemExit"),
     ("test/Bare-v0", "hostile_plants:Bare", "not a complete plant"),
 ])  # fmt: skip
-def test_a_bad_registration_is_refused_and_registers_nothing(plant_id, entry, match, tmp_path,
-                                                            monkeypatch):  # fmt: skip
+def test_a_bad_registration_is_refused_and_registers_nothing(
+    plant_id, entry, match, tmp_path, monkeypatch
+):
     (tmp_path / "hostile_plants.py").write_text(
         "from steamtemp_gym.plants import Plant\n\n\nclass Bare(Plant):\n    id = 'test/Bare-v0'\n"
     )

@@ -183,12 +183,16 @@ def make_parser() -> argparse.ArgumentParser:
     ap.add_argument("--import", dest="modules", action="append", default=[], metavar="MODULE",
                     help="import this module first, in every worker too (one that registers "
                     "baselines, scenarios or env variants; repeatable)")  # fmt: skip
-    ap.add_argument("--oracle", choices=ENGINES, default=DEFAULT_ENGINE,
-                    help="what makes the score's 1: 'optimum', the certified clairvoyant "
-                    "optimum of each episode (stored for the default scenarios and seeds, "
-                    "replayed; any other episode is solved, a few minutes of one core each), "
-                    "or 'cem', the receding-horizon CEM search (faster; a lower bound of "
-                    "the optimum, and every output says so) (default: %(default)s)")  # fmt: skip
+    ap.add_argument(
+        "--oracle",
+        choices=ENGINES,
+        default=DEFAULT_ENGINE,
+        help="what makes the score's 1: 'optimum', the certified clairvoyant "
+        "optimum of each episode (stored for the default scenarios and seeds, "
+        "replayed; any other episode is solved, a few minutes of one core each), "
+        "or 'cem', the receding-horizon CEM search (faster; a lower bound of "
+        "the optimum, and every output says so) (default: %(default)s)",
+    )
     ap.add_argument("--no-oracle", action="store_true",
                     help="leave the oracle out (its episodes are the run's longest); the "
                     "normalized score is then not computed (default: off)")  # fmt: skip
@@ -272,10 +276,12 @@ def _use_stored_references(plan: Any, done: dict, record: Record) -> None:
             done[key] = r
     if rows or stale:
         names = " and ".join(references.POLICIES)
-        print(f"note: {len(rows)} episodes of {names} taken from the stored references "
-              f"({references.ROWS.name}); {stale} run now (no stored episode for their "
-              "current code, scenario and seed); --recompute-references runs them all",
-              file=sys.stderr)  # fmt: skip
+        print(
+            f"note: {len(rows)} episodes of {names} taken from the stored references "
+            f"({references.ROWS.name}); {stale} run now (no stored episode for their "
+            "current code, scenario and seed); --recompute-references runs them all",
+            file=sys.stderr,
+        )
 
 
 def _say_what_walls_hold(plan: Any) -> None:
@@ -285,10 +291,12 @@ def _say_what_walls_hold(plan: Any) -> None:
         return
     why = sandbox.available()
     if why:
-        print(f"note: no sandbox for the policies that run in a process of their own ({why}): "
-              "they run in a session of their own under a memory limit, but could signal "
-              "this run and write its --out directory (docs/leaderboard.md, isolation)",
-              file=sys.stderr)  # fmt: skip
+        print(
+            f"note: no sandbox for the policies that run in a process of their own ({why}): "
+            "they run in a session of their own under a memory limit, but could signal "
+            "this run and write its --out directory (docs/leaderboard.md, isolation)",
+            file=sys.stderr,
+        )
 
 
 def main(argv: list[str] | None = None) -> None:
@@ -357,6 +365,8 @@ def _main(argv: list[str] | None) -> None:
         for r in bad[:10]:
             print(f"  {r['env']} {r['scenario']} {r['policy']} seed {r['seed']}: {r['error']}",
                   file=sys.stderr)  # fmt: skip
-        print("fix the cause and run the same command with --resume to run only those again",
-              file=sys.stderr)  # fmt: skip
+        print(
+            "fix the cause and run the same command with --resume to run only those again",
+            file=sys.stderr,
+        )
         raise SystemExit(1)

@@ -198,20 +198,24 @@ class PolicyProcess:
         except OSError as exc:
             if self._proc.is_alive() and "bad message length" in str(exc):
                 self.close()
-                raise PolicyFailed(f"the policy's answer to its {what} is larger than "
-                                   f"{ANSWER_BYTES // 2**20} MiB: refused before it is read "
-                                   "(an action is a few numbers per row)") from None  # fmt: skip
+                raise PolicyFailed(
+                    f"the policy's answer to its {what} is larger than "
+                    f"{ANSWER_BYTES // 2**20} MiB: refused before it is read "
+                    "(an action is a few numbers per row)"
+                ) from None
             self._proc.join(5)
             code = self._proc.exitcode
             self.close()
-            raise PolicyFailed(f"the policy's process ended (exit code {code}) during its "
-                               f"{what}") from None  # fmt: skip
+            raise PolicyFailed(
+                f"the policy's process ended (exit code {code}) during its {what}"
+            ) from None
         except EOFError:
             self._proc.join(5)
             code = self._proc.exitcode
             self.close()
-            raise PolicyFailed(f"the policy's process ended (exit code {code}) during its "
-                               f"{what}") from None  # fmt: skip
+            raise PolicyFailed(
+                f"the policy's process ended (exit code {code}) during its {what}"
+            ) from None
         try:
             kind, value = read_answer(data)
         except ValueError as exc:

@@ -271,11 +271,14 @@ def _certify(args: argparse.Namespace, items: list) -> int:
             continue
         optima.update(args.store, item, out, dumps)
         c, ic = out["certificate"], out.get("independent_check")
-        print(f"[{n}/{len(items)}] {item[0].split('/')[-1]} {item[1]} seed {item[2]}: "
-              f"certificate {'holds' if c['holds'] else 'FAILS'} (step {c['step_gain']:.2e}, "
-              f"refinement {c['last_refinement']:.2e}, starts {c['starts_agree']})"
-              + (f", independent check {ic['share']:.2e}" if ic else ""),
-              file=sys.stderr, flush=True)  # fmt: skip
+        print(
+            f"[{n}/{len(items)}] {item[0].split('/')[-1]} {item[1]} seed {item[2]}: "
+            f"certificate {'holds' if c['holds'] else 'FAILS'} (step {c['step_gain']:.2e}, "
+            f"refinement {c['last_refinement']:.2e}, starts {c['starts_agree']})"
+            + (f", independent check {ic['share']:.2e}" if ic else ""),
+            file=sys.stderr,
+            flush=True,
+        )
     return 1 if failed else 0
 
 

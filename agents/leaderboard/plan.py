@@ -289,8 +289,7 @@ def fingerprint(env_id: str, scenario: Any, policy_digest: str, source_digest: s
     return hashlib.sha256(text.encode()).hexdigest()[:16]
 
 
-def episode_fingerprint(env_id: str, scenario: str, name: str,
-                        oracle: str = DEFAULT_ENGINE) -> str:  # fmt: skip
+def episode_fingerprint(env_id: str, scenario: str, name: str, oracle: str = DEFAULT_ENGINE) -> str:
     """The fingerprint :func:`build_plan` gives the episodes of policy ``name`` on the
     nominal plant of ``env_id`` under ``scenario`` (a name as ``--scenarios`` takes it)."""
     return fingerprint(env_id, _resolve(scenario, env_id), _policy_digest(env_id, name, oracle),
@@ -351,9 +350,17 @@ def build_plan(ap: argparse.ArgumentParser, args: argparse.Namespace) -> Plan:
                     f"argument --scenarios: {tail(sc, 80)!r} for {env_id}: "
                     f"{head(str(exc), 1000)}"  # the message lists every form
                 )
-    plan = Plan(envs=envs, scenarios=scs, seeds=seeds, policies=pols, resolved=resolved,
-                imports=imports, travel_budget=budget, episode_timeout=timeout,
-                oracle=getattr(args, "oracle", DEFAULT_ENGINE))  # fmt: skip
+    plan = Plan(
+        envs=envs,
+        scenarios=scs,
+        seeds=seeds,
+        policies=pols,
+        resolved=resolved,
+        imports=imports,
+        travel_budget=budget,
+        episode_timeout=timeout,
+        oracle=getattr(args, "oracle", DEFAULT_ENGINE),
+    )
     if not args.no_mismatch and mismatch.SCENARIO in scs:
         for env_id in envs:
             plan.variants[env_id] = mismatch.labels(env_id)

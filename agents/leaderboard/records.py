@@ -97,8 +97,10 @@ def _row(line: bytes) -> dict:
         raise ValueError(f"metrics lack {missing[:5]}{' ...' if len(missing) > 5 else ''}")
     bad = [k for k, v in metrics.items() if v is not None and not _metric_value(v)]
     if bad:
-        raise ValueError(f"metrics {bad[:5]} are not numbers an episode gives (a bool, or "
-                         f"beyond {METRIC_BOUND:g} in magnitude)")  # fmt: skip
+        raise ValueError(
+            f"metrics {bad[:5]} are not numbers an episode gives (a bool, or "
+            f"beyond {METRIC_BOUND:g} in magnitude)"
+        )
     return row
 
 

@@ -69,8 +69,7 @@ def _unshare(libc: ctypes.CDLL) -> None:
     _write("/proc/self/gid_map", f"{gid} {gid} 1")
 
 
-def _mount(libc: ctypes.CDLL, src: str | None, target: str, fstype: str | None,
-           flags: int) -> None:  # fmt: skip
+def _mount(libc: ctypes.CDLL, src: str | None, target: str, fstype: str | None, flags: int) -> None:
     b = [None if s is None else s.encode() for s in (src, target, fstype)]
     _check(libc.mount(b[0], b[1], b[2], ctypes.c_ulong(flags), None), f"mount {target}")
 
@@ -99,8 +98,9 @@ def available() -> str | None:
     return msg.decode() or None
 
 
-def enter(readonly: tuple[str, ...], parent: int, watch: Callable[[], None],
-          poll_s: float = 0.5) -> str | None:  # fmt: skip
+def enter(
+    readonly: tuple[str, ...], parent: int, watch: Callable[[], None], poll_s: float = 0.5
+) -> str | None:
     """Build the walls (module docstring) around the rest of this process's life; the paths
     of ``readonly`` become read-only. Call it while the process has one thread (a threaded
     process cannot enter a user namespace). Forks: only the child returns (None, or why the

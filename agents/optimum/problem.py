@@ -63,8 +63,7 @@ def smooth_reward(Z, U, U_prev, sp, layout, eps):
 
     def positive(x, s):
         root = np.sqrt(x * x + s * s)
-        return 0.5 * (x + root), 0.5 * (1.0 + np.divide(x, root, out=np.sign(x),
-                                                        where=root > 0))  # fmt: skip
+        return 0.5 * (x + root), 0.5 * (1.0 + np.divide(x, root, out=np.sign(x), where=root > 0))
 
     def temperature(e):
         """c(e) and dc/de."""

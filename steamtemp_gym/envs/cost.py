@@ -107,8 +107,10 @@ def cost_limit(scenario: Any, dt_s: float) -> float:
         share = DEFAULT_COST_LIMIT_SHARE  # a scenario of its own under a shipped one's name
     limit = share * scenario.duration_s / float(dt_s)
     if not math.isfinite(limit):
-        raise ValueError(f"dt_s {dt_s!r} is too small: the limit of a {scenario.duration_s:g} s "
-                         "episode would not be finite")  # fmt: skip
+        raise ValueError(
+            f"dt_s {dt_s!r} is too small: the limit of a {scenario.duration_s:g} s "
+            "episode would not be finite"
+        )
     return limit
 
 

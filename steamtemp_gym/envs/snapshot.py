@@ -281,8 +281,10 @@ def _check_arrays(core: Any, arrays: Any, n: int, waiting: np.ndarray) -> None:
             raise ValueError(f"snapshot's arrays[{name!r}] holds NaN or infinite values in a "
                              "running row")  # fmt: skip
         if name in HANDED_OUT and not np.isfinite(a).all():  # the env never hands these out
-            raise ValueError(f"snapshot's arrays[{name!r}] holds NaN or infinite values (the "
-                             "env's observations and rewards are finite in every row)")  # fmt: skip
+            raise ValueError(
+                f"snapshot's arrays[{name!r}] holds NaN or infinite values (the "
+                "env's observations and rewards are finite in every row)"
+            )
         if name == "counter" and (a < 0).any():
             raise ValueError(f"snapshot's arrays['counter'] must be >= 0, got {a.tolist()[:5]}")
 

@@ -121,8 +121,10 @@ class SteamTempEnv(gym.Env):
         episode and its generator are as before."""
         if seed is not None:  # the vector env's rule: an integer >= 0, numpy's too, no bool
             if not (is_integer(seed) and seed >= 0):
-                raise ValueError(f"seed must be None or a non-negative integer, got "
-                                 f"{str(seed)[:100]!r} ({type(seed).__name__})")  # fmt: skip
+                raise ValueError(
+                    f"seed must be None or a non-negative integer, got "
+                    f"{str(seed)[:100]!r} ({type(seed).__name__})"
+                )
             seed = int(seed)
         spec = scenario_option(options, self._scenario_spec, self.plant.id)
         rng, rng_seed = self._np_random, self._np_random_seed
