@@ -330,26 +330,23 @@ def _int(lo: int, hi: int, what: str):
     return parse
 
 
-def _fraction(text: str) -> float:
-    try:
-        v = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"a fraction in (0, 1], got {text!r}") from None
-    if not 0.0 < v <= 1.0:
-        raise argparse.ArgumentTypeError(f"a fraction in (0, 1], got {text!r}")
-    return v
+def _share(hi: float, what: str):
+    """An argparse type: a float in (0, ``hi``], else an error describing it as ``what``."""
+
+    def parse(text: str) -> float:
+        try:
+            v = float(text)
+        except ValueError:
+            v = np.nan
+        if not 0.0 < v <= hi:  # False for NaN too
+            raise argparse.ArgumentTypeError(f"{what} in (0, {hi:g}], got {text!r}")
+        return v
+
+    return parse
 
 
-def _noise(text: str) -> float:
-    try:
-        v = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"a fraction of the stroke in (0, {MAX_NOISE}], got "
-                                         f"{text!r}") from None  # fmt: skip
-    if not 0.0 < v <= MAX_NOISE:
-        raise argparse.ArgumentTypeError(f"a fraction of the stroke in (0, {MAX_NOISE}], got "
-                                         f"{text!r}")  # fmt: skip
-    return v
+_fraction = _share(1.0, "a fraction")
+_noise = _share(MAX_NOISE, "a fraction of the stroke")
 
 
 def _seeds(text: str) -> tuple[int, ...]:

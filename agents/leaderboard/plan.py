@@ -296,17 +296,34 @@ def episode_fingerprint(env_id: str, scenario: str, name: str, oracle: str = DEF
                        specs.source_digest(env_id))  # fmt: skip
 
 
-def build_plan(ap: argparse.ArgumentParser, args: argparse.Namespace) -> Plan:
-    """Check every flag (argparse errors, exit code 2) and build the envs; runs nothing."""
-    imports = tuple(getattr(args, "modules", None) or ())
-    for module in imports:  # first: they may register env ids, baselines and scenarios
+def _import_modules(ap: argparse.ArgumentParser, imports: tuple[str, ...]) -> tuple[str, ...]:
+    """Import every ``--import`` module (first: they may register env ids, baselines and
+    scenarios); any failure, SystemExit too, is a bad value."""
+    for module in imports:
         try:
             importlib.import_module(module)
-        except BaseException as exc:  # any failure is a bad --import value, SystemExit too
+        except BaseException as exc:
             if not guard.own_failure(exc):  # Ctrl-C
                 raise
             ap.error(f"argument --import: cannot import {head(module, 100)!r}: "
                      f"{head(guard.describe(exc, 'the module'), _EXCERPT)}")  # fmt: skip
+    return imports
+
+
+def _number(ap: argparse.ArgumentParser, flag: str, value, ok, expected: str) -> float:
+    """``value`` as a finite float that ``ok`` accepts, else an argparse error naming ``flag``."""
+    try:
+        number = float(value)
+    except (TypeError, ValueError):
+        number = math.nan
+    if not (math.isfinite(number) and ok(number)):
+        ap.error(f"argument {flag}: must be {expected}, got {head(str(value), 60)!r}")
+    return number
+
+
+def build_plan(ap: argparse.ArgumentParser, args: argparse.Namespace) -> Plan:
+    """Check every flag (argparse errors, exit code 2) and build the envs; runs nothing."""
+    imports = _import_modules(ap, tuple(getattr(args, "modules", None) or ()))
     envs = _items(ap, "--envs", args.envs, key=_env_id)
     unknown = [e for e in envs if _env_id(e) not in envs_.ids()]
     if unknown:
@@ -316,23 +333,13 @@ def build_plan(ap: argparse.ArgumentParser, args: argparse.Namespace) -> Plan:
         )
     envs = [_env_id(e) for e in envs]
     seeds = parse_seeds(ap, args.seeds)
-    try:
-        budget = float(args.travel_budget)
-    except (TypeError, ValueError):
-        budget = math.nan
-    if not (math.isfinite(budget) and budget > 0.0):
-        ap.error(
-            f"argument --travel-budget: must be a finite number > 0 (a multiple of "
-            f"{summary.ZERO}'s valve travel), got {head(str(args.travel_budget), 60)!r}"
-        )
-    timeout = getattr(args, "episode_timeout", str(EPISODE_TIMEOUT_S))
-    try:
-        timeout = float(timeout)
-    except (TypeError, ValueError):
-        timeout = math.nan
-    if not (math.isfinite(timeout) and timeout >= 0.0):
-        ap.error(f"argument --episode-timeout: must be a number of seconds >= 0 (0: no limit), "
-                 f"got {head(str(getattr(args, 'episode_timeout', '')), 60)!r}")  # fmt: skip
+    budget = _number(
+        ap, "--travel-budget", args.travel_budget, lambda v: v > 0.0,
+        f"a finite number > 0 (a multiple of {summary.ZERO}'s valve travel)",
+    )  # fmt: skip
+    timeout = _number(ap, "--episode-timeout",
+                      getattr(args, "episode_timeout", str(EPISODE_TIMEOUT_S)),
+                      lambda v: v >= 0.0, "a number of seconds >= 0 (0: no limit)")  # fmt: skip
     timeout = timeout or None
     pols = _policies(ap, envs, args.policies, oracle=not args.no_oracle, imports=imports,
                      timeout=timeout)  # fmt: skip
