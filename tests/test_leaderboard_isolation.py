@@ -293,6 +293,31 @@ def test_answers_read_numbers_strings_containers_and_arrays_only(tmp_path):
     assert pickle.loads(dumps(Runs())) is None and flag.exists()  # the payload does run
 
 
+def test_answers_that_expand_past_the_item_bound_are_refused():
+    """A pickle names an object once and refers to it again by a few bytes: an answer of
+    450 kB standing for 5e7 floats is refused before the leaderboard converts it, quickly,
+    and so is a cyclic one; an answer as large as a real one is read."""
+    from multiprocessing.reduction import ForkingPickler
+
+    def dumps(obj):
+        return bytes(ForkingPickler.dumps(obj))
+
+    row = [0.5] * 50_000
+    data = dumps(("ok", [row] * 1000))
+    assert len(data) < 500_000
+    with pytest.raises(ValueError, match="more than 8,388,608 numbers"):
+        isolated.read_answer(data)
+    cyclic = []
+    cyclic.append(cyclic)
+    with pytest.raises(ValueError, match="more than"):
+        isolated.read_answer(dumps(("ok", cyclic)))
+    shared = np.zeros(1000)
+    with pytest.raises(ValueError, match="more than"):  # arrays' elements count per reference
+        isolated.read_answer(dumps(("ok", [shared] * 9000)))
+    kind, got = isolated.read_answer(dumps(("ok", [shared] * 8000)))
+    assert kind == "ok" and len(got) == 8000 and got[0] is got[1]
+
+
 def test_policy_process_answers_bit_for_bit():
     """A PolicyProcess's actions are its policy's, bit for bit, and it ends on close."""
     env = gym.make(ENV)

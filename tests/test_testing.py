@@ -4,7 +4,9 @@ example of docs/checking.md."""
 
 from __future__ import annotations
 
+import os
 import re
+import subprocess
 import sys
 from pathlib import Path
 
@@ -366,6 +368,47 @@ def test_a_factory_ending_the_process_is_a_bad_policy(tmp_path, capsys):
         main([CASCADE, "--policy", f"{tmp_path / 'ending.py'}:exit_when_built", "--quick"])
     assert exc.value.code == 2
     assert "SystemExit: 4 (raised by the factory" in capsys.readouterr().err
+
+
+_EXITING = """
+import os
+import baselines
+
+
+class Exiting:
+    def __init__(self, env):
+        self.inner = baselines.make("cascade_pi", env)
+
+    def reset(self):
+        self.inner.reset()
+
+    def predict(self, observation, state=None, episode_start=None, deterministic=True):
+        os._exit(0)
+
+
+def make(env):
+    return Exiting(env)
+"""
+
+
+@pytest.mark.parametrize("where", ["predict", "import"])
+def test_code_that_ends_its_process_fails_the_command(tmp_path, where):
+    """The command runs the checks in a child process: os._exit(0) in a policy's predict
+    (it printed a FAIL row, then exit 0) or in an --import module (no output, exit 0) now
+    fails the run, exit 1, saying so; a passing run keeps its status 0."""
+    (tmp_path / "exiting.py").write_text(_EXITING)
+    (tmp_path / "exit_on_import.py").write_text("import os\nos._exit(0)\n")
+    extra = (["--policy", f"{tmp_path / 'exiting.py'}:make"] if where == "predict"
+             else ["--import", "exit_on_import", "--policy", "cascade_pi"])  # fmt: skip
+    argv = [sys.executable, "-m", "steamtemp_gym.testing.cli", CASCADE, "--no-env-checks",
+            "--quick", "--check", "check_predict_signature"]  # fmt: skip
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(tmp_path), *sys.path])}
+    run = subprocess.run(argv + extra, env=env, capture_output=True, text=True, timeout=300)
+    assert run.returncode == 1, run.stderr
+    assert "ended before they finished (exit status 0)" in run.stderr
+    ok = subprocess.run(argv + ["--policy", "cascade_pi"], env=env, capture_output=True,
+                        text=True, timeout=300)  # fmt: skip
+    assert ok.returncode == 0 and "1 passed, 0 failed" in ok.stdout, ok.stderr
 
 
 def test_nothing_selected_is_an_error_not_a_pass(capsys):

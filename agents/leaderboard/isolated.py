@@ -17,7 +17,9 @@ leaderboard's own process (tests/test_leaderboard_isolation.py). The leaderboard
 an answer with :class:`_AnswerUnpickler`, which builds numbers, strings, containers and
 numpy arrays only: an answer that would run code in the leaderboard's process when
 unpickled (an object whose ``__reduce__`` names ``sys.exit`` or ``exec``) fails the
-policy's episodes instead.
+policy's episodes instead, and so does an answer that holds more than :data:`ANSWER_ITEMS`
+numbers once every reference to a shared object is counted (a few bytes of pickle can
+stand for gigabytes of floats).
 """
 
 from __future__ import annotations
@@ -34,6 +36,7 @@ import traceback
 from typing import Any
 
 import gymnasium as gym
+import numpy as np
 
 from agents.leaderboard import sandbox
 from steamtemp_gym.testing import guard
@@ -44,6 +47,10 @@ OUT_ENV = "STEAMTEMP_LEADERBOARD_OUT"
 #: The largest answer a policy's process may send (bytes, pickled): an action is a few
 #: numbers per row, a recurrent policy's state a few arrays of them.
 ANSWER_BYTES = 64 * 2**20
+#: The most numbers, strings and containers an answer may hold once unpickled, every
+#: reference counted: a pickle names an object once and refers to it again by a few bytes,
+#: so a small answer can stand for a huge one when the leaderboard converts it to arrays.
+ANSWER_ITEMS = 2**23
 #: How often a child process checks that the process that started it is alive (s).
 PARENT_POLL_S = 0.5
 
@@ -95,6 +102,9 @@ def read_answer(data: bytes) -> tuple[str, Any]:
     except Exception as exc:  # noqa: BLE001 - any malformed pickle
         raise ValueError("the policy's answer cannot cross from its process (numbers, strings, "
                          f"containers and numpy arrays only): {exc}") from None  # fmt: skip
+    if _items(answer, ANSWER_ITEMS) > ANSWER_ITEMS:
+        raise ValueError(f"the policy's answer holds more than {ANSWER_ITEMS:,} numbers, strings "
+                         "and containers (references to one object counted each time)")  # fmt: skip
     ok = isinstance(answer, tuple) and len(answer) == 2 and answer[0] in ("ok", "error")
     if ok and answer[0] == "error":
         v = answer[1]
@@ -103,6 +113,47 @@ def read_answer(data: bytes) -> tuple[str, Any]:
         raise ValueError(f"the policy's process sent an answer of another form: "
                          f"{type(answer).__name__}")  # fmt: skip
     return answer
+
+
+def _children(v: Any) -> list | None:
+    """The objects a container holds (a dict's keys and values, an object array's
+    elements), or None when ``v`` is not a container."""
+    if isinstance(v, dict):
+        return [*v.keys(), *v.values()]
+    if isinstance(v, list | tuple | set | frozenset):
+        return list(v)
+    if isinstance(v, np.ndarray) and v.dtype == object:
+        return v.ravel().tolist()
+    return None
+
+
+def _items(value: Any, limit: int) -> int:
+    """How many numbers, strings and containers ``value`` holds, every reference counted (a
+    numeric array's elements too), or just past ``limit`` once that is certain; a cyclic
+    answer counts as past it. Each object is visited once, whatever refers to it."""
+    sizes: dict[int, int] = {}
+    open_: set[int] = set()  # the containers on the walk's current path
+    stack: list[tuple[Any, list | None]] = [(value, None)]
+    while stack:
+        v, kids = stack.pop()
+        if kids is not None:  # every child counted: this container's total
+            sizes[id(v)] = 1 + sum(sizes.get(id(c), 1) for c in kids)
+            open_.discard(id(v))
+            if sizes[id(v)] > limit:
+                return sizes[id(v)]
+            continue
+        if id(v) in sizes:
+            continue
+        if id(v) in open_:
+            return limit + 1
+        kids = _children(v)
+        if kids is None:
+            sizes[id(v)] = 1 + (v.size if isinstance(v, np.ndarray) else 0)
+            continue
+        open_.add(id(v))
+        stack.append((v, kids))
+        stack.extend((c, None) for c in kids if not isinstance(c, int | float | str | bytes))
+    return sizes[id(value)]
 
 
 def start_method() -> str:

@@ -7,13 +7,21 @@
 
 Exit status 0 when every check passed or was skipped, 1 on any failure or when every check
 of a subject (an env's env checks, a policy's checks) was skipped, 2 on bad arguments.
+
+The command (:func:`console`) runs the checks in a child process and takes their status
+from it: code under check that ends its process (``os._exit(0)`` in an imported module or
+in ``predict``, a signal) fails the run, exit 1, instead of ending it with the code's own
+status. :func:`main` runs them in the calling process.
 """
 
 from __future__ import annotations
 
 import argparse
 import importlib
+import os
+import subprocess
 import sys
+import tempfile
 import time
 from collections.abc import Sequence
 
@@ -173,5 +181,43 @@ def _main(argv: Sequence[str] | None) -> int:
     return 1 if failed or nothing else 0
 
 
+#: Set in the child process that :func:`console` starts: the file its exit status goes to.
+STATUS_ENV = "STEAMTEMP_CHECK_STATUS"
+
+
+def console() -> None:
+    """Entry point of the ``steamtemp-check`` command: :func:`main` in a child process, whose
+    exit status counts only when it wrote it at its end; a child that ended otherwise (the
+    code under check ended its process) fails the run with exit status 1."""
+    status_file = os.environ.get(STATUS_ENV)
+    if status_file:  # the child
+        code: int | str | None = 1
+        try:
+            code = main()
+        except SystemExit as exc:  # argparse's exit 2, --help's 0
+            code = exc.code
+            raise
+        finally:
+            with open(status_file, "w") as f:
+                f.write(str(code if isinstance(code, int) else 0 if code is None else 1))
+        sys.exit(code)
+    with tempfile.TemporaryDirectory(prefix="steamtemp-check-") as tmp:
+        status_file = os.path.join(tmp, "status")
+        # as the command's own process: the working directory is not put on sys.path
+        start = "import sys; sys.path.pop(0); from steamtemp_gym.testing.cli import console; console()"
+        argv = [sys.executable, "-c", start, *sys.argv[1:]]
+        try:
+            child = subprocess.run(argv, env={**os.environ, STATUS_ENV: status_file})
+        except KeyboardInterrupt:  # the child got Ctrl-C too
+            sys.exit(130)
+        written = open(status_file).read() if os.path.exists(status_file) else ""
+    if written.isdigit():
+        sys.exit(int(written))
+    print(f"steamtemp-check: the process running the checks ended before they finished (exit "
+          f"status {child.returncode}): code under check ended it (os._exit, a signal). "
+          "That fails the run.", file=sys.stderr)  # fmt: skip
+    sys.exit(1)
+
+
 if __name__ == "__main__":
-    sys.exit(main())
+    console()
