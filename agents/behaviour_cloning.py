@@ -234,6 +234,10 @@ def train(dataset_id: str, out: str | Path, *, plain: bool = False, epochs: int 
 
     dataset = minari.load_dataset(dataset_id)
     env_id = dataset.spec.env_spec.id
+    held, made = dataset.observation_space.shape, gym.make(env_id).observation_space.shape
+    if held != made:
+        raise ValueError(f"its observations have shape {held} but those of {env_id}, the env "
+                         f"it names, have {made}: it was recorded on another env")  # fmt: skip
     memory = None if plain else memory_of(env_id)
     filter_s = None if plain else filter_of(env_id)
     t0 = time.perf_counter()

@@ -289,3 +289,47 @@ def test_the_zoo_command_chooses_the_noise_on_validation_and_fits_three_runs(
     assert all(m["dataset"] == choice["dataset"] for m in metas)
     for f in runs:
         f.check()
+
+
+def _spoiled(tmp_path, data_dir, how: str):
+    """A copy of the test dataset in a data folder of its own, spoiled as ``how`` says."""
+    import shutil
+
+    folder = tmp_path / "spoiled"
+    shutil.copytree(data_dir / "steamtemp" / "Cascade300MW", folder / "steamtemp" / "Cascade300MW")
+    where = folder / "steamtemp" / "Cascade300MW" / "cascade_pi_ff-v0"
+    hdf5 = where / "data" / "main_data.hdf5"
+    meta = where / "data" / "metadata.json"
+    if how == "truncated":
+        hdf5.write_bytes(hdf5.read_bytes()[: hdf5.stat().st_size // 2])
+    elif how == "empty":
+        hdf5.write_bytes(b"")
+    elif how == "garbage metadata":
+        meta.write_text("{not json")
+    elif how == "another plant":  # recorded on Cascade300MW, labelled SupercriticalFSH
+        m = json.loads(meta.read_text())
+        spec = json.loads(m["env_spec"])
+        spec["id"] = "steamtemp/SupercriticalFSH-v0"
+        m["env_spec"] = json.dumps(spec)
+        meta.write_text(json.dumps(m))
+    return folder
+
+
+@pytest.mark.parametrize("how", ["truncated", "empty", "garbage metadata", "another plant"])
+def test_a_spoiled_dataset_is_a_bad_dataset_flag(capsys, monkeypatch, tmp_path, dataset,
+                                                data_dir, how):  # fmt: skip
+    """A dataset whose files are damaged, or that names another plant than the one it was
+    recorded on, ends behaviour cloning with exit 2 naming --dataset (it ended in a
+    traceback: IndexError for the other plant), and nothing is written to --out."""
+    folder = _spoiled(tmp_path, data_dir, how)
+    monkeypatch.setenv("MINARI_DATASETS_PATH", str(folder))  # restored after
+    out = tmp_path / "bc"
+    with pytest.raises(SystemExit) as exc:
+        behaviour_cloning.main(["--dataset", DATASET, "--out", str(out), "--epochs", "1",
+                                "--data-dir", str(folder)])  # fmt: skip
+    assert exc.value.code == 2
+    err = capsys.readouterr().err
+    assert "argument --dataset" in err and "Traceback" not in err
+    assert not out.exists() or not any(out.iterdir())
+    if how == "another plant":
+        assert "recorded on another env" in err
