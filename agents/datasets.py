@@ -31,11 +31,11 @@ expert does there; the name gets ``-noisy`` and the noise in percent of the stro
 Reference scores: the dataset's evaluation env is the plant under a named scenario
 (``--eval-scenario``, default ``load_ramp_100_50``); ``ref_min_score`` and
 ``ref_max_score`` are the mean returns of ``cascade_pi_ff`` and the oracle there over
-``--eval-seeds`` (default the leaderboard's 0-4), the episodes the leaderboard runs (taken
-from its stored references where they are the current code's,
-agents/leaderboard/references.py). So ``minari.get_normalized_score(dataset, returns)``
-is the leaderboard's normalized score of those episodes on that scenario wherever the
-oracle's margin is at least ``agents.stats.MIN_SPAN`` of the reference's cost (docs/offline.md).
+``--eval-seeds`` (default the leaderboard's 0-4), the episodes the leaderboard runs (the
+oracle's replayed from the stored optima, agents/optima.py). So
+``minari.get_normalized_score(dataset, returns)`` is the leaderboard's normalized score of
+those episodes on that scenario wherever the oracle's margin is at least
+``agents.stats.MIN_SPAN`` of the reference's cost (docs/offline.md).
 """
 
 from __future__ import annotations
@@ -59,7 +59,7 @@ from agents import horizons, specs
 from agents.evaluation import run_episode
 from agents.exploration import low_pass
 from agents.files import git_revision
-from agents.leaderboard import references, summary
+from agents.leaderboard.episodes import score_ends
 from baselines.cascade_pi import CascadePI
 from steamtemp_gym import envs as envs_
 from steamtemp_gym import scenarios
@@ -105,14 +105,11 @@ def dataset_id(env_id: str, name: str, version: int = 0) -> str:
 
 
 def reference_scores(env_id: str, scenario: str = EVAL_SCENARIO,
-                     seeds: tuple[int, ...] = EVAL_SEEDS) -> tuple[float, float, int]:  # fmt: skip
-    """(ref_min_score, ref_max_score, taken): the mean returns of ``cascade_pi_ff`` and the
-    oracle on ``env_id``'s ``scenario`` over ``seeds``, as the leaderboard's
-    ``zero_return`` and ``one_return`` (agents/leaderboard/summary.py), and how many of
-    their episodes were stored references."""
-    lo, taken_lo = references.returns(env_id, scenario, summary.ZERO, list(seeds))
-    hi, taken_hi = references.returns(env_id, scenario, summary.ONE, list(seeds))
-    return float(lo.mean()), float(hi.mean()), taken_lo + taken_hi
+                     seeds: tuple[int, ...] = EVAL_SEEDS) -> tuple[float, float]:  # fmt: skip
+    """(ref_min_score, ref_max_score): the leaderboard's ``zero_return`` and ``one_return``
+    on ``env_id``'s ``scenario`` over ``seeds`` (agents/leaderboard/episodes.py:
+    ``score_ends``)."""
+    return score_ends(env_id, scenario, seeds)
 
 
 def detuned_knobs(rng: np.random.Generator) -> dict[str, float]:
@@ -227,10 +224,9 @@ def record(env_id: str, policy: str, episodes: int, seed: int = 0, *,
                          "it (minari delete) or give another --version or --name")  # fmt: skip
     say = log or (lambda msg: None)
     t0 = time.perf_counter()
-    lo, hi, taken = reference_scores(env_id, eval_scenario, tuple(eval_seeds))
+    lo, hi = reference_scores(env_id, eval_scenario, tuple(eval_seeds))
     say(f"reference scores on {eval_scenario}, seeds {list(eval_seeds)}: cascade_pi_ff "
-        f"{lo:.6g}, oracle {hi:.6g} ({taken} of {2 * len(eval_seeds)} episodes stored, "
-        f"{time.perf_counter() - t0:.1f} s)")
+        f"{lo:.6g}, oracle {hi:.6g} ({time.perf_counter() - t0:.1f} s)")
     t1 = time.perf_counter()
     plan = episode_plan(policy, episodes, seed, mixed)
     plant_env = gym.make(env_id, scenario=scenarios.RANDOM)

@@ -13,8 +13,9 @@ is checked). Its engine (:data:`ENGINES`) is how the sequence is found:
 
 - ``optimum``: the clairvoyant optimum of the episode (agents/optimum/: the whole
   command sequence optimized by L-BFGS-B with the adjoint gradient, with a certificate),
-  taken from the package's store where a stored one replays to its stored return bit for
-  bit (agents/optima.py), else solved now from the CEM's and the incumbents' sequences,
+  taken from the package's store where a stored one replays to its stored return
+  (agents/optima.py: bit for bit on the machine that stored it, to 1e-9 on another CPU),
+  else solved now from the CEM's and the incumbents' sequences,
   saying so on stderr;
 - ``cem``: the best of a receding-horizon CEM search and of the :data:`INCUMBENTS`
   (below): a lower bound of the optimum.
@@ -78,7 +79,7 @@ INCUMBENTS = ("mpc_linear", baselines.INDUSTRIAL_REFERENCE)
 #: receding-horizon search alone (a lower bound of the optimum, for quick looks).
 ENGINES = ("optimum", "cem")
 #: The engine of the leaderboard's oracle unless ``--oracle`` says otherwise.
-DEFAULT_ENGINE = "cem"
+DEFAULT_ENGINE = "optimum"
 
 
 class Replay:
@@ -140,20 +141,22 @@ def rollout(core: Core, act: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, n
 
 
 class Oracle:
-    """Clairvoyant CEM-MPC on the env's own kernel, at least the causal controllers of
-    :data:`INCUMBENTS` on every episode (module docstring).
+    """The clairvoyant optimum of each episode (engine ``optimum``, the default) or the
+    receding-horizon CEM (``cem``) on the env's own kernel, at least the causal controllers
+    of :data:`INCUMBENTS` on every episode (module docstring).
 
     Args:
         env: The env (single or native vector env) whose rows it acts on and reads.
         budget: The CEM's budget (agents/cem.py: :class:`Budget`).
         incumbents: Baseline names whose closed-loop episodes compete with the CEM's
             (default :data:`INCUMBENTS`; ``()``: the CEM alone).
-        engine: ``"optimum"`` or ``"cem"`` (:data:`ENGINES`).
+        engine: ``"optimum"`` or ``"cem"`` (:data:`ENGINES`; default
+            :data:`DEFAULT_ENGINE`).
         store: Where the ``optimum`` engine finds stored optima (agents/optima.py).
     """
 
     def __init__(self, env: Any, budget: Budget | None = None,
-                 incumbents: tuple[str, ...] = INCUMBENTS, engine: str = "cem",
+                 incumbents: tuple[str, ...] = INCUMBENTS, engine: str = DEFAULT_ENGINE,
                  store: Path = optima.STORE) -> None:  # fmt: skip
         try:
             src = env_core(env)
@@ -224,7 +227,7 @@ class Oracle:
 
     def _stored(self, rows: np.ndarray) -> np.ndarray:
         """Commit the rows at their episode's start whose stored optimum (agents/optima.py)
-        replays to its stored return bit for bit; returns the other rows."""
+        replays to its stored return (``optima.replays``); returns the other rows."""
         keys, counter = self.src.noise_keys(), self.src.steps()
         found = {}
         for r in rows.tolist():
@@ -238,7 +241,7 @@ class Oracle:
         run = self._play(np.array(list(found)), [a for _, a in found.values()])
         for j, (r, (record, a)) in enumerate(found.items()):
             total = float(np.cumsum(run[1][: run[3][j], j])[-1])  # summed in order
-            if total == record["return"]:
+            if optima.replays(total, record["return"]):
                 self._keep(r, j, run, "stored optimum", {"stored optimum": total},
                            {"stored optimum": a})  # fmt: skip
             else:

@@ -114,8 +114,9 @@ def ends(env_id: str, compute: bool = True) -> dict[str, Any]:
         raise ValueError(f"the stored score ends of {env_id} are missing or stale; run: "
                          f"python -m agents.baseline_tuning --ends --env {env_id}")  # fmt: skip
     zero = run_episodes(env_id, lambda v: baselines.make(ZERO, v))
-    # the oracle floored at the reference alone: with mpc_linear among its incumbents, a
-    # new tuning of mpc_linear would move the ends it was tuned on
+    # the clairvoyant optimum, stored for these episodes (agents/optima.py); where it must
+    # be solved, warm started by the CEM and the reference alone: with mpc_linear among the
+    # starts, a new tuning of mpc_linear could move the ends it was tuned on
     one = run_episodes(env_id, lambda v: Oracle(v, incumbents=(ZERO,)))
     got = {"episodes": key, "zero": zero["return"].tolist(), "one": one["return"].tolist(),
            "travel": float(zero["travel"].mean())}  # fmt: skip

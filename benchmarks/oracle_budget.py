@@ -59,7 +59,7 @@ def main() -> None:
         s, i = (int(x) for x in rung.split("x"))
         budget = Budget(samples=s, iterations=i, elites=max(2, s // 8), **extra)
         t0 = time.process_time()
-        m = _means(run_batch(venv, Oracle(venv, budget), seeds))
+        m = _means(run_batch(venv, Oracle(venv, budget, engine="cem"), seeds))
         cpu = (time.process_time() - t0) / len(seeds)
         change = "" if prev is None else f"{100 * (m['return'] - prev) / abs(prev):+.1f}"
         print(f"| {s} x {i} | {m['return']:.2f} | {m['iae_K_s']:.0f} | {m['valve_travel']:.2f} | "

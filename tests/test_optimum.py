@@ -138,7 +138,7 @@ def test_the_oracle_takes_a_stored_optimum_only_where_it_replays(tmp_path, capsy
     assert run_episode(env, stored, 7)["metrics"]["return"] == first
     assert stored.committed[0].source == "stored optimum"
     assert run_episode(env, Replay(a), 7)["metrics"]["return"] == first
-    record["return"] = first + 1e-9
+    record["return"] = first + 1e-6 * max(1.0, abs(first))
     optima.write(tmp_path, json.dumps(record), record["actions_file"], a)
     refused = Oracle(env, engine="optimum", store=tmp_path)
     assert run_episode(env, refused, 7)["metrics"]["return"] == first

@@ -1,5 +1,7 @@
-"""The oracle (agents/oracle.py): an upper bound on every controller, deterministic, the
-same alone and batched; its budget is checked."""
+"""The oracle's receding-horizon CEM engine (agents/oracle.py, ``engine="cem"``): a lower
+bound of the optimum that is already an upper bound on every controller, deterministic,
+the same alone and batched; its budget is checked. The ``optimum`` engine starts from its
+sequences (tests/test_optimum.py)."""
 
 from __future__ import annotations
 
@@ -14,11 +16,17 @@ import steamtemp_gym
 from agents.cem import Budget
 from agents.evaluation import run_batch, run_episode
 from agents.leaderboard.episodes import _make_policy
-from agents.oracle import INCUMBENTS, Oracle
+from agents.oracle import INCUMBENTS
+from agents.oracle import Oracle as _Oracle
 from steamtemp_gym import plants
 from steamtemp_gym.envs.snapshot import copy_rows
 from steamtemp_gym.plants import perturb
 from steamtemp_gym.scenarios import Scenario
+
+
+def Oracle(env, *args, **kw):  # noqa: N802 - the oracle with its CEM engine
+    return _Oracle(env, *args, engine="cem", **kw)
+
 
 #: A short scenario with the disturbances of the named ones: a load ramp at 5 %/min, then a
 #: heat-absorption step, with sensor noise and the coloured heat-absorption disturbance.

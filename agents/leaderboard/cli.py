@@ -62,12 +62,14 @@ its factory on an env of its own: its SystemExit, KeyboardInterrupt or a hang lo
 ``--episode-timeout`` fails its episodes, and it cannot reach the env it is scored on
 (docs/leaderboard.md, "Failures, timeouts and isolation").
 
-Cost: the oracle's episodes are the long ones (it optimizes by rollouts of the plant at
-every replanning instant); they are started first. The package stores the episodes of the
-score's two ends (``cascade_pi_ff`` and the oracle) for every plant, named and held-out
-scenario and default seed, keyed by the provenance digest of what they depend on
-(agents/leaderboard/references.py): a run takes them where that digest is the current
-code's and runs the rest, saying how many of each; ``--recompute-references`` runs all.
+Cost: the score's 1 is the clairvoyant optimum of each episode (agents/oracle.py). The
+package stores it for every plant, named and held-out scenario and default seed
+(agents/optima.py); the oracle replays a stored sequence on a copy of the row and takes it
+where the replay gives the stored return bit for bit, so its episodes cost two rollouts.
+An episode that is not stored (a YAML scenario, other seeds, a plant whose dynamics
+changed) is solved in the run, about a minute of one core each, with a line on stderr
+per episode; ``--oracle cem`` takes the receding-horizon search instead (a lower bound of
+the 1, labelled so in every output).
 
 ``--resume`` continues in an existing ``--out``: episodes already in
 ``episodes.jsonl`` with the same env, scenario, policy, seed and fingerprint and no
@@ -98,9 +100,9 @@ from typing import Any
 
 import steamtemp_gym
 from agents import ray_backend, stats
-from agents.leaderboard import references, report, sandbox
+from agents.leaderboard import report, sandbox
 from agents.leaderboard.backends import _execute
-from agents.leaderboard.episodes import _finished, _units, own_process
+from agents.leaderboard.episodes import _units, own_process
 from agents.leaderboard.isolated import OUT_ENV
 from agents.leaderboard.outputs import Plots, _rebuild
 from agents.leaderboard.plan import (
@@ -222,10 +224,6 @@ def make_parser() -> argparse.ArgumentParser:
     ap.add_argument("--trend-all", action="store_true",
                     help="trend plots show every policy (default: cascade_pi_ff, the oracle, "
                     "cascade_pi and the plant's three best-ranked policies)")  # fmt: skip
-    ap.add_argument("--recompute-references", action="store_true",
-                    help="run the reference episodes (cascade_pi_ff, the oracle) even where "
-                    "the package stores them for the same code (default: take the stored "
-                    "ones, agents/leaderboard/references.py)")  # fmt: skip
     ap.add_argument("--resume", action="store_true",
                     help="continue in --out: skip the episodes already in its episodes.jsonl "
                     "(default: off)")  # fmt: skip
@@ -263,25 +261,6 @@ def _show_library_log() -> None:
         handler.setFormatter(logging.Formatter("%(message)s"))  # lines name steamtemp_gym
         log.addHandler(handler)
     log.setLevel(logging.INFO)
-
-
-def _use_stored_references(plan: Any, done: dict, record: Record) -> None:
-    """Add the package's stored reference episodes whose fingerprint is the plan's to the
-    record (and to ``done``), saying how many were taken and how many will run."""
-    rows, stale = references.matching(plan)
-    for r in rows:
-        key = (r["env"], r["scenario"], r["policy"], r["seed"]), r["fingerprint"]
-        if not _finished(done.get(key)):
-            record.write(r)
-            done[key] = r
-    if rows or stale:
-        names = " and ".join(references.POLICIES)
-        print(
-            f"note: {len(rows)} episodes of {names} taken from the stored references "
-            f"({references.ROWS.name}); {stale} run now (no stored episode for their "
-            "current code, scenario and seed); --recompute-references runs them all",
-            file=sys.stderr,
-        )
 
 
 def _say_what_walls_hold(plan: Any) -> None:
@@ -335,8 +314,6 @@ def _main(argv: list[str] | None) -> None:
         record = Record(out / EPISODES)
     except OSError as exc:
         ap.error(f"argument --out: cannot write {str(out)!r}: {exc.strerror or exc}")
-    if not args.recompute_references:
-        _use_stored_references(plan, done, record)
     t0 = time.time()
     units = _units(plan, done)
     figures = Plots(out, plan, units, every=args.trend_all)

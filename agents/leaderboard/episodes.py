@@ -22,9 +22,10 @@ from agents.difficulty import FrozenValves
 from agents.evaluation import run_batch, run_episode
 from agents.leaderboard import summary
 from agents.leaderboard.isolated import PolicyFailed, PolicyProcess, PolicyTimeout, make_env
-from agents.leaderboard.plan import REFERENCE, Plan
+from agents.leaderboard.plan import REFERENCE, Plan, episode_fingerprint
 from agents.leaderboard.records import Key
 from agents.oracle import DEFAULT_ENGINE, Oracle
+from steamtemp_gym import scenarios
 from steamtemp_gym.checks import head
 
 
@@ -262,3 +263,25 @@ def _units(plan: Plan, done: dict) -> list[Unit]:
 
 def _finished(row: dict | None) -> bool:
     return row is not None and not row.get("error")
+
+
+def score_ends(env_id: str, scenario: str, seeds: tuple[int, ...]) -> tuple[float, float]:
+    """The mean returns of the score's 0 (``cascade_pi_ff``) and 1 (the oracle, replaying the
+    stored optima) on ``env_id``'s ``scenario`` (a name as ``--scenarios`` takes it) over
+    ``seeds``: their episodes run as a leaderboard run runs them, so these are its
+    ``zero_return`` and ``one_return`` (agents/leaderboard/summary.py).
+
+    Raises:
+        RuntimeError: an episode failed (naming it and why).
+    """
+    sc = scenarios.resolve(scenario, env_id)
+    means = []
+    for name in (summary.ZERO, summary.ONE):
+        fp = episode_fingerprint(env_id, scenario, name)
+        rows = run_unit(Unit(env_id, scenario, sc, name, list(seeds), fp, None))[0]
+        failed = [r for r in rows if r.get("error")]
+        if failed:
+            raise RuntimeError(f"{name} on {env_id} {scenario} seed {failed[0]['seed']}: "
+                               f"{failed[0]['error']}")  # fmt: skip
+        means.append(float(np.mean([r["metrics"]["return"] for r in rows])))
+    return means[0], means[1]

@@ -13,7 +13,7 @@ from typing import Any
 import steamtemp_gym
 from agents import specs, stats
 from agents.evaluation import run_episode
-from agents.leaderboard import episodes, mismatch, pareto, plots, references, report, trends
+from agents.leaderboard import episodes, mismatch, pareto, plots, report, trends
 from agents.leaderboard.episodes import Unit
 from agents.leaderboard.plan import Plan
 from agents.leaderboard.records import EPISODES, _latest, dumps, read_record
@@ -42,8 +42,6 @@ class Plots:
         self._shown: dict[str, tuple[list[str], dict[str, str]]] = {}
 
     def add(self, u: Unit, trace: dict | None) -> None:
-        if trace is not None and u.policy in references.POLICIES and u.trace_seed is not None:
-            self._keep_reference(u, trace)
         name, run = specs.split_run(u.policy)
         key = (u.env_id, u.spec, name)
         if trace is not None and (run or 0) <= self.trace_run.get(key, run or 0):
@@ -53,14 +51,6 @@ class Plots:
         if self.pending[u.env_id] == 0:
             for sc in self.plan.scenarios:
                 self.draw(u.env_id, sc)
-
-    def _keep_reference(self, u: Unit, trace: dict) -> None:
-        """Add a reference episode's trace to the run's ``reference_traces.npz`` (what
-        ``python -m agents.leaderboard.references --from OUT`` stores with its row)."""
-        path = self.out / references.RUN_TRACES
-        kept = references.read_traces(path)
-        kept[(u.env_id, u.spec, u.policy, u.trace_seed), u.fingerprint] = trace
-        references.save_traces(path, kept)
 
     def shown(self, env_id: str) -> tuple[list[str], dict[str, str]]:
         """The policies a plant's trends show and their legend notes (rank and score),
@@ -91,11 +81,6 @@ class Plots:
         env = self.plan.envs_made[env_id, sc]
         names, notes = self.shown(env_id)
         for name in names:
-            if name not in traces and name in references.POLICIES:  # a stored episode's
-                key = (env_id, sc, name, seed)
-                stored = references.trace(key, self.plan.fingerprints[env_id, sc, name])
-                if stored is not None:
-                    traces[name] = stored
             if name not in traces:
                 try:
                     runs = [r for r in self.plan.policies[env_id]
@@ -103,7 +88,8 @@ class Plots:
                     pol = episodes.make_policy(runs[0] if runs else name, env_id, env,
                                                self.plan.resolved[env_id, sc],
                                                imports=self.plan.imports,
-                                               timeout=self.plan.episode_timeout)  # fmt: skip
+                                               timeout=self.plan.episode_timeout,
+                                               oracle=self.plan.oracle)  # fmt: skip
                     try:
                         traces[name] = run_episode(env, pol, seed)["trace"]
                     finally:

@@ -204,7 +204,7 @@ def console() -> None:
     with tempfile.TemporaryDirectory(prefix="steamtemp-check-") as tmp:
         status_file = os.path.join(tmp, "status")
         # as the command's own process: the working directory is not put on sys.path
-        start = "import sys; sys.path.pop(0); from steamtemp_gym.testing.cli import console; console()"
+        start = "import sys; sys.path.pop(0); import steamtemp_gym.testing.cli as c; c.console()"
         argv = [sys.executable, "-c", start, *sys.argv[1:]]
         try:
             child = subprocess.run(argv, env={**os.environ, STATUS_ENV: status_file})
