@@ -8,7 +8,8 @@ episode: resumable, each episode written as it ends::
 Episodes run seed by seed across every plant and scenario, so a partial store covers every
 plant. ``--certify`` recomputes the certificates of the stored episodes
 (agents/optimum/certificate.py: ``certify``) and ``--check`` runs the independent check
-(``independent_check``) on them, each writing its result into the episode's record.
+(``independent_check``) on them, each writing its result into the episode's record
+(resumable: ``--again`` checks the episodes checked before too).
 """
 
 from __future__ import annotations
@@ -203,7 +204,11 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument(
         "--check",
         action="store_true",
-        help="with --certify: also run the independent check on them",
+        help="with --certify: also run the independent check on them (resumable: episodes "
+        "whose record holds a check are passed over unless --again)",
+    )
+    ap.add_argument(
+        "--again", action="store_true", help="with --check: check every episode again"
     )
     args = ap.parse_args(argv)
     import steamtemp_gym
@@ -223,8 +228,16 @@ def main(argv: list[str] | None = None) -> int:
     done = optima.load(args.store)
     if args.check and not args.certify:
         ap.error("argument --check: only with --certify")
+    if args.again and not args.check:
+        ap.error("argument --again: only with --check")
     if args.certify:
-        return _certify(args, [it for it in episodes(envs, names, seeds) if it in done])
+        items = [it for it in episodes(envs, names, seeds) if it in done]
+        if args.check and not args.again:
+            checked = [it for it in items if "independent_check" in done[it]]
+            items = [it for it in items if it not in checked]
+            print(f"optima: {len(items)} episode(s) to check, {len(checked)} checked before "
+                  "(--again checks them too)", file=sys.stderr)  # fmt: skip
+        return _certify(args, items)
     todo = [it for it in episodes(envs, names, seeds) if it not in done]
     if args.limit is not None:
         todo = todo[: args.limit]
