@@ -1,12 +1,13 @@
 """The tables of the stored optima (agents/optima.py) in docs/leaderboard.md: per plant, how
-many episodes are stored and certified, the score's 1 before (the receding-horizon CEM
-oracle: the best of its search and its incumbents) and after (the optimum), the headroom
-it adds, ``mpc_linear``'s IQM score against each 1 (its returns are the optimum's warm
-starts), and the optimizer's CPU time; then every episode whose certificate fails, with
-its numbers.
+many reference episodes are stored and certified, the score's 1 before (the receding-horizon
+CEM oracle: the best of its search and its incumbents) and after (the optimum), the
+headroom it adds, ``mpc_linear``'s IQM score against each 1 (its returns are the optimum's
+warm starts) and, given a leaderboard run (``--run``), the best trained agent's, the
+independent check, and the optimizer's CPU time; then every episode whose certificate
+fails, with its numbers, and the tuner's training episodes.
 
-    python scripts/optimum_tables.py            # rewrite the block in docs/leaderboard.md
-    python scripts/optimum_tables.py --print    # print it
+    python scripts/optimum_tables.py [--run leaderboard_out]   # rewrite the block
+    python scripts/optimum_tables.py --print                   # print it
 """
 
 from __future__ import annotations
@@ -18,7 +19,8 @@ from pathlib import Path
 
 import numpy as np
 
-from agents import optima, stats
+from agents import optima, specs, stats
+from agents.leaderboard.records import EPISODES, read_record
 from agents.optimum import TOLERANCES
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -48,16 +50,56 @@ def old_one(r: dict) -> float:
     return max(r["warm_starts"].values())
 
 
-def tables(store: Path = optima.STORE) -> str:
-    records = list(optima.load(store).values())
+def best_agents(run: Path | None, records: list[dict]) -> dict[str, tuple[str, float, float]]:
+    """Per plant, the trained agent (``sb3:...``, its training runs pooled) with the highest
+    IQM score against the optimum in the run's episodes.jsonl, and its score against the
+    CEM's 1 and the optimum, on the stored episodes."""
+    if run is None:
+        return {}
+    by_key = {(r["env"], r["scenario"], r["seed"]): r for r in records}
+    returns: dict[tuple[str, str], list[tuple[dict, float]]] = defaultdict(list)
+    for row in read_record(Path(run) / EPISODES):
+        name = specs.split_run(row["policy"])[0]
+        key = (row["env"], row["scenario"], row["seed"])
+        if name.startswith("sb3:") and key in by_key and not row.get("error"):
+            returns[row["env"], name].append((by_key[key], row["metrics"]["return"]))
+    out: dict[str, tuple[str, float, float]] = {}
+    for (env_id, name), pairs in sorted(returns.items()):
+        new = _pooled(pairs, lambda r: r["return"])
+        if env_id not in out or new > out[env_id][2]:
+            out[env_id] = (name, _pooled(pairs, old_one), new)
+    return out
+
+
+def _pooled(pairs: list[tuple[dict, float]], one) -> float:
+    """IQM over every (episode, return) pair of the normalized score, each scenario's ends
+    the means over its stored episodes (as the leaderboard scores)."""
+    by_sc: dict[str, list[tuple[dict, float]]] = defaultdict(list)
+    for r, ret in pairs:
+        by_sc[r["scenario"]].append((r, ret))
+    scores = []
+    for items in by_sc.values():
+        eps = {id(r): r for r, _ in items}.values()
+        zero = float(np.mean([r["zero"] for r in eps]))
+        top = float(np.mean([one(r) for r in eps]))
+        scores.extend(stats.normalize([ret for _, ret in items], zero, top).tolist())
+    return float(stats.iqm(np.array(scores)))
+
+
+def tables(store: Path = optima.STORE, run: Path | None = None) -> str:
+    everything = list(optima.load(store).values())
+    records = [r for r in everything if r["scenario"] != "random"]
+    training = [r for r in everything if r["scenario"] == "random"]
     by_env: dict[str, list[dict]] = defaultdict(list)
     for r in records:
         by_env[r["env"]].append(r)
+    agents = best_agents(run, records)
     lines = [
         "| plant | episodes stored | certificate holds | mean R1, CEM oracle | mean R1, optimum "
         "| headroom over `cascade_pi_ff` grows by | `mpc_linear`'s IQM score, CEM 1 -> optimum "
-        "| CPU per episode [s] (mean, max) |",
-        "|---|---|---|---|---|---|---|---|",
+        + ("| best trained agent's IQM score, CEM 1 -> optimum " if agents else "")
+        + "| independent check: checked, largest gain | CPU per episode [s] (mean, max) |",
+        "|---|---|---|---|---|---|---|" + ("---|" if agents else "") + "---|---|",
     ]
     for env_id in sorted(by_env):
         rows = by_env[env_id]
@@ -68,21 +110,35 @@ def tables(store: Path = optima.STORE) -> str:
         grow = (new - zero) / (old - zero) - 1.0
         mpc_old = _score(rows, lambda r: r["warm_starts"]["mpc_linear"], old_one)
         mpc_new = _score(rows, lambda r: r["warm_starts"]["mpc_linear"], lambda r: r["return"])
+        checked = [r["independent_check"] for r in rows if "independent_check" in r]
+        gain = max((c["share"] for c in checked), default=float("nan"))
         cpu = [r["cpu_s"] for r in rows]
+        agent = ""
+        if agents:
+            name, a_old, a_new = agents.get(env_id, ("-", float("nan"), float("nan")))
+            agent = f"| `{name}` {a_old:.2f} -> {a_new:.2f} "
         lines.append(
             f"| {env_id.split('/')[-1]} | {len(rows)} | {holds} | {old:.2f} | {new:.2f} "
-            f"| {100 * grow:.0f} % | {mpc_old:.2f} -> {mpc_new:.2f} "
+            f"| {100 * grow:.0f} % | {mpc_old:.2f} -> {mpc_new:.2f} {agent}"
+            f"| {len(checked)}, {100 * gain:.2f} % of the headroom "
             f"| {np.mean(cpu):.0f}, {np.max(cpu):.0f} |"
         )
-    total = sum(r["cpu_s"] for r in records)
-    lines += ["", f"CPU of the {len(records)} stored episodes: {total / 3600:.1f} h of one core "
-              f"in all, {total / max(len(records), 1):.0f} s an episode (warm starts, both "
-              "refined starts and the certificate; `python -m agents.leaderboard.optima "
-              "--jobs N` spreads them over N cores, `--backend ray` over a cluster)."]
-    failing = [r for r in records if not r["certificate"]["holds"]]
+    total = sum(r["cpu_s"] for r in everything)
+    lines += ["", f"CPU of the {len(everything)} stored episodes ({len(records)} reference "
+              f"episodes, {len(training)} of the tuner's training episodes): "
+              f"{total / 3600:.1f} h of one core in all, {total / max(len(everything), 1):.0f} s "
+              "an episode (warm starts, both refined starts and the certificate; `python -m "
+              "agents.leaderboard.optima --jobs N` spreads them over N cores, `--backend ray` "
+              "over a cluster)."]  # fmt: skip
+    if training:
+        holds = sum(r["certificate"]["holds"] for r in training)
+        lines += ["", f"The tuner's training episodes (`random`, seeds 2,000,000-2,000,007, "
+                  f"the score's ends of baselines/tuned/ends.json): {len(training)} stored, "
+                  f"{holds} certificates hold."]  # fmt: skip
+    failing = [r for r in everything if not r["certificate"]["holds"]]
     lines += [
         "",
-        f"Certificates that fail ({len(failing)} of {len(records)}; tolerances "
+        f"Certificates that fail ({len(failing)} of {len(everything)}; tolerances "
         + ", ".join(f"`{k}` {100 * v:g} %" for k, v in TOLERANCES.items())
         + "):",
         "",
@@ -107,8 +163,13 @@ def tables(store: Path = optima.STORE) -> str:
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=(__doc__ or "").split("\n")[0])
     ap.add_argument("--print", action="store_true", help="print the block instead")
+    ap.add_argument(
+        "--run", type=Path, default=None, help="a run's --out: the best agent's score too"
+    )
     args = ap.parse_args(argv)
-    block = tables()
+    if args.run is not None and not (args.run / EPISODES).is_file():
+        ap.error(f"argument --run: no {EPISODES} in {str(args.run)!r}")
+    block = tables(run=args.run)
     if args.print:
         print(block)
         return 0
