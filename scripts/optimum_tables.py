@@ -124,17 +124,23 @@ def tables(store: Path = optima.STORE, run: Path | None = None) -> str:
             f"| {np.mean(cpu):.0f}, {np.max(cpu):.0f} |"
         )
     total = sum(r["cpu_s"] for r in everything)
-    lines += ["", f"CPU of the {len(everything)} stored episodes ({len(records)} reference "
-              f"episodes, {len(training)} of the tuner's training episodes): "
-              f"{total / 3600:.1f} h of one core in all, {total / max(len(everything), 1):.0f} s "
-              "an episode (warm starts, both refined starts and the certificate; `python -m "
-              "agents.leaderboard.optima --jobs N` spreads them over N cores, `--backend ray` "
-              "over a cluster)."]  # fmt: skip
+    lines += [
+        "",
+        f"CPU of the {len(everything)} stored episodes ({len(records)} reference "
+        f"episodes, {len(training)} of the tuner's training episodes): "
+        f"{total / 3600:.1f} h of one core in all, {total / max(len(everything), 1):.0f} s "
+        "an episode (warm starts, both refined starts and the certificate; `python -m "
+        "agents.leaderboard.optima --jobs N` spreads them over N cores, `--backend ray` "
+        "over a cluster).",
+    ]
     if training:
         holds = sum(r["certificate"]["holds"] for r in training)
-        lines += ["", f"The tuner's training episodes (`random`, seeds 2,000,000-2,000,007, "
-                  f"the score's ends of baselines/tuned/ends.json): {len(training)} stored, "
-                  f"{holds} certificates hold."]  # fmt: skip
+        lines += [
+            "",
+            f"The tuner's training episodes (`random`, seeds 2,000,000-2,000,007, "
+            f"the score's ends of baselines/tuned/ends.json): {len(training)} stored, "
+            f"{holds} certificates hold.",
+        ]
     failing = [r for r in everything if not r["certificate"]["holds"]]
     lines += [
         "",

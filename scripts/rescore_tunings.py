@@ -44,9 +44,13 @@ def judged_feasible(plant: dict) -> list[dict]:
 
     def kept(r: dict) -> bool:
         robust = r.get("robust_ratio")
-        return (r.get("check") == "" and r["trips"] == 0 and not r.get("robust_breach")
-                and r["travel_ratio"] <= TUNING_TRAVEL_BUDGET
-                and (robust is None or robust <= ROBUST_COST_MAX))  # fmt: skip
+        return (
+            r.get("check") == ""
+            and r["trips"] == 0
+            and not r.get("robust_breach")
+            and r["travel_ratio"] <= TUNING_TRAVEL_BUDGET
+            and (robust is None or robust <= ROBUST_COST_MAX)
+        )
 
     return [r for r in plant["history"] if kept(r)]
 
@@ -87,22 +91,35 @@ def rescore(pairs: list[tuple[str, str]], out: Path) -> dict[str, dict]:
             # the commissioning's solvers may move the last digits across library versions
             moved = not math.isclose(res.travel_ratio, row["travel_ratio"], rel_tol=1e-6)
             if moved or res.trips != row["trips"]:
-                raise RuntimeError(f"{name} on {env_id} with {row['knobs']}: travel "
-                                   f"{res.travel_ratio!r} and trips {res.trips} now, "
-                                   f"{row['travel_ratio']!r} and {row['trips']} recorded: the "
-                                   "dynamics moved; search again")  # fmt: skip
-            done[k] = {"name": name, "env": env_id, "knobs": row["knobs"],
-                       "old_score": row["score"], "new_score": res.score}  # fmt: skip
+                raise RuntimeError(
+                    f"{name} on {env_id} with {row['knobs']}: travel "
+                    f"{res.travel_ratio!r} and trips {res.trips} now, "
+                    f"{row['travel_ratio']!r} and {row['trips']} recorded: the "
+                    "dynamics moved; search again"
+                )
+            done[k] = {
+                "name": name,
+                "env": env_id,
+                "knobs": row["knobs"],
+                "old_score": row["score"],
+                "new_score": res.score,
+            }
             with out.open("a") as f:
                 f.write(json.dumps(done[k]) + "\n")
-        print(f"{name} {env_id.split('/')[-1]}: {len(plant['history'])} rescored",
-              file=sys.stderr, flush=True)  # fmt: skip
+        print(
+            f"{name} {env_id.split('/')[-1]}: {len(plant['history'])} rescored",
+            file=sys.stderr,
+            flush=True,
+        )
     return done
 
 
 def table(pairs: list[tuple[str, str]], done: dict[str, dict]) -> list[str]:
-    lines = ["| controller | plant | feasible candidates | chosen: score, old ends -> new "
-             "| best feasible under the new ends |", "|---|---|---|---|---|"]  # fmt: skip
+    lines = [
+        "| controller | plant | feasible candidates | chosen: score, old ends -> new "
+        "| best feasible under the new ends |",
+        "|---|---|---|---|---|",
+    ]
     for name, env_id in pairs:
         plant = json.loads(tuning.path(name).read_text())["plants"][env_id]
         rows = [done[_key(name, env_id, r["knobs"])] for r in judged_feasible(plant)]
@@ -112,8 +129,11 @@ def table(pairs: list[tuple[str, str]], done: dict[str, dict]) -> list[str]:
             best = "no feasible candidate (the least bad stored)"
         else:
             top = max(rows, key=lambda r: r["new_score"])
-            best = "the chosen" if top["knobs"] == plant["knobs"] else (
-                f"another: {top['new_score']:.3f} by {top['knobs']}")  # fmt: skip
+            best = (
+                "the chosen"
+                if top["knobs"] == plant["knobs"]
+                else (f"another: {top['new_score']:.3f} by {top['knobs']}")
+            )
         lines.append(f"| `{name}` | {env_id.split('/')[-1]} | {len(rows)} | {cell} | {best} |")
     return lines
 
@@ -129,9 +149,7 @@ def apply(pairs: list[tuple[str, str]], done: dict[str, dict]) -> None:
             for row in plant["history"]:
                 row["score"] = done[_key(name, env_id, row["knobs"])]["new_score"]
             plant["score"] = done[_key(name, env_id, plant["knobs"])]["new_score"]
-            plant["start"]["score"] = done[_key(name, env_id, plant["start"]["knobs"])][
-                "new_score"
-            ]
+            plant["start"]["score"] = done[_key(name, env_id, plant["start"]["knobs"])]["new_score"]
         f.write_text(json.dumps(data, indent=1, sort_keys=True) + "\n")
 
 

@@ -170,13 +170,16 @@ def test_every_stored_optimum_of_a_plant_replays_to_its_return(env_id):
         assert run_episode(env, Replay(a), r["seed"])["metrics"]["return"] == r["return"]
 
 
-@pytest.mark.parametrize(("argv", "words"), [
-    (["--envs", "NoSuchPlant-v0"], "unknown env id"),
-    (["--jobs", "0"], "--jobs: must be >= 1"),
-    (["--check"], "--check: only with --certify"),
-    (["--certify", "--again"], "--again: only with --check"),
-    (["--seeds", "-1"], "--seeds"),
-])  # fmt: skip
+@pytest.mark.parametrize(
+    ("argv", "words"),
+    [
+        (["--envs", "NoSuchPlant-v0"], "unknown env id"),
+        (["--jobs", "0"], "--jobs: must be >= 1"),
+        (["--check"], "--check: only with --certify"),
+        (["--certify", "--again"], "--again: only with --check"),
+        (["--seeds", "-1"], "--seeds"),
+    ],
+)
 def test_the_store_command_refuses_bad_flags_before_it_solves(argv, words, tmp_path, capsys):
     from agents.leaderboard import optima as command
 

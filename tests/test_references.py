@@ -49,8 +49,23 @@ def test_a_run_replays_the_stored_optimum_and_reruns_the_zero(env_id, tmp_path, 
     with nothing solved; ``cascade_pi_ff``'s are the returns the store recorded as the
     episode's 0."""
     out = tmp_path / "out"
-    cli.main(["--out", str(out), "--envs", env_id, "--policies", ZERO, "--scenarios", SAMPLE,
-              "--seeds", "0,1", "--no-mismatch", "--jobs", "1"])  # fmt: skip
+    cli.main(
+        [
+            "--out",
+            str(out),
+            "--envs",
+            env_id,
+            "--policies",
+            ZERO,
+            "--scenarios",
+            SAMPLE,
+            "--seeds",
+            "0,1",
+            "--no-mismatch",
+            "--jobs",
+            "1",
+        ]
+    )
     assert "solving the clairvoyant optimum" not in capsys.readouterr().err
     stored = optima.load()
     rows = [r for r in read_record(out / EPISODES) if r["policy"] in (ZERO, ONE)]

@@ -207,9 +207,7 @@ def main(argv: list[str] | None = None) -> int:
         help="with --certify: also run the independent check on them (resumable: episodes "
         "whose record holds a check are passed over unless --again)",
     )
-    ap.add_argument(
-        "--again", action="store_true", help="with --check: check every episode again"
-    )
+    ap.add_argument("--again", action="store_true", help="with --check: check every episode again")
     args = ap.parse_args(argv)
     import steamtemp_gym
 
@@ -235,8 +233,11 @@ def main(argv: list[str] | None = None) -> int:
         if args.check and not args.again:
             checked = [it for it in items if "independent_check" in done[it]]
             items = [it for it in items if it not in checked]
-            print(f"optima: {len(items)} episode(s) to check, {len(checked)} checked before "
-                  "(--again checks them too)", file=sys.stderr)  # fmt: skip
+            print(
+                f"optima: {len(items)} episode(s) to check, {len(checked)} checked before "
+                "(--again checks them too)",
+                file=sys.stderr,
+            )
         return _certify(args, items)
     todo = [it for it in episodes(envs, names, seeds) if it not in done]
     if args.limit is not None:
