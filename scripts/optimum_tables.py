@@ -32,17 +32,8 @@ START, END = (
 
 
 def _score(records: list[dict], policy_return, one) -> float:
-    """IQM over scenario x seed of a policy's normalized score, each scenario's ends the
-    means over its seeds (as the leaderboard scores)."""
-    by_sc: dict[str, list[dict]] = defaultdict(list)
-    for r in records:
-        by_sc[r["scenario"]].append(r)
-    scores = []
-    for rows in by_sc.values():
-        zero = float(np.mean([r["zero"] for r in rows]))
-        top = float(np.mean([one(r) for r in rows]))
-        scores.extend(stats.normalize([policy_return(r) for r in rows], zero, top).tolist())
-    return float(stats.iqm(np.array(scores)))
+    """IQM over scenario x seed of a policy's normalized score (:func:`_pooled`)."""
+    return _pooled([(r, policy_return(r)) for r in records], one)
 
 
 def old_one(r: dict) -> float:
