@@ -18,6 +18,7 @@ ZOO = Path(__file__).with_name("zoo")
 #: controllers" has one answer per kind.
 KINDS = {"ppo": "model-free", "sac": "model-free", "td3": "model-free", "trpo": "model-free",
          "recurrentppo": "model-free", "sac_caps": "model-free",
+         "ppo_privileged": "model-free, critic trained on privileged signals",
          "ppo_residual": "residual over cascade_pi_ff",
          "ppo_residual_pi": "residual over cascade_pi_ff_tuned",
          "ppo_residual_mpc": "residual over mpc_linear",

@@ -189,6 +189,8 @@ def _check(files: AgentFiles, stat: tuple) -> None:
         else {}  # fmt: skip
     if meta.get("residual_base") is not None:  # the base's action is observed (residual.py)
         extra += len(plant.valves)
+    if meta.get("privileged_critic"):  # what its critic saw besides (privileged.py)
+        extra += len(meta["privileged_critic"]["signals"])
     want_obs = (env.observation_space.shape[-1] + extra,)
     want_act = tuple(env.action_space.shape)
     if meta.get("tied_valves") is not None:  # one action per group of tied valves (moves.py)

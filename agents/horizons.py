@@ -16,7 +16,8 @@ The rules (docs/agents.md, "Horizons from the plant"):
   scale (a move's whole effect and as long again for the recovery);
 - GAE: the window ``dt / (1 - gamma lambda)`` is :data:`GAE_FACTOR` times the dead time
   (the advantage of a move sees its effect begin), lambda at most :data:`GAE_LAMBDA_MAX`;
-- history: the controller memory's samples span the time scale;
+- history: the controller memory's samples span the time scale (the fewest control steps
+  between samples that reach it);
 - output filter: a time constant of :data:`FILTER_FACTOR` times the time scale;
 - exploration noise of off-policy agents (``noise_type: lowpass``, agents/exploration.py):
   a time constant of :data:`EXPLORATION_FACTOR` times the time scale;
@@ -29,6 +30,7 @@ The rules (docs/agents.md, "Horizons from the plant"):
 from __future__ import annotations
 
 import functools
+import math
 
 from steamtemp_gym import plants
 from steamtemp_gym.plants.base import MAIN
@@ -104,11 +106,11 @@ def exploration_time_constant(env_id: str) -> float:
 
 def history_stride(env_id: str, history: int) -> int:
     """Control steps between the memory's ``history`` samples so that they span the time
-    scale (at least 1)."""
+    scale: the fewest that reach it (at least 1)."""
     if not (isinstance(history, int) and history >= 1):
         raise ValueError(f"history must be an integer >= 1 to span the plant, got {history!r}")
     dt = plants.make(env_id).dt_s
-    return max(1, round(sum(time_scale(env_id)) / (history * dt)))
+    return max(1, math.ceil(sum(time_scale(env_id)) / (history * dt)))
 
 
 #: The value that asks for a setting read from the plant (:func:`from_plant`).
@@ -153,3 +155,31 @@ def _memory_from_plant(env_id: str, item: object) -> object:
 
 __all__ = ["PLANT", "action_filter", "action_repeat", "discount", "exploration_time_constant",
            "from_plant", "gae_lambda", "history_stride", "time_scale"]  # fmt: skip
+
+
+def shortfalls(env_id: str, hp: dict) -> list[str]:
+    """What of an entry ``hp`` (checked, its ``plant`` settings read: train_config's
+    ``read_hyperparams``) does not cover the plant's time scale (module docstring): the
+    discount's horizon shorter than dead time + lag, the GAE window shorter than the dead
+    time, or a memory of samples spanning less than dead time + lag (a memory without
+    samples: none needed, the error integral or a recurrent policy's state is the
+    memory). Empty: it covers."""
+    dt = plants.make(env_id).dt_s * (hp.get("action_repeat") or 1)
+    theta, tau = time_scale(env_id)
+    out = []
+    gamma = hp.get("gamma", 0.99)
+    if dt / (1.0 - gamma) < theta + tau:
+        out.append(f"discount horizon {dt / (1.0 - gamma):.0f} s < dead time + lag "
+                   f"{theta + tau:.0f} s")
+    if "gae_lambda" in hp or "n_steps" in hp:  # an on-policy learner: GAE
+        gl = gamma * hp.get("gae_lambda", 0.95)
+        if dt / (1.0 - gl) < theta:
+            out.append(f"GAE window {dt / (1.0 - gl):.0f} s < dead time {theta:.0f} s")
+    memory = hp.get("env_wrapper") or {}
+    n = memory.get("history", 4) if memory else 0
+    if n:
+        span = n * memory.get("history_stride", 5) * plants.make(env_id).dt_s
+        if span < theta + tau:
+            out.append(f"memory of {n} samples spans {span:.0f} s < dead time + lag "
+                       f"{theta + tau:.0f} s")
+    return out

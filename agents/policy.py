@@ -126,7 +126,8 @@ class AgentPolicy:
         tied_valves: Valves that share one of the model's actions (agents/moves.py; with
             ``max_move`` or ``action_filter_s``).
         action_repeat: If set, the model decides every this many control intervals and its
-            action is held in between (agents/repeat.py); not for a recurrent model.
+            action is held in between (agents/repeat.py); a recurrent model's state moves
+            on its decisions only, as it did in training.
     """
 
     #: Batched and unbatched actions agree to this (read by steamtemp_gym.testing's
@@ -175,11 +176,14 @@ class AgentPolicy:
             self.batch_tolerance = 1e-6
         self._lstm = None
         self._n: int | None = None
+        #: A critic trained on privileged signals (agents/privileged.py): the actor reads the
+        #: agent's entries only, so SB3's ``predict`` gets them padded with zeros.
+        self.critic_only = 0
+        space = getattr(getattr(model, "policy", None), "observation_space", None)
+        if hasattr(getattr(model, "policy", None), "actor_inputs"):
+            self.critic_only = space.shape[0] - model.policy.actor_inputs
         self.decisions = None
         if action_repeat is not None:
-            if self.recurrent:
-                raise ValueError("action_repeat is for a feed-forward model: a recurrent "
-                                 "model's state would move on the held intervals")  # fmt: skip
             self.decisions = Decisions(action_repeat, incremental=max_move is not None)
 
     def reset(self) -> None:
@@ -208,13 +212,13 @@ class AgentPolicy:
             x = x[due]
         if len(x) == 0:
             action = None
-        elif self.recurrent:  # the model restarts the LSTM state of the restarted rows
-            action, self._lstm = self.model.predict(
-                x, state=None if restart.all() else self._lstm, episode_start=restart,
-                deterministic=deterministic)  # fmt: skip
+        elif self.recurrent:
+            action = self._recurrent(x, restart, due, deterministic)
         elif self.actor is not None and deterministic:
             action = self.actor(x)
         else:
+            if self.critic_only:
+                x = np.concatenate([x, np.zeros((len(x), self.critic_only), x.dtype)], axis=1)
             action, _ = self.model.predict(x, deterministic=deterministic)
         if action is not None:
             action = np.asarray(action, dtype=np.float32).reshape(len(x), -1)
@@ -225,6 +229,24 @@ class AgentPolicy:
         if self.moves is not None:
             action = self.moves(action)
         return (action[0] if np.ndim(observation) == 1 else action), None
+
+
+    def _recurrent(self, x: np.ndarray, restart: np.ndarray, due: np.ndarray | None,
+                   deterministic: bool) -> np.ndarray:  # fmt: skip
+        """A recurrent model's action for the deciding rows ``x`` (all rows where ``due`` is
+        None); their LSTM states move on, the restarted rows' from a fresh state."""
+        rows = np.ones(len(restart), dtype=bool) if due is None else due
+        state = None
+        if self._lstm is not None and not restart[rows].all():
+            state = tuple(s[:, rows] for s in self._lstm)
+        action, new = self.model.predict(x, state=state, episode_start=restart[rows],
+                                         deterministic=deterministic)  # fmt: skip
+        if self._lstm is None or self._lstm[0].shape[1] != len(restart):
+            self._lstm = tuple(np.zeros((s.shape[0], len(restart), *s.shape[2:]), s.dtype)
+                               for s in new)  # fmt: skip
+        for full, part in zip(self._lstm, new, strict=True):
+            full[:, rows] = part
+        return action
 
 
 def model_class(name: str):

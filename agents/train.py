@@ -5,8 +5,9 @@
     python -m agents.train --zoo [--env ID] [--algo A] [--out DIR] [--runs K]
         [--backend {local,ray}] [--address ADDRESS] [--jobs N] [--max-minutes M]
         # rebuild agents/zoo/ (or DIR): every shipped agent from its shipped YAML entry;
-        # with --env/--algo, every YAML entry of that env/algo; with --runs K, K
-        # independent training runs of each (run k: seed --seed + 1000 k)
+        # with --env/--algo, every YAML entry of that env/algo; with --hyperparams and
+        # --algo, every entry of that file; with --runs K, K independent training runs of
+        # each (run k: seed --seed + 1000 k); --resume skips the runs already in --out
 
 Hyperparameters: RL Zoo's YAML format (``agents/hyperparams/<algo>.yml``, keyed by env
 id; the same files work with ``python -m rl_zoo3.train --gym-packages steamtemp_gym
@@ -69,6 +70,8 @@ from agents.train_runs import (
     MAX_RUNS,
     RUN_SEED_STRIDE,
     ZOO,
+    entries_of,
+    finished,
     zoo_entries,
     zoo_env,
     zoo_jobs,
@@ -124,6 +127,9 @@ def make_parser() -> argparse.ArgumentParser:
                     help=f"with --zoo: K independent training runs per agent (1 to {MAX_RUNS}), "
                     "written <env>__<algo>__run<k>; run k trains with seed --seed + "
                     f"{RUN_SEED_STRIDE} k (default: one run, written <env>__<algo>)")  # fmt: skip
+    ap.add_argument("--resume", action="store_true",
+                    help="with --zoo: skip the runs whose files are in --out already (a "
+                    "rebuild stopped part way goes on where it stopped)")  # fmt: skip
     ap.add_argument(
         "--backend",
         choices=("local", "ray"),
@@ -144,6 +150,7 @@ def _check_zoo_flags(ap: argparse.ArgumentParser, args: argparse.Namespace) -> N
     """argparse errors for --runs, --backend, --address and --jobs out of place."""
     given = [f for f, v in (("--runs", args.runs is not None),
                             ("--backend", args.backend != "local"),
+                            ("--resume", args.resume),
                             ("--address", args.address is not None),
                             ("--jobs", args.jobs is not None)) if v]  # fmt: skip
     if given and not args.zoo:
@@ -166,7 +173,9 @@ def main(argv: list[str] | None = None) -> None:
             if args.max_minutes is not None and args.max_minutes <= 0:
                 raise ConfigError(f"--max-minutes must be > 0, got {args.max_minutes}")
             entries = zoo_entries()
-            if not (args.env or args.algo):  # rebuild what ships (a residual ships only
+            if args.hyperparams and args.algo:  # the entries of that file
+                entries = [(env_id, args.algo) for env_id in entries_of(Path(args.hyperparams))]
+            elif not (args.env or args.algo):  # rebuild what ships (a residual ships only
                 entries = [e for e in entries if e in set(shipped())]  # where it pays)
             env = zoo_env(args.env)
             entries = [(env_id, algo) for env_id, algo in entries
@@ -183,6 +192,8 @@ def main(argv: list[str] | None = None) -> None:
                             args.max_minutes, timesteps=args.timesteps,
                             n_envs=args.n_envs, hyperparams=args.hyperparams and
                             Path(args.hyperparams).resolve())  # fmt: skip
+            if args.resume:  # the runs whose files are there are done
+                jobs = [j for j in jobs if not finished(j)]
             if args.backend == "ray":
                 done = ray_backend.results(zoo_run, jobs, args.jobs or os.cpu_count() or 1,
                                            args.address)  # fmt: skip

@@ -22,7 +22,11 @@ from agents.wrappers import memory_options
 #: (``_rl``), and sb3-contrib's TRPO (a trust-region natural policy gradient) and
 #: RecurrentPPO (an LSTM policy: the memory is learned instead of given by agents.wrappers).
 ALGOS = ("ppo", "sac", "td3", "trpo", "ppo_residual", "ppo_residual_pi", "ppo_residual_mpc",
-         "ppo_imitation_mpc", "ppo_imitation_mpc_rl", "recurrentppo", "sac_caps")  # fmt: skip
+         "ppo_imitation_mpc", "ppo_imitation_mpc_rl", "recurrentppo", "sac_caps",
+         "ppo_privileged")  # fmt: skip
+#: The algorithms whose critic sees privileged signals in training (agents/privileged.py):
+#: PPO's actor-critic with an actor on the agent's observation only.
+PRIVILEGED = ("ppo_privileged",)
 #: The base controller of each residual algorithm (agents/residual.py): observed by the
 #: agent and told the applied command; None: ``ppo_residual``'s legacy form (the industrial
 #: reference, unobserved).
@@ -79,7 +83,7 @@ SPECIAL = ("n_timesteps", "n_envs", "policy", "normalize", "env_wrapper", "polic
            "noise_type", "noise_std", "noise_tau_s", "residual_scale", "max_move", "train_reward",
            "plant_randomization", "travel_price", "price_probe_every", "residual_base",
            "action_filter_s", "critic_warmup_steps", "tied_valves", "action_repeat", "max_minutes",
-           *IMITATION_KEYS)  # fmt: skip
+           "privileged_critic", *IMITATION_KEYS)  # fmt: skip
 
 
 class ConfigError(ValueError):
@@ -222,18 +226,14 @@ def _check_action_form(path: Path, hp: dict[str, Any], env_id: str, algo: str) -
 
 
 def _check_run(path: Path, hp: dict[str, Any], algo: str) -> None:
-    """ConfigError for a bad run budget (max_minutes), action_repeat on a recurrent policy
-    or a bad critic warm-up (critic_warmup_steps, PPO only)."""
+    """ConfigError for a bad run budget (max_minutes) or a bad critic warm-up
+    (critic_warmup_steps, PPO only)."""
     if "max_minutes" in hp:
         v = hp["max_minutes"]
         ok = isinstance(v, (int, float)) and not isinstance(v, bool)
         if not (ok and 0 < v <= MAX_RUN_MINUTES):
             raise ConfigError(f"--hyperparams {path}: max_minutes (a run's wall-time budget) "
                               f"must be a number in (0, {MAX_RUN_MINUTES}], got {v!r}")  # fmt: skip
-    if "action_repeat" in hp:  # its value checked by from_plant, which reads it
-        if "lstm" in str(hp.get("policy", "")).lower():
-            raise ConfigError(f"--hyperparams {path}: action_repeat is for a feed-forward "
-                              "policy, not a recurrent one")  # fmt: skip
     if "critic_warmup_steps" in hp:
         v = hp["critic_warmup_steps"]
         if not (isinstance(v, int) and not isinstance(v, bool) and v >= 0):
@@ -302,11 +302,13 @@ def _check_imitation_entry(path: Path, hp: dict[str, Any], algo: str) -> None:
 def _completed(path: Path, hp: dict[str, Any], algo: str) -> dict[str, Any]:
     """A copy of the entry with the algo's residual base and its policy_kwargs, normalize
     and env_wrapper parsed."""
-    if "residual_base" in hp:
-        raise ConfigError(f"--hyperparams {path}: residual_base is set by the algo "
-                          f"({RESIDUAL_BASES}), not in the file")  # fmt: skip
+    for key, by in (("residual_base", RESIDUAL_BASES), ("privileged_critic", PRIVILEGED)):
+        if key in hp:
+            raise ConfigError(f"--hyperparams {path}: {key} is set by the algo ({by}), not in "
+                              "the file")  # fmt: skip
     hp = dict(hp)
     hp["residual_base"] = RESIDUAL_BASES.get(algo)
+    hp["privileged_critic"] = algo in PRIVILEGED
     hp["policy_kwargs"] = _dict_string("policy_kwargs", hp.get("policy_kwargs", {}))
     norm = hp.get("normalize", False)
     hp["normalize"] = norm if isinstance(norm, bool) else _dict_string("normalize", norm)

@@ -26,11 +26,28 @@ MAX_RUNS = 100
 ZOO_MINUTES = 10.0
 
 
+def entries_of(path: Path) -> list[str]:
+    """Env ids with an entry in the hyperparameter file ``path`` (none if it is missing);
+    ConfigError for a file that is not YAML."""
+    try:
+        doc = yaml.safe_load(path.read_text(encoding="utf-8")) if path.exists() else {}
+    except (OSError, yaml.YAMLError) as exc:
+        raise ConfigError(f"--hyperparams {path}: cannot read it as YAML: {exc}") from None
+    return [env_id for env_id in steamtemp_gym.ENV_IDS if isinstance(doc, dict) and env_id in doc]
+
+
 def zoo_entries_of(algo: str) -> list[str]:
     """Env ids with an entry in the shipped hyperparameter file of ``algo``."""
-    f = HYPERPARAMS / f"{algo}.yml"
-    doc = (yaml.safe_load(f.read_text(encoding="utf-8")) or {}) if f.exists() else {}
-    return [env_id for env_id in steamtemp_gym.ENV_IDS if env_id in doc]
+    return entries_of(HYPERPARAMS / f"{algo}.yml")
+
+
+def finished(job: dict[str, Any]) -> bool:
+    """Whether the run of a :func:`zoo_jobs` job has written its files (model and
+    metadata) in its output directory."""
+    from agents.files import steamtemp_paths
+
+    model, meta = steamtemp_paths(Path(job["out"]), job["env_id"], job["algo"], job["run"])
+    return model.is_file() and meta.is_file()
 
 
 def zoo_entries() -> list[tuple[str, str]]:

@@ -56,11 +56,16 @@ def _shown_path(path: Path) -> str:
 
 
 def _obs_stats(venv) -> dict[str, Any] | None:
+    """The frozen observation statistics of the training stack's VecNormalize (None
+    without one), of the actor's entries only where a critic sees privileged signals."""
     from stable_baselines3.common.vec_env import VecNormalize
 
+    from agents import privileged
     from agents.policy import frozen_stats
 
-    return frozen_stats(venv) if isinstance(venv, VecNormalize) else None
+    stats = frozen_stats(venv) if isinstance(venv, VecNormalize) else None
+    extra = privileged.find(venv)
+    return stats if extra is None else privileged.actor_stats(stats, extra.n_actor)
 
 
 def _checked_input(env_id: str, algo: str, hyperparams: Path | None, timesteps: int | None,
@@ -87,7 +92,7 @@ def _checked_input(env_id: str, algo: str, hyperparams: Path | None, timesteps: 
     return env_id, cls, path, hp, total, n_envs
 
 
-def _sb3_model(cls: Any, hp: dict[str, Any], venv: Any, seed: int,
+def sb3_model(cls: Any, hp: dict[str, Any], venv: Any, seed: int,
                tensorboard: str | None, decision_s: float | None = None) -> Any:  # fmt: skip
     """The SB3 model of ``cls`` on ``venv``: the constructor's hyperparameters, the learning
     rate schedule and, where configured, SAC/TD3's Gaussian action noise: white
@@ -99,6 +104,14 @@ def _sb3_model(cls: Any, hp: dict[str, Any], venv: Any, seed: int,
 
     kwargs = {k: v for k, v in hp.items() if k not in SPECIAL}
     kwargs["learning_rate"] = _schedule(kwargs.get("learning_rate", 3e-4))
+    policy, policy_kwargs = hp.get("policy", "MlpPolicy"), dict(hp["policy_kwargs"])
+    if hp.get("privileged_critic"):
+        from agents import privileged
+
+        extra = privileged.find(venv)
+        if extra is None:
+            raise ValueError("a privileged critic needs the training stack's VecPrivileged")
+        policy, policy_kwargs["actor_inputs"] = privileged.PrivilegedCriticPolicy, extra.n_actor
     n_u = venv.action_space.shape[0]
     sigma = hp.get("noise_std", 0.1) * np.ones(n_u)
     if hp.get("noise_type") == "normal":
@@ -106,8 +119,8 @@ def _sb3_model(cls: Any, hp: dict[str, Any], venv: Any, seed: int,
     elif hp.get("noise_type") == "lowpass":
         kwargs["action_noise"] = LowPassActionNoise(
             sigma, float(np.exp(-decision_s / hp["noise_tau_s"])))
-    model = cls(hp.get("policy", "MlpPolicy"), venv, seed=seed, device="cpu", verbose=0,
-                policy_kwargs=hp["policy_kwargs"] or None, tensorboard_log=tensorboard,
+    model = cls(policy, venv, seed=seed, device="cpu", verbose=0,
+                policy_kwargs=policy_kwargs or None, tensorboard_log=tensorboard,
                 **kwargs)  # fmt: skip
     if hp.get("residual_base") is not None:
         zero_output(model)
@@ -236,7 +249,20 @@ def _metadata(env_id: str, algo: str, cls: Any, revision: str, path: Path,
         "max_move": hp.get("max_move"), "action_filter_s": hp.get("action_filter_s"),
         "tied_valves": hp.get("tied_valves"), "train_reward": hp.get("train_reward"),
         "action_repeat": hp.get("action_repeat"),
+        "privileged_critic": _privileged_record(env_id, hp),
     }  # fmt: skip
+
+
+def _privileged_record(env_id: str, hp: dict[str, Any]) -> dict[str, Any] | None:
+    """What a critic trained on privileged signals saw besides the agent's observation (the
+    shipped actor never sees it), None for an ordinary critic."""
+    if not hp.get("privileged_critic"):
+        return None
+    from agents import privileged
+    from steamtemp_gym import plants
+
+    names = privileged.signal_names(plants.make(env_id))
+    return {"signals": names, "look_ahead_s": list(privileged.LOOK_AHEAD_S)}
 
 
 def _price_record(prices: list[tuple[int, float, float, float]]) -> dict[str, Any]:
@@ -340,7 +366,7 @@ def _fine_tune(env_id: str, cls: Any, hp: dict[str, Any], seed: int, n_envs: int
     stats = best["obs_norm"]
     venv, native, _ = make_training_env(env_id, n_envs, seed, {**hp, "normalize": False})
     venv = imitation.frozen_normalization(venv, stats, hp.get("gamma", 0.99))
-    model = _sb3_model(cls, hp, venv, seed, tensorboard)
+    model = sb3_model(cls, hp, venv, seed, tensorboard)
     model.policy.load_state_dict(PPO.load(model_path, device="cpu").policy.state_dict())
     with torch.no_grad():
         model.policy.log_std.fill_(hp["policy_kwargs"].get("log_std_init", 0.0))
@@ -385,7 +411,7 @@ def train(env_id: str, algo: str, hyperparams: Path | None = None, timesteps: in
         return _imitation(env_id, algo, cls, path, hp, seed, run, n_envs, total, out,
                           reference, venv, quiet, max_minutes, tensorboard)  # fmt: skip
     plant, repeat = native.unwrapped.plant, hp.get("action_repeat") or 1
-    model = _sb3_model(cls, hp, venv, seed, tensorboard, plant.dt_s * repeat)
+    model = sb3_model(cls, hp, venv, seed, tensorboard, plant.dt_s * repeat)
     off_policy = getattr(model, "replay_buffer", None) is not None
     if price is not None and off_policy:
         from agents.travel_price import price_replay

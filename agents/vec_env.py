@@ -185,6 +185,10 @@ def make_training_env(env_id: str, n_envs: int, seed: int, hp: dict[str, Any],
         from agents.repeat import VecRepeat
 
         venv = VecRepeat(venv, hp["action_repeat"], incremental=hp.get("max_move") is not None)
+    if hp.get("privileged_critic"):
+        from agents.privileged import VecPrivileged
+
+        venv = VecPrivileged(venv, base.venv)
     venv = VecMonitor(venv)
     if hp["normalize"]:
         kw = hp["normalize"] if isinstance(hp["normalize"], dict) else {}

@@ -135,15 +135,52 @@ def test_bad_repeats_are_refused(bad):
         check_repeat(bad)
 
 
-def test_a_recurrent_model_with_action_repeat_is_refused():
-    class Lstm:
-        class policy:  # noqa: N801 - stands for an sb3-contrib RecurrentPPO policy
-            lstm_actor = object()
+def _recurrent_policy(k):
+    """An untrained RecurrentPPO on the native env's observation, as a Policy deciding
+    every ``k`` intervals."""
+    from sb3_contrib import RecurrentPPO
 
     native = NativeVecEnv(ENV, 1, scenario=SHORT)
-    with pytest.raises(ValueError, match="feed-forward"):
-        AgentPolicy(Lstm(), native.venv, action_repeat=2)
+    model = RecurrentPPO("MlpLstmPolicy", native, seed=0, device="cpu", n_steps=8,
+                         policy_kwargs={"lstm_hidden_size": 8})  # fmt: skip
     native.close()
+    import gymnasium as gym
+
+    return AgentPolicy(model, gym.make(ENV), action_repeat=k)
+
+
+def test_a_recurrent_model_decides_every_k_intervals_and_its_state_moves_on_decisions():
+    """Held between decisions; a row acted on in a batch with a row that started later
+    gets the actions it gets alone (the LSTM state of each row moves on its own
+    decisions only)."""
+    import gymnasium as gym
+
+    env = gym.make(ENV, scenario="load_ramp_100_50")
+    rows = []  # the observations of two episodes under a constant valve
+    for s in (0, 1):
+        o, _ = env.reset(seed=s)
+        trace = []
+        for _ in range(9):
+            trace.append(o)
+            o, *_ = env.step(np.full(env.action_space.shape, 0.3, dtype=np.float32))
+        rows.append(np.array(trace))
+    alone = _recurrent_policy(3)
+    a0 = [alone.predict(x)[0] for x in rows[0]]
+    for t in range(1, 9):
+        if t % 3:
+            np.testing.assert_array_equal(a0[t], a0[t - 1])
+    assert np.abs(np.diff(np.array(a0), axis=0)).max() > 0  # it decides
+    alone1 = _recurrent_policy(3)
+    a1 = [alone1.predict(x)[0] for x in rows[1][:8]]
+    batch = _recurrent_policy(3)  # row 1 restarts one interval after row 0 starts
+    out = []
+    for t in range(9):
+        x = np.stack([rows[0][t], rows[1][max(t - 1, 0)]])
+        a, _ = batch.predict(x, episode_start=np.array([t == 0, t <= 1]))
+        out.append(a)
+    out = np.array(out)
+    np.testing.assert_allclose(out[:, 0], np.array(a0), atol=1e-6)
+    np.testing.assert_allclose(out[1:, 1], np.array(a1), atol=1e-6)
 
 
 @pytest.mark.parametrize("env_id", steamtemp_gym.ENV_IDS)
@@ -210,7 +247,6 @@ def test_an_agent_with_action_repeat_trains_and_acts_every_k_intervals(tmp_path)
 @pytest.mark.parametrize(("algo", "extra", "match"), [
     ("ppo", {"action_repeat": 0}, "action_repeat must be an integer"),
     ("ppo", {"action_repeat": "often"}, "action_repeat must be an integer"),
-    ("ppo", {"action_repeat": 2, "policy": "MlpLstmPolicy"}, "recurrent"),
     ("ppo_imitation_mpc", {"action_repeat": 2}, "every interval")])  # fmt: skip
 def test_bad_action_repeat_in_the_hyperparameters_is_refused(tmp_path, algo, extra, match):
     from agents.train_config import ConfigError, read_hyperparams

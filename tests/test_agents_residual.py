@@ -132,7 +132,7 @@ def test_a_zero_output_ppo_residual_acts_as_its_base(tmp_path):
     path = train_config.HYPERPARAMS / "ppo_residual_mpc.yml"
     hp = train_config.read_hyperparams(path, ENV_ID, "ppo_residual_mpc")
     venv, native, _ = training.make_training_env(ENV_ID, 2, 0, hp)
-    model = training._sb3_model(train_config.algo_class("ppo_residual_mpc"), hp, venv, 0, None)
+    model = training.sb3_model(train_config.algo_class("ppo_residual_mpc"), hp, venv, 0, None)
     agent = AgentPolicy(model, native, memory=hp["env_wrapper"], obs_norm=None,
                         residual_scale=hp["residual_scale"],
                         residual_base="mpc_linear")  # fmt: skip
@@ -168,7 +168,7 @@ def test_the_actor_holds_still_while_the_critic_warms_up():
     hp = train_config.read_hyperparams(path, ENV_ID, "ppo_residual_pi")
     hp.update(n_steps=32, batch_size=32, n_epochs=2)
     venv, _, _ = training.make_training_env(ENV_ID, 2, 0, hp)
-    model = training._sb3_model(train_config.algo_class("ppo_residual_pi"), hp, venv, 0, None)
+    model = training.sb3_model(train_config.algo_class("ppo_residual_pi"), hp, venv, 0, None)
     actor0 = [p.detach().clone() for p in training.actor_parameters(model)]
     critic0 = [p.detach().clone() for p in model.policy.value_net.parameters()]
     model.learn(total_timesteps=128, callback=[training.critic_warmup(10_000)])

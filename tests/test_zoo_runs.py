@@ -177,6 +177,7 @@ def test_bad_runs_are_argparse_errors(value, match, capsys):
     (["--zoo", "--jobs", "2"], "argument --jobs: only with --backend ray"),
     (["--zoo", "--backend", "dask"], "invalid choice: 'dask'"),
     (["--zoo", "--max-minutes", "0"], "--max-minutes must be > 0"),
+    (["--env", ENV, "--algo", "ppo", "--resume"], "argument --resume: only with --zoo"),
 ])  # fmt: skip
 def test_zoo_flags_are_checked_before_training(argv, match, argparse_error):
     assert match in argparse_error(train.main, argv)
@@ -184,9 +185,23 @@ def test_zoo_flags_are_checked_before_training(argv, match, argparse_error):
 
 def test_every_entry_is_checked_before_the_first_run(tmp_path, argparse_error):
     yml = tmp_path / "ppo.yml"
-    yml.write_text(yaml.safe_dump({ENV: TINY_PPO[ENV]}))  # no entry for the other plants
-    argv = ["--zoo", "--algo", "ppo", "--runs", "2", "--hyperparams", str(yml)]
-    assert "no entry for steamtemp/" in argparse_error(train.main, argv)
+    other = "steamtemp/Cascade300MW-v0"
+    yml.write_text(yaml.safe_dump({ENV: TINY_PPO[ENV], other: {**TINY_PPO[ENV], "speed": 3}}))
+    argv = ["--zoo", "--algo", "ppo", "--runs", "2", "--hyperparams", str(yml), "--out",
+            str(tmp_path / "zoo")]  # fmt: skip
+    assert "unknown key(s) ['speed']" in argparse_error(train.main, argv)
+    assert not (tmp_path / "zoo").exists()
+
+
+def test_a_file_given_with_its_algo_trains_its_own_entries(tmp_path):
+    """--hyperparams with --algo: the entries of that file, shipped entry or not."""
+    yml = tmp_path / "recurrentppo.yml"
+    yml.write_text(yaml.safe_dump({ENV: {}, "steamtemp/Cascade300MW-v0": {}}))
+    assert train_runs.entries_of(yml) == [ENV, "steamtemp/Cascade300MW-v0"]
+    assert train_runs.entries_of(tmp_path / "none.yml") == []
+    yml.write_text("a: [")
+    with pytest.raises(train_config.ConfigError, match="cannot read it as YAML"):
+        train_runs.entries_of(yml)
 
 
 def test_run_seeds_never_share_a_training_env_seed(tmp_path):
@@ -267,6 +282,22 @@ def test_local_runs_write_run_indexed_files_with_their_seeds(local_zoo, tmp_path
                         out=tmp_path, max_minutes=30, quiet=True, run=1)  # fmt: skip
     assert _outcome(again) == _outcome(m1)  # same seed, same run
     assert files.steamtemp_paths(tmp_path, ENV, "ppo", 1)[0].is_file()
+
+
+def test_a_resumed_rebuild_trains_only_the_runs_not_there(local_zoo, tmp_path):
+    import shutil
+
+    zoo = tmp_path / "zoo"
+    shutil.copytree(local_zoo, zoo)
+    before = {f.name: f.stat().st_mtime_ns for f in zoo.iterdir()}
+    argv = _zoo_args(local_zoo.parent, zoo)
+    argv[argv.index("--runs") + 1] = "3"
+    train.main([*argv, "--resume"])
+    after = {f.name: f.stat().st_mtime_ns for f in zoo.iterdir()}
+    assert {k: after[k] for k in before} == before  # runs 0 and 1 untouched
+    assert sorted(set(after) - set(before)) == [
+        f"{files.stem(ENV, 'ppo', 2)}{ext}" for ext in (".json", ".zip")]  # fmt: skip
+    assert _meta(zoo, 2)["seed"] == 2 * train_runs.RUN_SEED_STRIDE
 
 
 def test_ray_runs_equal_local_runs(local_zoo, tmp_path):
