@@ -31,11 +31,11 @@ of docs/offline.md scores far below its expert.
 
 from __future__ import annotations
 
-import time
 from typing import Any
 
 import numpy as np
 
+from agents.run_clock import RunClock
 from agents.train_config import DAGGER_KEYS, EXPERTS, IMITATION_DEFAULTS
 
 
@@ -129,10 +129,12 @@ def _fit(net: Any, data: list[tuple[np.ndarray, ...]], stats: dict[str, Any],
 
 def train(env_id: str, algo: str, hp: dict[str, Any], seed: int, n_envs: int,
           reference: dict[str, float], save_to: Any, log: Any = None,
-          max_minutes: float | None = None) -> tuple[Any, dict, list, dict, list]:  # fmt: skip
+          max_minutes: float | None = None,
+          clock: RunClock | None = None) -> tuple[Any, dict, list, dict, list]:  # fmt: skip
     """DAgger (module docstring): returns (model, best checkpoint, validation curve,
     imitation record, the aggregated pairs); the best model is saved to ``save_to``.
-    Training episodes: seeds ``seed + i * n_envs + k`` in iteration i."""
+    Training episodes: seeds ``seed + i * n_envs + k`` in iteration i. ``max_minutes``: CPU
+    minutes on ``clock`` (the run's; a new one if None)."""
     from stable_baselines3 import PPO
 
     from agents.behaviour_cloning import standardization
@@ -147,7 +149,8 @@ def train(env_id: str, algo: str, hp: dict[str, Any], seed: int, n_envs: int,
     model = PPO(hp.get("policy", "MlpPolicy"), venv, seed=seed, device="cpu", verbose=0,
                 policy_kwargs=hp["policy_kwargs"] or None,
                 **{k: hp[k] for k in ("gamma", "gae_lambda") if k in hp})  # fmt: skip
-    net, rng, t0 = actor_net(model), np.random.default_rng(seed), time.monotonic()
+    net, rng = actor_net(model), np.random.default_rng(seed)
+    clock = clock or RunClock()
     data: list[tuple[np.ndarray, ...]] = []
     stats, best, curve = None, {}, []
     record = {"expert": expert, **settings, "iterations": []}
@@ -160,9 +163,9 @@ def train(env_id: str, algo: str, hp: dict[str, Any], seed: int, n_envs: int,
         mse = _fit(net, data, stats, settings, seed + i)
         score = scored(env_id, AgentPolicy(model, native, memory=memory, obs_norm=stats,
                                            action_filter_s=filter_s), reference)  # fmt: skip
-        wall, pairs = time.monotonic() - t0, int(sum(len(d[0]) for d in data))
+        pairs = int(sum(len(d[0]) for d in data))
         curve.append({"timesteps": pairs, "fraction": (i + 1) / settings["dagger_iterations"],
-                      "wall_s": wall, **score})  # fmt: skip
+                      **clock.stamp(), **score})  # fmt: skip
         record["iterations"].append({"beta": beta, "pairs": pairs, "mse": mse})
         if log:
             log(f"[{algo}] iteration {i}: beta {beta:.3g}, {pairs:,} pairs, mse {mse:.3g}, "
@@ -170,7 +173,7 @@ def train(env_id: str, algo: str, hp: dict[str, Any], seed: int, n_envs: int,
         if better_checkpoint(score, best, TUNING_TRAVEL_BUDGET):
             best.update(score, timesteps=pairs, obs_norm=stats)
             model.save(save_to)
-        if max_minutes is not None and wall > 60.0 * max_minutes:
+        if max_minutes is not None and clock.cpu() > 60.0 * max_minutes:
             break
     venv.close()
     return model, best, curve, record, data

@@ -41,9 +41,10 @@ validation episodes), or, if none does, one that passes its checks, then the one
 travel (agents.validation.better_checkpoint). With ``--max-minutes`` the
 agent is validated at every sixteenth of that time instead (and at the end of the step
 budget, where that ends the run first); an entry's ``max_minutes`` is its
-runs' wall-time budget where ``--max-minutes`` is not given. Output in ``--out``:
+runs' budget where ``--max-minutes`` is not given. A budget is minutes of one core: the
+run's CPU time (agents/run_clock.py), not the wall's. Output in ``--out``:
 ``<env>__<algo>.zip`` (the best SB3 model) and ``<env>__<algo>.json`` (env id, package
-version, git revision, hyperparameters, seed, timesteps, wall time, the validation curve
+version, git revision, hyperparameters, seed, timesteps, CPU and wall time, the validation curve
 and score, the normalization statistics and the wrapper config: everything
 ``agents.load`` needs).
 
@@ -113,8 +114,8 @@ def make_parser() -> argparse.ArgumentParser:
         "--max-minutes",
         type=float,
         default=None,
-        help="stop after this wall time (default: the YAML entry's max_minutes; with --zoo: "
-             "of each run, 10 where the entry has none)",
+        help="stop after this many minutes of one core, the run's CPU time (default: the "
+        "YAML entry's max_minutes; with --zoo: of each run, 10 where the entry has none)",
     )
     ap.add_argument("--tensorboard", default=None, help="TensorBoard log directory")
     ap.add_argument("--zoo", action="store_true",
@@ -213,7 +214,7 @@ def main(argv: list[str] | None = None) -> None:
 
 
 def _summary(meta: dict[str, Any]) -> str:
-    keys = ("env_id", "algo", "run", "seed", "timesteps_trained", "wall_time_s")
+    keys = ("env_id", "algo", "run", "seed", "timesteps_trained", "cpu_time_s", "wall_time_s")
     return json.dumps({k: meta[k] for k in keys} | {"validation": meta["validation"]["best"]})
 
 

@@ -76,7 +76,7 @@ def check_imitation(hp: dict[str, Any], algo: str) -> None:
 
 HYPERPARAMS = Path(__file__).with_name("hyperparams")
 #: RL Zoo keys with a meaning of their own (the rest go to the algorithm's constructor).
-#: The longest wall-time budget of a run an entry may ask for (``max_minutes``): minutes of
+#: The longest budget of a run an entry may ask for (``max_minutes``): minutes of
 #: one core, the project's budget per training run.
 MAX_RUN_MINUTES = 20
 SPECIAL = ("n_timesteps", "n_envs", "policy", "normalize", "env_wrapper", "policy_kwargs",
@@ -232,7 +232,7 @@ def _check_run(path: Path, hp: dict[str, Any], algo: str) -> None:
         v = hp["max_minutes"]
         ok = isinstance(v, (int, float)) and not isinstance(v, bool)
         if not (ok and 0 < v <= MAX_RUN_MINUTES):
-            raise ConfigError(f"--hyperparams {path}: max_minutes (a run's wall-time budget) "
+            raise ConfigError(f"--hyperparams {path}: max_minutes (a run's budget, CPU minutes) "
                               f"must be a number in (0, {MAX_RUN_MINUTES}], got {v!r}")  # fmt: skip
     if "critic_warmup_steps" in hp:
         v = hp["critic_warmup_steps"]

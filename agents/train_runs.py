@@ -21,7 +21,7 @@ ZOO = Path(__file__).with_name("zoo")
 RUN_SEED_STRIDE = 1000
 #: Most runs per agent (run seeds stay far below agents.training.VALIDATION_SEED).
 MAX_RUNS = 100
-#: A zoo run's wall-time budget (minutes of one core) where neither --max-minutes nor its
+#: A zoo run's budget (minutes of one core, its CPU time) where neither --max-minutes nor its
 #: YAML entry gives one.
 ZOO_MINUTES = 10.0
 

@@ -7,7 +7,6 @@ from __future__ import annotations
 
 import json
 import sys
-import time
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -16,6 +15,8 @@ import numpy as np
 
 import steamtemp_gym
 from agents.files import git_revision, steamtemp_paths, stem
+from agents.run_clock import RunClock, one_core
+from agents.run_record import metadata, price_record
 from agents.train_config import (
     EXPERTS,
     FINE_TUNED,
@@ -44,15 +45,6 @@ def _schedule(value: Any):
         v0 = float(value[4:])
         return lambda progress_remaining: progress_remaining * v0
     return value
-
-
-def _shown_path(path: Path) -> str:
-    """``path`` as recorded in the metadata: relative to the project for a shipped file (no
-    machine's directory in the zoo's metadata), as given otherwise."""
-    try:
-        return Path(path).resolve().relative_to(HYPERPARAMS.parent.parent).as_posix()
-    except ValueError:
-        return str(path)
 
 
 def _obs_stats(venv) -> dict[str, Any] | None:
@@ -161,15 +153,16 @@ def scored_policy(model: Any, venv: Any, native: Any, hp: dict[str, Any]) -> Any
 
 def _checkpointing(model: Any, venv: Any, native: Any, hp: dict[str, Any], env_id: str,
                    reference: dict[str, float], total: int, curve: list, best: dict,
-                   save_to: Path, offset: int = 0) -> Callable[[int, float], None]:  # fmt: skip
-    """``evaluate(steps, wall)``: validate the model as it is, add the result to ``curve``,
+                   save_to: Path, offset: int = 0) -> Callable[[int, RunClock], None]:  # fmt: skip
+    """``evaluate(steps, clock)``: validate the model as it is, add the result to ``curve``
+    (with the run's CPU and wall seconds on ``clock``),
     and where it beats ``best`` (:func:`better_checkpoint`) keep it there and save the model
     to ``save_to``; ``offset``: what the run trained on before (added to ``steps``)."""
     from agents.tuning_terms import TUNING_TRAVEL_BUDGET
 
-    def evaluate(steps: int, wall: float) -> None:
+    def evaluate(steps: int, clock: RunClock) -> None:
         score = scored(env_id, scored_policy(model, venv, native, hp), reference)
-        curve.append({"timesteps": offset + steps, "fraction": steps / total, "wall_s": wall,
+        curve.append({"timesteps": offset + steps, "fraction": steps / total, **clock.stamp(),
                       **score})  # fmt: skip
         # within the tuned baselines' margin under the budget (agents/tuning_terms.py)
         if better_checkpoint(score, best, TUNING_TRAVEL_BUDGET):
@@ -179,12 +172,13 @@ def _checkpointing(model: Any, venv: Any, native: Any, hp: dict[str, Any], env_i
     return evaluate
 
 
-def _progress(evaluate: Callable[[int, float], None], curve: list, total: int, t0: float,
-              name: str, quiet: bool, max_minutes: float | None) -> Any:  # fmt: skip
+def _progress(evaluate: Callable[[int, RunClock], None], curve: list, total: int,
+              clock: RunClock, name: str, quiet: bool,
+              max_minutes: float | None) -> Any:  # fmt: skip
     """The SB3 callback of a run: ``evaluate`` at every mark of :data:`EVAL_FRACTIONS` of the
-    step budget ``total``, or with ``max_minutes`` at those of the time budget and at the
-    end of whichever budget ends the run (a time stop ends the training), a progress line
-    on stderr every 10 s unless ``quiet``."""
+    step budget ``total``, or with ``max_minutes`` (CPU minutes on ``clock``) at those of
+    the time budget and at the end of whichever budget ends the run (a time stop ends the
+    training), a progress line on stderr every 10 CPU seconds unless ``quiet``."""
     from stable_baselines3.common.callbacks import BaseCallback
 
     class Progress(BaseCallback):
@@ -193,12 +187,14 @@ def _progress(evaluate: Callable[[int, float], None], curve: list, total: int, t
             # with a time budget the step budget's marks would only add validations: its end
             self.marks = ([int(f * total) for f in EVAL_FRACTIONS] if max_minutes is None
                           else [total])  # fmt: skip
+            # the marks still ahead (a fine-tuning starts part way into its run's budget)
             self.clock = ([] if max_minutes is None else
-                          [60.0 * max_minutes * f for f in EVAL_FRACTIONS[:-1]])  # fmt: skip
+                          [60.0 * max_minutes * f for f in EVAL_FRACTIONS[:-1]
+                           if 60.0 * max_minutes * f > clock.cpu()])  # fmt: skip
             self.last_line = 0.0
 
         def _on_step(self) -> bool:
-            steps, wall = self.num_timesteps, time.monotonic() - t0
+            steps, wall = self.num_timesteps, clock.cpu()
             due = bool(self.marks and steps >= self.marks[0])
             due |= bool(self.clock and wall >= self.clock[0])
             while self.marks and steps >= self.marks[0]:
@@ -206,74 +202,21 @@ def _progress(evaluate: Callable[[int, float], None], curve: list, total: int, t
             while self.clock and wall >= self.clock[0]:
                 self.clock.pop(0)
             if due:
-                evaluate(steps, wall)
+                evaluate(steps, clock)
             if not quiet and wall - self.last_line > 10.0:
                 self.last_line = wall
                 eta = wall / max(steps, 1) * (total - steps)
                 last = f", validation return {curve[-1]['return']:.1f}" if curve else ""
                 print(f"[{name}] {steps:,}/{total:,} steps ({100 * steps / total:.0f} %), "
-                      f"{steps / max(wall, 1e-9):,.0f} steps/s, ETA {eta / 60:.1f} min{last}",
+                      f"{steps / max(wall, 1e-9):,.0f} steps per CPU-s, ETA {eta / 60:.1f} "
+                      f"CPU-min{last}",
                       file=sys.stderr, flush=True)  # fmt: skip
             if max_minutes is not None and wall > 60.0 * max_minutes:
-                evaluate(steps, wall)
+                evaluate(steps, clock)
                 return False
             return True
 
     return Progress()
-
-
-def _metadata(env_id: str, algo: str, cls: Any, revision: str, path: Path,
-              hp: dict[str, Any], seed: int, run: int | None, n_envs: int, total: int,
-              model: Any, best: dict[str, Any], wall_s: float, reference: dict[str, float],
-              curve: list) -> dict[str, Any]:  # fmt: skip
-    """The run's ``<stem>.json``: everything ``agents.load`` needs and how the run went."""
-    import baselines
-    from agents.tuning_terms import TUNING_TRAVEL_BUDGET
-
-    return {
-        "env_id": env_id, "algo": algo, "sb3_class": cls.__name__,
-        "package_version": steamtemp_gym.__version__, "git_revision": revision,
-        "hyperparams_file": _shown_path(path),
-        "hyperparameters": json.loads(json.dumps(hp, default=str)), "seed": seed, "run": run,
-        "n_envs": n_envs, "timesteps_budget": total, "timesteps_trained": model.num_timesteps,
-        "timesteps_of_best": best["timesteps"], "wall_time_s": wall_s,
-        "validation": {"scenario": "random", "seeds": [VALIDATION_SEED + k
-                       for k in range(N_VALIDATION)], "best": {k: best[k] for k in
-                       ("return", "iae_K_s", "valve_travel", "travel_ratio", "check",
-                        "check_travel_ratio")},
-                       "reference": {"policy": baselines.INDUSTRIAL_REFERENCE,
-                                     **{k: v for k, v in reference.items() if k != "checks"}},
-                       "travel_budget": TUNING_TRAVEL_BUDGET, "curve": curve},
-        "normalization": best["obs_norm"], "memory": hp["env_wrapper"],
-        "residual_scale": hp.get("residual_scale"), "residual_base": hp.get("residual_base"),
-        "max_move": hp.get("max_move"), "action_filter_s": hp.get("action_filter_s"),
-        "tied_valves": hp.get("tied_valves"), "train_reward": hp.get("train_reward"),
-        "action_repeat": hp.get("action_repeat"),
-        "privileged_critic": _privileged_record(env_id, hp),
-    }  # fmt: skip
-
-
-def _privileged_record(env_id: str, hp: dict[str, Any]) -> dict[str, Any] | None:
-    """What a critic trained on privileged signals saw besides the agent's observation (the
-    shipped actor never sees it), None for an ordinary critic."""
-    if not hp.get("privileged_critic"):
-        return None
-    from agents import privileged
-    from steamtemp_gym import plants
-
-    names = privileged.signal_names(plants.make(env_id))
-    return {"signals": names, "look_ahead_s": list(privileged.LOOK_AHEAD_S)}
-
-
-def _price_record(prices: list[tuple[int, float, float, float]]) -> dict[str, Any]:
-    """The travel price's course for the metadata: the first rollout's travel over the
-    reference's (the untrained policy with its exploration, before any update), the last
-    price, and at most 100 (timesteps, the policy's travel ratio, the rollout's, price)
-    points."""
-    keep = prices[:: max(1, len(prices) // 100)]
-    return {"exploration_travel_ratio": prices[0][2] if prices else None,
-            "final_price": prices[-1][3] if prices else None,
-            "course": [list(p) for p in keep]}  # fmt: skip
 
 
 def actor_parameters(model: Any) -> list:
@@ -323,7 +266,7 @@ def _imitation(env_id: str, algo: str, cls: Any, path: Path, hp: dict[str, Any],
     out.mkdir(parents=True, exist_ok=True)
     model_path, meta_path = steamtemp_paths(out, env_id, algo, run)
     revision = git_revision()
-    t0 = time.monotonic()
+    clock = RunClock()
     log = None if quiet else (lambda m: print(m, file=sys.stderr, flush=True))
     tuned = algo in FINE_TUNED
     dagger_minutes = hp.get("dagger_minutes") if tuned else None
@@ -331,18 +274,17 @@ def _imitation(env_id: str, algo: str, cls: Any, path: Path, hp: dict[str, Any],
         dagger_minutes = min(dagger_minutes or max_minutes, max_minutes)
     model, best, curve, record, data = imitation.train(env_id, algo, hp, seed, n_envs,
                                                        reference, model_path, log,
-                                                       dagger_minutes)  # fmt: skip
+                                                       dagger_minutes, clock)  # fmt: skip
     pairs = curve[-1]["timesteps"]
     for point in curve:
         point["phase"] = "dagger"
     if tuned:
-        left = None if max_minutes is None else max_minutes - (time.monotonic() - t0) / 60.0
-        if left is None or left > 0:
+        if max_minutes is None or clock.cpu() < 60.0 * max_minutes:
             model = _fine_tune(env_id, cls, hp, seed, n_envs, total, model_path, reference,
-                               data, best, curve, quiet, left, tensorboard, stem(env_id, algo,
-                               run))  # fmt: skip
-    meta = _metadata(env_id, algo, cls, revision, path, hp, seed, run, n_envs, total, model,
-                     best, time.monotonic() - t0, reference, curve)  # fmt: skip
+                               data, best, curve, quiet, max_minutes, tensorboard,
+                               stem(env_id, algo, run), clock)  # fmt: skip
+    meta = metadata(env_id, algo, cls, revision, path, hp, seed, run, n_envs, total, model,
+                     best, clock, reference, curve)  # fmt: skip
     meta["timesteps_trained"] = pairs + (model.num_timesteps if tuned else 0)
     meta["imitation"] = record
     meta_path.write_text(json.dumps(meta, indent=1), encoding="utf-8")
@@ -352,12 +294,13 @@ def _imitation(env_id: str, algo: str, cls: Any, path: Path, hp: dict[str, Any],
 def _fine_tune(env_id: str, cls: Any, hp: dict[str, Any], seed: int, n_envs: int, total: int,
                model_path: Path, reference: dict, data: list, best: dict, curve: list,
                quiet: bool, max_minutes: float | None, tensorboard: str | None,
-               name: str) -> Any:  # fmt: skip
+               name: str, clock: RunClock) -> Any:  # fmt: skip
     """PPO from DAgger's best checkpoint (saved at ``model_path``, its statistics in
     ``best``): the observations standardized as DAgger froze them, the critic learning
     alone for ``critic_warmup_steps``, the actor anchored to the expert's actions
     (``imitation.anchor``); validated as any run, the best checkpoint (DAgger's included)
-    kept. Returns the fine-tuned model."""
+    kept; ``clock``: the run's (its budget ``max_minutes`` counts DAgger's minutes).
+    Returns the fine-tuned model."""
     import torch
     from stable_baselines3 import PPO
 
@@ -373,8 +316,7 @@ def _fine_tune(env_id: str, cls: Any, hp: dict[str, Any], seed: int, n_envs: int
     rl_curve: list[dict[str, Any]] = []
     evaluate = _checkpointing(model, venv, native, hp, env_id, reference, total, rl_curve,
                               best, model_path, offset=curve[-1]["timesteps"])  # fmt: skip
-    t0 = time.monotonic()
-    callbacks = [_progress(evaluate, rl_curve, total, t0, name, quiet, max_minutes),
+    callbacks = [_progress(evaluate, rl_curve, total, clock, name, quiet, max_minutes),
                  imitation.anchor(data, stats, hp.get("anchor_weight",
                                   IMITATION_DEFAULTS["anchor_weight"]),
                                   int(total * hp.get("anchor_fraction",
@@ -383,7 +325,7 @@ def _fine_tune(env_id: str, cls: Any, hp: dict[str, Any], seed: int, n_envs: int
         callbacks.append(critic_warmup(hp["critic_warmup_steps"]))
     model.learn(total_timesteps=total, callback=callbacks, progress_bar=False)
     if not rl_curve:
-        evaluate(model.num_timesteps, time.monotonic() - t0)
+        evaluate(model.num_timesteps, clock)
     curve.extend({**point, "phase": "rl"} for point in rl_curve)
     venv.close()
     return model
@@ -401,9 +343,7 @@ def train(env_id: str, algo: str, hyperparams: Path | None = None, timesteps: in
                                                           n_envs, max_minutes)  # fmt: skip
     if max_minutes is None:
         max_minutes = hp.get("max_minutes", default_minutes)
-    import torch
-
-    torch.set_num_threads(1)  # one core per run (a shared machine; small networks)
+    one_core()  # a run's budget is minutes of one core
     reference = reference_result(env_id)
     venv, native, price = make_training_env(env_id, n_envs, seed, hp,
                                             reference_rate=reference["travel_per_s"])  # fmt: skip
@@ -422,15 +362,15 @@ def train(env_id: str, algo: str, hyperparams: Path | None = None, timesteps: in
     name = stem(env_id, algo, run)
     model_path, meta_path = steamtemp_paths(out, env_id, algo, run)
     revision = git_revision()  # the code this run trains with
-    t0 = time.monotonic()
+    clock = RunClock()
     curve: list[dict[str, Any]] = []
     best: dict[str, Any] = {}
     prices: list[tuple[int, float, float]] = []
     evaluate = _checkpointing(model, venv, native, hp, env_id, reference, total, curve, best,
                               model_path)  # fmt: skip
     if hp.get("residual_base") is not None:  # zero output: the base itself (zero_output)
-        evaluate(0, 0.0)
-    callbacks = [_progress(evaluate, curve, total, t0, name, quiet, max_minutes)]
+        evaluate(0, clock)
+    callbacks = [_progress(evaluate, curve, total, clock, name, quiet, max_minutes)]
     if price is not None:
         from agents.moves import filter_gain, tie_map
         from agents.travel_price import OFF_POLICY_EVERY, price_callback, travel_probe
@@ -453,11 +393,11 @@ def train(env_id: str, algo: str, hyperparams: Path | None = None, timesteps: in
         callbacks.append(critic_warmup(hp["critic_warmup_steps"]))
     model.learn(total_timesteps=total, callback=callbacks, progress_bar=False)
     if not curve:  # a budget below the first mark's granularity
-        evaluate(model.num_timesteps, time.monotonic() - t0)
-    meta = _metadata(env_id, algo, cls, revision, path, hp, seed, run, n_envs, total, model,
-                     best, time.monotonic() - t0, reference, curve)  # fmt: skip
+        evaluate(model.num_timesteps, clock)
+    meta = metadata(env_id, algo, cls, revision, path, hp, seed, run, n_envs, total, model,
+                     best, clock, reference, curve)  # fmt: skip
     if price is not None:
-        meta["travel_price"] = _price_record(prices)
+        meta["travel_price"] = price_record(prices)
     meta_path.write_text(json.dumps(meta, indent=1), encoding="utf-8")
     venv.close()
     return meta

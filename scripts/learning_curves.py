@@ -49,8 +49,10 @@ def runs(directories: list[Path]) -> dict[str, list[dict]]:
             if not val or not val.get("curve"):  # trained offline: no validation curve
                 continue
             ref = val["reference"]["return"]
+            # CPU minutes where recorded (a run's budget), else wall minutes (older runs)
             points = [
-                (p["timesteps"], p["wall_s"] / 60.0, 1.0 - p["return"] / ref) for p in val["curve"]
+                (p["timesteps"], p.get("cpu_s", p["wall_s"]) / 60.0, 1.0 - p["return"] / ref)
+                for p in val["curve"]
             ]
             kept = meta["timesteps_of_best"]
             out[env_id].append(

@@ -257,8 +257,9 @@ def _meta(zoo: Path, run: int) -> dict:
 
 
 def _outcome(meta: dict) -> dict:
-    """What a run's result is, without its wall times."""
-    curve = [{k: v for k, v in c.items() if k != "wall_s"} for c in meta["validation"]["curve"]]
+    """What a run's result is, without its times."""
+    curve = [{k: v for k, v in c.items() if k not in ("wall_s", "cpu_s")}
+             for c in meta["validation"]["curve"]]  # fmt: skip
     return {
         "seed": meta["seed"],
         "run": meta["run"],
@@ -364,6 +365,21 @@ def test_an_entrys_max_minutes_bounds_its_runs_where_the_command_does_not(tmp_pa
     # a run under a time budget is validated at its marks of that budget and at the end of
     # the step budget, not also at the marks of the step budget
     assert [c["timesteps"] for c in meta["validation"]["curve"]] == [128]
+
+
+def test_a_runs_budget_is_minutes_of_one_core_not_of_the_wall():
+    """A run's clock counts its process's CPU time: waiting (a machine busy with other
+    work) does not spend its budget; the metadata records both."""
+    import time
+
+    from agents.run_clock import RunClock
+
+    clock = RunClock()
+    time.sleep(0.3)
+    assert clock.wall() >= 0.3 and clock.cpu() < 0.1
+    sum(i * i for i in range(2_000_000))
+    assert clock.cpu() > 0.05
+    assert set(clock.stamp()) == {"cpu_s", "wall_s"}
 
 
 @pytest.mark.parametrize("bad", [0, -1, 21, "ten", True])
