@@ -27,7 +27,7 @@ import numpy as np
 
 import agents
 from agents import specs, stats
-from agents.files import steamtemp_files
+from agents.files import parse_stem, steamtemp_files
 from agents.leaderboard.records import EPISODES, read_record
 from steamtemp_gym.scenarios import heldout
 
@@ -78,7 +78,7 @@ def plant_table(env_id: str, plant: dict, scores: dict, baselines: list[str]) ->
         "|---|---|---|---|---|---|---|---|",
     ]
     pols = plant["policies"]
-    trained = [p for p in pols if "training_runs" in pols[p]]
+    trained = [p for p in pols if "training_runs" in pols[p] or p.endswith(".zip")]
     for p in [b for b in baselines if b in pols] + trained:
         e = pols[p]
         iqm = e.get("normalized_score", {}).get("iqm", {})
@@ -99,8 +99,8 @@ def plant_table(env_id: str, plant: dict, scores: dict, baselines: list[str]) ->
         trips = e.get("trips", 0)
         rejected = f"{breaches + trips} of {e['episodes']}"
         decisions = cpu = "-"
-        if "training_runs" in e:
-            meta = run_records(env_id, p, e["training_runs"])
+        if p in trained:
+            meta = run_records(env_id, p, e.get("training_runs", [0]))
             steps = [m["timesteps_trained"] for m in meta if "timesteps_trained" in m]
             mins = [
                 m.get("cpu_time_s", m.get("wall_time_s", 0.0)) / 60
@@ -109,7 +109,10 @@ def plant_table(env_id: str, plant: dict, scores: dict, baselines: list[str]) ->
             ]
             decisions = " / ".join(f"{s / 1e6:.1f}M" for s in steps) or "-"
             cpu = " / ".join(f"{m:.0f}" for m in mins) or "-"
-        shown = p if len(p) < 40 else "…" + p[-38:]
+        shown = p
+        if p.endswith(".zip"):  # a run's files: its algo, run and directory
+            _, algo, k = parse_stem(Path(p).stem)
+            shown = f"{algo} run{k or 0} ({Path(p).parent.name})"
         lines.append(
             f"| `{shown}` | {iqm['value']:.2f} [{lo:.2f}, {hi:.2f}] | {per_run} | "
             f"{_iqm(named)} / {_iqm(held)} | {e.get('travel_ratio', float('nan')):.2f}x | "

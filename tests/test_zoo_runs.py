@@ -348,6 +348,32 @@ def test_the_leaderboard_scores_each_run_and_reports_the_agent(local_zoo, tmp_pa
     )
     md = (tmp_path / "lb" / "leaderboard.md").read_text()
     assert "| sb3:ppo |" in md and "(2 runs)" in md
+    # the agents' table and learning curves of docs/agents.md, from this run and its zoo
+    tables = _script("agent_tables").tables(tmp_path / "lb", ["cascade_pi"])
+    (row,) = [line for line in tables.splitlines() if line.startswith("| `sb3:ppo` |")]
+    per_run = " / ".join(f"{v:.2f}" for v in e["normalized_score"]["iqm"]["per_run"])
+    assert f"| {per_run} |" in row
+    steps = [_meta(local_zoo, k)["timesteps_trained"] for k in (0, 1)]
+    assert " / ".join(f"{n / 1e6:.1f}M" for n in steps) in row
+    page = tmp_path / "page.md"
+    start, end = "<!-- agent-tables:start -->", "<!-- agent-tables:end -->"
+    page.write_text(f"intro\n{start}\nold\n{end}\nend\n")
+    _script("agent_tables").write(page, tables)
+    assert page.read_text() == f"intro\n{start}\n{tables}{end}\nend\n"
+    curves = _script("learning_curves")
+    assert curves.main([str(local_zoo), "--out", str(tmp_path / "img")]) == 0
+    assert (tmp_path / "img" / f"learning_{ENV.split('/')[1]}.png").stat().st_size > 10_000
+
+
+def _script(name: str):
+    """A script of scripts/ as a module."""
+    import importlib.util
+
+    path = Path(__file__).resolve().parents[1] / "scripts" / f"{name}.py"
+    spec = importlib.util.spec_from_file_location(name, path)
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
 
 
 def test_an_entrys_max_minutes_bounds_its_runs_where_the_command_does_not(tmp_path):
