@@ -16,15 +16,21 @@ ZOO = Path(__file__).with_name("zoo")
 
 #: What kind of agent each algorithm's entry trains: the question "does RL beat the
 #: controllers" has one answer per kind.
-KINDS = {"ppo": "model-free", "sac": "model-free", "td3": "model-free", "trpo": "model-free",
-         "recurrentppo": "model-free", "sac_caps": "model-free",
-         "ppo_privileged": "model-free, critic trained on privileged signals",
-         "ppo_residual": "residual over cascade_pi_ff",
-         "ppo_residual_pi": "residual over cascade_pi_ff_tuned",
-         "ppo_residual_mpc": "residual over mpc_linear",
-         "ppo_imitation_mpc": "imitation of mpc_linear",
-         "ppo_imitation_mpc_rl": "imitation of mpc_linear, then RL",
-         "bc": "offline: behaviour cloning of mpc_linear's noisy dataset"}  # fmt: skip
+KINDS = {
+    "ppo": "model-free",
+    "sac": "model-free",
+    "td3": "model-free",
+    "trpo": "model-free",
+    "recurrentppo": "model-free",
+    "sac_caps": "model-free",
+    "ppo_privileged": "model-free, critic trained on privileged signals",
+    "ppo_residual": "residual over cascade_pi_ff",
+    "ppo_residual_pi": "residual over cascade_pi_ff_tuned",
+    "ppo_residual_mpc": "residual over mpc_linear",
+    "ppo_imitation_mpc": "imitation of mpc_linear",
+    "ppo_imitation_mpc_rl": "imitation of mpc_linear, then RL",
+    "bc": "offline: behaviour cloning of mpc_linear's noisy dataset",
+}
 
 
 def kind(algo: str) -> str:
@@ -66,6 +72,8 @@ def load(env_id: str, algo: str, zoo: Path | str | None = None, run: int = 0):
     from agents.files import steamtemp_files
 
     if zoo is None and run not in runs(env_id, algo):
-        raise ValueError(f"no trained agent {algo!r} run {run} shipped for {env_id!r}; shipped: "
-                         f"{ {f'{e} {a}': runs(e, a) for e, a in shipped()} }")  # fmt: skip
+        raise ValueError(
+            f"no trained agent {algo!r} run {run} shipped for {env_id!r}; shipped: "
+            f"{ {f'{e} {a}': runs(e, a) for e, a in shipped()} }"
+        )
     return steamtemp_files(Path(zoo) if zoo is not None else ZOO, env_id, algo, run).load()

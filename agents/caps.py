@@ -31,10 +31,19 @@ class SACCAPS(SAC):
         **kwargs: SAC's.
     """
 
-    def __init__(self, *args: Any, caps_temporal: float = 1.0, caps_spatial: float = 1.0,
-                 caps_sigma: float = 0.05, **kwargs: Any) -> None:  # fmt: skip
-        for name, v in (("caps_temporal", caps_temporal), ("caps_spatial", caps_spatial),
-                        ("caps_sigma", caps_sigma)):  # fmt: skip
+    def __init__(
+        self,
+        *args: Any,
+        caps_temporal: float = 1.0,
+        caps_spatial: float = 1.0,
+        caps_sigma: float = 0.05,
+        **kwargs: Any,
+    ) -> None:
+        for name, v in (
+            ("caps_temporal", caps_temporal),
+            ("caps_spatial", caps_spatial),
+            ("caps_sigma", caps_sigma),
+        ):
             if not (isinstance(v, (int, float)) and not isinstance(v, bool) and v >= 0):
                 raise ValueError(f"{name} must be a number >= 0, got {v!r}")
         self.caps_temporal = float(caps_temporal)

@@ -33,8 +33,15 @@ from steamtemp_gym import plants, scenarios
 from steamtemp_gym.plants.base import MAIN
 
 REFERENCE_POLICIES = ("frozen", "random", "cascade_pi", "cascade_pi_2x", "cascade_pi_ff")
-COLUMNS = ("max_abs_dev_K", "iae_K_s", "time_outside_5K_s", "spray_used_kg", "valve_travel",
-           "return", "tripped")  # fmt: skip
+COLUMNS = (
+    "max_abs_dev_K",
+    "iae_K_s",
+    "time_outside_5K_s",
+    "spray_used_kg",
+    "valve_travel",
+    "return",
+    "tripped",
+)
 #: Peak |e| band (K) of cascade PI on the two 5 %/min ramps, per boiler circulation.
 PI_RAMP_PEAK_K = {"once_through": (4.0, 10.0), "drum": (3.0, 8.0)}
 TARGETS = {
@@ -51,6 +58,7 @@ def ramp_band(env_id: str) -> tuple[float, float] | None:
     kind = plants.plant_class(env_id).circulation
     return None if kind is None else PI_RAMP_PEAK_K[kind]
 
+
 RAMPS = ("load_ramp_100_50", "load_ramp_50_100")
 #: Field range of Tu/Tg of the true outlet after a last-stage spray step (field step tests:
 #: about 0.3), and the largest the thermocouple reading may show.
@@ -66,8 +74,7 @@ def last_spray_stage(plant: Any) -> int:
 def spray_step_dead_time(env_id: str, load: float) -> tuple[Any, Any]:
     """FOPDT of the true and of the measured outlet for a +5 % last-stage spray step."""
     plant = gym.make(env_id).unwrapped.plant
-    m = step_test(env_id, last_spray_stage(plant), [plant.outlet, plant.outlet_measured],
-                  load=load)  # fmt: skip
+    m = step_test(env_id, last_spray_stage(plant), [plant.outlet, plant.outlet_measured], load=load)
     return m[plant.outlet], m[plant.outlet_measured]
 
 
@@ -157,6 +164,12 @@ def difficulty_table(
             if sc not in scenarios.names(env_id):
                 continue
             for pol in policies:
-                out.append({"env": env_id, "scenario": sc, "policy": pol,
-                            **evaluate(env_id, pol, sc, seeds)})  # fmt: skip
+                out.append(
+                    {
+                        "env": env_id,
+                        "scenario": sc,
+                        "policy": pol,
+                        **evaluate(env_id, pol, sc, seeds),
+                    }
+                )
     return out

@@ -22,8 +22,15 @@ from steamtemp_gym.metrics import (
 )
 from steamtemp_gym.plants.base import DIST
 
-TRACE_KEYS = ("time_s", "outlet_temp_C", "measured_temp_C", "setpoint_C", "load",
-              "spray_valve", "spray_flow_kg_s")  # fmt: skip
+TRACE_KEYS = (
+    "time_s",
+    "outlet_temp_C",
+    "measured_temp_C",
+    "setpoint_C",
+    "load",
+    "spray_valve",
+    "spray_flow_kg_s",
+)
 #: Scenario disturbances recorded in the trace (as the plant receives them: the heat-absorption
 #: bias includes the coloured noise).
 DISTURBANCE_KEYS = ("heat_absorption_bias", "fouling", "spray_water_temp_offset_C")
@@ -41,24 +48,41 @@ SECONDARY_METRICS = ("iae_K_s", "max_abs_dev_K")
 def metric_keys(secondary: tuple[tuple[str, float], ...]) -> tuple[str, ...]:
     """The keys of an episode's ``metrics`` on a plant with these ``secondary``
     temperatures (``Plant.secondary``)."""
-    return (*METRIC_NAMES, "quiet_p2p_K",
-            *(f"{name}_{m}" for name, _ in secondary for m in SECONDARY_METRICS),
-            "return", "tripped")  # fmt: skip
+    return (
+        *METRIC_NAMES,
+        "quiet_p2p_K",
+        *(f"{name}_{m}" for name, _ in secondary for m in SECONDARY_METRICS),
+        "return",
+        "tripped",
+    )
 
 
-def _metrics(env: Any, tr: dict[str, np.ndarray], ret: float, tripped: bool,
-             scenario: Any) -> dict[str, float]:  # fmt: skip
+def _metrics(
+    env: Any, tr: dict[str, np.ndarray], ret: float, tripped: bool, scenario: Any
+) -> dict[str, float]:
     """The episode's metrics: steamtemp_gym.metrics of the main steam (and of the secondary
     temperatures), ``quiet_p2p_K`` (the error's peak-to-peak over the quiet stretch after the
     scenario's last scheduled change: the limit-cycle measure), return and trip."""
-    metrics = trajectory_metrics(tr["time_s"], tr["outlet_temp_C"], tr["setpoint_C"],
-                                 tr["spray_valve"], tr["spray_flow_kg_s"])  # fmt: skip
+    metrics = trajectory_metrics(
+        tr["time_s"],
+        tr["outlet_temp_C"],
+        tr["setpoint_C"],
+        tr["spray_valve"],
+        tr["spray_flow_kg_s"],
+    )
     metrics["quiet_p2p_K"] = quiet_peak_to_peak(
-        tr["time_s"], tr["outlet_temp_C"] - tr["setpoint_C"],
-        scenario.last_change_s() + QUIET_SETTLE_S)  # fmt: skip
+        tr["time_s"],
+        tr["outlet_temp_C"] - tr["setpoint_C"],
+        scenario.last_change_s() + QUIET_SETTLE_S,
+    )
     for name, sp2 in env.unwrapped.plant.secondary:  # e.g. the reheat temperature
-        m2 = trajectory_metrics(tr["time_s"], tr[name], np.full_like(tr[name], sp2),
-                                tr["spray_valve"], tr["spray_flow_kg_s"])  # fmt: skip
+        m2 = trajectory_metrics(
+            tr["time_s"],
+            tr[name],
+            np.full_like(tr[name], sp2),
+            tr["spray_valve"],
+            tr["spray_flow_kg_s"],
+        )
         for m in SECONDARY_METRICS:
             metrics[f"{name}_{m}"] = m2[m]
     metrics["return"] = float(ret)

@@ -130,9 +130,12 @@ def from_plant(env_id: str, hp: dict) -> dict:
     if out.get("action_repeat") == PLANT:
         out["action_repeat"] = action_repeat(env_id)
     k = check_repeat(out.get("action_repeat", 1))
-    rules = {"gamma": lambda e: discount(e, k), "gae_lambda": lambda e: gae_lambda(e, k),
-             "action_filter_s": action_filter,
-             "noise_tau_s": exploration_time_constant}  # fmt: skip
+    rules = {
+        "gamma": lambda e: discount(e, k),
+        "gae_lambda": lambda e: gae_lambda(e, k),
+        "action_filter_s": action_filter,
+        "noise_tau_s": exploration_time_constant,
+    }
     for key, rule in rules.items():
         if out.get(key) == PLANT:
             out[key] = round(rule(env_id), 5)
@@ -147,14 +150,23 @@ def from_plant(env_id: str, hp: dict) -> dict:
 def _memory_from_plant(env_id: str, item: object) -> object:
     if not (isinstance(item, dict) and len(item) == 1):
         return item
-    (name, kwargs), = item.items()
+    ((name, kwargs),) = item.items()
     if not (isinstance(kwargs, dict) and kwargs.get("history_stride") == PLANT):
         return item
     return {name: {**kwargs, "history_stride": history_stride(env_id, kwargs.get("history", 4))}}
 
 
-__all__ = ["PLANT", "action_filter", "action_repeat", "discount", "exploration_time_constant",
-           "from_plant", "gae_lambda", "history_stride", "time_scale"]  # fmt: skip
+__all__ = [
+    "PLANT",
+    "action_filter",
+    "action_repeat",
+    "discount",
+    "exploration_time_constant",
+    "from_plant",
+    "gae_lambda",
+    "history_stride",
+    "time_scale",
+]
 
 
 def shortfalls(env_id: str, hp: dict) -> list[str]:
@@ -169,8 +181,9 @@ def shortfalls(env_id: str, hp: dict) -> list[str]:
     out = []
     gamma = hp.get("gamma", 0.99)
     if dt / (1.0 - gamma) < theta + tau:
-        out.append(f"discount horizon {dt / (1.0 - gamma):.0f} s < dead time + lag "
-                   f"{theta + tau:.0f} s")
+        out.append(
+            f"discount horizon {dt / (1.0 - gamma):.0f} s < dead time + lag {theta + tau:.0f} s"
+        )
     if "gae_lambda" in hp or "n_steps" in hp:  # an on-policy learner: GAE
         gl = gamma * hp.get("gae_lambda", 0.95)
         if dt / (1.0 - gl) < theta:
@@ -180,6 +193,7 @@ def shortfalls(env_id: str, hp: dict) -> list[str]:
     if n:
         span = n * memory.get("history_stride", 5) * plants.make(env_id).dt_s
         if span < theta + tau:
-            out.append(f"memory of {n} samples spans {span:.0f} s < dead time + lag "
-                       f"{theta + tau:.0f} s")
+            out.append(
+                f"memory of {n} samples spans {span:.0f} s < dead time + lag {theta + tau:.0f} s"
+            )
     return out

@@ -47,9 +47,16 @@ def actor_net(model: Any) -> Any:
     return torch.nn.Sequential(*pol.mlp_extractor.policy_net, pol.action_net)
 
 
-def collect(env_id: str, expert_name: str, memory: dict, seeds: list[int], beta: float,
-            learner: Any, rng: np.random.Generator,
-            filter_s: float | None = None) -> tuple[np.ndarray, ...]:  # fmt: skip
+def collect(
+    env_id: str,
+    expert_name: str,
+    memory: dict,
+    seeds: list[int],
+    beta: float,
+    learner: Any,
+    rng: np.random.Generator,
+    filter_s: float | None = None,
+) -> tuple[np.ndarray, ...]:
     """(memory-extended observations, expert actions, the same at the next step) of every
     step but an episode's last, one episode per seed, the applied action being the
     expert's with probability ``beta`` per step and row and ``learner(x)`` otherwise
@@ -63,8 +70,9 @@ def collect(env_id: str, expert_name: str, memory: dict, seeds: list[int], beta:
     from agents.wrappers import MemoryState
 
     n = len(seeds)
-    venv = gym.make_vec(env_id, num_envs=n, vectorization_mode="vector_entry_point",
-                        scenario="random")  # fmt: skip
+    venv = gym.make_vec(
+        env_id, num_envs=n, vectorization_mode="vector_entry_point", scenario="random"
+    )
     expert = baselines.make(expert_name, venv)
     mem = MemoryState(venv, MemoryConfig.from_kwargs(memory))
     shape = command_state(venv, None, filter_s)
@@ -106,8 +114,13 @@ def _learner(model: Any, stats: dict[str, Any] | None) -> Any:
     return lambda z: actor(normalize_obs(z, stats))
 
 
-def _fit(net: Any, data: list[tuple[np.ndarray, ...]], stats: dict[str, Any],
-         settings: dict[str, Any], seed: int) -> float:  # fmt: skip
+def _fit(
+    net: Any,
+    data: list[tuple[np.ndarray, ...]],
+    stats: dict[str, Any],
+    settings: dict[str, Any],
+    seed: int,
+) -> float:
     """Fit the actor to every pair in ``data`` (:func:`collect`'s), with the move term where
     ``move_weight`` > 0; the last epoch's mean squared error."""
     import torch
@@ -123,14 +136,29 @@ def _fit(net: Any, data: list[tuple[np.ndarray, ...]], stats: dict[str, Any],
     moves = None
     if settings["move_weight"] > 0:
         moves = (tensor(2, True), tensor(3, False), settings["move_weight"])
-    return regress(net, tensor(0, True), tensor(1, False), epochs=settings["fit_epochs"],
-                   max_seconds=settings["fit_seconds"], seed=seed, moves=moves)  # fmt: skip
+    return regress(
+        net,
+        tensor(0, True),
+        tensor(1, False),
+        epochs=settings["fit_epochs"],
+        max_seconds=settings["fit_seconds"],
+        seed=seed,
+        moves=moves,
+    )
 
 
-def train(env_id: str, algo: str, hp: dict[str, Any], seed: int, n_envs: int,
-          reference: dict[str, float], save_to: Any, log: Any = None,
-          max_minutes: float | None = None,
-          clock: RunClock | None = None) -> tuple[Any, dict, list, dict, list]:  # fmt: skip
+def train(
+    env_id: str,
+    algo: str,
+    hp: dict[str, Any],
+    seed: int,
+    n_envs: int,
+    reference: dict[str, float],
+    save_to: Any,
+    log: Any = None,
+    max_minutes: float | None = None,
+    clock: RunClock | None = None,
+) -> tuple[Any, dict, list, dict, list]:
     """DAgger (module docstring): returns (model, best checkpoint, validation curve,
     imitation record, the aggregated pairs); the best model is saved to ``save_to``.
     Training episodes: seeds ``seed + i * n_envs + k`` in iteration i. ``max_minutes``: CPU
@@ -146,9 +174,15 @@ def train(env_id: str, algo: str, hp: dict[str, Any], seed: int, n_envs: int,
     settings = {k: hp.get(k, IMITATION_DEFAULTS[k]) for k in DAGGER_KEYS}
     expert, memory, filter_s = EXPERTS[algo], hp["env_wrapper"], hp.get("action_filter_s")
     venv, native, _ = make_training_env(env_id, 1, seed, {**hp, "normalize": False})
-    model = PPO(hp.get("policy", "MlpPolicy"), venv, seed=seed, device="cpu", verbose=0,
-                policy_kwargs=hp["policy_kwargs"] or None,
-                **{k: hp[k] for k in ("gamma", "gae_lambda") if k in hp})  # fmt: skip
+    model = PPO(
+        hp.get("policy", "MlpPolicy"),
+        venv,
+        seed=seed,
+        device="cpu",
+        verbose=0,
+        policy_kwargs=hp["policy_kwargs"] or None,
+        **{k: hp[k] for k in ("gamma", "gae_lambda") if k in hp},
+    )
     net, rng = actor_net(model), np.random.default_rng(seed)
     clock = clock or RunClock()
     data: list[tuple[np.ndarray, ...]] = []
@@ -157,19 +191,31 @@ def train(env_id: str, algo: str, hp: dict[str, Any], seed: int, n_envs: int,
     for i in range(settings["dagger_iterations"]):
         beta = settings["beta_decay"] ** i
         seeds = [seed + i * n_envs + k for k in range(n_envs)]
-        data.append(collect(env_id, expert, memory, seeds, beta, _learner(model, stats), rng,
-                            filter_s))  # fmt: skip
+        data.append(
+            collect(env_id, expert, memory, seeds, beta, _learner(model, stats), rng, filter_s)
+        )
         stats = stats or standardization(data[0][0])
         mse = _fit(net, data, stats, settings, seed + i)
-        score = scored(env_id, AgentPolicy(model, native, memory=memory, obs_norm=stats,
-                                           action_filter_s=filter_s), reference)  # fmt: skip
+        score = scored(
+            env_id,
+            AgentPolicy(model, native, memory=memory, obs_norm=stats, action_filter_s=filter_s),
+            reference,
+        )
         pairs = int(sum(len(d[0]) for d in data))
-        curve.append({"timesteps": pairs, "fraction": (i + 1) / settings["dagger_iterations"],
-                      **clock.stamp(), **score})  # fmt: skip
+        curve.append(
+            {
+                "timesteps": pairs,
+                "fraction": (i + 1) / settings["dagger_iterations"],
+                **clock.stamp(),
+                **score,
+            }
+        )
         record["iterations"].append({"beta": beta, "pairs": pairs, "mse": mse})
         if log:
-            log(f"[{algo}] iteration {i}: beta {beta:.3g}, {pairs:,} pairs, mse {mse:.3g}, "
-                f"validation return {score['return']:.1f}, travel {score['travel_ratio']:.2f}x")
+            log(
+                f"[{algo}] iteration {i}: beta {beta:.3g}, {pairs:,} pairs, mse {mse:.3g}, "
+                f"validation return {score['return']:.1f}, travel {score['travel_ratio']:.2f}x"
+            )
         if better_checkpoint(score, best, TUNING_TRAVEL_BUDGET):
             best.update(score, timesteps=pairs, obs_norm=stats)
             model.save(save_to)
@@ -190,16 +236,23 @@ def frozen_normalization(venv: Any, stats: dict[str, Any], gamma: float) -> Any:
         def update(self, arr: np.ndarray) -> None:
             del arr
 
-    out = VecNormalize(venv, norm_obs=True, norm_reward=True, gamma=gamma,
-                       clip_obs=stats["clip_obs"], epsilon=stats["epsilon"])  # fmt: skip
+    out = VecNormalize(
+        venv,
+        norm_obs=True,
+        norm_reward=True,
+        gamma=gamma,
+        clip_obs=stats["clip_obs"],
+        epsilon=stats["epsilon"],
+    )
     out.obs_rms = FrozenStats(shape=out.obs_rms.mean.shape)
     out.obs_rms.mean = np.asarray(stats["mean"], np.float64)
     out.obs_rms.var = np.asarray(stats["var"], np.float64)
     return out
 
 
-def anchor(data: list[tuple[np.ndarray, ...]], stats: dict[str, Any], weight: float,
-           until: int, seed: int) -> Any:  # fmt: skip
+def anchor(
+    data: list[tuple[np.ndarray, ...]], stats: dict[str, Any], weight: float, until: int, seed: int
+) -> Any:
     """SB3 callback keeping a PPO actor near the expert early in RL fine-tuning: PPO's loss
     gains ``w`` times the expert actions' negative log-likelihood under the policy's
     Gaussian, as far as its mean moves it (the squared error of the mean over twice the
@@ -213,8 +266,9 @@ def anchor(data: list[tuple[np.ndarray, ...]], stats: dict[str, Any], weight: fl
     from agents.policy import normalize_obs
 
     x = torch.as_tensor(normalize_obs(np.concatenate([d[0] for d in data]), stats))
-    y = torch.as_tensor(np.clip(np.concatenate([d[1] for d in data]), -1.0, 1.0),
-                        dtype=torch.float32)  # fmt: skip
+    y = torch.as_tensor(
+        np.clip(np.concatenate([d[1] for d in data]), -1.0, 1.0), dtype=torch.float32
+    )
     gen = torch.Generator().manual_seed(seed)
 
     class Anchor(BaseCallback):

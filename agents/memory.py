@@ -27,8 +27,10 @@ class MemoryConfig:
 
     def __post_init__(self) -> None:
         if self.history_signals not in HISTORY_SIGNALS:
-            raise ValueError(f"history_signals must be one of {list(HISTORY_SIGNALS)}, got "
-                             f"{self.history_signals!r}")  # fmt: skip
+            raise ValueError(
+                f"history_signals must be one of {list(HISTORY_SIGNALS)}, got "
+                f"{self.history_signals!r}"
+            )
         for name in ("integral_time_s", "integral_limit_K", "rate_filter_s"):
             v = getattr(self, name)
             if not (isinstance(v, (int, float)) and not isinstance(v, bool) and v > 0):

@@ -46,22 +46,39 @@ NOMINAL = "nominal"
 def make_parser() -> argparse.ArgumentParser:
     """The CLI's argument parser."""
     doc = __doc__ or ""
-    ap = argparse.ArgumentParser(prog="python -m agents.mismatch", description=doc.split("\n")[0],
-                                 epilog=doc.split("\n", 2)[2],
-                                 formatter_class=argparse.RawDescriptionHelpFormatter)  # fmt: skip
-    ap.add_argument("--env", default=None, metavar="ID",
-                    help="one env id, with or without the steamtemp/ namespace (default: "
-                    "every plant with variants)")  # fmt: skip
-    ap.add_argument("--policies", default=DEFAULT_POLICIES,
-                    help="comma list of policy names as steamtemp-leaderboard takes them "
-                    "(default: %(default)s)")  # fmt: skip
-    ap.add_argument("--seeds", default="0,1",
-                    help="integers >= 0 or ranges a-b (default: %(default)s)")  # fmt: skip
-    ap.add_argument("--heldout", default=DEFAULT_HELDOUT,
-                    help="the held-out scenario run besides load_ramp_100_50 (default: "
-                    "%(default)s)")  # fmt: skip
-    ap.add_argument("--out", default=None, metavar="FILE",
-                    help="also write the markdown tables to FILE (default: print only)")
+    ap = argparse.ArgumentParser(
+        prog="python -m agents.mismatch",
+        description=doc.split("\n")[0],
+        epilog=doc.split("\n", 2)[2],
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    ap.add_argument(
+        "--env",
+        default=None,
+        metavar="ID",
+        help="one env id, with or without the steamtemp/ namespace (default: "
+        "every plant with variants)",
+    )
+    ap.add_argument(
+        "--policies",
+        default=DEFAULT_POLICIES,
+        help="comma list of policy names as steamtemp-leaderboard takes them "
+        "(default: %(default)s)",
+    )
+    ap.add_argument(
+        "--seeds", default="0,1", help="integers >= 0 or ranges a-b (default: %(default)s)"
+    )
+    ap.add_argument(
+        "--heldout",
+        default=DEFAULT_HELDOUT,
+        help="the held-out scenario run besides load_ramp_100_50 (default: %(default)s)",
+    )
+    ap.add_argument(
+        "--out",
+        default=None,
+        metavar="FILE",
+        help="also write the markdown tables to FILE (default: print only)",
+    )
     return ap
 
 
@@ -71,15 +88,15 @@ def _envs(ap: argparse.ArgumentParser, name: str | None) -> list[str]:
     env_id = _env_id(name)
     if env_id not in steamtemp_gym.ENV_IDS or not perturb.variant_factors(env_id):
         valid = [e for e in steamtemp_gym.ENV_IDS if perturb.variant_factors(e)]
-        ap.error(f"argument --env: {name[:100]!r} is not a plant with mismatch variants; "
-                 f"valid: {valid}")  # fmt: skip
+        ap.error(
+            f"argument --env: {name[:100]!r} is not a plant with mismatch variants; valid: {valid}"
+        )
     return [env_id]
 
 
 def _heldout(ap: argparse.ArgumentParser, spec: str, envs: list[str]) -> str:
     if not spec.startswith("heldout:"):
-        ap.error(f"argument --heldout: {spec[:100]!r} is not a held-out scenario "
-                 "(heldout:<name>)")  # fmt: skip
+        ap.error(f"argument --heldout: {spec[:100]!r} is not a held-out scenario (heldout:<name>)")
     for e in envs:
         try:
             scenarios.resolve(spec, e)
@@ -91,29 +108,37 @@ def _heldout(ap: argparse.ArgumentParser, spec: str, envs: list[str]) -> str:
 def evaluate(env_id: str, policy: str, scenario: str, seeds: list[int]) -> dict[str, Any]:
     """{variant: (mean return, trips)} of ``policy`` commissioned on the nominal plant and
     run on it (``nominal``) and on every variant of ``env_id``, under ``scenario``."""
+
     def venv(params: dict | None = None) -> Any:
-        return gym.make_vec(env_id, num_envs=len(seeds), vectorization_mode="vector_entry_point",
-                            scenario=scenario, params=params or {})  # fmt: skip
+        return gym.make_vec(
+            env_id,
+            num_envs=len(seeds),
+            vectorization_mode="vector_entry_point",
+            scenario=scenario,
+            params=params or {},
+        )
 
     nominal = venv()
     pol = _make_policy(policy, env_id, nominal)  # commissioned on the model
     out = {}
     for name, params in [(NOMINAL, None), *perturb.mismatch(env_id).items()]:
         rows = run_batch(nominal if params is None else venv(params), pol, seeds)
-        out[name] = (float(np.mean([r["metrics"]["return"] for r in rows])),
-                     int(sum(r["metrics"]["tripped"] > 0 for r in rows)))  # fmt: skip
+        out[name] = (
+            float(np.mean([r["metrics"]["return"] for r in rows])),
+            int(sum(r["metrics"]["tripped"] > 0 for r in rows)),
+        )
     return out
 
 
-def table(env_id: str, results: dict[str, dict[str, dict[str, Any]]],
-          scenario_names: list[str]) -> str:  # fmt: skip
+def table(
+    env_id: str, results: dict[str, dict[str, dict[str, Any]]], scenario_names: list[str]
+) -> str:
     """The markdown table of one plant: results[policy][scenario][variant] = (return, trips)."""
     head = ["policy", "variant"]
     for s in scenario_names:
         head += [f"{s} return", f"{s} rel. nominal"]
     head.append("trips")
-    lines = [f"### {env_id}", "", "| " + " | ".join(head) + " |",
-             "|" + "---|" * len(head)]  # fmt: skip
+    lines = [f"### {env_id}", "", "| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     for pol, by_sc in results.items():
         for v in [NOMINAL, *perturb.variant_factors(env_id)]:
             cells = [pol, v]
@@ -150,8 +175,10 @@ def main(argv: list[str] | None = None) -> None:
             print(f"note: {e} {pol} done ({time.perf_counter() - t0:.0f} s)", file=sys.stderr)
         parts.append(table(e, results, scenario_names))
     text = "\n".join(parts)
-    text += (f"\nSeeds {seeds}; policies commissioned on the nominal plant; "
-             f"{time.perf_counter() - t0:.0f} s in one process.\n")  # fmt: skip
+    text += (
+        f"\nSeeds {seeds}; policies commissioned on the nominal plant; "
+        f"{time.perf_counter() - t0:.0f} s in one process.\n"
+    )
     print(text)
     if args.out is not None:
         Path(args.out).write_text(text)

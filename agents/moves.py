@@ -41,8 +41,10 @@ def check_max_move(max_move: Any) -> float:
     """``max_move`` as a float in (0, 1]; ValueError otherwise."""
     ok = isinstance(max_move, (int, float)) and not isinstance(max_move, bool)
     if not (ok and np.isfinite(max_move) and 0.0 < max_move <= 1.0):
-        raise ValueError(f"max_move must be a number in (0, 1] (fraction of stroke per "
-                         f"control interval), got {max_move!r}")  # fmt: skip
+        raise ValueError(
+            f"max_move must be a number in (0, 1] (fraction of stroke per "
+            f"control interval), got {max_move!r}"
+        )
     return float(max_move)
 
 
@@ -59,10 +61,15 @@ def tie_map(valves: tuple[str, ...], tied_valves: Any = None) -> np.ndarray:
     if tied_valves is None:
         return np.arange(len(valves))
     tied = list(tied_valves) if isinstance(tied_valves, (list, tuple)) else None
-    if (tied is None or len(tied) < 2 or len(set(tied)) != len(tied)
-            or not all(isinstance(v, str) for v in tied)):  # fmt: skip
-        raise ValueError(f"tied_valves must be a list of two or more different valve names, "
-                         f"got {tied_valves!r}")  # fmt: skip
+    if (
+        tied is None
+        or len(tied) < 2
+        or len(set(tied)) != len(tied)
+        or not all(isinstance(v, str) for v in tied)
+    ):
+        raise ValueError(
+            f"tied_valves must be a list of two or more different valve names, got {tied_valves!r}"
+        )
     unknown = [v for v in tied if v not in valves]
     if unknown:
         raise ValueError(f"tied_valves: {unknown} not among the plant's valves {list(valves)}")
@@ -104,10 +111,12 @@ class _Commands:
     def __call__(self, action: np.ndarray) -> np.ndarray:
         """The env's action (float32, 2 u - 1) for the agent's ``action`` (rows, n)."""
         if self.u is None:
-            raise ValueError(f"{type(self).__name__}.restart must be called with the first "
-                             "observation")  # fmt: skip
-        a = np.clip(np.asarray(action, dtype=np.float64).reshape(self.u.shape[0], self.n_actions),
-                    -1.0, 1.0)  # fmt: skip
+            raise ValueError(
+                f"{type(self).__name__}.restart must be called with the first observation"
+            )
+        a = np.clip(
+            np.asarray(action, dtype=np.float64).reshape(self.u.shape[0], self.n_actions), -1.0, 1.0
+        )
         self.u = self._next(a if self._expand is None else a[:, self._expand])
         return (2.0 * self.u - 1.0).astype(np.float32)
 
@@ -164,26 +173,31 @@ def check_filter(filter_s: Any) -> float:
     """``filter_s`` as a float > 0 (s); ValueError otherwise."""
     ok = isinstance(filter_s, (int, float)) and not isinstance(filter_s, bool)
     if not (ok and np.isfinite(filter_s) and filter_s > 0):
-        raise ValueError(f"action_filter_s must be a number > 0 (the output filter's time "
-                         f"constant in s), got {filter_s!r}")  # fmt: skip
+        raise ValueError(
+            f"action_filter_s must be a number > 0 (the output filter's time "
+            f"constant in s), got {filter_s!r}"
+        )
     return float(filter_s)
 
 
-def command_state(env: Any, max_move: float | None = None, filter_s: float | None = None,
-                  tied_valves: Any = None) -> _Commands | None:  # fmt: skip
+def command_state(
+    env: Any, max_move: float | None = None, filter_s: float | None = None, tied_valves: Any = None
+) -> _Commands | None:
     """The command state of an agent's action form: incremental (``max_move``), filtered
     positions (``filter_s``) or None (plain positions), with ``tied_valves`` sharing one
     action (either form); ValueError for both forms, or tied valves on plain positions."""
     if max_move is not None and filter_s is not None:
-        raise ValueError("an agent's actions are incremental (max_move) or filtered "
-                         "(action_filter_s), not both")  # fmt: skip
+        raise ValueError(
+            "an agent's actions are incremental (max_move) or filtered (action_filter_s), not both"
+        )
     if max_move is not None:
         return MoveState(env, max_move, tied_valves)
     if filter_s is not None:
         return LowPassState(env, filter_s, tied_valves)
     if tied_valves is not None:
-        raise ValueError("tied_valves needs incremental (max_move) or filtered "
-                         "(action_filter_s) actions")  # fmt: skip
+        raise ValueError(
+            "tied_valves needs incremental (max_move) or filtered (action_filter_s) actions"
+        )
     return None
 
 
@@ -201,8 +215,14 @@ class VecMoves(VecEnvWrapper):
         tied_valves: Valves that share one action (module docstring), or None.
     """
 
-    def __init__(self, venv: VecEnv, env: Any, max_move: float | None = None,
-                 filter_s: float | None = None, tied_valves: Any = None) -> None:  # fmt: skip
+    def __init__(
+        self,
+        venv: VecEnv,
+        env: Any,
+        max_move: float | None = None,
+        filter_s: float | None = None,
+        tied_valves: Any = None,
+    ) -> None:
         moves = command_state(env, max_move, filter_s, tied_valves)
         if moves is None:
             raise ValueError("VecMoves needs max_move or filter_s")
@@ -227,5 +247,14 @@ class VecMoves(VecEnvWrapper):
         return obs, rew, dones, infos
 
 
-__all__ = ["LowPassState", "MoveState", "VecMoves", "check_filter", "check_max_move",
-           "command_state", "filter_gain", "n_actions", "tie_map"]  # fmt: skip
+__all__ = [
+    "LowPassState",
+    "MoveState",
+    "VecMoves",
+    "check_filter",
+    "check_max_move",
+    "command_state",
+    "filter_gain",
+    "n_actions",
+    "tie_map",
+]

@@ -155,17 +155,24 @@ class Oracle:
         store: Where the ``optimum`` engine finds stored optima (agents/optima.py).
     """
 
-    def __init__(self, env: Any, budget: Budget | None = None,
-                 incumbents: tuple[str, ...] = INCUMBENTS, engine: str = DEFAULT_ENGINE,
-                 store: Path = optima.STORE) -> None:  # fmt: skip
+    def __init__(
+        self,
+        env: Any,
+        budget: Budget | None = None,
+        incumbents: tuple[str, ...] = INCUMBENTS,
+        engine: str = DEFAULT_ENGINE,
+        store: Path = optima.STORE,
+    ) -> None:
         try:
             src = env_core(env)
         except ValueError as exc:
             raise ValueError(f"the oracle acts on a steamtemp_gym env: {exc}") from None
         unknown = [n for n in incumbents if n not in baselines.NAMES]
         if isinstance(incumbents, str) or unknown:
-            raise ValueError(f"oracle incumbents must be a tuple of baseline names "
-                             f"({', '.join(baselines.NAMES)}), got {incumbents!r}")  # fmt: skip
+            raise ValueError(
+                f"oracle incumbents must be a tuple of baseline names "
+                f"({', '.join(baselines.NAMES)}), got {incumbents!r}"
+            )
         if engine not in ENGINES:
             raise ValueError(f"oracle engine must be one of {ENGINES}, got {engine!r}")
         self.engine, self.store = engine, Path(store)
@@ -215,14 +222,22 @@ class Oracle:
 
         return rollout(shadow, act)
 
-    def _keep(self, r: int, j: int, run: tuple, source: str, returns: dict,
-              sequences: dict) -> None:  # fmt: skip
+    def _keep(
+        self, r: int, j: int, run: tuple, source: str, returns: dict, sequences: dict
+    ) -> None:
         """Commit row r to row j of ``run`` (a :func:`rollout`)."""
         acts, rew, obs, steps = run
         k = steps[j]
-        self.committed[r] = Committed(int(self.src.noise_keys()[r]), int(self.src.steps()[r]),
-                                      acts[:k, j].copy(), rew[:k, j].copy(), obs[:k, j].copy(),
-                                      source, returns, sequences)  # fmt: skip
+        self.committed[r] = Committed(
+            int(self.src.noise_keys()[r]),
+            int(self.src.steps()[r]),
+            acts[:k, j].copy(),
+            rew[:k, j].copy(),
+            obs[:k, j].copy(),
+            source,
+            returns,
+            sequences,
+        )
         self._key[r] = self.src.noise_keys()[r]
 
     def _stored(self, rows: np.ndarray) -> np.ndarray:
@@ -231,8 +246,11 @@ class Oracle:
         keys, counter = self.src.noise_keys(), self.src.steps()
         found = {}
         for r in rows.tolist():
-            record = None if counter[r] else optima.find(
-                self.src.plant.id, self.src.scenario[r], int(keys[r]), self.store)
+            record = (
+                None
+                if counter[r]
+                else optima.find(self.src.plant.id, self.src.scenario[r], int(keys[r]), self.store)
+            )
             a = None if record is None else optima.actions(record, self.store)
             if a is not None:
                 found[r] = (record, a)
@@ -242,16 +260,28 @@ class Oracle:
         for j, (r, (record, a)) in enumerate(found.items()):
             total = float(np.cumsum(run[1][: run[3][j], j])[-1])  # summed in order
             if optima.replays(total, record["return"]):
-                self._keep(r, j, run, "stored optimum", {"stored optimum": total},
-                           {"stored optimum": a})  # fmt: skip
+                self._keep(
+                    r, j, run, "stored optimum", {"stored optimum": total}, {"stored optimum": a}
+                )
             else:
-                print(f"oracle: the stored optimum of {self.src.plant.id} "
-                      f"{record['scenario']} seed {record['seed']} replays to {total!r}, not "
-                      f"its stored {record['return']!r} (the plant's code has changed): "
-                      "solving it anew", file=sys.stderr, flush=True)  # fmt: skip
-        return np.array([r for r in rows.tolist() if self.committed[r] is None
-                         or self._key[r] != keys[r] or self.committed[r].start != counter[r]],
-                        dtype=np.int64)  # fmt: skip
+                print(
+                    f"oracle: the stored optimum of {self.src.plant.id} "
+                    f"{record['scenario']} seed {record['seed']} replays to {total!r}, not "
+                    f"its stored {record['return']!r} (the plant's code has changed): "
+                    "solving it anew",
+                    file=sys.stderr,
+                    flush=True,
+                )
+        return np.array(
+            [
+                r
+                for r in rows.tolist()
+                if self.committed[r] is None
+                or self._key[r] != keys[r]
+                or self.committed[r].start != counter[r]
+            ],
+            dtype=np.int64,
+        )
 
     def _solve(self, r: int) -> None:
         """Commit row r to the whole-episode optimum from its state (agents/optimum.py),
@@ -259,18 +289,25 @@ class Oracle:
         c = self.committed[r]
         scenario = self.src.scenario[r]
         zero = c.returns.get(baselines.INDUSTRIAL_REFERENCE, min(c.returns.values()))
-        print(f"oracle: solving the clairvoyant optimum of {self.src.plant.id} "
-              f"{scenario.name!r} (noise key {c.key}) from step {c.start}: a few minutes of "
-              "one core", file=sys.stderr, flush=True)  # fmt: skip
+        print(
+            f"oracle: solving the clairvoyant optimum of {self.src.plant.id} "
+            f"{scenario.name!r} (noise key {c.key}) from step {c.start}: a few minutes of "
+            "one core",
+            file=sys.stderr,
+            flush=True,
+        )
         t0 = time.process_time()
         out = optimum.solve(optimum.episode(self.src, r), c.sequences, c.returns, zero)
         run = self._play(np.array([r]), [out["actions"]])
         returns = {**c.returns, "optimum": out["return"]}
         self._keep(r, 0, run, "optimum", returns, {**c.sequences, "optimum": out["actions"]})
-        print(f"oracle: done in {time.process_time() - t0:.0f} s of CPU: return "
-              f"{out['return']:.4f} (CEM {c.returns.get('cem', float('nan')):.4f}); certificate "
-              f"{'holds' if out['certificate']['holds'] else 'fails'}", file=sys.stderr,
-              flush=True)  # fmt: skip
+        print(
+            f"oracle: done in {time.process_time() - t0:.0f} s of CPU: return "
+            f"{out['return']:.4f} (CEM {c.returns.get('cem', float('nan')):.4f}); certificate "
+            f"{'holds' if out['certificate']['holds'] else 'fails'}",
+            file=sys.stderr,
+            flush=True,
+        )
 
     def _commit_cem(self, rows: np.ndarray) -> None:
         """Roll the rest of each row's episode out on copies, by the CEM and by each
@@ -285,19 +322,31 @@ class Oracle:
         for name, policy in zip(self.incumbents, self._incumbent_policies(), strict=True):
             copy_rows(self.src, rows, shadow, dst)
             policy.reset()
-            runs[name] = rollout(shadow, lambda obs, first, p=policy: p.predict(
-                obs, episode_start=np.full(n, first), deterministic=True)[0])
+            runs[name] = rollout(
+                shadow,
+                lambda obs, first, p=policy: p.predict(
+                    obs, episode_start=np.full(n, first), deterministic=True
+                )[0],
+            )
         for j, r in enumerate(rows):
             # summed in order, as the evaluation adds; a tie keeps the CEM's
-            totals = {name: float(np.cumsum(run[1][: run[3][j], j])[-1])
-                      for name, run in runs.items()}  # fmt: skip
+            totals = {
+                name: float(np.cumsum(run[1][: run[3][j], j])[-1]) for name, run in runs.items()
+            }
             best = max(totals, key=totals.get)
             acts, rew, obs, steps = runs[best]
             k = steps[j]
             sequences = {name: run[0][: run[3][j], j].copy() for name, run in runs.items()}
-            self.committed[r] = Committed(int(keys[r]), int(counter[r]), acts[:k, j].copy(),
-                                          rew[:k, j].copy(), obs[:k, j].copy(), best, totals,
-                                          sequences)  # fmt: skip
+            self.committed[r] = Committed(
+                int(keys[r]),
+                int(counter[r]),
+                acts[:k, j].copy(),
+                rew[:k, j].copy(),
+                obs[:k, j].copy(),
+                best,
+                totals,
+                sequences,
+            )
             self._key[r] = keys[r]
 
     def predict(self, observation, state=None, episode_start=None, deterministic=True):

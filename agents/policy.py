@@ -94,8 +94,12 @@ def frozen_stats(vecnormalize: Any) -> dict[str, Any] | None:
     if not getattr(vecnormalize, "norm_obs", False):
         return None
     rms = vecnormalize.obs_rms
-    return {"mean": rms.mean.tolist(), "var": rms.var.tolist(),
-            "epsilon": vecnormalize.epsilon, "clip_obs": vecnormalize.clip_obs}  # fmt: skip
+    return {
+        "mean": rms.mean.tolist(),
+        "var": rms.var.tolist(),
+        "epsilon": vecnormalize.epsilon,
+        "clip_obs": vecnormalize.clip_obs,
+    }
 
 
 def normalize_obs(obs: np.ndarray, stats: dict[str, Any] | None) -> np.ndarray:
@@ -149,8 +153,10 @@ class AgentPolicy:
         action_repeat: int | None = None,
     ) -> None:
         if residual_scale is not None and (max_move, action_filter_s) != (None, None):
-            raise ValueError("an agent is either residual (residual_scale) or incremental "
-                             "(max_move) or filtered (action_filter_s), not two of them")
+            raise ValueError(
+                "an agent is either residual (residual_scale) or incremental "
+                "(max_move) or filtered (action_filter_s), not two of them"
+            )
         self.model = model
         self.n_obs = observation_size(env)
         self.memory = None
@@ -158,8 +164,11 @@ class AgentPolicy:
             self.memory = MemoryState(env, MemoryConfig.from_kwargs(memory))
         self.obs_norm = None  # the statistics as arrays once, not at every step
         if obs_norm:
-            self.obs_norm = {**obs_norm, "mean": np.asarray(obs_norm["mean"], dtype=np.float64),
-                             "var": np.asarray(obs_norm["var"], dtype=np.float64)}  # fmt: skip
+            self.obs_norm = {
+                **obs_norm,
+                "mean": np.asarray(obs_norm["mean"], dtype=np.float64),
+                "var": np.asarray(obs_norm["var"], dtype=np.float64),
+            }
         self.residual_scale = residual_scale
         self.base = None
         if residual_scale is not None:
@@ -194,7 +203,8 @@ class AgentPolicy:
 
     def predict(self, observation, state=None, episode_start=None, deterministic=True):
         obs = np.atleast_2d(check_predict_args(observation, episode_start, self.n_obs)).astype(
-            np.float64, copy=False)  # fmt: skip
+            np.float64, copy=False
+        )
         n = obs.shape[0]
         restart = restart_rows(self._n != n, n, episode_start)
         self._n = n
@@ -230,20 +240,22 @@ class AgentPolicy:
             action = self.moves(action)
         return (action[0] if np.ndim(observation) == 1 else action), None
 
-
-    def _recurrent(self, x: np.ndarray, restart: np.ndarray, due: np.ndarray | None,
-                   deterministic: bool) -> np.ndarray:  # fmt: skip
+    def _recurrent(
+        self, x: np.ndarray, restart: np.ndarray, due: np.ndarray | None, deterministic: bool
+    ) -> np.ndarray:
         """A recurrent model's action for the deciding rows ``x`` (all rows where ``due`` is
         None); their LSTM states move on, the restarted rows' from a fresh state."""
         rows = np.ones(len(restart), dtype=bool) if due is None else due
         state = None
         if self._lstm is not None and not restart[rows].all():
             state = tuple(s[:, rows] for s in self._lstm)
-        action, new = self.model.predict(x, state=state, episode_start=restart[rows],
-                                         deterministic=deterministic)  # fmt: skip
+        action, new = self.model.predict(
+            x, state=state, episode_start=restart[rows], deterministic=deterministic
+        )
         if self._lstm is None or self._lstm[0].shape[1] != len(restart):
-            self._lstm = tuple(np.zeros((s.shape[0], len(restart), *s.shape[2:]), s.dtype)
-                               for s in new)  # fmt: skip
+            self._lstm = tuple(
+                np.zeros((s.shape[0], len(restart), *s.shape[2:]), s.dtype) for s in new
+            )
         for full, part in zip(self._lstm, new, strict=True):
             full[:, rows] = part
         return action
@@ -262,8 +274,10 @@ def model_class(name: str):
     try:
         import sb3_contrib
     except ImportError:
-        raise ValueError(f"{name} needs sb3-contrib: pip install sb3-contrib (part of the "
-                          "project's [agents] extra)") from None  # fmt: skip
+        raise ValueError(
+            f"{name} needs sb3-contrib: pip install sb3-contrib (part of the "
+            "project's [agents] extra)"
+        ) from None
     if not hasattr(sb3_contrib, name):
         raise ValueError(f"unknown model class {name!r}")
     return getattr(sb3_contrib, name)

@@ -17,8 +17,9 @@ def installed() -> bool:
     return importlib.util.find_spec("ray") is not None
 
 
-def results(fn: Callable[[Any], Any], items: Iterable[Any], cpus: int,
-            address: str | None = None) -> Iterator[tuple[Any, Any]]:  # fmt: skip
+def results(
+    fn: Callable[[Any], Any], items: Iterable[Any], cpus: int, address: str | None = None
+) -> Iterator[tuple[Any, Any]]:
     """``(item, fn(item))`` as each task finishes, every item a Ray task of one CPU: on a
     new local Ray with ``cpus`` CPUs, on the cluster at ``address`` (e.g. ``auto`` or
     ``ray://host:10001``), or on the Ray this process has already started. A task's
@@ -26,8 +27,13 @@ def results(fn: Callable[[Any], Any], items: Iterable[Any], cpus: int,
     import ray
 
     if not ray.is_initialized():
-        ray.init(address=address, num_cpus=None if address else cpus, include_dashboard=False,
-                 log_to_driver=False, configure_logging=False)  # fmt: skip
+        ray.init(
+            address=address,
+            num_cpus=None if address else cpus,
+            include_dashboard=False,
+            log_to_driver=False,
+            configure_logging=False,
+        )
     task = ray.remote(num_cpus=1)(fn)
     pending = {task.remote(x): x for x in items}
     try:

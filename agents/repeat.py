@@ -37,10 +37,11 @@ REPEAT_MAX = 100
 def check_repeat(k: Any) -> int:
     """``k`` (control intervals per decision) as an int in [1, :data:`REPEAT_MAX`];
     ValueError otherwise."""
-    if not (isinstance(k, (int, np.integer)) and not isinstance(k, bool)
-            and 1 <= k <= REPEAT_MAX):  # fmt: skip
-        raise ValueError(f"action_repeat must be an integer in [1, {REPEAT_MAX}] (control "
-                         f"intervals per decision), got {k!r}")  # fmt: skip
+    if not (isinstance(k, (int, np.integer)) and not isinstance(k, bool) and 1 <= k <= REPEAT_MAX):
+        raise ValueError(
+            f"action_repeat must be an integer in [1, {REPEAT_MAX}] (control "
+            f"intervals per decision), got {k!r}"
+        )
     return int(k)
 
 
@@ -86,8 +87,12 @@ class VecRepeat(VecEnvWrapper):
             ended |= np.asarray(dones, dtype=bool)
             if i == 0:
                 action = held(self._actions, self.incremental)
-        return obs, total.astype(np.float32), ended, [last.get(b, info)
-                                                      for b, info in enumerate(infos)]
+        return (
+            obs,
+            total.astype(np.float32),
+            ended,
+            [last.get(b, info) for b, info in enumerate(infos)],
+        )
 
 
 class Decisions:
@@ -122,5 +127,6 @@ class Decisions:
             raise ValueError("Decisions.act: no row has decided since its episode's start")
         self._t += 1
         return np.where(due[:, None], self._last, held(self._last, self.incremental))
+
 
 __all__ = ["REPEAT_MAX", "Decisions", "VecRepeat", "check_repeat", "held"]

@@ -38,8 +38,10 @@ def check_residual(scale: Any, base: Any) -> None:
     if not (ok and np.isfinite(scale) and 0 < scale <= 2):
         raise ValueError(f"residual_scale must be a number in (0, 2], got {scale!r}")
     if base is not None and base not in baselines.NAMES:
-        raise ValueError(f"residual_base must be a registered baseline, got {base!r}; "
-                         f"valid: {list(baselines.NAMES)}")  # fmt: skip
+        raise ValueError(
+            f"residual_base must be a registered baseline, got {base!r}; "
+            f"valid: {list(baselines.NAMES)}"
+        )
 
 
 class ResidualBase:

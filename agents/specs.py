@@ -52,10 +52,12 @@ SB3_PREFIX, ZOO_PREFIX = "sb3:", "zoo:"
 RUN_SUFFIX = "@run"
 _RUN = re.compile(r"^(?P<agent>sb3:[^@]+)@run(?P<run>0|[1-9][0-9]*)$")
 #: Every form, for error messages and --help.
-FORMS = ("a baseline name, sb3:<algo> (a shipped trained agent), zoo:DIR or a path to a "
-         "trained agent's files (a directory or .zip from steamtemp-train --out or an RL Zoo "
-         "run), or module:callable (a factory env -> Policy; module a dotted name or a .py "
-         "file)")  # fmt: skip
+FORMS = (
+    "a baseline name, sb3:<algo> (a shipped trained agent), zoo:DIR or a path to a "
+    "trained agent's files (a directory or .zip from steamtemp-train --out or an RL Zoo "
+    "run), or module:callable (a factory env -> Policy; module a dotted name or a .py "
+    "file)"
+)
 _FACTORY = re.compile(r"^(?P<module>[A-Za-z_][\w.]*|.+\.py):(?P<attr>[A-Za-z_][\w.]*)$")
 
 
@@ -123,8 +125,7 @@ class Spec:
             files = steamtemp_files(agents.ZOO, env_id, self.target, self.run or 0)
             return f"{self.name}:{files.digest()}:{code_digest(AGENT_MODULE)}"
         if self.kind == FILES:
-            return (f"{self.name}:{_agent(self.target, env_id).digest()}:"
-                    f"{code_digest(AGENT_MODULE)}")  # fmt: skip
+            return f"{self.name}:{_agent(self.target, env_id).digest()}:{code_digest(AGENT_MODULE)}"
         if self.kind == FACTORY:
             path = module_file(self.name, self.target.rsplit(":", 1)[0])
             return self.name + ":" + provenance.file_digest(path)
@@ -167,8 +168,9 @@ def source_digest(env_id: str) -> str:
     if module is None or outside:  # a variant id, or a plant registered from outside
         files = [*provenance.package_files(), *outside]
         return f"{code_digest(EVALUATION)}:{provenance.digest(files)}"
-    return provenance.digest([*provenance.plant_files(module),
-                              *provenance.module_files(EVALUATION, POLICY_PACKAGES)])
+    return provenance.digest(
+        [*provenance.plant_files(module), *provenance.module_files(EVALUATION, POLICY_PACKAGES)]
+    )
 
 
 def tuning_digest(name: str, env_id: str) -> str:
@@ -194,17 +196,20 @@ def parse(name: str) -> Spec:
         return Spec(name, BASELINE, name)
     if name.startswith(SB3_PREFIX):
         agent, run = split_run(name)
-        algo = agent[len(SB3_PREFIX):]
+        algo = agent[len(SB3_PREFIX) :]
         envs = frozenset(e for e, a in agents.shipped() if a == algo)
         if not envs:
-            raise ValueError(f"no shipped trained agent {_show(name)}; shipped: "
-                             f"{', '.join(shipped_names())}")  # fmt: skip
+            raise ValueError(
+                f"no shipped trained agent {_show(name)}; shipped: {', '.join(shipped_names())}"
+            )
         if run is not None:
             have = {e: agents.runs(e, algo) for e in envs}
             envs = frozenset(e for e in envs if run in have[e])
             if not envs:
-                raise ValueError(f"no training run {run} of {agent!r} shipped; its runs: "
-                                 f"{ {e: have[e] for e in sorted(have)} }")  # fmt: skip
+                raise ValueError(
+                    f"no training run {run} of {agent!r} shipped; its runs: "
+                    f"{ {e: have[e] for e in sorted(have)} }"
+                )
         from agents.files import steamtemp_files
 
         for e in sorted(envs):
@@ -214,15 +219,17 @@ def parse(name: str) -> Spec:
                 raise ValueError(f"policy {_show(name)}: {exc}") from None
         return Spec(name, SHIPPED, algo, envs, run)
     if name.startswith(ZOO_PREFIX):
-        return _files_spec(name, name[len(ZOO_PREFIX):])
+        return _files_spec(name, name[len(ZOO_PREFIX) :])
     m = _FACTORY.match(name)
     if m:
         module_file(name, m.group("module"))  # found, not imported (module_file)
         return Spec(name, FACTORY, name)
     if "/" in name or "\\" in name or name.endswith(".zip"):
         return _files_spec(name, name)
-    raise ValueError(f"unknown policy {_show(name)}; valid names: {', '.join(baselines.NAMES)}, "
-                     f"{', '.join(shipped_names())}; a policy is {FORMS}")  # fmt: skip
+    raise ValueError(
+        f"unknown policy {_show(name)}; valid names: {', '.join(baselines.NAMES)}, "
+        f"{', '.join(shipped_names())}; a policy is {FORMS}"
+    )
 
 
 def everyday_names() -> list[str]:
@@ -236,8 +243,11 @@ def listing() -> list[str]:
     where: dict[str, list[str]] = {}
     for env_id, algo in agents.shipped():
         where.setdefault(f"{SB3_PREFIX}{algo}", []).append(env_id.split("/")[-1])
-    lines = [f"Baselines (baselines.make(name, env)): {', '.join(baselines.NAMES)}", "",
-             "Shipped trained agents (agents.load(id, algo); need the agents extra):"]
+    lines = [
+        f"Baselines (baselines.make(name, env)): {', '.join(baselines.NAMES)}",
+        "",
+        "Shipped trained agents (agents.load(id, algo); need the agents extra):",
+    ]
     return lines + [f"  {name}: {', '.join(ids)}" for name, ids in sorted(where.items())]
 
 
@@ -265,7 +275,7 @@ def training_runs(name: str, env_id: str) -> list[str]:
     else the name itself."""
     if not name.startswith(SB3_PREFIX) or split_run(name)[1] is not None:
         return [name]
-    runs = agents.runs(env_id, name[len(SB3_PREFIX):])
+    runs = agents.runs(env_id, name[len(SB3_PREFIX) :])
     return [run_name(name, k) for k in runs] if len(runs) > 1 else [name]
 
 
@@ -282,10 +292,12 @@ def check_built(name: str, policy: Any) -> None:
     """
     missing = [m for m in ("predict", "reset") if not callable(getattr(policy, m, None))]
     if missing:
-        raise ValueError(f"policy {_show(name)}: the factory returned {type(policy).__name__}, "
-                         f"which has no {' and no '.join(missing)} method (a Policy needs "
-                         "predict(observation, state, episode_start, deterministic) and "
-                         "reset(), baselines/policy.py)")  # fmt: skip
+        raise ValueError(
+            f"policy {_show(name)}: the factory returned {type(policy).__name__}, "
+            f"which has no {' and no '.join(missing)} method (a Policy needs "
+            "predict(observation, state, episode_start, deterministic) and "
+            "reset(), baselines/policy.py)"
+        )
 
 
 def _files_spec(name: str, path: str) -> Spec:
@@ -302,8 +314,10 @@ def _files_spec(name: str, path: str) -> Spec:
         by_env.setdefault(f.env_id, []).append(f.model.name)
     several = {e: m for e, m in by_env.items() if len(m) > 1}
     if several:
-        raise ValueError(f"policy {_show(name)}: several agents for one env in {path!r}: "
-                         f"{several}; name one model .zip instead")  # fmt: skip
+        raise ValueError(
+            f"policy {_show(name)}: several agents for one env in {path!r}: "
+            f"{several}; name one model .zip instead"
+        )
     return Spec(name, FILES, path, frozenset(by_env))
 
 
@@ -383,8 +397,9 @@ def _module(name: str, ref: str):
     except BaseException as exc:  # any failure of the import is a bad name, SystemExit too
         if not guard.own_failure(exc):  # Ctrl-C
             raise
-        raise ValueError(f"policy {_show(name)}: cannot import {ref!r}: "
-                         f"{guard.describe(exc, 'the module')}") from None  # fmt: skip
+        raise ValueError(
+            f"policy {_show(name)}: cannot import {ref!r}: {guard.describe(exc, 'the module')}"
+        ) from None
 
 
 def _factory(name: str, ref: str):
@@ -396,6 +411,8 @@ def _factory(name: str, ref: str):
             raise ValueError(f"policy {_show(name)}: {module_ref!r} has no attribute {attr!r}")
         obj = getattr(obj, part)
     if not callable(obj):
-        raise ValueError(f"policy {_show(name)}: {attr!r} is a {type(obj).__name__}, not callable "
-                         "(a factory env -> Policy)")  # fmt: skip
+        raise ValueError(
+            f"policy {_show(name)}: {attr!r} is a {type(obj).__name__}, not callable "
+            "(a factory env -> Policy)"
+        )
     return obj

@@ -149,15 +149,23 @@ def training_run_bootstrap_ci(
     rows, slots = np.arange(n_boot)[:, None], np.arange(n_runs)[None, :]
     per_task = []  # per task: per run, its drawn episodes in every (replicate, slot)
     for t in range(len(cells[0])):
-        per_task.append([c[t][rng.integers(0, c[t].size, (n_boot, n_runs, c[t].size))]
-                         for c in cells])  # fmt: skip
+        per_task.append(
+            [c[t][rng.integers(0, c[t].size, (n_boot, n_runs, c[t].size))] for c in cells]
+        )
     if all(len({d.shape for d in drawn}) == 1 for drawn in per_task):  # equal sizes per task
         parts = [np.stack(drawn)[pick, rows, slots].reshape(n_boot, -1) for drawn in per_task]
         reps = statistic(np.concatenate(parts, axis=1), axis=1)
     else:
-        reps = np.array([statistic(np.concatenate([drawn[pick[b, j]][b, j] for drawn in per_task
-                                                   for j in range(n_runs)]))
-                         for b in range(n_boot)])  # fmt: skip
+        reps = np.array(
+            [
+                statistic(
+                    np.concatenate(
+                        [drawn[pick[b, j]][b, j] for drawn in per_task for j in range(n_runs)]
+                    )
+                )
+                for b in range(n_boot)
+            ]
+        )
     q = 100 * (1 - confidence) / 2
     lo, hi = np.percentile(reps, [q, 100 - q])
     return float(statistic(np.concatenate([t for r in cells for t in r]))), float(lo), float(hi)
@@ -187,9 +195,12 @@ def _prob_greater(x: np.ndarray, y: np.ndarray) -> float:
 
 
 def probability_of_improvement(
-    x: Scores, y: Scores, n_boot: int = N_BOOTSTRAP, confidence: float = CONFIDENCE,
+    x: Scores,
+    y: Scores,
+    n_boot: int = N_BOOTSTRAP,
+    confidence: float = CONFIDENCE,
     seed: int = 0,
-) -> tuple[float, float, float]:  # fmt: skip
+) -> tuple[float, float, float]:
     """``P(X > Y)``: for each task the probability that a run of X scores higher than a run
     of Y (ties count half), averaged over tasks; stratified-bootstrap percentile interval
     (runs of X and of Y resampled within each task).
@@ -228,8 +239,9 @@ def performance_profile(scores: Scores, taus: np.ndarray) -> np.ndarray:
     score distribution), shape ``taus.shape``."""
     tasks = _tasks(scores)
     taus = np.asarray(taus, dtype=float)
-    return np.mean([np.mean(t[:, None] > taus.ravel()[None, :], axis=0) for t in tasks],
-                   axis=0).reshape(taus.shape)  # fmt: skip
+    return np.mean(
+        [np.mean(t[:, None] > taus.ravel()[None, :], axis=0) for t in tasks], axis=0
+    ).reshape(taus.shape)
 
 
 #: The valve-travel budget: a policy is admissible on a plant when its mean valve travel there
@@ -254,11 +266,13 @@ def realism_breach(m: dict[str, Any], ref: dict[str, Any]) -> str | None:
     if travel > REALISM_TRAVEL_MAX * ref_travel:
         ratio = f"{travel / ref_travel:.2f}x" if ref_travel > 0 else "infinitely"
         return f"travel {travel:.2f} = {ratio} the reference's {ref_travel:.2f}"
-    p2p, ref_p2p = (math.nan if x.get("quiet_p2p_K") is None else float(x["quiet_p2p_K"])
-                    for x in (m, ref))  # fmt: skip
+    p2p, ref_p2p = (
+        math.nan if x.get("quiet_p2p_K") is None else float(x["quiet_p2p_K"]) for x in (m, ref)
+    )
     if limit_cycles(p2p, ref_p2p):
         return f"quiet p2p {p2p:.2f} K against the reference's {ref_p2p:.2f} K"
     return None
+
 
 #: Smallest scale of the normalized score, as a fraction of the reference's cost |R0|.
 MIN_SPAN = 0.05

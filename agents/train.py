@@ -94,9 +94,12 @@ def _run_count(text: str) -> int:
 
 def make_parser() -> argparse.ArgumentParser:
     doc = __doc__ or ""
-    ap = argparse.ArgumentParser(prog="steamtemp-train", description=doc.split("\n")[0],
-                                 epilog=doc.split("\n", 2)[2],
-                                 formatter_class=argparse.RawDescriptionHelpFormatter)  # fmt: skip
+    ap = argparse.ArgumentParser(
+        prog="steamtemp-train",
+        description=doc.split("\n")[0],
+        epilog=doc.split("\n", 2)[2],
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
     ap.add_argument(
         "--env",
         help=f"env id, one of {list(steamtemp_gym.ENV_IDS)} (the name "
@@ -118,19 +121,30 @@ def make_parser() -> argparse.ArgumentParser:
         "YAML entry's max_minutes; with --zoo: of each run, 10 where the entry has none)",
     )
     ap.add_argument("--tensorboard", default=None, help="TensorBoard log directory")
-    ap.add_argument("--zoo", action="store_true",
-                    help="rebuild agents/zoo/ (or --out): every shipped agent from its YAML "
-                         "entry (or --hyperparams), or with --env/--algo every entry of "
-                         "those; one at a time, at nice 10 (--max-minutes each, default the "
-                         "entry's max_minutes or 10; "
-                         "--timesteps and --n-envs, when given, for each)")  # fmt: skip
-    ap.add_argument("--runs", type=_run_count, default=None, metavar="K",
-                    help=f"with --zoo: K independent training runs per agent (1 to {MAX_RUNS}), "
-                    "written <env>__<algo>__run<k>; run k trains with seed --seed + "
-                    f"{RUN_SEED_STRIDE} k (default: one run, written <env>__<algo>)")  # fmt: skip
-    ap.add_argument("--resume", action="store_true",
-                    help="with --zoo: skip the runs whose files are in --out already (a "
-                    "rebuild stopped part way goes on where it stopped)")  # fmt: skip
+    ap.add_argument(
+        "--zoo",
+        action="store_true",
+        help="rebuild agents/zoo/ (or --out): every shipped agent from its YAML "
+        "entry (or --hyperparams), or with --env/--algo every entry of "
+        "those; one at a time, at nice 10 (--max-minutes each, default the "
+        "entry's max_minutes or 10; "
+        "--timesteps and --n-envs, when given, for each)",
+    )
+    ap.add_argument(
+        "--runs",
+        type=_run_count,
+        default=None,
+        metavar="K",
+        help=f"with --zoo: K independent training runs per agent (1 to {MAX_RUNS}), "
+        "written <env>__<algo>__run<k>; run k trains with seed --seed + "
+        f"{RUN_SEED_STRIDE} k (default: one run, written <env>__<algo>)",
+    )
+    ap.add_argument(
+        "--resume",
+        action="store_true",
+        help="with --zoo: skip the runs whose files are in --out already (a "
+        "rebuild stopped part way goes on where it stopped)",
+    )
     ap.add_argument(
         "--backend",
         choices=("local", "ray"),
@@ -138,22 +152,35 @@ def make_parser() -> argparse.ArgumentParser:
         help="with --zoo: local trains the runs one after another; ray runs each "
         "as a Ray task of one CPU (needs the ray extra) (default: %(default)s)",
     )
-    ap.add_argument("--address", default=None,
-                    help="with --backend ray: an existing Ray cluster (e.g. ray://host:10001 "
-                    "or auto); default: start a local Ray with --jobs CPUs")  # fmt: skip
-    ap.add_argument("--jobs", type=int, default=None,
-                    help="with --backend ray: CPUs of a new local Ray, so runs at a time "
-                    f"(default: the number of CPUs, {os.cpu_count() or 1})")  # fmt: skip
+    ap.add_argument(
+        "--address",
+        default=None,
+        help="with --backend ray: an existing Ray cluster (e.g. ray://host:10001 "
+        "or auto); default: start a local Ray with --jobs CPUs",
+    )
+    ap.add_argument(
+        "--jobs",
+        type=int,
+        default=None,
+        help="with --backend ray: CPUs of a new local Ray, so runs at a time "
+        f"(default: the number of CPUs, {os.cpu_count() or 1})",
+    )
     return ap
 
 
 def _check_zoo_flags(ap: argparse.ArgumentParser, args: argparse.Namespace) -> None:
     """argparse errors for --runs, --backend, --address and --jobs out of place."""
-    given = [f for f, v in (("--runs", args.runs is not None),
-                            ("--backend", args.backend != "local"),
-                            ("--resume", args.resume),
-                            ("--address", args.address is not None),
-                            ("--jobs", args.jobs is not None)) if v]  # fmt: skip
+    given = [
+        f
+        for f, v in (
+            ("--runs", args.runs is not None),
+            ("--backend", args.backend != "local"),
+            ("--resume", args.resume),
+            ("--address", args.address is not None),
+            ("--jobs", args.jobs is not None),
+        )
+        if v
+    ]
     if given and not args.zoo:
         ap.error(f"argument {given[0]}: only with --zoo")
     for flag, value in (("--address", args.address), ("--jobs", args.jobs)):
@@ -179,25 +206,37 @@ def main(argv: list[str] | None = None) -> None:
             elif not (args.env or args.algo):  # rebuild what ships (a residual ships only
                 entries = [e for e in entries if e in set(shipped())]  # where it pays)
             env = zoo_env(args.env)
-            entries = [(env_id, algo) for env_id, algo in entries
-                       if (not env or env_id == env)
-                       and (not args.algo or algo == args.algo)]  # fmt: skip
+            entries = [
+                (env_id, algo)
+                for env_id, algo in entries
+                if (not env or env_id == env) and (not args.algo or algo == args.algo)
+            ]
             if not entries:
-                raise ConfigError(f"no entry for --env {args.env!r} and --algo {args.algo!r} "
-                                  f"in the shipped hyperparameter files; entries: "
-                                  f"{zoo_entries()}")  # fmt: skip
+                raise ConfigError(
+                    f"no entry for --env {args.env!r} and --algo {args.algo!r} "
+                    f"in the shipped hyperparameter files; entries: "
+                    f"{zoo_entries()}"
+                )
             for env_id, algo in entries:  # every entry checked before the first run
-                read_hyperparams(Path(args.hyperparams or HYPERPARAMS / f"{algo}.yml"),
-                                 env_id, algo)  # fmt: skip
-            jobs = zoo_jobs(entries, Path(args.out or ZOO), args.seed, args.runs,
-                            args.max_minutes, timesteps=args.timesteps,
-                            n_envs=args.n_envs, hyperparams=args.hyperparams and
-                            Path(args.hyperparams).resolve())  # fmt: skip
+                read_hyperparams(
+                    Path(args.hyperparams or HYPERPARAMS / f"{algo}.yml"), env_id, algo
+                )
+            jobs = zoo_jobs(
+                entries,
+                Path(args.out or ZOO),
+                args.seed,
+                args.runs,
+                args.max_minutes,
+                timesteps=args.timesteps,
+                n_envs=args.n_envs,
+                hyperparams=args.hyperparams and Path(args.hyperparams).resolve(),
+            )
             if args.resume:  # the runs whose files are there are done
                 jobs = [j for j in jobs if not finished(j)]
             if args.backend == "ray":
-                done = ray_backend.results(zoo_run, jobs, args.jobs or os.cpu_count() or 1,
-                                           args.address)  # fmt: skip
+                done = ray_backend.results(
+                    zoo_run, jobs, args.jobs or os.cpu_count() or 1, args.address
+                )
             else:
                 done = ((job, zoo_run(job)) for job in jobs)
             for _, meta in done:
@@ -206,8 +245,17 @@ def main(argv: list[str] | None = None) -> None:
         if not args.env or not args.algo:
             ap.error("--env and --algo are required (or --zoo)")
         out = Path(args.out or "trained")
-        meta = train(args.env, args.algo, args.hyperparams, args.timesteps, args.seed,
-                     args.n_envs, out, args.max_minutes, args.tensorboard)  # fmt: skip
+        meta = train(
+            args.env,
+            args.algo,
+            args.hyperparams,
+            args.timesteps,
+            args.seed,
+            args.n_envs,
+            out,
+            args.max_minutes,
+            args.tensorboard,
+        )
     except ConfigError as exc:
         ap.error(str(exc))
     print(_summary(meta))

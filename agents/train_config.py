@@ -21,17 +21,31 @@ from agents.wrappers import memory_options
 #: PPO imitating a causal expert by DAgger (agents/imitation.py), the same fine-tuned by PPO
 #: (``_rl``), and sb3-contrib's TRPO (a trust-region natural policy gradient) and
 #: RecurrentPPO (an LSTM policy: the memory is learned instead of given by agents.wrappers).
-ALGOS = ("ppo", "sac", "td3", "trpo", "ppo_residual", "ppo_residual_pi", "ppo_residual_mpc",
-         "ppo_imitation_mpc", "ppo_imitation_mpc_rl", "recurrentppo", "sac_caps",
-         "ppo_privileged")  # fmt: skip
+ALGOS = (
+    "ppo",
+    "sac",
+    "td3",
+    "trpo",
+    "ppo_residual",
+    "ppo_residual_pi",
+    "ppo_residual_mpc",
+    "ppo_imitation_mpc",
+    "ppo_imitation_mpc_rl",
+    "recurrentppo",
+    "sac_caps",
+    "ppo_privileged",
+)
 #: The algorithms whose critic sees privileged signals in training (agents/privileged.py):
 #: PPO's actor-critic with an actor on the agent's observation only.
 PRIVILEGED = ("ppo_privileged",)
 #: The base controller of each residual algorithm (agents/residual.py): observed by the
 #: agent and told the applied command; None: ``ppo_residual``'s legacy form (the industrial
 #: reference, unobserved).
-RESIDUAL_BASES = {"ppo_residual": None, "ppo_residual_pi": "cascade_pi_ff_tuned",
-                  "ppo_residual_mpc": "mpc_linear"}  # fmt: skip
+RESIDUAL_BASES = {
+    "ppo_residual": None,
+    "ppo_residual_pi": "cascade_pi_ff_tuned",
+    "ppo_residual_mpc": "mpc_linear",
+}
 #: The expert of each imitation algorithm (agents/imitation.py).
 EXPERTS = {"ppo_imitation_mpc": "mpc_linear", "ppo_imitation_mpc_rl": "mpc_linear"}
 #: The imitation algorithms that go on with PPO after DAgger (agents/imitation.py ``anchor``).
@@ -41,9 +55,16 @@ FINE_TUNED = ("ppo_imitation_mpc_rl",)
 DAGGER_KEYS = ("dagger_iterations", "beta_decay", "fit_epochs", "fit_seconds", "move_weight")
 FINE_TUNE_KEYS = ("dagger_minutes", "anchor_weight", "anchor_fraction")
 IMITATION_KEYS = DAGGER_KEYS + FINE_TUNE_KEYS
-IMITATION_DEFAULTS = {"dagger_iterations": 8, "beta_decay": 0.5, "fit_epochs": 10,
-                      "fit_seconds": 60.0, "move_weight": 1.0, "dagger_minutes": None,
-                      "anchor_weight": 1.0, "anchor_fraction": 0.5}  # fmt: skip
+IMITATION_DEFAULTS = {
+    "dagger_iterations": 8,
+    "beta_decay": 0.5,
+    "fit_epochs": 10,
+    "fit_seconds": 60.0,
+    "move_weight": 1.0,
+    "dagger_minutes": None,
+    "anchor_weight": 1.0,
+    "anchor_fraction": 0.5,
+}
 
 
 def check_imitation(hp: dict[str, Any], algo: str) -> None:
@@ -52,8 +73,9 @@ def check_imitation(hp: dict[str, Any], algo: str) -> None:
     if given and algo not in FINE_TUNED:
         raise ValueError(f"{given} only for an imitation fine-tuned by RL ({list(FINE_TUNED)})")
     v = hp.get("dagger_minutes")
-    if v is not None and not (isinstance(v, (int, float)) and not isinstance(v, bool)
-                              and 0 < v < np.inf):  # fmt: skip
+    if v is not None and not (
+        isinstance(v, (int, float)) and not isinstance(v, bool) and 0 < v < np.inf
+    ):
         raise ValueError(f"dagger_minutes must be a number > 0, got {v!r}")
     v = hp.get("anchor_fraction", IMITATION_DEFAULTS["anchor_fraction"])
     if not (isinstance(v, (int, float)) and not isinstance(v, bool) and 0 < v <= 1):
@@ -79,11 +101,31 @@ HYPERPARAMS = Path(__file__).with_name("hyperparams")
 #: The longest budget of a run an entry may ask for (``max_minutes``): minutes of
 #: one core, the project's budget per training run.
 MAX_RUN_MINUTES = 20
-SPECIAL = ("n_timesteps", "n_envs", "policy", "normalize", "env_wrapper", "policy_kwargs",
-           "noise_type", "noise_std", "noise_tau_s", "residual_scale", "max_move", "train_reward",
-           "plant_randomization", "travel_price", "price_probe_every", "residual_base",
-           "action_filter_s", "critic_warmup_steps", "tied_valves", "action_repeat", "max_minutes",
-           "privileged_critic", *IMITATION_KEYS)  # fmt: skip
+SPECIAL = (
+    "n_timesteps",
+    "n_envs",
+    "policy",
+    "normalize",
+    "env_wrapper",
+    "policy_kwargs",
+    "noise_type",
+    "noise_std",
+    "noise_tau_s",
+    "residual_scale",
+    "max_move",
+    "train_reward",
+    "plant_randomization",
+    "travel_price",
+    "price_probe_every",
+    "residual_base",
+    "action_filter_s",
+    "critic_warmup_steps",
+    "tied_valves",
+    "action_repeat",
+    "max_minutes",
+    "privileged_critic",
+    *IMITATION_KEYS,
+)
 
 
 class ConfigError(ValueError):
@@ -198,28 +240,36 @@ def _check_action_form(path: Path, hp: dict[str, Any], env_id: str, algo: str) -
     """ConfigError for a bad or conflicting setting of the action's form: residual
     (residual_scale), incremental (max_move), filtered (action_filter_s), tied valves."""
     if ("residual_scale" in hp) != (algo in RESIDUAL_BASES):
-        raise ConfigError(f"--hyperparams {path}: residual_scale is required for a residual "
-                          f"algo ({list(RESIDUAL_BASES)}) and only there (algo {algo!r})")
+        raise ConfigError(
+            f"--hyperparams {path}: residual_scale is required for a residual "
+            f"algo ({list(RESIDUAL_BASES)}) and only there (algo {algo!r})"
+        )
     if "residual_scale" in hp:
         from agents.residual import check_residual
 
         _checked(path, check_residual, hp["residual_scale"], RESIDUAL_BASES[algo])
     if "max_move" in hp:
         if "residual_scale" in hp:
-            raise ConfigError(f"--hyperparams {path}: residual_scale and max_move exclude each "
-                              "other (an agent is residual or incremental)")  # fmt: skip
+            raise ConfigError(
+                f"--hyperparams {path}: residual_scale and max_move exclude each "
+                "other (an agent is residual or incremental)"
+            )
         _checked(path, check_max_move, hp["max_move"])
     if "action_filter_s" in hp:
         from agents.moves import check_filter
 
         if "max_move" in hp or "residual_scale" in hp:
-            raise ConfigError(f"--hyperparams {path}: action_filter_s filters position "
-                              "actions: not with max_move or residual_scale")  # fmt: skip
+            raise ConfigError(
+                f"--hyperparams {path}: action_filter_s filters position "
+                "actions: not with max_move or residual_scale"
+            )
         _checked(path, check_filter, hp["action_filter_s"])
     if "tied_valves" in hp:
         if "max_move" not in hp and "action_filter_s" not in hp:
-            raise ConfigError(f"--hyperparams {path}: tied_valves needs incremental "
-                              "(max_move) or filtered (action_filter_s) actions")  # fmt: skip
+            raise ConfigError(
+                f"--hyperparams {path}: tied_valves needs incremental "
+                "(max_move) or filtered (action_filter_s) actions"
+            )
         from steamtemp_gym.plants import plant_class  # the valves of the default options
 
         _checked(path, tie_map, tuple(plant_class(env_id).valves), hp["tied_valves"])
@@ -232,16 +282,21 @@ def _check_run(path: Path, hp: dict[str, Any], algo: str) -> None:
         v = hp["max_minutes"]
         ok = isinstance(v, (int, float)) and not isinstance(v, bool)
         if not (ok and 0 < v <= MAX_RUN_MINUTES):
-            raise ConfigError(f"--hyperparams {path}: max_minutes (a run's budget, CPU minutes) "
-                              f"must be a number in (0, {MAX_RUN_MINUTES}], got {v!r}")  # fmt: skip
+            raise ConfigError(
+                f"--hyperparams {path}: max_minutes (a run's budget, CPU minutes) "
+                f"must be a number in (0, {MAX_RUN_MINUTES}], got {v!r}"
+            )
     if "critic_warmup_steps" in hp:
         v = hp["critic_warmup_steps"]
         if not (isinstance(v, int) and not isinstance(v, bool) and v >= 0):
-            raise ConfigError(f"--hyperparams {path}: critic_warmup_steps must be an integer "
-                              f">= 0, got {v!r}")  # fmt: skip
+            raise ConfigError(
+                f"--hyperparams {path}: critic_warmup_steps must be an integer >= 0, got {v!r}"
+            )
         if algo.split("_")[0] != "ppo":
-            raise ConfigError(f"--hyperparams {path}: critic_warmup_steps is for PPO's "
-                              f"actor and critic, not {algo!r}")  # fmt: skip
+            raise ConfigError(
+                f"--hyperparams {path}: critic_warmup_steps is for PPO's "
+                f"actor and critic, not {algo!r}"
+            )
 
 
 def _check_training_terms(path: Path, hp: dict[str, Any], env_id: str) -> None:
@@ -260,17 +315,21 @@ def _check_training_terms(path: Path, hp: dict[str, Any], env_id: str) -> None:
         v = hp["travel_price"]
         ok = isinstance(v, (int, float)) and not isinstance(v, bool)
         if not (ok and PRICE_MIN <= v <= PRICE_MAX):
-            raise ConfigError(f"--hyperparams {path}: travel_price (the starting price per "
-                              f"valve stroke) must be a number in [{PRICE_MIN}, {PRICE_MAX}], "
-                              f"got {v!r}")  # fmt: skip
+            raise ConfigError(
+                f"--hyperparams {path}: travel_price (the starting price per "
+                f"valve stroke) must be a number in [{PRICE_MIN}, {PRICE_MAX}], "
+                f"got {v!r}"
+            )
     if "price_probe_every" in hp:
         v = hp["price_probe_every"]
         if "travel_price" not in hp:
             raise ConfigError(f"--hyperparams {path}: price_probe_every needs travel_price")
         if not (isinstance(v, int) and not isinstance(v, bool) and v >= 1):
-            raise ConfigError(f"--hyperparams {path}: price_probe_every (transitions between "
-                              f"two closed-loop travel probes) must be a positive integer, "
-                              f"got {v!r}")  # fmt: skip
+            raise ConfigError(
+                f"--hyperparams {path}: price_probe_every (transitions between "
+                f"two closed-loop travel probes) must be a positive integer, "
+                f"got {v!r}"
+            )
     if "plant_randomization" in hp:
         from steamtemp_gym.plants import perturb
 
@@ -278,8 +337,10 @@ def _check_training_terms(path: Path, hp: dict[str, Any], env_id: str) -> None:
     for key in ("gamma", "gae_lambda"):
         v = hp.get(key, 0.5)
         if not (isinstance(v, (int, float)) and not isinstance(v, bool) and 0 < v <= 1):
-            raise ConfigError(f"--hyperparams {path}: {key} must be a number in (0, 1] or "
-                              f"'plant' (read from the plant's time scale), got {v!r}")
+            raise ConfigError(
+                f"--hyperparams {path}: {key} must be a number in (0, 1] or "
+                f"'plant' (read from the plant's time scale), got {v!r}"
+            )
 
 
 def _check_imitation_entry(path: Path, hp: dict[str, Any], algo: str) -> None:
@@ -287,16 +348,21 @@ def _check_imitation_entry(path: Path, hp: dict[str, Any], algo: str) -> None:
     or an action form its expert does not act in."""
     given = sorted(set(hp) & set(IMITATION_KEYS))
     if given and algo not in EXPERTS:
-        raise ConfigError(f"--hyperparams {path}: {given} only for an imitation algo "
-                          f"({list(EXPERTS)})")  # fmt: skip
+        raise ConfigError(
+            f"--hyperparams {path}: {given} only for an imitation algo ({list(EXPERTS)})"
+        )
     if algo in EXPERTS:
         _checked(path, check_imitation, hp, algo)
-        if any(k in hp for k in ("max_move", "residual_scale", "travel_price", "tied_valves",
-                                 "action_repeat")):  # fmt: skip
-            raise ConfigError(f"--hyperparams {path}: an imitation agent acts on valve "
-                              "positions in every interval as its expert does (no max_move, "
-                              "residual_scale, travel_price, tied_valves or "
-                              "action_repeat)")  # fmt: skip
+        if any(
+            k in hp
+            for k in ("max_move", "residual_scale", "travel_price", "tied_valves", "action_repeat")
+        ):
+            raise ConfigError(
+                f"--hyperparams {path}: an imitation agent acts on valve "
+                "positions in every interval as its expert does (no max_move, "
+                "residual_scale, travel_price, tied_valves or "
+                "action_repeat)"
+            )
 
 
 def _completed(path: Path, hp: dict[str, Any], algo: str) -> dict[str, Any]:
@@ -304,8 +370,9 @@ def _completed(path: Path, hp: dict[str, Any], algo: str) -> dict[str, Any]:
     and env_wrapper parsed."""
     for key, by in (("residual_base", RESIDUAL_BASES), ("privileged_critic", PRIVILEGED)):
         if key in hp:
-            raise ConfigError(f"--hyperparams {path}: {key} is set by the algo ({by}), not in "
-                              "the file")  # fmt: skip
+            raise ConfigError(
+                f"--hyperparams {path}: {key} is set by the algo ({by}), not in the file"
+            )
     hp = dict(hp)
     hp["residual_base"] = RESIDUAL_BASES.get(algo)
     hp["privileged_critic"] = algo in PRIVILEGED
@@ -325,10 +392,15 @@ def _check_noise(hp: dict[str, Any]) -> None:
         raise ConfigError(f"noise_type: 'normal' or 'lowpass', got {hp['noise_type']!r}")
     tau = hp.get("noise_tau_s")
     if (hp.get("noise_type") == "lowpass") != (tau is not None):
-        raise ConfigError("noise_tau_s (seconds, or plant) goes with noise_type: lowpass, "
-                          f"and only with it; got noise_type {hp.get('noise_type')!r}, "
-                          f"noise_tau_s {tau!r}")  # fmt: skip
-    if tau is not None and not (isinstance(tau, (int, float)) and not isinstance(tau, bool)
-                                and math.isfinite(tau) and tau > 0):  # fmt: skip
-        raise ConfigError(f"noise_tau_s must be a positive number of seconds or plant, "
-                          f"got {tau!r}")  # fmt: skip
+        raise ConfigError(
+            "noise_tau_s (seconds, or plant) goes with noise_type: lowpass, "
+            f"and only with it; got noise_type {hp.get('noise_type')!r}, "
+            f"noise_tau_s {tau!r}"
+        )
+    if tau is not None and not (
+        isinstance(tau, (int, float))
+        and not isinstance(tau, bool)
+        and math.isfinite(tau)
+        and tau > 0
+    ):
+        raise ConfigError(f"noise_tau_s must be a positive number of seconds or plant, got {tau!r}")

@@ -72,8 +72,14 @@ def zoo_run(job: dict[str, Any]) -> dict[str, Any]:
     return train(**job)
 
 
-def zoo_jobs(entries: list[tuple[str, str]], out: Path, seed: int, runs: int | None,
-             max_minutes: float | None, **options: Any) -> list[dict[str, Any]]:  # fmt: skip
+def zoo_jobs(
+    entries: list[tuple[str, str]],
+    out: Path,
+    seed: int,
+    runs: int | None,
+    max_minutes: float | None,
+    **options: Any,
+) -> list[dict[str, Any]]:
     """The :func:`zoo_run` jobs of ``entries``: one per entry without ``runs`` (file names
     without a run index, ``seed``), else ``runs`` per entry (run k: :func:`run_seed`);
     each run bounded by ``max_minutes``, or if None by its entry's ``max_minutes`` or
@@ -81,10 +87,20 @@ def zoo_jobs(entries: list[tuple[str, str]], out: Path, seed: int, runs: int | N
     not None)."""
     ks = [None] if runs is None else list(range(runs))
     extra = {k: v for k, v in options.items() if v is not None}
-    return [{"env_id": env_id, "algo": algo, "out": Path(out).resolve(), "run": k,
-             "seed": seed if k is None else run_seed(seed, k), "max_minutes": max_minutes,
-             "default_minutes": ZOO_MINUTES, **extra}
-            for env_id, algo in entries for k in ks]  # fmt: skip
+    return [
+        {
+            "env_id": env_id,
+            "algo": algo,
+            "out": Path(out).resolve(),
+            "run": k,
+            "seed": seed if k is None else run_seed(seed, k),
+            "max_minutes": max_minutes,
+            "default_minutes": ZOO_MINUTES,
+            **extra,
+        }
+        for env_id, algo in entries
+        for k in ks
+    ]
 
 
 def zoo_env(name: str | None) -> str | None:

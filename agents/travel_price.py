@@ -126,13 +126,15 @@ class VecTravelPrice(VecEnvWrapper):
         """Move the price on ``ratio`` (default: the rollout's own travel since the last
         update, :meth:`ratio`); (ratio, new price)."""
         r = self.ratio() if ratio is None else float(ratio)
-        self.price = float(np.clip(self.price * np.exp(RATE * (r / target - 1.0)), PRICE_MIN,
-                                   PRICE_MAX))  # fmt: skip
+        self.price = float(
+            np.clip(self.price * np.exp(RATE * (r / target - 1.0)), PRICE_MIN, PRICE_MAX)
+        )
         return r, self.price
 
 
-def policy_travel(model: Any, max_move: float | None, alpha: float | None = None,
-                  expand: np.ndarray | None = None) -> float | None:  # fmt: skip
+def policy_travel(
+    model: Any, max_move: float | None, alpha: float | None = None, expand: np.ndarray | None = None
+) -> float | None:
     """Valve travel per decision of ``model``'s deterministic action along the states of its
     last rollout (PPO's rollout buffer; None without one). Position actions move
     the valves by half the change of the action (actions in [-1, 1]), incremental ones by
@@ -148,8 +150,9 @@ def policy_travel(model: Any, max_move: float | None, alpha: float | None = None
         return None
     obs, starts = buf.observations, buf.episode_starts  # (steps, rows, n); (steps, rows)
     with torch.no_grad():
-        x = torch.as_tensor(obs.reshape(-1, obs.shape[-1]), dtype=torch.float32,
-                            device=model.device)  # fmt: skip
+        x = torch.as_tensor(
+            obs.reshape(-1, obs.shape[-1]), dtype=torch.float32, device=model.device
+        )
         a = model.policy._predict(x, deterministic=True).cpu().numpy()
     a = np.clip(a.reshape(*obs.shape[:2], -1), -1.0, 1.0)
     if expand is not None:
@@ -198,9 +201,13 @@ class PricedReplayBuffer(ReplayBuffer):
         travel = np.abs(self.price.opening(nxt) - self.price.opening(obs)).sum(axis=-1)
         reward = self.rewards[batch_inds, rows] - self.price.price * travel
         done = self.dones[batch_inds, rows] * (1.0 - self.timeouts[batch_inds, rows])
-        data = (self._normalize_obs(obs, env), self.actions[batch_inds, rows, :],
-                self._normalize_obs(nxt, env), done.reshape(-1, 1),
-                self._normalize_reward(reward.reshape(-1, 1), env))  # fmt: skip
+        data = (
+            self._normalize_obs(obs, env),
+            self.actions[batch_inds, rows, :],
+            self._normalize_obs(nxt, env),
+            done.reshape(-1, 1),
+            self._normalize_reward(reward.reshape(-1, 1), env),
+        )
         return ReplayBufferSamples(*tuple(map(self.to_torch, data)))
 
 
@@ -210,9 +217,15 @@ def price_replay(model: Any, price: VecTravelPrice) -> None:
     if model.replay_buffer.size():
         raise ValueError("price_replay: the model's replay buffer holds transitions already")
     model.replay_buffer = PricedReplayBuffer(
-        model.buffer_size, model.observation_space, model.action_space, device=model.device,
-        n_envs=model.n_envs, optimize_memory_usage=model.optimize_memory_usage, price=price,
-        **(model.replay_buffer_kwargs or {}))  # fmt: skip
+        model.buffer_size,
+        model.observation_space,
+        model.action_space,
+        device=model.device,
+        n_envs=model.n_envs,
+        optimize_memory_usage=model.optimize_memory_usage,
+        price=price,
+        **(model.replay_buffer_kwargs or {}),
+    )
     price.charge = False
 
 
@@ -237,10 +250,16 @@ def travel_probe(env_id: str, policy: Any, k: int, reference_rate: float) -> flo
     return validate(env_id, policy, n=PROBE_EPISODES, seed=seed)["travel_per_s"] / reference_rate
 
 
-def price_callback(wrapper: VecTravelPrice, log: list, max_move: float | None = None,
-                   alpha: float | None = None, expand: np.ndarray | None = None,
-                   repeat: int = 1, probe: Any = None,
-                   every: int = OFF_POLICY_EVERY) -> Any:  # fmt: skip
+def price_callback(
+    wrapper: VecTravelPrice,
+    log: list,
+    max_move: float | None = None,
+    alpha: float | None = None,
+    expand: np.ndarray | None = None,
+    repeat: int = 1,
+    probe: Any = None,
+    every: int = OFF_POLICY_EVERY,
+) -> Any:
     """SB3 callback: at each rollout's end, :meth:`VecTravelPrice.update` on the travel of
     the policy's deterministic action (:func:`policy_travel`, per decision of ``repeat``
     control intervals, agents/repeat.py; ``alpha``: the filter's gain per decision; the
@@ -268,14 +287,26 @@ def price_callback(wrapper: VecTravelPrice, log: list, max_move: float | None = 
                 own = probe(len(log))
             else:
                 per_step = policy_travel(self.model, max_move, alpha, expand)
-                own = (rollout if per_step is None
-                       else per_step / (wrapper.dt * repeat) / wrapper.reference_rate)  # fmt: skip
+                own = (
+                    rollout
+                    if per_step is None
+                    else per_step / (wrapper.dt * repeat) / wrapper.reference_rate
+                )
             r, p = wrapper.update(own)
             log.append((self.num_timesteps, r, rollout, p))
 
     return Price()
 
 
-__all__ = ["OFF_POLICY_EVERY", "PROBE_EPISODES", "PROBE_SEED", "TARGET", "PricedReplayBuffer",
-           "VecTravelPrice", "policy_travel", "price_callback", "price_replay",
-           "travel_probe"]  # fmt: skip
+__all__ = [
+    "OFF_POLICY_EVERY",
+    "PROBE_EPISODES",
+    "PROBE_SEED",
+    "TARGET",
+    "PricedReplayBuffer",
+    "VecTravelPrice",
+    "policy_travel",
+    "price_callback",
+    "price_replay",
+    "travel_probe",
+]

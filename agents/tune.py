@@ -57,8 +57,10 @@ SPACES["td3"] = {k: v for k, v in SPACES["sac"].items() if k != "log_std_init"}
 SPACES["td3"]["noise_std"] = [0.05, 0.1, 0.2]
 #: CAPS's weights on the shipped SAC settings: 0.1 is smooth but slow, 1 a constant action
 #: (docs/agents.md)
-SPACES["sac_caps"] = {"caps_temporal": [0.003, 0.01, 0.03, 0.1],
-                      "caps_spatial": [0.003, 0.01, 0.03, 0.1]}  # fmt: skip
+SPACES["sac_caps"] = {
+    "caps_temporal": [0.003, 0.01, 0.03, 0.1],
+    "caps_spatial": [0.003, 0.01, 0.03, 0.1],
+}
 
 
 def trial_entry(base: dict[str, Any], params: dict[str, Any]) -> dict[str, Any]:
@@ -78,8 +80,9 @@ def trial_entry(base: dict[str, Any], params: dict[str, Any]) -> dict[str, Any]:
     return entry
 
 
-def search(env_id: str, algo: str, trials: int, timesteps: int, max_minutes: float,
-           seed: int, out: Path) -> dict[str, Any]:  # fmt: skip
+def search(
+    env_id: str, algo: str, trials: int, timesteps: int, max_minutes: float, seed: int, out: Path
+) -> dict[str, Any]:
     """Run the search (module docstring); returns the record written to ``out``."""
     if algo not in SPACES:
         raise ConfigError(f"no search space for {algo!r}; valid: {sorted(SPACES)}")
@@ -88,8 +91,9 @@ def search(env_id: str, algo: str, trials: int, timesteps: int, max_minutes: flo
     try:
         import optuna
     except ImportError:
-        raise ConfigError("agents.tune needs optuna: pip install optuna "
-                          "(or the project's [zoo] extra)") from None  # fmt: skip
+        raise ConfigError(
+            "agents.tune needs optuna: pip install optuna (or the project's [zoo] extra)"
+        ) from None
     shipped = HYPERPARAMS / f"{algo}.yml"
     read_hyperparams(shipped, env_id, algo)  # checked; the raw entry keeps its YAML forms
     raw = yaml.safe_load(shipped.read_text(encoding="utf-8"))[env_id]
@@ -98,18 +102,34 @@ def search(env_id: str, algo: str, trials: int, timesteps: int, max_minutes: flo
     records: list[dict[str, Any]] = []
 
     def objective(trial) -> float:
-        params = {k: trial.suggest_categorical(k, [json.dumps(c) for c in v])
-                  for k, v in SPACES[algo].items()}  # fmt: skip
+        params = {
+            k: trial.suggest_categorical(k, [json.dumps(c) for c in v])
+            for k, v in SPACES[algo].items()
+        }
         params = {k: json.loads(v) for k, v in params.items()}
         with tempfile.TemporaryDirectory() as tmp:
             yml = Path(tmp) / f"{algo}.yml"
             yml.write_text(yaml.safe_dump({env_id: trial_entry(raw, params)}), encoding="utf-8")
-            meta = train(env_id, algo, hyperparams=yml, timesteps=timesteps, seed=seed,
-                         out=Path(tmp), max_minutes=max_minutes, quiet=True)  # fmt: skip
+            meta = train(
+                env_id,
+                algo,
+                hyperparams=yml,
+                timesteps=timesteps,
+                seed=seed,
+                out=Path(tmp),
+                max_minutes=max_minutes,
+                quiet=True,
+            )
         best = meta["validation"]["best"]
-        records.append({"trial": trial.number, "params": params, **best,
-                        "timesteps_trained": meta["timesteps_trained"],
-                        "wall_time_s": meta["wall_time_s"]})  # fmt: skip
+        records.append(
+            {
+                "trial": trial.number,
+                "params": params,
+                **best,
+                "timesteps_trained": meta["timesteps_trained"],
+                "wall_time_s": meta["wall_time_s"],
+            }
+        )
         print(
             f"trial {trial.number}: return {best['return']:.1f}, IAE {best['iae_K_s']:.0f} "
             f"K*s, {meta['wall_time_s']:.0f} s, {params}",
@@ -122,32 +142,48 @@ def search(env_id: str, algo: str, trials: int, timesteps: int, max_minutes: flo
     sampler = optuna.samplers.TPESampler(seed=seed, n_startup_trials=min(5, trials))
     study = optuna.create_study(direction="maximize", sampler=sampler)
     study.optimize(objective, n_trials=trials)
-    record = {"env_id": env_id, "algo": algo, "trials": trials, "timesteps": timesteps,
-              "max_minutes": max_minutes, "seed": seed, "space": SPACES[algo],
-              "package_version": steamtemp_gym.__version__, "results": records,
-              "best": max(records, key=lambda r: r["return"])}  # fmt: skip
-    (out / f"{stem(env_id, algo)}__tuning.json").write_text(json.dumps(record, indent=1),
-                                                            encoding="utf-8")  # fmt: skip
+    record = {
+        "env_id": env_id,
+        "algo": algo,
+        "trials": trials,
+        "timesteps": timesteps,
+        "max_minutes": max_minutes,
+        "seed": seed,
+        "space": SPACES[algo],
+        "package_version": steamtemp_gym.__version__,
+        "results": records,
+        "best": max(records, key=lambda r: r["return"]),
+    }
+    (out / f"{stem(env_id, algo)}__tuning.json").write_text(
+        json.dumps(record, indent=1), encoding="utf-8"
+    )
     return record
 
 
 def markdown(record: dict[str, Any]) -> str:
     keys = list(record["space"])
-    lines = ["| trial | " + " | ".join(keys) + " | return | IAE (K·s) | steps | wall (s) |",
-             "|" + "---|" * (len(keys) + 5)]  # fmt: skip
+    lines = [
+        "| trial | " + " | ".join(keys) + " | return | IAE (K·s) | steps | wall (s) |",
+        "|" + "---|" * (len(keys) + 5),
+    ]
     for r in sorted(record["results"], key=lambda r: -r["return"]):
         cells = [str(r["params"][k]) for k in keys]
-        lines.append(f"| {r['trial']} | " + " | ".join(cells) + f" | {r['return']:.1f} | "
-                     f"{r['iae_K_s']:.0f} | {r['timesteps_trained']:,} | "
-                     f"{r['wall_time_s']:.0f} |")  # fmt: skip
+        lines.append(
+            f"| {r['trial']} | " + " | ".join(cells) + f" | {r['return']:.1f} | "
+            f"{r['iae_K_s']:.0f} | {r['timesteps_trained']:,} | "
+            f"{r['wall_time_s']:.0f} |"
+        )
     return "\n".join(lines)
 
 
 def main(argv: list[str] | None = None) -> int:
     doc = __doc__ or ""
-    ap = argparse.ArgumentParser(prog="python -m agents.tune", description=doc.split("\n")[0],
-                                 epilog=doc.split("\n", 2)[2],
-                                 formatter_class=argparse.RawDescriptionHelpFormatter)  # fmt: skip
+    ap = argparse.ArgumentParser(
+        prog="python -m agents.tune",
+        description=doc.split("\n")[0],
+        epilog=doc.split("\n", 2)[2],
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
     ap.add_argument("--env", required=True, help=f"one of {list(steamtemp_gym.ENV_IDS)}")
     ap.add_argument("--algo", required=True, help=f"one of {sorted(SPACES)}")
     ap.add_argument("--trials", type=int, default=8)
@@ -157,11 +193,19 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--out", default="tuning")
     args = ap.parse_args(argv)
     if args.env not in steamtemp_gym.ENV_IDS or args.algo not in ALGOS:
-        ap.error(f"--env must be one of {list(steamtemp_gym.ENV_IDS)} and --algo one of "
-                 f"{sorted(SPACES)}")  # fmt: skip
+        ap.error(
+            f"--env must be one of {list(steamtemp_gym.ENV_IDS)} and --algo one of {sorted(SPACES)}"
+        )
     try:
-        record = search(args.env, args.algo, args.trials, args.timesteps, args.max_minutes,
-                        args.seed, Path(args.out))  # fmt: skip
+        record = search(
+            args.env,
+            args.algo,
+            args.trials,
+            args.timesteps,
+            args.max_minutes,
+            args.seed,
+            Path(args.out),
+        )
     except ConfigError as exc:
         ap.error(str(exc))
     print(markdown(record))

@@ -85,8 +85,9 @@ def seeds() -> list[int]:
 
 
 def _venv(env_id: str) -> Any:
-    return gym.make_vec(env_id, num_envs=EPISODES, scenario="random",
-                        vectorization_mode="vector_entry_point")  # fmt: skip
+    return gym.make_vec(
+        env_id, num_envs=EPISODES, scenario="random", vectorization_mode="vector_entry_point"
+    )
 
 
 def run_episodes(env_id: str, make_policy: Any) -> dict[str, np.ndarray]:
@@ -94,9 +95,10 @@ def run_episodes(env_id: str, make_policy: Any) -> dict[str, np.ndarray]:
     venv = _venv(env_id)
     res = run_batch(venv, make_policy(venv), seeds())
     m = [r["metrics"] for r in res]
-    return {k: np.array([x[key] for x in m], dtype=float)
-            for k, key in (("return", "return"), ("travel", "valve_travel"),
-                           ("tripped", "tripped"))}  # fmt: skip
+    return {
+        k: np.array([x[key] for x in m], dtype=float)
+        for k, key in (("return", "return"), ("travel", "valve_travel"), ("tripped", "tripped"))
+    }
 
 
 def ends(env_id: str, compute: bool = True) -> dict[str, Any]:
@@ -111,15 +113,21 @@ def ends(env_id: str, compute: bool = True) -> dict[str, Any]:
     if got is not None and got.get("episodes") == key:
         return got
     if not compute:
-        raise ValueError(f"the stored score ends of {env_id} are missing or stale; run: "
-                         f"python -m agents.baseline_tuning --ends --env {env_id}")  # fmt: skip
+        raise ValueError(
+            f"the stored score ends of {env_id} are missing or stale; run: "
+            f"python -m agents.baseline_tuning --ends --env {env_id}"
+        )
     zero = run_episodes(env_id, lambda v: baselines.make(ZERO, v))
     # the clairvoyant optimum, stored for these episodes (agents/optima.py); where it must
     # be solved, warm started by the CEM and the reference alone: with mpc_linear among the
     # starts, a new tuning of mpc_linear could move the ends it was tuned on
     one = run_episodes(env_id, lambda v: Oracle(v, incumbents=(ZERO,)))
-    got = {"episodes": key, "zero": zero["return"].tolist(), "one": one["return"].tolist(),
-           "travel": float(zero["travel"].mean())}  # fmt: skip
+    got = {
+        "episodes": key,
+        "zero": zero["return"].tolist(),
+        "one": one["return"].tolist(),
+        "travel": float(zero["travel"].mean()),
+    }
     table[env_id] = got
     tuning.TUNED.mkdir(exist_ok=True)
     f.write_text(json.dumps(table, indent=1, sort_keys=True) + "\n")
@@ -133,8 +141,9 @@ def robust_corners(env_id: str) -> list[dict[str, float]]:
     return perturb.corners(env_id, ROBUST_MARGIN)
 
 
-def robustness(env_id: str, make_policy: Any,
-               corner_refs: list[dict[str, Any]] | None = None) -> tuple[float, str]:  # fmt: skip
+def robustness(
+    env_id: str, make_policy: Any, corner_refs: list[dict[str, Any]] | None = None
+) -> tuple[float, str]:
     """The robustness check: (cost ratio, breach). The ratio (bounded by
     :data:`ROBUST_COST_MAX`) is the largest over the corners of :func:`robust_corners` of
     one policy's cost (minus the return) on that corner's plant over its cost on the
@@ -161,15 +170,20 @@ def robustness(env_id: str, make_policy: Any,
     runs = [(corners[k % len(corners)], train[k % len(train)]) for k in range(n)]
     nominal = _venv(env_id)
     policy = make_policy(nominal)
-    twin = {s: r["metrics"]["return"] for s, r in zip(train, run_batch(nominal, policy, train),
-                                                      strict=True)}  # fmt: skip
+    twin = {
+        s: r["metrics"]["return"]
+        for s, r in zip(train, run_batch(nominal, policy, train), strict=True)
+    }
     worst = 0.0
     for factors, s in runs:
         unit = _corner_venv(env_id, "random", factors)
         ret = run_batch(unit, policy, [s])[0]["metrics"]["return"]
         worst = max(worst, -ret / max(-twin[s], 1e-9))
-    refs = corner_refs if corner_refs is not None else corner_check_metrics(
-        env_id, lambda env: baselines.make(ZERO, env))[1]  # fmt: skip
+    refs = (
+        corner_refs
+        if corner_refs is not None
+        else corner_check_metrics(env_id, lambda env: baselines.make(ZERO, env))[1]
+    )
     nominal_checks, ms = corner_check_metrics(env_id, make_policy)
     breaches = []
     for (i, factors), m, ref in zip(_corner_episodes(env_id), ms, refs, strict=True):
@@ -185,9 +199,13 @@ def _corner_venv(env_id: str, scenario: Any, factors: dict[str, float] | None) -
     """A one-row vector env of ``scenario`` on the corner plant of group ``factors`` (None:
     the nominal plant)."""
     fixed = None if factors is None else {g: (f, f) for g, f in factors.items()}
-    return gym.make_vec(env_id, num_envs=1, scenario=scenario,
-                        vectorization_mode="vector_entry_point",
-                        **({} if fixed is None else {"plant_randomization": fixed}))  # fmt: skip
+    return gym.make_vec(
+        env_id,
+        num_envs=1,
+        scenario=scenario,
+        vectorization_mode="vector_entry_point",
+        **({} if fixed is None else {"plant_randomization": fixed}),
+    )
 
 
 def _corner_episodes(env_id: str) -> list[tuple[int, dict[str, float]]]:
@@ -207,8 +225,10 @@ def corner_check_metrics(
         venv = _corner_venv(env_id, sc, None)
         policy = make_policy(venv)
         nominal.append(run_batch(venv, policy, [CHECK_SEEDS[0]])[0]["metrics"])
-        corners += [run_batch(_corner_venv(env_id, sc, c), policy, [CHECK_SEEDS[0]])[0]["metrics"]
-                    for c in robust_corners(env_id)]  # fmt: skip
+        corners += [
+            run_batch(_corner_venv(env_id, sc, c), policy, [CHECK_SEEDS[0]])[0]["metrics"]
+            for c in robust_corners(env_id)
+        ]
     return nominal, corners
 
 
@@ -218,8 +238,9 @@ def check_metrics(env_id: str, make_policy: Any) -> list[dict[str, Any]]:
     side in the native vector env."""
     out = []
     for sc in COMMISSIONING_CHECKS:
-        venv = gym.make_vec(env_id, num_envs=len(CHECK_SEEDS), scenario=sc,
-                            vectorization_mode="vector_entry_point")  # fmt: skip
+        venv = gym.make_vec(
+            env_id, num_envs=len(CHECK_SEEDS), scenario=sc, vectorization_mode="vector_entry_point"
+        )
         out += [r["metrics"] for r in run_batch(venv, make_policy(venv), list(CHECK_SEEDS))]
     return out
 
@@ -229,9 +250,11 @@ def check_breach(ms: list[dict[str, Any]], refs: list[dict[str, Any]]) -> tuple[
     ``refs`` on the same episodes (:func:`check_metrics`), and the largest valve-travel ratio
     to the reference's over them."""
     where = [(load, seed) for load in CHECK_LOADS for seed in CHECK_SEEDS]
-    broke = [f"at {round(100 * load)} % load, seed {seed}: {b}"
-             for (load, seed), m, r in zip(where, ms, refs, strict=True)
-             if (b := stats.realism_breach(m, r))]  # fmt: skip
+    broke = [
+        f"at {round(100 * load)} % load, seed {seed}: {b}"
+        for (load, seed), m, r in zip(where, ms, refs, strict=True)
+        if (b := stats.realism_breach(m, r))
+    ]
     ratio = max(m["valve_travel"] / r["valve_travel"] for m, r in zip(ms, refs, strict=True))
     return "; ".join(broke), float(ratio)
 
@@ -241,6 +264,9 @@ def code_digest(env_id: str, name: str | None = None) -> str:
     training episodes of ``env_id`` depends on: the plant's scope, the evaluation, the
     reference and the oracle (the score's ends, ``name`` None) or controller ``name`` and
     the tuner (a tuning)."""
-    modules = [baselines.factory(ZERO).__module__, "agents.oracle"] if name is None else [
-        baselines.factory(name).__module__, "agents.baseline_tuning"]  # fmt: skip
+    modules = (
+        [baselines.factory(ZERO).__module__, "agents.oracle"]
+        if name is None
+        else [baselines.factory(name).__module__, "agents.baseline_tuning"]
+    )
     return f"{specs.source_digest(env_id)}:{specs.code_digest(*modules)}"

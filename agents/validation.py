@@ -24,8 +24,9 @@ VALIDATION_SEED = 1_000_000
 N_VALIDATION = 16
 
 
-def validate(env_id: str, policy, n: int = N_VALIDATION,
-             seed: int = VALIDATION_SEED) -> dict[str, float]:  # fmt: skip
+def validate(
+    env_id: str, policy, n: int = N_VALIDATION, seed: int = VALIDATION_SEED
+) -> dict[str, float]:
     """Mean return, IAE and valve travel of ``policy`` over the validation episodes (default
     reward), run as one batch in the native vector env by agents.evaluation.run_batch (row k
     is ``gym.make(env_id, scenario="random")`` reset with seed ``seed`` + k, bit for bit).
@@ -34,14 +35,17 @@ def validate(env_id: str, policy, n: int = N_VALIDATION,
 
     from agents.evaluation import run_batch
 
-    venv = gym.make_vec(env_id, num_envs=n, vectorization_mode="vector_entry_point",
-                        scenario="random")  # fmt: skip
+    venv = gym.make_vec(
+        env_id, num_envs=n, vectorization_mode="vector_entry_point", scenario="random"
+    )
     if not hasattr(policy, "predict"):
         policy = policy(venv)
     runs = run_batch(venv, policy, [seed + k for k in range(n)])
     venv.close()
-    out = {key: float(np.mean([r["metrics"][key] for r in runs]))
-           for key in ("return", "iae_K_s", "valve_travel")}  # fmt: skip
+    out = {
+        key: float(np.mean([r["metrics"][key] for r in runs]))
+        for key in ("return", "iae_K_s", "valve_travel")
+    }
     seconds = sum(float(r["trace"]["time_s"][-1] - r["trace"]["time_s"][0]) for r in runs)
     out["travel_per_s"] = n * out["valve_travel"] / max(seconds, 1e-9)
     return out
@@ -70,7 +74,8 @@ def scored(env_id: str, policy, ref: dict[str, Any]) -> dict[str, Any]:
     out: dict[str, Any] = validate(env_id, policy)
     out["travel_ratio"] = out["valve_travel"] / ref["valve_travel"]
     out["check"], out["check_travel_ratio"] = check_breach(
-        check_metrics(env_id, lambda venv: policy), ref["checks"])  # fmt: skip
+        check_metrics(env_id, lambda venv: policy), ref["checks"]
+    )
     return out
 
 
@@ -84,11 +89,16 @@ def better_checkpoint(new: dict[str, Any], best: dict[str, Any], budget: float) 
 
     def rank(s: dict[str, Any]) -> tuple:
         within, passed = s["travel_ratio"] <= budget, not s.get("check")
-        return (within and passed, passed, within,
-                s["return"] if within else -s["travel_ratio"])  # fmt: skip
+        return (within and passed, passed, within, s["return"] if within else -s["travel_ratio"])
 
     return rank(new) > rank(best)
 
 
-__all__ = ["N_VALIDATION", "VALIDATION_SEED", "better_checkpoint", "reference_result", "scored",
-           "validate"]  # fmt: skip
+__all__ = [
+    "N_VALIDATION",
+    "VALIDATION_SEED",
+    "better_checkpoint",
+    "reference_result",
+    "scored",
+    "validate",
+]

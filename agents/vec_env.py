@@ -69,12 +69,16 @@ class NativeVecEnv(VecEnv):
     def __init__(self, env_id: str, n_envs: int = 1, **options: Any) -> None:
         if env_id not in gym.registry:
             raise ValueError(f"unknown env id {env_id!r}")
-        venv = gym.make_vec(env_id, num_envs=n_envs, vectorization_mode="vector_entry_point",
-                            autoreset_mode=AutoresetMode.SAME_STEP, **options)  # fmt: skip
+        venv = gym.make_vec(
+            env_id,
+            num_envs=n_envs,
+            vectorization_mode="vector_entry_point",
+            autoreset_mode=AutoresetMode.SAME_STEP,
+            **options,
+        )
         self.venv: SteamTempVectorEnv = venv.unwrapped
         self.views = [SubEnv(self.venv, i) for i in range(n_envs)]
-        super().__init__(n_envs, self.venv.single_observation_space,
-                         self.venv.single_action_space)  # fmt: skip
+        super().__init__(n_envs, self.venv.single_observation_space, self.venv.single_action_space)
         self.env_id = env_id
         self._actions: np.ndarray | None = None
 
@@ -127,10 +131,13 @@ class NativeVecEnv(VecEnv):
                 "set it for all of them (indices=None)"
             )
 
-    def env_method(self, method_name: str, *method_args, indices: VecEnvIndices = None,
-                   **method_kwargs) -> list[Any]:  # fmt: skip
-        return [getattr(self.views[i], method_name)(*method_args, **method_kwargs)
-                for i in self._get_indices(indices)]  # fmt: skip
+    def env_method(
+        self, method_name: str, *method_args, indices: VecEnvIndices = None, **method_kwargs
+    ) -> list[Any]:
+        return [
+            getattr(self.views[i], method_name)(*method_args, **method_kwargs)
+            for i in self._get_indices(indices)
+        ]
 
     def env_is_wrapped(self, wrapper_class: type, indices: VecEnvIndices = None) -> list[bool]:
         return [False for _ in self._get_indices(indices)]
@@ -154,8 +161,9 @@ def _rows(info: dict[str, Any], n: int, full: bool = False) -> list[dict[str, An
     return rows
 
 
-def make_training_env(env_id: str, n_envs: int, seed: int, hp: dict[str, Any],
-                       reference_rate: float | None = None):  # fmt: skip
+def make_training_env(
+    env_id: str, n_envs: int, seed: int, hp: dict[str, Any], reference_rate: float | None = None
+):
     """(VecEnv for training, the native vector env under it, the travel price wrapper or
     None). ``reference_rate``: the reference's travel per second, which a ``travel_price``
     entry needs (agents/travel_price.py)."""
@@ -166,8 +174,13 @@ def make_training_env(env_id: str, n_envs: int, seed: int, hp: dict[str, Any],
     from agents.travel_price import VecTravelPrice
     from agents.wrappers import VecControllerMemory, VecResidual
 
-    base = NativeVecEnv(env_id, n_envs, scenario="random", reward=hp.get("train_reward"),
-                        plant_randomization=hp.get("plant_randomization"))  # fmt: skip
+    base = NativeVecEnv(
+        env_id,
+        n_envs,
+        scenario="random",
+        reward=hp.get("train_reward"),
+        plant_randomization=hp.get("plant_randomization"),
+    )
     price = None
     venv = base
     if hp.get("travel_price") is not None:
@@ -177,8 +190,9 @@ def make_training_env(env_id: str, n_envs: int, seed: int, hp: dict[str, Any],
     if hp.get("residual_scale") is not None:
         venv = VecResidual(venv, base.venv, hp["residual_scale"], hp.get("residual_base"))
     if hp.get("max_move") is not None or hp.get("action_filter_s") is not None:
-        venv = VecMoves(venv, base.venv, hp.get("max_move"), hp.get("action_filter_s"),
-                        hp.get("tied_valves"))  # fmt: skip
+        venv = VecMoves(
+            venv, base.venv, hp.get("max_move"), hp.get("action_filter_s"), hp.get("tied_valves")
+        )
     if hp["env_wrapper"] is not None:
         venv = VecControllerMemory(venv, base.venv, **hp["env_wrapper"])
     if hp.get("action_repeat", 1) > 1:

@@ -66,16 +66,22 @@ class MemoryState:
         self.dt = plant.dt_s
         self.n_obs = len(names)
         # secondary scored temperatures: (observation index, setpoint) of each measurement
-        second = ([(_measured(names, n), sp) for n, sp in plant.secondary]
-                  if config.secondary_integral else [])  # fmt: skip
+        second = (
+            [(_measured(names, n), sp) for n, sp in plant.secondary]
+            if config.secondary_integral
+            else []
+        )
         self.i_sec = np.array([i for i, _ in second], dtype=int)
         self.sp_sec = np.array([sp for _, sp in second], dtype=float)
         self.sec_scale, self.sec_center = scale[self.i_sec], center[self.i_sec]
         # every integral is observed in its own error's normalization
         self.i_scale = np.concatenate([[self.e_scale], self.sec_scale])
         self.n_extra = config.n_extra(len(self.i_valve), len(second), self.n_obs)
-        self.i_sample = (np.arange(self.n_obs) if config.history_signals == "observation"
-                         else np.concatenate([[self.i_err], self.i_valve]).astype(int))  # fmt: skip
+        self.i_sample = (
+            np.arange(self.n_obs)
+            if config.history_signals == "observation"
+            else np.concatenate([[self.i_err], self.i_valve]).astype(int)
+        )
         # rates: the filtered per-minute change of the load demand and of the setpoint, in
         # their observations' normalization
         self.i_rate = np.array([names.index("load_demand"), names.index("setpoint_C")])
@@ -127,12 +133,12 @@ class MemoryState:
             if at_stop.any():
                 grows = np.abs(self._integral + step) > np.abs(self._integral)
                 step[at_stop[:, None] & grows] = 0.0
-            self._integral = np.clip(self._integral + step, -c.integral_limit_K,
-                                     c.integral_limit_K)  # fmt: skip
+            self._integral = np.clip(self._integral + step, -c.integral_limit_K, c.integral_limit_K)
             parts.append(self._integral / self.i_scale)
         if c.rates:
-            self._rate = (self.a_rate * self._rate
-                          + (1.0 - self.a_rate) * (now - self._last) * (60.0 / self.dt))
+            self._rate = self.a_rate * self._rate + (1.0 - self.a_rate) * (now - self._last) * (
+                60.0 / self.dt
+            )
             self._last = now
             parts.append(self._rate)
         if c.history:
@@ -144,8 +150,10 @@ class MemoryState:
     def state(self) -> tuple[np.ndarray, ...]:
         """A copy of (integral, history ring, rates, last rate inputs, the ring's head) (to
         extend a terminal observation)."""
-        return (*(a.copy() for a in (self._integral, self._buf, self._rate, self._last)),
-                self._head)  # fmt: skip
+        return (
+            *(a.copy() for a in (self._integral, self._buf, self._rate, self._last)),
+            self._head,
+        )
 
     def set_state(self, state: tuple) -> None:
         *arrays, self._head = state
@@ -157,8 +165,10 @@ def _measured(names: list[str], true_name: str) -> int:
     (``<x>_meas_C``)."""
     meas = true_name[: -len("_C")] + "_meas_C" if true_name.endswith("_C") else true_name
     if meas not in names:
-        raise ValueError(f"no measurement {meas!r} of the secondary temperature "
-                         f"{true_name!r} among the observations {names}")  # fmt: skip
+        raise ValueError(
+            f"no measurement {meas!r} of the secondary temperature "
+            f"{true_name!r} among the observations {names}"
+        )
     return names.index(meas)
 
 

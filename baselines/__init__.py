@@ -47,8 +47,7 @@ _REGISTRY: dict[str, str | Callable[..., Any]] = {
 }
 #: Rows of the benchmark's common tuning for controllers whose own parameters are published
 #: (SIMC for the cascades): ``<name>_tuned`` (baselines/tuning.py).
-TUNED_ROWS = ("cascade_pi", "cascade_pi_ff", "fao_sf", "fao_fac", "neuro_pid_mee",
-              "neuro_pid_mse")  # fmt: skip
+TUNED_ROWS = ("cascade_pi", "cascade_pi_ff", "fao_sf", "fao_fac", "neuro_pid_mee", "neuro_pid_mse")
 _REGISTRY.update({f"{n}_tuned": Tuned(n) for n in TUNED_ROWS})
 #: The industrial reference: the cascade as a commissioned unit runs it (load-scheduled
 #: gains, load feed-forward). The leaderboard's score 0, the unit of the valve-travel
@@ -81,11 +80,15 @@ def register(name: str, factory: Callable[..., Policy] | str) -> None:
     """
     global NAMES
     if not isinstance(name, str) or not _NAME.match(name):
-        raise ValueError(f"baseline name must be a letter followed by up to 99 letters, digits, "
-                         f"'_', '-' or '.', got {name!r}")  # fmt: skip
+        raise ValueError(
+            f"baseline name must be a letter followed by up to 99 letters, digits, "
+            f"'_', '-' or '.', got {name!r}"
+        )
     if not (callable(factory) or (isinstance(factory, str) and _REF.match(factory))):
-        raise ValueError(f"factory of {name!r} must be callable (env -> Policy) or a "
-                         f"'module:callable' string, got {factory!r}")  # fmt: skip
+        raise ValueError(
+            f"factory of {name!r} must be callable (env -> Policy) or a "
+            f"'module:callable' string, got {factory!r}"
+        )
     if name in SHIPPED:
         raise ValueError(f"{name!r} is a shipped baseline; register under another name")
     old = _REGISTRY.get(name)
@@ -121,6 +124,4 @@ def make(name: str, env: Any, **kwargs: Any) -> Policy:
     return checked(factory(name)(env, **kwargs), env)
 
 
-__all__ = ["NAMES", "SHIPPED", "Policy", "Tuned", "factory", "make", "register",
-           "tuning_source"]  # fmt: skip
-
+__all__ = ["NAMES", "SHIPPED", "Policy", "Tuned", "factory", "make", "register", "tuning_source"]

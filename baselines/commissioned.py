@@ -47,8 +47,9 @@ _ROOTS = (Path(steamtemp_gym.__file__).resolve().parent, Path(__file__).resolve(
 def folder() -> Path | None:
     """This code version's folder of commissioning results (None: not writable)."""
     versions = (f"numpy {np.__version__}", f"scipy {scipy.__version__}")
-    return _cache.versioned_folder("commissioning", list(_ROOTS), *versions,
-                                   suffixes=(".py", ".npz"))  # fmt: skip
+    return _cache.versioned_folder(
+        "commissioning", list(_ROOTS), *versions, suffixes=(".py", ".npz")
+    )
 
 
 def _key(value: Any) -> str:

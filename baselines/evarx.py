@@ -86,15 +86,19 @@ def regressors(data: dict[str, np.ndarray], n: int) -> tuple[np.ndarray, ...]:
     return np.hstack(cols), w[t], y[t + n]
 
 
-def sequences(data: dict[str, np.ndarray], n: int,
-              starts: int = SEQ_STARTS) -> tuple[np.ndarray, ...]:  # fmt: skip
+def sequences(
+    data: dict[str, np.ndarray], n: int, starts: int = SEQ_STARTS
+) -> tuple[np.ndarray, ...]:
     """The regressors as interleaved Ts-spaced sequences, ``starts`` of them evenly spread
     over the first model interval: (phi (K, S, p), w (K, S), target (K, S, n_out))."""
     phi, w, y = regressors(data, n)
     K = len(w) // n
     o = np.unique(np.arange(min(starts, n)) * n // min(starts, n))
-    return (phi[: K * n].reshape(K, n, -1)[:, o], w[: K * n].reshape(K, n)[:, o],
-            y[: K * n].reshape(K, n, -1)[:, o])  # fmt: skip
+    return (
+        phi[: K * n].reshape(K, n, -1)[:, o],
+        w[: K * n].reshape(K, n)[:, o],
+        y[: K * n].reshape(K, n, -1)[:, o],
+    )
 
 
 def _basis(w: np.ndarray, gamma: np.ndarray) -> np.ndarray:
@@ -105,8 +109,9 @@ def _basis(w: np.ndarray, gamma: np.ndarray) -> np.ndarray:
     return np.concatenate([np.ones(d2.shape[:-1] + (1,)), np.exp(-gamma * d2)], -1)
 
 
-def evarx_predict(theta: np.ndarray, gamma: np.ndarray, phi: np.ndarray,
-                  w: np.ndarray) -> np.ndarray:  # fmt: skip
+def evarx_predict(
+    theta: np.ndarray, gamma: np.ndarray, phi: np.ndarray, w: np.ndarray
+) -> np.ndarray:
     """One-step prediction of one output, eq. (11)-(12): theta (1 + n_w0, p)."""
     return np.einsum("ti,ip,tp->t", _basis(w, gamma), theta, phi)
 
@@ -117,8 +122,9 @@ def lstsq_scaled(J: np.ndarray, r: np.ndarray) -> np.ndarray:
     return np.linalg.lstsq(J / sc, r, rcond=1e-10)[0] / sc
 
 
-def fit_evarx(phi: np.ndarray, w: np.ndarray, y: np.ndarray, iters: int = 30,
-              gamma0: float = GAMMA0) -> tuple[np.ndarray, np.ndarray, dict]:  # fmt: skip
+def fit_evarx(
+    phi: np.ndarray, w: np.ndarray, y: np.ndarray, iters: int = 30, gamma0: float = GAMMA0
+) -> tuple[np.ndarray, np.ndarray, dict]:
     """One-step (equation-error) Gauss-Newton on theta and gamma of one output, eq. (15)-(20)
     with the measured outputs in phi: the start of :func:`fit_output_error`.
 
@@ -173,8 +179,9 @@ def _simulate(C: np.ndarray, phi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return yh, x
 
 
-def simulation_sensitivities(theta: np.ndarray, gamma: np.ndarray, phi: np.ndarray,
-                             w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+def simulation_sensitivities(
+    theta: np.ndarray, gamma: np.ndarray, phi: np.ndarray, w: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
     """Simulated outputs (K, S, n_out) of the EV-ARX (theta (n_out, 1 + n_w0, p), gamma
     (n_out, n_w0)) on sequences phi (K, S, p), w (K, S), and their derivatives D (K, S,
     n_out, P) with the parameters [theta.ravel(), gamma.ravel()] (module docstring)."""
@@ -232,8 +239,7 @@ def fit_output_error(
 
     def cost(x: np.ndarray) -> float:
         th, ga = unpack(x)
-        C = np.einsum("ksjb,jbp->ksjp", np.stack([_basis(w, ga[j]) for j in range(len(th))],
-                                                 2), th)  # fmt: skip
+        C = np.einsum("ksjb,jbp->ksjp", np.stack([_basis(w, ga[j]) for j in range(len(th))], 2), th)
         with np.errstate(all="ignore"):
             c = float(np.sum(((y - _simulate(C, phi)[0]) / sy) ** 2))
         return c if np.isfinite(c) else np.inf
@@ -312,8 +318,9 @@ def split(c: np.ndarray, n_out: int, n_act: int) -> tuple[np.ndarray, ...]:
     return a, b, c[:, i : i + N_W]
 
 
-def advance(a: np.ndarray, b: np.ndarray, c: np.ndarray, dy: np.ndarray, du: np.ndarray,
-            ddw: np.ndarray) -> np.ndarray:  # fmt: skip
+def advance(
+    a: np.ndarray, b: np.ndarray, c: np.ndarray, dy: np.ndarray, du: np.ndarray, ddw: np.ndarray
+) -> np.ndarray:
     """One model interval of the differenced model: Delta y(t + 1) from the past output
     differences dy (N_Y, n_out), bias differences du (N_U + 1, n_act) and load-change
     differences ddw (N_W,), newest first."""

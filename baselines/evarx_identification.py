@@ -62,17 +62,42 @@ from steamtemp_gym.scenarios import Scenario
 
 PRBS_CLOCK_S, PRBS_AMP = 20.0, 0.2
 #: measurement noise and coloured heat-absorption noise of the identification runs
-NOISE = {"noise_std_C": 0.25, "heat_absorption_noise_std": 0.02,
-         "heat_absorption_noise_tau_s": 300.0}  # fmt: skip
+NOISE = {
+    "noise_std_C": 0.25,
+    "heat_absorption_noise_std": 0.02,
+    "heat_absorption_noise_tau_s": 300.0,
+}
 #: commissioning ramps (t_s, load): 2-5 %/min over 50-100 %
-TRAIN_LOAD = ((0.0, 1.0), (300.0, 1.0), (900.0, 0.5), (1500.0, 0.5), (2400.0, 0.8),
-              (2700.0, 0.8), (3100.0, 0.6), (3500.0, 0.6), (4100.0, 1.0), (4700.0, 1.0),
-              (5300.0, 0.7), (5900.0, 0.7), (6900.0, 0.9), (7500.0, 0.9))  # fmt: skip
+TRAIN_LOAD = (
+    (0.0, 1.0),
+    (300.0, 1.0),
+    (900.0, 0.5),
+    (1500.0, 0.5),
+    (2400.0, 0.8),
+    (2700.0, 0.8),
+    (3100.0, 0.6),
+    (3500.0, 0.6),
+    (4100.0, 1.0),
+    (4700.0, 1.0),
+    (5300.0, 0.7),
+    (5900.0, 0.7),
+    (6900.0, 0.9),
+    (7500.0, 0.9),
+)
 #: the commissioning ramps are run this many times in a row (one record)
 TRAIN_REPEATS = 3
-VALID_LOAD = ((0.0, 0.9), (300.0, 0.9), (825.0, 0.55), (1400.0, 0.55), (2240.0, 0.95),
-              (2600.0, 0.95), (3100.0, 0.7), (3600.0, 0.7), (4100.0, 0.9),
-              (4500.0, 0.9))  # fmt: skip
+VALID_LOAD = (
+    (0.0, 0.9),
+    (300.0, 0.9),
+    (825.0, 0.55),
+    (1400.0, 0.55),
+    (2240.0, 0.95),
+    (2600.0, 0.95),
+    (3100.0, 0.7),
+    (3600.0, 0.7),
+    (4100.0, 0.9),
+    (4500.0, 0.9),
+)
 #: duration (s) of each constant-load run of the interpolated ARX models
 ARX_RUN_S = 5400.0
 #: closed-loop step tests: loads, bias step (stroke), settle time before it and length (s)
@@ -94,12 +119,14 @@ def prbs(n: int, clock: int, phase: int) -> np.ndarray:
 
 def controlled_outputs(plant: Any) -> list[str]:
     """The measured main-steam temperature plus every outer signal of ``control_loops``."""
-    return [plant.outlet_measured] + [o for _, o in plant.control_loops
-                                      if o not in (None, MAIN, SCHEDULED)]  # fmt: skip
+    return [plant.outlet_measured] + [
+        o for _, o in plant.control_loops if o not in (None, MAIN, SCHEDULED)
+    ]
 
 
-def _run(env_id: str, params_json: str, sc: Scenario, seed: int,
-         bias: Callable[[int, int], np.ndarray]) -> dict[str, np.ndarray]:  # fmt: skip
+def _run(
+    env_id: str, params_json: str, sc: Scenario, seed: int, bias: Callable[[int, int], np.ndarray]
+) -> dict[str, np.ndarray]:
     """cascade_pi through the env with ``bias(n_steps, n_act)[k]`` added to the commands;
     y are the deviations of the controlled outputs from their references (the setpoint for
     the main steam, the value at the start for the others: cascade_pi's)."""
@@ -132,15 +159,15 @@ def _run(env_id: str, params_json: str, sc: Scenario, seed: int,
     return {"y": np.array(Y), "u": np.array(U), "w": np.array(W)}
 
 
-def record(env_id: str, params_json: str, load: tuple, seed: int, phase: int,
-           amp: float = PRBS_AMP) -> dict[str, np.ndarray]:  # fmt: skip
+def record(
+    env_id: str, params_json: str, load: tuple, seed: int, phase: int, amp: float = PRBS_AMP
+) -> dict[str, np.ndarray]:
     """One excitation run through the env: cascade_pi plus PRBS biases on every actuator.
 
     Returns y (T, n_out) measured output deviations (STE, RTE), u (T, n_act) the biases
     applied after observing y, w (T,) the load demand, all at the control interval.
     """
-    sc = Scenario(name="mpc_identification", duration_s=float(load[-1][0]), load=load,
-                  **NOISE)  # fmt: skip
+    sc = Scenario(name="mpc_identification", duration_s=float(load[-1][0]), load=load, **NOISE)
     dt = plants.make(env_id, **json.loads(params_json)).dt_s
     clock = max(1, int(round(PRBS_CLOCK_S / dt)))
 
@@ -168,8 +195,11 @@ def closed_loop_steps(env_id: str, params_json: str = "{}") -> np.ndarray:
     idx = i0 + n * np.arange(1, N + 1)
     out = np.zeros((len(STEP_LOADS), N, len(controlled_outputs(plant)), plant.n_u))
     for li, L in enumerate(STEP_LOADS):
-        sc = Scenario(name="closed_loop_step", duration_s=STEP_PRE_S + STEP_S + 2 * n * plant.dt_s,
-                      load=((0.0, L),))  # fmt: skip
+        sc = Scenario(
+            name="closed_loop_step",
+            duration_s=STEP_PRE_S + STEP_S + 2 * n * plant.dt_s,
+            load=((0.0, L),),
+        )
         base = _run(env_id, params_json, sc, 0, lambda k, na: np.zeros((k, na)))["y"]
         for m in range(plant.n_u):
 
@@ -219,7 +249,12 @@ def identify(env_id: str, params_json: str = "{}") -> dict[str, Any]:
     ax = Model("arx", n_out, n_act, n, arx=np.array(arx))
     phv, wv, yv = regressors(valid, n)
     rms = {m.kind: np.sqrt(np.mean((yv - m.one_step(phv, wv)) ** 2, 0)) for m in (ev, ax)}
-    return {"evarx": ev, "arx": ax, "outputs": outs, "rms_1step": rms,
-            "fit_pct": {m.kind: fit_percent(*simulate(m, valid)) for m in (ev, ax)},
-            "fit_pct_1step": {m.kind: fit_percent(*simulate(m, valid)) for m in (ev0, ax0)},
-            "cost": {"evarx": costs[:1], "arx": costs[1:]}}  # fmt: skip
+    return {
+        "evarx": ev,
+        "arx": ax,
+        "outputs": outs,
+        "rms_1step": rms,
+        "fit_pct": {m.kind: fit_percent(*simulate(m, valid)) for m in (ev, ax)},
+        "fit_pct_1step": {m.kind: fit_percent(*simulate(m, valid)) for m in (ev0, ax0)},
+        "cost": {"evarx": costs[:1], "arx": costs[1:]},
+    }

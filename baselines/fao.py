@@ -130,8 +130,14 @@ class FaoCompensated:
     fuzzy = True
     KNOBS: tuple[Knob, ...] = (KNOB_KK1, KNOB_KK2)
 
-    def __init__(self, env: Any, fuzzy: bool | None = None, sf: bool = True,
-                 kk1: float | None = None, kk2: float | None = None) -> None:  # fmt: skip
+    def __init__(
+        self,
+        env: Any,
+        fuzzy: bool | None = None,
+        sf: bool = True,
+        kk1: float | None = None,
+        kk2: float | None = None,
+    ) -> None:
         self.kk1 = KNOB_KK1.check(kk1, KK1)
         self.kk2 = KNOB_KK2.check(kk2, KK2)
         u = env.unwrapped

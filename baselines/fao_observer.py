@@ -162,26 +162,41 @@ def _fsh_par(plant: Any) -> np.ndarray:
     a_metal = np.pi / 4.0 * (pp.tube_od_m**2 - pp.tube_id_m**2)
     Cm = a_metal * pp.tube_length_m * pp.n_tubes * pp.rho_metal_kg_m3 * pp.c_metal_J_kgK
     kA = pp.alpha_nom_W_m2K * np.pi * pp.tube_id_m * pp.tube_length_m * pp.n_tubes
-    return np.array([
-        Cm / N_DIV, kA / N_DIV, pp.W_nom_kg_s, pp.line_volume_m3 / pp.n_line,
-        pp.line_metal_t * 1e3 * pp.c_metal_J_kgK / pp.n_line, pp.tau_tc1_s, pp.tau_tc2_s,
-        float(pp.n_line),
-    ])  # fmt: skip
+    return np.array(
+        [
+            Cm / N_DIV,
+            kA / N_DIV,
+            pp.W_nom_kg_s,
+            pp.line_volume_m3 / pp.n_line,
+            pp.line_metal_t * 1e3 * pp.c_metal_J_kgK / pp.n_line,
+            pp.tau_tc1_s,
+            pp.tau_tc2_s,
+            float(pp.n_line),
+        ]
+    )
 
 
 @commissioned(maxsize=8)
 def _fsh_nominal(env_id: str, params_json: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(U_3, h_e^nom, h_a^nom) of the undisturbed steady states at the schedule loads."""
-    sig = {s: inner_schedule(env_id, params_json, s)[1] for s in (
-        "attemp_in_temp_C", "spray_flow_kg_s", "steam_flow_kg_s", "pressure_MPa",
-        "outlet_temp_meas_C")}  # fmt: skip
+    sig = {
+        s: inner_schedule(env_id, params_json, s)[1]
+        for s in (
+            "attemp_in_temp_C",
+            "spray_flow_kg_s",
+            "steam_flow_kg_s",
+            "pressure_MPa",
+            "outlet_temp_meas_C",
+        )
+    }
     plant = plants.make(env_id, **json.loads(params_json))
     par = _fsh_par(plant)
     p = sig["pressure_MPa"] * 1e6
     W = sig["steam_flow_kg_s"]
     h_sp = plant.spray_water_enthalpy(W / par[2])
-    h0 = _fsh_inlet(sig["attemp_in_temp_C"], sig["spray_flow_kg_s"], W, p, h_sp,
-                    plant.params.attemp_margin_K)  # fmt: skip
+    h0 = _fsh_inlet(
+        sig["attemp_in_temp_C"], sig["spray_flow_kg_s"], W, p, h_sp, plant.params.attemp_margin_K
+    )
     ha = np.array([h_pT(pi, T + K0) for pi, T in zip(p, sig["outlet_temp_meas_C"], strict=True)])
     return sig["steam_flow_kg_s"] / par[2], h0, ha
 
@@ -192,8 +207,10 @@ def _fsh_unit_K(env_id: str, params_json: str) -> tuple[np.ndarray, np.ndarray]:
     the FSH inlet enthalpy by one normalized unit, h_a0 - h_e0 = 217.8 kJ/kg, i.e.
     DH0 dT/dh(p, h) at the undisturbed steady state of each schedule load (the plant's
     steam tables, the paper's eq. (14) ``tph``)."""
-    sig = {s: inner_schedule(env_id, params_json, s)[1] for s in (
-        "attemp_out_temp_meas_C", "steam_flow_kg_s", "pressure_MPa")}  # fmt: skip
+    sig = {
+        s: inner_schedule(env_id, params_json, s)[1]
+        for s in ("attemp_out_temp_meas_C", "steam_flow_kg_s", "pressure_MPa")
+    }
     plant = plants.make(env_id, **json.loads(params_json))
     pT = zip(sig["pressure_MPa"] * 1e6, sig["attemp_out_temp_meas_C"] + K0, strict=True)
     unit = np.array([DH0_J_KG * T_dTdh_ph(p, h_pT(p, T))[1] for p, T in pT])
@@ -244,9 +261,16 @@ class FSHObserver:
         self.plant = plant
         self.nl = int(self.par[7])
         self.dt = plant.dt_s
-        self.ix = [names.index(s) for s in (
-            "attemp_in_temp_C", "spray_flow_kg_s", "steam_flow_kg_s", "pressure_MPa",
-            "outlet_temp_meas_C")]  # fmt: skip
+        self.ix = [
+            names.index(s)
+            for s in (
+                "attemp_in_temp_C",
+                "spray_flow_kg_s",
+                "steam_flow_kg_s",
+                "pressure_MPa",
+                "outlet_temp_meas_C",
+            )
+        ]
         self.u3_tab, self.h0_tab, self.ha_tab = _fsh_nominal(plant.id, params_json)
         self.unit_tab = _fsh_unit_K(plant.id, params_json)
         self.unit_K = np.zeros(0)
@@ -348,7 +372,8 @@ class LinearObserver:
     def __init__(self, env: Any, names: list[str], params_json: str, j: int) -> None:
         plant = env.unwrapped.plant
         self.Ad, self.Bd, self.K, self.dT0, self.kc, self.ti = _linear_observer(
-            plant.id, params_json, j)  # fmt: skip
+            plant.id, params_json, j
+        )
         self.i_in = names.index(plant.control_loops[j][0])
         self.i_out = names.index(plant.outlet_measured)
         self.dt = plant.dt_s

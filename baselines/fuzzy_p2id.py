@@ -149,8 +149,14 @@ def infer(x1: np.ndarray, x2: np.ndarray) -> np.ndarray:
     table = rule_table().ravel()
     clip = np.stack([fire[:, table == o].max(axis=1) for o in range(len(LABELS))], axis=1)
     ca, cb = clip[:, :-1, None], clip[:, 1:, None]  # (n, 6, 1): left and right set levels
-    t = np.sort(np.clip(np.concatenate(np.broadcast_arrays(
-        0.0, 1.0 - ca, ca, cb, 1.0 - cb, 0.5, 1.0), axis=2), 0.0, 1.0), axis=2)  # fmt: skip
+    t = np.sort(
+        np.clip(
+            np.concatenate(np.broadcast_arrays(0.0, 1.0 - ca, ca, cb, 1.0 - cb, 0.5, 1.0), axis=2),
+            0.0,
+            1.0,
+        ),
+        axis=2,
+    )
     m = np.maximum(np.minimum(ca, 1.0 - t), np.minimum(cb, t))
     peaks = set_peaks(*OUT_RANGE)
     h = peaks[1] - peaks[0]
@@ -171,14 +177,20 @@ def control_system() -> Any:
     a = ctrl.Antecedent(uin, "x1")
     b = ctrl.Antecedent(uin, "x2")
     c = ctrl.Consequent(uout, "u")  # centroid, max aggregation by default
-    for var, peaks in ((a, set_peaks(*IN_RANGE)), (b, set_peaks(*IN_RANGE)),
-                       (c, set_peaks(*OUT_RANGE))):  # fmt: skip
+    for var, peaks in (
+        (a, set_peaks(*IN_RANGE)),
+        (b, set_peaks(*IN_RANGE)),
+        (c, set_peaks(*OUT_RANGE)),
+    ):
         w = peaks[1] - peaks[0]
         for lab, p in zip(LABELS, peaks, strict=True):
             var[lab] = fuzz.trimf(var.universe, [p - w, p, p + w])
     table = rule_table()
-    rules = [ctrl.Rule(a[LABELS[i]] & b[LABELS[j]], c[LABELS[table[i, j]]])
-             for i in range(len(LABELS)) for j in range(len(LABELS))]  # fmt: skip
+    rules = [
+        ctrl.Rule(a[LABELS[i]] & b[LABELS[j]], c[LABELS[table[i, j]]])
+        for i in range(len(LABELS))
+        for j in range(len(LABELS))
+    ]
     return ctrl.ControlSystem(rules)
 
 
@@ -204,8 +216,12 @@ def evaluate_surface(f: np.ndarray, x1: np.ndarray, x2: np.ndarray) -> np.ndarra
     i = np.minimum(p.astype(np.int64), n - 1)
     j = np.minimum(q.astype(np.int64), n - 1)
     a, b = p - i, q - j
-    return ((1 - a) * (1 - b) * f[i, j] + a * (1 - b) * f[i + 1, j]
-            + (1 - a) * b * f[i, j + 1] + a * b * f[i + 1, j + 1])  # fmt: skip
+    return (
+        (1 - a) * (1 - b) * f[i, j]
+        + a * (1 - b) * f[i + 1, j]
+        + (1 - a) * b * f[i, j + 1]
+        + a * b * f[i + 1, j + 1]
+    )
 
 
 def tsk_weights(load: np.ndarray) -> np.ndarray:
@@ -234,9 +250,11 @@ class FuzzyP2ID:
             :data:`GAINS_PI`.
     """
 
-    KNOBS = tuple(Knob(f"{g}_{round(100 * L)}", *box) for L in RULE_LOADS
-                  for g, box in (("kp", (0.125, 8.0)), ("ki", (0.125, 8.0)),
-                                 ("kd", (0.0, 1.0, False))))  # fmt: skip
+    KNOBS = tuple(
+        Knob(f"{g}_{round(100 * L)}", *box)
+        for L in RULE_LOADS
+        for g, box in (("kp", (0.125, 8.0)), ("ki", (0.125, 8.0)), ("kd", (0.0, 1.0, False)))
+    )
 
     @staticmethod
     def knob_defaults(env_id: str) -> dict[str, float]:
@@ -265,8 +283,9 @@ class FuzzyP2ID:
             cascade = self.loops[j][1] not in (None, SCHEDULED)
             self.kc[j], self.t0[j] = (kc_o, ti_o) if cascade else (kc_i, ti_i)
         self.u0 = self.kc * E0_K / s0
-        self.gains = np.array(gains if gains is not None else self._knob_gains(plant, knobs),
-                              dtype=float)  # (n_act, n_rules, 3)  # fmt: skip
+        self.gains = np.array(
+            gains if gains is not None else self._knob_gains(plant, knobs), dtype=float
+        )  # (n_act, n_rules, 3)
         self._st: dict[str, np.ndarray] | None = None
         self.inner_setpoint = np.zeros((1, len(self.loops)))
 
@@ -282,8 +301,10 @@ class FuzzyP2ID:
         for r, L in enumerate(RULE_LOADS):
             row = [float(values[f"{x}_{round(100 * L)}"]) for x in ("kp", "ki", "kd")]
             if not (np.all(np.isfinite(row)) and row[0] > 0 and row[1] > 0 and row[2] >= 0):
-                raise ValueError(f"fuzzy P2ID gains at {L:.0%} load must be finite with "
-                                 f"K_p, K_i > 0 and K_d >= 0, got {row}")  # fmt: skip
+                raise ValueError(
+                    f"fuzzy P2ID gains at {L:.0%} load must be finite with "
+                    f"K_p, K_i > 0 and K_d >= 0, got {row}"
+                )
             for j in self.fuzzy:
                 if self.loops[j][1] == MAIN:
                     g[j, r] = row
@@ -294,15 +315,15 @@ class FuzzyP2ID:
         self.pi.reset()
 
     def _restart(self, st: dict[str, np.ndarray], rows: np.ndarray, y: np.ndarray) -> None:
-        st["y0"][rows], st["v0"][rows], st["yf"][rows] = y[rows], y[rows][:, self.i_valve], \
-            y[rows]  # fmt: skip
+        st["y0"][rows], st["v0"][rows], st["yf"][rows] = y[rows], y[rows][:, self.i_valve], y[rows]
         st["ii"][rows], st["ie"][rows], st["fpd"][rows] = 0.0, 0.0, 0.0
         st["e1"][rows] = np.nan  # no rate on the first step
         for j in self.fuzzy:
             inner, outer = self.loops[j]
             # integrated FPI part of the P²ID output: inner setpoint (cascade) or valve
-            st["u"][rows, j] = y[rows, inner] if outer not in (None, SCHEDULED) else \
-                y[rows, self.i_valve[j]]  # fmt: skip
+            st["u"][rows, j] = (
+                y[rows, inner] if outer not in (None, SCHEDULED) else y[rows, self.i_valve[j]]
+            )
 
     def _errors(self, st: dict[str, np.ndarray], yf: np.ndarray, load: np.ndarray, n: int):
         """Error per fuzzy loop that the P²ID acts on, (n, n_act) (0 for the others)."""
@@ -327,9 +348,16 @@ class FuzzyP2ID:
         fresh = st is None or st["y0"].shape != y.shape
         if fresh:
             z = np.zeros((n, m))
-            st = self._st = {"y0": y.copy(), "v0": y[:, self.i_valve].copy(), "yf": y.copy(),
-                             "ii": z, "ie": z.copy(), "fpd": z.copy(), "e1": z.copy(),
-                             "u": z.copy()}  # fmt: skip
+            st = self._st = {
+                "y0": y.copy(),
+                "v0": y[:, self.i_valve].copy(),
+                "yf": y.copy(),
+                "ii": z,
+                "ie": z.copy(),
+                "fpd": z.copy(),
+                "e1": z.copy(),
+                "u": z.copy(),
+            }
         restart = restart_rows(fresh, n, episode_start)
         if restart.any():
             self._restart(st, restart, y)

@@ -57,5 +57,8 @@ def observation_layout(env: Any) -> tuple[list[str], np.ndarray, np.ndarray]:
     """(names, scale, center) of an env's observation entries: a baseline reads the
     physical values y = obs * scale + center (steamtemp_gym.signals)."""
     sig = env.unwrapped.signals.observation
-    return ([s.name for s in sig], np.array([s.scale for s in sig]),
-            np.array([s.center for s in sig]))  # fmt: skip
+    return (
+        [s.name for s in sig],
+        np.array([s.scale for s in sig]),
+        np.array([s.center for s in sig]),
+    )

@@ -98,9 +98,16 @@ LOAD_GRID = np.round(np.arange(0.3, 1.201, 0.01), 2)
 
 
 # -- prediction in velocity form ---------------------------------------------------------
-def free_response(abc: tuple[np.ndarray, ...], dy: np.ndarray, du: np.ndarray,
-                  ddw: np.ndarray, du_now: np.ndarray, dw_now: float, n_hold: int,
-                  N: int) -> np.ndarray:  # fmt: skip
+def free_response(
+    abc: tuple[np.ndarray, ...],
+    dy: np.ndarray,
+    du: np.ndarray,
+    ddw: np.ndarray,
+    du_now: np.ndarray,
+    dw_now: float,
+    n_hold: int,
+    N: int,
+) -> np.ndarray:
     """(N, n_out) output changes with the inputs held after the step ``du_now`` and Delta w
     held ``n_hold`` intervals, then zero.
 
@@ -170,16 +177,29 @@ class MPCEVARX:
         Knob("b_max", 0.02, 0.3),
     )
 
-    def __init__(self, env: Any, model: str | None = None, *, move_weight: float | None = None,
-                 bias_weight: float | None = None, secondary_weight: float | None = None,
-                 y_max_K: float | None = None, move_limit: float | None = None,
-                 b_max: float | None = None) -> None:  # fmt: skip
+    def __init__(
+        self,
+        env: Any,
+        model: str | None = None,
+        *,
+        move_weight: float | None = None,
+        bias_weight: float | None = None,
+        secondary_weight: float | None = None,
+        y_max_K: float | None = None,
+        move_limit: float | None = None,
+        b_max: float | None = None,
+    ) -> None:
         kind = model or self.model_kind
         if kind not in ("evarx", "arx"):
             raise ValueError(f"unknown model {kind!r}; valid: ['evarx', 'arx']")
-        given = {"move_weight": move_weight, "bias_weight": bias_weight,
-                 "secondary_weight": secondary_weight, "y_max_K": y_max_K,
-                 "move_limit": move_limit, "b_max": b_max}  # fmt: skip
+        given = {
+            "move_weight": move_weight,
+            "bias_weight": bias_weight,
+            "secondary_weight": secondary_weight,
+            "y_max_K": y_max_K,
+            "move_limit": move_limit,
+            "b_max": b_max,
+        }
         u = env.unwrapped
         plant = u.plant
         # the paper gives no weights: the benchmark's common tuning is the default
@@ -209,9 +229,12 @@ class MPCEVARX:
         self.n_b = split(self.model.coef(1.0), self.model.n_out, self.model.n_act)[1].shape[1]
         self._hist = max(N_Y, self.n_b, N_W + 1) * self.n + 1
         self._frozen_cache: dict[int, tuple] = {}
-        self.stats: dict[str, Any] = {"solves": 0, "iterations": [], "solve_time_s": [],
-                                      "fallbacks": {"qp": 0, "model": 0, "sign": 0,
-                                                    "band": 0}}  # fmt: skip
+        self.stats: dict[str, Any] = {
+            "solves": 0,
+            "iterations": [],
+            "solve_time_s": [],
+            "fallbacks": {"qp": 0, "model": 0, "sign": 0, "band": 0},
+        }
         self._st: dict[str, Any] | None = None
 
     def reset(self) -> None:
@@ -237,9 +260,16 @@ class MPCEVARX:
 
     def _new_state(self, nb: int) -> dict[str, Any]:
         no, na, H = len(self.i_y), self.qp.n_act, self._hist
-        return {"Y": np.zeros((nb, H, no)), "U": np.zeros((nb, H, na)), "W": np.zeros((nb, H)),
-                "ref": np.zeros((nb, no)), "b": np.zeros((nb, na)), "k": np.zeros(nb, int),
-                "yhat": np.full((nb, no), np.nan), "warm": [None] * nb}  # fmt: skip
+        return {
+            "Y": np.zeros((nb, H, no)),
+            "U": np.zeros((nb, H, na)),
+            "W": np.zeros((nb, H)),
+            "ref": np.zeros((nb, no)),
+            "b": np.zeros((nb, na)),
+            "k": np.zeros(nb, int),
+            "yhat": np.full((nb, no), np.nan),
+            "warm": [None] * nb,
+        }
 
     def _restart(self, st: dict[str, Any], rows: np.ndarray, y: np.ndarray) -> None:
         for r in np.flatnonzero(rows):
@@ -280,16 +310,23 @@ class MPCEVARX:
         idx = -1 - n * np.arange(max(N_Y, N_W) + 2)
         yl, wl = Y[idx], W[idx]  # y(t), y(t - n), ...
         dwl = wl[:-1] - wl[1:]  # Delta w(t), Delta w(t - n), ...
-        ub = np.stack([U[len(U) - (lag + 1) * n : len(U) - lag * n].mean(0)
-                       for lag in range(self.n_b)])  # block means of the past biases  # fmt: skip
+        ub = np.stack(
+            [U[len(U) - (lag + 1) * n : len(U) - lag * n].mean(0) for lag in range(self.n_b)]
+        )  # block means of the past biases
         b_max = self.knobs["b_max"]
         lo_b = np.maximum(-b_max, -v_pi)
         hi_b = np.minimum(b_max, 1.0 - v_pi)
         b_last = np.clip(st["b"][r], lo_b, hi_b)
-        yf = Y[-1] + free_response(abc, (yl[:-1] - yl[1:])[:N_Y],
-                                   (ub[:-1] - ub[1:])[: self.n_b - 1],
-                                   (dwl[:-1] - dwl[1:])[:N_W], b_last - ub[0], dwl[0],
-                                   self.n_hold, self.N)  # fmt: skip
+        yf = Y[-1] + free_response(
+            abc,
+            (yl[:-1] - yl[1:])[:N_Y],
+            (ub[:-1] - ub[1:])[: self.n_b - 1],
+            (dwl[:-1] - dwl[1:])[:N_W],
+            b_last - ub[0],
+            dwl[0],
+            self.n_hold,
+            self.N,
+        )
         ref = st["ref"][r].copy()
         ref[0] = yr[self.i_sp]
         reason = None
@@ -300,8 +337,9 @@ class MPCEVARX:
         elif abs(yr[self.i_sp] - Y[-1, 0]) > self.e_safe_K:
             reason = "band"
         else:
-            ok, moves, warm, info = self.qp.solve(mats, ref - yf, b_last, lo_b, hi_b,
-                                                  st["warm"][r], row=r)  # fmt: skip
+            ok, moves, warm, info = self.qp.solve(
+                mats, ref - yf, b_last, lo_b, hi_b, st["warm"][r], row=r
+            )
             self.stats["solves"] += 1
             self.stats["iterations"].append(int(info.iter))
             self.stats["solve_time_s"].append(float(info.solve_time))
@@ -313,8 +351,7 @@ class MPCEVARX:
             self.stats["fallbacks"][reason] += 1
             b_new = b_last - np.clip(b_last, -self.move_max, self.move_max)
         else:
-            b_new = np.clip(b_last + np.clip(moves[0], -self.move_max, self.move_max), lo_b,
-                            hi_b)  # fmt: skip
+            b_new = np.clip(b_last + np.clip(moves[0], -self.move_max, self.move_max), lo_b, hi_b)
         # the model's prediction of y one interval ahead under b_new, for the monitor
         st["yhat"][r] = yf[0] + mats["S"][: self.model.n_out, : self.qp.n_act] @ (b_new - b_last)
         st["b"][r] = b_new

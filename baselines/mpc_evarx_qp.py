@@ -23,12 +23,26 @@ import scipy.sparse as sp
 MOVE_STEPS = (0, 1, 2, 4, 8, 16)
 #: knob start values (all chosen: the paper gives the form of eq. 21-22, no values); the
 #: default of each knob is the benchmark's stored tuning (baselines/tuned/mpc_<model>.json)
-DEFAULTS = {"move_weight": 0.05, "bias_weight": 0.1, "secondary_weight": 1.0,
-            "y_max_K": 10.0, "move_limit": 0.02, "b_max": 0.2}  # fmt: skip
+DEFAULTS = {
+    "move_weight": 0.05,
+    "bias_weight": 0.1,
+    "secondary_weight": 1.0,
+    "y_max_K": 10.0,
+    "move_limit": 0.02,
+    "b_max": 0.2,
+}
 RHO_SLACK, RHO_SLACK_L = 1e3, 1e2
-OSQP_SETTINGS = {"verbose": False, "adaptive_rho": True, "adaptive_rho_interval": 25,
-                 "rho": 0.1, "eps_abs": 1e-5, "eps_rel": 1e-5, "max_iter": 4000,
-                 "polishing": True, "warm_starting": True}  # fmt: skip
+OSQP_SETTINGS = {
+    "verbose": False,
+    "adaptive_rho": True,
+    "adaptive_rho_interval": 25,
+    "rho": 0.1,
+    "eps_abs": 1e-5,
+    "eps_rel": 1e-5,
+    "max_iter": 4000,
+    "polishing": True,
+    "warm_starting": True,
+}
 
 
 def _pattern(M: sp.csc_matrix) -> tuple[np.ndarray, np.ndarray]:
@@ -49,8 +63,14 @@ class BiasQP:
         weights: The knobs (``DEFAULTS``' keys).
     """
 
-    def __init__(self, n_out: int, n_act: int, N: int, rates: np.ndarray,
-                 weights: dict[str, float] | None = None) -> None:  # fmt: skip
+    def __init__(
+        self,
+        n_out: int,
+        n_act: int,
+        N: int,
+        rates: np.ndarray,
+        weights: dict[str, float] | None = None,
+    ) -> None:
         import osqp
 
         self.w = {**DEFAULTS, **(weights or {})}
@@ -72,8 +92,14 @@ class BiasQP:
         A = sp.csc_matrix(self._A(np.ones((self.ns, nv))))
         self.P_idx, self.A_idx = _pattern(P), _pattern(A)
         self.nc = A.shape[0]
-        self._setup = {"P": P, "q": np.zeros(self.nz), "A": A, "l": -np.ones(self.nc),
-                       "u": np.ones(self.nc), **OSQP_SETTINGS}  # fmt: skip
+        self._setup = {
+            "P": P,
+            "q": np.zeros(self.nz),
+            "A": A,
+            "l": -np.ones(self.nc),
+            "u": np.ones(self.nc),
+            **OSQP_SETTINGS,
+        }
         self._osqp = osqp.OSQP
         #: One solver per row, set up afresh when its episode starts (:meth:`restart`): an
         #: OSQP object carries state from solve to solve, so a shared one would make a
@@ -94,13 +120,15 @@ class BiasQP:
     def _A(self, Ssub: np.ndarray) -> np.ndarray:
         """Constraint matrix: bias bounds, move bounds, soft outputs (two sides), slacks."""
         nv, no = self.nv, self.n_out
-        return np.vstack([
-            np.hstack([self.L, np.zeros((nv, no))]),
-            np.hstack([np.eye(nv), np.zeros((nv, no))]),
-            np.hstack([Ssub, -self.E]),
-            np.hstack([Ssub, self.E]),
-            np.hstack([np.zeros((no, nv)), np.eye(no)]),
-        ])  # fmt: skip
+        return np.vstack(
+            [
+                np.hstack([self.L, np.zeros((nv, no))]),
+                np.hstack([np.eye(nv), np.zeros((nv, no))]),
+                np.hstack([Ssub, -self.E]),
+                np.hstack([Ssub, self.E]),
+                np.hstack([np.zeros((no, nv)), np.eye(no)]),
+            ]
+        )
 
     def matrices(self, G: np.ndarray) -> dict[str, np.ndarray]:
         """Dynamic matrix S, the values of P and A, and the weights for step responses G."""
@@ -114,14 +142,23 @@ class BiasQP:
         R = np.tile(self.w["move_weight"] * N * g2, self.M)
         Rabs = np.tile(self.w["bias_weight"] * g2, N)
         H = np.zeros((self.nz, self.nz))
-        H[:nv, :nv] = 2.0 * ((sq * S).T @ (sq * S) + np.diag(R)
-                             + self.Cb.T @ (Rabs[:, None] * self.Cb))  # fmt: skip
+        H[:nv, :nv] = 2.0 * (
+            (sq * S).T @ (sq * S) + np.diag(R) + self.Cb.T @ (Rabs[:, None] * self.Cb)
+        )
         H[nv:, nv:] = 2.0 * RHO_SLACK * np.eye(no)
         Ssub = S.reshape(N, no, nv)[self.pts].reshape(-1, nv)
         return {"S": S, "Rabs": Rabs, "Px": H[self.P_idx], "Ax": self._A(Ssub)[self.A_idx]}
 
-    def solve(self, mats: dict[str, np.ndarray], e_free: np.ndarray, b_last: np.ndarray,
-              lo_b: np.ndarray, hi_b: np.ndarray, warm: tuple, row: int = 0) -> tuple:  # fmt: skip
+    def solve(
+        self,
+        mats: dict[str, np.ndarray],
+        e_free: np.ndarray,
+        b_last: np.ndarray,
+        lo_b: np.ndarray,
+        hi_b: np.ndarray,
+        warm: tuple,
+        row: int = 0,
+    ) -> tuple:
         """Bias moves (M, n_act) for the free tracking error e_free = r - y_free (N, n_out),
         the current bias b_last and its bounds [lo_b, hi_b] (b_last inside them), solved by
         row ``row``'s solver.
@@ -130,17 +167,21 @@ class BiasQP:
         """
         nv, no = self.nv, self.n_out
         qe = (e_free * self.q).reshape(-1)
-        q = np.concatenate([-2.0 * mats["S"].T @ qe
-                            + 2.0 * self.Cb.T @ (mats["Rabs"] * np.tile(b_last, self.N)),
-                            np.full(no, RHO_SLACK_L)])  # fmt: skip
+        q = np.concatenate(
+            [
+                -2.0 * mats["S"].T @ qe
+                + 2.0 * self.Cb.T @ (mats["Rabs"] * np.tile(b_last, self.N)),
+                np.full(no, RHO_SLACK_L),
+            ]
+        )
         esub = e_free[self.pts].reshape(-1)
         inf = np.full(self.ns, np.inf)
         rate = np.tile(self.rates, self.M)
         ym = self.w["y_max_K"]
-        lo = np.concatenate([np.tile(lo_b - b_last, self.M), -rate, -inf, esub - ym,
-                             np.zeros(no)])  # fmt: skip
-        hi = np.concatenate([np.tile(hi_b - b_last, self.M), rate, esub + ym, inf,
-                             np.full(no, np.inf)])  # fmt: skip
+        lo = np.concatenate([np.tile(lo_b - b_last, self.M), -rate, -inf, esub - ym, np.zeros(no)])
+        hi = np.concatenate(
+            [np.tile(hi_b - b_last, self.M), rate, esub + ym, inf, np.full(no, np.inf)]
+        )
         s = self._solver(row)
         s.update(q=q, l=lo, u=hi, Px=mats["Px"], Ax=mats["Ax"])
         s.update_settings(rho=OSQP_SETTINGS["rho"])

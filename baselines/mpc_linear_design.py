@@ -124,9 +124,17 @@ def _local_models(plant: Any, outs: list[str], n_y: int) -> tuple:
         x = A @ x + B
         peak = np.maximum(peak, np.abs(x))
     sx = np.maximum(peak, 1e-9 * peak.max())
-    scaled = [(A[np.ix_(keep, keep)] / sx[:, None] * sx[None, :], B[keep] / sx[:, None],
-               A[np.ix_(keep, md)] / sx[:, None], C[:, keep] * sx[None, :], D, Dd)
-              for A, B, C, D, Dd in raw]  # fmt: skip
+    scaled = [
+        (
+            A[np.ix_(keep, keep)] / sx[:, None] * sx[None, :],
+            B[keep] / sx[:, None],
+            A[np.ix_(keep, md)] / sx[:, None],
+            C[:, keep] * sx[None, :],
+            D,
+            Dd,
+        )
+        for A, B, C, D, Dd in raw
+    ]
     return scaled, keep, sx, size_in, (md_rows, md_gain)
 
 
@@ -166,15 +174,19 @@ def _responses(Az, Ccz, Ar, Bu, bL, br, Bmd, Cc, Nh) -> tuple[np.ndarray, ...]: 
     return Phi, Su, sL, hr, Pm
 
 
-def _load_path(sL: np.ndarray, hr: np.ndarray, pts: np.ndarray, n_hold: int,
-               dt: float) -> np.ndarray:  # fmt: skip
+def _load_path(
+    sL: np.ndarray, hr: np.ndarray, pts: np.ndarray, n_hold: int, dt: float
+) -> np.ndarray:
     """(n_hold + 1, points, n_c): the scored outputs' response per unit load rate to a load
     that ramps for n steps, then holds (rate pulses plus the steps of the ramp)."""
     f = np.zeros((n_hold + 1, len(pts), sL.shape[1]))
     for n in range(1, n_hold + 1):
         i_r, i_l = pts - (n - 1), pts - n
-        f[n] = (f[n - 1] + np.where((i_r > 0)[:, None], hr[np.maximum(i_r, 0)], 0.0)
-                + dt * np.where((i_l > 0)[:, None], sL[np.maximum(i_l, 0)], 0.0))  # fmt: skip
+        f[n] = (
+            f[n - 1]
+            + np.where((i_r > 0)[:, None], hr[np.maximum(i_r, 0)], 0.0)
+            + dt * np.where((i_l > 0)[:, None], sL[np.maximum(i_l, 0)], 0.0)
+        )
     return f
 
 
@@ -204,8 +216,9 @@ class _Layout(NamedTuple):
     dt: float
 
 
-def _output_disturbances(pair: list[int], n_y: int,
-                         n_c: int) -> tuple[list[int], np.ndarray, np.ndarray]:  # fmt: skip
+def _output_disturbances(
+    pair: list[int], n_y: int, n_c: int
+) -> tuple[list[int], np.ndarray, np.ndarray]:
     """(rows, E, Ec): the observed rows with a random-walk output disturbance (all but the
     main-steam thermocouple's) and where those disturbances enter the observed signals (E)
     and the scored temperatures (Ec, through their thermocouples)."""
@@ -220,13 +233,17 @@ def _output_disturbances(pair: list[int], n_y: int,
     return p_rows, E, Ec
 
 
-def _horizon(Ar: np.ndarray, Br: np.ndarray, Cr: np.ndarray, n_y: int, n_c: int, n_u: int,
-             dt: float) -> tuple[int, int, np.ndarray, np.ndarray, int]:  # fmt: skip
+def _horizon(
+    Ar: np.ndarray, Br: np.ndarray, Cr: np.ndarray, n_y: int, n_c: int, n_u: int, dt: float
+) -> tuple[int, int, np.ndarray, np.ndarray, int]:
     """(t63, Nh, pts, moves, n_hold) in steps: the slowest 63 % time of an actuator's effect
     on a scored temperature (rated-load model), the horizon, its points, the move instants
     and how long the measured load rate is assumed to continue."""
-    t63 = max(_t63(Ar, Br[:, m], Cr[n_y + c], int(HORIZON_MAX_S / dt))
-              for m in range(n_u) for c in range(n_c))  # fmt: skip
+    t63 = max(
+        _t63(Ar, Br[:, m], Cr[n_y + c], int(HORIZON_MAX_S / dt))
+        for m in range(n_u)
+        for c in range(n_c)
+    )
     Nh = int(np.clip(HORIZON_T63 * t63 * dt, HORIZON_MIN_S, HORIZON_MAX_S) / dt)
     pts = np.unique(np.round(np.linspace(Nh / N_POINTS, Nh, N_POINTS)).astype(int))
     moves = np.unique(np.round(np.array(MOVE_T63) * t63).astype(int))
@@ -235,8 +252,9 @@ def _horizon(Ar: np.ndarray, Br: np.ndarray, Cr: np.ndarray, n_y: int, n_c: int,
     return t63, Nh, pts, moves, n_hold
 
 
-def _noise(observed: list, p_rows: list[int], r: int, dt: float, noise_K: float,
-           heat_std: float) -> tuple[np.ndarray, ...]:  # fmt: skip
+def _noise(
+    observed: list, p_rows: list[int], r: int, dt: float, noise_K: float, heat_std: float
+) -> tuple[np.ndarray, ...]:
     """(V, W): the Kalman filter's measurement noise (``noise_K`` on the thermocouples) and
     process noise of the augmented state (the heat-absorption bias's increments from an OU
     process of std ``heat_std``); W's block of the plant states is set per grid model
@@ -249,8 +267,9 @@ def _noise(observed: list, p_rows: list[int], r: int, dt: float, noise_K: float,
     return V, W
 
 
-def _grid_model(model: tuple, T: np.ndarray, Ti: np.ndarray, W: np.ndarray, V: np.ndarray,
-                lay: _Layout) -> dict[str, Any]:  # fmt: skip
+def _grid_model(
+    model: tuple, T: np.ndarray, Ti: np.ndarray, W: np.ndarray, V: np.ndarray, lay: _Layout
+) -> dict[str, Any]:
     """One grid load's reduced augmented model, Kalman gain, prediction matrices and steady
     gains; ``W``'s block of the plant states is set to this model's process noise."""
     As, Bs, Bm, Cs, Dm, Dd = model
@@ -279,19 +298,35 @@ def _grid_model(model: tuple, T: np.ndarray, Ti: np.ndarray, W: np.ndarray, V: n
     if np.linalg.cond(init) > 1e12:
         raise ValueError(f"{lay.env_id}: the disturbance model is not detectable")
     return {
-        "Az": Az, "Bz": Bz, "Cmz": Cmz, "M": M, "Dm": Dm, "DdL": Dd[:, 0], "Ddr": Dd[:, 1],
-        "Phi": Phi[pts], "Gam": Su[pts], "Pm": Pm[pts],
+        "Az": Az,
+        "Bz": Bz,
+        "Cmz": Cmz,
+        "M": M,
+        "Dm": Dm,
+        "DdL": Dd[:, 0],
+        "Ddr": Dd[:, 1],
+        "Phi": Phi[pts],
+        "Gam": Su[pts],
+        "Pm": Pm[pts],
         "f": _load_path(sL, hr, pts, lay.n_hold, lay.dt),
         "Sd": Sd.reshape(len(pts) * n_c, len(moves) * n_u),
-        "Gu": Cc @ inv @ Bu, "Gq": Cc @ inv @ bq, "GL": Cc @ inv @ bL,
-        "Init": init, "InitU": Cm @ inv @ Bu + Dm, "InitM": Cm @ inv @ Bmd,
-        "inv": inv, "Bu": Bu, "bq": bq, "Bmd": Bmd,
-    }  # fmt: skip
+        "Gu": Cc @ inv @ Bu,
+        "Gq": Cc @ inv @ bq,
+        "GL": Cc @ inv @ bL,
+        "Init": init,
+        "InitU": Cm @ inv @ Bu + Dm,
+        "InitM": Cm @ inv @ Bmd,
+        "inv": inv,
+        "Bu": Bu,
+        "bq": bq,
+        "Bmd": Bmd,
+    }
 
 
 @commissioned(maxsize=16)
-def design(env_id: str, params_json: str, noise_K: float = NOISE_K,
-           heat_std: float = HEAT_STD) -> dict[str, Any]:  # fmt: skip
+def design(
+    env_id: str, params_json: str, noise_K: float = NOISE_K, heat_std: float = HEAT_STD
+) -> dict[str, Any]:
     """The MPC of a plant (cached): per grid load the reduced augmented model, Kalman gain,
     prediction matrices and steady gains; horizon, points, moves; operating-point tables.
     ``noise_K`` and ``heat_std``: the thermocouple noise and heat-absorption variability the
@@ -302,29 +337,44 @@ def design(env_id: str, params_json: str, noise_K: float = NOISE_K,
     ctrl = [plant.outlet] + [n for n, _ in plant.secondary]
     n_y, n_c, n_u, dt = len(observed), len(ctrl), plant.n_u, plant.dt_s
     scaled, keep, sx, size_in, (md_rows, md_gain) = _local_models(
-        plant, [s.name for s in observed] + ctrl, n_y)  # fmt: skip
+        plant, [s.name for s in observed] + ctrl, n_y
+    )
     scale_y = np.array([s.scale for s in observed] + [1.0] * n_c)
-    T, Ti, hsv = balanced_basis([(A, B * size_in, C / scale_y[:, None])
-                                 for A, B, _, C, *_ in scaled], HSV_TOL, MAX_ORDER)  # fmt: skip
+    T, Ti, hsv = balanced_basis(
+        [(A, B * size_in, C / scale_y[:, None]) for A, B, _, C, *_ in scaled], HSV_TOL, MAX_ORDER
+    )
     r = T.shape[1]
     As, Bs, _, Cs, *_ = scaled[-1]
     pair = _pairs(plant, Cs @ np.linalg.solve(np.eye(len(As)) - As, Bs), n_y, ctrl)
     p_rows, E, Ec = _output_disturbances(pair, n_y, n_c)
     t63, Nh, pts, moves, n_hold = _horizon(Ti @ As @ T, Ti @ Bs, Cs @ T, n_y, n_c, n_u, dt)
     V, W = _noise(observed, p_rows, r, dt, noise_K, heat_std)
-    lay = _Layout(env_id, r, n_y, n_c, n_u, len(md_rows), pair, E, Ec, Nh, pts, moves, n_hold,
-                  dt)  # fmt: skip
+    lay = _Layout(env_id, r, n_y, n_c, n_u, len(md_rows), pair, E, Ec, Nh, pts, moves, n_hold, dt)
     grid = [_grid_model(model, T, Ti, W, V, lay) for model in scaled]
     ops = [steady_point(plant, L, [s.name for s in observed] + ctrl) for L in OP_LOADS]
     ok = [k for k, (_, _, y) in enumerate(ops) if np.all(np.isfinite(y))]
     rates = np.array(plant.rate_limits)
     return {
-        "grid": grid, "r": r, "n_p": len(p_rows), "n_y": n_y, "n_c": n_c, "n_md": len(md_rows),
-        "md_rows": md_rows, "md_gain": md_gain, "Ec": Ec, "pts": pts, "moves": moves,
-        "Nh": Nh, "n_hold": n_hold, "t63_s": t63 * dt, "hsv": hsv, "rates": rates,
+        "grid": grid,
+        "r": r,
+        "n_p": len(p_rows),
+        "n_y": n_y,
+        "n_c": n_c,
+        "n_md": len(md_rows),
+        "md_rows": md_rows,
+        "md_gain": md_gain,
+        "Ec": Ec,
+        "pts": pts,
+        "moves": moves,
+        "Nh": Nh,
+        "n_hold": n_hold,
+        "t63_s": t63 * dt,
+        "hsv": hsv,
+        "rates": rates,
         "op_loads": np.array(OP_LOADS)[ok],
-        "op": np.array([np.concatenate([Ti @ (ops[k][0][keep] / sx), ops[k][1], ops[k][2]])
-                        for k in ok]),
+        "op": np.array(
+            [np.concatenate([Ti @ (ops[k][0][keep] / sx), ops[k][1], ops[k][2]]) for k in ok]
+        ),
         "op_cols": np.cumsum([0, r, n_u, n_y, n_c]),
         "secondary_sp": np.array([s for _, s in plant.secondary]),
-    }  # fmt: skip
+    }

@@ -48,7 +48,7 @@ ZETA_MIN = 0.02
 #: Loads of the check (fraction of rated): the bottom of the scenarios' load range to rated.
 LOADS = (0.35, 0.5, 0.75, 1.0)
 #: The filter's assumed noise is raised by this factor per try, at most ``MAX_STEPS`` times.
-NOISE_STEP, MAX_STEPS = 2.0 ** 0.125, 64
+NOISE_STEP, MAX_STEPS = 2.0**0.125, 64
 
 
 def closed_loop(ctrl: Any, plant: Any, load: float) -> np.ndarray:
@@ -77,11 +77,13 @@ def closed_loop(ctrl: Any, plant: Any, load: float) -> np.ndarray:
     Ru = -first @ (m["SdT2"] @ m["Gam"].reshape(-1, n_u) + m["CbS"] @ tile)
     # u_k = u + Rz z_k + Ru u
     Ux, Uz, Uu = Rz @ Fx, Rz @ Fz, np.eye(n_u) + Rz @ Fu + Ru
-    return np.block([
-        [A + B @ Ux, B @ Uz, B @ Uu],
-        [Fx, Fz, Fu],
-        [Ux, Uz, Uu],
-    ])  # fmt: skip
+    return np.block(
+        [
+            [A + B @ Ux, B @ Uz, B @ Uu],
+            [Fx, Fz, Fu],
+            [Ux, Uz, Uu],
+        ]
+    )
 
 
 def damping(matrix: np.ndarray, dt: float) -> float:
@@ -111,9 +113,15 @@ def worst_damping(ctrl: Any, env_id: str, params_json: str) -> tuple[float, str]
 
 
 @commissioned(maxsize=64)
-def robust_filter_noise(cls: type, env_id: str, params_json: str, move_weight: float,
-                        u_weight: float, filter_noise_K: float,
-                        heat_std: float) -> tuple[float, float, str]:  # fmt: skip
+def robust_filter_noise(
+    cls: type,
+    env_id: str,
+    params_json: str,
+    move_weight: float,
+    u_weight: float,
+    filter_noise_K: float,
+    heat_std: float,
+) -> tuple[float, float, str]:
     """(filter noise, its least damping ratio, where) of the design rule (module
     docstring): the first of ``filter_noise_K`` x NOISE_STEP^k, k = 0..MAX_STEPS, whose
     loop keeps ZETA_MIN on every vertex, else the best damped of them. ``cls``: the MPC's
@@ -123,8 +131,14 @@ def robust_filter_noise(cls: type, env_id: str, params_json: str, move_weight: f
     try:
         for k in range(MAX_STEPS + 1):
             noise = filter_noise_K * NOISE_STEP**k
-            ctrl = cls(env, move_weight=move_weight, u_weight=u_weight, filter_noise_K=noise,
-                       heat_std=heat_std, robust=False)  # fmt: skip
+            ctrl = cls(
+                env,
+                move_weight=move_weight,
+                u_weight=u_weight,
+                filter_noise_K=noise,
+                heat_std=heat_std,
+                robust=False,
+            )
             zeta, where = worst_damping(ctrl, env_id, params_json)
             if zeta >= ZETA_MIN:
                 return noise, zeta, where

@@ -56,8 +56,9 @@ def inner_p_valve_per_K(plant: Any) -> float | None:
 
 
 @commissioned(maxsize=48)
-def outer_models(controller: type, env_id: str, params_json: str,
-                 load: float = 1.0) -> tuple[FOPDT | None, ...]:  # fmt: skip
+def outer_models(
+    controller: type, env_id: str, params_json: str, load: float = 1.0
+) -> tuple[FOPDT | None, ...]:
     """Per action: FOPDT of inner setpoint -> measured outlet (MAIN loops) at ``load``, else
     None. ``controller`` is the NeuroPID class, which runs the step tests (``force_u``).
 

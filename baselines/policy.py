@@ -74,16 +74,21 @@ def check_predict_args(observation: Any, episode_start: Any, n_obs: int) -> np.n
                 f"{type(exc).__name__}: {exc}"
             ) from None
         if obs.dtype.kind not in "fiu":
-            raise ValueError(f"observation must hold real numbers, got dtype {obs.dtype} "
-                             f"({str(observation)[:80]})")  # fmt: skip
+            raise ValueError(
+                f"observation must hold real numbers, got dtype {obs.dtype} "
+                f"({str(observation)[:80]})"
+            )
     if obs.ndim not in (1, 2) or obs.shape[-1] != n_obs:
         raise ValueError(f"observation has shape {obs.shape}, expected {_shapes(n_obs)}")
     n = 1 if obs.ndim == 1 else obs.shape[0]
     if n == 0:
         raise ValueError(f"observation is an empty batch of shape {obs.shape}; give >= 1 row")
     # a few entries: Python's isfinite over a list is several times faster than the ufunc
-    ok = (all(map(math.isfinite, obs.ravel().tolist())) if obs.size <= _FEW
-          else bool(np.isfinite(obs).all()))  # fmt: skip
+    ok = (
+        all(map(math.isfinite, obs.ravel().tolist()))
+        if obs.size <= _FEW
+        else bool(np.isfinite(obs).all())
+    )
     if not ok:
         rows, cols = np.nonzero(~np.isfinite(np.atleast_2d(obs)))
         raise ValueError(
@@ -116,8 +121,13 @@ class CheckedPolicy:
         object.__setattr__(self, "policy", policy)
         object.__setattr__(self, "n_obs", int(n_obs))
 
-    def predict(self, observation: Any, state: Any = None, episode_start: Any = None,
-                deterministic: bool = True) -> tuple[np.ndarray, Any]:  # fmt: skip
+    def predict(
+        self,
+        observation: Any,
+        state: Any = None,
+        episode_start: Any = None,
+        deterministic: bool = True,
+    ) -> tuple[np.ndarray, Any]:
         """The wrapped policy's ``predict`` of arguments that passed the checks."""
         check_predict_args(observation, episode_start, self.n_obs)
         return self.policy.predict(observation, state, episode_start, deterministic)
@@ -142,5 +152,8 @@ class CheckedPolicy:
 
 def checked(policy: Any, env: Any) -> CheckedPolicy:
     """``policy`` (acting on ``env``'s observations) with its ``predict`` arguments checked."""
-    return policy if isinstance(policy, CheckedPolicy) else CheckedPolicy(
-        policy, observation_size(env))  # fmt: skip
+    return (
+        policy
+        if isinstance(policy, CheckedPolicy)
+        else CheckedPolicy(policy, observation_size(env))
+    )

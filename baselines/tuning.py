@@ -105,8 +105,10 @@ def stored(name: str, env_id: str) -> dict[str, float]:
         raise ValueError(f"no stored tuning of {name!r} ({f} is missing); run: {command}")
     plants = json.loads(f.read_text())["plants"]
     if env_id not in plants:
-        raise ValueError(f"the stored tuning of {name!r} has no entry for {env_id!r} "
-                         f"(it has {sorted(plants)}); run: {command}")  # fmt: skip
+        raise ValueError(
+            f"the stored tuning of {name!r} has no entry for {env_id!r} "
+            f"(it has {sorted(plants)}); run: {command}"
+        )
     return {k: float(v) for k, v in plants[env_id]["knobs"].items()}
 
 

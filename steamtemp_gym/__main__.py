@@ -17,25 +17,33 @@ def report() -> str:
     from steamtemp_gym.scenarios import heldout
 
     common = [n for n in scenarios.names() if n != scenarios.RANDOM]
-    lines = [f"steamtemp_gym {steamtemp_gym.__version__}", "", "Env ids "
-             "(gym.make(id); the name after 'steamtemp/' is enough in the command lines):"]
+    lines = [
+        f"steamtemp_gym {steamtemp_gym.__version__}",
+        "",
+        "Env ids (gym.make(id); the name after 'steamtemp/' is enough in the command lines):",
+    ]
     for env_id in envs.ids():
         cls = plants.plant_class(env_id) if env_id in steamtemp_gym.ENV_IDS else None
         own = [n for n in scenarios.names(env_id) if n not in common and n != scenarios.RANDOM]
         lines.append(f"  {env_id}" + (f"  ({cls.source})" if cls else "  (registered variant)"))
         if own:
             lines.append(f"      its own scenarios: {', '.join(own)}")
-    lines += ["", "Scenarios (gym.make(id, scenario=...), reset(options={'scenario': ...}), "
-              "--scenarios):", f"  named: {', '.join(common)}",
-              f"  held-out: {', '.join(heldout.PREFIX + n for n in heldout.NAMES)}",
-              f"  {scenarios.RANDOM} (the seeded training distribution, the default), or a "
-              "YAML file"]  # fmt: skip
+    lines += [
+        "",
+        "Scenarios (gym.make(id, scenario=...), reset(options={'scenario': ...}), --scenarios):",
+        f"  named: {', '.join(common)}",
+        f"  held-out: {', '.join(heldout.PREFIX + n for n in heldout.NAMES)}",
+        f"  {scenarios.RANDOM} (the seeded training distribution, the default), or a YAML file",
+    ]
     source = policy_sources.find()
     if source is None:  # an installation without policies
         return "\n".join(lines) + "\n"
     lines += ["", *source.listing()]
-    lines += ["", "Commands: steamtemp-leaderboard --help, steamtemp-check --help, "
-              "steamtemp-train --help; reference pages: docs/envs/."]  # fmt: skip
+    lines += [
+        "",
+        "Commands: steamtemp-leaderboard --help, steamtemp-check --help, "
+        "steamtemp-train --help; reference pages: docs/envs/.",
+    ]
     return "\n".join(lines) + "\n"
 
 

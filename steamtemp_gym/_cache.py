@@ -82,8 +82,9 @@ def base_dir() -> Path:
     return Path(xdg) / "steamtemp_gym"
 
 
-def _code_digest(roots: list[Path], memo: Path, *extra: str,
-                 suffixes: tuple[str, ...] = (".py",)) -> str:  # fmt: skip
+def _code_digest(
+    roots: list[Path], memo: Path, *extra: str, suffixes: tuple[str, ...] = (".py",)
+) -> str:
     """The provenance digest (steamtemp_gym/provenance.py: docstring-free syntax trees; other
     files as bytes) of the files under ``roots`` with these ``suffixes`` (not in
     :data:`_NO_KERNELS` folders), numba's version and the ``extra`` strings.
@@ -112,7 +113,7 @@ def _code_digest(roots: list[Path], memo: Path, *extra: str,
     if isinstance(known.get(key), str):
         return known[key]
     digest = provenance.digest(files, *extra, root=roots[0].parent)
-    known = dict(list(known.items())[-(_MEMO_SIZE - 1):])
+    known = dict(list(known.items())[-(_MEMO_SIZE - 1) :])
     known[key] = digest
     try:
         memo.parent.mkdir(parents=True, exist_ok=True)
@@ -153,8 +154,9 @@ def _use(base: Path, current: Path, kind: str) -> bool:
     return True
 
 
-def versioned_folder(kind: str, roots: list[Path], *extra: str,
-                     suffixes: tuple[str, ...] = (".py",)) -> Path | None:  # fmt: skip
+def versioned_folder(
+    kind: str, roots: list[Path], *extra: str, suffixes: tuple[str, ...] = (".py",)
+) -> Path | None:
     """``<cache>/<kind>-<key>``, the folder of this version of the code under ``roots`` (the
     key of :func:`_code_digest` over those files and ``extra``), made, stamped used, and the
     other versions' ``<kind>-*`` folders pruned like the kernels'; None where it cannot be
@@ -279,17 +281,22 @@ class _CompileNotice(event.Listener if event is not None else object):
             log.warning(
                 "steamtemp_gym: compiling kernels on first use (once per code version, about "
                 "10-30 s per plant; cached in %s; `python -m steamtemp_gym.precompile` "
-                "compiles every plant ahead)", where.path if where else "numba's cache")
+                "compiles every plant ahead)",
+                where.path if where else "numba's cache",
+            )
         elif not self.warned:
             self.warned = True
             log.warning(
                 "steamtemp_gym: compiling kernels that are not kept (about 10-30 s per plant, "
                 "again in every process): the cache folder %s is not writable%s; point "
-                "STEAMTEMP_GYM_CACHE_DIR at a writable folder to keep them", where.path,
-                "" if where.numba_dir is None else " (the kernels it holds are used)")
+                "STEAMTEMP_GYM_CACHE_DIR at a writable folder to keep them",
+                where.path,
+                "" if where.numba_dir is None else " (the kernels it holds are used)",
+            )
         else:
-            log.info("steamtemp_gym: compiling kernels that are not kept (%s is read-only)",
-                     where.path)  # fmt: skip
+            log.info(
+                "steamtemp_gym: compiling kernels that are not kept (%s is read-only)", where.path
+            )
 
     def on_end(self, ev) -> None:
         self.depth -= 1

@@ -36,12 +36,16 @@ from steamtemp_gym import _cache
 _HOOK = getattr(Dispatcher, "get_call_template", None)
 #: whether calls from compiled code are typed with literals widened (module docstring)
 WIDENING = _HOOK is not None and list(inspect.signature(_HOOK).parameters) == [
-    "self", "args", "kws"]  # fmt: skip
+    "self",
+    "args",
+    "kws",
+]
 if not WIDENING:
     logging.getLogger("steamtemp_gym").warning(
         "steamtemp_gym: numba %s has no Dispatcher.get_call_template(args, kws); kernels "
         "compile once per literal argument (slower cold starts, same results)",
-        numba.__version__)  # fmt: skip
+        numba.__version__,
+    )
 
 
 def _widen_literals(dispatcher: Dispatcher) -> Dispatcher:
@@ -51,8 +55,9 @@ def _widen_literals(dispatcher: Dispatcher) -> Dispatcher:
     template = dispatcher.get_call_template  # numba's typing hook for calls from compiled code
 
     def get_call_template(args, kws):
-        return template(tuple(types.unliteral(a) for a in args),
-                        {k: types.unliteral(v) for k, v in kws.items()})  # fmt: skip
+        return template(
+            tuple(types.unliteral(a) for a in args), {k: types.unliteral(v) for k, v in kws.items()}
+        )
 
     dispatcher.get_call_template = get_call_template
     return dispatcher

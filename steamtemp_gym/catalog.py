@@ -52,8 +52,10 @@ def add(plant_id: str, entry: str, base: type) -> None:
         ) from None
     is_plant = isinstance(cls, type) and issubclass(cls, base)
     if not is_plant or getattr(cls, "id", None) != plant_id:
-        raise ValueError(f"plant entry {str(entry)[:80]!r} must name a subclass of Plant "
-                         f"whose id is {plant_id!r}")  # fmt: skip
+        raise ValueError(
+            f"plant entry {str(entry)[:80]!r} must name a subclass of Plant "
+            f"whose id is {plant_id!r}"
+        )
     try:
         cls.skeleton()
     except Exception as exc:  # noqa: BLE001 - a declaration it lacks or gets wrong

@@ -69,12 +69,17 @@ def check_type(subject: str, kind: Any, v: Any) -> None:
     else:
         return
     if not ok:
-        raise ValueError(f"{subject} must be of type {kind.__name__}, got {type(v).__name__} "
-                         f"{str(v)[:50]!r}")  # fmt: skip
+        raise ValueError(
+            f"{subject} must be of type {kind.__name__}, got {type(v).__name__} {str(v)[:50]!r}"
+        )
 
 
-def check_fields(obj: Any, subject: str, label: str = "range",
-                 ranges: dict[str, tuple[float, float]] | None = None) -> None:  # fmt: skip
+def check_fields(
+    obj: Any,
+    subject: str,
+    label: str = "range",
+    ranges: dict[str, tuple[float, float]] | None = None,
+) -> None:
     """Raise ValueError for the first field of the dataclass ``obj`` whose value is not of
     its annotated type, is a number that is not finite, or lies outside its range (the
     field's own, :func:`ranged`, else ``ranges[name]``). ``subject`` names a field in the
@@ -93,5 +98,6 @@ def check_fields(obj: Any, subject: str, label: str = "range",
         lo, hi = span
         above = f.metadata.get("above", False)
         if not (lo < v <= hi if above else lo <= v <= hi):
-            raise ValueError(f"{who} = {v!r} is outside the {label} "
-                             f"{'(' if above else '['}{lo:g}, {hi:g}]")  # fmt: skip
+            raise ValueError(
+                f"{who} = {v!r} is outside the {label} {'(' if above else '['}{lo:g}, {hi:g}]"
+            )

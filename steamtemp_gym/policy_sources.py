@@ -37,8 +37,10 @@ _warned: set[str] = set()
 def _check(source: Any, where: str) -> Any:
     missing = [a for a in _ATTRS if not hasattr(source, a)]
     if missing:
-        raise ValueError(f"policy source {where} lacks {missing}; a source has "
-                         f"{', '.join(_ATTRS)} (steamtemp_gym.policy_sources)")  # fmt: skip
+        raise ValueError(
+            f"policy source {where} lacks {missing}; a source has "
+            f"{', '.join(_ATTRS)} (steamtemp_gym.policy_sources)"
+        )
     return source
 
 
@@ -90,8 +92,10 @@ def parse(name: str) -> Any:
     does not know the name."""
     source = find()
     if source is None:
-        raise ValueError(f"no policy source is installed to look up {name!r}: install "
-                         "steamtemp-gym with its agents package, register one "
-                         "(steamtemp_gym.policy_sources.register) or pass a policy "
-                         "factory")  # fmt: skip
+        raise ValueError(
+            f"no policy source is installed to look up {name!r}: install "
+            "steamtemp-gym with its agents package, register one "
+            "(steamtemp_gym.policy_sources.register) or pass a policy "
+            "factory"
+        )
     return source.parse(name)

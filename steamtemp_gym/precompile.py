@@ -42,12 +42,21 @@ def main(argv: list[str] | None = None) -> None:
     import steamtemp_gym
     from steamtemp_gym.envs import resolve_id
 
-    ap = argparse.ArgumentParser(prog="python -m steamtemp_gym.precompile",
-                                 description=__doc__.split("\n\n")[0])  # fmt: skip
-    ap.add_argument("env_ids", nargs="*", metavar="ENV_ID",
-                    help=f"envs to compile (default: all of {', '.join(steamtemp_gym.ENV_IDS)})")
-    ap.add_argument("--jobs", type=int, default=usable_cpus(),
-                    help="plants compiled at once, one process each (default: the CPUs)")
+    ap = argparse.ArgumentParser(
+        prog="python -m steamtemp_gym.precompile", description=__doc__.split("\n\n")[0]
+    )
+    ap.add_argument(
+        "env_ids",
+        nargs="*",
+        metavar="ENV_ID",
+        help=f"envs to compile (default: all of {', '.join(steamtemp_gym.ENV_IDS)})",
+    )
+    ap.add_argument(
+        "--jobs",
+        type=int,
+        default=usable_cpus(),
+        help="plants compiled at once, one process each (default: the CPUs)",
+    )
     args = ap.parse_args(argv)
     if args.jobs < 1:
         ap.error(f"--jobs must be at least 1, got {args.jobs}")

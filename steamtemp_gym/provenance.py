@@ -35,8 +35,7 @@ ROOT = Path(__file__).resolve().parent.parent
 #: Modules of steamtemp_gym that no trajectory depends on (drawing, docs, the command line,
 #: the ahead-of-time compile command, where the compile cache lives), left out of every
 #: scope with the testing package.
-NO_DYNAMICS = ("render.py", "docs.py", "__main__.py", "precompile.py", "provenance.py",
-               "_cache.py")  # fmt: skip
+NO_DYNAMICS = ("render.py", "docs.py", "__main__.py", "precompile.py", "provenance.py", "_cache.py")
 _NO_DYNAMICS_PACKAGES = ("testing",)
 #: Length of a digest (hex characters).
 LENGTH = 16
@@ -45,9 +44,13 @@ LENGTH = 16
 def _strip_docstrings(tree: ast.AST) -> ast.AST:
     for node in ast.walk(tree):
         body = getattr(node, "body", None)
-        if (isinstance(body, list) and body and isinstance(body[0], ast.Expr)
-                and isinstance(body[0].value, ast.Constant)
-                and isinstance(body[0].value.value, str)):  # fmt: skip
+        if (
+            isinstance(body, list)
+            and body
+            and isinstance(body[0], ast.Expr)
+            and isinstance(body[0].value, ast.Constant)
+            and isinstance(body[0].value.value, str)
+        ):
             body[0] = ast.Pass()
     return tree
 
@@ -201,5 +204,13 @@ def _imports(path_s: str, name: str, size: int, mtime_ns: int) -> tuple[str, ...
     return tuple(out)
 
 
-__all__ = ["LENGTH", "NO_DYNAMICS", "ROOT", "digest", "file_digest", "module_files",
-           "package_files", "plant_files"]  # fmt: skip
+__all__ = [
+    "LENGTH",
+    "NO_DYNAMICS",
+    "ROOT",
+    "digest",
+    "file_digest",
+    "module_files",
+    "package_files",
+    "plant_files",
+]

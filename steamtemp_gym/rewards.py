@@ -106,8 +106,11 @@ N_WEIGHTS = len(W)
 def temperature_cost(e, w):
     """c(e) of the module docstring for a temperature error e (K)."""
     a = abs(e) / w[W.T0_K]
-    return (w[W.w_abs] * a + w[W.w_sq] * a * a
-            + w[W.w_band] * max(0.0, abs(e) - w[W.band_K]) / w[W.T0_K])  # fmt: skip
+    return (
+        w[W.w_abs] * a
+        + w[W.w_sq] * a * a
+        + w[W.w_band] * max(0.0, abs(e) - w[W.band_K]) / w[W.T0_K]
+    )
 
 
 @njit(cache=True, error_model="numpy")
@@ -116,16 +119,21 @@ def reward(e, secondary_cost, spray_norm, move, terminated, w):
 
     ``secondary_cost`` is the sum of temperature_cost over the secondary errors.
     """
-    r = (temperature_cost(e, w) + w[W.w_secondary] * secondary_cost + w[W.w_spray] * spray_norm
-         + w[W.w_move] * move)  # fmt: skip
+    r = (
+        temperature_cost(e, w)
+        + w[W.w_secondary] * secondary_cost
+        + w[W.w_spray] * spray_norm
+        + w[W.w_move] * move
+    )
     if terminated:
         r += w[W.trip_penalty]
     return -r
 
 
 @njit(cache=True, error_model="numpy")
-def row_reward(b, Z, U, U_prev, e, terminated, sprays, i_design, spray_scale, secondary,
-               secondary_sp, w):  # fmt: skip
+def row_reward(
+    b, Z, U, U_prev, e, terminated, sprays, i_design, spray_scale, secondary, secondary_sp, w
+):
     """Reward of row b's transition (module docstring) from its plant outputs ``Z[b]``, its
     commands ``U[b]`` and the previous ones ``U_prev[b]`` (valve openings in [0, 1]).
 

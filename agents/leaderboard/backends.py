@@ -39,8 +39,10 @@ class Progress:
         eta = el / self.done * (self.total - self.done) if self.done else 0.0
         pct = 100 * self.done / max(self.total, 1)
         bar = "#" * int(pct / 4) + "." * (25 - int(pct / 4))
-        text = (f"[{bar}] {self.done}/{self.total} episodes {pct:3.0f} %  "
-                f"elapsed {_mmss(el)}  ETA {_mmss(eta)}")  # fmt: skip
+        text = (
+            f"[{bar}] {self.done}/{self.total} episodes {pct:3.0f} %  "
+            f"elapsed {_mmss(el)}  ETA {_mmss(eta)}"
+        )
         if self.tty:
             end = "\n" if self.done >= self.total else ""
             print("\r" + text, end=end, file=self.stream, flush=True)
@@ -61,8 +63,12 @@ def _pool(jobs: int):
     import multiprocessing as mp
     from concurrent.futures import ProcessPoolExecutor
 
-    return ProcessPoolExecutor(max_workers=jobs, mp_context=mp.get_context(start_method()),
-                               initializer=_worker_start, initargs=(os.getpid(),))  # fmt: skip
+    return ProcessPoolExecutor(
+        max_workers=jobs,
+        mp_context=mp.get_context(start_method()),
+        initializer=_worker_start,
+        initargs=(os.getpid(),),
+    )
 
 
 def _worker_start(parent: int) -> None:
@@ -102,21 +108,31 @@ def _ray_results(units: list[Unit], jobs: int, address: str | None):
         yield from zip(batch, results, strict=True)
 
 
-def _execute(plan: Plan, units: list[Unit], jobs: int, record: Record, on_trace,
-             backend: str = "local", address: str | None = None) -> int:  # fmt: skip
+def _execute(
+    plan: Plan,
+    units: list[Unit],
+    jobs: int,
+    record: Record,
+    on_trace,
+    backend: str = "local",
+    address: str | None = None,
+) -> int:
     """Run the units (in ``jobs`` processes or as Ray tasks), appending rows as they
     finish. Failed count."""
     progress = Progress(sum(len(u.seeds) for u in units))
     failed = 0
-    results = (_ray_results(units, jobs, address) if backend == "ray"
-               else _local_results(units, jobs))  # fmt: skip
+    results = (
+        _ray_results(units, jobs, address) if backend == "ray" else _local_results(units, jobs)
+    )
     for u, (rows, trace) in results:
         for row in rows:
             record.write(row)
             if row.get("error"):
                 failed += 1
-                print(f"\nFAILED {u.env_id} {u.spec} {u.policy} seed {row['seed']}: "
-                      f"{row['error']}", file=sys.stderr)  # fmt: skip
+                print(
+                    f"\nFAILED {u.env_id} {u.spec} {u.policy} seed {row['seed']}: {row['error']}",
+                    file=sys.stderr,
+                )
         on_trace(u, trace)
         progress.update(len(rows))
     return failed

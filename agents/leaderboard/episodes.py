@@ -43,9 +43,17 @@ def own_process(name: str) -> bool:
     return name not in (REFERENCE, summary.ONE) and not specs.parse(name).shipped
 
 
-def make_policy(name: str, env_id: str, env: Any, scenario: Any, num_envs: int | None = None,
-                imports: tuple[str, ...] = (), timeout: float | None = None,
-                episodes: int = 1, oracle: str = DEFAULT_ENGINE) -> Any:  # fmt: skip
+def make_policy(
+    name: str,
+    env_id: str,
+    env: Any,
+    scenario: Any,
+    num_envs: int | None = None,
+    imports: tuple[str, ...] = (),
+    timeout: float | None = None,
+    episodes: int = 1,
+    oracle: str = DEFAULT_ENGINE,
+) -> Any:
     """The policy ``name`` to act on ``env`` (of ``num_envs`` rows, None: a single env): a
     shipped one built here on ``env``, any other a :class:`PolicyProcess` (commissioned on
     an env of its own made with ``scenario``; close it)."""
@@ -99,8 +107,14 @@ class RowScenarios(gym.vector.VectorWrapper):
 
 
 def _ok_row(u: Unit, seed: int, metrics: dict) -> dict:
-    return {"env": u.env_id, "scenario": u.spec, "policy": u.policy, "seed": seed,
-            "fingerprint": u.fingerprint, "metrics": metrics}  # fmt: skip
+    return {
+        "env": u.env_id,
+        "scenario": u.spec,
+        "policy": u.policy,
+        "seed": seed,
+        "fingerprint": u.fingerprint,
+        "metrics": metrics,
+    }
 
 
 def run_unit(u: Unit) -> tuple[list[dict], dict | None]:
@@ -138,9 +152,12 @@ def batches(units: list[Unit]) -> list[list[Unit]]:
     unit."""
     groups: dict[Any, list[Unit]] = {}
     for i, u in enumerate(units):
-        together = (u.params is None and u.policy not in (summary.ONE, *ALONE)
-                    and not own_process(u.policy)
-                    and not isinstance(u.scenario, str))  # "random": lengths drawn per row
+        together = (
+            u.params is None
+            and u.policy not in (summary.ONE, *ALONE)
+            and not own_process(u.policy)
+            and not isinstance(u.scenario, str)
+        )  # "random": lengths drawn per row
         key = (u.env_id, u.policy, u.scenario.duration_s) if together else i
         groups.setdefault(key, []).append(u)
     return list(groups.values())
@@ -158,8 +175,13 @@ def _run_units(batch: list[Unit]) -> list[tuple[list[dict], dict | None]]:
     try:
         return _side_by_side(batch)
     except PolicyTimeout as exc:
-        return [([_error_row((u.env_id, u.spec, u.policy, s), u.fingerprint, exc)
-                  for s in u.seeds], None) for u in batch]  # fmt: skip
+        return [
+            (
+                [_error_row((u.env_id, u.spec, u.policy, s), u.fingerprint, exc) for s in u.seeds],
+                None,
+            )
+            for u in batch
+        ]
     except Exception:  # noqa: BLE001 - isolate the failing units, then seeds, below
         if len(batch) > 1:
             return [out for u in batch for out in _run_units([u])]
@@ -180,8 +202,9 @@ def _side_by_side(batch: list[Unit]) -> list[tuple[list[dict], dict | None]]:
         unit = RowScenarios(unit, [u.scenario for u in batch for _ in u.seeds])
     # the nominal plant (a policy of its own process commissions on an env of its own)
     model = make_env(u0.env_id, u0.scenario, n) if plant and not own else unit
-    policy = make_policy(u0.policy, u0.env_id, model, u0.scenario, n, u0.imports, u0.timeout,
-                         n, u0.oracle)  # fmt: skip
+    policy = make_policy(
+        u0.policy, u0.env_id, model, u0.scenario, n, u0.imports, u0.timeout, n, u0.oracle
+    )
     try:
         results = run_batch(unit, policy, seeds)
     finally:
@@ -213,8 +236,11 @@ def _seed_by_seed(u: Unit) -> tuple[list[dict], dict | None]:
             if isinstance(policy, Exception):
                 raise policy
             # a policy of its own process: a new process for each episode (a failure ends it)
-            alone = policy if not own else make_policy(u.policy, u.env_id, model, u.scenario,
-                                                       None, u.imports, u.timeout)  # fmt: skip
+            alone = (
+                policy
+                if not own
+                else make_policy(u.policy, u.env_id, model, u.scenario, None, u.imports, u.timeout)
+            )
             try:
                 res = run_episode(env, alone, seed)
             finally:
@@ -237,9 +263,16 @@ def _error_row(key: Key, fp: str, exc: BaseException) -> dict:
         what = str(exc)
         if exc.remote_traceback:
             tb = f"{tb}\nin the policy's process:\n{exc.remote_traceback}"
-    return {"env": env_id, "scenario": sc, "policy": name, "seed": seed, "fingerprint": fp,
-            "metrics": None, "error": head(what, 1000),
-            "traceback": tb[-4000:]}  # fmt: skip
+    return {
+        "env": env_id,
+        "scenario": sc,
+        "policy": name,
+        "seed": seed,
+        "fingerprint": fp,
+        "metrics": None,
+        "error": head(what, 1000),
+        "traceback": tb[-4000:],
+    }
 
 
 def _units(plan: Plan, done: dict) -> list[Unit]:
@@ -251,13 +284,26 @@ def _units(plan: Plan, done: dict) -> list[Unit]:
             params = plan.variants.get(env_id, {}).get(sc)
             for name in plan.policies_of(env_id, sc):
                 fp = plan.fingerprints[env_id, sc, name]
-                todo = [s for s in plan.seeds
-                        if not _finished(done.get(((env_id, sc, name, s), fp)))]  # fmt: skip
+                todo = [
+                    s for s in plan.seeds if not _finished(done.get(((env_id, sc, name, s), fp)))
+                ]
                 if todo:
                     keep = plan.seeds[0] if plan.seeds[0] in todo and params is None else None
-                    out.append(Unit(env_id, sc, plan.resolved[env_id, sc], name, todo, fp, keep,
-                                    plan.imports, params, plan.episode_timeout,
-                                    plan.oracle))  # fmt: skip
+                    out.append(
+                        Unit(
+                            env_id,
+                            sc,
+                            plan.resolved[env_id, sc],
+                            name,
+                            todo,
+                            fp,
+                            keep,
+                            plan.imports,
+                            params,
+                            plan.episode_timeout,
+                            plan.oracle,
+                        )
+                    )
     return sorted(out, key=lambda u: u.policy != summary.ONE)  # stable: run order otherwise
 
 
@@ -281,7 +327,8 @@ def score_ends(env_id: str, scenario: str, seeds: tuple[int, ...]) -> tuple[floa
         rows = run_unit(Unit(env_id, scenario, sc, name, list(seeds), fp, None))[0]
         failed = [r for r in rows if r.get("error")]
         if failed:
-            raise RuntimeError(f"{name} on {env_id} {scenario} seed {failed[0]['seed']}: "
-                               f"{failed[0]['error']}")  # fmt: skip
+            raise RuntimeError(
+                f"{name} on {env_id} {scenario} seed {failed[0]['seed']}: {failed[0]['error']}"
+            )
         means.append(float(np.mean([r["metrics"]["return"] for r in rows])))
     return means[0], means[1]

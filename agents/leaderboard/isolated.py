@@ -72,11 +72,14 @@ class PolicyTimeout(PolicyFailed):
 #: The only globals an answer from a policy's process may name when unpickled: what numpy
 #: arrays, scalars and dtypes pickle to (numpy 1 and 2 module names).
 _ANSWER_GLOBALS = frozenset(
-    [(m, n) for m in ("numpy.core.multiarray", "numpy._core.multiarray")
-     for n in ("_reconstruct", "scalar")]
+    [
+        (m, n)
+        for m in ("numpy.core.multiarray", "numpy._core.multiarray")
+        for n in ("_reconstruct", "scalar")
+    ]
     + [(m, "_frombuffer") for m in ("numpy.core.numeric", "numpy._core.numeric")]
     + [("numpy", "ndarray"), ("numpy", "dtype")]
-)  # fmt: skip
+)
 
 
 class _AnswerUnpickler(pickle.Unpickler):
@@ -100,18 +103,23 @@ def read_answer(data: bytes) -> tuple[str, Any]:
     try:
         answer = _AnswerUnpickler(io.BytesIO(data)).load()
     except Exception as exc:  # noqa: BLE001 - any malformed pickle
-        raise ValueError("the policy's answer cannot cross from its process (numbers, strings, "
-                         f"containers and numpy arrays only): {exc}") from None  # fmt: skip
+        raise ValueError(
+            "the policy's answer cannot cross from its process (numbers, strings, "
+            f"containers and numpy arrays only): {exc}"
+        ) from None
     if _items(answer, ANSWER_ITEMS) > ANSWER_ITEMS:
-        raise ValueError(f"the policy's answer holds more than {ANSWER_ITEMS:,} numbers, strings "
-                         "and containers (references to one object counted each time)")  # fmt: skip
+        raise ValueError(
+            f"the policy's answer holds more than {ANSWER_ITEMS:,} numbers, strings "
+            "and containers (references to one object counted each time)"
+        )
     ok = isinstance(answer, tuple) and len(answer) == 2 and answer[0] in ("ok", "error")
     if ok and answer[0] == "error":
         v = answer[1]
         ok = isinstance(v, tuple) and len(v) == 2 and all(isinstance(x, str) for x in v)
     if not ok:
-        raise ValueError(f"the policy's process sent an answer of another form: "
-                         f"{type(answer).__name__}")  # fmt: skip
+        raise ValueError(
+            f"the policy's process sent an answer of another form: {type(answer).__name__}"
+        )
     return answer
 
 
@@ -185,8 +193,7 @@ def make_env(env_id: str, scenario: Any, num_envs: int | None = None, **kw: Any)
         kw["scenario"] = scenario
     if num_envs is None:
         return gym.make(env_id, **kw)
-    return gym.make_vec(env_id, num_envs=num_envs, vectorization_mode="vector_entry_point",
-                        **kw)  # fmt: skip
+    return gym.make_vec(env_id, num_envs=num_envs, vectorization_mode="vector_entry_point", **kw)
 
 
 class PolicyProcess:
@@ -204,17 +211,27 @@ class PolicyProcess:
         PolicyFailed: building the policy failed, or took longer than ``timeout``.
     """
 
-    def __init__(self, name: str, env_id: str, scenario: Any, num_envs: int | None,
-                 imports: tuple[str, ...] = (), timeout: float | None = None,
-                 episodes: int = 1) -> None:  # fmt: skip
+    def __init__(
+        self,
+        name: str,
+        env_id: str,
+        scenario: Any,
+        num_envs: int | None,
+        imports: tuple[str, ...] = (),
+        timeout: float | None = None,
+        episodes: int = 1,
+    ) -> None:
         import multiprocessing as mp
 
         self.name, self.timeout, self.episodes = name, timeout, episodes
         ctx = mp.get_context(start_method())
         self._conn, child = ctx.Pipe()
-        self._proc = ctx.Process(target=_serve, name=f"policy {name}", daemon=True,
-                                 args=(child, name, env_id, scenario, num_envs, imports,
-                                       os.getpid()))  # fmt: skip
+        self._proc = ctx.Process(
+            target=_serve,
+            name=f"policy {name}",
+            daemon=True,
+            args=(child, name, env_id, scenario, num_envs, imports, os.getpid()),
+        )
         self._proc.start()
         child.close()
         self._deadline = None if timeout is None else time.monotonic() + timeout
@@ -242,9 +259,11 @@ class PolicyProcess:
                 self.close()
                 limit = self.timeout if what == "build" else self.timeout * self.episodes
                 n = "" if what == "build" or self.episodes == 1 else f" ({self.episodes} episodes)"
-                raise PolicyTimeout(f"timed out: the policy did not answer its {what} within "
-                                    f"{limit:g} s{n} (--episode-timeout {self.timeout:g}); its "
-                                    "process was ended")  # fmt: skip
+                raise PolicyTimeout(
+                    f"timed out: the policy did not answer its {what} within "
+                    f"{limit:g} s{n} (--episode-timeout {self.timeout:g}); its "
+                    "process was ended"
+                )
             data = self._conn.recv_bytes(ANSWER_BYTES)
         except OSError as exc:
             if self._proc.is_alive() and "bad message length" in str(exc):
@@ -296,8 +315,15 @@ def _error(exc: BaseException, during: str) -> tuple[str, str]:
     return f"{guard.describe(exc, 'the policy')} (in its {during})", tb[-4000:]
 
 
-def _serve(conn: Any, name: str, env_id: str, scenario: Any, num_envs: int | None,
-           imports: tuple[str, ...], parent: int) -> None:  # fmt: skip
+def _serve(
+    conn: Any,
+    name: str,
+    env_id: str,
+    scenario: Any,
+    num_envs: int | None,
+    imports: tuple[str, ...],
+    parent: int,
+) -> None:
     """The policy's process: build the policy, then answer calls until the pipe closes or
     the policy fails (its failure is sent, then the process ends)."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C stops the leaderboard, which ends this

@@ -48,8 +48,9 @@ def is_label(scenario: str) -> bool:
     return scenario.startswith(PREFIX)
 
 
-def summarize(rows: list[dict], env_id: str, policies: dict[str, Any], zero: str,
-              references: tuple[str, ...]) -> dict[str, Any] | None:  # fmt: skip
+def summarize(
+    rows: list[dict], env_id: str, policies: dict[str, Any], zero: str, references: tuple[str, ...]
+) -> dict[str, Any] | None:
     """A plant's ``robustness`` entry from the run's rows (``policies``: the plant's
     ranked entries, for admissibility); None if the run has no mismatch rows there."""
     nominal: dict[tuple[str, int], float] = {}
@@ -72,15 +73,17 @@ def summarize(rows: list[dict], env_id: str, policies: dict[str, Any], zero: str
     variants = declared or sorted({v for d in by.values() for v in d})
     out: dict[str, Any] = {}
     for name in dict.fromkeys([*by, *failed]):
-        entry: dict[str, Any] = {"episodes": 0, "trips": 0, "failed": failed[name],
-                                 "variants": {}}  # fmt: skip
+        entry: dict[str, Any] = {"episodes": 0, "trips": 0, "failed": failed[name], "variants": {}}
         paired_nominal: list[float] = []
         for v in variants:
             got = by[name].get(v, [])
             if not got:
                 continue
-            pairs = [(r["metrics"]["return"], nominal[r["policy"], r["seed"]]) for r in got
-                     if (r["policy"], r["seed"]) in nominal]  # fmt: skip
+            pairs = [
+                (r["metrics"]["return"], nominal[r["policy"], r["seed"]])
+                for r in got
+                if (r["policy"], r["seed"]) in nominal
+            ]
             var_mean = float(np.mean([r["metrics"]["return"] for r in got]))
             cell: dict[str, Any] = {
                 "return": var_mean,
@@ -101,8 +104,13 @@ def summarize(rows: list[dict], env_id: str, policies: dict[str, Any], zero: str
             worst = max(rel, key=rel.get)
             entry["worst"] = {"variant": worst, "relative": rel[worst]}
         out[name] = entry
-    challengers = [p for p in out if p not in baselines.NAMES and p not in references
-                   and policies.get(p, {}).get("admissible")]  # fmt: skip
+    challengers = [
+        p
+        for p in out
+        if p not in baselines.NAMES
+        and p not in references
+        and policies.get(p, {}).get("admissible")
+    ]
     versus: dict[str, Any] = {}
     for v in variants:
         z = out.get(zero, {}).get("variants", {}).get(v)
@@ -140,12 +148,15 @@ def markdown(summary: dict[str, Any], zero: str) -> str:
     if not plants:
         return ""
     n = len(summary["run"]["seeds"])
-    lines = [f"Every policy but the references commissioned on the nominal plant and run "
-             f"unchanged on the model-mismatch variants (docs/robustness.md) under "
-             f"`{SCENARIO}` ({n} seeds; a trained agent over its training runs). Cells: mean "
-             "return on the variant (its ratio to the same policy's mean return on the "
-             "nominal plant, same runs and seeds: 1.00 as good as on the model, 1.30 = 30 % "
-             "more cost); worst: the variant with the highest ratio.", ""]  # fmt: skip
+    lines = [
+        f"Every policy but the references commissioned on the nominal plant and run "
+        f"unchanged on the model-mismatch variants (docs/robustness.md) under "
+        f"`{SCENARIO}` ({n} seeds; a trained agent over its training runs). Cells: mean "
+        "return on the variant (its ratio to the same policy's mean return on the "
+        "nominal plant, same runs and seeds: 1.00 as good as on the model, 1.30 = 30 % "
+        "more cost); worst: the variant with the highest ratio.",
+        "",
+    ]
     for env_id, p in plants.items():
         rob = p["robustness"]
         header = ["policy", "nominal return", *rob["variants"], "worst", "failed"]
@@ -153,10 +164,15 @@ def markdown(summary: dict[str, Any], zero: str) -> str:
         for k in _order(p):
             e = rob["policies"][k]
             worst = e.get("worst")
-            body.append([k, f"{e['nominal_return']:.1f}" if "nominal_return" in e else "-",
-                         *(_cell(e["variants"].get(v)) for v in rob["variants"]),
-                         f"{worst['relative']:.2f} ({worst['variant']})" if worst else "-",
-                         str(e["failed"])])  # fmt: skip
+            body.append(
+                [
+                    k,
+                    f"{e['nominal_return']:.1f}" if "nominal_return" in e else "-",
+                    *(_cell(e["variants"].get(v)) for v in rob["variants"]),
+                    f"{worst['relative']:.2f} ({worst['variant']})" if worst else "-",
+                    str(e["failed"]),
+                ]
+            )
         lines += [
             f"#### {env_id.split('/')[-1]}",
             "",
@@ -199,5 +215,13 @@ def worst_markdown(summary: dict[str, Any]) -> str:
             w = summary["plants"][e]["robustness"]["policies"].get(k, {}).get("worst")
             cells.append(f"{w['relative']:.2f} ({w['variant']})" if w else "-")
         body.append([k, *cells])
-    return "\n".join(["| " + " | ".join(header) + " |", "|" + "---|" * len(header),
-                      *["| " + " | ".join(r) + " |" for r in body]]) + "\n"  # fmt: skip
+    return (
+        "\n".join(
+            [
+                "| " + " | ".join(header) + " |",
+                "|" + "---|" * len(header),
+                *["| " + " | ".join(r) + " |" for r in body],
+            ]
+        )
+        + "\n"
+    )

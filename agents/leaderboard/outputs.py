@@ -62,10 +62,8 @@ class Plots:
     def _summarize_shown(self, env_id: str) -> tuple[list[str], dict[str, str]]:
         rows = [r for r in _grid_rows(self.out, self.plan) if r["env"] == env_id]
         ok = [r for r in rows if not r.get("error")]
-        plant = (summarize(ok, _run_info(self.plan, [env_id]))[0]["plants"][env_id]
-                 if ok else {})  # fmt: skip
-        names = plots.trend_policies(plant, agent_names(self.plan.policies[env_id]),
-                                     self.every)  # fmt: skip
+        plant = summarize(ok, _run_info(self.plan, [env_id]))[0]["plants"][env_id] if ok else {}
+        names = plots.trend_policies(plant, agent_names(self.plan.policies[env_id]), self.every)
         notes = {}
         for name in names:
             e = plant.get("policies", {}).get(name, {})
@@ -83,32 +81,44 @@ class Plots:
         for name in names:
             if name not in traces:
                 try:
-                    runs = [r for r in self.plan.policies[env_id]
-                            if specs.split_run(r)[0] == name]  # fmt: skip
-                    pol = episodes.make_policy(runs[0] if runs else name, env_id, env,
-                                               self.plan.resolved[env_id, sc],
-                                               imports=self.plan.imports,
-                                               timeout=self.plan.episode_timeout,
-                                               oracle=self.plan.oracle)  # fmt: skip
+                    runs = [r for r in self.plan.policies[env_id] if specs.split_run(r)[0] == name]
+                    pol = episodes.make_policy(
+                        runs[0] if runs else name,
+                        env_id,
+                        env,
+                        self.plan.resolved[env_id, sc],
+                        imports=self.plan.imports,
+                        timeout=self.plan.episode_timeout,
+                        oracle=self.plan.oracle,
+                    )
                     try:
                         traces[name] = run_episode(env, pol, seed)["trace"]
                     finally:
                         episodes.close(pol)
                 except Exception as exc:  # noqa: BLE001 - that episode is in the record
-                    print(f"note: no trace of {name} seed {seed} for the plot: {exc}",
-                          file=sys.stderr)  # fmt: skip
+                    print(
+                        f"note: no trace of {name} seed {seed} for the plot: {exc}", file=sys.stderr
+                    )
         order = [n for n in names if n in traces]
         if order:
             title = self.plan.resolved[env_id, sc].name if _is_file(sc) else sc
-            trends.trend(_plot_path(self.out, env_id, sc), env, env_id, title,
-                        {n: traces[n] for n in order}, seed,
-                        colors=plots.policy_colors(names), notes=notes)  # fmt: skip
+            trends.trend(
+                _plot_path(self.out, env_id, sc),
+                env,
+                env_id,
+                title,
+                {n: traces[n] for n in order},
+                seed,
+                colors=plots.policy_colors(names),
+                notes=notes,
+            )
 
     def missing(self) -> list[tuple[str, str]]:
         """Groups without a plot file (after a resume with nothing left to run)."""
         groups = [(e, s) for e in self.plan.envs for s in self.plan.scenarios]
-        return [g for g in groups
-                if g[0] not in self.pending and not _plot_path(self.out, *g).exists()]  # fmt: skip
+        return [
+            g for g in groups if g[0] not in self.pending and not _plot_path(self.out, *g).exists()
+        ]
 
 
 def _grid_rows(out: Path, plan: Plan) -> list[dict]:
@@ -125,13 +135,24 @@ def _grid_rows(out: Path, plan: Plan) -> list[dict]:
 
 def _run_info(plan: Plan, envs: list[str] | None = None) -> dict[str, Any]:
     """leaderboard.json's ``run``: what ran, with the statistics' settings."""
-    return {"envs": envs or plan.envs, "scenarios": plan.scenarios, "policies": plan.policies,
-            "seeds": plan.seeds, "steamtemp_gym_version": steamtemp_gym.__version__,
-            "n_bootstrap": stats.N_BOOTSTRAP, "confidence": stats.CONFIDENCE,
-            "reference": REFERENCE, "versus": VERSUS,
-            "travel_budget": plan.travel_budget, "oracle": plan.oracle,
-            "mismatch": {e: [v.removeprefix(mismatch.PREFIX) for v in plan.variants.get(e, {})]
-                         for e in envs or plan.envs if plan.variants.get(e)}}  # fmt: skip
+    return {
+        "envs": envs or plan.envs,
+        "scenarios": plan.scenarios,
+        "policies": plan.policies,
+        "seeds": plan.seeds,
+        "steamtemp_gym_version": steamtemp_gym.__version__,
+        "n_bootstrap": stats.N_BOOTSTRAP,
+        "confidence": stats.CONFIDENCE,
+        "reference": REFERENCE,
+        "versus": VERSUS,
+        "travel_budget": plan.travel_budget,
+        "oracle": plan.oracle,
+        "mismatch": {
+            e: [v.removeprefix(mismatch.PREFIX) for v in plan.variants.get(e, {})]
+            for e in envs or plan.envs
+            if plan.variants.get(e)
+        },
+    }
 
 
 def _rebuild(out: Path, plan: Plan, figures: bool = True) -> tuple[list[dict], dict | None]:
@@ -141,8 +162,9 @@ def _rebuild(out: Path, plan: Plan, figures: bool = True) -> tuple[list[dict], d
     summary, norm = (None, {})
     if any(not r.get("error") for r in rows):
         summary, norm = summarize(rows, run)
-    doc = dict(summary or {"schema_version": SCHEMA_VERSION, "run": run, "plants": {},
-                           "ranking": []})  # fmt: skip
+    doc = dict(
+        summary or {"schema_version": SCHEMA_VERSION, "run": run, "plants": {}, "ranking": []}
+    )
     doc["episodes"] = rows
     (out / "leaderboard.json").write_text(dumps(doc, indent=1) + "\n")
     (out / "leaderboard.md").write_text(report.markdown(doc, rows))
@@ -151,9 +173,14 @@ def _rebuild(out: Path, plan: Plan, figures: bool = True) -> tuple[list[dict], d
         plots.bars(out / "plots" / "scores.png", summary)
         if any(norm.values()):
             pareto.pareto(out / "plots" / pareto.PARETO, summary)
-            plots.profiles(out / "plots" / "profiles.png", norm, len(plan.seeds),
-                           order=plots.figure_order(summary), highlight={
-                               e: plots.trend_policies(summary["plants"][e],
-                                                       agent_names(plan.policies[e]))
-                               for e in summary["plants"]})  # fmt: skip
+            plots.profiles(
+                out / "plots" / "profiles.png",
+                norm,
+                len(plan.seeds),
+                order=plots.figure_order(summary),
+                highlight={
+                    e: plots.trend_policies(summary["plants"][e], agent_names(plan.policies[e]))
+                    for e in summary["plants"]
+                },
+            )
     return rows, summary

@@ -41,33 +41,60 @@ def training_markdown(directory: Any) -> str:
         lo, hi = fmt.format(min(xs)), fmt.format(max(xs))
         return lo if lo == hi else f"{lo} to {hi}"
 
-    header = ["plant", "agent", "kind", "runs", "decisions trained", "decisions at the chosen "
-              "checkpoint", "wall time per run [min]", "validation return (reference's)",
-              "validation travel / reference's", "commissioning checks passed"]  # fmt: skip
+    header = [
+        "plant",
+        "agent",
+        "kind",
+        "runs",
+        "decisions trained",
+        "decisions at the chosen checkpoint",
+        "wall time per run [min]",
+        "validation return (reference's)",
+        "validation travel / reference's",
+        "commissioning checks passed",
+    ]
     body = []
     for (env_id, algo), runs in sorted(zoo_runs(directory).items()):
-        metas = [json.loads(steamtemp_files(directory, env_id, algo, k).meta[0].read_text())
-                 for k in runs]  # fmt: skip
+        metas = [
+            json.loads(steamtemp_files(directory, env_id, algo, k).meta[0].read_text())
+            for k in runs
+        ]
         plant, kind = env_id.split("/")[-1], agents.kind(algo)
         if "timesteps_trained" not in metas[0]:  # an offline clone
             t = [m["training"] for m in metas]
-            body.append([plant, f"sb3:{algo}", kind, str(len(runs)),
-                         f"offline: {span([x['transitions'] / 1e3 for x in t], '{:.0f}')}k "
-                         f"transitions x {span([x['epochs'] for x in t], '{:d}')} epochs", "-",
-                         span([x["seconds"] / 60 for x in t], "{:.1f}"), "-", "-",
-                         "-"])  # fmt: skip
+            body.append(
+                [
+                    plant,
+                    f"sb3:{algo}",
+                    kind,
+                    str(len(runs)),
+                    f"offline: {span([x['transitions'] / 1e3 for x in t], '{:.0f}')}k "
+                    f"transitions x {span([x['epochs'] for x in t], '{:d}')} epochs",
+                    "-",
+                    span([x["seconds"] / 60 for x in t], "{:.1f}"),
+                    "-",
+                    "-",
+                    "-",
+                ]
+            )
             continue
         v = [m["validation"] for m in metas]
         checked = [x["best"]["check"] for x in v if "check" in x["best"]]
-        body.append([plant, f"sb3:{algo}", kind, str(len(runs)),
-                     span([m["timesteps_trained"] / 1e6 for m in metas], "{:.2f}") + "M",
-                     span([m["timesteps_of_best"] / 1e6 for m in metas], "{:.2f}") + "M",
-                     span([m["wall_time_s"] / 60 for m in metas], "{:.1f}"),
-                     span([x["best"]["return"] for x in v], "{:.1f}")
-                     + f" ({span([x['reference']['return'] for x in v], '{:.1f}')})",
-                     span([x["best"]["travel_ratio"] for x in v], "{:.2f}") + "x",
-                     f"{sum(not c for c in checked)} of {len(v)} runs" if checked
-                     else "-"])  # fmt: skip
+        body.append(
+            [
+                plant,
+                f"sb3:{algo}",
+                kind,
+                str(len(runs)),
+                span([m["timesteps_trained"] / 1e6 for m in metas], "{:.2f}") + "M",
+                span([m["timesteps_of_best"] / 1e6 for m in metas], "{:.2f}") + "M",
+                span([m["wall_time_s"] / 60 for m in metas], "{:.1f}"),
+                span([x["best"]["return"] for x in v], "{:.1f}")
+                + f" ({span([x['reference']['return'] for x in v], '{:.1f}')})",
+                span([x["best"]["travel_ratio"] for x in v], "{:.2f}") + "x",
+                f"{sum(not c for c in checked)} of {len(v)} runs" if checked else "-",
+            ]
+        )
     return "\n".join(table_lines(header, body)) + "\n"
 
 
@@ -76,8 +103,10 @@ def baselines_markdown(summary: dict[str, Any]) -> str:
     the reference's and valve reversals, over scenario x seed (the actuator columns of
     docs/baselines.md's valve-activity table); † = not admissible."""
     plants = list(summary["plants"])
-    header = ["baseline", *[f"{p.split('/')[-1]}: IAE [K s] / travel / reversals / rejected"
-                            for p in plants]]  # fmt: skip
+    header = [
+        "baseline",
+        *[f"{p.split('/')[-1]}: IAE [K s] / travel / reversals / rejected" for p in plants],
+    ]
     body = []
     limit = budget(summary)
     for name in baselines.NAMES:
@@ -89,14 +118,19 @@ def baselines_markdown(summary: dict[str, Any]) -> str:
                 continue
             met = pe["metrics"]
             mark = f" {INADMISSIBLE}" if pe.get("admissible") is False else ""
-            cells.append(f"{num(met.get('iae_K_s'), 0)} / {travel_cell(pe, limit)} / "
-                         f"{num(met.get('valve_reversals'), 0)} / "
-                         f"{rejected_cell(pe)}{mark}")  # fmt: skip
+            cells.append(
+                f"{num(met.get('iae_K_s'), 0)} / {travel_cell(pe, limit)} / "
+                f"{num(met.get('valve_reversals'), 0)} / "
+                f"{rejected_cell(pe)}{mark}"
+            )
         if any(c != "-" for c in cells):
             body.append([f"`{name}`", *cells])
     n = len(summary["run"]["seeds"])
-    lines = [f"Means over scenario × seed ({n} seeds); {admissibility_note(summary)[:-1]}; "
-             f"{rejected_note()}", ""]  # fmt: skip
+    lines = [
+        f"Means over scenario × seed ({n} seeds); {admissibility_note(summary)[:-1]}; "
+        f"{rejected_note()}",
+        "",
+    ]
     return "\n".join(lines + table_lines(header, body)) + "\n"
 
 
@@ -115,8 +149,14 @@ def realism_markdown(summary: dict[str, Any]) -> str:
                 continue
             listed = "; ".join(x.split(" ", 1)[1] for x in r["listed"])
             more = "; ..." if r["breaches"] > len(r["listed"]) else ""
-            rows.append([f"`{name}`", env_id.split("/")[-1], f"{r['breaches']}/{r['episodes']}",
-                         listed + more])  # fmt: skip
+            rows.append(
+                [
+                    f"`{name}`",
+                    env_id.split("/")[-1],
+                    f"{r['breaches']}/{r['episodes']}",
+                    listed + more,
+                ]
+            )
     n = len(summary["run"]["seeds"])
     head = (
         f"Over every scenario and seed ({n} seeds) of the run, {clean} of "
@@ -148,14 +188,24 @@ def comparison_markdown(summary: dict[str, Any], policies: list[str]) -> str:
     quiet peak-to-peak of each of ``policies``, side by side (``a / b / c`` per cell; "-"
     where a policy was not run or a metric does not apply)."""
     n = len(summary["run"]["seeds"])
-    lines = [f"Means over seeds ({n} seeds); each cell is {' / '.join(policies)}; quiet "
-             "p2p: the main-steam error's peak-to-peak over the quiet stretch after the "
-             "scenario's last scheduled change (- where it does not apply).", ""]  # fmt: skip
+    lines = [
+        f"Means over seeds ({n} seeds); each cell is {' / '.join(policies)}; quiet "
+        "p2p: the main-steam error's peak-to-peak over the quiet stretch after the "
+        "scenario's last scheduled change (- where it does not apply).",
+        "",
+    ]
     header = ["scenario", *(COLUMNS[m][0] for m in COMPARISON_METRICS)]
     for env_id, plant in summary["plants"].items():
         body = []
         for sc, cells in plant["scenarios"].items():
-            body.append([sc, *(" / ".join(cell(m, cells.get(p, {}).get(m)) for p in policies)
-                               for m in COMPARISON_METRICS)])  # fmt: skip
+            body.append(
+                [
+                    sc,
+                    *(
+                        " / ".join(cell(m, cells.get(p, {}).get(m)) for p in policies)
+                        for m in COMPARISON_METRICS
+                    ),
+                ]
+            )
         lines += [f"#### {env_id.split('/')[-1]}", "", *table_lines(header, body), ""]
     return "\n".join(lines)

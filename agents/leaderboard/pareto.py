@@ -52,8 +52,11 @@ PARETO_FLOOR = -1.0
 
 def _points(pols: dict[str, Any]) -> dict[str, tuple[float, float]]:
     """Name -> (travel ratio, IQM score) of the plant's policies that have both."""
-    return {p: (e["travel_ratio"], e["normalized_score"]["iqm"]["value"]) for p, e in pols.items()
-            if "travel_ratio" in e and "normalized_score" in e}  # fmt: skip
+    return {
+        p: (e["travel_ratio"], e["normalized_score"]["iqm"]["value"])
+        for p, e in pols.items()
+        if "travel_ratio" in e and "normalized_score" in e
+    }
 
 
 def _dark(color: str) -> tuple[float, float, float]:
@@ -74,8 +77,11 @@ def _samples(ax: Any, lines: Sequence[np.ndarray], step: float = 4.0) -> list[np
     return out
 
 
-def _place_labels(ax: Any, anchors: list[tuple[float, float, str, dict[str, Any]]],
-                  lines: Sequence[np.ndarray] = ()) -> None:  # fmt: skip
+def _place_labels(
+    ax: Any,
+    anchors: list[tuple[float, float, str, dict[str, Any]]],
+    lines: Sequence[np.ndarray] = (),
+) -> None:
     """Write each label next to its point (data coordinates) where it overlaps no label
     already placed, no point and none of ``lines`` (polylines in data coordinates), trying
     offsets around the point from near to far; a label set apart is joined to its point by
@@ -86,20 +92,27 @@ def _place_labels(ax: Any, anchors: list[tuple[float, float, str, dict[str, Any]
     box = ax.get_window_extent(renderer)
     taken = []
     pts = [ax.transData.transform((x, y)) for x, y, _, _ in anchors] + _samples(ax, lines)
-    offsets = [(dx * r, dy * r) for r in (1, 2, 3, 4.5)
-               for dx, dy in ((1, 0), (1, 1), (1, -1), (-1, 0), (-1, 1), (-1, -1), (0, 1.6),
-                              (0, -1.6))]  # fmt: skip
+    offsets = [
+        (dx * r, dy * r)
+        for r in (1, 2, 3, 4.5)
+        for dx, dy in ((1, 0), (1, 1), (1, -1), (-1, 0), (-1, 1), (-1, -1), (0, 1.6), (0, -1.6))
+    ]
     for x, y, text, style in anchors:
         best = None
         for dx, dy in offsets:
             ha = "left" if dx > 0 else "right" if dx < 0 else "center"
-            t = ax.annotate(text, (x, y), xytext=(7 * dx, 6 * dy), textcoords="offset points",
-                            ha=ha, va="center", **style)  # fmt: skip
+            t = ax.annotate(
+                text,
+                (x, y),
+                xytext=(7 * dx, 6 * dy),
+                textcoords="offset points",
+                ha=ha,
+                va="center",
+                **style,
+            )
             bb = t.get_window_extent(renderer).expanded(1.05, 1.15)
-            inside = (bb.x0 >= box.x0 and bb.x1 <= box.x1 and bb.y0 >= box.y0
-                      and bb.y1 <= box.y1)  # fmt: skip
-            hits = sum(bb.overlaps(o) for o in taken) + sum(
-                bb.contains(qx, qy) for qx, qy in pts)  # fmt: skip
+            inside = bb.x0 >= box.x0 and bb.x1 <= box.x1 and bb.y0 >= box.y0 and bb.y1 <= box.y1
+            hits = sum(bb.overlaps(o) for o in taken) + sum(bb.contains(qx, qy) for qx, qy in pts)
             cost = hits + (0 if inside else 10)
             if best is None or cost < best[0]:
                 if best is not None:
@@ -112,9 +125,19 @@ def _place_labels(ax: Any, anchors: list[tuple[float, float, str, dict[str, Any]
         _, t, bb, (dx, dy) = best
         if abs(dx) > 1 or abs(dy) > 1.6:
             t.arrow_patch = None
-            ax.annotate("", (x, y), xytext=(7 * dx, 6 * dy), textcoords="offset points",
-                        arrowprops={"arrowstyle": "-", "lw": 0.5, "color": "0.5",
-                                    "shrinkA": 0, "shrinkB": 3})  # fmt: skip
+            ax.annotate(
+                "",
+                (x, y),
+                xytext=(7 * dx, 6 * dy),
+                textcoords="offset points",
+                arrowprops={
+                    "arrowstyle": "-",
+                    "lw": 0.5,
+                    "color": "0.5",
+                    "shrinkA": 0,
+                    "shrinkB": 3,
+                },
+            )
         taken.append(bb)
 
 
@@ -124,22 +147,55 @@ def _pareto_keys(limit: float) -> list[Any]:
     from matplotlib.patches import Patch
 
     dot = {"ls": "none", "marker": "o", "ms": 6}
-    return [Line2D([], [], color="k", lw=1.4,
-                   label="Pareto front: the admissible policies that no\nother beats on "
-                         "both score and travel (labelled)"),
-            Line2D([], [], color="0.6", **{**dot, "ms": 4},
-                   label="another policy (grey, unlabelled)"),
-            Line2D([], [], color="0.3", mfc="white", mew=1.2, **dot,
-                   label=f"{INADMISSIBLE} not admissible (hollow; labelled where no\n"
-                         "admissible policy beats it on both)"),
-            Patch(color="#d62728", alpha=0.15,
-                  label=f"over the travel budget ({limit:g}x {ZERO}'s)"),
-            Line2D([], [], color=BASELINE_COLORS[0], ls="none", marker="s", ms=6,
-                   label=f"{ZERO}, the score's 0"),
-            Line2D([], [], color=REFERENCE_COLORS[ONE], ls="none", marker="*", ms=9,
-                   label=f"{ONE}, the score's 1"),
-            Line2D([], [], color="0.5", ls="none", marker="v", ms=6,
-                   label="beyond the axis, at its edge (travel, score)")]  # fmt: skip
+    return [
+        Line2D(
+            [],
+            [],
+            color="k",
+            lw=1.4,
+            label="Pareto front: the admissible policies that no\nother beats on "
+            "both score and travel (labelled)",
+        ),
+        Line2D([], [], color="0.6", **{**dot, "ms": 4}, label="another policy (grey, unlabelled)"),
+        Line2D(
+            [],
+            [],
+            color="0.3",
+            mfc="white",
+            mew=1.2,
+            **dot,
+            label=f"{INADMISSIBLE} not admissible (hollow; labelled where no\n"
+            "admissible policy beats it on both)",
+        ),
+        Patch(color="#d62728", alpha=0.15, label=f"over the travel budget ({limit:g}x {ZERO}'s)"),
+        Line2D(
+            [],
+            [],
+            color=BASELINE_COLORS[0],
+            ls="none",
+            marker="s",
+            ms=6,
+            label=f"{ZERO}, the score's 0",
+        ),
+        Line2D(
+            [],
+            [],
+            color=REFERENCE_COLORS[ONE],
+            ls="none",
+            marker="*",
+            ms=9,
+            label=f"{ONE}, the score's 1",
+        ),
+        Line2D(
+            [],
+            [],
+            color="0.5",
+            ls="none",
+            marker="v",
+            ms=6,
+            label="beyond the axis, at its edge (travel, score)",
+        ),
+    ]
 
 
 def pareto(path: Path, summary: dict[str, Any]) -> Path:
@@ -174,8 +230,9 @@ def pareto(path: Path, summary: dict[str, Any]) -> Path:
     return path
 
 
-def _pareto_panel(ax: Any, env_id: str, pols: dict[str, Any], colors: dict[str, str],
-                  limit: float) -> None:  # fmt: skip
+def _pareto_panel(
+    ax: Any, env_id: str, pols: dict[str, Any], colors: dict[str, str], limit: float
+) -> None:
     """One plant's panel of :func:`pareto`: its policies ``pols`` (the summary's) against
     the travel budget ``limit``, the Pareto front joined, the labels placed."""
     pts = _points(pols)
@@ -211,8 +268,7 @@ def _draw_budget(ax: Any, limit: float, view: tuple[float, float, float]) -> Non
     ax.set_ylim(lo, hi)
     ax.axvspan(limit, right, color="#d62728", alpha=0.06, lw=0)
     ax.axvline(limit, color="#d62728", lw=1.2, ls="--")
-    ax.text(limit, hi, f" budget {limit:g}x", color="#d62728", ha="left", va="top",
-            fontsize=8)  # fmt: skip
+    ax.text(limit, hi, f" budget {limit:g}x", color="#d62728", ha="left", va="top", fontsize=8)
     ax.axhline(0, color="k", lw=0.6)
     ax.axhline(1, color="k", lw=0.6, ls=":")
 
@@ -225,14 +281,30 @@ def _draw_front(ax: Any, front: list[tuple[float, float]], limit: float) -> list
         return []
     xs = [x for x, _ in front] + [limit]
     ys = [y for _, y in front]
-    ax.step(xs, [*ys, ys[-1]], where="post", color="k", lw=1.4, zorder=2,
-            label="Pareto front of the admissible policies")  # fmt: skip
+    ax.step(
+        xs,
+        [*ys, ys[-1]],
+        where="post",
+        color="k",
+        lw=1.4,
+        zorder=2,
+        label="Pareto front of the admissible policies",
+    )
     return [[c for k, y in enumerate(ys) for c in ((xs[k], y), (xs[k + 1], y))]]
 
 
-def _draw_point(ax: Any, p: str, xy: tuple[float, float], pe: dict[str, Any], color: str,
-                labelled: bool, limit: float, view: tuple[float, float, float],
-                anchors: list[Any], lines: list[Any]) -> None:  # fmt: skip
+def _draw_point(
+    ax: Any,
+    p: str,
+    xy: tuple[float, float],
+    pe: dict[str, Any],
+    color: str,
+    labelled: bool,
+    limit: float,
+    view: tuple[float, float, float],
+    anchors: list[Any],
+    lines: list[Any],
+) -> None:
     """Draw policy ``p`` at ``xy`` (travel ratio, score) with its 95 % CI (``pe``: its
     summary entry), hollow where not admissible; a point beyond ``view`` sits at its edge
     as a triangle. Adds its CI bar to ``lines`` and, if ``labelled``, its label to
@@ -246,12 +318,20 @@ def _draw_point(ax: Any, p: str, xy: tuple[float, float], pe: dict[str, Any], co
     edge = x > right or y < lo
     if edge:
         marker = ">" if x > right else "v"
-    ax.errorbar([shown_x], [shown_y],
-                yerr=None if edge else [[y - max(ci[0], lo)], [min(ci[1], hi) - y]],
-                fmt=marker, ms=9 if marker == "*" else 6 if labelled else 4,
-                color=color, mfc="white" if hollow else color, mew=1.2,
-                elinewidth=0.9, capsize=2, zorder=3 if labelled else 1,
-                clip_on=False)  # fmt: skip
+    ax.errorbar(
+        [shown_x],
+        [shown_y],
+        yerr=None if edge else [[y - max(ci[0], lo)], [min(ci[1], hi) - y]],
+        fmt=marker,
+        ms=9 if marker == "*" else 6 if labelled else 4,
+        color=color,
+        mfc="white" if hollow else color,
+        mew=1.2,
+        elinewidth=0.9,
+        capsize=2,
+        zorder=3 if labelled else 1,
+        clip_on=False,
+    )
     if not edge:
         lines.append([(shown_x, max(ci[0], lo)), (shown_x, min(ci[1], hi))])
     if labelled:

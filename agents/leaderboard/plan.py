@@ -36,8 +36,14 @@ from steamtemp_gym.scenarios import heldout
 from steamtemp_gym.testing import guard
 
 #: The named scenarios every plant has, then the held-out set (steamtemp_gym/scenarios/heldout).
-NAMED_SCENARIOS = ("load_ramp_100_50", "load_ramp_50_100", "load_cycle", "setpoint_step",
-                   "heat_imbalance_step", "load_following")  # fmt: skip
+NAMED_SCENARIOS = (
+    "load_ramp_100_50",
+    "load_ramp_50_100",
+    "load_cycle",
+    "setpoint_step",
+    "heat_imbalance_step",
+    "load_following",
+)
 DEFAULT_SCENARIOS = NAMED_SCENARIOS + tuple(heldout.PREFIX + n for n in heldout.NAMES)
 DEFAULT_SEEDS = "0-4"
 #: The frozen-valve reference run on every plant (agents/difficulty.py).
@@ -161,8 +167,11 @@ def _sb3() -> bool:
     if importlib.util.find_spec("stable_baselines3") is not None:
         return True
     if agents.shipped():
-        print("note: the trained agents (sb3:*) are left out: they need the agents extra, "
-              "pip install 'steamtemp-gym[agents]'", file=sys.stderr)  # fmt: skip
+        print(
+            "note: the trained agents (sb3:*) are left out: they need the agents extra, "
+            "pip install 'steamtemp-gym[agents]'",
+            file=sys.stderr,
+        )
     return False
 
 
@@ -172,9 +181,14 @@ def _resolve(spec: str, env_id: str) -> Any:
     return scenarios.resolve(spec, env_id)
 
 
-def _policies(ap: argparse.ArgumentParser, envs: list[str], text: str | None,
-              oracle: bool = True, imports: tuple[str, ...] = (),
-              timeout: float | None = EPISODE_TIMEOUT_S) -> dict:  # fmt: skip
+def _policies(
+    ap: argparse.ArgumentParser,
+    envs: list[str],
+    text: str | None,
+    oracle: bool = True,
+    imports: tuple[str, ...] = (),
+    timeout: float | None = EPISODE_TIMEOUT_S,
+) -> dict:
     """Policies per env; every requested name must parse (agents/specs.py) and be available
     for at least one env, and a factory's policy is built once on each env and checked, in
     a process of its own as it runs (agents/leaderboard/isolated.py), within ``timeout``.
@@ -194,8 +208,10 @@ def _policies(ap: argparse.ArgumentParser, envs: list[str], text: str | None,
         except ValueError as exc:
             ap.error(f"argument --policies: {head(str(exc), 1000)}")
         if parsed[n].kind in (specs.SHIPPED, specs.FILES) and not _sb3():
-            ap.error(f"argument --policies: {head(n, 60)!r} is a trained agent: it needs the "
-                     "agents extra, pip install 'steamtemp-gym[agents]'")  # fmt: skip
+            ap.error(
+                f"argument --policies: {head(n, 60)!r} is a trained agent: it needs the "
+                "agents extra, pip install 'steamtemp-gym[agents]'"
+            )
 
     def here(n: str, e: str) -> bool:
         return n not in parsed or parsed[n].available(e)
@@ -216,8 +232,7 @@ def _policies(ap: argparse.ArgumentParser, envs: list[str], text: str | None,
             try:
                 PolicyProcess(n, e, None, None, imports, timeout).close()
             except PolicyFailed as exc:  # any failure is a bad --policies value
-                ap.error(f"argument --policies: {head(n, 60)!r} on {e}: "
-                         f"{head(str(exc), _EXCERPT)}")  # fmt: skip
+                ap.error(f"argument --policies: {head(n, 60)!r} on {e}: {head(str(exc), _EXCERPT)}")
         pols += [p for p in always if p not in pols]
     return out
 
@@ -276,13 +291,19 @@ def _policy_digest(env_id: str, name: str, oracle: str = DEFAULT_ENGINE) -> str:
     return specs.parse(name).digest(env_id)
 
 
-def fingerprint(env_id: str, scenario: Any, policy_digest: str, source_digest: str,
-                params: dict | None = None) -> str:  # fmt: skip
+def fingerprint(
+    env_id: str, scenario: Any, policy_digest: str, source_digest: str, params: dict | None = None
+) -> str:
     """Short hash of everything but the seed that decides an episode's result (``params``:
     a mismatch variant's plant parameters)."""
     sc = scenario.to_dict() if isinstance(scenario, scenarios.Scenario) else str(scenario)
-    payload = {"schema": SCHEMA, "env": env_id, "scenario": sc, "policy": policy_digest,
-               "source": source_digest}  # fmt: skip
+    payload = {
+        "schema": SCHEMA,
+        "env": env_id,
+        "scenario": sc,
+        "policy": policy_digest,
+        "source": source_digest,
+    }
     if params:
         payload["params"] = params
     text = json.dumps(payload, sort_keys=True, allow_nan=False, default=str)
@@ -292,8 +313,12 @@ def fingerprint(env_id: str, scenario: Any, policy_digest: str, source_digest: s
 def episode_fingerprint(env_id: str, scenario: str, name: str, oracle: str = DEFAULT_ENGINE) -> str:
     """The fingerprint :func:`build_plan` gives the episodes of policy ``name`` on the
     nominal plant of ``env_id`` under ``scenario`` (a name as ``--scenarios`` takes it)."""
-    return fingerprint(env_id, _resolve(scenario, env_id), _policy_digest(env_id, name, oracle),
-                       specs.source_digest(env_id))  # fmt: skip
+    return fingerprint(
+        env_id,
+        _resolve(scenario, env_id),
+        _policy_digest(env_id, name, oracle),
+        specs.source_digest(env_id),
+    )
 
 
 def _import_modules(ap: argparse.ArgumentParser, imports: tuple[str, ...]) -> tuple[str, ...]:
@@ -305,8 +330,10 @@ def _import_modules(ap: argparse.ArgumentParser, imports: tuple[str, ...]) -> tu
         except BaseException as exc:
             if not guard.own_failure(exc):  # Ctrl-C
                 raise
-            ap.error(f"argument --import: cannot import {head(module, 100)!r}: "
-                     f"{head(guard.describe(exc, 'the module'), _EXCERPT)}")  # fmt: skip
+            ap.error(
+                f"argument --import: cannot import {head(module, 100)!r}: "
+                f"{head(guard.describe(exc, 'the module'), _EXCERPT)}"
+            )
     return imports
 
 
@@ -334,15 +361,23 @@ def build_plan(ap: argparse.ArgumentParser, args: argparse.Namespace) -> Plan:
     envs = [_env_id(e) for e in envs]
     seeds = parse_seeds(ap, args.seeds)
     budget = _number(
-        ap, "--travel-budget", args.travel_budget, lambda v: v > 0.0,
+        ap,
+        "--travel-budget",
+        args.travel_budget,
+        lambda v: v > 0.0,
         f"a finite number > 0 (a multiple of {summary.ZERO}'s valve travel)",
-    )  # fmt: skip
-    timeout = _number(ap, "--episode-timeout",
-                      getattr(args, "episode_timeout", str(EPISODE_TIMEOUT_S)),
-                      lambda v: v >= 0.0, "a number of seconds >= 0 (0: no limit)")  # fmt: skip
+    )
+    timeout = _number(
+        ap,
+        "--episode-timeout",
+        getattr(args, "episode_timeout", str(EPISODE_TIMEOUT_S)),
+        lambda v: v >= 0.0,
+        "a number of seconds >= 0 (0: no limit)",
+    )
     timeout = timeout or None
-    pols = _policies(ap, envs, args.policies, oracle=not args.no_oracle, imports=imports,
-                     timeout=timeout)  # fmt: skip
+    pols = _policies(
+        ap, envs, args.policies, oracle=not args.no_oracle, imports=imports, timeout=timeout
+    )
     scs = _items(ap, "--scenarios", args.scenarios, key=_scenario_key)
     if args.out is None or str(args.out).strip() == "":
         ap.error("argument --out: empty path")

@@ -31,14 +31,41 @@ from agents.leaderboard.report import INADMISSIBLE, ratio
 from agents.leaderboard.summary import ONE, REFERENCES, ZERO, agent_names
 
 DPI = 150
-RC = {"font.size": 10, "axes.titlesize": 11, "axes.labelsize": 10, "legend.fontsize": 9,
-      "xtick.labelsize": 9, "ytick.labelsize": 9}  # fmt: skip
+RC = {
+    "font.size": 10,
+    "axes.titlesize": 11,
+    "axes.labelsize": 10,
+    "legend.fontsize": 9,
+    "xtick.labelsize": 9,
+    "ytick.labelsize": 9,
+}
 #: The baselines' colours (blues, greens, teals; the first is the reference's), in order.
-BASELINE_COLORS = ("#08306b", "#1f77b4", "#2ca02c", "#17becf", "#74c476", "#00695c", "#6baed6",
-                   "#00a087", "#1b5e20", "#4dd0e1", "#80cbc4")  # fmt: skip
+BASELINE_COLORS = (
+    "#08306b",
+    "#1f77b4",
+    "#2ca02c",
+    "#17becf",
+    "#74c476",
+    "#00695c",
+    "#6baed6",
+    "#00a087",
+    "#1b5e20",
+    "#4dd0e1",
+    "#80cbc4",
+)
 #: The other policies' colours (trained agents, your own: oranges, reds, purples), in order.
-AGENT_COLORS = ("#ff7f0e", "#d62728", "#9467bd", "#e377c2", "#8c564b", "#6a1b9a", "#c2185b",
-                "#fdae6b", "#7f0000", "#b39ddb")  # fmt: skip
+AGENT_COLORS = (
+    "#ff7f0e",
+    "#d62728",
+    "#9467bd",
+    "#e377c2",
+    "#8c564b",
+    "#6a1b9a",
+    "#c2185b",
+    "#fdae6b",
+    "#7f0000",
+    "#b39ddb",
+)
 #: HSV hue ranges of the two families (extra colours are drawn from them; agents' wraps 1).
 BASELINE_HUES, AGENT_HUES = (0.30, 0.68), (0.72, 1.10)
 #: The references: the oracle near black, the frozen valve mid grey.
@@ -84,8 +111,9 @@ def policy_colors(names: Sequence[str]) -> dict[str, str]:
         elif name == ZERO:
             color = BASELINE_COLORS[0]
         else:
-            pal, hues = ((BASELINE_COLORS, BASELINE_HUES) if k == "baseline"
-                         else (AGENT_COLORS, AGENT_HUES))  # fmt: skip
+            pal, hues = (
+                (BASELINE_COLORS, BASELINE_HUES) if k == "baseline" else (AGENT_COLORS, AGENT_HUES)
+            )
             color = None
             while color is None or color in used:
                 i = counts[k]
@@ -108,8 +136,9 @@ def line_style(name: str, color: str) -> dict[str, Any]:
     return {"color": color, "lw": 1.4, "ls": "-"}
 
 
-def trend_policies(plant: dict[str, Any], available: Sequence[str],
-                   every: bool = False) -> list[str]:  # fmt: skip
+def trend_policies(
+    plant: dict[str, Any], available: Sequence[str], every: bool = False
+) -> list[str]:
     """The policies a plant's trend plots show, in legend order.
 
     By default the reference ``cascade_pi_ff``, the ``oracle``, ``cascade_pi`` and the
@@ -217,16 +246,26 @@ def bars(path: Path, summary: dict[str, Any]) -> Path:
             lo = max(lo_all, -1.0) - 0.05
             hi = PROFILE_RANGE[1]
             shown = np.clip(x, lo, hi)
-            err = np.array([[max(s - max(v["ci95"][0], lo), 0.0),
-                             max(min(v["ci95"][1], hi) - s, 0.0)]
-                            for s, v in zip(shown, vals, strict=True)])  # fmt: skip
-            ax.barh(y, shown, xerr=err.T if len(vals) else None,
-                    color=[colors[p] for p in ranked], alpha=0.85, capsize=3)  # fmt: skip
+            err = np.array(
+                [
+                    [max(s - max(v["ci95"][0], lo), 0.0), max(min(v["ci95"][1], hi) - s, 0.0)]
+                    for s, v in zip(shown, vals, strict=True)
+                ]
+            )
+            ax.barh(
+                y,
+                shown,
+                xerr=err.T if len(vals) else None,
+                color=[colors[p] for p in ranked],
+                alpha=0.85,
+                capsize=3,
+            )
             for k in np.flatnonzero(x < lo):
                 ax.text(lo, y[k], f" ◀ {x[k]:.2f}", va="center", ha="left", fontsize=8)
             ax.set_xlim(lo, hi)
-            ax.set_yticks(y, [_bar_label(p, pols[p], summary["run"].get("travel_budget"))
-                              for p in ranked])  # fmt: skip
+            ax.set_yticks(
+                y, [_bar_label(p, pols[p], summary["run"].get("travel_budget")) for p in ranked]
+            )
             ax.invert_yaxis()
             ax.axvline(0, color="k", lw=0.8)
             ax.axvline(1, color="k", lw=0.8, ls="--")
@@ -249,8 +288,7 @@ def bars(path: Path, summary: dict[str, Any]) -> Path:
             f"IQM over scenario × seed ({len(n_seeds)} seeds), 95 % stratified-bootstrap "
             f"CI; blue/green: baselines, orange/red/purple: trained agents{note}"
         )
-        fig.suptitle("\n".join(textwrap.fill(line, int(width * 13))
-                               for line in title.split("\n")))  # fmt: skip
+        fig.suptitle("\n".join(textwrap.fill(line, int(width * 13)) for line in title.split("\n")))
         fig.tight_layout()
         save(fig, path)
     return path
@@ -292,8 +330,10 @@ def profiles(
                 prof = stats.performance_profile(tasks, taus)
                 (line,) = ax.plot(taus, prof, label=pol, **style)
                 handles.setdefault(pol, line)
-                for x, y, edge, marker in ((lo, prof[0], prof[0] < 1.0, "<"),
-                                           (hi, prof[-1], prof[-1] > 0.0, ">")):  # fmt: skip
+                for x, y, edge, marker in (
+                    (lo, prof[0], prof[0] < 1.0, "<"),
+                    (hi, prof[-1], prof[-1] > 0.0, ">"),
+                ):
                     if edge:
                         ax.plot(
                             [x],
@@ -322,12 +362,15 @@ def profiles(
             ax.axis("off")
         legend_args = {"handles": proxies, "labels": labels}
         if spare:
-            spare[0].legend(loc="center", ncol=2, title="bold: the plant's trend-plot policies",
-                            **legend_args)  # fmt: skip
+            spare[0].legend(
+                loc="center", ncol=2, title="bold: the plant's trend-plot policies", **legend_args
+            )
         else:
             fig.legend(loc="center left", bbox_to_anchor=(1.0, 0.5), **legend_args)
-        fig.suptitle(f"Performance profiles over scenario × seed ({n_seeds} seeds); "
-                     f"0 = {ZERO}, 1 = {ONE}; ◀ ▶: the curve goes on beyond the axis")  # fmt: skip
+        fig.suptitle(
+            f"Performance profiles over scenario × seed ({n_seeds} seeds); "
+            f"0 = {ZERO}, 1 = {ONE}; ◀ ▶: the curve goes on beyond the axis"
+        )
         fig.tight_layout()
         save(fig, path, bbox_inches="tight")
     return path

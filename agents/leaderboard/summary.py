@@ -49,11 +49,28 @@ REFERENCES = ("oracle", "frozen_valve")
 REFERENCE = "frozen_valve"
 #: The policy the probability of improvement compares against.
 VERSUS = ZERO
-TABLE_METRICS = ("iae_K_s", "max_abs_dev_K", "time_outside_5K_s", "overshoot_pct",
-                 "settling_time_s", "spray_used_kg", "valve_travel", "valve_reversals",
-                 "quiet_p2p_K", "return")  # fmt: skip
-SUMMARY_METRICS = ("iae_K_s", "max_abs_dev_K", "time_outside_5K_s", "time_outside_8K_s",
-                   "spray_used_kg", "valve_travel", "valve_reversals", "return")  # fmt: skip
+TABLE_METRICS = (
+    "iae_K_s",
+    "max_abs_dev_K",
+    "time_outside_5K_s",
+    "overshoot_pct",
+    "settling_time_s",
+    "spray_used_kg",
+    "valve_travel",
+    "valve_reversals",
+    "quiet_p2p_K",
+    "return",
+)
+SUMMARY_METRICS = (
+    "iae_K_s",
+    "max_abs_dev_K",
+    "time_outside_5K_s",
+    "time_outside_8K_s",
+    "spray_used_kg",
+    "valve_travel",
+    "valve_reversals",
+    "return",
+)
 
 
 def _applicable(m: dict[str, Any]) -> dict[str, float]:
@@ -73,8 +90,10 @@ def _means(ms: list[dict[str, float]], keys) -> dict[str, float]:
     return out
 
 
-def _estimate(tasks: list[np.ndarray], by_run: list[list[np.ndarray]] | None = None,
-              ) -> dict[str, Any]:  # fmt: skip
+def _estimate(
+    tasks: list[np.ndarray],
+    by_run: list[list[np.ndarray]] | None = None,
+) -> dict[str, Any]:
     """Mean and IQM with CIs over ``tasks`` (scores per task); with ``by_run`` (per training
     run, its scores per task; several runs) the CIs resample the runs too and each
     statistic gets ``per_run`` and ``run_range``."""
@@ -86,8 +105,12 @@ def _estimate(tasks: list[np.ndarray], by_run: list[list[np.ndarray]] | None = N
         else:
             point, lo, hi = stats.training_run_bootstrap_ci(by_run, f)
             each = stats.per_run(by_run, f)
-            out[name] = {"value": point, "ci95": [lo, hi], "per_run": each,
-                         "run_range": [min(each), max(each)]}  # fmt: skip
+            out[name] = {
+                "value": point,
+                "ci95": [lo, hi],
+                "per_run": each,
+                "run_range": [min(each), max(each)],
+            }
     out["tasks"] = len(tasks)
     out["runs"] = int(sum(len(t) for t in tasks))
     return out
@@ -99,8 +122,11 @@ def agent_names(policies: list[str]) -> list[str]:
     return list(dict.fromkeys(specs.split_run(p)[0] for p in policies))
 
 
-def _by_run(values: dict[str, np.ndarray], runs: dict[str, np.ndarray], ks: list[int],
-            ) -> list[list[np.ndarray]] | None:  # fmt: skip
+def _by_run(
+    values: dict[str, np.ndarray],
+    runs: dict[str, np.ndarray],
+    ks: list[int],
+) -> list[list[np.ndarray]] | None:
     """Per training run in ``ks`` with values, its part of each task's ``values`` (``runs``:
     the run of each value); None for fewer than two such runs."""
     parts = [[v[runs[sc] == k] for sc, v in values.items()] for k in ks]
@@ -117,8 +143,11 @@ def _realism(rows: list[dict]) -> dict[tuple[str, str], dict[str, Any]]:
     scenario and seed, how many of them a plant engineer would reject
     (:func:`agents.stats.realism_breach`: a trip, travel above 3x the reference's, a limit
     cycle in the quiet stretch) and the first :data:`REALISM_LISTED` of those."""
-    ref = {(r["env"], r["scenario"], r["seed"]): r["metrics"] for r in rows
-           if r["policy"] == ZERO and not r.get("error")}  # fmt: skip
+    ref = {
+        (r["env"], r["scenario"], r["seed"]): r["metrics"]
+        for r in rows
+        if r["policy"] == ZERO and not r.get("error")
+    }
     out: dict[tuple[str, str], dict[str, Any]] = {}
     for r in rows:
         name = specs.split_run(r["policy"])[0]
@@ -154,27 +183,37 @@ def summarize(rows: list[dict], run: dict[str, Any]) -> dict[str, Any]:
     plants: dict[str, Any] = {}
     norm_scores: dict[str, dict[str, list[np.ndarray]]] = {}
     for env_id in run["envs"]:
-        plants[env_id], norm_scores[env_id] = _plant(env_id, by[env_id], run_of[env_id], failed,
-                                                     realism, run)  # fmt: skip
-        robust = mismatch.summarize(all_rows, env_id, plants[env_id]["policies"], ZERO,
-                                    REFERENCES)  # fmt: skip
+        plants[env_id], norm_scores[env_id] = _plant(
+            env_id, by[env_id], run_of[env_id], failed, realism, run
+        )
+        robust = mismatch.summarize(all_rows, env_id, plants[env_id]["policies"], ZERO, REFERENCES)
         if robust is not None:
             plants[env_id]["robustness"] = robust
-    return {"schema_version": SCHEMA_VERSION, "run": run, "plants": plants,
-            "ranking": _overall(plants)}, norm_scores  # fmt: skip
+    return {
+        "schema_version": SCHEMA_VERSION,
+        "run": run,
+        "plants": plants,
+        "ranking": _overall(plants),
+    }, norm_scores
 
 
-def _plant(env_id: str, by: dict, run_of: dict, failed: dict, realism: dict, run: dict[str, Any],
-           ) -> tuple[dict[str, Any], dict[str, list[np.ndarray]]]:  # fmt: skip
+def _plant(
+    env_id: str,
+    by: dict,
+    run_of: dict,
+    failed: dict,
+    realism: dict,
+    run: dict[str, Any],
+) -> tuple[dict[str, Any], dict[str, list[np.ndarray]]]:
     """A plant's entry of the summary (its reference returns, policies and scenarios) and each
     policy's normalized scores per scenario. ``by``: scenario -> policy -> the metrics of the
     plant's finished episodes; ``run_of``: the training run of each; ``failed`` and
     ``realism``: per (env, policy)."""
     scs = [s for s in run["scenarios"] if s in by]
-    policies = [p for p in agent_names(run["policies"][env_id])
-                if any(p in by[s] for s in scs)]  # fmt: skip
-    runs_of = {p: {s: np.array(run_of[s][p], dtype=int) for s in scs if p in by[s]}
-               for p in policies}  # fmt: skip
+    policies = [p for p in agent_names(run["policies"][env_id]) if any(p in by[s] for s in scs)]
+    runs_of = {
+        p: {s: np.array(run_of[s][p], dtype=int) for s in scs if p in by[s]} for p in policies
+    }
     ks = {p: sorted({int(k) for v in runs_of[p].values() for k in v}) for p in policies}
     refs, tasks_norm = {}, {}
     for sc in scs:
@@ -185,8 +224,9 @@ def _plant(env_id: str, by: dict, run_of: dict, failed: dict, realism: dict, run
     norm_scores: dict[str, list[np.ndarray]] = {}
     for p in policies:
         norm = {s: tasks_norm[s][p] for s in tasks_norm if p in tasks_norm[s]}
-        pol_out[p] = _policy_entry(by, scs, p, norm, runs_of[p], ks[p], failed[env_id, p],
-                                   realism.get((env_id, p)))  # fmt: skip
+        pol_out[p] = _policy_entry(
+            by, scs, p, norm, runs_of[p], ks[p], failed[env_id, p], realism.get((env_id, p))
+        )
         if norm:
             norm_scores[p] = list(norm.values())
     _admissibility(pol_out, float(run.get("travel_budget", stats.TRAVEL_BUDGET)))
@@ -209,8 +249,9 @@ def _plant(env_id: str, by: dict, run_of: dict, failed: dict, realism: dict, run
     return {"reference": refs, "policies": pol_out, "scenarios": per_sc}, norm_scores
 
 
-def _reference(by_policy: dict[str, list[dict]],
-               ) -> tuple[dict[str, Any], dict[str, np.ndarray] | None]:  # fmt: skip
+def _reference(
+    by_policy: dict[str, list[dict]],
+) -> tuple[dict[str, Any], dict[str, np.ndarray] | None]:
     """A scenario's entry of a plant's ``reference`` (the score's ends, the best baseline)
     and each policy's normalized scores there (None without both ends)."""
     ret = {p: np.array([m["return"] for m in ms]) for p, ms in by_policy.items()}
@@ -228,13 +269,21 @@ def _reference(by_policy: dict[str, list[dict]],
     ref["headroom"] = ref["one_return"] - ref["zero_return"]
     ref["span"] = stats.score_span(ref["zero_return"], ref["one_return"])
     ref["normalized"] = True
-    return ref, {p: stats.normalize(v, ref["zero_return"], ref["one_return"])
-                 for p, v in ret.items()}  # fmt: skip
+    return ref, {
+        p: stats.normalize(v, ref["zero_return"], ref["one_return"]) for p, v in ret.items()
+    }
 
 
-def _policy_entry(by: dict, scs: list[str], p: str, norm: dict[str, np.ndarray],
-                  runs: dict[str, np.ndarray], ks: list[int], failed: int,
-                  realism: dict[str, Any] | None) -> dict[str, Any]:  # fmt: skip
+def _policy_entry(
+    by: dict,
+    scs: list[str],
+    p: str,
+    norm: dict[str, np.ndarray],
+    runs: dict[str, np.ndarray],
+    ks: list[int],
+    failed: int,
+    realism: dict[str, Any] | None,
+) -> dict[str, Any]:
     """A policy's entry of a plant's ``policies`` over scenario x seed (``norm``: its
     normalized scores per scenario; ``runs``: the training run of each episode; ``ks``:
     its training runs)."""
@@ -259,19 +308,27 @@ def _policy_entry(by: dict, scs: list[str], p: str, norm: dict[str, np.ndarray],
             x = [np.array([m["return"] for m in by[s][p]]) for s in common]
             y = [np.array([m["return"] for m in by[s][VERSUS]]) for s in common]
             point, lo, hi = stats.probability_of_improvement(x, y)
-            entry[f"p_improvement_over_{VERSUS}"] = {"value": point, "ci95": [lo, hi],
-                                                    "tasks": len(common)}  # fmt: skip
+            entry[f"p_improvement_over_{VERSUS}"] = {
+                "value": point,
+                "ci95": [lo, hi],
+                "tasks": len(common),
+            }
     return entry
 
 
 def _rank(pol_out: dict[str, Any]) -> None:
     """Each ranked policy's ``rank`` on the plant: by the IQM of the normalized score, the
     admissible ones first (the references are never ranked)."""
-    ranked = {p: e["normalized_score"]["iqm"]["value"] for p, e in pol_out.items()
-              if p not in REFERENCES and "normalized_score" in e}  # fmt: skip
+    ranked = {
+        p: e["normalized_score"]["iqm"]["value"]
+        for p, e in pol_out.items()
+        if p not in REFERENCES and "normalized_score" in e
+    }
     first = {p: v for p, v in ranked.items() if pol_out[p].get("admissible")}
-    for group, offset in ((first, 0), ({p: v for p, v in ranked.items() if p not in first},
-                                       len(first))):  # fmt: skip
+    for group, offset in (
+        (first, 0),
+        ({p: v for p, v in ranked.items() if p not in first}, len(first)),
+    ):
         for p, k in stats.ranks(group).items():
             pol_out[p]["rank"] = offset + k
 
@@ -287,8 +344,9 @@ def _admissibility(pol_out: dict[str, Any], budget: float) -> None:
             continue
         e["travel_ratio"] = travel / zero
         if p not in REFERENCES:
-            e["admissible"] = bool(e["travel_ratio"] <= budget and e["trips"] == 0
-                                   and e["failed"] == 0)  # fmt: skip
+            e["admissible"] = bool(
+                e["travel_ratio"] <= budget and e["trips"] == 0 and e["failed"] == 0
+            )
 
 
 #: How the cross-plant ranking orders the policies (the tables' captions quote it).
@@ -316,11 +374,16 @@ def _overall(plants: dict[str, Any]) -> list[dict[str, Any]]:
         for name, e in p["policies"].items():
             if "rank" in e:
                 entries[name].append(e)
-    out = [{"policy": n, "score": float(np.mean([counted_score(e) for e in es])),
-            "plants": len(es), "admissible_plants": sum(e.get("admissible") is not False
-                                                        for e in es),
-            "mean_rank": float(np.mean([e["rank"] for e in es]))}
-           for n, es in entries.items()]  # fmt: skip
+    out = [
+        {
+            "policy": n,
+            "score": float(np.mean([counted_score(e) for e in es])),
+            "plants": len(es),
+            "admissible_plants": sum(e.get("admissible") is not False for e in es),
+            "mean_rank": float(np.mean([e["rank"] for e in es])),
+        }
+        for n, es in entries.items()
+    ]
     out.sort(key=lambda e: (-e["plants"], -e["score"], e["mean_rank"], e["policy"]))
     for i, e in enumerate(out):
         e["position"] = i + 1

@@ -73,8 +73,9 @@ def trend(
     # y ranges: the controllers and the bands; the frozen valve may leave the axes
     ranged = [name for name in traces if name != "frozen_valve"] or list(traces)
     with plt.rc_context(plots.RC):
-        fig, axes = plt.subplots(n, 1, figsize=(10, 2.0 + 1.7 * n), sharex=True,
-                                 gridspec_kw={"height_ratios": ratios})  # fmt: skip
+        fig, axes = plt.subplots(
+            n, 1, figsize=(10, 2.0 + 1.7 * n), sharex=True, gridspec_kw={"height_ratios": ratios}
+        )
         legends = [_outlet_panel(axes[0], traces, styles, colors, notes, ranged)]
         axes[0].set_title(
             f"{plots.short_env(env_id)} - {scenario}: one episode per policy (seed {seed})"
@@ -114,20 +115,37 @@ def _outlet_panel(
     t = first["time_s"] / 60.0
     sp = first["setpoint_C"]
     for band, alpha in zip(BANDS_K, _BAND_ALPHA, strict=True):
-        ax.fill_between(t, sp - band, sp + band, color="tab:green", alpha=alpha, lw=0,
-                        label=f"setpoint ±{band:g} K band")  # fmt: skip
+        ax.fill_between(
+            t,
+            sp - band,
+            sp + band,
+            color="tab:green",
+            alpha=alpha,
+            lw=0,
+            label=f"setpoint ±{band:g} K band",
+        )
     ax.plot(t, sp, "k--", lw=1.2, label="setpoint")
     for name, tr in traces.items():
         note = f" ({notes[name]})" if notes.get(name) else ""
-        ax.plot(tr["time_s"] / 60, tr["outlet_temp_C"], label=f"{name}{note}: true",
-                **styles[name])  # fmt: skip
-    dev = max(BANDS_K[-1] + 2.0, 1.1 * max(
-        float(np.max(np.abs(traces[k]["outlet_temp_C"] - traces[k]["setpoint_C"])))
-        for k in ranged))  # fmt: skip
+        ax.plot(tr["time_s"] / 60, tr["outlet_temp_C"], label=f"{name}{note}: true", **styles[name])
+    dev = max(
+        BANDS_K[-1] + 2.0,
+        1.1
+        * max(
+            float(np.max(np.abs(traces[k]["outlet_temp_C"] - traces[k]["setpoint_C"])))
+            for k in ranged
+        ),
+    )
     ax.set_ylim(float(sp.min()) - dev, float(sp.max()) + dev)
     name0 = next(iter(traces))
-    ax.plot(first["time_s"] / 60, first["measured_temp_C"], color=colors[name0], lw=0.6,
-            alpha=0.5, label=f"{name0}: measured (thermocouple)")  # fmt: skip
+    ax.plot(
+        first["time_s"] / 60,
+        first["measured_temp_C"],
+        color=colors[name0],
+        lw=0.6,
+        alpha=0.5,
+        label=f"{name0}: measured (thermocouple)",
+    )
     ax.set_ylabel("main steam outlet [°C]")
     # outside the axes and out of tight_layout (a tall legend would spread the panels);
     # savefig is told to keep it in the image
@@ -149,8 +167,9 @@ def _secondary_panel(
     for name, tr in traces.items():
         axk.plot(tr["time_s"] / 60, tr[key], **dict(styles[name], lw=1.2))
     axk.set_ylabel(key.replace("_temp_C", "").replace("_", " ") + " (true) [°C]")
-    d2 = max(BANDS_K[-1] + 2.0, 1.1 * max(float(np.max(np.abs(traces[k][key] - sp2)))
-                                          for k in ranged))  # fmt: skip
+    d2 = max(
+        BANDS_K[-1] + 2.0, 1.1 * max(float(np.max(np.abs(traces[k][key] - sp2))) for k in ranged)
+    )
     axk.set_ylim(sp2 - d2, sp2 + d2)
 
 
@@ -162,8 +181,15 @@ def _actuator_panel(
         v = np.asarray(tr["spray_valve"]).reshape(len(tr["time_s"]), -1)
         axk.plot(tr["time_s"] / 60, 100 * v[:, j], **dict(styles[name], lw=1.1))
     axk.set_ylabel("opening [%]")
-    axk.text(0.01, 0.95, label, transform=axk.transAxes, va="top", fontsize=10,
-             bbox={"facecolor": "white", "alpha": 0.8, "lw": 0})  # fmt: skip
+    axk.text(
+        0.01,
+        0.95,
+        label,
+        transform=axk.transAxes,
+        va="top",
+        fontsize=10,
+        bbox={"facecolor": "white", "alpha": 0.8, "lw": 0},
+    )
     axk.set_ylim(-5, 105)
 
 

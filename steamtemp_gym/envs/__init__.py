@@ -34,8 +34,10 @@ def resolve_id(name: str) -> str:
         return found[0]
     if found:
         raise ValueError(f"env name {name!r} is ambiguous: {found}; give the full id")
-    raise ValueError(f"unknown env id {str(name)[:100]!r}; valid ids: {', '.join(ids())} "
-                     "(the name after 'steamtemp/' is enough)")  # fmt: skip
+    raise ValueError(
+        f"unknown env id {str(name)[:100]!r}; valid ids: {', '.join(ids())} "
+        "(the name after 'steamtemp/' is enough)"
+    )
 
 
 def register_variant(new_id: str, base_id: str, **options: Any) -> None:
@@ -75,5 +77,9 @@ def register_variant(new_id: str, base_id: str, **options: Any) -> None:
         if old.kwargs == kwargs and old.entry_point == base.entry_point:
             return
         raise ValueError(f"{new_id!r} is already registered (with {old.kwargs})")
-    gym.register(new_id, entry_point=base.entry_point,
-                 vector_entry_point=base.vector_entry_point, kwargs=kwargs)  # fmt: skip
+    gym.register(
+        new_id,
+        entry_point=base.entry_point,
+        vector_entry_point=base.vector_entry_point,
+        kwargs=kwargs,
+    )

@@ -27,8 +27,14 @@ def run_corners(env_id: str, num_envs: int = 16, steps: int = 500, seed: int = 0
     plant = plants.make(env_id)
     core = Core(plant, num_envs, RewardConfig())
     rng = np.random.default_rng(seed)
-    counts = {"steps": 0, "episodes": 0, "rejected": 0, "non_finite": 0, "out_of_range": 0,
-              "trips": dict.fromkeys(TRIP_REASONS[1:], 0)}  # fmt: skip
+    counts = {
+        "steps": 0,
+        "episodes": 0,
+        "rejected": 0,
+        "non_finite": 0,
+        "out_of_range": 0,
+        "trips": dict.fromkeys(TRIP_REASONS[1:], 0),
+    }
 
     def start(b: int) -> None:
         while True:
@@ -52,9 +58,13 @@ def run_corners(env_id: str, num_envs: int = 16, steps: int = 500, seed: int = 0
         bad = ~(np.isfinite(core.obs).all(axis=1) & np.isfinite(core.reward))
         counts["non_finite"] += int(bad.sum())
         valves = core.Z[:, core.valve_idx]
-        counts["out_of_range"] += int(((np.abs(core.obs) > OBS_LIMIT).any(axis=1)
-                                       | (valves < 0).any(axis=1)
-                                       | (valves > 1).any(axis=1)).sum())  # fmt: skip
+        counts["out_of_range"] += int(
+            (
+                (np.abs(core.obs) > OBS_LIMIT).any(axis=1)
+                | (valves < 0).any(axis=1)
+                | (valves > 1).any(axis=1)
+            ).sum()
+        )
         for b in np.flatnonzero(core.ended()):
             code = int(core.trip[b])
             if code:

@@ -47,12 +47,18 @@ assert COST_METRIC in METRIC_NAMES
 COST_KEYS: tuple[str, ...] = ("cost", "cost_band")
 #: Unit and meaning of each of :data:`COST_KEYS` (the reference pages' info tables).
 COST_DOC: dict[str, tuple[str, str]] = {
-    "cost": ("1", "constraint cost of the control interval for safe RL: the sum of its "
-                  "components (docs/safe_rl.md)"),
-    "cost_band": ("1", f"fraction of the interval with the true main steam more than "
-                       f"{COST_BAND_K:g} K from the setpoint (times dt: the interval's part of "
-                       f"{COST_METRIC})"),
-}  # fmt: skip
+    "cost": (
+        "1",
+        "constraint cost of the control interval for safe RL: the sum of its "
+        "components (docs/safe_rl.md)",
+    ),
+    "cost_band": (
+        "1",
+        f"fraction of the interval with the true main steam more than "
+        f"{COST_BAND_K:g} K from the setpoint (times dt: the interval's part of "
+        f"{COST_METRIC})",
+    ),
+}
 
 #: Default budget of each named scenario: the share of the episode's control intervals
 #: its summed cost may reach. cascade_pi_ff's share (mean of seeds 0-2, the larger of
@@ -99,8 +105,11 @@ def cost_limit(scenario: Any, dt_s: float) -> float:
     """
     if not isinstance(scenario, Scenario):
         raise ValueError(f"cost_limit needs a Scenario, got {type(scenario).__name__}")
-    if isinstance(dt_s, bool) or not isinstance(dt_s, (int, float, np.integer, np.floating)) or (
-            not (math.isfinite(dt_s) and dt_s > 0)):  # fmt: skip
+    if (
+        isinstance(dt_s, bool)
+        or not isinstance(dt_s, (int, float, np.integer, np.floating))
+        or (not (math.isfinite(dt_s) and dt_s > 0))
+    ):
         raise ValueError(f"dt_s must be a positive finite number of seconds, got {dt_s!r}")
     share = COST_LIMIT_SHARE.get(scenario.name, DEFAULT_COST_LIMIT_SHARE)
     if share != DEFAULT_COST_LIMIT_SHARE and not _shipped(scenario):

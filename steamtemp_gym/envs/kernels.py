@@ -43,8 +43,18 @@ E_TIME, E_DUR, E_NOISE, E_OU_A, E_OU_B = 0, 1, 2, 3, 4
 #: the plant declares none), then where each index list of ints starts (``end``: where the
 #: last one ends); the lists are output indices of the observed signals, valves, sprays,
 #: secondary temperatures and info values.
-H = slots("IntsHeader", "outlet", "measured", "design_spray", "obs", "valves", "sprays",
-          "secondary", "info", "end")  # fmt: skip
+H = slots(
+    "IntsHeader",
+    "outlet",
+    "measured",
+    "design_spray",
+    "obs",
+    "valves",
+    "sprays",
+    "secondary",
+    "info",
+    "end",
+)
 #: EnvState.cfg: these scalars, then the reward weights (rewards.W) and the secondary setpoints.
 CFG = slots("Config", "dt", "setpoint", "trip_below_K", "trip_above_K", "spray_scale")
 N_CFG = len(CFG)
@@ -162,8 +172,7 @@ def advance(s):
         counter[b] += 1
         ep[b, E_TIME] = counter[b] * dt  # counted, not summed: no drift over long episodes
         if ep[b, E_OU_B] > 0.0:
-            ou[b] = ep[b, E_OU_A] * ou[b] + ep[b, E_OU_B] * gauss(key[b], counter[b],
-                                                                  OU_CHANNEL)  # fmt: skip
+            ou[b] = ep[b, E_OU_A] * ou[b] + ep[b, E_OU_B] * gauss(key[b], counter[b], OU_CHANNEL)
         schedules(b, slot[b], ep[b, E_TIME], bp_t, bp_v, bp_n, sp_nom, ou, D, sp)
         observe(b, Z, D, sp, ep, key, counter, obs_cs, obs_idx, i_meas, obs, meas)
         # the cost of the interval from the last info's error to this step's (envs/cost.py)
@@ -179,8 +188,9 @@ def advance(s):
         if code == TRIP_NON_FINITE:
             reward[b] = non_finite_reward(trip_lo, w)
         else:
-            reward[b] = row_reward(b, Z, U, U_prev, e, term, s_idx, i_design, s_scale,
-                                     sec_idx, sec_sp, w)  # fmt: skip
+            reward[b] = row_reward(
+                b, Z, U, U_prev, e, term, s_idx, i_design, s_scale, sec_idx, sec_sp, w
+            )
         for j in range(U.shape[1]):
             U_prev[b, j] = U[b, j]
 

@@ -43,9 +43,14 @@ class PlantRowsCore(Core):
         factors: The group factors of each row's plant (empty until its first reset).
     """
 
-    def __init__(self, plant: Plant, batch: int, reward_cfg: RewardConfig,
-                 ranges: dict[str, tuple[float, float]],
-                 base: Mapping[str, Any]) -> None:  # fmt: skip
+    def __init__(
+        self,
+        plant: Plant,
+        batch: int,
+        reward_cfg: RewardConfig,
+        ranges: dict[str, tuple[float, float]],
+        base: Mapping[str, Any],
+    ) -> None:
         super().__init__(plant, batch, reward_cfg)
         self.ranges = dict(ranges)
         self.base = dict(base)
@@ -64,8 +69,7 @@ class PlantRowsCore(Core):
         for b in range(1, self.B + 1):
             if b == self.B or self.plants[b] is not self.plants[first]:
                 r = slice(first, b)
-                out.append(self.plants[first].step_args(self.X[r], self.U[r], self.D[r],
-                                                        self.Z[r]))  # fmt: skip
+                out.append(self.plants[first].step_args(self.X[r], self.U[r], self.D[r], self.Z[r]))
                 first = b
         return out
 
@@ -90,11 +94,13 @@ class PlantRowsCore(Core):
                 can (perturb.draw_plant).
         """
         super().episode_plant(scenario, key)
-        return perturb.draw_plant(self.plant.id, self.base, self.ranges, key,
-                                  lambda p: self.start_fits(scenario, p))  # fmt: skip
+        return perturb.draw_plant(
+            self.plant.id, self.base, self.ranges, key, lambda p: self.start_fits(scenario, p)
+        )
 
-    def _start_row(self, b: int, scenario: Any, key: int,
-                   drawn: tuple[Plant, dict[str, float]]) -> None:  # fmt: skip
+    def _start_row(
+        self, b: int, scenario: Any, key: int, drawn: tuple[Plant, dict[str, float]]
+    ) -> None:
         self.set_plant(b, *drawn)
         super()._start_row(b, scenario, key, drawn)
 
@@ -108,8 +114,10 @@ class PlantRowsCore(Core):
             blocks = self._block_args = self._blocks()
         entries = self._row_entries
         if entries is None:
-            entries = self._row_entries = (entry_point(self.plant.kernel(), blocks[0]),
-                                           entry_point(advance, (self.state,)))  # fmt: skip
+            entries = self._row_entries = (
+                entry_point(self.plant.kernel(), blocks[0]),
+                entry_point(advance, (self.state,)),
+            )
         kernel = entries[0]
         for args in blocks:
             kernel(*args)

@@ -94,10 +94,11 @@ def info_sources(plant: Any) -> list[tuple[str, str]]:
     """(info key, the plant output it reads) of the info values taken from the plant's
     outputs, in order; :data:`INFO_TAIL` and ``trip_reason`` follow them. With several
     valves, ``spray_valve`` holds every valve's opening."""
-    return ([("outlet_temp_C", plant.outlet),
-             ("measured_temp_noise_free_C", plant.outlet_measured),
-             ("spray_valve", plant.valves[0])]
-            + [(name, name) for name in plant.extra_info])  # fmt: skip
+    return [
+        ("outlet_temp_C", plant.outlet),
+        ("measured_temp_noise_free_C", plant.outlet_measured),
+        ("spray_valve", plant.valves[0]),
+    ] + [(name, name) for name in plant.extra_info]
 
 
 def outputs(plant: Plant) -> Outputs:
@@ -111,33 +112,70 @@ def outputs(plant: Plant) -> Outputs:
     observed = [i for i, s in enumerate(plant.outputs) if s.observed]
     if len(observed) >= OU_CHANNEL:
         raise ValueError(f"{plant.id}: at most {OU_CHANNEL - 1} observed outputs")
-    return Outputs(observed, [idx[v] for v in plant.valves], [idx[s] for s in plant.sprays],
-                   [idx[name] for name, _ in plant.secondary],
-                   [idx[source] for _, source in info_sources(plant)])  # fmt: skip
+    return Outputs(
+        observed,
+        [idx[v] for v in plant.valves],
+        [idx[s] for s in plant.sprays],
+        [idx[name] for name, _ in plant.secondary],
+        [idx[source] for _, source in info_sources(plant)],
+    )
 
 
-def new_state(plant: Plant, batch: int, reward_cfg: RewardConfig, obs_cs: np.ndarray,
-              out: Outputs) -> EnvState:  # fmt: skip
+def new_state(
+    plant: Plant, batch: int, reward_cfg: RewardConfig, obs_cs: np.ndarray, out: Outputs
+) -> EnvState:
     """The zeroed state of ``batch`` rows of ``plant`` with one schedule-table slot: its
     tables from the plant's outputs ``out`` (:func:`outputs`), the reward weights and the
     observed signals' ``obs_cs``."""
     B, idx = batch, plant.index
     starts = np.cumsum([len(H)] + [len(v) for v in out]).tolist()
-    ints = np.array([idx[plant.outlet], idx[plant.outlet_measured],
-                     idx[plant.design_spray] if plant.design_spray else -1, *starts]
-                    + [i for v in out for i in v], dtype=np.int64)  # fmt: skip
+    ints = np.array(
+        [
+            idx[plant.outlet],
+            idx[plant.outlet_measured],
+            idx[plant.design_spray] if plant.design_spray else -1,
+            *starts,
+        ]
+        + [i for v in out for i in v],
+        dtype=np.int64,
+    )
     spray_scale = plant.outputs[out.sprays[0]].scale if out.sprays else 1.0
     # the scalars in the order of kernels.CFG
-    cfg = np.concatenate([[plant.dt_s, plant.setpoint_C, *plant.trip_band_K, spray_scale],
-                          reward_cfg.to_array(), [sp for _, sp in plant.secondary]])  # fmt: skip
-    zeros = dict(X=(B, plant.n_x), Z=(B, plant.n_z), U=(B, plant.n_u), U_prev=(B, plant.n_u),
-                 D=(B, N_DIST), sp=B, ep=(B, 5), ou=B, obs=(B, len(out.observed) + 3), meas=B,
-                 info=(B, len(out.info) + len(INFO_TAIL)), reward=B)  # fmt: skip
-    state = EnvState(**{k: np.zeros(shape) for k, shape in zeros.items()},
-                     slot=np.zeros(B, np.int64), key=np.zeros(B, np.uint64),
-                     counter=np.zeros(B, np.int64), trip=np.zeros(B, np.int64),
-                     truncated=np.zeros(B, np.bool_), bp_t=None, bp_v=None, bp_n=None,
-                     ints=ints, cfg=cfg, obs_cs=obs_cs)  # fmt: skip
+    cfg = np.concatenate(
+        [
+            [plant.dt_s, plant.setpoint_C, *plant.trip_band_K, spray_scale],
+            reward_cfg.to_array(),
+            [sp for _, sp in plant.secondary],
+        ]
+    )
+    zeros = dict(
+        X=(B, plant.n_x),
+        Z=(B, plant.n_z),
+        U=(B, plant.n_u),
+        U_prev=(B, plant.n_u),
+        D=(B, N_DIST),
+        sp=B,
+        ep=(B, 5),
+        ou=B,
+        obs=(B, len(out.observed) + 3),
+        meas=B,
+        info=(B, len(out.info) + len(INFO_TAIL)),
+        reward=B,
+    )
+    state = EnvState(
+        **{k: np.zeros(shape) for k, shape in zeros.items()},
+        slot=np.zeros(B, np.int64),
+        key=np.zeros(B, np.uint64),
+        counter=np.zeros(B, np.int64),
+        trip=np.zeros(B, np.int64),
+        truncated=np.zeros(B, np.bool_),
+        bp_t=None,
+        bp_v=None,
+        bp_n=None,
+        ints=ints,
+        cfg=cfg,
+        obs_cs=obs_cs,
+    )
     return with_tables(state, 1, MIN_BREAKPOINTS)
 
 
@@ -160,5 +198,8 @@ class StateFields:
 
 
 for _name in EnvState._fields:
-    setattr(StateFields, _name, property(attrgetter(f"state.{_name}"),
-                                         doc=f"``state.{_name}`` (:class:`EnvState`)"))  # fmt: skip
+    setattr(
+        StateFields,
+        _name,
+        property(attrgetter(f"state.{_name}"), doc=f"``state.{_name}`` (:class:`EnvState`)"),
+    )

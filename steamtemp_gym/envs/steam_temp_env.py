@@ -36,8 +36,9 @@ def draw_episode(
     return scenario, key
 
 
-def scenario_option(options: dict | None, default: Any, plant_id: str,
-                    other: tuple[str, ...] = ()) -> Any:  # fmt: skip
+def scenario_option(
+    options: dict | None, default: Any, plant_id: str, other: tuple[str, ...] = ()
+) -> Any:
     """The scenario of a reset: ``options["scenario"]`` resolved, else ``default``.
 
     Raises:
@@ -145,11 +146,17 @@ class SteamTempEnv(gym.Env):
             from steamtemp_gym.envs.render import TrendDisplay, spray_range
 
             title = f"{self.plant.id}  scenario: {getattr(scenario, 'name', '')}"
-            names = tuple((s.description or s.name).removesuffix(" command")
-                          for s in self.signals.action)  # fmt: skip
-            self._display = TrendDisplay(title, scenario.duration_s, info,
-                                         spray_range(self.plant), names,
-                                         self.plant.secondary)  # fmt: skip
+            names = tuple(
+                (s.description or s.name).removesuffix(" command") for s in self.signals.action
+            )
+            self._display = TrendDisplay(
+                title,
+                scenario.duration_s,
+                info,
+                spray_range(self.plant),
+                names,
+                self.plant.secondary,
+            )
         return self.core.obs[0].copy(), info
 
     def step(self, action):
@@ -176,8 +183,9 @@ class SteamTempEnv(gym.Env):
         """
         if self.core.scenario[0] is None:
             raise ValueError("call reset() before snapshot()")
-        return snap_.take(self.core, np.zeros(1, dtype=np.int64), [self.np_random],
-                          np.array([self._needs_reset]))  # fmt: skip
+        return snap_.take(
+            self.core, np.zeros(1, dtype=np.int64), [self.np_random], np.array([self._needs_reset])
+        )
 
     def restore(self, snapshot: snap_.Snapshot) -> np.ndarray:
         """Continue from ``snapshot`` (one row, of this plant and parameters): the episode

@@ -138,8 +138,11 @@ class SteamTempVectorEnv(VectorEnv):
         mask = (options or {}).get("reset_mask")
         if mask is None:
             mask = np.ones(self.num_envs, dtype=bool)
-        elif not (isinstance(mask, np.ndarray) and mask.dtype == np.bool_
-                  and mask.shape == (self.num_envs,)):  # fmt: skip
+        elif not (
+            isinstance(mask, np.ndarray)
+            and mask.dtype == np.bool_
+            and mask.shape == (self.num_envs,)
+        ):
             raise ValueError(
                 f"options['reset_mask'] must be a numpy bool array of shape ({self.num_envs},), "
                 f"got {type(mask).__name__} {getattr(mask, 'dtype', '')} {np.shape(mask)}"
@@ -158,6 +161,7 @@ class SteamTempVectorEnv(VectorEnv):
 
     def _seeds(self, seed: Any) -> np.ndarray:
         """Per-sub-env seeds (object array of int or None) of a reset() ``seed`` argument."""
+
         def valid(s: Any) -> bool:
             return s is None or (is_integer(s) and s >= 0)
 
@@ -214,8 +218,12 @@ class SteamTempVectorEnv(VectorEnv):
         final_obs = np.full(self.num_envs, None, dtype=object)
         for b in np.flatnonzero(done):
             final_obs[b] = self.core.obs[b].copy()
-        return {"final_obs": final_obs, "_final_obs": done.copy(),
-                "final_info": self._info(done), "_final_info": done.copy()}  # fmt: skip
+        return {
+            "final_obs": final_obs,
+            "_final_obs": done.copy(),
+            "final_info": self._info(done),
+            "_final_info": done.copy(),
+        }
 
     def _info(self, mask: np.ndarray | None = None) -> dict[str, Any]:
         """Info columns, each with its own ``_key`` mask array (True where the row reports)."""

@@ -47,8 +47,9 @@ def quiet_peak_to_peak(
     t = _as_time(time_s)
     e = _as_signal(error_K, "error_K", t.size)
     if not math.isfinite(quiet_from_s) or not math.isfinite(min_length_s):
-        raise ValueError(f"quiet_from_s and min_length_s must be finite, got "
-                         f"{quiet_from_s!r}, {min_length_s!r}")  # fmt: skip
+        raise ValueError(
+            f"quiet_from_s and min_length_s must be finite, got {quiet_from_s!r}, {min_length_s!r}"
+        )
     quiet = t >= quiet_from_s
     if not quiet.any() or t[-1] - t[quiet][0] < min_length_s:
         return math.nan

@@ -68,8 +68,9 @@ class Signal:
 def design_spray_signal(center: float, scale: float, description: str) -> Signal:
     """The hidden output ``design_spray_kg_s`` of a plant with a design spray
     (``Plant.design_spray``): the spray its design schedule passes at this load."""
-    return Signal("design_spray_kg_s", "kg/s", center, scale, observed=False,
-                  description=description)  # fmt: skip
+    return Signal(
+        "design_spray_kg_s", "kg/s", center, scale, observed=False, description=description
+    )
 
 
 #: The hidden coal-mill output of a plant with a mill lag (fraction of rated fuel).
@@ -382,15 +383,17 @@ class Plant:
         else:
             unknown = [o for o in outputs if o not in self.index]
             if unknown:
-                raise ValueError(f"unknown output(s) {unknown} of {self.id}; valid: "
-                                 f"{list(self.index)}")  # fmt: skip
+                raise ValueError(
+                    f"unknown output(s) {unknown} of {self.id}; valid: {list(self.index)}"
+                )
             rows = np.array([self.index[o] for o in outputs], dtype=np.int64)
         d0 = nominal_disturbances(load)
         x, z = self.steady_outputs(d0[0], setpoint_C)
         u0 = z[[self.index[v] for v in self.valves]].reshape(1, self.n_u)
 
-        def run(x: np.ndarray, u: np.ndarray, d: np.ndarray,
-                dt: float | None) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+        def run(
+            x: np.ndarray, u: np.ndarray, d: np.ndarray, dt: float | None
+        ) -> tuple[np.ndarray, np.ndarray]:
             X, Z = x.copy(), np.zeros((1, self.n_z))
             self.step(X, u, d, Z, dt=dt)
             return X[0], Z[0, rows]
@@ -398,13 +401,16 @@ class Plant:
         return x[None, :], u0, d0, run
 
 
-def _central_difference(run: Callable, point: tuple[np.ndarray, ...], which: int, i: int,
-                        h: float) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+def _central_difference(
+    run: Callable, point: tuple[np.ndarray, ...], which: int, i: int, h: float
+) -> tuple[np.ndarray, np.ndarray]:
     """Derivatives of the next state and of the outputs of ``run`` (a one-row step, as
     :meth:`Plant._linear_point` makes it) in entry i of point[which] (x, u or d), by central
     differences of step h."""
     hi, lo = [a.copy() for a in point], [a.copy() for a in point]
     hi[which][0, i] += h
     lo[which][0, i] -= h
-    return ((run(*hi, None)[0] - run(*lo, None)[0]) / (2.0 * h),
-            (run(*hi, 0.0)[1] - run(*lo, 0.0)[1]) / (2.0 * h))  # fmt: skip
+    return (
+        (run(*hi, None)[0] - run(*lo, None)[0]) / (2.0 * h),
+        (run(*hi, 0.0)[1] - run(*lo, 0.0)[1]) / (2.0 * h),
+    )

@@ -93,9 +93,20 @@ VWT, PD, AR, VSD = 0, 1, 2, 3
 
 
 def drum_block(
-    V_d: float, V_r: float, V_dc: float, m_t: float, m_r: float, m_d: float, C_p: float,
-    A_d: float, A_dc: float, k: float, beta: float, T_d: float, V_sd0: float,
-) -> np.ndarray:  # fmt: skip
+    V_d: float,
+    V_r: float,
+    V_dc: float,
+    m_t: float,
+    m_r: float,
+    m_d: float,
+    C_p: float,
+    A_d: float,
+    A_dc: float,
+    k: float,
+    beta: float,
+    T_d: float,
+    V_sd0: float,
+) -> np.ndarray:
     """Packed drum parameters (SI) in the order of the D_* indices; level reference 0."""
     P = np.zeros(N_DRUM_P)
     P[D_VT] = V_d + V_r + V_dc
@@ -134,8 +145,9 @@ def void_fraction(rho_w, rho_s, drho_w, drho_s, ar):
 @njit(cache=True)
 def circulation(rho_w, rho_s, av, P, o):
     """Downcomer flow q_dc (kg/s): 0.5 k q_dc^2 = rho_w A_dc (rho_w - rho_s) g a_v V_r."""
-    return math.sqrt(max(2.0 * rho_w * P[o + D_ADC] * (rho_w - rho_s) * G * av * P[o + D_VR]
-                         / P[o + D_K], 0.0))  # fmt: skip
+    return math.sqrt(
+        max(2.0 * rho_w * P[o + D_ADC] * (rho_w - rho_s) * G * av * P[o + D_VR] / P[o + D_K], 0.0)
+    )
 
 
 @njit(cache=True)
@@ -173,23 +185,29 @@ def drum_rhs(x, s, P, o, q_s, q_f, h_f, Q, f, jd, want_jac):
     e11 = rw - rs
     e12 = Vwt * drw + Vst * drs
     e21 = rw * hw - rs * hs
-    e22 = (Vwt * (hw * drw + rw * dhw) + Vst * (hs * drs + rs * dhs) - Vt
-           + P[o + D_MT] * Cp * dTs)  # fmt: skip
+    e22 = Vwt * (hw * drw + rw * dhw) + Vst * (hs * drs + rs * dhs) - Vt + P[o + D_MT] * Cp * dTs
     g1 = q_f - q_s
     g2 = Q + q_f * h_f - q_s * hs
     det = e11 * e22 - e12 * e21
     dVwt = (g1 * e22 - e12 * g2) / det
     dp = (e11 * g2 - e21 * g1) / det
     # riser (row 3)
-    e32 = ((rw * dhw - ar * hc * drw) * (1.0 - av) * Vr
-           + ((1.0 - ar) * hc * drs + rs * dhs) * av * Vr
-           + (rs + (rw - rs) * ar) * hc * Vr * dav_dp - Vr + P[o + D_MR] * Cp * dTs)  # fmt: skip
+    e32 = (
+        (rw * dhw - ar * hc * drw) * (1.0 - av) * Vr
+        + ((1.0 - ar) * hc * drs + rs * dhs) * av * Vr
+        + (rs + (rw - rs) * ar) * hc * Vr * dav_dp
+        - Vr
+        + P[o + D_MR] * Cp * dTs
+    )
     e33 = ((1.0 - ar) * rs + ar * rw) * hc * Vr * dav_dar
     dar = (Q - ar * hc * qdc - e32 * dp) / e33
     # steam under the level (row 4)
     ab = ar * (1.0 + P[o + D_BETA]) * Vr
-    e42 = (Vsd * drs + (rs * Vsd * dhs + rw * Vwd * dhw - Vsd - Vwd + P[o + D_MD] * Cp * dTs) / hc
-           + ab * (av * drs + (1.0 - av) * drw + (rs - rw) * dav_dp))  # fmt: skip
+    e42 = (
+        Vsd * drs
+        + (rs * Vsd * dhs + rw * Vwd * dhw - Vsd - Vwd + P[o + D_MD] * Cp * dTs) / hc
+        + ab * (av * drs + (1.0 - av) * drw + (rs - rw) * dav_dp)
+    )
     e43 = ab * (rs - rw) * dav_dar
     Td = P[o + D_TD]
     dVsd = (rs / Td * (P[o + D_VSD0] - Vsd) + (h_f - hw) * q_f / hc - e42 * dp - e43 * dar) / rs
@@ -198,8 +216,9 @@ def drum_rhs(x, s, P, o, q_s, q_f, h_f, Q, f, jd, want_jac):
     f[s + AR] = dar
     f[s + VSD] = dVsd
     # riser outlet flow from the riser mass balance
-    q_r = qdc - Vr * ((av * drs + (1.0 - av) * drw + (rs - rw) * dav_dp) * dp
-                      + (rs - rw) * dav_dar * dar)  # fmt: skip
+    q_r = qdc - Vr * (
+        (av * drs + (1.0 - av) * drw + (rs - rw) * dav_dp) * dp + (rs - rw) * dav_dar * dar
+    )
     level = (Vwd + Vsd) / P[o + D_AD] - P[o + D_L0]
     if not want_jac:
         z = 0.0
@@ -220,12 +239,23 @@ def drum_rhs(x, s, P, o, q_s, q_f, h_f, Q, f, jd, want_jac):
     ar_q = (1.0 - e32 * pw_q) / e33
     ar_h = -e32 * pw_h / e33
     sens = (
-        (e12 * hs - e22) / det, (e22 - e12 * h_f) / det, -e12 / det, -e12 * q_f / det,
-        pw_s, pw_f, pw_q, pw_h,
-        ar_s, ar_f, ar_q, ar_h,
-        -(e42 * pw_s + e43 * ar_s) / rs, ((h_f - hw) / hc - e42 * pw_f - e43 * ar_f) / rs,
-        -(e42 * pw_q + e43 * ar_q) / rs, (q_f / hc - e42 * pw_h - e43 * ar_h) / rs,
-    )  # fmt: skip
+        (e12 * hs - e22) / det,
+        (e22 - e12 * h_f) / det,
+        -e12 / det,
+        -e12 * q_f / det,
+        pw_s,
+        pw_f,
+        pw_q,
+        pw_h,
+        ar_s,
+        ar_f,
+        ar_q,
+        ar_h,
+        -(e42 * pw_s + e43 * ar_s) / rs,
+        ((h_f - hw) / hc - e42 * pw_f - e43 * ar_f) / rs,
+        -(e42 * pw_q + e43 * ar_q) / rs,
+        (q_f / hc - e42 * pw_h - e43 * ar_h) / rs,
+    )
     return level, qdc, q_r, hs, dhs, sens
 
 

@@ -186,5 +186,6 @@ def make_batched_step(
     """
     act = np.zeros((0, 3), dtype=np.int64) if actuators is None else np.asarray(actuators, np.int64)
     outputs = _no_outputs if outputs is None else outputs
-    return specialize(_batched_step, name, rhs=rhs, outputs=outputs, project=project,
-                      ACTUATORS=act.reshape(-1, 3))  # fmt: skip
+    return specialize(
+        _batched_step, name, rhs=rhs, outputs=outputs, project=project, ACTUATORS=act.reshape(-1, 3)
+    )

@@ -56,5 +56,12 @@ def validate_params(params: Any, positive: tuple[str, ...] = ()) -> None:
             raise ValueError(f"{name_cls}.{name} must be > 0, got {v!r}")
 
 
-__all__ = ["COMMON_RANGES", "DEFAULT_SPAN", "DT_RANGE_S", "SUBSTEP_RANGE", "field_range",
-           "ranged", "validate_params"]  # fmt: skip
+__all__ = [
+    "COMMON_RANGES",
+    "DEFAULT_SPAN",
+    "DT_RANGE_S",
+    "SUBSTEP_RANGE",
+    "field_range",
+    "ranged",
+    "validate_params",
+]

@@ -80,8 +80,9 @@ def plant_groups(plant_id: str) -> Mapping[str, tuple[str, ...]]:
     groups = catalog.plant_class(plant_id).perturbation_groups
     if not groups:
         have = [i for i in catalog.PLANTS if catalog.plant_class(i).perturbation_groups]
-        raise ValueError(f"plant_randomization: no parameter groups for {plant_id!r}; "
-                         f"plants with groups: {have}")  # fmt: skip
+        raise ValueError(
+            f"plant_randomization: no parameter groups for {plant_id!r}; plants with groups: {have}"
+        )
     return groups
 
 
@@ -119,41 +120,52 @@ def parse(plant_id: str, option: Any) -> dict[str, tuple[float, float]] | None:
     if option is True or (isinstance(option, np.bool_) and option):
         return {g: RANGES[g] for g in groups}
     if not isinstance(option, Mapping):
-        raise ValueError(f"plant_randomization must be True, False, None or a dict "
-                         f"{{group: (lo, hi)}}, got {type(option).__name__} "
-                         f"{str(option)[:60]!r}")  # fmt: skip
+        raise ValueError(
+            f"plant_randomization must be True, False, None or a dict "
+            f"{{group: (lo, hi)}}, got {type(option).__name__} "
+            f"{str(option)[:60]!r}"
+        )
     if not option:
-        raise ValueError("plant_randomization is an empty dict; give at least one group "
-                         f"of {list(groups)} or True")  # fmt: skip
+        raise ValueError(
+            "plant_randomization is an empty dict; give at least one group "
+            f"of {list(groups)} or True"
+        )
     unknown = [g for g in option if g not in groups]
     if unknown:
-        raise ValueError(f"plant_randomization: unknown group(s) {[str(g)[:40] for g in unknown]} "
-                         f"for {plant_id}; valid groups: {list(groups)}")  # fmt: skip
+        raise ValueError(
+            f"plant_randomization: unknown group(s) {[str(g)[:40] for g in unknown]} "
+            f"for {plant_id}; valid groups: {list(groups)}"
+        )
     out = {}
     for g in groups:  # the plant's order: the draw does not depend on the dict's order
         if g not in option:
             continue
         value = option[g]
-        if (isinstance(value, (str, bytes)) or not hasattr(value, "__len__")
-                or len(value) != 2):  # fmt: skip
-            raise ValueError(f"plant_randomization[{g!r}] must be a pair (lo, hi) of "
-                             f"factors, got {str(value)[:60]!r}")  # fmt: skip
+        if isinstance(value, (str, bytes)) or not hasattr(value, "__len__") or len(value) != 2:
+            raise ValueError(
+                f"plant_randomization[{g!r}] must be a pair (lo, hi) of "
+                f"factors, got {str(value)[:60]!r}"
+            )
         lo, hi = value
         for name, v in (("lo", lo), ("hi", hi)):
             if not is_real(v) or isinstance(v, (bool, np.bool_)) or not is_finite(v):
-                raise ValueError(f"plant_randomization[{g!r}]: {name} must be a finite "
-                                 f"number, got {str(v)[:40]!r}")  # fmt: skip
+                raise ValueError(
+                    f"plant_randomization[{g!r}]: {name} must be a finite "
+                    f"number, got {str(v)[:40]!r}"
+                )
             if not v > 0:
-                raise ValueError(f"plant_randomization[{g!r}]: {name} = {v!r} must be a "
-                                 "positive factor")  # fmt: skip
+                raise ValueError(
+                    f"plant_randomization[{g!r}]: {name} = {v!r} must be a positive factor"
+                )
         if lo > hi:
             raise ValueError(f"plant_randomization[{g!r}]: lo = {lo!r} is above hi = {hi!r}")
         out[g] = (float(lo), float(hi))
     return out
 
 
-def draw_factors(ranges: dict[str, tuple[float, float]], rng: np.random.Generator
-                 ) -> dict[str, float]:  # fmt: skip
+def draw_factors(
+    ranges: dict[str, tuple[float, float]], rng: np.random.Generator
+) -> dict[str, float]:
     """One factor per group, log-uniform in its range (one uniform number per group, in
     the order of ``ranges``, also for a fixed range lo == hi)."""
     out = {}
@@ -163,8 +175,7 @@ def draw_factors(ranges: dict[str, tuple[float, float]], rng: np.random.Generato
     return out
 
 
-def scaled(plant_id: str, base: Mapping[str, Any], factors: Mapping[str, float]
-           ) -> dict[str, Any]:  # fmt: skip
+def scaled(plant_id: str, base: Mapping[str, Any], factors: Mapping[str, float]) -> dict[str, Any]:
     """``base`` (parameter overrides of ``gym.make``'s ``params``) with every field of each
     group of ``factors`` set to its value (the override, else the default) times the
     group's factor."""
@@ -199,8 +210,13 @@ def episode_rng(key: int, attempt: int) -> np.random.Generator:
     return np.random.default_rng(np.random.SeedSequence([int(key), _STREAM, int(attempt)]))
 
 
-def draw_plant(plant_id: str, base: Mapping[str, Any], ranges: dict[str, tuple[float, float]],
-               key: int, fits: Callable[[Any], bool]) -> tuple[Any, dict[str, float]]:  # fmt: skip
+def draw_plant(
+    plant_id: str,
+    base: Mapping[str, Any],
+    ranges: dict[str, tuple[float, float]],
+    key: int,
+    fits: Callable[[Any], bool],
+) -> tuple[Any, dict[str, float]]:
     """(plant, its factors) of the episode with noise key ``key``: the first of up to
     :data:`MAX_DRAWS` draws whose plant can be built and passes ``fits`` (the start check).
 

@@ -7,8 +7,9 @@ from __future__ import annotations
 from collections.abc import Callable
 
 
-def secant(fun: Callable[[float], float], a: float, b: float, tol: float,
-           floor: float | None = None) -> tuple[float, float]:  # fmt: skip
+def secant(
+    fun: Callable[[float], float], a: float, b: float, tol: float, floor: float | None = None
+) -> tuple[float, float]:
     """(x, fun(x)) after the secant iteration from a, b: it stops at ``|fun(x)| < tol``, at a
     stall (two equal residuals) or after 80 steps. With ``floor``, a step never goes below
     ``floor * |x|`` of the previous iterate (keeps a positive unknown positive)."""

@@ -34,8 +34,7 @@ def specialize(template: Callable, name: str, **bindings) -> Callable:
         raise ValueError(f"{template.__qualname__} does not use {missing}")
     scope = dict(template.__globals__)
     scope.update(bindings)
-    copy = types.FunctionType(template.__code__, scope, template.__name__,
-                              template.__defaults__)  # fmt: skip
+    copy = types.FunctionType(template.__code__, scope, template.__name__, template.__defaults__)
     copy.__qualname__ = f"{template.__qualname__}[{name}]"
     copy.__module__ = template.__module__
     copy.__doc__ = template.__doc__

@@ -69,8 +69,31 @@ def steam_side_kA(kA_nom, W, W_nom):
 
 
 @njit(cache=True, error_model="numpy")
-def chain_rhs(x, off, n, h0, dh0, W, dW, p, dp, kA, dkA, V, Cm, UAg, Tg, Qrad, f, jd, ju, jl,
-              joff, want_jac, flow):  # fmt: skip
+def chain_rhs(
+    x,
+    off,
+    n,
+    h0,
+    dh0,
+    W,
+    dW,
+    p,
+    dp,
+    kA,
+    dkA,
+    V,
+    Cm,
+    UAg,
+    Tg,
+    Qrad,
+    f,
+    jd,
+    ju,
+    jl,
+    joff,
+    want_jac,
+    flow,
+):
     """Right-hand side of an n-segment chain, writing f (and jd, ju, jl from joff).
 
     Args:
@@ -180,15 +203,17 @@ def chain_steady(x, off, n, h0, W, p, kA, UAg, Tg, Qrad):
 # of a plant is an effective value (see the plants' docstrings).
 
 
-def pipe_cells(n: int, volume_m3: float, metal_t: float, c_metal_J_kgK: float
-               ) -> tuple[float, float]:  # fmt: skip
+def pipe_cells(
+    n: int, volume_m3: float, metal_t: float, c_metal_J_kgK: float
+) -> tuple[float, float]:
     """Steam volume V_k (m3) and wall heat capacity C_m,k (J/K) of each of the n equal
     cells of a line of the given volume and wall metal mass (t)."""
     return volume_m3 / n, metal_t * 1e3 * c_metal_J_kgK / n
 
 
-def pipe_pattern(off: int, n: int, inlet_cols: tuple[int, ...] = (),
-                 flow_col: int = -1) -> list[tuple[int, int]]:  # fmt: skip
+def pipe_pattern(
+    off: int, n: int, inlet_cols: tuple[int, ...] = (), flow_col: int = -1
+) -> list[tuple[int, int]]:
     """Strictly-lower Jacobian couplings of an n-cell pipe at ``off`` (one h state per cell)."""
     pat = []
     for i in range(n):

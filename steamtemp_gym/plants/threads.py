@@ -33,8 +33,9 @@ def _default_threads() -> int:
         try:
             n = int(raw)
         except ValueError:
-            raise ValueError(f"STEAMTEMP_GYM_THREADS must be a positive integer, got {raw!r}"
-                             ) from None  # fmt: skip
+            raise ValueError(
+                f"STEAMTEMP_GYM_THREADS must be a positive integer, got {raw!r}"
+            ) from None
         if n < 1:
             raise ValueError(f"STEAMTEMP_GYM_THREADS must be a positive integer, got {raw!r}")
         return n

@@ -40,8 +40,10 @@ def check_name(name: str) -> None:
     if name == RANDOM:
         raise ValueError(f"{RANDOM!r} is reserved for the seeded training distribution")
     if name.startswith(HELDOUT_PREFIX) or name.lower().endswith((".yaml", ".yml")) or "," in name:
-        raise ValueError(f"scenario name {_excerpt(name)} would read as a held-out scenario, "
-                         "a file or a list; choose another name")  # fmt: skip
+        raise ValueError(
+            f"scenario name {_excerpt(name)} would read as a held-out scenario, "
+            "a file or a list; choose another name"
+        )
 
 
 def register(scenario: Scenario, plants: Sequence[str] | None = None) -> Scenario:
@@ -73,8 +75,10 @@ def register(scenario: Scenario, plants: Sequence[str] | None = None) -> Scenari
     entry = (scenario, tuple(plants) if plants is not None else None)
     old = _REGISTRY.get(name)
     if old is not None and (old[0].to_dict() != scenario.to_dict() or old[1] != entry[1]):
-        raise ValueError(f"scenario {_excerpt(name)} is already registered (with another "
-                         "schedule or other plants); choose another name")  # fmt: skip
+        raise ValueError(
+            f"scenario {_excerpt(name)} is already registered (with another "
+            "schedule or other plants); choose another name"
+        )
     _REGISTRY[name] = entry
     return scenario
 

@@ -46,8 +46,7 @@ def corner_scenario(rng: np.random.Generator, duration_s: float = 1800.0) -> sc.
         pts += [(t, load), (t + dt, target)]
         t, load = t + dt, target
     fields: dict[str, object] = {"load": tuple(pts)}
-    for ch in ("setpoint_offset_C", "heat_absorption_bias", "fouling",
-               "spray_water_temp_offset_C"):  # fmt: skip
+    for ch in ("setpoint_offset_C", "heat_absorption_bias", "fouling", "spray_water_temp_offset_C"):
         lo, hi = lim[ch]
         v0 = _corner_value(rng, lo, hi)
         if ch in ("setpoint_offset_C", "heat_absorption_bias") and rng.uniform() < 0.5:

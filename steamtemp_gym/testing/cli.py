@@ -35,45 +35,78 @@ from steamtemp_gym.testing.subjects import short_id
 
 def _parser() -> argparse.ArgumentParser:
     source = policy_sources.find()
-    names = ("a policy factory module:callable (env -> Policy; module a dotted name or a .py "
-             "file): no policy source is installed" if source is None else
-             f"{source.FORMS}; 'all' for {', '.join(source.everyday_names())}")  # fmt: skip
+    names = (
+        "a policy factory module:callable (env -> Policy; module a dotted name or a .py "
+        "file): no policy source is installed"
+        if source is None
+        else f"{source.FORMS}; 'all' for {', '.join(source.everyday_names())}"
+    )
     p = argparse.ArgumentParser(
         prog="steamtemp-check",
         description="Check that env ids (plants, variants) and controllers honour every "
         "contract of steamtemp_gym (docs/checking.md). Prints one row per check and the "
         "message of each failure; exits 1 if any check fails.",
     )
-    p.add_argument("ids", nargs="*", metavar="ID",
-                   help="env ids to check, with or without the steamtemp/ namespace (default: "
-                   "every steamtemp id, steamtemp_gym.ENV_IDS)")
-    p.add_argument("--policy", action="append", default=[], metavar="NAME",
-                   help="also run the policy checks of this policy on each id (repeatable): "
-                   + names)
-    p.add_argument("--scenario", action="append", default=[], metavar="SCENARIO",
-                   help="run check_completes_a_scenario under this scenario instead of "
-                   "setpoint_step (repeatable): a scenario name, heldout:<name>, random or a "
-                   "YAML path, as gym.make(..., scenario=...) and steamtemp-leaderboard "
-                   "--scenarios take them")
-    p.add_argument("--quick", action="store_true",
-                   help="shorter runs, slow checks skipped (about 10-20 s per id from a warm "
-                   "kernel cache)")
-    p.add_argument("--check", action="append", default=None, metavar="NAME",
-                   help="run only this check (repeatable): one of " + ", ".join(CHECK_NAMES))
-    p.add_argument("--no-env-checks", action="store_true",
-                   help="only the policy checks of --policy")
-    p.add_argument("--import", dest="modules", action="append", default=[], metavar="MODULE",
-                   help="import this module first (one that registers your variants)")
+    p.add_argument(
+        "ids",
+        nargs="*",
+        metavar="ID",
+        help="env ids to check, with or without the steamtemp/ namespace (default: "
+        "every steamtemp id, steamtemp_gym.ENV_IDS)",
+    )
+    p.add_argument(
+        "--policy",
+        action="append",
+        default=[],
+        metavar="NAME",
+        help="also run the policy checks of this policy on each id (repeatable): " + names,
+    )
+    p.add_argument(
+        "--scenario",
+        action="append",
+        default=[],
+        metavar="SCENARIO",
+        help="run check_completes_a_scenario under this scenario instead of "
+        "setpoint_step (repeatable): a scenario name, heldout:<name>, random or a "
+        "YAML path, as gym.make(..., scenario=...) and steamtemp-leaderboard "
+        "--scenarios take them",
+    )
+    p.add_argument(
+        "--quick",
+        action="store_true",
+        help="shorter runs, slow checks skipped (about 10-20 s per id from a warm kernel cache)",
+    )
+    p.add_argument(
+        "--check",
+        action="append",
+        default=None,
+        metavar="NAME",
+        help="run only this check (repeatable): one of " + ", ".join(CHECK_NAMES),
+    )
+    p.add_argument(
+        "--no-env-checks", action="store_true", help="only the policy checks of --policy"
+    )
+    p.add_argument(
+        "--import",
+        dest="modules",
+        action="append",
+        default=[],
+        metavar="MODULE",
+        help="import this module first (one that registers your variants)",
+    )
     return p
 
 
 def _table(results: list[Result]) -> str:
     rows = [("env", "policy", "check", "result", "s")]
-    rows += [(short_id(r.env), r.policy or "-", r.check, r.status.upper(), f"{r.seconds:.1f}")
-             for r in results]  # fmt: skip
+    rows += [
+        (short_id(r.env), r.policy or "-", r.check, r.status.upper(), f"{r.seconds:.1f}")
+        for r in results
+    ]
     widths = [max(len(row[i]) for row in rows) for i in range(5)]
-    return "\n".join("  ".join(c.ljust(w) for c, w in zip(row, widths, strict=True)).rstrip()
-                     for row in rows)  # fmt: skip
+    return "\n".join(
+        "  ".join(c.ljust(w) for c, w in zip(row, widths, strict=True)).rstrip() for row in rows
+    )
 
 
 def _env_id(parser: argparse.ArgumentParser, name: str) -> str:
@@ -115,8 +148,7 @@ def _check_policies(parser: argparse.ArgumentParser, policies: list[str], ids: l
             except BaseException as exc:  # any failure is a bad --policy value; SystemExit too
                 if not guard.own_failure(exc):
                     raise
-                parser.error(f"--policy {name}: on {env_id}: "
-                             f"{guard.describe(exc, 'the factory')}")  # fmt: skip
+                parser.error(f"--policy {name}: on {env_id}: {guard.describe(exc, 'the factory')}")
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -154,12 +186,15 @@ def _main(argv: Sequence[str] | None) -> int:
 
     ids = args.ids or list(steamtemp_gym.ENV_IDS)
     _check_scenarios(parser, args.scenario, ids)
-    checks = bound_checks(policies, args.quick, env=not args.no_env_checks, only=args.check,
-                          scenarios=args.scenario)  # fmt: skip
+    checks = bound_checks(
+        policies, args.quick, env=not args.no_env_checks, only=args.check, scenarios=args.scenario
+    )
     if not checks:
-        parser.error("nothing to check: --no-env-checks leaves the env's checks out and no "
-                     "--policy (or --check) selects a policy's; drop --no-env-checks or "
-                     "name a policy")  # fmt: skip
+        parser.error(
+            "nothing to check: --no-env-checks leaves the env's checks out and no "
+            "--policy (or --check) selects a policy's; drop --no-env-checks or "
+            "name a policy"
+        )
     t0, results = time.perf_counter(), []
     for env_id in ids:
         for check in checks:
@@ -175,9 +210,11 @@ def _main(argv: Sequence[str] | None) -> int:
         print(f"\nNOT CHECKED {subject}: every check was skipped")
         print("  " + "\n  ".join(reasons))
     counts = {s: sum(r.status == s for r in results) for s in ("pass", "fail", "skip")}
-    print(f"\n{counts['pass']} passed, {counts['fail']} failed, {counts['skip']} skipped "
-          f"in {time.perf_counter() - t0:.1f} s"
-          + (f"; {len(nothing)} subject(s) not checked at all" if nothing else ""))  # fmt: skip
+    print(
+        f"\n{counts['pass']} passed, {counts['fail']} failed, {counts['skip']} skipped "
+        f"in {time.perf_counter() - t0:.1f} s"
+        + (f"; {len(nothing)} subject(s) not checked at all" if nothing else "")
+    )
     return 1 if failed or nothing else 0
 
 
@@ -213,9 +250,12 @@ def console() -> None:
         written = open(status_file).read() if os.path.exists(status_file) else ""
     if written.isdigit():
         sys.exit(int(written))
-    print(f"steamtemp-check: the process running the checks ended before they finished (exit "
-          f"status {child.returncode}): code under check ended it (os._exit, a signal). "
-          "That fails the run.", file=sys.stderr)  # fmt: skip
+    print(
+        f"steamtemp-check: the process running the checks ended before they finished (exit "
+        f"status {child.returncode}): code under check ended it (os._exit, a signal). "
+        "That fails the run.",
+        file=sys.stderr,
+    )
     sys.exit(1)
 
 

@@ -35,8 +35,10 @@ def stop_asked() -> None:
 def watch() -> Iterator[None]:
     """In this block Ctrl-C raises ``KeyboardInterrupt`` marked as a stop. Only in the main
     thread and where SIGINT has Python's default handler (else nothing changes)."""
-    own = (threading.current_thread() is threading.main_thread()
-           and signal.getsignal(signal.SIGINT) is signal.default_int_handler)  # fmt: skip
+    own = (
+        threading.current_thread() is threading.main_thread()
+        and signal.getsignal(signal.SIGINT) is signal.default_int_handler
+    )
     before = signal.signal(signal.SIGINT, _on_sigint) if own else None
     if own:
         _state["watching"] += 1

@@ -17,18 +17,29 @@ from steamtemp_gym.testing.vector_checks import check_vector_env_matches_single_
 
 #: Every env contract, in the order they run.
 ENV_CHECKS: tuple[Callable[..., None], ...] = (
-    ec.check_gymnasium_env, ec.check_sb3_env, ec.check_spaces_match_signals,
-    ec.check_info_keys_and_units, ec.check_determinism, check_vector_env_matches_single_env,
-    ec.check_pickle_and_deepcopy, ec.check_named_scenarios_run_to_end,
-    ec.check_bad_inputs_rejected, ec.check_physical_under_random_and_corner_runs,
+    ec.check_gymnasium_env,
+    ec.check_sb3_env,
+    ec.check_spaces_match_signals,
+    ec.check_info_keys_and_units,
+    ec.check_determinism,
+    check_vector_env_matches_single_env,
+    ec.check_pickle_and_deepcopy,
+    ec.check_named_scenarios_run_to_end,
+    ec.check_bad_inputs_rejected,
+    ec.check_physical_under_random_and_corner_runs,
     ec.check_render_frame,
-)  # fmt: skip
+)
 #: Every policy contract, in the order they run.
 POLICY_CHECKS: tuple[Callable[..., None], ...] = (
-    pc.check_predict_signature, pc.check_batched_equals_unbatched, pc.check_policy_determinism,
-    pc.check_reset_clears_state, pc.check_actions_in_bounds, pc.check_bad_observations_rejected,
-    pc.check_completes_a_scenario, pc.check_completes_every_scenario,
-)  # fmt: skip
+    pc.check_predict_signature,
+    pc.check_batched_equals_unbatched,
+    pc.check_policy_determinism,
+    pc.check_reset_clears_state,
+    pc.check_actions_in_bounds,
+    pc.check_bad_observations_rejected,
+    pc.check_completes_a_scenario,
+    pc.check_completes_every_scenario,
+)
 #: Checks too slow for the default test run and ``--quick`` (pytest marker ``slow``).
 SLOW_CHECKS = frozenset({pc.check_completes_every_scenario})
 CHECK_NAMES: tuple[str, ...] = tuple(c.__name__ for c in ENV_CHECKS + POLICY_CHECKS)
@@ -74,9 +85,13 @@ class BoundCheck:
         return self.label if self.policy is None else f"{self.policy_label}-{self.label}"
 
 
-def bound_checks(policies: Iterable[Any] = (), quick: bool = False, env: bool = True,
-                 only: Sequence[str] | None = None,
-                 scenarios: Sequence[Any] = ()) -> list[BoundCheck]:  # fmt: skip
+def bound_checks(
+    policies: Iterable[Any] = (),
+    quick: bool = False,
+    env: bool = True,
+    only: Sequence[str] | None = None,
+    scenarios: Sequence[Any] = (),
+) -> list[BoundCheck]:
     """The env checks (if ``env``) then each policy's checks; ``only``: these names;
     ``scenarios``: the scenarios of ``check_completes_a_scenario`` (one check each; default
     its own, ``setpoint_step``)."""
@@ -94,8 +109,12 @@ def bound_checks(policies: Iterable[Any] = (), quick: bool = False, env: bool = 
     return [b for b in out if only is None or b.name in only]
 
 
-def parametrize_with_checks(ids: Iterable[Any] | None = None, policies: Iterable[Any] = (),
-                            env: bool = True, quick: bool = False):  # fmt: skip
+def parametrize_with_checks(
+    ids: Iterable[Any] | None = None,
+    policies: Iterable[Any] = (),
+    env: bool = True,
+    quick: bool = False,
+):
     """A pytest decorator parametrizing a test ``(env_id, check)`` over every contract.
 
     ``ids``: env ids or factories (default :data:`steamtemp_gym.ENV_IDS`); ``policies``:
@@ -140,8 +159,9 @@ def run(env: Any, check: BoundCheck, skip_slow: bool = False) -> Result:
     """Run one bound check on one env, catching its failure into a Result."""
     label = resolve_env(env).label
     if skip_slow and check.slow:
-        return Result(label, check.policy_label, check.label, "skip", 0.0,
-                      "slow; run without --quick")  # fmt: skip
+        return Result(
+            label, check.policy_label, check.label, "skip", 0.0, "slow; run without --quick"
+        )
     t0 = time.perf_counter()
     try:
         with guard.watch():  # the checked code's own KeyboardInterrupt fails the check
@@ -162,15 +182,20 @@ def unchecked(results: Iterable[Result]) -> dict[str, list[str]]:
     for r in results:
         key = f"env checks of {r.env}" if r.policy is None else f"policy {r.policy}"
         subjects.setdefault(key, []).append(r)
-    return {key: list(dict.fromkeys(r.message or "no reason given" for r in rs))
-            for key, rs in subjects.items() if all(r.status == "skip" for r in rs)}  # fmt: skip
+    return {
+        key: list(dict.fromkeys(r.message or "no reason given" for r in rs))
+        for key, rs in subjects.items()
+        if all(r.status == "skip" for r in rs)
+    }
 
 
 def _raise_failures(results: list[Result]) -> list[Result]:
     failed = [r for r in results if r.status == "fail"]
     if failed:
-        raise AssertionError(f"{len(failed)} of {len(results)} checks failed:\n"
-                             + "\n".join(r.message for r in failed))  # fmt: skip
+        raise AssertionError(
+            f"{len(failed)} of {len(results)} checks failed:\n"
+            + "\n".join(r.message for r in failed)
+        )
     return results
 
 

@@ -56,8 +56,9 @@ class EnvTarget:
     def make_vec(self, num_envs: int, **options: Any) -> gym.vector.VectorEnv:
         """The native vector env of an id; Gymnasium's SyncVectorEnv over a factory's envs."""
         if self.has_native_vector_env:
-            return gym.make_vec(self.env_id, num_envs=num_envs,
-                                vectorization_mode="vector_entry_point", **options)  # fmt: skip
+            return gym.make_vec(
+                self.env_id, num_envs=num_envs, vectorization_mode="vector_entry_point", **options
+            )
         return SyncVectorEnv([functools.partial(self.make, **options)] * num_envs)
 
     def repro(self) -> str:
@@ -121,8 +122,9 @@ def _make_named(name: str, env: Any) -> Any:
     ids = [i for i in (getattr(getattr(u, "spec", None), "id", None), u.plant.id) if i]
     env_id = next((i for i in ids if spec.available(i)), None)
     if env_id is None:
-        raise CheckSkipped(f"{name} is not available for {ids[0]} (only for "
-                           f"{sorted(spec.envs or ())})")  # fmt: skip
+        raise CheckSkipped(
+            f"{name} is not available for {ids[0]} (only for {sorted(spec.envs or ())})"
+        )
     try:
         return spec.make(env_id, env)
     except ImportError as exc:

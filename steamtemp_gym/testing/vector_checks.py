@@ -32,11 +32,15 @@ def autoreset_modes() -> tuple[AutoresetMode, ...]:
 
 def short_scenario(dt_s: float, steps: int = EPISODE_STEPS) -> Scenario:
     """A scenario of ``steps`` control intervals with a load ramp, a heat step and noise."""
-    return Scenario(name="short", duration_s=steps * dt_s,
-                    load=((0.0, 0.9), (steps * dt_s, 0.85)),
-                    heat_absorption_bias=((0.0, 0.0), (3 * dt_s, 0.03)),
-                    noise_std_C=0.5, heat_absorption_noise_std=0.02,
-                    heat_absorption_noise_tau_s=60.0)  # fmt: skip
+    return Scenario(
+        name="short",
+        duration_s=steps * dt_s,
+        load=((0.0, 0.9), (steps * dt_s, 0.85)),
+        heat_absorption_bias=((0.0, 0.0), (3 * dt_s, 0.03)),
+        noise_std_C=0.5,
+        heat_absorption_noise_std=0.02,
+        heat_absorption_noise_tau_s=60.0,
+    )
 
 
 def native_vector_env(target: EnvTarget, n: int, mode: AutoresetMode, **options: Any) -> VectorEnv:
@@ -74,13 +78,17 @@ def _info_differences(got: dict, ref: dict, where: str) -> list[str]:
         elif isinstance(ref[k], dict):
             out += _info_differences(got[k], ref[k], f"{where} in info[{k!r}]")
         else:
-            out += [f"info[{k!r}][{i}] = {got[k][i]!r} != reference {ref[k][i]!r} {where}"
-                    for i in np.flatnonzero(mask) if not _same(got[k][i], ref[k][i])]  # fmt: skip
+            out += [
+                f"info[{k!r}][{i}] = {got[k][i]!r} != reference {ref[k][i]!r} {where}"
+                for i in np.flatnonzero(mask)
+                if not _same(got[k][i], ref[k][i])
+            ]
     return out
 
 
-def compare_vector_envs(vec: VectorEnv, ref: VectorEnv, mode: AutoresetMode, steps: int = STEPS,
-                        seed: int = SEED) -> int:  # fmt: skip
+def compare_vector_envs(
+    vec: VectorEnv, ref: VectorEnv, mode: AutoresetMode, steps: int = STEPS, seed: int = SEED
+) -> int:
     """Step ``vec`` and ``ref`` with the same random actions and compare everything.
 
     A partial reset of sub-env 1 at step 3 puts the sub-envs' episodes out of phase. In
@@ -114,8 +122,11 @@ def compare_vector_envs(vec: VectorEnv, ref: VectorEnv, mode: AutoresetMode, ste
             mask |= ended
         if mask.any():
             opts = {"reset_mask": mask}
-            compare(vec.reset(options=dict(opts)), ref.reset(options=dict(opts)),
-                    f"{where}, reset(options={{'reset_mask': {mask.tolist()}}})")  # fmt: skip
+            compare(
+                vec.reset(options=dict(opts)),
+                ref.reset(options=dict(opts)),
+                f"{where}, reset(options={{'reset_mask': {mask.tolist()}}})",
+            )
     return endings
 
 
@@ -130,6 +141,7 @@ def check_vector_env_matches_single_env(target: EnvTarget, quick: bool = False) 
         vec = native_vector_env(target, N_ENVS, mode, **options)
         declared = vec.metadata.get("autoreset_mode")
         assert declared == mode, f"asked for autoreset mode {mode}, the env declares {declared}"
-        endings = compare_vector_envs(vec, reference_vector_env(target, N_ENVS, mode, **options),
-                                      mode)  # fmt: skip
+        endings = compare_vector_envs(
+            vec, reference_vector_env(target, N_ENVS, mode, **options), mode
+        )
         assert endings >= N_ENVS, f"mode {mode.name}: only {endings} episode ends in {STEPS} steps"

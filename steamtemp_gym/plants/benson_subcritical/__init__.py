@@ -169,12 +169,34 @@ from steamtemp_gym.plants.benson_subcritical.steady_state import (
 
 __all__ = [
     # the plant, its parameters and sections
-    "BensonSubcritical", "BensonParams", "K0", "SECTIONS", "SEC", "P_SHARE",
+    "BensonSubcritical",
+    "BensonParams",
+    "K0",
+    "SECTIONS",
+    "SEC",
+    "P_SHARE",
     # kernels and steady state
-    "rhs", "derivatives", "outputs", "project", "step", "steady", "firing", "fuel_demand",
-    "p_setpoint", "h_ev_setpoint", "cold_reheat", "design_spray", "section_enthalpies",
-    "section_temperatures", "_pack", "_reheat", "_table",
+    "rhs",
+    "derivatives",
+    "outputs",
+    "project",
+    "step",
+    "steady",
+    "firing",
+    "fuel_demand",
+    "p_setpoint",
+    "h_ev_setpoint",
+    "cold_reheat",
+    "design_spray",
+    "section_enthalpies",
+    "section_temperatures",
+    "_pack",
+    "_reheat",
+    "_table",
     # the layout: outputs and the named slots of P, x and z (the section blocks, tables and
     # thermowells in the layout module)
-    "OUTPUTS", "IP", "IX", "IZ",
-]  # fmt: skip
+    "OUTPUTS",
+    "IP",
+    "IX",
+    "IZ",
+]

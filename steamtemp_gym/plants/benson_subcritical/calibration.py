@@ -43,8 +43,10 @@ def _secant(fun, a: float, b: float, what: str, tol: float = 1e-4) -> float:
     b, fb = secant(fun, a, b, tol, floor=1e-3)
     if abs(fb) < 1e3 * tol:
         return b
-    raise ValueError(f"BensonParams: cannot calibrate {what} (residual {fb:.4g}); "
-                     "check the design temperatures and gas temperatures")  # fmt: skip
+    raise ValueError(
+        f"BensonParams: cannot calibrate {what} (residual {fb:.4g}); "
+        "check the design temperatures and gas temperatures"
+    )
 
 
 def _calibrate(pr: BensonParams, P: np.ndarray) -> None:
@@ -69,8 +71,13 @@ def _feedwater_tables(pr: BensonParams, P: np.ndarray, Pk: np.ndarray) -> None:
         p_eco = p + P_SHARE[SEC.ECO] * P[IP.DPB] * L * L
         p_pump = p + P[IP.DPPUMP] * L * L
         h_sp = h_pT(p_pump, T_da)
-        vals = (h_pT(p_eco, T_fw), cp_pT(p_eco, T_fw), h_sp, cp_pT(p_pump, T_da),
-                rho_ph(p_pump, h_sp))  # fmt: skip
+        vals = (
+            h_pT(p_eco, T_fw),
+            cp_pT(p_eco, T_fw),
+            h_sp,
+            cp_pT(p_pump, T_da),
+            rho_ph(p_pump, h_sp),
+        )
         for tb, v in zip((ITB.HFW, ITB.CPFW, ITB.HSP, ITB.CPSP, ITB.RHOSP), vals, strict=True):
             P[IP.TAB + tb * N_TAB + i] = v
 
@@ -120,8 +127,10 @@ def _rated_design(pr: BensonParams, P: np.ndarray, Pk: np.ndarray, x: np.ndarray
     # spray valves: fully open passes spray*_max_fraction of W_nom at rated load
     rho_sp = _table(Pk, ITB.RHOSP, 1.0)
     h_sp = _table(Pk, ITB.HSP, 1.0)
-    for i_cv, share, smax in ((IP.CV1, P_SHARE[SEC.SH2], pr.spray1_max_fraction),
-                              (IP.CV2, P_SHARE[SEC.SH3], pr.spray2_max_fraction)):  # fmt: skip
+    for i_cv, share, smax in (
+        (IP.CV1, P_SHARE[SEC.SH2], pr.spray1_max_fraction),
+        (IP.CV2, P_SHARE[SEC.SH3], pr.spray2_max_fraction),
+    ):
         P[i_cv] = smax * W_nom / math.sqrt(rho_sp * (P[IP.DPPUMP] - share * dpb))
     P[IP.V1D] = pr.spray1_design_fraction / pr.spray1_max_fraction
     P[IP.V2D] = pr.spray2_design_fraction / pr.spray2_max_fraction
@@ -222,10 +231,22 @@ def _pack_sections(pr: BensonParams, P: np.ndarray) -> tuple[list[tuple[int, int
     """Each section's block of P and its states (economizer .. SH4, the main-steam line,
     the reheater): the Jacobian pattern so far and the next free state index."""
     W_nom = pr.W_nom_kg_s
-    W_rated = (P[IP.WECO], P[IP.WECO], P[IP.WECO], P[IP.WECO],
-               W_nom * (1.0 - pr.spray2_design_fraction), W_nom, P[IP.WRHN])  # fmt: skip
-    Tg = {SEC.ECO: pr.Tg_eco_C, SEC.SH1: pr.Tg_sh1_C, SEC.SH3: pr.Tg_sh3_C, SEC.SH4: pr.Tg_sh4_C,
-          SEC.RH: pr.Tg_rh_C}  # fmt: skip
+    W_rated = (
+        P[IP.WECO],
+        P[IP.WECO],
+        P[IP.WECO],
+        P[IP.WECO],
+        W_nom * (1.0 - pr.spray2_design_fraction),
+        W_nom,
+        P[IP.WRHN],
+    )
+    Tg = {
+        SEC.ECO: pr.Tg_eco_C,
+        SEC.SH1: pr.Tg_sh1_C,
+        SEC.SH3: pr.Tg_sh3_C,
+        SEC.SH4: pr.Tg_sh4_C,
+        SEC.RH: pr.Tg_rh_C,
+    }
     off = IX.CHAINS
     pat: list[tuple[int, int]] = []
     prev_h = -1

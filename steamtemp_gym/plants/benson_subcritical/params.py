@@ -138,8 +138,16 @@ class BensonParams:
     n_substeps: int = 1  # ROS2 steps per control interval
 
     def __post_init__(self) -> None:
-        zero_ok = {"dT_deaerator_dload_K", "dT_hp_dload_K", "T_bir_s", "fwr_kp", "fwr_ki_per_s",
-                   "gas_temp_coeff", "fwr_schedule_error_kJ_kg", "bias_evap_share"}  # fmt: skip
+        zero_ok = {
+            "dT_deaerator_dload_K",
+            "dT_hp_dload_K",
+            "T_bir_s",
+            "fwr_kp",
+            "fwr_ki_per_s",
+            "gas_temp_coeff",
+            "fwr_schedule_error_kJ_kg",
+            "bias_evap_share",
+        }
         validate_params(
             self,
             positive=tuple(f.name for f in fields(self) if f.name not in zero_ok),
@@ -153,8 +161,12 @@ class BensonParams:
             raise ValueError(f"{name}.p_pump_MPa must exceed the economizer inlet pressure")
         T_fw = self.T_deaerator_C + self.dT_hp_heaters_K
         chain = (T_fw, self.T_eco_out_C, self.T_evap_out_C, self.T_sh1_out_C, self.T_sh2_out_C)
-        for a, b, f in zip(chain[:-1], chain[1:], ("T_eco_out_C", "T_evap_out_C", "T_sh1_out_C",
-                                             "T_sh2_out_C"), strict=True):  # fmt: skip
+        for a, b, f in zip(
+            chain[:-1],
+            chain[1:],
+            ("T_eco_out_C", "T_evap_out_C", "T_sh1_out_C", "T_sh2_out_C"),
+            strict=True,
+        ):
             if not b > a + 5.0:
                 raise ValueError(f"{name}.{f} must exceed the section inlet temperature")
         if not self.T_sh2_out_C - 30.0 <= self.T_sh3_out_C < self.T_ms_C:
@@ -163,8 +175,12 @@ class BensonParams:
             design, top = (getattr(self, f"spray{s}_{w}_fraction") for w in ("design", "max"))
             if design >= top:
                 raise ValueError(f"{name}.spray{s}_design_fraction must be below its max fraction")
-        for f, hot in (("Tg_eco_C", self.T_eco_out_C), ("Tg_sh1_C", self.T_sh1_out_C),
-                       ("Tg_sh3_C", self.T_sh3_out_C), ("Tg_sh4_C", self.T_ms_C),
-                       ("Tg_rh_C", self.T_rh_C)):  # fmt: skip
+        for f, hot in (
+            ("Tg_eco_C", self.T_eco_out_C),
+            ("Tg_sh1_C", self.T_sh1_out_C),
+            ("Tg_sh3_C", self.T_sh3_out_C),
+            ("Tg_sh4_C", self.T_ms_C),
+            ("Tg_rh_C", self.T_rh_C),
+        ):
             if getattr(self, f) * (1.0 - 0.6 * self.gas_temp_coeff) <= hot + 20.0:
                 raise ValueError(f"{name}.{f}: gas at 40 % firing must be hotter than the steam")

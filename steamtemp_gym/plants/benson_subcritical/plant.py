@@ -25,8 +25,14 @@ class BensonSubcritical(Plant):
     setpoint_C = 535.0
     valves = ("spray_valve_1", "spray_valve_2")
     sprays = ("spray_flow_1_kg_s", "spray_flow_2_kg_s")
-    extra_info = ("reheat_temp_C", "attemp2_out_temp_C", "pressure_MPa", "steam_flow_kg_s",
-                  "power_MW", "heat_absorption_MW")  # fmt: skip
+    extra_info = (
+        "reheat_temp_C",
+        "attemp2_out_temp_C",
+        "pressure_MPa",
+        "steam_flow_kg_s",
+        "power_MW",
+        "heat_absorption_MW",
+    )
 
     pack = staticmethod(_pack)
     steady = staticmethod(_steady)
@@ -38,12 +44,19 @@ class BensonSubcritical(Plant):
     design_spray = "design_spray_kg_s"
     circulation = "once_through"
     perturbation_groups = {
-        "heat_transfer": ("kA_eco_MW_K", "kA_evap_MW_K", "kA_sh1_MW_K", "kA_sh2_MW_K",
-                          "kA_sh3_MW_K", "kA_sh4_MW_K", "kA_rh_MW_K"),
+        "heat_transfer": (
+            "kA_eco_MW_K",
+            "kA_evap_MW_K",
+            "kA_sh1_MW_K",
+            "kA_sh2_MW_K",
+            "kA_sh3_MW_K",
+            "kA_sh4_MW_K",
+            "kA_rh_MW_K",
+        ),
         "metal_heat_capacity": ("c_metal_J_kgK",),
         "firing_lag": ("tau_furnace_s",),
         "sensor_lag": ("tau_tc1_s", "tau_tc2_s"),
-    }  # fmt: skip
+    }
     mismatch_variants = BOILER_VARIANTS
     commissioning = {
         "mpc_linear": {"move_weight": 0.001},

@@ -32,8 +32,7 @@ def _section_steady(x, P, k, h0, W, p, lf, d):
     """Steady state of section k written into x; returns its outlet enthalpy."""
     kA = steam_side_kA(_s(P, k, IF.KA), W, _s(P, k, IF.WN))[0]
     UAg, Tg, Qrad = _gas(P, k, lf, d)
-    return chain_steady(x, int(_s(P, k, IF.OFF)), int(_s(P, k, IF.N)), h0, W, p, kA, UAg, Tg,
-                        Qrad)  # fmt: skip
+    return chain_steady(x, int(_s(P, k, IF.OFF)), int(_s(P, k, IF.N)), h0, W, p, kA, UAg, Tg, Qrad)
 
 
 @njit(cache=True)
@@ -128,8 +127,9 @@ def steady(D, sp_K, P, X):
         x[int(P[IP.STRIM])] = lf / _table(P, ITB.FUEL, L_ff) - 1.0
         temps = section_temperatures(x, d, P)
         s0 = int(P[IP.S0])
-        for j, T in enumerate((temps[2], temps[3], temps[4], temps[5], temps[6], temps[7],
-                               temps[8], temps[10])):  # fmt: skip
+        for j, T in enumerate(
+            (temps[2], temps[3], temps[4], temps[5], temps[6], temps[7], temps[8], temps[10])
+        ):
             x[s0 + 2 * j] = T + K0
             x[s0 + 2 * j + 1] = T + K0
 
@@ -141,8 +141,15 @@ def section_enthalpies(x, d, P):
     p = x[IX.P]
     out = np.empty(11)
     out[0] = h_fw
-    for i, k in ((1, SEC.ECO), (2, SEC.EV), (3, SEC.SH1), (4, SEC.SH2), (6, SEC.SH3),
-                 (8, SEC.SH4), (10, SEC.RH)):  # fmt: skip
+    for i, k in (
+        (1, SEC.ECO),
+        (2, SEC.EV),
+        (3, SEC.SH1),
+        (4, SEC.SH2),
+        (6, SEC.SH3),
+        (8, SEC.SH4),
+        (10, SEC.RH),
+    ):
         out[i] = _last_h(x, P, k)
     W3, out[5] = mix(W_eco, out[4], w1, h_sp)
     _, out[7] = mix(W3, out[6], w2, h_sp)

@@ -155,10 +155,30 @@ from steamtemp_gym.plants.boiler_turbine_mimo.steady_state import steady
 
 __all__ = [
     # the plant and its parameters
-    "BoilerTurbineMIMO", "BoilerTurbineParams", "K0",
+    "BoilerTurbineMIMO",
+    "BoilerTurbineParams",
+    "K0",
     # kernels, steady state and packing
-    "rhs", "outputs", "project", "step", "steady", "fuel_demand", "firing_travel",
-    "design_spray", "KERNELS", "ACTUATORS", "N_U_HELD", "patterns", "_pack", "_offsets", "_tab",
+    "rhs",
+    "outputs",
+    "project",
+    "step",
+    "steady",
+    "fuel_demand",
+    "firing_travel",
+    "design_spray",
+    "KERNELS",
+    "ACTUATORS",
+    "N_U_HELD",
+    "patterns",
+    "_pack",
+    "_offsets",
+    "_tab",
     # the layout: outputs and the named slots of P, x, z and the load schedules
-    "OUTPUTS", "IP", "IX", "IZ", "ITAB", "N_TAB",
-]  # fmt: skip
+    "OUTPUTS",
+    "IP",
+    "IX",
+    "IZ",
+    "ITAB",
+    "N_TAB",
+]

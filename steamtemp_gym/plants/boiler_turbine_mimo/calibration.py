@@ -103,8 +103,9 @@ def _water_and_reheat_tables(params: BoilerTurbineParams, P: np.ndarray, Pk: np.
         P[IP.TAB + ITAB.CPCRH * N_TAB + k] = cp_pT(prh, T_ms * ratio)
 
 
-def _rated_design(params: BoilerTurbineParams, P: np.ndarray, Pk: np.ndarray,
-                  x: np.ndarray) -> float:  # fmt: skip
+def _rated_design(
+    params: BoilerTurbineParams, P: np.ndarray, Pk: np.ndarray, x: np.ndarray
+) -> float:
     """Size the spray valves, the platen's radiant heat and the convective UA_g of the
     primary SH, final SH and reheater on the rated design balance; the design evaporator
     outlet enthalpy (J/kg)."""
@@ -142,20 +143,51 @@ def _rated_design(params: BoilerTurbineParams, P: np.ndarray, Pk: np.ndarray,
         a = w * (h_out - h_in) / max(tg - T_out, 10.0)
         P[i_uag] = _secant(out, a, 1.3 * a, what)
 
-    stage(IP.UAG_F, o_f, n3, h_fi, W, p_nom, _kA(P[IP.KAF_F], P[IP.KAW_F], W, W)[0], P[IP.TG_F],
-          h_ms, "the final SH gas side")  # fmt: skip
-    stage(IP.UAG_P, o_p, n1, h_up, Wp, p_nom, _kA(P[IP.KAF_P], P[IP.KAW_P], Wp, W)[0], P[IP.TG_P],
-          h_po, "the primary SH gas side")  # fmt: skip
+    stage(
+        IP.UAG_F,
+        o_f,
+        n3,
+        h_fi,
+        W,
+        p_nom,
+        _kA(P[IP.KAF_F], P[IP.KAW_F], W, W)[0],
+        P[IP.TG_F],
+        h_ms,
+        "the final SH gas side",
+    )
+    stage(
+        IP.UAG_P,
+        o_p,
+        n1,
+        h_up,
+        Wp,
+        p_nom,
+        _kA(P[IP.KAF_P], P[IP.KAW_P], Wp, W)[0],
+        P[IP.TG_P],
+        h_po,
+        "the primary SH gas side",
+    )
     Wr = P[IP.FRH] * W
     prh, _ = _reheat_pressure(Pk, 1.0)
     kA_r = _kA(P[IP.KAF_R], P[IP.KAW_R], Wr, Wr)[0]
-    stage(IP.UAG_R, o_r, n4, _tab(Pk, ITAB.HCRH, 1.0), Wr, prh, kA_r, P[IP.TG_R],
-          h_pT(prh, P[IP.TRH]), "the reheater gas side")  # fmt: skip
+    stage(
+        IP.UAG_R,
+        o_r,
+        n4,
+        _tab(Pk, ITAB.HCRH, 1.0),
+        Wr,
+        prh,
+        kA_r,
+        P[IP.TG_R],
+        h_pT(prh, P[IP.TRH]),
+        "the reheater gas side",
+    )
     return h_up
 
 
-def _conductances(n_tubes: int, length: float, d_i: float, d_o: float, alpha: float, k: float,
-                  rho_c: float) -> tuple[float, float, float, float]:  # fmt: skip
+def _conductances(
+    n_tubes: int, length: float, d_i: float, d_o: float, alpha: float, k: float, rho_c: float
+) -> tuple[float, float, float, float]:
     """(kA_film at rated flow, kA_wall of eq. (4), steam volume, metal heat capacity) of a bank."""
     a_in = math.pi * d_i * length * n_tubes
     wall = a_in * 4.0 * k / (d_o - d_i)  # A / ((r_o - r_i) / (2 k))
@@ -171,14 +203,32 @@ def _pack(params: BoilerTurbineParams) -> tuple[np.ndarray, np.ndarray, np.ndarr
     write_copies(P, IP, COPIED, params)
     rc = q.rho_metal_kg_m3 * q.c_metal_J_kgK
     P[IP.KAF_P], P[IP.KAW_P], P[IP.V_P], P[IP.CM_P] = _conductances(
-        q.primary_n_tubes, q.primary_length_m, q.primary_id_m, q.primary_od_m, q.alpha_sh_W_m2K,
-        q.k_wall_W_mK, rc)  # fmt: skip
+        q.primary_n_tubes,
+        q.primary_length_m,
+        q.primary_id_m,
+        q.primary_od_m,
+        q.alpha_sh_W_m2K,
+        q.k_wall_W_mK,
+        rc,
+    )
     P[IP.KAF_F], P[IP.KAW_F], P[IP.V_F], P[IP.CM_F] = _conductances(
-        q.final_n_tubes, q.final_length_m, q.final_id_m, q.final_od_m, q.alpha_sh_W_m2K,
-        q.k_wall_W_mK, rc)  # fmt: skip
+        q.final_n_tubes,
+        q.final_length_m,
+        q.final_id_m,
+        q.final_od_m,
+        q.alpha_sh_W_m2K,
+        q.k_wall_W_mK,
+        rc,
+    )
     P[IP.KAF_R], P[IP.KAW_R], P[IP.V_R], P[IP.CM_R] = _conductances(
-        q.reheat_n_tubes, q.reheat_length_m, q.reheat_id_m, q.reheat_od_m, q.alpha_rh_W_m2K,
-        q.k_wall_W_mK, rc)  # fmt: skip
+        q.reheat_n_tubes,
+        q.reheat_length_m,
+        q.reheat_id_m,
+        q.reheat_od_m,
+        q.alpha_rh_W_m2K,
+        q.k_wall_W_mK,
+        rc,
+    )
     P[IP.RNOM] = q.recirc_max_fraction * q.rgd_design_opening
     n1, n2, n3, n4 = q.n_seg_primary, q.n_seg_platen, q.n_seg_final, q.n_seg_reheat
     P[IP.JOFF_PL] = 4 * n1

@@ -131,9 +131,16 @@ class BoilerTurbineParams:
     n_substeps: int = 1  # ROS2 steps per control interval
 
     def __post_init__(self) -> None:
-        signed = ("dT_fw_dload_K", "dTg_dload_K", "dTg_reheat_dload_K", "T_bir_s", "fwr_coupling",
-                  "platen_recirc_sensitivity", "fwr_schedule_error_kJ_kg",
-                  "bias_upstream_share")  # fmt: skip
+        signed = (
+            "dT_fw_dload_K",
+            "dTg_dload_K",
+            "dTg_reheat_dload_K",
+            "T_bir_s",
+            "fwr_coupling",
+            "platen_recirc_sensitivity",
+            "fwr_schedule_error_kJ_kg",
+            "bias_upstream_share",
+        )
         validate_params(
             self,
             positive=tuple(
@@ -148,15 +155,19 @@ class BoilerTurbineParams:
             raise ValueError(f"{name}.p_min_MPa must not exceed p_nom_MPa")
         if not self.slide_min_load < self.slide_knee_load:
             raise ValueError(f"{name}.slide_min_load must be below slide_knee_load")
-        if not (self.T_up_design_C < self.T_sp1_out_design_C < self.T_sp2_out_design_C
-                < self.T_ms_C):  # fmt: skip
+        if not (
+            self.T_up_design_C < self.T_sp1_out_design_C < self.T_sp2_out_design_C < self.T_ms_C
+        ):
             raise ValueError(
                 f"{name}.T_up_design_C < T_sp1_out_design_C < T_sp2_out_design_C < T_ms_C "
                 "must hold (the steam heats up along the path)"
             )
         if self.T_crh_nom_C >= self.T_rh_C:
             raise ValueError(f"{name}.T_crh_nom_C must be below T_rh_C")
-        for g, dtg in (("Tg_primary_C", self.dTg_dload_K), ("Tg_final_C", self.dTg_dload_K),
-                       ("Tg_reheat_C", self.dTg_reheat_dload_K)):  # fmt: skip
+        for g, dtg in (
+            ("Tg_primary_C", self.dTg_dload_K),
+            ("Tg_final_C", self.dTg_dload_K),
+            ("Tg_reheat_C", self.dTg_reheat_dload_K),
+        ):
             if getattr(self, g) - 0.8 * dtg <= self.T_ms_C - 100.0:
                 raise ValueError(f"{name}.{g}: gas at 20 % firing must stay above the steam")

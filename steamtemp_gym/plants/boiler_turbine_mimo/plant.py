@@ -47,12 +47,16 @@ class BoilerTurbineMIMO(Plant):
     design_spray = "design_spray_kg_s"
     circulation = "once_through"
     perturbation_groups = {
-        "heat_transfer": ("alpha_sh_W_m2K", "alpha_rh_W_m2K", "platen_kA_film_MW_K",
-                          "platen_kA_wall_MW_K"),
+        "heat_transfer": (
+            "alpha_sh_W_m2K",
+            "alpha_rh_W_m2K",
+            "platen_kA_film_MW_K",
+            "platen_kA_wall_MW_K",
+        ),
         "metal_heat_capacity": ("c_metal_J_kgK", "platen_metal_MJ_K"),
         "firing_lag": ("tau_mill_s", "tau_firing_s"),
         "sensor_lag": ("tau_tc1_s", "tau_tc2_s"),
-    }  # fmt: skip
+    }
     mismatch_variants = BOILER_VARIANTS
     commissioning = {
         "mpc_linear": {"move_weight": 0.001},
@@ -83,9 +87,10 @@ class BoilerTurbineMIMO(Plant):
             self.valves = type(self).valves + ("fuel_bias",)
             self.outputs = tuple(
                 Signal(s.name, s.unit, s.center, s.scale, True, s.noisy, s.description)
-                if s.name == "fuel_bias" else s
+                if s.name == "fuel_bias"
+                else s
                 for s in type(self).outputs
-            )  # fmt: skip
+            )
             self.n_u = len(self.actions)
 
     def kernel(self):

@@ -52,11 +52,13 @@ def _sh_steady(x, v, d, P):
     kA = _kA(P[IP.KAF_P], P[IP.KAW_P], Wp, P[IP.WNOM])[0]
     h_po = chain_steady(x, o_p, n1, x[IX.HUP], Wp, p, kA / n1, uag_p / n1, tg_p, 0.0)
     kA = _kA(P[IP.KAF_PL], P[IP.KAW_PL], Wpl, P[IP.WNOM])[0]
-    h_plo = chain_steady(x, o_pl, n2, (Wp * h_po + w1 * h_sp) / Wpl, Wpl, p, kA / n2, 0.0, 0.0,
-                         q_pl / n2)  # fmt: skip
+    h_plo = chain_steady(
+        x, o_pl, n2, (Wp * h_po + w1 * h_sp) / Wpl, Wpl, p, kA / n2, 0.0, 0.0, q_pl / n2
+    )
     kA = _kA(P[IP.KAF_F], P[IP.KAW_F], W, P[IP.WNOM])[0]
-    return chain_steady(x, o_f, n3, (Wpl * h_plo + w2 * h_sp) / W, W, p, kA / n3, uag_f / n3,
-                        tg_f, 0.0)  # fmt: skip
+    return chain_steady(
+        x, o_f, n3, (Wpl * h_plo + w2 * h_sp) / W, W, p, kA / n3, uag_f / n3, tg_f, 0.0
+    )
 
 
 @njit(cache=True)

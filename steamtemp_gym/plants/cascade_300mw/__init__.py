@@ -167,8 +167,24 @@ from steamtemp_gym.plants.cascade_300mw.plant import Cascade300MW
 
 __all__ = [
     # the plant, its parameters and its discretization
-    "Cascade300MW", "CascadeParams", "K0", "PLANT_ID", "LOAD_MIN", "LOAD_MAX", "continuous_model",
-    "zoh", "_block", "_pack", "step", "steady", "SEED_SALT",
+    "Cascade300MW",
+    "CascadeParams",
+    "K0",
+    "PLANT_ID",
+    "LOAD_MIN",
+    "LOAD_MAX",
+    "continuous_model",
+    "zoh",
+    "_block",
+    "_pack",
+    "step",
+    "steady",
+    "SEED_SALT",
     # the layout: outputs and the named slots of P, x and z
-    "OUTPUTS", "IP", "IX", "IZ", "LOAD_STEP", "N_GRID",
-]  # fmt: skip
+    "OUTPUTS",
+    "IP",
+    "IX",
+    "IZ",
+    "LOAD_STEP",
+    "N_GRID",
+]

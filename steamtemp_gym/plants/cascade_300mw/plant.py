@@ -48,9 +48,8 @@ class Cascade300MW(Plant):
         # LQI's valve travel 3.7x cascade_pi_ff's at its default e_max_K = 1 K, within 3x at 2
         "lqi": {"e_max_K": 2.0},
         # the paper's omega and omega_2, and its secondary P controller G_C2 = 8 %/K
-        "neuro_pid": {"disturbance_signals": ("omega_K", "omega2_kg_s"),
-                      "inner_p_pct_per_K": 8.0},
-    }  # fmt: skip
+        "neuro_pid": {"disturbance_signals": ("omega_K", "omega2_kg_s"), "inner_p_pct_per_K": 8.0},
+    }
     extra_info = ("intermediate_temp_C", "omega_K", "omega2_kg_s", "outer_disturbance_K")
     default_duration_s = 3600.0
 

@@ -112,10 +112,27 @@ from steamtemp_gym.plants.drum_boiler.steady_state import steady
 
 __all__ = [
     # the plant and its parameters
-    "DrumBoilerSH", "DrumBoilerParams", "K0",
+    "DrumBoilerSH",
+    "DrumBoilerParams",
+    "K0",
     # kernels, steady state, packing and the state layout
-    "rhs", "outputs", "project", "steady", "KERNELS", "pattern", "s_mill", "s_line", "sensors",
-    "_pack", "_boundary",
+    "rhs",
+    "outputs",
+    "project",
+    "steady",
+    "KERNELS",
+    "pattern",
+    "s_mill",
+    "s_line",
+    "sensors",
+    "_pack",
+    "_boundary",
     # the layout: outputs and the named slots of P, x, z and the Jacobian
-    "OUTPUTS", "DSP_LOADS", "IP", "IX", "IZ", "IW", "S_P",
-]  # fmt: skip
+    "OUTPUTS",
+    "DSP_LOADS",
+    "IP",
+    "IX",
+    "IZ",
+    "IW",
+    "S_P",
+]

@@ -72,16 +72,18 @@ def _calibrate(params: DrumBoilerParams, P: np.ndarray, n_x: int) -> None:
     q1 = q_s * (h1_target - h_s) / n / 300.0
     P[IP.UAG1] = _secant(
         lambda g: chain_steady(x, IX.CHAIN1, n, h_s, q_s, p1, kA1, g, P[IP.TG1], 0.0) - h1_target,
-        q1, 1.2 * q1,
-    )  # fmt: skip
+        q1,
+        1.2 * q1,
+    )
     h_sp, rho_sp, _ = _fw(Pk, P[IP.TFW])
     _, h_att = mix(q_s, h1_target, w_sp, h_sp)
     h_out = h_pT(p2, params.T_out_C + K0)
     q2 = W * (h_out - h_att) / n / 500.0
     P[IP.UAG2] = _secant(
         lambda g: chain_steady(x, c2, n, h_att, W, p2, kA2, g, P[IP.TG2], 0.0) - h_out,
-        q2, 1.2 * q2,
-    )  # fmt: skip
+        q2,
+        1.2 * q2,
+    )
     P[IP.CV] = params.spray_max_fraction * W / math.sqrt(rho_sp * P[IP.DPSP])
 
 
@@ -101,16 +103,33 @@ def _pack(params: DrumBoilerParams) -> tuple[np.ndarray, np.ndarray, np.ndarray,
         seg = getattr(params, f"tube_length_{i}_m") / n
         P[ika] = params.alpha_nom_W_m2K * math.pi * di * seg * nt
         P[iv] = math.pi / 4.0 * di**2 * seg * nt
-        P[icm] = (math.pi / 4.0 * (do**2 - di**2) * seg * nt * params.rho_metal_kg_m3
-                  * params.c_metal_J_kgK)  # fmt: skip
+        P[icm] = (
+            math.pi
+            / 4.0
+            * (do**2 - di**2)
+            * seg
+            * nt
+            * params.rho_metal_kg_m3
+            * params.c_metal_J_kgK
+        )
     P[IP.LV], P[IP.LCM] = pipe_cells(
         params.n_line, params.line_volume_m3, params.line_metal_t, params.c_metal_J_kgK
     )
     P[IP.DRUM : IP.DRUM + dr.N_DRUM_P] = dr.drum_block(
-        params.V_d_m3, params.V_r_m3, params.V_dc_m3, params.m_t_kg, params.m_r_kg,
-        params.m_d_kg, params.C_p_J_kgK, params.A_d_m2, params.A_dc_m2, params.k_friction,
-        params.beta, params.T_d_s, params.V_sd0_m3,
-    )  # fmt: skip
+        params.V_d_m3,
+        params.V_r_m3,
+        params.V_dc_m3,
+        params.m_t_kg,
+        params.m_r_kg,
+        params.m_d_kg,
+        params.C_p_J_kgK,
+        params.A_d_m2,
+        params.A_dc_m2,
+        params.k_friction,
+        params.beta,
+        params.T_d_s,
+        params.V_sd0_m3,
+    )
     p_fw = params.p_fw_MPa * 1e6
     for k in range(N_FW):
         h = h_pT(p_fw, FW_T0_K + FW_DT_K * k)

@@ -107,8 +107,31 @@ def _firing_demand(x, d, P):
 
 
 @njit(cache=True)
-def _chain_fired(x, off, n, n_in, h0, dh0, W, dW, p, dp, kA, UAg, Tg, dUAg, dTg, Cm, V,
-                 f, jd, ju, jl, joff, want_jac):  # fmt: skip
+def _chain_fired(
+    x,
+    off,
+    n,
+    n_in,
+    h0,
+    dh0,
+    W,
+    dW,
+    p,
+    dp,
+    kA,
+    UAg,
+    Tg,
+    dUAg,
+    dTg,
+    Cm,
+    V,
+    f,
+    jd,
+    ju,
+    jl,
+    joff,
+    want_jac,
+):
     """chain_rhs plus the firing column of every metal row (pattern: :func:`fired_pattern`).
 
     chain_rhs writes its own entries n places further on; they are then moved down to
@@ -116,8 +139,31 @@ def _chain_fired(x, off, n, n_in, h0, dh0, W, dW, p, dp, kA, UAg, Tg, dUAg, dTg,
     before each metal row's entry (a forward in-place move: every destination index is
     at most its source).
     """
-    _, T_out, _ = chain_rhs(x, off, n, h0, dh0, W, dW, p, dp, kA[0], kA[1], V, Cm, UAg, Tg,
-                            0.0, f, jd, ju, jl, joff + n, want_jac, True)  # fmt: skip
+    _, T_out, _ = chain_rhs(
+        x,
+        off,
+        n,
+        h0,
+        dh0,
+        W,
+        dW,
+        p,
+        dp,
+        kA[0],
+        kA[1],
+        V,
+        Cm,
+        UAg,
+        Tg,
+        0.0,
+        f,
+        jd,
+        ju,
+        jl,
+        joff + n,
+        want_jac,
+        True,
+    )
     if want_jac:
         dst, src = joff, joff + n
         for i in range(n):
@@ -171,10 +217,30 @@ def rhs(x, u, d, P, f, jd, ju, jl, want_jac):
     # inlet derivatives (arrays only in the Jacobian call; chain_rhs reads them only then)
     dh0 = np.array([dh_s]) if want_jac else f[0:1]
     _chain_fired(
-        x, IX.CHAIN1, n, 1, h_s, dh0, q_s, dWok, p1, dp1,
-        steam_side_kA(P[IP.KA1], q_s, P[IP.QSN]), UAg1, Tg1, gex * UAg1, P[IP.DTG1] * dLf,
-        P[IP.CM1], P[IP.V1], f, jd, ju, jl, IJ.CHAIN1, want_jac,
-    )  # fmt: skip
+        x,
+        IX.CHAIN1,
+        n,
+        1,
+        h_s,
+        dh0,
+        q_s,
+        dWok,
+        p1,
+        dp1,
+        steam_side_kA(P[IP.KA1], q_s, P[IP.QSN]),
+        UAg1,
+        Tg1,
+        gex * UAg1,
+        P[IP.DTG1] * dLf,
+        P[IP.CM1],
+        P[IP.V1],
+        f,
+        jd,
+        ju,
+        jl,
+        IJ.CHAIN1,
+        want_jac,
+    )
     # attemperator and final superheater at W
     h1 = x[c2 - 1]
     _, h_att = mix(q_s, h1, w_sp, h_sp)
@@ -185,15 +251,51 @@ def rhs(x, u, d, P, f, jd, ju, jl, want_jac):
     UAg2 = P[IP.UAG2] * mult
     Tg2 = P[IP.TG2] - P[IP.DTG2] * (1.0 - L_f)
     _chain_fired(
-        x, c2, n, 3, h_att, dh_att, W, dWok, p2, dp2, steam_side_kA(P[IP.KA2], W, P[IP.WNOM]),
-        UAg2, Tg2, gex * UAg2, P[IP.DTG2] * dLf, P[IP.CM2], P[IP.V2], f, jd, ju, jl,
-        IJ.CHAIN1 + 5 * n, want_jac,
-    )  # fmt: skip
+        x,
+        c2,
+        n,
+        3,
+        h_att,
+        dh_att,
+        W,
+        dWok,
+        p2,
+        dp2,
+        steam_side_kA(P[IP.KA2], W, P[IP.WNOM]),
+        UAg2,
+        Tg2,
+        gex * UAg2,
+        P[IP.DTG2] * dLf,
+        P[IP.CM2],
+        P[IP.V2],
+        f,
+        jd,
+        ju,
+        jl,
+        IJ.CHAIN1 + 5 * n,
+        want_jac,
+    )
     # outlet header and main-steam line (superheater.pipe_rhs; package docstring)
     nl = int(P[IP.NL])
     j_line = IJ.CHAIN1 + 10 * n + 4  # after the mill's two entries
-    T_out, dT_out = pipe_rhs(x, s_line(n), nl, x[c2 + 2 * n - 1], (1.0,), W, 0.0, p2, P[IP.LV],
-                             P[IP.LCM], f, jd, jl, j_line, want_jac, False)  # fmt: skip
+    T_out, dT_out = pipe_rhs(
+        x,
+        s_line(n),
+        nl,
+        x[c2 + 2 * n - 1],
+        (1.0,),
+        W,
+        0.0,
+        p2,
+        P[IP.LV],
+        P[IP.LCM],
+        f,
+        jd,
+        jl,
+        j_line,
+        want_jac,
+        False,
+    )
     T_att, dT_att = T_dTdh_ph(p1, h_att)
     st = sensors(n, nl)
     tc1, tc2 = P[IP.TC1], P[IP.TC2]

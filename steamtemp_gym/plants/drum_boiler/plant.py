@@ -37,9 +37,14 @@ class DrumBoilerSH(Plant):
     }
     setpoint_C = 505.0
     extra_info = (
-        "attemp_out_temp_C", "heat_absorption_MW", "drum_pressure_MPa", "drum_level_m",
-        "steam_flow_kg_s", "feedwater_flow_kg_s", "firing_rate",
-    )  # fmt: skip
+        "attemp_out_temp_C",
+        "heat_absorption_MW",
+        "drum_pressure_MPa",
+        "drum_level_m",
+        "steam_flow_kg_s",
+        "feedwater_flow_kg_s",
+        "firing_rate",
+    )
 
     pack = staticmethod(_pack)
     steady = staticmethod(_steady)

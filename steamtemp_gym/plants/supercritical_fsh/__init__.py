@@ -135,10 +135,30 @@ from steamtemp_gym.plants.supercritical_fsh.steady_state import steady
 
 __all__ = [
     # the plant and its parameters
-    "SupercriticalFSH", "FSHParams", "K0", "P_CRIT_PA",
+    "SupercriticalFSH",
+    "FSHParams",
+    "K0",
+    "P_CRIT_PA",
     # kernels, steady state and packing
-    "rhs", "outputs", "project", "steady", "KERNELS", "spray_water", "_boundary", "_pressure",
-    "_table", "_pack",
+    "rhs",
+    "outputs",
+    "project",
+    "steady",
+    "KERNELS",
+    "spray_water",
+    "_boundary",
+    "_pressure",
+    "_table",
+    "_pack",
     # the layout: outputs and the named slots of P, x and z
-    "OUTPUTS", "IP", "IX", "IZ", "N_P", "N_TAB", "TAB_LOADS", "INLET_COLS", "s_line", "s_mill",
-]  # fmt: skip
+    "OUTPUTS",
+    "IP",
+    "IX",
+    "IZ",
+    "N_P",
+    "N_TAB",
+    "TAB_LOADS",
+    "INLET_COLS",
+    "s_line",
+    "s_mill",
+]

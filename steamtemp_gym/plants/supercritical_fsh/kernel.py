@@ -137,12 +137,49 @@ def rhs(x, u, d, P, f, jd, ju, jl, want_jac):
     dW = P[IP.WNOM] if 0.05 < x[IX.LW] < 1.3 else 0.0
     dp = _dpressure(P, x[IX.LW])
     _, _, _ = chain_rhs(
-        x, IX.CHAIN, n, h0, dh0, W, dW, p, dp, kA[0], kA[1], P[IP.V], P[IP.CM], UAg, Tg, 0.0,
-        f, jd, ju, jl, 0, want_jac, True,
-    )  # fmt: skip
+        x,
+        IX.CHAIN,
+        n,
+        h0,
+        dh0,
+        W,
+        dW,
+        p,
+        dp,
+        kA[0],
+        kA[1],
+        P[IP.V],
+        P[IP.CM],
+        UAg,
+        Tg,
+        0.0,
+        f,
+        jd,
+        ju,
+        jl,
+        0,
+        want_jac,
+        True,
+    )
     # outlet header and main-steam line (superheater.pipe_rhs; module docstring)
-    T_out, _ = pipe_rhs(x, s_line(n), int(P[IP.NL]), x[IX.CHAIN + 2 * n - 1], (1.0,), W, 0.0, p,
-                     P[IP.LV], P[IP.LCM], f, jd, jl, 4 * n + 1, want_jac, False)  # fmt: skip
+    T_out, _ = pipe_rhs(
+        x,
+        s_line(n),
+        int(P[IP.NL]),
+        x[IX.CHAIN + 2 * n - 1],
+        (1.0,),
+        W,
+        0.0,
+        p,
+        P[IP.LV],
+        P[IP.LCM],
+        f,
+        jd,
+        jl,
+        4 * n + 1,
+        want_jac,
+        False,
+    )
     T_att, _ = T_dTdh_ph(p, h0)
     f[IX.TC1], f[IX.TC2], j1, j2 = thermowell_rhs(T_out, x[IX.TC1], x[IX.TC2], P[IP.TC1], P[IP.TC2])
     f[IX.TA1], f[IX.TA2], j3, j4 = thermowell_rhs(T_att, x[IX.TA1], x[IX.TA2], P[IP.TC1], P[IP.TC2])

@@ -130,10 +130,15 @@ def outside_training(scenario: Scenario) -> list[str]:
     """
     d = RANDOM_DISTRIBUTION
     out = _load_violations(scenario.load)
-    out += _single_step("setpoint_offset_C", scenario.setpoint_offset_C,
-                        max(map(abs, d["setpoint_step_K"])), 0.0)  # fmt: skip
-    out += _single_step("heat_absorption_bias", scenario.heat_absorption_bias,
-                        max(map(abs, d["heat_bias_step"])), 60.0)  # fmt: skip
+    out += _single_step(
+        "setpoint_offset_C", scenario.setpoint_offset_C, max(map(abs, d["setpoint_step_K"])), 0.0
+    )
+    out += _single_step(
+        "heat_absorption_bias",
+        scenario.heat_absorption_bias,
+        max(map(abs, d["heat_bias_step"])),
+        60.0,
+    )
     fouling = scenario.fouling if scenario.fouling else ((0.0, 1.0),)
     spray = scenario.spray_water_temp_offset_C or ((0.0, 0.0),)
     out += _constant("fouling", fouling, *d["fouling"])
