@@ -7,13 +7,48 @@ travel price's course, what a privileged critic saw).
 from __future__ import annotations
 
 import json
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import steamtemp_gym
+from agents.files import steamtemp_paths, stem
 from agents.run_clock import RunClock
 from agents.train_config import HYPERPARAMS
 from agents.validation import N_VALIDATION, VALIDATION_SEED
+
+
+@dataclass(frozen=True)
+class RunSpec:
+    """A training run's input, checked (agents/training.py): the env, the algorithm and
+    its SB3 class, the hyperparameter file and its entry read from it, the seed, the run's
+    index in the file names (None: names without one), the envs, the decisions and minutes
+    of one core it may train for, where its files go, its TensorBoard log and whether it
+    reports progress."""
+
+    env_id: str
+    algo: str
+    cls: Any
+    path: Path
+    hp: dict[str, Any]
+    seed: int
+    run: int | None
+    n_envs: int
+    total: int
+    out: Path
+    max_minutes: float | None
+    tensorboard: str | None
+    quiet: bool
+
+    @property
+    def name(self) -> str:
+        """The stem of the run's files."""
+        return stem(self.env_id, self.algo, self.run)
+
+    def paths(self) -> tuple[Path, Path]:
+        """The run's model ``.zip`` and metadata ``.json`` (made: their directory)."""
+        Path(self.out).mkdir(parents=True, exist_ok=True)
+        return steamtemp_paths(self.out, self.env_id, self.algo, self.run)
 
 
 def shown_path(path: Path) -> str:
@@ -26,16 +61,8 @@ def shown_path(path: Path) -> str:
 
 
 def metadata(
-    env_id: str,
-    algo: str,
-    cls: Any,
+    spec: RunSpec,
     revision: str,
-    path: Path,
-    hp: dict[str, Any],
-    seed: int,
-    run: int | None,
-    n_envs: int,
-    total: int,
     model: Any,
     best: dict[str, Any],
     clock: RunClock,
@@ -46,18 +73,19 @@ def metadata(
     import baselines
     from agents.tuning_terms import TUNING_TRAVEL_BUDGET
 
+    env_id, hp = spec.env_id, spec.hp
     return {
         "env_id": env_id,
-        "algo": algo,
-        "sb3_class": cls.__name__,
+        "algo": spec.algo,
+        "sb3_class": spec.cls.__name__,
         "package_version": steamtemp_gym.__version__,
         "git_revision": revision,
-        "hyperparams_file": shown_path(path),
+        "hyperparams_file": shown_path(spec.path),
         "hyperparameters": json.loads(json.dumps(hp, default=str)),
-        "seed": seed,
-        "run": run,
-        "n_envs": n_envs,
-        "timesteps_budget": total,
+        "seed": spec.seed,
+        "run": spec.run,
+        "n_envs": spec.n_envs,
+        "timesteps_budget": spec.total,
         "timesteps_trained": model.num_timesteps,
         "timesteps_of_best": best["timesteps"],
         "wall_time_s": clock.wall(),

@@ -19,7 +19,7 @@ ZOO = Path(__file__).with_name("zoo")
 #: Run k of ``--zoo --runs K`` trains with seed ``--seed + RUN_SEED_STRIDE * k``: more than
 #: any n_envs, so no two runs share a training env's seed.
 RUN_SEED_STRIDE = 1000
-#: Most runs per agent (run seeds stay far below agents.training.VALIDATION_SEED).
+#: Most runs per agent (run seeds stay far below agents.validation.VALIDATION_SEED).
 MAX_RUNS = 100
 #: A zoo run's budget (minutes of one core, its CPU time) where neither --max-minutes nor its
 #: YAML entry gives one.

@@ -6,7 +6,7 @@ an entry's settings against the same entry with large-batch settings, per plant.
 
 For each plant the entry of ``--algo`` in the hyperparameter file (default: the shipped
 one) is built as ``steamtemp-train`` builds it (agents.vec_env.make_training_env,
-agents.training.sb3_model: the same wrappers, memory, action repeat, normalization and
+agents.sb3_models.sb3_model: the same wrappers, memory, action repeat, normalization and
 model) and trained for about ``--seconds`` of this process's CPU time, rollouts and
 updates both, without validation; then the same entry with the large-batch settings of
 :data:`LARGE` for the algorithm family. A decision is one action of the agent (``k``
@@ -26,8 +26,8 @@ import torch
 from stable_baselines3.common.callbacks import BaseCallback
 
 import steamtemp_gym
+from agents.sb3_models import sb3_model
 from agents.train_config import HYPERPARAMS, algo_class, read_hyperparams
-from agents.training import sb3_model
 from agents.vec_env import make_training_env
 from steamtemp_gym.envs import resolve_id
 

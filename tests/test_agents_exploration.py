@@ -9,7 +9,7 @@ import pytest
 import yaml
 from stand_ins import refused_entry
 
-from agents import horizons, train_config, training
+from agents import horizons, sb3_models, train_config, training, vec_env
 from agents.exploration import LowPassActionNoise
 
 ENV_ID = "steamtemp/SupercriticalFSH-v0"
@@ -77,8 +77,8 @@ def test_td3_explores_with_the_low_pass_noise_per_decision(tmp_path):
         "noise_std": 0.1, "noise_tau_s": "plant", "policy_kwargs": "dict(net_arch=[8])",
         "action_repeat": 2}}))  # fmt: skip
     hp = train_config.read_hyperparams(path, ENV_ID, "td3")
-    model = training.sb3_model(train_config.algo_class("td3"), hp,
-                                training.make_training_env(ENV_ID, 2, 0, hp)[0], 0, None,
+    model = sb3_models.sb3_model(train_config.algo_class("td3"), hp,
+                                vec_env.make_training_env(ENV_ID, 2, 0, hp)[0], 0, None,
                                 decision_s=4.0)  # fmt: skip
     assert isinstance(model.action_noise, LowPassActionNoise)
     assert model.action_noise.a == pytest.approx(np.exp(-4.0 / hp["noise_tau_s"]))

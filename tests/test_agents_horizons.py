@@ -11,7 +11,7 @@ import yaml
 from stand_ins import refused_entry
 
 import steamtemp_gym
-from agents import horizons, train_config, training
+from agents import horizons, train_config, training, vec_env
 from agents.memory import MemoryConfig
 from agents.travel_price import PRICE_MAX, PRICE_MIN, TARGET, VecTravelPrice
 from agents.vec_env import NativeVecEnv
@@ -219,8 +219,8 @@ def test_training_env_with_a_price_needs_the_reference_rate(tmp_path):
     path.write_text(yaml.safe_dump({ENV_ID: {"policy": "MlpPolicy", "travel_price": 0.1}}))
     hp = train_config.read_hyperparams(path, ENV_ID, "ppo")
     with pytest.raises(train_config.ConfigError, match="reference's travel rate"):
-        training.make_training_env(ENV_ID, 2, 0, hp)
-    venv, _, price = training.make_training_env(ENV_ID, 2, 0, hp, reference_rate=1e-3)
+        vec_env.make_training_env(ENV_ID, 2, 0, hp)
+    venv, _, price = vec_env.make_training_env(ENV_ID, 2, 0, hp, reference_rate=1e-3)
     assert price.price == 0.1 and PRICE_MIN <= price.price <= PRICE_MAX
     venv.close()
 

@@ -120,7 +120,7 @@ def test_bad_fine_tuning_entries_are_config_errors(tmp_path, algo, extra, match)
 
 
 def test_fine_tuning_keeps_the_frozen_standardization_and_moves_the_reward_scale():
-    from agents.training import make_training_env
+    from agents.vec_env import make_training_env
 
     hp = train_config.read_hyperparams(train_config.HYPERPARAMS / "ppo_imitation_mpc_rl.yml",
                                        ENV_ID, "ppo_imitation_mpc_rl")  # fmt: skip
@@ -147,7 +147,7 @@ def test_the_anchor_pulls_the_actor_to_the_experts_actions():
     import torch
     from stable_baselines3 import PPO
 
-    from agents.training import make_training_env
+    from agents.vec_env import make_training_env
 
     hp = train_config.read_hyperparams(train_config.HYPERPARAMS / "ppo_imitation_mpc_rl.yml",
                                        ENV_ID, "ppo_imitation_mpc_rl")  # fmt: skip

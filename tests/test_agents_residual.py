@@ -11,7 +11,7 @@ import yaml
 from stand_ins import refused_entry
 
 import baselines
-from agents import horizons, train_config, training
+from agents import horizons, sb3_models, train_config, vec_env
 from agents.policy import AgentPolicy
 from agents.residual import ResidualBase
 from agents.vec_env import NativeVecEnv
@@ -131,8 +131,8 @@ def test_a_zero_output_ppo_residual_acts_as_its_base(tmp_path):
     actor's output layer is zero, so the action is mpc_linear's to the last bit."""
     path = train_config.HYPERPARAMS / "ppo_residual_mpc.yml"
     hp = train_config.read_hyperparams(path, ENV_ID, "ppo_residual_mpc")
-    venv, native, _ = training.make_training_env(ENV_ID, 2, 0, hp)
-    model = training.sb3_model(train_config.algo_class("ppo_residual_mpc"), hp, venv, 0, None)
+    venv, native, _ = vec_env.make_training_env(ENV_ID, 2, 0, hp)
+    model = sb3_models.sb3_model(train_config.algo_class("ppo_residual_mpc"), hp, venv, 0, None)
     agent = AgentPolicy(model, native, memory=hp["env_wrapper"], obs_norm=None,
                         residual_scale=hp["residual_scale"],
                         residual_base="mpc_linear")  # fmt: skip
@@ -167,18 +167,18 @@ def test_the_actor_holds_still_while_the_critic_warms_up():
     path = train_config.HYPERPARAMS / "ppo_residual_pi.yml"
     hp = train_config.read_hyperparams(path, ENV_ID, "ppo_residual_pi")
     hp.update(n_steps=32, batch_size=32, n_epochs=2)
-    venv, _, _ = training.make_training_env(ENV_ID, 2, 0, hp)
-    model = training.sb3_model(train_config.algo_class("ppo_residual_pi"), hp, venv, 0, None)
-    actor0 = [p.detach().clone() for p in training.actor_parameters(model)]
+    venv, _, _ = vec_env.make_training_env(ENV_ID, 2, 0, hp)
+    model = sb3_models.sb3_model(train_config.algo_class("ppo_residual_pi"), hp, venv, 0, None)
+    actor0 = [p.detach().clone() for p in sb3_models.actor_parameters(model)]
     critic0 = [p.detach().clone() for p in model.policy.value_net.parameters()]
-    model.learn(total_timesteps=128, callback=[training.critic_warmup(10_000)])
-    assert all(torch.equal(a, p) for a, p in zip(actor0, training.actor_parameters(model),
+    model.learn(total_timesteps=128, callback=[sb3_models.critic_warmup(10_000)])
+    assert all(torch.equal(a, p) for a, p in zip(actor0, sb3_models.actor_parameters(model),
                                                    strict=True))  # fmt: skip
     assert not all(torch.equal(c, p) for c, p in zip(critic0, model.policy.value_net.parameters(),
                                                      strict=True))  # fmt: skip
-    model.learn(total_timesteps=128, callback=[training.critic_warmup(64)],
+    model.learn(total_timesteps=128, callback=[sb3_models.critic_warmup(64)],
                 reset_num_timesteps=False)  # past the warm-up: the actor learns
-    assert not all(torch.equal(a, p) for a, p in zip(actor0, training.actor_parameters(model),
+    assert not all(torch.equal(a, p) for a, p in zip(actor0, sb3_models.actor_parameters(model),
                                                      strict=True))  # fmt: skip
     venv.close()
 

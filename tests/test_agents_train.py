@@ -13,7 +13,16 @@ import pytest
 import yaml
 
 import agents
-from agents import behaviour_cloning, train, train_config, train_runs, training
+from agents import (
+    behaviour_cloning,
+    checkpoints,
+    train,
+    train_config,
+    train_runs,
+    training,
+    validation,
+    vec_env,
+)
 from agents.evaluation import run_episode
 from agents.files import steamtemp_paths
 from steamtemp_gym.rewards import RewardConfig
@@ -87,7 +96,7 @@ def test_smoke_training_writes_model_and_metadata(trained, algo):
     base = train_config.RESIDUAL_BASES.get(algo)
     # a zero-output residual is validated before training too: its base alone
     dagger = meta["hyperparameters"].get("dagger_iterations", 0)
-    rl = 0 if algo == "ppo_imitation_mpc" else len(training.EVAL_FRACTIONS) + (base is not None)
+    rl = 0 if algo == "ppo_imitation_mpc" else len(checkpoints.EVAL_FRACTIONS) + (base is not None)
     assert len(meta["validation"]["curve"]) == dagger + rl
     if dagger:  # DAgger's checkpoints, then PPO's from DAgger's pairs on
         phases = [c["phase"] for c in meta["validation"]["curve"]]
@@ -106,7 +115,7 @@ def test_smoke_training_writes_model_and_metadata(trained, algo):
     assert meta["residual_scale"] == (0.2 if algo in train_config.RESIDUAL_BASES else None)
     chosen: dict = {}
     for c in meta["validation"]["curve"]:
-        if training.better_checkpoint(c, chosen, meta["validation"]["travel_budget"]):
+        if validation.better_checkpoint(c, chosen, meta["validation"]["travel_budget"]):
             chosen = c
     assert meta["validation"]["best"]["return"] == chosen["return"]
     # every checkpoint ran the commissioning checks; the kept one passes them if any does
@@ -126,11 +135,11 @@ def test_loaded_policy_reproduces_validation_and_is_deterministic(trained, algo)
     pol = agents.load(ENV_ID, algo, zoo=trained[algo])
     meta = json.loads(steamtemp_paths(trained[algo], ENV_ID, algo)[1].read_text())
     env = gym.make(ENV_ID, scenario="random")
-    rets = [run_episode(env, pol, training.VALIDATION_SEED + k)["metrics"]["return"]
-            for k in range(training.N_VALIDATION)]  # fmt: skip
+    rets = [run_episode(env, pol, validation.VALIDATION_SEED + k)["metrics"]["return"]
+            for k in range(validation.N_VALIDATION)]  # fmt: skip
     # validation ran the episodes as one batch: torch's batched matmuls round differently
     assert np.mean(rets) == pytest.approx(meta["validation"]["best"]["return"], rel=1e-6)
-    again = run_episode(env, pol, training.VALIDATION_SEED)["metrics"]["return"]
+    again = run_episode(env, pol, validation.VALIDATION_SEED)["metrics"]["return"]
     assert again == rets[0]
 
 
@@ -230,10 +239,10 @@ def test_checkpoints_within_the_travel_budget_come_first():
     b = {"return": -80.0, "travel_ratio": 1.5}
     c = {"return": -70.0, "travel_ratio": 1.9}
     d = {"return": -40.0, "travel_ratio": 2.5}
-    assert training.better_checkpoint(a, {}, 2.0)
-    assert training.better_checkpoint(b, a, 2.0) and not training.better_checkpoint(a, b, 2.0)
-    assert training.better_checkpoint(c, b, 2.0) and not training.better_checkpoint(d, c, 2.0)
-    assert training.better_checkpoint(d, a, 2.0)  # both over: the lower travel
+    assert validation.better_checkpoint(a, {}, 2.0)
+    assert validation.better_checkpoint(b, a, 2.0) and not validation.better_checkpoint(a, b, 2.0)
+    assert validation.better_checkpoint(c, b, 2.0) and not validation.better_checkpoint(d, c, 2.0)
+    assert validation.better_checkpoint(d, a, 2.0)  # both over: the lower travel
 
 
 def test_checkpoints_that_fail_the_commissioning_checks_come_after_those_that_pass():
@@ -244,13 +253,13 @@ def test_checkpoints_that_fail_the_commissioning_checks_come_after_those_that_pa
     cycles = {"return": -40.0, "travel_ratio": 1.2, "check": "at 35 % load, seed 1: quiet p2p"}
     over = {"return": -90.0, "travel_ratio": 2.5, "check": ""}
     over_cycles = {"return": -30.0, "travel_ratio": 2.5, "check": "tripped"}
-    assert training.better_checkpoint(passes, cycles, 2.0)
-    assert not training.better_checkpoint(cycles, passes, 2.0)
-    assert training.better_checkpoint(over, cycles, 2.0)  # passing first, then the budget
-    assert training.better_checkpoint(cycles, over_cycles, 2.0)
-    assert not training.better_checkpoint(over_cycles, cycles, 2.0)
+    assert validation.better_checkpoint(passes, cycles, 2.0)
+    assert not validation.better_checkpoint(cycles, passes, 2.0)
+    assert validation.better_checkpoint(over, cycles, 2.0)  # passing first, then the budget
+    assert validation.better_checkpoint(cycles, over_cycles, 2.0)
+    assert not validation.better_checkpoint(over_cycles, cycles, 2.0)
     # no checks run (an older record): judged as passing
-    assert not training.better_checkpoint({"return": -90.0, "travel_ratio": 1.5}, passes, 2.0)
+    assert not validation.better_checkpoint({"return": -90.0, "travel_ratio": 1.5}, passes, 2.0)
 
 
 def test_train_reward_is_checked_and_applies_to_the_training_envs_only(tmp_path):
@@ -261,8 +270,8 @@ def test_train_reward_is_checked_and_applies_to_the_training_envs_only(tmp_path)
     path.write_text(yaml.safe_dump({ENV_ID: {"policy": "MlpPolicy",
                                              "train_reward": {"w_move": 5.0}}}))  # fmt: skip
     hp = train_config.read_hyperparams(path, ENV_ID, "ppo")
-    charged, _, _ = training.make_training_env(ENV_ID, 2, 0, hp)
-    plain, _, _ = training.make_training_env(ENV_ID, 2, 0, {**hp, "train_reward": None})
+    charged, _, _ = vec_env.make_training_env(ENV_ID, 2, 0, hp)
+    plain, _, _ = vec_env.make_training_env(ENV_ID, 2, 0, {**hp, "train_reward": None})
     stroke = np.ones((2, charged.action_space.shape[0]))  # open every valve fully
     rewards = []
     for venv in (charged, plain):
@@ -283,11 +292,11 @@ def test_plant_randomization_is_checked_and_draws_the_training_plants(tmp_path):
         train_config.read_hyperparams(path, ENV_ID, "ppo")
     path.write_text(yaml.safe_dump({ENV_ID: {"policy": "MlpPolicy", "plant_randomization": True}}))
     hp = train_config.read_hyperparams(path, ENV_ID, "ppo")
-    drawn, base, _ = training.make_training_env(ENV_ID, 2, 0, hp)
+    drawn, base, _ = vec_env.make_training_env(ENV_ID, 2, 0, hp)
     drawn.reset()
     plants = base.core.plants
     assert plants[0].params != plants[1].params  # each row its own unit
-    _, nominal, _ = training.make_training_env(ENV_ID, 2, 0, {**hp, "plant_randomization": None})
+    _, nominal, _ = vec_env.make_training_env(ENV_ID, 2, 0, {**hp, "plant_randomization": None})
     assert not hasattr(nominal.core, "plants")
 
 

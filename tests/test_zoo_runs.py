@@ -16,7 +16,7 @@ import yaml
 from stand_ins import refused_entry
 
 import agents
-from agents import files, specs, stats, train, train_config, train_runs, training
+from agents import files, specs, stats, train, train_config, train_runs, training, validation
 from agents import leaderboard as lb
 
 ENV = "steamtemp/BensonSubcritical-v0"  # 5 s control interval: short validation episodes
@@ -216,7 +216,7 @@ def test_run_seeds_never_share_a_training_env_seed(tmp_path):
     n_envs = [hp.get("n_envs", 1) for f in train_config.HYPERPARAMS.glob("*.yml")
               for hp in (yaml.safe_load(f.read_text()) or {}).values()]  # fmt: skip
     assert n_envs and max(n_envs) < train_runs.RUN_SEED_STRIDE
-    assert train_runs.run_seed(0, train_runs.MAX_RUNS) < training.VALIDATION_SEED
+    assert train_runs.run_seed(0, train_runs.MAX_RUNS) < validation.VALIDATION_SEED
 
 
 # --------------------------------------------------------------------------- tiny runs
