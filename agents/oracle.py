@@ -66,7 +66,8 @@ import numpy as np
 import baselines
 from agents import optima, optimum
 from agents.cem import Budget, Planner
-from steamtemp_gym.envs.core import Core, check_action
+from steamtemp_gym.envs.actions import check_action
+from steamtemp_gym.envs.core import Core
 from steamtemp_gym.envs.snapshot import copy_rows, env_core, planning_core
 
 #: The causal controllers whose whole-episode command sequences compete with the CEM's

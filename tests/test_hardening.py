@@ -114,7 +114,7 @@ def test_scenario_the_plant_cannot_start_is_rejected_with_the_value():
 def test_every_start_is_a_steady_state_near_the_setpoint(env_id):
     """Named and random scenarios start within START_BAND_K of the setpoint (no trip at
     the first step, whatever the action)."""
-    from steamtemp_gym.envs.core import START_BAND_K
+    from steamtemp_gym.envs.start import START_BAND_K
 
     venv = _vec(env_id, 16, scenario="random")
     _, info = venv.reset(seed=5)

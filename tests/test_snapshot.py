@@ -141,9 +141,9 @@ def _whole_state(env) -> dict:
             continue
         if isinstance(v, np.ndarray):
             out[name] = v.copy()
-        elif name == "_slots":
-            out[name] = [(s, list(e)) for s, e in v.items()]
-        elif name in ("scenario", "plants", "_free", "factors"):
+        elif name == "_slots":  # envs/schedule_slots.py: the slots in use and the free ones
+            out[name] = ([(s, list(e)) for s, e in v.used.items()], list(v.free))
+        elif name in ("scenario", "plants", "factors"):
             out[name] = [dict(x) if isinstance(x, dict) else x for x in v]
     if hasattr(u, "_rngs"):
         out["rngs"] = [(g, g.bit_generator.state) for g in u._rngs]

@@ -21,7 +21,8 @@ from collections.abc import Mapping
 from typing import Any
 
 from steamtemp_gym._jit import entry_point
-from steamtemp_gym.envs.core import Core, non_finite_action
+from steamtemp_gym.envs.actions import non_finite_action
+from steamtemp_gym.envs.core import Core
 from steamtemp_gym.envs.kernels import advance, to_commands
 from steamtemp_gym.plants import perturb
 from steamtemp_gym.plants.base import Plant

@@ -87,7 +87,7 @@ class TrendDisplay:
         n_sec = len(self.secondary)
         ratios = [2.0] + [1.1] * n_sec + [0.8, 1.3]
         axs = fig.subplots(len(ratios), 1, sharex=True, gridspec_kw={"height_ratios": ratios})
-        ax1, sec_axes, ax2, ax3 = axs[0], list(axs[1:1 + n_sec]), axs[-2], axs[-1]
+        ax1, sec_axes, ax2, ax3 = axs[0], list(axs[1 : 1 + n_sec]), axs[-2], axs[-1]
         ax3b = ax3.twinx()
         temps = [(ax1, (sp0 - SPAN_K, sp0 + SPAN_K))] + [
             (ax, (sp2 - SPAN_K, sp2 + SPAN_K)) for ax, (_, sp2) in zip(sec_axes, self.secondary,
@@ -181,7 +181,7 @@ class TrendDisplay:
             return
         for band, color in zip(reversed(BANDS_K), reversed(self.bands), strict=True):
             r0, r1 = round(ax.y(sp + band)), round(ax.y(sp - band))
-            self.image[r0:r1 + 1, c0:c1 + 1] = color
+            self.image[r0 : r1 + 1, c0 : c1 + 1] = color
 
     def _segment(self, ax: _Axis, t0: float, v0: float, t1: float, v1: float,
                  color: np.ndarray, width: int) -> None:  # fmt: skip
@@ -196,7 +196,7 @@ class TrendDisplay:
             y = y1 if x1 <= x0 else y0 + (y1 - y0) * min(max((c - x0) / (x1 - x0), 0.0), 1.0)
             a = max(math.floor(min(y, y_prev) - (width - 1) / 2), lo_row)
             b = min(math.ceil(max(y, y_prev) + (width - 1) / 2), hi_row)
-            self.image[a:b + 1, c] = color
+            self.image[a : b + 1, c] = color
             y_prev = y
 
 

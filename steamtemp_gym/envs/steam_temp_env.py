@@ -21,7 +21,8 @@ from steamtemp_gym import scenarios as sc
 from steamtemp_gym.checks import is_integer, key_list
 from steamtemp_gym.envs import options as opts
 from steamtemp_gym.envs import snapshot as snap_
-from steamtemp_gym.envs.core import Core, check_action
+from steamtemp_gym.envs.actions import check_action
+from steamtemp_gym.envs.core import Core
 from steamtemp_gym.envs.cost import cost_limit
 from steamtemp_gym.signals import OBS_LIMIT
 

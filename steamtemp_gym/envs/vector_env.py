@@ -34,7 +34,7 @@ from gymnasium.vector.utils import batch_space
 from steamtemp_gym.checks import is_integer
 from steamtemp_gym.envs import options as opts
 from steamtemp_gym.envs import snapshot as snap_
-from steamtemp_gym.envs.core import check_action
+from steamtemp_gym.envs.actions import check_action
 from steamtemp_gym.envs.cost import cost_limit
 from steamtemp_gym.envs.steam_temp_env import draw_episode, scenario_option, spaces
 
