@@ -2,8 +2,9 @@
 
     steamtemp-train --env steamtemp/Cascade300MW-v0 --algo ppo [--timesteps N] [--seed 0]
         [--n-envs N] [--out DIR] [--hyperparams FILE] [--max-minutes M] [--tensorboard DIR]
-    python -m agents.train --zoo [--env ID] [--algo A] [--out DIR] [--runs K]
-        [--backend {local,ray}] [--address ADDRESS] [--jobs N] [--max-minutes M]
+    python -m agents.train --zoo [--env ID] [--algo A] [--hyperparams FILE] [--out DIR]
+        [--runs K] [--resume] [--backend {local,ray}] [--address ADDRESS] [--jobs N]
+        [--max-minutes M]
         # rebuild agents/zoo/ (or DIR): every shipped agent from its shipped YAML entry;
         # with --env/--algo, every YAML entry of that env/algo; with --hyperparams and
         # --algo, every entry of that file; with --runs K, K independent training runs of
@@ -66,7 +67,7 @@ from typing import Any
 
 import steamtemp_gym
 from agents import ray_backend, shipped
-from agents.train_config import ALGOS, HYPERPARAMS, ConfigError, read_hyperparams
+from agents.train_config import ALGOS, HYPERPARAMS, ConfigError, algo_class, read_hyperparams
 from agents.train_runs import (
     MAX_RUNS,
     RUN_SEED_STRIDE,
@@ -201,7 +202,10 @@ def main(argv: list[str] | None = None) -> None:
             if args.max_minutes is not None and args.max_minutes <= 0:
                 raise ConfigError(f"--max-minutes must be > 0, got {args.max_minutes}")
             entries = zoo_entries()
+            if args.hyperparams and not Path(args.hyperparams).is_file():
+                raise ConfigError(f"--hyperparams {args.hyperparams}: no such file")
             if args.hyperparams and args.algo:  # the entries of that file
+                algo_class(args.algo)  # a known algo, or the list of them
                 entries = [(env_id, args.algo) for env_id in entries_of(Path(args.hyperparams))]
             elif not (args.env or args.algo):  # rebuild what ships (a residual ships only
                 entries = [e for e in entries if e in set(shipped())]  # where it pays)
@@ -212,10 +216,11 @@ def main(argv: list[str] | None = None) -> None:
                 if (not env or env_id == env) and (not args.algo or algo == args.algo)
             ]
             if not entries:
+                where = args.hyperparams or "the shipped hyperparameter files"
+                there = entries_of(Path(args.hyperparams)) if args.hyperparams else zoo_entries()
                 raise ConfigError(
-                    f"no entry for --env {args.env!r} and --algo {args.algo!r} "
-                    f"in the shipped hyperparameter files; entries: "
-                    f"{zoo_entries()}"
+                    f"no entry for --env {args.env!r} and --algo {args.algo!r} in {where}; "
+                    f"entries: {there}"
                 )
             for env_id, algo in entries:  # every entry checked before the first run
                 read_hyperparams(

@@ -178,6 +178,9 @@ def test_bad_runs_are_argparse_errors(value, match, capsys):
     (["--zoo", "--backend", "dask"], "invalid choice: 'dask'"),
     (["--zoo", "--max-minutes", "0"], "--max-minutes must be > 0"),
     (["--env", ENV, "--algo", "ppo", "--resume"], "argument --resume: only with --zoo"),
+    (["--zoo", "--algo", "ppo", "--hyperparams", "/no/such.yml"], "/no/such.yml: no such file"),
+    (["--zoo", "--algo", "nope", "--hyperparams", str(train_config.HYPERPARAMS / "ppo.yml")],
+     "unknown algo 'nope'"),
 ])  # fmt: skip
 def test_zoo_flags_are_checked_before_training(argv, match, argparse_error):
     assert match in argparse_error(train.main, argv)
