@@ -10,7 +10,7 @@ deterministic actions mu(s) of the policy:
 
 Their gradient joins the actor loss's in each of SAC's actor steps (on a batch of the same
 replay buffer, in the normalized observations SAC trains on), so SB3's own ``SAC.train``
-runs unchanged. Why: the shipped SAC agents chatter (docs/agents.md).
+runs unchanged. Why: the shipped SAC agents chatter (docs/notes/agents_sac.md).
 """
 
 from __future__ import annotations

@@ -6,11 +6,11 @@ advantage estimate must reach past the dead time, and its observation must remem
 that far back. The time scale is the one a commissioning engineer measures: dead time
 plus time constant (Tu + Tg) of the true main-steam temperature after a step of a valve
 that acts on it (the plant's main-steam loops, ``Plant.control_loops``), at 50 % load,
-the slowest operating point (baselines/identification.py ``step_test``; docs/leaderboard.md
+the slowest operating point (baselines/identification.py ``step_test``; docs/agents/observation.md
 lists them: FSH 53 + 181 s, Benson 55 + 194 s, MIMO 47 + 134 s, Drum 77 + 251 s,
 Cascade300MW 113 + 231 s).
 
-The rules (docs/agents.md, "Horizons from the plant"):
+The rules (docs/agents/observation.md, "Horizons from the plant"):
 
 - discount: the horizon ``dt / (1 - gamma)`` is :data:`HORIZON_FACTOR` times the time
   scale (a move's whole effect and as long again for the recovery);

@@ -13,7 +13,7 @@ from typing import Any
 @dataclasses.dataclass(frozen=True)
 class MemoryConfig:
     """What the memory adds (module docstring); the defaults are the measured choice
-    (docs/agents.md, "Controller memory")."""
+    (docs/agents/observation.md, "Controller memory")."""
 
     integral: bool = True
     secondary_integral: bool = False

@@ -50,7 +50,7 @@ candidates. With them an episode costs about 1.2x the CEM alone. The ``optimum``
 starts from all three sequences and keeps the best it finds, so it is never below them.
 
 The CEM's budget (samples, iterations, horizon, knots, replanning interval) was chosen by
-measurement: docs/leaderboard.md, "The oracle", gives the return as the budget doubles.
+measurement: docs/oracle.md, "The receding-horizon CEM", gives the return as the budget doubles.
 """
 
 from __future__ import annotations

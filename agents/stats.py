@@ -37,7 +37,8 @@ than the reference. Where the oracle's margin is small (a disturbance that satur
 valves whatever the controller does), the scale is held at :data:`MIN_SPAN` of the
 reference's cost (:func:`score_span`): the division is always by a per-task constant of
 means over seeds, never by a near-zero gap. (The previous scales, 0 = ``cascade_pi`` and
-1 = zero cost, and before that 0 = the frozen valve, are recorded in docs/leaderboard.md.)
+1 = zero cost, and before that 0 = the frozen valve, are recorded in
+docs/leaderboard_outputs.md.)
 """
 
 from __future__ import annotations

@@ -23,7 +23,7 @@ an incremental agent whose action is a valve move of at most ``max_move`` of str
 interval, agents/moves.py; reward options for the training envs only, e.g.
 ``{w_move: 1.0}`` to charge valve travel more while learning, steamtemp_gym/rewards.py;
 ``plant_randomization``: the training envs' option of that name, a plant drawn per episode,
-docs/robustness.md; ``travel_price``: the starting price of the valve-travel constraint,
+docs/plant_uncertainty.md; ``travel_price``: the starting price of the valve-travel constraint,
 agents/travel_price.py; such entries are not for RL Zoo). Every other key
 must be an argument of the algorithm's constructor. All input is checked before training
 starts. Validation, the leaderboard and every score use the env's default reward.

@@ -11,7 +11,7 @@ first five trials random; every trial trains with the same ``--seed``, on one co
 rerun on the same machine gives the same table. Output in ``--out``:
 ``<env>__<algo>__tuning.json`` (every trial: parameters, validation return and IAE, wall
 time; the best trial) and the same as a markdown table on stdout. The chosen values are
-copied into the shipped YAML by hand, with the search recorded in docs/agents.md.
+copied into the shipped YAML by hand, with the search recorded in docs/notes/agents_search.md.
 
 Needs Optuna (``pip install optuna``; RL Zoo, extra ``[zoo]``, brings it).
 """
@@ -56,7 +56,7 @@ SPACES: dict[str, dict[str, list[Any]]] = {
 SPACES["td3"] = {k: v for k, v in SPACES["sac"].items() if k != "log_std_init"}
 SPACES["td3"]["noise_std"] = [0.05, 0.1, 0.2]
 #: CAPS's weights on the shipped SAC settings: 0.1 is smooth but slow, 1 a constant action
-#: (docs/agents.md)
+#: (docs/notes/agents_sac.md)
 SPACES["sac_caps"] = {
     "caps_temporal": [0.003, 0.01, 0.03, 0.1],
     "caps_spatial": [0.003, 0.01, 0.03, 0.1],

@@ -4,7 +4,8 @@ entries (the env's own observation is left as it is, first).
 
 A PI controller integrates the error; an MLP policy acting on one observation cannot,
 so under a persistent disturbance it keeps a steady offset (measured on
-SupercriticalFSH: -1.36 K without an integral, 0.00 K with it; docs/agents.md). The memory adds:
+SupercriticalFSH: -1.36 K without an integral, 0.00 K with it;
+docs/notes/agents_search.md). The memory adds:
 
 - the error integral ``I_k = clamp(I_{k-1} + e_k dt / T_i, -L, L)`` (K; ``T_i``:
   ``integral_time_s``, ``L``: ``integral_limit_K``), with two anti-windups as a PI has

@@ -28,7 +28,7 @@ Step tests of the real closed loop (:func:`closed_loop_steps`): at ``STEP_LOADS`
 noise, a ``STEP_DB`` bias step on one actuator against the same run without it. The
 loops integrate, so every bias is integrated out and the closed loop's steady gains are
 zero; the signed gain physics fixes is the first lobe of the response
-(:func:`baselines.evarx.first_lobe`). Measured numbers are in docs/baselines.md.
+(:func:`baselines.evarx.first_lobe`). Measured numbers are in docs/baselines/mpc_evarx.md.
 """
 
 from __future__ import annotations

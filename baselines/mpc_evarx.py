@@ -67,7 +67,7 @@ act alone once it is zero, while
 Generalization: every plant, every actuator (a bias on each loop's command); outputs are
 the measured main steam and every outer signal of ``control_loops``. The paper solves the
 nonlinear problem by SQP; this is the linearized form (no SQP refinement). Measured
-numbers and the claims' status: docs/baselines.md.
+numbers and the claims' status: docs/baselines/mpc_evarx.md.
 """
 
 from __future__ import annotations

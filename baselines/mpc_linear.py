@@ -68,7 +68,7 @@ clipped); a solve that does not succeed within 400 iterations holds the valves
 (``stats["failures"]``). A call whose estimate comes out non-finite (a non-finite
 observation) raises ValueError and leaves the policy's state as it was.
 
-Measured: docs/baselines.md and docs/robustness.md. Offset after a constant +5 %
+Measured: docs/baselines/mpc_linear.md and docs/robustness.md. Offset after a constant +5 %
 heat-absorption step (tests/test_mpc_linear.py): <= 5e-4 K on every plant, 1-5 K with
 ``disturbance_model=False``.
 """

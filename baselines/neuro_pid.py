@@ -27,7 +27,7 @@ at a bound (benchmarks/neuro_pid_eta.py; never a named or held-out scenario): th
 tests compare MEE with MSE there too, between nets that adapt by about the same amount.
 On those training episodes of the paper's plant, learning lowers the MEE net's return at
 every eta, and raises the MSE net's only where eta is so large that it drives its gains to
-their upper bounds (measured numbers in docs/baselines.md).
+their upper bounds (measured numbers in docs/baselines/neuro_pid.md).
 
 Inner loop. The paper's secondary controller is the proportional G_C2 = 8 (Section 5)
 ahead of the leading section G_plant2 = -2.01 / (1 + 16 s)^2. The text gives neither in
@@ -83,7 +83,7 @@ cascade_pi). Bumpless start: u = 0 (inner setpoint = the inner temperature at th
 start), valve at its start position; a scheduled inner PI's integral is rescaled where its
 gain moves (as cascade_pi_ff's).
 
-Claims of the paper and what reproduces: the Claims table of docs/baselines.md and
+Claims of the paper and what reproduces: the Claims table of docs/baselines/neuro_pid.md and
 tests/test_neuro_pid.py; realism (valve travel, limit cycles) on every plant:
 benchmarks/neuro_pid_realism.py.
 """

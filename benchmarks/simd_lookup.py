@@ -3,7 +3,7 @@
     python benchmarks/simd_lookup.py [--batch 4096] [--repeats 30]
 
 The physics plants spend 40-55 % of their right-hand sides in IAPWS-IF97 table lookups
-(docs/performance.md). A batch-innermost (structure-of-arrays) restructure of the plants
+(docs/performance_profile.md). A batch-innermost (structure-of-arrays) restructure of the plants
 would pay only if those lookups vectorize across rows. This script times, on one thread,
 ns per lookup of T, dT/dh and rho on the fast table for ``--batch`` random superheated
 states (10-25 MPa, 3000-3400 kJ/kg):

@@ -14,7 +14,7 @@ gives the same ratio for Gymnasium's own vector env of one CartPole-v1
 (``SyncVectorEnv``), the cost of the vector API (an array and a mask per info
 key) on a reference env. The speed goals: single env >= 1.0x CartPole-v1;
 vector env >= 2,000,000 env-steps/s at batch 4096 on one thread; vector B=1 no
-slower than the single env. docs/performance.md has the floors.
+slower than the single env. docs/performance_profile.md has the floors.
 """
 
 from __future__ import annotations

@@ -4,7 +4,7 @@ IQM on the named and on the held-out scenarios, valve travel against ``cascade_p
 the episodes rejected for realism, and what each run trained on (decisions, CPU minutes).
 
     python scripts/agent_tables.py --run leaderboard_out [--baselines mpc_linear,...]
-        [--write docs/agents.md]
+        [--write docs/agents/plant_scale.md]
 
 ``--run``: a steamtemp-leaderboard output directory (leaderboard.json, episodes.jsonl).
 Agents: every policy with training runs there (``sb3:<algo>``, or a trained agent's files

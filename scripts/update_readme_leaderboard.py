@@ -1,4 +1,4 @@
-"""Regenerate the README's leaderboard table and picture, and the zoo table of docs/agents.md,
+"""Regenerate the README's leaderboard table and picture, and the zoo table of docs/agents/zoo.md,
 from a leaderboard run.
 
     python scripts/update_readme_leaderboard.py [--out leaderboard_out]
@@ -12,13 +12,13 @@ Reads ``<out>/leaderboard.json`` (the current schema version) and writes, betwee
   ``docs/img/leaderboard_pareto.png``;
 - README.md ``trend:start`` / ``trend:end``: the picture at the top, one trend plot of
   ``<out>/plots`` copied to ``docs/img/leaderboard_trend.png``, with its caption;
-- docs/agents.md ``zoo:start`` / ``zoo:end``: the trained agents against the baselines
+- docs/agents/zoo.md ``zoo:start`` / ``zoo:end``: the trained agents against the baselines
   (``agents_markdown``); ``training:start`` / ``training:end``: what each agent of the
   shipped zoo trained, in decisions and wall time, read from the zoo's own files
   (``training_markdown``);
 - docs/baselines.md ``baselines:start`` / ``baselines:end``: every baseline's IAE, valve
   travel, reversals and rejected episodes per plant (``baselines_markdown``);
-- docs/baselines.md ``compare:start`` / ``compare:end``: per plant and scenario,
+- docs/baselines/mpc_linear.md ``compare:start`` / ``compare:end``: per plant and scenario,
   ``mpc_linear``, ``cascade_pi`` and ``cascade_pi_ff`` side by side
   (``comparison_markdown``);
 - docs/baselines.md ``realism:start`` / ``realism:end``: the baseline-plant pairs with
@@ -43,10 +43,11 @@ from agents.leaderboard.summary import SCHEMA_VERSION, ZERO
 
 ROOT = Path(__file__).resolve().parents[1]
 README = ROOT / "README.md"
-AGENTS_PAGE = ROOT / "docs" / "agents.md"
+AGENTS_PAGE = ROOT / "docs" / "agents" / "zoo.md"
 BASELINES_PAGE = ROOT / "docs" / "baselines.md"
+COMPARE_PAGE = ROOT / "docs" / "baselines" / "mpc_linear.md"
 ROBUSTNESS_PAGE = ROOT / "docs" / "robustness.md"
-#: The policies side by side in docs/baselines.md.
+#: The policies side by side in docs/baselines/mpc_linear.md.
 COMPARED = ["mpc_linear", "cascade_pi", "cascade_pi_ff"]
 IMAGE = ROOT / "docs" / "img" / "leaderboard_trend.png"
 PARETO_IMAGE = ROOT / "docs" / "img" / "leaderboard_pareto.png"
@@ -135,10 +136,10 @@ def main(argv: list[str] | None = None) -> None:
     budget = f"{TRAIN_START} {_GEN}\n\n" + pages.training_markdown(ZOO) + "\n" + TRAIN_END
     agents_text = replace(agents_text, TRAIN_START, TRAIN_END, budget, AGENTS_PAGE.name)
     cmp = f"{CMP_START} {_GEN}\n\n" + pages.comparison_markdown(doc, COMPARED) + "\n" + CMP_END
-    baselines_text = replace(BASELINES_PAGE.read_text(), CMP_START, CMP_END, cmp,
-                             BASELINES_PAGE.name)  # fmt: skip
+    compare_text = replace(COMPARE_PAGE.read_text(), CMP_START, CMP_END, cmp, COMPARE_PAGE.name)
     real = f"{REAL_START} {_GEN}\n\n" + pages.realism_markdown(doc) + "\n" + REAL_END
-    baselines_text = replace(baselines_text, REAL_START, REAL_END, real, BASELINES_PAGE.name)
+    baselines_text = replace(BASELINES_PAGE.read_text(), REAL_START, REAL_END, real,
+                             BASELINES_PAGE.name)  # fmt: skip
     base = f"{BASE_START} {_GEN}\n\n" + pages.baselines_markdown(doc) + "\n" + BASE_END
     baselines_text = replace(baselines_text, BASE_START, BASE_END, base, BASELINES_PAGE.name)
     robust = f"{MIS_START} {_GEN}\n\n" + mismatch.markdown(doc, ZERO) + "\n" + MIS_END
@@ -151,8 +152,10 @@ def main(argv: list[str] | None = None) -> None:
     README.write_text(text)
     AGENTS_PAGE.write_text(agents_text)
     BASELINES_PAGE.write_text(baselines_text)
+    COMPARE_PAGE.write_text(compare_text)
     ROBUSTNESS_PAGE.write_text(robustness_text)
-    print(f"README.md, docs/agents.md, docs/baselines.md and docs/robustness.md updated; "
+    print(f"README.md, docs/agents/zoo.md, docs/baselines.md, docs/baselines/mpc_linear.md and "
+          f"docs/robustness.md updated; "
           f"{IMAGE.relative_to(ROOT)} from {args.plot}"
           + (f", {PARETO_IMAGE.relative_to(ROOT)}" if figure.exists() else ""))  # fmt: skip
 

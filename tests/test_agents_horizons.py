@@ -19,7 +19,7 @@ from agents.wrappers import MemoryState
 from steamtemp_gym import plants
 from steamtemp_gym.scenarios import Scenario
 
-#: (dead time, time constant) in s at 50 % load, as docs/leaderboard.md lists them.
+#: (dead time, time constant) in s at 50 % load, as docs/agents/observation.md lists them.
 DOCUMENTED = {
     "steamtemp/SupercriticalFSH-v0": (53, 181),
     "steamtemp/BensonSubcritical-v0": (55, 194),
@@ -33,8 +33,9 @@ ENV_ID = "steamtemp/SupercriticalFSH-v0"
 @pytest.mark.parametrize("env_id", steamtemp_gym.ENV_IDS)
 def test_time_scale_is_the_documented_step_response(env_id):
     if env_id not in DOCUMENTED:
-        pytest.skip(f"{env_id}'s time scale is not documented: add it to docs/leaderboard.md "
-                    "and DOCUMENTED (python -c 'from agents import horizons; "
+        pytest.skip(f"{env_id}'s time scale is not documented: add it to "
+                    "docs/agents/observation.md and DOCUMENTED "
+                    "(python -c 'from agents import horizons; "
                     f"print(horizons.time_scale(\"{env_id}\"))')")  # fmt: skip
     theta, tau = horizons.time_scale(env_id)
     assert (round(theta), round(tau)) == DOCUMENTED[env_id]

@@ -193,7 +193,7 @@ def test_the_repeat_rule_and_the_per_decision_horizons(env_id):
     assert k == max(1, int(horizons.REPEAT_FACTOR * theta / dt))
     documented = {"steamtemp/SupercriticalFSH-v0": 2, "steamtemp/BensonSubcritical-v0": 1,
                   "steamtemp/BoilerTurbineMIMO-v0": 2, "steamtemp/DrumBoilerSH-v0": 3,
-                  "steamtemp/Cascade300MW-v0": 11}  # docs/agents.md  # fmt: skip
+                  "steamtemp/Cascade300MW-v0": 11}  # docs/agents/observation.md  # fmt: skip
     assert documented.get(env_id, k) == k  # as horizons.REPEAT_FACTOR says
     g1, gk = horizons.discount(env_id), horizons.discount(env_id, k)
     assert k * dt / (1 - gk) == pytest.approx(dt / (1 - g1))

@@ -1,4 +1,4 @@
-"""Why the feedback-only cascades swing in the drum's quiet stretch (docs/baselines.md,
+"""Why the feedback-only cascades swing in the drum's quiet stretch (docs/baselines/drum_swing.md,
 "The drum's slow swing"): the drum's own pressure loop rings after a load change, at a
 period the temperature loops' tuning cannot damp, and only a firing feed-forward removes it.
 

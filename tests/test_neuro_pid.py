@@ -1,7 +1,7 @@
 """Neuro-PID by MEE / MSE (baselines/neuro_pid.py): the mechanism against independent
 references, the batched contract, the inner loop, realism and stability, and one test per
 claim of Zhang et al. 2012 on steamtemp/Cascade300MW-v0, scenario ``setpoint_step_535_545``
-(the Claims table of docs/baselines.md)."""
+(the Claims table of docs/baselines/neuro_pid.md)."""
 
 from __future__ import annotations
 

@@ -1,5 +1,5 @@
 """The README works as written: its quick start runs in a fresh interpreter and prints the
-KPIs, its two commands are the ones CI runs, and the generated tables (README, docs/agents.md,
+KPIs, its two commands are the ones CI runs, and the generated tables (README, docs/agents/zoo.md,
 docs/difficulty.md) have their markers and are rewritten by their generators in place."""
 
 from __future__ import annotations
@@ -98,9 +98,11 @@ def test_readme_is_a_guide():
         assert (ROOT / link).exists(), link
 
 
-MARKERS = [(README, "leaderboard"), (README, "trend"), (ROOT / "docs" / "agents.md", "zoo"),
+MARKERS = [(README, "leaderboard"), (README, "trend"),
+           (ROOT / "docs" / "agents" / "zoo.md", "zoo"),
+           (ROOT / "docs" / "agents" / "zoo.md", "training"),
            (ROOT / "docs" / "baselines.md", "baselines"),
-           (ROOT / "docs" / "baselines.md", "compare"),
+           (ROOT / "docs" / "baselines" / "mpc_linear.md", "compare"),
            (ROOT / "docs" / "baselines.md", "realism"),
            (ROOT / "docs" / "robustness.md", "mismatch"),
            (ROOT / "docs" / "difficulty.md", "difficulty")]  # fmt: skip
@@ -123,15 +125,21 @@ def test_leaderboard_generator_rewrites_readme_and_agents_page(tmp_path, monkeyp
     from agents.leaderboard.summary import summarize
 
     gen = _script(ROOT / "scripts" / "update_readme_leaderboard.py")
-    readme, agents_page = tmp_path / "README.md", tmp_path / "agents.md"
+    readme, agents_page = tmp_path / "README.md", tmp_path / "zoo.md"
     baselines_page, robustness_page = tmp_path / "baselines.md", tmp_path / "robustness.md"
-    shutil.copy(ROOT / "docs" / "robustness.md", robustness_page)
+    compare_page = tmp_path / "mpc_linear.md"
     shutil.copy(README, readme)
-    shutil.copy(ROOT / "docs" / "agents.md", agents_page)
-    shutil.copy(ROOT / "docs" / "baselines.md", baselines_page)
+    pages = {(ROOT / "docs" / "agents" / "zoo.md", agents_page): gen.AGENTS_PAGE,
+             (ROOT / "docs" / "baselines.md", baselines_page): gen.BASELINES_PAGE,
+             (ROOT / "docs" / "baselines" / "mpc_linear.md", compare_page): gen.COMPARE_PAGE,
+             (ROOT / "docs" / "robustness.md", robustness_page): gen.ROBUSTNESS_PAGE}  # fmt: skip
+    for (page, copy), written in pages.items():
+        assert written == page  # the generator writes the pages that hold the markers
+        shutil.copy(page, copy)
     monkeypatch.setattr(gen, "README", readme)
     monkeypatch.setattr(gen, "AGENTS_PAGE", agents_page)
     monkeypatch.setattr(gen, "BASELINES_PAGE", baselines_page)
+    monkeypatch.setattr(gen, "COMPARE_PAGE", compare_page)
     monkeypatch.setattr(gen, "ROBUSTNESS_PAGE", robustness_page)
     monkeypatch.setattr(gen, "ROOT", tmp_path)
     monkeypatch.setattr(gen, "IMAGE", tmp_path / "img" / "trend.png")
@@ -166,7 +174,7 @@ def test_leaderboard_generator_rewrites_readme_and_agents_page(tmp_path, monkeyp
     assert "| A-v0 | sb3:ppo | model-free | **0.50" in agents_page.read_text()
     assert "| A-v0 | lqi (best baseline) | baseline |" in agents_page.read_text()
     assert "| s | - / - / -100.5 | - / - / 100 | - / - / 1.00 | - / - / - |" in (
-        baselines_page.read_text())  # mpc_linear / cascade_pi / cascade_pi_ff, two not run
+        compare_page.read_text())  # mpc_linear / cascade_pi / cascade_pi_ff, two not run
     assert "1 of 1 baseline-plant pairs have no episode" in baselines_page.read_text()
     assert (tmp_path / "img" / "trend.png").read_bytes() == b"png"
     assert "<!-- mismatch:start" in robustness_page.read_text()  # no mismatch rows: empty

@@ -351,7 +351,7 @@ def test_the_leaderboard_scores_each_run_and_reports_the_agent(local_zoo, tmp_pa
     )
     md = (tmp_path / "lb" / "leaderboard.md").read_text()
     assert "| sb3:ppo |" in md and "(2 runs)" in md
-    # the agents' table and learning curves of docs/agents.md, from this run and its zoo
+    # the agents' table and learning curves of docs/agents/plant_scale.md, from this run and its zoo
     tables = _script("agent_tables").tables(tmp_path / "lb", ["cascade_pi"])
     (row,) = [line for line in tables.splitlines() if line.startswith("| `sb3:ppo` |")]
     per_run = " / ".join(f"{v:.2f}" for v in e["normalized_score"]["iqm"]["per_run"])

@@ -1,7 +1,7 @@
 """The tables scripts/update_readme_leaderboard.py writes into the documentation pages,
-from leaderboard.json's summary and the zoo's files: the training budget of docs/agents.md,
-the baselines' table, the rejected episodes (docs/robustness.md) and the comparison of
-docs/baselines.md; built from the cells of agents/leaderboard/report.py.
+from leaderboard.json's summary and the zoo's files: the training budget of docs/agents/zoo.md,
+the baselines' table and the rejected episodes of docs/baselines.md and the comparison of
+docs/baselines/mpc_linear.md; built from the cells of agents/leaderboard/report.py.
 """
 
 from __future__ import annotations
@@ -31,7 +31,7 @@ def training_markdown(directory: Any) -> str:
     episodes alongside) and how many runs' chosen checkpoints passed the commissioning
     checks (agents/validation.py; "-" for runs trained before checkpoints ran them); an
     offline clone (agents/behaviour_cloning.py) its transitions, epochs and fit time. The
-    zoo's training-budget table of docs/agents.md."""
+    zoo's training-budget table of docs/agents/zoo.md."""
     import json
 
     import agents

@@ -1,6 +1,7 @@
 """episodes.jsonl, the record of a leaderboard run: strict JSON rows, appended and synced as
 each episode finishes; reading it back repairs the end a crash may leave (a last line cut off
-mid-write). The row format is described in agents/leaderboard/cli.py and docs/leaderboard.md.
+mid-write). The row format is described in agents/leaderboard/cli.py and
+docs/leaderboard_outputs.md.
 """
 
 from __future__ import annotations

@@ -2,8 +2,8 @@
 (agents/leaderboard/summary.py): the headline table (policy x plant), the trained agents
 against the baselines, the robustness to model mismatch (agents/leaderboard/mismatch.py),
 the ranking and per-scenario tables of each plant and the failed episodes; also the README's
-headline and the zoo's table of docs/agents.md (the other generated tables of the docs:
-agents/leaderboard/pages.py). Described in docs/leaderboard.md.
+headline and the zoo's table of docs/agents/zoo.md (the other generated tables of the docs:
+agents/leaderboard/pages.py). Described in docs/leaderboard_outputs.md.
 """
 
 from __future__ import annotations
@@ -257,7 +257,7 @@ def agents_markdown(summary: dict[str, Any]) -> str:
     """Per plant, each trained agent (``sb3:*``, with its kind) against ``cascade_pi`` and
     the best other baseline (by the IQM of the normalized score): IQM normalized score with
     its CI, mean return and mean IAE over scenario × seed, trips and the episodes a plant
-    engineer would reject (:func:`rejected_cell`). The zoo table of docs/agents.md."""
+    engineer would reject (:func:`rejected_cell`). The zoo table of docs/agents/zoo.md."""
     n = len(summary["run"]["seeds"])
     multi = _multi_run(summary)
     lines = [f"{stat_label(n)}; return and IAE: means over scenario × seed. **Bold**: the "

@@ -16,7 +16,7 @@ settling time without a setpoint step, is left out, never NaN; ``max_abs_dev_K``
 out of an episode with a setpoint step, where it measures the step). Each plant's
 ``robustness`` entry summarizes the model-mismatch rows (agents/leaderboard/mismatch.py),
 which take no part in the scores. The format is
-docs/leaderboard_schema.json, described in docs/leaderboard.md.
+docs/leaderboard_schema.json, described in docs/leaderboard_outputs.md.
 """
 
 from __future__ import annotations

@@ -23,7 +23,7 @@ Each plant declares its groups (``Plant.perturbation_groups``: group -> its fiel
 named model-mismatch variants (``Plant.mismatch_variants``: variant -> group factors within
 those ranges; the boilers' are :data:`BOILER_VARIANTS`); :func:`mismatch` turns them into
 the public model-mismatch set, a ``params`` dict of ``gym.make`` per variant
-(docs/robustness.md).
+(docs/plant_uncertainty.md).
 
 Draws (:func:`draw_plant`): one factor per group, log-uniform in its range (so 0.5..2 is
 as likely slower as faster), from a generator seeded by the episode's noise key, so an
