@@ -83,8 +83,19 @@ from agents.tuning_terms import (
 from baselines import tuning
 
 #: The baselines with knobs, tuned by default.
-TUNABLE = ("cascade_pi", "cascade_pi_ff", "fuzzy_p2id", "mpc_linear", "lqi", "fao_sf", "fao_fac",
-           "neuro_pid_mee", "neuro_pid_mse", "mpc_evarx", "mpc_arx")  # fmt: skip
+TUNABLE = (
+    "cascade_pi",
+    "cascade_pi_ff",
+    "fuzzy_p2id",
+    "mpc_linear",
+    "lqi",
+    "fao_sf",
+    "fao_fac",
+    "neuro_pid_mee",
+    "neuro_pid_mse",
+    "mpc_evarx",
+    "mpc_arx",
+)
 EVALUATIONS = 48
 STEP0 = 0.25
 MIN_STEP = 1.0 / 64.0
@@ -117,9 +128,13 @@ class Evaluation:
 
     @property
     def feasible(self) -> bool:
-        return (self.trips == 0 and self.travel_ratio <= TUNING_TRAVEL_BUDGET
-                and not self.check and self.robust_excess == 0.0
-                and not self.robust_breach)  # fmt: skip
+        return (
+            self.trips == 0
+            and self.travel_ratio <= TUNING_TRAVEL_BUDGET
+            and not self.check
+            and self.robust_excess == 0.0
+            and not self.robust_breach
+        )
 
     @property
     def merit(self) -> float:
@@ -143,8 +158,13 @@ def evaluate(name: str, env_id: str, values: dict[str, float], e: dict[str, Any]
     score = np.mean(
         [stats.normalize(x, z, o) for x, z, o in zip(r["return"], e["zero"], e["one"], strict=True)]
     )
-    return Evaluation(dict(values), float(score), float(r["travel"].mean() / e["travel"]),
-                      int(r["tripped"].sum()), mean_return=float(r["return"].mean()))  # fmt: skip
+    return Evaluation(
+        dict(values),
+        float(score),
+        float(r["travel"].mean() / e["travel"]),
+        int(r["tripped"].sum()),
+        mean_return=float(r["return"].mean()),
+    )
 
 
 def defaults(factory: Any, env_id: str) -> dict[str, float]:
@@ -242,8 +262,10 @@ def search(
 
     def evaluate_at(u: np.ndarray) -> Evaluation:
         nonlocal replayed
-        values = dict(start) if np.array_equal(u, x0) else {  # the start exactly
-            k.name: k.from_unit(ui) for k, ui in zip(ks, u, strict=True)}  # fmt: skip
+        if np.array_equal(u, x0):
+            values = dict(start)  # the start exactly
+        else:
+            values = {k.name: k.from_unit(ui) for k, ui in zip(ks, u, strict=True)}
         r = None if np.array_equal(u, x0) else stored.get(_key(values))
         if r is not None:
             replayed += 1
@@ -251,15 +273,17 @@ def search(
         res = evaluate(name, env_id, values, e)
         if np.array_equal(u, x0) and stored:
             r = stored.get(_key(values))
-            same = r is not None and (r["score"], r["travel_ratio"], r["trips"]) == (
-                res.score, res.travel_ratio, res.trips)  # fmt: skip
+            got = (res.score, res.travel_ratio, res.trips)
+            same = r is not None and (r["score"], r["travel_ratio"], r["trips"]) == got
             if not same:
                 stored.clear()
             if log:
                 log(f"{name} {env_id}: replay {'valid' if same else 'refused: start differs'}")
         if log:
-            log(f"{name} {env_id}: score {res.score:.4f} travel x{res.travel_ratio:.2f} "
-                f"trips {res.trips}")  # fmt: skip
+            log(
+                f"{name} {env_id}: score {res.score:.4f} travel x{res.travel_ratio:.2f} "
+                f"trips {res.trips}"
+            )
         return res
 
     # the controller's alternative starts (a robust design), each judged in full; the
@@ -269,10 +293,18 @@ def search(
         u = np.array([k.to_unit({**start, **alt}[k.name]) for k in ks])
         pre.append((u, confirm(u, evaluate_at(u))))
     i = max(range(len(pre)), key=lambda j: pre[j][1].merit)
-    walk = compass(pre[i][0], evaluate_at, budget=EVALUATIONS - len(pre) + 1, confirm=confirm,
-                   first=pre[i][1])  # fmt: skip
+    walk = compass(
+        pre[i][0], evaluate_at, budget=EVALUATIONS - len(pre) + 1, confirm=confirm, first=pre[i][1]
+    )
     history = pre + walk[1:]  # the defaults first
+    return _search_result(history, replayed)
+
+
+def _search_result(history: list[tuple[np.ndarray, Evaluation]], replayed: int) -> dict[str, Any]:
+    """A search's result as stored: the best evaluation's knobs, results and checks, the
+    evaluations made and replayed, the start's results and every evaluation in order."""
     best = best_of(history)
+    start = history[0][1]
     return {
         "knobs": best.knobs,
         "score": best.score,
@@ -284,9 +316,11 @@ def search(
         "check_travel_ratio": _finite(best.check_travel_ratio),
         "robust_ratio": _finite(best.robust_ratio),
         "robust_breach": best.robust_breach,
-        "start": {**{k: v for k, v in history[0][1].__dict__.items() if k != "mean_return"},
-                  "check_travel_ratio": _finite(history[0][1].check_travel_ratio),
-                  "robust_ratio": _finite(history[0][1].robust_ratio)},
+        "start": {
+            **{k: v for k, v in start.__dict__.items() if k != "mean_return"},
+            "check_travel_ratio": _finite(start.check_travel_ratio),
+            "robust_ratio": _finite(start.robust_ratio),
+        },
         "history": [_row(r) for _, r in history],
     }
 
@@ -305,11 +339,14 @@ def _confirmer(name: str, env_id: str, log: Any) -> Any:
         res = replace(res, check=breach, check_travel_ratio=ratio)
         if breach:
             return res
-        robust, breach = robustness(env_id, lambda env: baselines.make(name, env, **res.knobs),
-                                    corner_refs)  # fmt: skip
+        robust, breach = robustness(
+            env_id, lambda env: baselines.make(name, env, **res.knobs), corner_refs
+        )
         if log:
-            log(f"{name} {env_id}: robustness: worst corner plant's cost x{robust:.2f} the "
-                f"nominal's{'; ' + breach if breach else ''}")
+            log(
+                f"{name} {env_id}: robustness: worst corner plant's cost x{robust:.2f} the "
+                f"nominal's{'; ' + breach if breach else ''}"
+            )
         return replace(res, robust_ratio=robust, robust_breach=breach)
 
     return confirm
@@ -326,9 +363,15 @@ def _finite(v: float) -> float | None:
 
 def _row(r: Evaluation) -> dict[str, Any]:
     """One evaluation as stored: its knobs, score, travel ratio, trips and checks."""
-    return {"knobs": r.knobs, "score": r.score, "travel_ratio": r.travel_ratio,
-            "trips": r.trips, "check": r.check,
-            "robust_ratio": _finite(r.robust_ratio), "robust_breach": r.robust_breach}  # fmt: skip
+    return {
+        "knobs": r.knobs,
+        "score": r.score,
+        "travel_ratio": r.travel_ratio,
+        "trips": r.trips,
+        "check": r.check,
+        "robust_ratio": _finite(r.robust_ratio),
+        "robust_breach": r.robust_breach,
+    }
 
 
 def write(name: str, env_ids: list[str], log: Any = None, replay: bool = False) -> dict[str, Any]:
@@ -343,17 +386,27 @@ def write(name: str, env_ids: list[str], log: Any = None, replay: bool = False) 
         res["seconds"] = round(time.perf_counter() - t0, 1)
         res["code"] = code_digest(env_id, name)
         data["plants"][env_id] = res
-        data["terms"] = {"episodes": EPISODES, "tuning_seed": TUNING_SEED,
-                         "evaluations": EVALUATIONS, "step0": STEP0, "min_step": MIN_STEP,
-                         "travel_budget": TUNING_TRAVEL_BUDGET,
-                         "admissibility_budget": TRAVEL_BUDGET, "reference": ZERO,
-                         "robustness": {"plants": "corners of the parameter ranges",
-                                        "episodes": ROBUST_EPISODES,
-                                        "margin": ROBUST_MARGIN,
-                                        "cost_max": ROBUST_COST_MAX},
-                         "commissioning_checks": {
-                             "loads": list(CHECK_LOADS), "seeds": list(CHECK_SEEDS),
-                             "travel_max": stats.REALISM_TRAVEL_MAX}}  # fmt: skip
+        data["terms"] = {
+            "episodes": EPISODES,
+            "tuning_seed": TUNING_SEED,
+            "evaluations": EVALUATIONS,
+            "step0": STEP0,
+            "min_step": MIN_STEP,
+            "travel_budget": TUNING_TRAVEL_BUDGET,
+            "admissibility_budget": TRAVEL_BUDGET,
+            "reference": ZERO,
+            "robustness": {
+                "plants": "corners of the parameter ranges",
+                "episodes": ROBUST_EPISODES,
+                "margin": ROBUST_MARGIN,
+                "cost_max": ROBUST_COST_MAX,
+            },
+            "commissioning_checks": {
+                "loads": list(CHECK_LOADS),
+                "seeds": list(CHECK_SEEDS),
+                "travel_max": stats.REALISM_TRAVEL_MAX,
+            },
+        }
         data.pop("code", None)  # per plant since the provenance digests are scoped
         tuning.TUNED.mkdir(exist_ok=True)
         f.write_text(json.dumps(data, indent=1, sort_keys=True) + "\n")  # after every env
@@ -363,8 +416,11 @@ def write(name: str, env_ids: list[str], log: Any = None, replay: bool = False) 
 def markdown(names: tuple[str, ...] = TUNABLE) -> str:
     """The stored tunings as a markdown table: per controller and env, the training score and
     travel ratio at the start and at the result, evaluations used, and the knobs."""
-    lines = ["| controller | plant | start: score, travel | tuned: score, travel, worst corner's "
-             "cost | evaluations | knobs |", "|---|---|---|---|---|---|"]  # fmt: skip
+    lines = [
+        "| controller | plant | start: score, travel | tuned: score, travel, worst corner's "
+        "cost | evaluations | knobs |",
+        "|---|---|---|---|---|---|",
+    ]
     for name in names:
         f = tuning.path(name)
         if not f.is_file():
@@ -376,9 +432,11 @@ def markdown(names: tuple[str, ...] = TUNABLE) -> str:
             tuned = f"{r['score']:.3f}, {r['travel_ratio']:.2f}x, "
             tuned += f"{rob:.2f}x" if rob is not None else "not checked"
             tuned += "" if r.get("feasible", True) else " (no candidate kept every term)"
-            lines.append(f"| `{name}` | {env_id.split('/')[-1]} | {st['score']:.3f}, "
-                         f"{st['travel_ratio']:.2f}x | {tuned} | {r['evaluations']} | "
-                         f"{knobs} |")  # fmt: skip
+            lines.append(
+                f"| `{name}` | {env_id.split('/')[-1]} | {st['score']:.3f}, "
+                f"{st['travel_ratio']:.2f}x | {tuned} | {r['evaluations']} | "
+                f"{knobs} |"
+            )
     return "\n".join(lines) + "\n"
 
 
@@ -387,7 +445,8 @@ def main(argv: list[str] | None = None) -> int:
         prog="python -m agents.baseline_tuning",
         description="Tune baselines on equal terms (same search, budget, objective and "
         "travel budget) and write baselines/tuned/<name>.json. Takes minutes to an hour "
-        "per controller and env.")  # fmt: skip
+        "per controller and env.",
+    )
     ap.add_argument("names", nargs="*", help=f"baselines to tune (default: {', '.join(TUNABLE)})")
     ap.add_argument(
         "--env",
@@ -444,5 +503,14 @@ def main(argv: list[str] | None = None) -> int:
 if __name__ == "__main__":
     sys.exit(main())
 
-__all__ = ["EPISODES", "EVALUATIONS", "TUNABLE", "Evaluation", "ends", "evaluate", "search",
-           "seeds", "write"]  # fmt: skip
+__all__ = [
+    "EPISODES",
+    "EVALUATIONS",
+    "TUNABLE",
+    "Evaluation",
+    "ends",
+    "evaluate",
+    "search",
+    "seeds",
+    "write",
+]

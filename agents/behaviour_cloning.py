@@ -82,8 +82,9 @@ def filter_of(env_id: str) -> float:
     return _imitation_entry(env_id)["action_filter_s"]
 
 
-def transitions(dataset: Any, memory: dict[str, Any] | None = None,
-                env: Any = None) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+def transitions(
+    dataset: Any, memory: dict[str, Any] | None = None, env: Any = None
+) -> tuple[np.ndarray, np.ndarray]:
     """(observations, labels) of every step of a Minari dataset: each episode's
     observations but its last (with the controller ``memory`` appended, computed along the
     episode as agents.policy.AgentPolicy does, for ``env``'s observation layout), and the
@@ -114,13 +115,25 @@ def transitions(dataset: Any, memory: dict[str, Any] | None = None,
 def standardization(x: np.ndarray) -> dict[str, Any]:
     """Frozen VecNormalize statistics of the observations ``x`` (agents.policy
     ``normalize_obs``): their mean and variance, SB3's epsilon and clip."""
-    return {"mean": x.mean(axis=0).tolist(), "var": x.var(axis=0).tolist(),
-            "epsilon": EPSILON, "clip_obs": CLIP_OBS}  # fmt: skip
+    return {
+        "mean": x.mean(axis=0).tolist(),
+        "var": x.var(axis=0).tolist(),
+        "epsilon": EPSILON,
+        "clip_obs": CLIP_OBS,
+    }
 
 
-def fit(obs: np.ndarray, act: np.ndarray, *, epochs: int = 10, batch: int = 256,
-        lr: float = 1e-3, seed: int = 0, max_seconds: float = 120.0,
-        log: Any = None) -> tuple[Any, dict[str, Any]]:  # fmt: skip
+def fit(
+    obs: np.ndarray,
+    act: np.ndarray,
+    *,
+    epochs: int = 10,
+    batch: int = 256,
+    lr: float = 1e-3,
+    seed: int = 0,
+    max_seconds: float = 120.0,
+    log: Any = None,
+) -> tuple[Any, dict[str, Any]]:
     """The MLP (a torch Sequential) fitted to ``act`` from standardized ``obs``, and the
     standardization (VecNormalize's frozen statistics, agents.policy.normalize_obs).
     Training stops after ``epochs`` or ``max_seconds``, whichever comes first."""
@@ -129,22 +142,35 @@ def fit(obs: np.ndarray, act: np.ndarray, *, epochs: int = 10, batch: int = 256,
     from agents.policy import normalize_obs
 
     if obs.ndim != 2 or act.ndim != 2 or len(obs) != len(act) or not len(obs):
-        raise ValueError(f"observations {obs.shape} and actions {act.shape} must be 2-d arrays "
-                         "of as many rows, at least one")  # fmt: skip
+        raise ValueError(
+            f"observations {obs.shape} and actions {act.shape} must be 2-d arrays "
+            "of as many rows, at least one"
+        )
     stats = standardization(obs)
     torch.set_num_threads(1)  # one core: a minute or two for 100 episodes
     torch.manual_seed(seed)
     x = torch.as_tensor(normalize_obs(obs, stats), dtype=torch.float32)
     y = torch.as_tensor(np.clip(act, -1.0, 1.0), dtype=torch.float32)
     net = actor(obs.shape[1], act.shape[1])
-    regress(net, x, y, epochs=epochs, batch=batch, lr=lr, seed=seed, max_seconds=max_seconds,
-            log=log)  # fmt: skip
+    regress(
+        net, x, y, epochs=epochs, batch=batch, lr=lr, seed=seed, max_seconds=max_seconds, log=log
+    )
     return net, stats
 
 
-def regress(net: Any, x: Any, y: Any, *, epochs: int, batch: int = 256, lr: float = 1e-3,
-            seed: int = 0, max_seconds: float = 120.0, log: Any = None,
-            moves: tuple[Any, Any, float] | None = None) -> float:  # fmt: skip
+def regress(
+    net: Any,
+    x: Any,
+    y: Any,
+    *,
+    epochs: int,
+    batch: int = 256,
+    lr: float = 1e-3,
+    seed: int = 0,
+    max_seconds: float = 120.0,
+    log: Any = None,
+    moves: tuple[Any, Any, float] | None = None,
+) -> float:
     """Fit the torch module ``net`` to ``y`` from ``x`` (tensors) by mean squared error with
     Adam, in shuffled minibatches, for ``epochs`` or ``max_seconds``, whichever comes
     first; the last epoch's mean squared error of the actions. ``moves``: (x of the next
@@ -164,7 +190,7 @@ def regress(net: Any, x: Any, y: Any, *, epochs: int, batch: int = 256, lr: floa
         perm = torch.randperm(len(x), generator=gen)
         total = 0.0
         for i in range(0, len(x), batch):
-            idx = perm[i:i + batch]
+            idx = perm[i : i + batch]
             a = net(x[idx])
             loss = torch.mean((a - y[idx]) ** 2)
             fit = loss
@@ -194,10 +220,17 @@ def actor(n_obs: int, n_act: int) -> Any:
     return torch.nn.Sequential(*layers, torch.nn.Linear(width, n_act), torch.nn.Tanh())
 
 
-def save(net: Any, stats: dict[str, Any], env_id: str, out: str | Path, dataset_id: str,
-         training: dict[str, Any], memory: dict[str, Any] | None = None,
-         action_filter_s: float | None = None,
-         run: int | None = None) -> tuple[Path, Path]:  # fmt: skip
+def save(
+    net: Any,
+    stats: dict[str, Any],
+    env_id: str,
+    out: str | Path,
+    dataset_id: str,
+    training: dict[str, Any],
+    memory: dict[str, Any] | None = None,
+    action_filter_s: float | None = None,
+    run: int | None = None,
+) -> tuple[Path, Path]:
     """Write the agent (run ``run``) in steamtemp-train's layout; returns the .zip and .json
     paths."""
     import gymnasium as gym
@@ -210,23 +243,46 @@ def save(net: Any, stats: dict[str, Any], env_id: str, out: str | Path, dataset_
     model_path.parent.mkdir(parents=True, exist_ok=True)
     env = gym.make(env_id)
     env = ControllerMemory(env, **memory) if memory is not None else env
-    model = TD3("MlpPolicy", env, buffer_size=1, learning_starts=0, device="cpu",
-                policy_kwargs={"net_arch": list(HIDDEN)})  # fmt: skip
+    model = TD3(
+        "MlpPolicy",
+        env,
+        buffer_size=1,
+        learning_starts=0,
+        device="cpu",
+        policy_kwargs={"net_arch": list(HIDDEN)},
+    )
     with torch.no_grad():
         for target in (model.actor.mu, model.actor_target.mu):
             target.load_state_dict(net.state_dict())
     model.save(model_path)
-    meta = {"env_id": env_id, "algo": ALGO, "run": run, "sb3_class": "TD3", "memory": memory,
-            "normalization": stats, "residual_scale": None, "action_filter_s": action_filter_s,
-            "package_version": steamtemp_gym.__version__, "dataset": dataset_id,
-            "training": training}  # fmt: skip
+    meta = {
+        "env_id": env_id,
+        "algo": ALGO,
+        "run": run,
+        "sb3_class": "TD3",
+        "memory": memory,
+        "normalization": stats,
+        "residual_scale": None,
+        "action_filter_s": action_filter_s,
+        "package_version": steamtemp_gym.__version__,
+        "dataset": dataset_id,
+        "training": training,
+    }
     meta_path.write_text(json.dumps(meta, indent=1) + "\n", encoding="utf-8")
     return model_path, meta_path
 
 
-def train(dataset_id: str, out: str | Path, *, plain: bool = False, epochs: int = 10,
-          seed: int = 0, max_seconds: float = 120.0, run: int | None = None,
-          log: Any = None) -> tuple[Path, Path]:  # fmt: skip
+def train(
+    dataset_id: str,
+    out: str | Path,
+    *,
+    plain: bool = False,
+    epochs: int = 10,
+    seed: int = 0,
+    max_seconds: float = 120.0,
+    run: int | None = None,
+    log: Any = None,
+) -> tuple[Path, Path]:
     """Load the dataset, fit the MLP, write the agent (module docstring); ``plain``: the
     env's observation alone into the raw action."""
     import gymnasium as gym
@@ -236,19 +292,34 @@ def train(dataset_id: str, out: str | Path, *, plain: bool = False, epochs: int 
     env_id = dataset.spec.env_spec.id
     held, made = dataset.observation_space.shape, gym.make(env_id).observation_space.shape
     if held != made:
-        raise ValueError(f"its observations have shape {held} but those of {env_id}, the env "
-                         f"it names, have {made}: it was recorded on another env")  # fmt: skip
+        raise ValueError(
+            f"its observations have shape {held} but those of {env_id}, the env "
+            f"it names, have {made}: it was recorded on another env"
+        )
     memory = None if plain else memory_of(env_id)
     filter_s = None if plain else filter_of(env_id)
     t0 = time.perf_counter()
     obs, act = transitions(dataset, memory, gym.make(env_id))
     t1 = time.perf_counter()
     net, stats = fit(obs, act, epochs=epochs, seed=seed, max_seconds=max_seconds, log=log)
-    return save(net, stats, env_id, out, dataset_id,
-                {"transitions": len(obs), "epochs": epochs, "seed": seed, "plain": plain,
-                 "memory_seconds": round(t1 - t0, 1),
-                 "seconds": round(time.perf_counter() - t1, 1)},
-                memory, filter_s, run)  # fmt: skip
+    return save(
+        net,
+        stats,
+        env_id,
+        out,
+        dataset_id,
+        {
+            "transitions": len(obs),
+            "epochs": epochs,
+            "seed": seed,
+            "plain": plain,
+            "memory_seconds": round(t1 - t0, 1),
+            "seconds": round(time.perf_counter() - t1, 1),
+        },
+        memory,
+        filter_s,
+        run,
+    )
 
 
 def zoo_dataset_id(env_id: str, noise: float) -> str:
@@ -259,8 +330,7 @@ def zoo_dataset_id(env_id: str, noise: float) -> str:
     return datasets.dataset_id(env_id, name)
 
 
-def choose_noise(env_id: str, staging: Path,
-                 log: Any = None) -> tuple[str, dict[str, Any], Path]:  # fmt: skip
+def choose_noise(env_id: str, staging: Path, log: Any = None) -> tuple[str, dict[str, Any], Path]:
     """(dataset id, record, folder of its clone) of ``env_id``'s shipped clones: each
     dataset of :data:`ZOO_NOISES` (recorded where missing) cloned with seed 0 into a folder
     of ``staging`` and validated; the best by agents.validation.better_checkpoint within
@@ -278,16 +348,17 @@ def choose_noise(env_id: str, staging: Path,
         did = zoo_dataset_id(env_id, noise)
         if not Path(get_dataset_path(did)).is_dir():
             d = ZOO_DATASET
-            datasets.record(env_id, d["policy"], d["episodes"], d["seed"], noise=noise,
-                            log=log)  # fmt: skip
+            datasets.record(env_id, d["policy"], d["episodes"], d["seed"], noise=noise, log=log)
         here = staging / f"{noise:g}"
         train(did, here, log=None)
         (files,) = find(here)
         score = scored(env_id, files.load(), ref)
         tried[f"{noise:g}"] = {k: score[k] for k in ("return", "travel_ratio")}
         if log:
-            log(f"{did}: validation return {score['return']:.1f}, travel "
-                f"{score['travel_ratio']:.2f}x")  # fmt: skip
+            log(
+                f"{did}: validation return {score['return']:.1f}, travel "
+                f"{score['travel_ratio']:.2f}x"
+            )
         if better_checkpoint(score, best, TUNING_TRAVEL_BUDGET):
             best.update(score)
             chosen, folder = did, here
@@ -309,8 +380,9 @@ def rebuild_zoo(env_ids: list[str], out: str | Path, log: Any = None) -> list[Pa
                 model, meta = steamtemp_paths(out, env_id, ALGO, run or None)
                 if run == 0:
                     model.parent.mkdir(parents=True, exist_ok=True)
-                    for src, dst in zip(steamtemp_paths(first, env_id, ALGO), (model, meta),
-                                        strict=True):  # fmt: skip
+                    for src, dst in zip(
+                        steamtemp_paths(first, env_id, ALGO), (model, meta), strict=True
+                    ):
                         shutil.copyfile(src, dst)
                 else:
                     train(did, out, seed=run, run=run, log=log)
@@ -326,8 +398,9 @@ def _positive(kind: type, what: str):
         try:
             v = kind(text)
         except ValueError:
-            raise argparse.ArgumentTypeError(f"{what} must be a {kind.__name__}, got {text!r}") \
-                from None  # fmt: skip
+            raise argparse.ArgumentTypeError(
+                f"{what} must be a {kind.__name__}, got {text!r}"
+            ) from None
         if not (v > 0 and np.isfinite(v)):
             raise argparse.ArgumentTypeError(f"{what} must be > 0, got {text!r}")
         return v
@@ -346,29 +419,53 @@ def _seed(text: str) -> int:
     return value
 
 
-def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(prog="python -m agents.behaviour_cloning",
-                                 description=(__doc__ or "").split("\n")[0])  # fmt: skip
+def make_parser() -> argparse.ArgumentParser:
+    """The command line's argument parser."""
+    ap = argparse.ArgumentParser(
+        prog="python -m agents.behaviour_cloning", description=(__doc__ or "").split("\n")[0]
+    )
     ap.add_argument("--dataset", help="a Minari dataset id")
-    ap.add_argument("--out", help="folder of the agent's files (with --zoo: default "
-                    "agents/zoo)")  # fmt: skip
-    ap.add_argument("--zoo", action="store_true",
-                    help="rebuild the shipped clones (module docstring), recording their "
-                    "datasets where missing")  # fmt: skip
-    ap.add_argument("--env", action="append", dest="envs", metavar="ID",
-                    help="with --zoo: a plant (repeatable; default every plant)")
-    ap.add_argument("--data-dir", default=None, metavar="DIR",
-                    help="Minari's data folder (default: MINARI_DATASETS_PATH, else "
-                    "~/.minari/datasets)")  # fmt: skip
+    ap.add_argument("--out", help="folder of the agent's files (with --zoo: default agents/zoo)")
+    ap.add_argument(
+        "--zoo",
+        action="store_true",
+        help="rebuild the shipped clones (module docstring), recording their "
+        "datasets where missing",
+    )
+    ap.add_argument(
+        "--env",
+        action="append",
+        dest="envs",
+        metavar="ID",
+        help="with --zoo: a plant (repeatable; default every plant)",
+    )
+    ap.add_argument(
+        "--data-dir",
+        default=None,
+        metavar="DIR",
+        help="Minari's data folder (default: MINARI_DATASETS_PATH, else ~/.minari/datasets)",
+    )
     ap.add_argument("--epochs", type=_positive(int, "--epochs"), default=10)
     ap.add_argument("--max-minutes", type=_positive(float, "--max-minutes"), default=2.0)
     ap.add_argument("--seed", type=_seed, default=0)
-    ap.add_argument("--run", type=_positive(int, "--run"), default=None, metavar="K",
-                    help="write run K's files (<env>__bc__runK), as steamtemp-train --runs "
-                    "names them")  # fmt: skip
-    ap.add_argument("--plain", action="store_true",
-                    help="the env's observation alone into the raw action: no controller "
-                    "memory, no output filter")  # fmt: skip
+    ap.add_argument(
+        "--run",
+        type=_positive(int, "--run"),
+        default=None,
+        metavar="K",
+        help="write run K's files (<env>__bc__runK), as steamtemp-train --runs names them",
+    )
+    ap.add_argument(
+        "--plain",
+        action="store_true",
+        help="the env's observation alone into the raw action: no controller "
+        "memory, no output filter",
+    )
+    return ap
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = make_parser()
     args = ap.parse_args(argv)
     if args.zoo == (args.dataset is not None):
         ap.error("give one of --dataset ID or --zoo")
@@ -404,18 +501,28 @@ def main(argv: list[str] | None = None) -> int:
     except ValueError as exc:
         ap.error(f"argument --dataset: {exc}")
     if not found:
-        ap.error(f"argument --dataset: no dataset {args.dataset!r} in "
-                 f"{os.environ.get('MINARI_DATASETS_PATH', '~/.minari/datasets')} "
-                 "(python -m agents.datasets makes one)")  # fmt: skip
+        ap.error(
+            f"argument --dataset: no dataset {args.dataset!r} in "
+            f"{os.environ.get('MINARI_DATASETS_PATH', '~/.minari/datasets')} "
+            "(python -m agents.datasets makes one)"
+        )
     try:
-        model, meta = train(args.dataset, args.out, plain=args.plain, epochs=args.epochs,
-                            seed=args.seed, max_seconds=60.0 * args.max_minutes, run=args.run,
-                            log=say)  # fmt: skip
+        model, meta = train(
+            args.dataset,
+            args.out,
+            plain=args.plain,
+            epochs=args.epochs,
+            seed=args.seed,
+            max_seconds=60.0 * args.max_minutes,
+            run=args.run,
+            log=say,
+        )
     except (ValueError, OSError, KeyError, IndexError, TypeError) as exc:  # its files' fault
-        ap.error(f"argument --dataset: {args.dataset!r} cannot be learnt from: "
-                 f"{type(exc).__name__}: {str(exc)[:300]}")  # fmt: skip
-    print(f"{model} and {meta}: score it with steamtemp-leaderboard --policies "
-          f"zoo:{args.out}")
+        ap.error(
+            f"argument --dataset: {args.dataset!r} cannot be learnt from: "
+            f"{type(exc).__name__}: {str(exc)[:300]}"
+        )
+    print(f"{model} and {meta}: score it with steamtemp-leaderboard --policies zoo:{args.out}")
     return 0
 
 

@@ -104,8 +104,9 @@ def dataset_id(env_id: str, name: str, version: int = 0) -> str:
     return f"{NAMESPACE}/{plant_name(env_id)}/{name}-v{version}"
 
 
-def reference_scores(env_id: str, scenario: str = EVAL_SCENARIO,
-                     seeds: tuple[int, ...] = EVAL_SEEDS) -> tuple[float, float]:  # fmt: skip
+def reference_scores(
+    env_id: str, scenario: str = EVAL_SCENARIO, seeds: tuple[int, ...] = EVAL_SEEDS
+) -> tuple[float, float]:
     """(ref_min_score, ref_max_score): the leaderboard's ``zero_return`` and ``one_return``
     on ``env_id``'s ``scenario`` over ``seeds`` (agents/leaderboard/episodes.py:
     ``score_ends``)."""
@@ -116,13 +117,15 @@ def detuned_knobs(rng: np.random.Generator) -> dict[str, float]:
     """A tuning of :data:`DETUNED` drawn from its knobs' search box (log-uniform)."""
     out = {}
     for k in CascadePI.KNOBS:
-        out[k.name] = float(np.exp(rng.uniform(np.log(k.lo), np.log(k.hi))) if k.log
-                            else rng.uniform(k.lo, k.hi))  # fmt: skip
+        out[k.name] = float(
+            np.exp(rng.uniform(np.log(k.lo), np.log(k.hi))) if k.log else rng.uniform(k.lo, k.hi)
+        )
     return out
 
 
-def episode_plan(policy: str, episodes: int, seed: int,
-                 mixed: float | None = None) -> list[dict[str, Any]]:  # fmt: skip
+def episode_plan(
+    policy: str, episodes: int, seed: int, mixed: float | None = None
+) -> list[dict[str, Any]]:
     """Per episode its seed, policy and (for a detuned one) knobs; the draws of a mixed
     dataset come from ``seed``, so the same flags give the same dataset."""
     rng = np.random.default_rng([seed, 0x5EED])
@@ -167,8 +170,9 @@ class NoisyPolicy:
         dt_s: The control interval (s).
     """
 
-    def __init__(self, policy: Any, label: PolicyActionInfo, sigma: float, tau_s: float,
-                 dt_s: float) -> None:  # fmt: skip
+    def __init__(
+        self, policy: Any, label: PolicyActionInfo, sigma: float, tau_s: float, dt_s: float
+    ) -> None:
         self.policy, self.label = policy, label
         self.scale = 2.0 * sigma  # actions span the stroke as [-1, 1]
         self.a = float(np.exp(-dt_s / tau_s))
@@ -183,8 +187,13 @@ class NoisyPolicy:
         self.policy.reset()
         self.noise = None
 
-    def predict(self, observation: Any, state: Any = None, episode_start: Any = None,
-                deterministic: bool = True) -> tuple[np.ndarray, Any]:  # fmt: skip
+    def predict(
+        self,
+        observation: Any,
+        state: Any = None,
+        episode_start: Any = None,
+        deterministic: bool = True,
+    ) -> tuple[np.ndarray, Any]:
         action, state = self.policy.predict(observation, state, episode_start, deterministic)
         action = np.asarray(action, dtype=np.float64)
         white = self.rng.standard_normal(action.shape) * self.scale
@@ -199,12 +208,22 @@ class NoisyPolicy:
         return noisy.astype(np.float32), state
 
 
-def record(env_id: str, policy: str, episodes: int, seed: int = 0, *,
-           mixed: float | None = None, noise: float | None = None,
-           name: str | None = None, version: int = 0,
-           eval_scenario: str = EVAL_SCENARIO, eval_seeds: tuple[int, ...] = EVAL_SEEDS,
-           author: str = AUTHOR, code_permalink: str | None = None,
-           log: Any = None) -> Any:  # fmt: skip
+def record(
+    env_id: str,
+    policy: str,
+    episodes: int,
+    seed: int = 0,
+    *,
+    mixed: float | None = None,
+    noise: float | None = None,
+    name: str | None = None,
+    version: int = 0,
+    eval_scenario: str = EVAL_SCENARIO,
+    eval_seeds: tuple[int, ...] = EVAL_SEEDS,
+    author: str = AUTHOR,
+    code_permalink: str | None = None,
+    log: Any = None,
+) -> Any:
     """Record the episodes and create the dataset (module docstring) in Minari's data
     folder (``MINARI_DATASETS_PATH``); returns the ``MinariDataset``.
 
@@ -220,19 +239,66 @@ def record(env_id: str, policy: str, episodes: int, seed: int = 0, *,
     did = dataset_id(env_id, name or dataset_name(policy, mixed, noise), version)
     minari.dataset.minari_dataset.parse_dataset_id(did)  # Minari's own rules
     if Path(get_dataset_path(did)).exists():
-        raise ValueError(f"dataset {did} exists already in {get_dataset_path(did)}; delete "
-                         "it (minari delete) or give another --version or --name")  # fmt: skip
+        raise ValueError(
+            f"dataset {did} exists already in {get_dataset_path(did)}; delete "
+            "it (minari delete) or give another --version or --name"
+        )
     say = log or (lambda msg: None)
     t0 = time.perf_counter()
     lo, hi = reference_scores(env_id, eval_scenario, tuple(eval_seeds))
-    say(f"reference scores on {eval_scenario}, seeds {list(eval_seeds)}: cascade_pi_ff "
-        f"{lo:.6g}, oracle {hi:.6g} ({time.perf_counter() - t0:.1f} s)")
+    say(
+        f"reference scores on {eval_scenario}, seeds {list(eval_seeds)}: cascade_pi_ff "
+        f"{lo:.6g}, oracle {hi:.6g} ({time.perf_counter() - t0:.1f} s)"
+    )
     t1 = time.perf_counter()
     plan = episode_plan(policy, episodes, seed, mixed)
     plant_env = gym.make(env_id, scenario=scenarios.RANDOM)
     label = PolicyActionInfo(plant_env) if noise else None
     env = minari.DataCollector(label or plant_env, record_infos=True)
     tau_s = NOISE_FACTOR * sum(horizons.time_scale(env_id)) if noise else None
+    _run_plan(env, env_id, plan, policy, spec, label, noise, tau_s)
+    what = policy + (f" mixed {mixed:g}" if mixed else "") + (f" noise {noise:g}" if noise else "")
+    say(
+        f"{episodes} episodes of {what} on {env_id} random, seeds {seed}-{seed + episodes - 1}: "
+        f"{time.perf_counter() - t1:.1f} s"
+    )
+    eval_env = gym.make(env_id, scenario=eval_scenario)
+    description = _description(
+        env_id, policy, episodes, seed, mixed, noise, tau_s, eval_scenario, eval_seeds
+    )
+    with warnings.catch_warnings():  # the one field left out: no e-mail address
+        warnings.filterwarnings("ignore", message="`author_email` is set to None")
+        dataset = env.create_dataset(
+            dataset_id=did,
+            eval_env=eval_env,
+            algorithm_name=policy,
+            author=author,
+            code_permalink=code_permalink or _permalink(),
+            ref_min_score=lo,
+            ref_max_score=hi,
+            num_episodes_average_score=len(eval_seeds),
+            description=description,
+            requirements=[f"steamtemp-gym=={steamtemp_gym.__version__}"],
+        )
+    dataset.storage.update_metadata({"steamtemp_episodes": json.dumps(plan)})
+    env.close()
+    return dataset
+
+
+def _run_plan(
+    env: Any,
+    env_id: str,
+    plan: list[dict[str, Any]],
+    policy: str,
+    spec: Any,
+    label: PolicyActionInfo | None,
+    noise: float | None,
+    tau_s: float | None,
+) -> None:
+    """Run the episodes of ``plan`` in the collecting ``env``, each by the detuned controller
+    at its knobs or else by ``policy`` (built once), with the action noise on top where
+    ``label`` takes the chosen actions; each entry of ``plan`` gets its episode's return
+    (and the noise's parameters)."""
     built: dict[str, Any] = {}
     for ep in plan:
         if "knobs" in ep:
@@ -246,54 +312,67 @@ def record(env_id: str, policy: str, episodes: int, seed: int = 0, *,
             pol.seed(ep["seed"])
             ep["noise"] = {"sigma": noise, "tau_s": tau_s}
         ep["return"] = _episode(env, pol, ep["seed"])
-    what = policy + (f" mixed {mixed:g}" if mixed else "") + (f" noise {noise:g}" if noise else "")
-    say(f"{episodes} episodes of {what} on {env_id} random, seeds {seed}-{seed + episodes - 1}: "
-        f"{time.perf_counter() - t1:.1f} s")
-    eval_env = gym.make(env_id, scenario=eval_scenario)
-    description = (
+
+
+def _description(
+    env_id: str,
+    policy: str,
+    episodes: int,
+    seed: int,
+    mixed: float | None,
+    noise: float | None,
+    tau_s: float | None,
+    eval_scenario: str,
+    eval_seeds: tuple[int, ...],
+) -> str:
+    """The dataset's description: who acted in which episodes, the detuned share and the
+    action noise if any, the infos recorded and the evaluation env with its score ends."""
+    text = (
         f"{episodes} episodes of {policy} on {env_id}, scenario 'random' (the training "
         f"distribution, a fresh draw per episode), seeds {seed}..{seed + episodes - 1}"
-        + (f"; each episode with probability {mixed:g} by {DETUNED} at a tuning drawn "
-           "log-uniform from its knobs' box (factors 0.25-4 on every gain and integral "
-           "time) instead: the steamtemp_episodes metadata names each" if mixed else "")
-        + (f"; low-pass Gaussian noise of standard deviation {noise:g} of the stroke and "
-           f"time constant {tau_s:.1f} s added to every action (DART); the info "
-           f"'{POLICY_ACTION}' holds the policy's action before it" if noise else "")
-        + f". Infos recorded (cost: the safe-RL constraint cost). eval_env: {env_id} "
+    )
+    if mixed:
+        text += (
+            f"; each episode with probability {mixed:g} by {DETUNED} at a tuning drawn "
+            "log-uniform from its knobs' box (factors 0.25-4 on every gain and integral "
+            "time) instead: the steamtemp_episodes metadata names each"
+        )
+    if noise:
+        text += (
+            f"; low-pass Gaussian noise of standard deviation {noise:g} of the stroke and "
+            f"time constant {tau_s:.1f} s added to every action (DART); the info "
+            f"'{POLICY_ACTION}' holds the policy's action before it"
+        )
+    return text + (
+        f". Infos recorded (cost: the safe-RL constraint cost). eval_env: {env_id} "
         f"under '{eval_scenario}'; ref_min_score / ref_max_score: the mean returns of "
         f"cascade_pi_ff and the oracle there over seeds {list(eval_seeds)}, the "
         "leaderboard's score ends (0 and 1). steamtemp_gym "
         f"{steamtemp_gym.__version__}, python -m agents.datasets."
     )
-    with warnings.catch_warnings():  # the one field left out: no e-mail address
-        warnings.filterwarnings("ignore", message="`author_email` is set to None")
-        dataset = env.create_dataset(
-            dataset_id=did, eval_env=eval_env, algorithm_name=policy, author=author,
-            code_permalink=code_permalink or _permalink(), ref_min_score=lo,
-            ref_max_score=hi, num_episodes_average_score=len(eval_seeds),
-            description=description,
-            requirements=[f"steamtemp-gym=={steamtemp_gym.__version__}"],
-        )  # fmt: skip
-    dataset.storage.update_metadata({"steamtemp_episodes": json.dumps(plan)})
-    env.close()
-    return dataset
 
 
-def _check_arguments(env_id: str, policy: str, episodes: Any, seed: Any, mixed: Any,
-                     noise: Any, eval_scenario: str) -> Any:  # fmt: skip
+def _check_arguments(
+    env_id: str, policy: str, episodes: Any, seed: Any, mixed: Any, noise: Any, eval_scenario: str
+) -> Any:
     """ValueError for a bad count, seed, fraction, policy or evaluation scenario of
     :func:`record`; else the policy's spec (agents/specs.py)."""
-    if isinstance(episodes, bool) or not isinstance(episodes, int) or not (
-            1 <= episodes <= MAX_EPISODES):  # fmt: skip
+    if (
+        isinstance(episodes, bool)
+        or not isinstance(episodes, int)
+        or not (1 <= episodes <= MAX_EPISODES)
+    ):
         raise ValueError(f"episodes must be an integer in 1..{MAX_EPISODES}, got {episodes!r}")
     if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
         raise ValueError(f"seed must be an integer >= 0, got {seed!r}")
     if mixed is not None and not (isinstance(mixed, float | int) and 0.0 < mixed <= 1.0):
         raise ValueError(f"mixed must be a fraction in (0, 1], got {mixed!r}")
-    if noise is not None and not (isinstance(noise, float | int) and not isinstance(noise, bool)
-                                  and 0.0 < noise <= MAX_NOISE):  # fmt: skip
-        raise ValueError(f"noise must be a fraction of the stroke in (0, {MAX_NOISE}], got "
-                         f"{noise!r}")  # fmt: skip
+    if noise is not None and not (
+        isinstance(noise, float | int) and not isinstance(noise, bool) and 0.0 < noise <= MAX_NOISE
+    ):
+        raise ValueError(
+            f"noise must be a fraction of the stroke in (0, {MAX_NOISE}], got {noise!r}"
+        )
     spec = specs.parse(policy)
     if not spec.available(env_id):
         raise ValueError(f"policy {policy!r} has no agent for {env_id}")
@@ -309,8 +388,7 @@ def _episode(env: Any, policy: Any, seed: int) -> float:
 
 
 def _permalink() -> str:
-    return (f"steamtemp_gym {steamtemp_gym.__version__}, git {git_revision()}: "
-            "agents/datasets.py")
+    return f"steamtemp_gym {steamtemp_gym.__version__}, git {git_revision()}: agents/datasets.py"
 
 
 def _int(lo: int, hi: int, what: str):
@@ -357,36 +435,72 @@ def _seeds(text: str) -> tuple[int, ...]:
 
 def make_parser() -> argparse.ArgumentParser:
     doc = __doc__ or ""
-    ap = argparse.ArgumentParser(prog="python -m agents.datasets", description=doc.split("\n")[0],
-                                 epilog="docs/offline.md")  # fmt: skip
-    ap.add_argument("--env", default=steamtemp_gym.ENV_IDS[0].split("/")[-1],
-                    help="the plant's env id, with or without steamtemp/ (default: the first "
-                    "plant, %(default)s)")
-    ap.add_argument("--policy", required=True,
-                    help="the policy that acts: " + specs.FORMS)
-    ap.add_argument("--episodes", type=_int(1, MAX_EPISODES, "--episodes"), default=20,
-                    help="number of episodes (default: %(default)s)")
-    ap.add_argument("--seed", type=_int(0, 2**31 - 1, "--seed"), default=0,
-                    help="seed of the first episode; episode i has seed + i (default: 0)")
-    ap.add_argument("--data-dir", default=None, metavar="DIR",
-                    help="Minari's data folder (sets MINARI_DATASETS_PATH; default: that "
-                    "variable, else ~/.minari/datasets)")  # fmt: skip
-    ap.add_argument("--mixed", type=_fraction, default=None, metavar="F",
-                    help=f"mixed quality: each episode by {DETUNED} at a random tuning with "
-                    "probability F, else by --policy; the name gets -mixed")  # fmt: skip
-    ap.add_argument("--noise", type=_noise, default=None, metavar="S",
-                    help="inject low-pass Gaussian noise of standard deviation S (fraction "
-                    "of the stroke) into the actions (DART); the policy's own action is in "
-                    f"the info '{POLICY_ACTION}'; the name gets -noisy<percent>")  # fmt: skip
+    ap = argparse.ArgumentParser(
+        prog="python -m agents.datasets", description=doc.split("\n")[0], epilog="docs/offline.md"
+    )
+    ap.add_argument(
+        "--env",
+        default=steamtemp_gym.ENV_IDS[0].split("/")[-1],
+        help="the plant's env id, with or without steamtemp/ (default: the first "
+        "plant, %(default)s)",
+    )
+    ap.add_argument("--policy", required=True, help="the policy that acts: " + specs.FORMS)
+    ap.add_argument(
+        "--episodes",
+        type=_int(1, MAX_EPISODES, "--episodes"),
+        default=20,
+        help="number of episodes (default: %(default)s)",
+    )
+    ap.add_argument(
+        "--seed",
+        type=_int(0, 2**31 - 1, "--seed"),
+        default=0,
+        help="seed of the first episode; episode i has seed + i (default: 0)",
+    )
+    ap.add_argument(
+        "--data-dir",
+        default=None,
+        metavar="DIR",
+        help="Minari's data folder (sets MINARI_DATASETS_PATH; default: that "
+        "variable, else ~/.minari/datasets)",
+    )
+    ap.add_argument(
+        "--mixed",
+        type=_fraction,
+        default=None,
+        metavar="F",
+        help=f"mixed quality: each episode by {DETUNED} at a random tuning with "
+        "probability F, else by --policy; the name gets -mixed",
+    )
+    ap.add_argument(
+        "--noise",
+        type=_noise,
+        default=None,
+        metavar="S",
+        help="inject low-pass Gaussian noise of standard deviation S (fraction "
+        "of the stroke) into the actions (DART); the policy's own action is in "
+        f"the info '{POLICY_ACTION}'; the name gets -noisy<percent>",
+    )
     ap.add_argument("--name", default=None, help="the dataset name (default: from the policy)")
-    ap.add_argument("--version", type=_int(0, 10**6, "--version"), default=0,
-                    help="the dataset version (default: 0)")
-    ap.add_argument("--eval-scenario", default=EVAL_SCENARIO,
-                    help="the evaluation env's scenario, where the reference scores are "
-                    "measured (default: %(default)s)")  # fmt: skip
-    ap.add_argument("--eval-seeds", type=_seeds, default=EVAL_SEEDS, metavar="S,S,...",
-                    help="seeds of the reference episodes (default: 0,1,2,3,4, the "
-                    "leaderboard's)")  # fmt: skip
+    ap.add_argument(
+        "--version",
+        type=_int(0, 10**6, "--version"),
+        default=0,
+        help="the dataset version (default: 0)",
+    )
+    ap.add_argument(
+        "--eval-scenario",
+        default=EVAL_SCENARIO,
+        help="the evaluation env's scenario, where the reference scores are "
+        "measured (default: %(default)s)",
+    )
+    ap.add_argument(
+        "--eval-seeds",
+        type=_seeds,
+        default=EVAL_SEEDS,
+        metavar="S,S,...",
+        help="seeds of the reference episodes (default: 0,1,2,3,4, the leaderboard's)",
+    )
     ap.add_argument("--author", default=AUTHOR, help="(default: %(default)s)")
     return ap
 
@@ -394,8 +508,11 @@ def make_parser() -> argparse.ArgumentParser:
 def main(argv: list[str] | None = None) -> int:
     ap = make_parser()
     args = ap.parse_args(argv)
-    if args.data_dir is not None and Path(args.data_dir).exists() and not Path(
-            args.data_dir).is_dir():  # fmt: skip
+    if (
+        args.data_dir is not None
+        and Path(args.data_dir).exists()
+        and not Path(args.data_dir).is_dir()
+    ):
         ap.error(f"argument --data-dir: {str(args.data_dir)[:200]!r} is a file, not a folder")
     try:
         import minari  # noqa: F401
@@ -423,22 +540,37 @@ def main(argv: list[str] | None = None) -> int:
         os.environ["MINARI_DATASETS_PATH"] = str(Path(args.data_dir).resolve())
     from minari.storage import get_dataset_path
 
-    did = dataset_id(env_id, args.name or dataset_name(args.policy, args.mixed, args.noise),
-                     args.version)  # fmt: skip
+    did = dataset_id(
+        env_id, args.name or dataset_name(args.policy, args.mixed, args.noise), args.version
+    )
     if Path(get_dataset_path(did)).exists():
-        ap.error(f"dataset {did} exists already in {get_dataset_path(did)}; delete it "
-                 "(minari delete) or give another --version or --name")  # fmt: skip
+        ap.error(
+            f"dataset {did} exists already in {get_dataset_path(did)}; delete it "
+            "(minari delete) or give another --version or --name"
+        )
     t0 = time.perf_counter()
-    dataset = record(env_id, args.policy, args.episodes, args.seed, mixed=args.mixed,
-                     noise=args.noise, name=args.name, version=args.version,
-                     eval_scenario=args.eval_scenario, eval_seeds=args.eval_seeds,
-                     author=args.author, log=lambda m: print(m, file=sys.stderr))  # fmt: skip
+    dataset = record(
+        env_id,
+        args.policy,
+        args.episodes,
+        args.seed,
+        mixed=args.mixed,
+        noise=args.noise,
+        name=args.name,
+        version=args.version,
+        eval_scenario=args.eval_scenario,
+        eval_seeds=args.eval_seeds,
+        author=args.author,
+        log=lambda m: print(m, file=sys.stderr),
+    )
     path = Path(get_dataset_path(did))
     size = sum(f.stat().st_size for f in path.rglob("*") if f.is_file())
-    print(f"{did}: {dataset.total_episodes} episodes, {dataset.total_steps} steps, "
-          f"{size / 1e6:.1f} MB in {path}, {time.perf_counter() - t0:.1f} s; ref_min_score "
-          f"{dataset.storage.metadata['ref_min_score']:.6g}, ref_max_score "
-          f"{dataset.storage.metadata['ref_max_score']:.6g}")
+    print(
+        f"{did}: {dataset.total_episodes} episodes, {dataset.total_steps} steps, "
+        f"{size / 1e6:.1f} MB in {path}, {time.perf_counter() - t0:.1f} s; ref_min_score "
+        f"{dataset.storage.metadata['ref_min_score']:.6g}, ref_max_score "
+        f"{dataset.storage.metadata['ref_max_score']:.6g}"
+    )
     return 0
 
 

@@ -50,8 +50,10 @@ STEAMTEMP, RL_ZOO = "steamtemp-train", "rl-zoo"
 _RL_ZOO_CLASSES = {"ppo_lstm": "RecurrentPPO", "crossq": "CrossQ"}
 #: The run index at the end of a stem: ``__run<k>``, k without leading zeros.
 RUN_TAG = "__run"
-_STEM = re.compile(r"^(?P<env>.+?)__(?!run[0-9]*(?:__|$))(?P<algo>[A-Za-z0-9]+(?:_[A-Za-z0-9]+)*)"
-                   r"(?:__run(?P<run>0|[1-9][0-9]*))?$")  # fmt: skip
+_STEM = re.compile(
+    r"^(?P<env>.+?)__(?!run[0-9]*(?:__|$))(?P<algo>[A-Za-z0-9]+(?:_[A-Za-z0-9]+)*)"
+    r"(?:__run(?P<run>0|[1-9][0-9]*))?$"
+)
 
 
 @dataclass(frozen=True)
@@ -91,9 +93,11 @@ class AgentFiles:
                 data = json.loads(z.read("data"))
             return tuple(data["observation_space"]["_shape"]), tuple(data["action_space"]["_shape"])
         except (OSError, zipfile.BadZipFile, KeyError, TypeError, ValueError) as exc:
-            raise ValueError(f"{str(self.model)!r} is not a Stable-Baselines3 model file (a .zip "
-                             f"with its 'data' entry and spaces): {type(exc).__name__}: {exc}; "
-                             "is it corrupt or cut short?") from None  # fmt: skip
+            raise ValueError(
+                f"{str(self.model)!r} is not a Stable-Baselines3 model file (a .zip "
+                f"with its 'data' entry and spaces): {type(exc).__name__}: {exc}; "
+                "is it corrupt or cut short?"
+            ) from None
 
     def check(self) -> None:
         """The model fits the env it is labelled with: it takes that env's observation
@@ -134,18 +138,31 @@ class AgentFiles:
                 norm = _vecnormalize_stats(pkl[0])
         st = self.model.stat()
         model = _model(cls, str(self.model), (st.st_size, st.st_mtime_ns))
-        return AgentPolicy(model, gym.make(self.env_id), memory=memory, obs_norm=norm,
-                           residual_scale=residual, max_move=max_move,
-                           residual_base=base, action_filter_s=filter_s,
-                           tied_valves=tied, action_repeat=repeat)  # fmt: skip
+        return AgentPolicy(
+            model,
+            gym.make(self.env_id),
+            memory=memory,
+            obs_norm=norm,
+            residual_scale=residual,
+            max_move=max_move,
+            residual_base=base,
+            action_filter_s=filter_s,
+            tied_valves=tied,
+            action_repeat=repeat,
+        )
 
 
 def git_revision() -> str:
     """The git commit of this checkout (recorded in a trained agent's or a dataset's
     metadata), "unknown" outside a git checkout."""
     try:
-        done = subprocess.run(["git", "rev-parse", "HEAD"], cwd=Path(__file__).parent,
-                              capture_output=True, text=True, check=True)  # fmt: skip
+        done = subprocess.run(
+            ["git", "rev-parse", "HEAD"],
+            cwd=Path(__file__).parent,
+            capture_output=True,
+            text=True,
+            check=True,
+        )
         return done.stdout.strip()
     except (OSError, subprocess.CalledProcessError):
         return "unknown"
@@ -179,14 +196,22 @@ def _check(files: AgentFiles, stat: tuple) -> None:
     try:
         env = _env(files.env_id)
     except Exception as exc:  # noqa: BLE001 - an unknown or broken env id
-        raise ValueError(f"{str(files.model)!r} is labelled for env {files.env_id!r}, which "
-                         f"cannot be made: {type(exc).__name__}: {exc}") from None  # fmt: skip
+        raise ValueError(
+            f"{str(files.model)!r} is labelled for env {files.env_id!r}, which "
+            f"cannot be made: {type(exc).__name__}: {exc}"
+        ) from None
     plant = env.unwrapped.plant
     memory = files._memory()
-    extra = 0 if memory is None else MemoryConfig.from_kwargs(memory).n_extra(
-        len(plant.valves), len(plant.secondary), env.observation_space.shape[-1])  # fmt: skip
-    meta = json.loads(files.meta[0].read_text(encoding="utf-8")) if files.layout == STEAMTEMP \
-        else {}  # fmt: skip
+    extra = (
+        0
+        if memory is None
+        else MemoryConfig.from_kwargs(memory).n_extra(
+            len(plant.valves), len(plant.secondary), env.observation_space.shape[-1]
+        )
+    )
+    meta = (
+        json.loads(files.meta[0].read_text(encoding="utf-8")) if files.layout == STEAMTEMP else {}
+    )
     if meta.get("residual_base") is not None:  # the base's action is observed (residual.py)
         extra += len(plant.valves)
     if meta.get("privileged_critic"):  # what its critic saw besides (privileged.py)
@@ -197,9 +222,12 @@ def _check(files: AgentFiles, stat: tuple) -> None:
         want_act = (n_actions(tie_map(tuple(plant.valves), meta["tied_valves"])),)
     if (obs, act) == (want_obs, want_act):
         return
-    how = (f"with its controller memory of {extra} entries ({memory})" if memory is not None
-           else "without controller memory" + (" (its config.yml has no env_wrapper)"
-                                               if files.layout == RL_ZOO else ""))  # fmt: skip
+    how = (
+        f"with its controller memory of {extra} entries ({memory})"
+        if memory is not None
+        else "without controller memory"
+        + (" (its config.yml has no env_wrapper)" if files.layout == RL_ZOO else "")
+    )
     raise ValueError(
         f"{str(files.model)!r} does not fit {files.env_id}, the env its files name: the model "
         f"takes observations of shape {obs} and gives actions of shape {act}; {files.env_id} "
@@ -218,19 +246,24 @@ def stem(env_id: str, algo: str, run: int | None = None) -> str:
             or without digits), or a run that is not an integer >= 0.
     """
     if not isinstance(env_id, str) or not env_id or "__" in env_id or env_id.endswith("/"):
-        raise ValueError(f"env id {env_id!r}: must be a non-empty string without '__' "
-                         "(its '/' is written '__' in file names)")  # fmt: skip
+        raise ValueError(
+            f"env id {env_id!r}: must be a non-empty string without '__' "
+            "(its '/' is written '__' in file names)"
+        )
     if run is not None and (isinstance(run, bool) or not isinstance(run, int) or run < 0):
         raise ValueError(f"run index {run!r}: must be an integer >= 0")
     name = f"{env_id.replace('/', '__')}__{algo}" + ("" if run is None else f"{RUN_TAG}{run}")
     if parse_stem(name, check=False) != (env_id, algo, run):
-        raise ValueError(f"algo {algo!r}: must be letters and digits joined by single '_', "
-                         "and not 'run' with or without digits (the run index's tag)")
+        raise ValueError(
+            f"algo {algo!r}: must be letters and digits joined by single '_', "
+            "and not 'run' with or without digits (the run index's tag)"
+        )
     return name
 
 
-def steamtemp_paths(directory: str | Path, env_id: str, algo: str,
-                    run: int | None = None) -> tuple[Path, Path]:  # fmt: skip
+def steamtemp_paths(
+    directory: str | Path, env_id: str, algo: str, run: int | None = None
+) -> tuple[Path, Path]:
     """The model ``.zip`` and the metadata ``.json`` of run ``run`` of (env_id, algo) in
     ``directory``, as steamtemp-train writes them (their stem: :func:`stem`).
 
@@ -253,9 +286,11 @@ def parse_stem(name: str, check: bool = True) -> tuple[str, str, int | None]:
     if m is None or not env or "____" in env or env.startswith("__") or env.endswith("__"):
         if not check:
             return ("", "", None)
-        raise ValueError(f"{name!r} is not a trained agent's file stem: expected "
-                         "<env>__<algo> or <env>__<algo>__run<k> (<env> the env id with '/' "
-                         "written '__', k an integer >= 0 without leading zeros)")  # fmt: skip
+        raise ValueError(
+            f"{name!r} is not a trained agent's file stem: expected "
+            "<env>__<algo> or <env>__<algo>__run<k> (<env> the env id with '/' "
+            "written '__', k an integer >= 0 without leading zeros)"
+        )
     run = m.group("run")
     return env.replace("__", "/"), m.group("algo"), None if run is None else int(run)
 
@@ -297,8 +332,9 @@ def steamtemp_files(directory: Path, env_id: str, algo: str, run: int = 0) -> Ag
     Raises:
         ValueError: the .zip or the .json is missing.
     """
-    tried = [steamtemp_paths(directory, env_id, algo, k)
-             for k in ((run, None) if run == 0 else (run,))]  # fmt: skip
+    tried = [
+        steamtemp_paths(directory, env_id, algo, k) for k in ((run, None) if run == 0 else (run,))
+    ]
     for model, meta in tried:
         if model.is_file() and meta.is_file():
             return AgentFiles(env_id, algo, model, (meta,), STEAMTEMP)
@@ -387,10 +423,13 @@ def _other(loader: yaml.SafeLoader, suffix: str, node: yaml.Node) -> Any:
     return None
 
 
-_ZooLoader.add_constructor("tag:yaml.org,2002:python/object/apply:collections.OrderedDict",
-                           _ordered_dict)  # fmt: skip
-_ZooLoader.add_constructor("tag:yaml.org,2002:python/tuple",
-                           lambda loader, node: loader.construct_sequence(node, deep=True))
+_ZooLoader.add_constructor(
+    "tag:yaml.org,2002:python/object/apply:collections.OrderedDict", _ordered_dict
+)
+_ZooLoader.add_constructor(
+    "tag:yaml.org,2002:python/tuple",
+    lambda loader, node: loader.construct_sequence(node, deep=True),
+)
 _ZooLoader.add_multi_constructor("tag:yaml.org,2002:python/", _other)
 
 

@@ -95,8 +95,9 @@ def _tuning(
     out = []
     n_main = sum(outer == MAIN for _, outer in plant.control_loops)
     for j, (inner, outer) in enumerate(plant.control_loops):
-        outer_sig = None if outer == SCHEDULED else (
-            plant.outlet_measured if outer == MAIN else outer)  # fmt: skip
+        outer_sig = (
+            None if outer == SCHEDULED else (plant.outlet_measured if outer == MAIN else outer)
+        )
         m = step_test(env_id, j, [s for s in (inner, outer_sig) if s], load=load, params=params)
         m = {k: FOPDT(f.K, f.tau_s, f.theta_s + FILTER_S) for k, f in m.items()}
         kc_o, ti_o, kc_i, ti_i = NO_LOOP
@@ -104,11 +105,13 @@ def _tuning(
             kc_i, ti_i = simc_pi(m[inner])
         if outer_sig and inner:
             mi, mo = m[inner], m[outer_sig]
-            kc_o, ti_o = simc_pi(FOPDT(
-                K=mo.K / mi.K,
-                tau_s=max(mo.tau_s - mi.tau_s, 0.2 * mo.tau_s),
-                theta_s=max(mo.theta_s - mi.theta_s, plant.dt_s),
-            ))  # fmt: skip
+            kc_o, ti_o = simc_pi(
+                FOPDT(
+                    K=mo.K / mi.K,
+                    tau_s=max(mo.tau_s - mi.tau_s, 0.2 * mo.tau_s),
+                    theta_s=max(mo.theta_s - mi.theta_s, plant.dt_s),
+                )
+            )
         elif outer_sig:
             kc_o, ti_o = simc_pi(m[outer_sig])
         if outer == MAIN:  # loops sharing the main-steam error share its loop gain
@@ -228,21 +231,36 @@ class CascadePI:
     """
 
     #: Factors on the SIMC tuning, searched by agents.baseline_tuning (default 1: SIMC).
-    KNOBS = (Knob("outer_gain", 0.25, 4.0), Knob("outer_reset", 0.25, 4.0),
-             Knob("inner_gain", 0.25, 4.0), Knob("inner_reset", 0.25, 4.0))  # fmt: skip
+    KNOBS = (
+        Knob("outer_gain", 0.25, 4.0),
+        Knob("outer_reset", 0.25, 4.0),
+        Knob("inner_gain", 0.25, 4.0),
+        Knob("inner_reset", 0.25, 4.0),
+    )
 
     @staticmethod
     def knob_defaults(env_id: str) -> dict[str, float]:
         """The SIMC tuning: every factor 1."""
-        return {"outer_gain": 1.0, "outer_reset": 1.0, "inner_gain": 1.0, "inner_reset": 1.0,
-                "feedforward_gain": 1.0}  # fmt: skip
+        return {
+            "outer_gain": 1.0,
+            "outer_reset": 1.0,
+            "inner_gain": 1.0,
+            "inner_reset": 1.0,
+            "feedforward_gain": 1.0,
+        }
 
     def __init__(
-        self, env: Any, tuning: Any = None, load_feedforward: bool = False,
-        feedforward: tuple[np.ndarray, float] | None = None, gain_schedule: bool = False,
-        outer_gain: float | None = None, outer_reset: float | None = None,
-        inner_gain: float | None = None, inner_reset: float | None = None,
-    ) -> None:  # fmt: skip
+        self,
+        env: Any,
+        tuning: Any = None,
+        load_feedforward: bool = False,
+        feedforward: tuple[np.ndarray, float] | None = None,
+        gain_schedule: bool = False,
+        outer_gain: float | None = None,
+        outer_reset: float | None = None,
+        inner_gain: float | None = None,
+        inner_reset: float | None = None,
+    ) -> None:
         u = env.unwrapped
         plant = u.plant
         names, self._scale, self._center = observation_layout(env)
@@ -265,15 +283,20 @@ class CascadePI:
         self.dt = plant.dt_s
         self.a_filter = float(np.exp(-self.dt / FILTER_S))
         if tuning is None:  # scheduled: the rated-load tuning sets the feed-forward's filter
-            tuning = _tuning(plant.id, params) if gain_schedule else commissioned_tuning(
-                plant.id, params)  # fmt: skip
+            tuning = (
+                _tuning(plant.id, params)
+                if gain_schedule
+                else commissioned_tuning(plant.id, params)
+            )
         self.gains = np.array(tuning, dtype=float)
         factors = _factors(outer_gain, outer_reset, inner_gain, inner_reset)
         self.gains = self.gains * factors
         #: (loads, table) of the load-scheduled gains (gain_table), or None
-        self.gain_schedule = (np.array(GAIN_LOADS), gain_table(plant.id, params) * np.array(
-            [factors[0], factors[0] / factors[1], factors[2], factors[2] / factors[3]])) if (
-            gain_schedule) else None  # fmt: skip
+        self.gain_schedule: tuple[np.ndarray, np.ndarray] | None = None
+        if gain_schedule:  # the table's (Kc, Ki) pairs: Ki = Kc / Ti takes gain / reset
+            g_o, r_o, g_i, r_i = factors
+            scale = np.array([g_o, g_o / r_o, g_i, g_i / r_i])
+            self.gain_schedule = (np.array(GAIN_LOADS), gain_table(plant.id, params) * scale)
         if feedforward is None and load_feedforward:
             feedforward = _feedforward(plant.id, params, gain_schedule)
         self.ff, self.ff_tau = feedforward if feedforward is not None else (None, 1.0)
@@ -293,8 +316,8 @@ class CascadePI:
 
     def _restart(self, st: dict[str, np.ndarray], rows: np.ndarray, y: np.ndarray) -> None:
         st["y0"][rows], st["v0"][rows] = y[rows], y[rows][:, self.i_valve]
-        st["yf"][rows], st["L0"][rows], st["Lf"][rows] = y[rows], y[rows, self.i_load], \
-            y[rows, self.i_load]  # fmt: skip
+        load = y[rows, self.i_load]
+        st["yf"][rows], st["L0"][rows], st["Lf"][rows] = y[rows], load, load
         st["io"][rows], st["ii"][rows] = 0.0, 0.0
         for j, (loads, temps) in self.schedules.items():  # bumpless: no kick at the start
             r = np.interp(y[rows, self.i_load], loads, temps)
@@ -313,8 +336,12 @@ class CascadePI:
         w = ((x - loads[k]) / (loads[k + 1] - loads[k]))[:, None, None]
         g = table[k] * (1.0 - w) + table[k + 1] * w
         for kc, ki in ((0, 1), (2, 3)):  # Ki back to Ti (inf: no integral)
-            g[..., ki] = np.divide(g[..., kc], g[..., ki], out=np.full_like(g[..., ki], np.inf),
-                                   where=g[..., ki] != 0.0)  # fmt: skip
+            g[..., ki] = np.divide(
+                g[..., kc],
+                g[..., ki],
+                out=np.full_like(g[..., ki], np.inf),
+                where=g[..., ki] != 0.0,
+            )
         g.flags.writeable = False  # returned again while the load holds
         self._gains_at = (np.array(load, dtype=float), g)
         return g
@@ -339,9 +366,15 @@ class CascadePI:
         fresh = st is None or st["y0"].shape != y.shape
         if fresh:
             z = np.zeros_like(valve)
-            st = self._st = {"y0": y.copy(), "v0": valve.copy(), "yf": y.copy(),
-                             "L0": np.zeros(n), "Lf": np.zeros(n), "io": z,
-                             "ii": z.copy()}  # fmt: skip
+            st = self._st = {
+                "y0": y.copy(),
+                "v0": valve.copy(),
+                "yf": y.copy(),
+                "L0": np.zeros(n),
+                "Lf": np.zeros(n),
+                "io": z,
+                "ii": z.copy(),
+            }
         restart = restart_rows(fresh, n, episode_start)
         if restart.any():
             self._restart(st, restart, y)
@@ -374,8 +407,9 @@ class CascadePI:
                     if self.i_fire is not None:
                         r = r + c * (y[:, self.i_fire] - load)
             self.inner_setpoint[:, j] = r
-            v[:, j], stopped = pi_position(st["v0"][:, j], kc_i, r - yf[:, inner],
-                                           st["ii"][:, j], self.dt, ti_i)  # fmt: skip
+            v[:, j], stopped = pi_position(
+                st["v0"][:, j], kc_i, r - yf[:, inner], st["ii"][:, j], self.dt, ti_i
+            )
             if np.all(np.isfinite(ti_o)):  # the outer loop integrates while the inner can act
                 st["io"][:, j] += np.where(stopped, 0.0, self.dt / ti_o * e_o)
         action = (2.0 * np.clip(v, 0.0, 1.0) - 1.0).astype(np.float32)
@@ -386,8 +420,10 @@ def _factors(*values: float | None) -> np.ndarray:
     """(Kc_o, Ti_o, Kc_i, Ti_i) factors from the knobs (None: 1); ValueError unless > 0."""
     out = np.array([1.0 if v is None else v for v in values], dtype=float)
     if not np.all(np.isfinite(out) & (out > 0.0)):
-        raise ValueError(f"the tuning factors outer_gain, outer_reset, inner_gain and "
-                         f"inner_reset must be finite and > 0, got {out.tolist()}")  # fmt: skip
+        raise ValueError(
+            f"the tuning factors outer_gain, outer_reset, inner_gain and "
+            f"inner_reset must be finite and > 0, got {out.tolist()}"
+        )
     return out
 
 
@@ -408,6 +444,7 @@ class CascadePIFF(CascadePI):
         if feedforward_gain is not None:
             g = float(feedforward_gain)
             if not (np.isfinite(g) and g >= 0.0):
-                raise ValueError(f"feedforward_gain must be finite and >= 0, "
-                                 f"got {feedforward_gain!r}")
+                raise ValueError(
+                    f"feedforward_gain must be finite and >= 0, got {feedforward_gain!r}"
+                )
             self.ff = self.ff * g

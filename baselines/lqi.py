@@ -146,8 +146,9 @@ def _t63(A: np.ndarray, B: np.ndarray, c: np.ndarray, dt: float) -> float:
     return dt * (1 + int(np.argmax(ys >= 0.632 * ys[-1])))
 
 
-def lq_gains(A: np.ndarray, Bm: np.ndarray, c: np.ndarray, dt: float, q_y: float, q_i: float,
-             r: float) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+def lq_gains(
+    A: np.ndarray, Bm: np.ndarray, c: np.ndarray, dt: float, q_y: float, q_i: float, r: float
+) -> tuple[np.ndarray, np.ndarray]:
     """(Kx, Kz) of the discrete LQI: x+ = A x + Bm du, z+ = z - dt c x, cost
     sum q_y (c x)^2 + q_i z^2 + r |du|^2 (scipy.linalg.solve_discrete_are)."""
     n, m = A.shape[0], Bm.shape[1]
@@ -175,20 +176,18 @@ def steady_targets(
 
 
 @commissioned(maxsize=32)
-def design(env_id: str, params_json: str, knobs: tuple[float, ...] | None = None
-           ) -> dict[str, Any]:  # fmt: skip
+def design(env_id: str, params_json: str, knobs: tuple[float, ...] | None = None) -> dict[str, Any]:
     """The scheduled LQI design of a plant (cached): per grid load the scaled, reduced
     model (A, B, C, bq), the augmented Kalman gain M, LQ gains (Kx, Kz) and the
     disturbance feed-forward Kq; the operating-point tables. ``knobs``: values in
     :data:`KNOBS` order (None: the plant's defaults)."""
-    du_max, e_max, ti_factor, heat_walk = knobs or defaults(env_id)
+    knobs = knobs or defaults(env_id)
     plant = plants.make(env_id, **json.loads(params_json))
     main = [j for j, (_, o) in enumerate(plant.control_loops) if o == MAIN]
     observed = [s for s in plant.outputs if s.observed]
     i_meas = [s.name for s in observed].index(plant.outlet_measured)
     models = [plant.linearize(L) for L in GRID_LOADS]
-    bqs = [plant.linearize_disturbances(L, ("heat_absorption_bias",))[0][:, 0]
-           for L in GRID_LOADS]  # fmt: skip
+    bqs = [plant.linearize_disturbances(L, ("heat_absorption_bias",))[0][:, 0] for L in GRID_LOADS]
     keep = np.zeros(plant.n_x, dtype=bool)
     for (A, B, *_), bq in zip(models, bqs, strict=True):
         keep |= reachable(A, np.column_stack([B, bq]))
@@ -212,27 +211,8 @@ def design(env_id: str, params_json: str, knobs: tuple[float, ...] | None = None
         B = B[keep] / sx[:, None]
         bq = bq[keep] / sx
         C = C[:, keep] * sx[None, :] / sy[:, None]
-        n = A.shape[0]
         c_main = C[i_meas] * sy[i_meas]  # K per scaled state
-        tau = _t63(A, B[:, main], c_main, dt)
-        Kx, Kz = lq_gains(A, B[:, main], c_main, dt, 1.0 / e_max**2,
-                          1.0 / (e_max * ti_factor * tau) ** 2, 1.0 / du_max**2)  # fmt: skip
-        Nu_q, Nx_q, Nu_r, Nx_r = steady_targets(A, B[:, main], bq, c_main)
-        nz = n + 1 + n_p
-        Az = np.eye(nz)
-        Az[:n, :n], Az[:n, n] = A, bq
-        Cz = np.hstack([C, np.zeros((n_y, 1)), E])
-        W = np.diag(np.r_[np.full(n, W_REL**2), heat_walk**2 * dt, np.full(n_p, P_REL**2)])
-        M = kalman_gain(Az, Cz, W, np.diag(vy))
-        Aa = np.block([[A, np.zeros((n, 1))], [-dt * c_main[None, :], np.ones((1, 1))]])
-        Ba = np.vstack([B[:, main], np.zeros((1, len(main)))])
-        grid.append({"A": Az, "B": np.vstack([B, np.zeros((1 + n_p, B.shape[1]))]), "C": Cz,
-                     "M": M, "Kx": Kx, "Kz": Kz, "Kq": Nu_q + Kx @ Nx_q,
-                     "Kr": Nu_r + Kx @ Nx_r, "bq": bq, "tau": tau,
-                     "rho_cl": float(np.abs(np.linalg.eigvals(
-                         Aa - Ba @ np.hstack([Kx, Kz[:, None]]))).max()),
-                     "rho_est": float(np.abs(np.linalg.eigvals(
-                         Az - M @ Cz @ Az)).max())})  # fmt: skip
+        grid.append(_load_design(A, B, C, bq, c_main, main, E, vy, dt, knobs))
     ops = [steady_point(plant, L, [s.name for s in observed]) for L in OP_LOADS]
     ok = [k for k, (xo, uo, yo) in enumerate(ops) if np.all(np.isfinite(yo))]
     return {
@@ -246,6 +226,55 @@ def design(env_id: str, params_json: str, knobs: tuple[float, ...] | None = None
         "x_op": np.array([ops[k][0][keep] / sx for k in ok]),
         "u_op": np.array([ops[k][1] for k in ok]),
         "y_op": np.array([ops[k][2] for k in ok]),
+    }
+
+
+def _load_design(
+    A: np.ndarray,
+    B: np.ndarray,
+    C: np.ndarray,
+    bq: np.ndarray,
+    c_main: np.ndarray,
+    main: list[int],
+    E: np.ndarray,
+    vy: np.ndarray,
+    dt: float,
+    knobs: tuple[float, ...],
+) -> dict[str, Any]:
+    """The LQI design at one grid load of the reduced, scaled model (A, B, C, bq), ``c_main``
+    the main steam temperature (K) per scaled state: the model augmented by the heat walk
+    and the output disturbances ``E``, its Kalman gain M for the output noise variances
+    ``vy``, the LQ gains (Kx, Kz) of the ``main`` actuators, the feed-forwards Kq and Kr and
+    the spectral radii of the closed loop and of the estimator."""
+    du_max, e_max, ti_factor, heat_walk = knobs
+    n_y, n_p = E.shape
+    n = A.shape[0]
+    tau = _t63(A, B[:, main], c_main, dt)
+    # Bryson's rule: the inverse squares of the largest wanted error, integral and move
+    q_y, q_i, r = 1.0 / e_max**2, 1.0 / (e_max * ti_factor * tau) ** 2, 1.0 / du_max**2
+    Kx, Kz = lq_gains(A, B[:, main], c_main, dt, q_y, q_i, r)
+    Nu_q, Nx_q, Nu_r, Nx_r = steady_targets(A, B[:, main], bq, c_main)
+    nz = n + 1 + n_p
+    Az = np.eye(nz)
+    Az[:n, :n], Az[:n, n] = A, bq
+    Cz = np.hstack([C, np.zeros((n_y, 1)), E])
+    W = np.diag(np.r_[np.full(n, W_REL**2), heat_walk**2 * dt, np.full(n_p, P_REL**2)])
+    M = kalman_gain(Az, Cz, W, np.diag(vy))
+    Aa = np.block([[A, np.zeros((n, 1))], [-dt * c_main[None, :], np.ones((1, 1))]])
+    Ba = np.vstack([B[:, main], np.zeros((1, len(main)))])
+    return {
+        "A": Az,
+        "B": np.vstack([B, np.zeros((1 + n_p, B.shape[1]))]),
+        "C": Cz,
+        "M": M,
+        "Kx": Kx,
+        "Kz": Kz,
+        "Kq": Nu_q + Kx @ Nx_q,
+        "Kr": Nu_r + Kx @ Nx_r,
+        "bq": bq,
+        "tau": tau,
+        "rho_cl": float(np.abs(np.linalg.eigvals(Aa - Ba @ np.hstack([Kx, Kz[:, None]]))).max()),
+        "rho_est": float(np.abs(np.linalg.eigvals(Az - M @ Cz @ Az)).max()),
     }
 
 
@@ -269,14 +298,20 @@ class LQI:
     KNOBS = KNOBS
     knob_defaults = staticmethod(start)
 
-    def __init__(self, env: Any, du_max: float | None = None, e_max_K: float | None = None,
-                 ti_factor: float | None = None,
-                 heat_walk: float | None = None) -> None:  # fmt: skip
+    def __init__(
+        self,
+        env: Any,
+        du_max: float | None = None,
+        e_max_K: float | None = None,
+        ti_factor: float | None = None,
+        heat_walk: float | None = None,
+    ) -> None:
         u = env.unwrapped
         plant = u.plant
         given = (du_max, e_max_K, ti_factor, heat_walk)
-        self.knobs = {k.name: k.check(v, d) for k, v, d in
-                      zip(KNOBS, given, defaults(plant.id), strict=True)}  # fmt: skip
+        self.knobs = {
+            k.name: k.check(v, d) for k, v, d in zip(KNOBS, given, defaults(plant.id), strict=True)
+        }
         params = json.dumps(getattr(u, "params_overrides", {}) or {}, sort_keys=True)
         self.d = design(plant.id, params, tuple(self.knobs.values()))
         names, self._scale, self._center = observation_layout(env)
@@ -316,8 +351,11 @@ class LQI:
     def _op(self, L: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         d = self.d
         xp = d["op_loads"]
-        return (interp_rows(L, xp, d["x_op"]), interp_rows(L, xp, d["u_op"]),
-                interp_rows(L, xp, d["y_op"]))  # fmt: skip
+        return (
+            interp_rows(L, xp, d["x_op"]),
+            interp_rows(L, xp, d["u_op"]),
+            interp_rows(L, xp, d["y_op"]),
+        )
 
     def predict(self, observation, state=None, episode_start=None, deterministic=True):
         obs = np.atleast_2d(np.asarray(observation, dtype=np.float64))
@@ -329,10 +367,15 @@ class LQI:
         st = self._st
         fresh = st is None or st["xh"].shape[0] != n
         if fresh:
-            st = self._st = {"xh": np.zeros((n, self._A.shape[1])), "z": np.zeros(n),
-                             "xop": x_op.copy(), "ub": np.zeros_like(valve),
-                             "yb": np.zeros((n, self.n_y)), "rb": np.zeros(n),
-                             "u": valve.copy()}  # fmt: skip
+            st = self._st = {
+                "xh": np.zeros((n, self._A.shape[1])),
+                "z": np.zeros(n),
+                "xop": x_op.copy(),
+                "ub": np.zeros_like(valve),
+                "yb": np.zeros((n, self.n_y)),
+                "rb": np.zeros(n),
+                "u": valve.copy(),
+            }
         restart = restart_rows(fresh, n, episode_start)
         if restart.any():
             st["xh"][restart], st["z"][restart] = 0.0, 0.0
@@ -354,8 +397,12 @@ class LQI:
         e = y[:, self.i_err]
         # setpoint change since the start (its offset at the start is held with the biases)
         dr = e - st["rb"] + dy[:, self.i_meas] * self.d["sy"][self.i_meas]
-        du = (-np.einsum("bmn,bn->bm", Kx, xf[:, : self.n_x]) - Kz * z[:, None]
-              + (w @ self._Kq) * xf[:, self.n_x, None] + (w @ self._Kr) * dr[:, None])  # fmt: skip
+        du = (
+            -np.einsum("bmn,bn->bm", Kx, xf[:, : self.n_x])
+            - Kz * z[:, None]
+            + (w @ self._Kq) * xf[:, self.n_x, None]
+            + (w @ self._Kr) * dr[:, None]
+        )
         m = self.main
         u_prev = st["u"][:, m]
         demand = u_op[:, m] + st["ub"][:, m] + du
@@ -371,7 +418,10 @@ class LQI:
             u_all[:, self.other] = 0.5 * (np.atleast_2d(a_pi)[:, self.other] + 1.0)
         st["u"] = u_all
         du_all = u_all - u_op - st["ub"]
-        st["xh"] = np.einsum("bg,bgn->bn", w, np.einsum("gnk,bk->bgn", self._A, xf)
-                             + np.einsum("gnk,bk->bgn", self._B, du_all))  # fmt: skip
+        st["xh"] = np.einsum(
+            "bg,bgn->bn",
+            w,
+            np.einsum("gnk,bk->bgn", self._A, xf) + np.einsum("gnk,bk->bgn", self._B, du_all),
+        )
         action = (2.0 * u_all - 1.0).astype(np.float32)
         return (action[0] if np.ndim(observation) == 1 else action), None

@@ -105,9 +105,17 @@ U_WEIGHT = 0.01
 BAND_K = 5.0
 RHO_SLACK, RHO_SLACK_L = 1e2, 1e1
 SOFT_EVERY = 4
-OSQP_SETTINGS = {"verbose": False, "adaptive_rho": True, "adaptive_rho_interval": 25,
-                 "rho": 0.1, "eps_abs": 1e-6, "eps_rel": 1e-6, "max_iter": 400,
-                 "polishing": False, "warm_starting": True}  # fmt: skip
+OSQP_SETTINGS = {
+    "verbose": False,
+    "adaptive_rho": True,
+    "adaptive_rho_interval": 25,
+    "rho": 0.1,
+    "eps_abs": 1e-6,
+    "eps_rel": 1e-6,
+    "max_iter": 400,
+    "polishing": False,
+    "warm_starting": True,
+}
 
 
 # -- the QP of one row ---------------------------------------------------------------------
@@ -121,10 +129,14 @@ class _QP:
         self.P_rc = np.nonzero(np.triu(np.ones((nz, nz))).T)[::-1]  # (rows, cols), CSC order
         self.A_rc = np.nonzero(np.ones((nc, nz)).T)[::-1]
         self.solver = osqp.OSQP()
-        self.solver.setup(P=sp.csc_matrix((H[self.P_rc], self.P_rc), (nz, nz)),
-                          q=np.zeros(nz), A=sp.csc_matrix((A[self.A_rc], self.A_rc), (nc, nz)),
-                          l=np.full(nc, -np.inf), u=np.full(nc, np.inf),
-                          **OSQP_SETTINGS)  # fmt: skip
+        self.solver.setup(
+            P=sp.csc_matrix((H[self.P_rc], self.P_rc), (nz, nz)),
+            q=np.zeros(nz),
+            A=sp.csc_matrix((A[self.A_rc], self.A_rc), (nc, nz)),
+            l=np.full(nc, -np.inf),
+            u=np.full(nc, np.inf),
+            **OSQP_SETTINGS,
+        )
         self.key: int | None = None
         self.rho_moved = False  # whether the last solve adapted rho away from the setting's
         # the compiled solver behind osqp's wrapper (osqp >= 1.0), called directly: the
@@ -133,8 +145,16 @@ class _QP:
         self.core = getattr(self.solver, "_solver", None)
         self.infty = float(self.solver.constant("OSQP_INFTY"))
 
-    def solve(self, key: int, H: np.ndarray, A: np.ndarray, g: np.ndarray, lo: np.ndarray,
-              hi: np.ndarray, warm: tuple | None) -> Any:  # fmt: skip
+    def solve(
+        self,
+        key: int,
+        H: np.ndarray,
+        A: np.ndarray,
+        g: np.ndarray,
+        lo: np.ndarray,
+        hi: np.ndarray,
+        warm: tuple | None,
+    ) -> Any:
         """Solve with the matrices of local model ``key`` (sent only when the key changes),
         from rho and the given warm start: the result depends on the row's data only."""
         c = self.core
@@ -153,8 +173,16 @@ class _QP:
         self.rho_moved = info.rho_updates > 0
         return SimpleNamespace(x=sol.x, y=sol.y, info=info)
 
-    def _solve_wrapped(self, key: int, H: np.ndarray, A: np.ndarray, g: np.ndarray,
-                       lo: np.ndarray, hi: np.ndarray, warm: tuple | None) -> Any:  # fmt: skip
+    def _solve_wrapped(
+        self,
+        key: int,
+        H: np.ndarray,
+        A: np.ndarray,
+        g: np.ndarray,
+        lo: np.ndarray,
+        hi: np.ndarray,
+        warm: tuple | None,
+    ) -> Any:
         """:meth:`solve` through osqp's public wrapper (the same calls)."""
         s = self.solver
         if key != self.key:
@@ -193,16 +221,23 @@ class MPCLinear:
     """
 
     #: Searched by agents.baseline_tuning from the commissioning rule's values.
-    KNOBS = (Knob("move_weight", 1e-4, 0.1), Knob("u_weight", 1e-3, 1.0),
-             Knob("filter_noise_K", NOISE_K, 100 * NOISE_K),
-             Knob("heat_std", 1e-3, 0.05))  # fmt: skip
+    KNOBS = (
+        Knob("move_weight", 1e-4, 0.1),
+        Knob("u_weight", 1e-3, 1.0),
+        Knob("filter_noise_K", NOISE_K, 100 * NOISE_K),
+        Knob("heat_std", 1e-3, 0.05),
+    )
 
     @staticmethod
     def knob_defaults(env_id: str) -> dict[str, float]:
         """The commissioning rule's move suppression and U_WEIGHT, and the filter of the
         named scenarios' noise and disturbance."""
-        return {"move_weight": rule_move_weight(env_id),
-                "u_weight": U_WEIGHT, "filter_noise_K": NOISE_K, "heat_std": HEAT_STD}  # fmt: skip
+        return {
+            "move_weight": rule_move_weight(env_id),
+            "u_weight": U_WEIGHT,
+            "filter_noise_K": NOISE_K,
+            "heat_std": HEAT_STD,
+        }
 
     @staticmethod
     def knob_alternatives(env_id: str) -> list[dict[str, float]]:
@@ -214,23 +249,41 @@ class MPCLinear:
         times the commissioning rule's move suppression."""
         rule = rule_move_weight(env_id)
         lo = {k.name: k.lo for k in MPCLinear.KNOBS}
-        return [{"filter_noise_K": 10.0 * NOISE_K, "heat_std": HEAT_STD / 4.0},
-                {"filter_noise_K": 20.0 * NOISE_K, "heat_std": HEAT_STD / 4.0,
-                 "move_weight": lo["move_weight"], "u_weight": lo["u_weight"]},
-                {"move_weight": 3.0 * rule}]
+        return [
+            {"filter_noise_K": 10.0 * NOISE_K, "heat_std": HEAT_STD / 4.0},
+            {
+                "filter_noise_K": 20.0 * NOISE_K,
+                "heat_std": HEAT_STD / 4.0,
+                "move_weight": lo["move_weight"],
+                "u_weight": lo["u_weight"],
+            },
+            {"move_weight": 3.0 * rule},
+        ]
 
-    def __init__(self, env: Any, disturbance_model: bool = True, move_weight: float | None = None,
-                 u_weight: float | None = None, filter_noise_K: float | None = None,
-                 heat_std: float | None = None, robust: bool = True) -> None:  # fmt: skip
+    def __init__(
+        self,
+        env: Any,
+        disturbance_model: bool = True,
+        move_weight: float | None = None,
+        u_weight: float | None = None,
+        filter_noise_K: float | None = None,
+        heat_std: float | None = None,
+        robust: bool = True,
+    ) -> None:
         u = env.unwrapped
         plant = u.plant
         base = tuning.stored_or("mpc_linear", plant.id, self.knob_defaults(plant.id))
-        given = {"move_weight": move_weight, "u_weight": u_weight,
-                 "filter_noise_K": filter_noise_K, "heat_std": heat_std}  # fmt: skip
+        given = {
+            "move_weight": move_weight,
+            "u_weight": u_weight,
+            "filter_noise_K": filter_noise_K,
+            "heat_std": heat_std,
+        }
         k = {name: base[name] if v is None else v for name, v in given.items()}
         for name, v in k.items():
-            if not (isinstance(v, (int, float)) and not isinstance(v, bool) and np.isfinite(v)
-                    and v > 0):  # fmt: skip
+            if not (
+                isinstance(v, (int, float)) and not isinstance(v, bool) and np.isfinite(v) and v > 0
+            ):
                 raise ValueError(f"{name} must be a positive finite number, got {v!r}")
         move_weight, u_weight = k["move_weight"], k["u_weight"]
         params = json.dumps(getattr(u, "params_overrides", {}) or {}, sort_keys=True)
@@ -240,7 +293,8 @@ class MPCLinear:
         self.robustness: tuple[float, float, str] | None = None
         if robust:
             self.robustness = robust_filter_noise(
-                type(self), plant.id, params, *(float(k[n]) for n in given))
+                type(self), plant.id, params, *(float(k[n]) for n in given)
+            )
             k["filter_noise_K"] = self.robustness[0]
         self.d = d = design(plant.id, params, float(k["filter_noise_K"]), float(k["heat_std"]))
         self.estimate_disturbances = bool(disturbance_model)
@@ -269,10 +323,12 @@ class MPCLinear:
         seg[0] = 1  # the first move happens in one interval, later ones over their block
         self.max_move = np.kron(seg, d["rates"] * self.dt)
         inf = np.full(n_s, np.inf)
-        self._lo0 = np.concatenate([np.zeros(nv), -self.max_move, -inf, np.full(n_s, -BAND_K),
-                                    np.zeros(n_c)])  # fmt: skip
-        self._hi0 = np.concatenate([np.zeros(nv), self.max_move, np.full(n_s, BAND_K), inf,
-                                    np.full(n_c, np.inf)])  # fmt: skip
+        self._lo0 = np.concatenate(
+            [np.zeros(nv), -self.max_move, -inf, np.full(n_s, -BAND_K), np.zeros(n_c)]
+        )
+        self._hi0 = np.concatenate(
+            [np.zeros(nv), self.max_move, np.full(n_s, BAND_K), inf, np.full(n_c, np.inf)]
+        )
         self._g0 = np.concatenate([np.zeros(nv), np.full(n_c, RHO_SLACK_L)])
         self._local: dict[int, dict[str, Any]] = {}
         self.stats = {"solves": 0, "iterations": 0, "failures": 0}
@@ -292,8 +348,10 @@ class MPCLinear:
             raise ValueError("mpc_linear.applied: no predict call to apply commands to")
         u = np.atleast_2d(np.asarray(action, dtype=np.float64))
         if u.shape != (len(self._rows), self.n_u) or not np.all(np.isfinite(u)):
-            raise ValueError(f"mpc_linear.applied: expected finite commands of shape "
-                             f"({len(self._rows)}, {self.n_u}), got shape {u.shape}")  # fmt: skip
+            raise ValueError(
+                f"mpc_linear.applied: expected finite commands of shape "
+                f"({len(self._rows)}, {self.n_u}), got shape {u.shape}"
+            )
         for st, ab in zip(self._rows, u, strict=True):
             own = (2.0 * st["u"] - 1.0).astype(np.float32)  # the action predict gave
             if not np.array_equal(own, ab.astype(np.float32)):
@@ -320,8 +378,7 @@ class MPCLinear:
         mw, uw = self._weights
         CbS = 2.0 * self._Cb.T * np.tile(uw * gu2, n_pts)[None, :]
         H = np.zeros((nv + n_c, nv + n_c))
-        H[:nv, :nv] = 2.0 * (Sd.T @ Sd + np.diag(np.tile(mw * n_pts * gu2, n_mv))) \
-            + CbS @ self._Cb  # fmt: skip
+        H[:nv, :nv] = 2.0 * (Sd.T @ Sd + np.diag(np.tile(mw * n_pts * gu2, n_mv))) + CbS @ self._Cb
         H[nv:, nv:] = 2.0 * RHO_SLACK * np.eye(n_c)
         n_s = len(self.soft) * n_c
         Ssoft = Sd.reshape(n_pts, n_c, nv)[self.soft].reshape(n_s, nv)
@@ -329,8 +386,13 @@ class MPCLinear:
         A[2 * nv : 2 * nv + n_s, :nv] = Ssoft
         A[2 * nv + n_s : 2 * nv + 2 * n_s, :nv] = Ssoft
         G, Wi = m["Gu"], 1.0 / gu2  # target: least change, weighted by the steady effects
-        m.update(H=H, A=A, SdT2=2.0 * Sd.T, CbS=CbS,
-                 Gpinv=Wi[:, None] * (G.T @ np.linalg.inv((G * Wi) @ G.T)))  # fmt: skip
+        m.update(
+            H=H,
+            A=A,
+            SdT2=2.0 * Sd.T,
+            CbS=CbS,
+            Gpinv=Wi[:, None] * (G.T @ np.linalg.inv((G * Wi) @ G.T)),
+        )
         self._local[key] = m
         return key, m
 
@@ -360,8 +422,15 @@ class MPCLinear:
         else:
             qp = np.zeros(1 + self.d["n_p"])
         xi = m["inv"] @ (m["Bu"] @ (u0 - u_op) + m["bq"] * qp[0] + m["Bmd"] @ md)
-        return {"z": np.concatenate([xi, qp]), "u": u0, "L": L, "op": op, "md": md,
-                "warm": None, "qp": None}  # fmt: skip
+        return {
+            "z": np.concatenate([xi, qp]),
+            "u": u0,
+            "L": L,
+            "op": op,
+            "md": md,
+            "warm": None,
+            "qp": None,
+        }
 
     def _row(self, st: dict[str, Any] | None, y: np.ndarray) -> dict[str, Any]:
         """The next state of one row (``st`` None: an episode start); ``st`` is not changed."""
@@ -400,8 +469,13 @@ class MPCLinear:
         # free response and the QP
         u_prev = st["u"]
         f0, f1, a = m["f"]
-        free = (yc_op + m["Phi"] @ z + m["Gam"] @ (u_prev - u_op) + m["Pm"] @ md
-                + ((1.0 - a) * f0[n_eff] + a * f1[n_eff]) * rate)  # fmt: skip
+        free = (
+            yc_op
+            + m["Phi"] @ z
+            + m["Gam"] @ (u_prev - u_op)
+            + m["Pm"] @ md
+            + ((1.0 - a) * f0[n_eff] + a * f1[n_eff]) * rate
+        )
         e0 = (free - ref).reshape(-1)
         n_pts, n_c, n_mv = len(d["pts"]), d["n_c"], len(d["moves"])
         nv, n_s = n_mv * self.n_u, len(self.soft) * n_c
@@ -441,8 +515,10 @@ class MPCLinear:
             if not (np.all(np.isfinite(s["z"])) and np.all(np.isfinite(s["u"])))
         ]
         if bad:
-            raise ValueError(f"mpc_linear: non-finite estimate for rows {bad} of the "
-                             f"observation; the policy's state is unchanged")  # fmt: skip
+            raise ValueError(
+                f"mpc_linear: non-finite estimate for rows {bad} of the "
+                f"observation; the policy's state is unchanged"
+            )
         self._rows = new
         u = np.array([s["u"] for s in new])
         action = (2.0 * u - 1.0).astype(np.float32)

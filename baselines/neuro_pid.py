@@ -139,9 +139,13 @@ class NeuroPID:
         return {"eta": ETA}
 
     def __init__(
-        self, env: Any, criterion: str = "mee", k0: Any = None, force_u: float | None = None,
+        self,
+        env: Any,
+        criterion: str = "mee",
+        k0: Any = None,
+        force_u: float | None = None,
         eta: float | None = None,
-    ) -> None:  # fmt: skip
+    ) -> None:
         if criterion not in ("mee", "mse"):
             raise ValueError(f"criterion must be 'mee' or 'mse', got {criterion!r}")
         eta = ETA if eta is None else float(eta)
@@ -162,8 +166,10 @@ class NeuroPID:
         self.a_filter = float(np.exp(-self.dt / FILTER_S))
         self.a_load = float(np.exp(-self.dt / LOAD_RATE_FILTER_S))
         self.main = [j for j, (_, o) in enumerate(plant.control_loops) if o == MAIN]
-        self.inner = [names.index(plant.control_loops[j][0]) if plant.control_loops[j][0]
-                      else None for j in self.main]  # fmt: skip
+        self.inner = [
+            names.index(plant.control_loops[j][0]) if plant.control_loops[j][0] else None
+            for j in self.main
+        ]
         self.p_inner = inner_p_valve_per_K(plant)
         own = plant.commissioning.get("neuro_pid", {})
         prox = own.get("disturbance_signals") or (
@@ -209,13 +215,21 @@ class NeuroPID:
         nm = len(self.main)
         nu = n * nm
         return {
-            "y0": np.zeros((n, len(self._scale))), "yf": np.zeros((n, len(self._scale))),
-            "Lf": np.zeros(n), "E": np.zeros((n, nm, 3)), "u": np.zeros((n, nm)),
-            "ii": np.zeros((n, nm)), "kci": np.zeros((n, nm)), "W": np.zeros((nu, N_W)),
-            "G": np.zeros((nu, N_W)), "V": np.zeros(nu), "Ebuf": np.zeros((nu, WINDOW)),
-            "Sbuf": np.zeros((nu, WINDOW, N_W)), "nbuf": np.zeros(nu, np.int64),
+            "y0": np.zeros((n, len(self._scale))),
+            "yf": np.zeros((n, len(self._scale))),
+            "Lf": np.zeros(n),
+            "E": np.zeros((n, nm, 3)),
+            "u": np.zeros((n, nm)),
+            "ii": np.zeros((n, nm)),
+            "kci": np.zeros((n, nm)),
+            "W": np.zeros((nu, N_W)),
+            "G": np.zeros((nu, N_W)),
+            "V": np.zeros(nu),
+            "Ebuf": np.zeros((nu, WINDOW)),
+            "Sbuf": np.zeros((nu, WINDOW, N_W)),
+            "nbuf": np.zeros(nu, np.int64),
             "head": np.zeros(nu, np.int64),
-        }  # fmt: skip
+        }
 
     def _restart(self, st: dict[str, np.ndarray], rows: np.ndarray, y: np.ndarray) -> None:
         nm = len(self.main)
@@ -225,8 +239,9 @@ class NeuroPID:
         units = (np.flatnonzero(rows)[:, None] * nm + np.arange(nm)).ravel()
         st["W"][units] = np.tile(self.w0, (rows.sum(), 1)) if nm else 0.0
         st["G"][units], st["nbuf"][units], st["head"][units] = 0.0, 0, 0
-        st["V"][units] = 1.0 / (math.sqrt(2.0 * math.pi) * math.sqrt(2.0) * SIGMA_K) \
-            if self.mee else 0.0  # fmt: skip
+        st["V"][units] = (
+            1.0 / (math.sqrt(2.0 * math.pi) * math.sqrt(2.0) * SIGMA_K) if self.mee else 0.0
+        )
 
     def _inputs(self, st: dict[str, np.ndarray], y: np.ndarray) -> np.ndarray:
         """Net inputs (n, N_IN): normalized errors and the two disturbance signals."""
@@ -243,6 +258,43 @@ class NeuroPID:
             else:  # a temperature: deviation from the episode start
                 x[:, 3 + c] = (y[:, i] - st["y0"][:, i]) / self._scale[i]
         return x
+
+    def _adapted_outputs(
+        self, st: dict[str, np.ndarray], y: np.ndarray, load: np.ndarray
+    ) -> np.ndarray:
+        """(rows, MAIN loops) new outputs u of the outer loops: the net adapts its weights
+        to the errors in ``st["E"]`` and sets each loop's PID gains between the bounds
+        around its commissioning gains at the load demand, which move u (eq. (4))."""
+        n, nm = y.shape[0], len(self.main)
+        E = st["E"]
+        x = np.repeat(self._inputs(st, y), nm, axis=0)
+        gains = np.empty((n * nm, 3))
+        base, scale = gain_bounds(self.commissioning(load).reshape(n * nm, 3))
+        npid_step(
+            x,
+            E.reshape(n * nm, 3),
+            st["W"],
+            st["G"],
+            st["V"],
+            st["Ebuf"],
+            st["Sbuf"],
+            st["nbuf"],
+            st["head"],
+            base,
+            scale,
+            self.mee,
+            SIGMA_K,
+            LAMBDA,
+            WINDOW,
+            self.eta,
+            gains,
+        )
+        gains = gains.reshape(n, nm, 3)
+        self.gains = gains
+        self.outputs = ((gains.reshape(n * nm, 3) - base) / scale).reshape(n, nm, 3)
+        e0, e1, e2 = E[..., 0], E[..., 1], E[..., 2]  # this step's error and the two before
+        du = np.stack([e0 - e1, e0, e0 - 2.0 * e1 + e2], axis=-1)  # the P, I and D increments
+        return st["u"] + self.direction * np.einsum("nml,nml->nm", gains, du)  # eq. (4)
 
     # -- predict -------------------------------------------------------------------
     def predict(self, observation, state=None, episode_start=None, deterministic=True):
@@ -269,18 +321,7 @@ class NeuroPID:
         E[:, :, 1:] = E[:, :, :2].copy()
         E[:, :, 0] = yf[:, self.i_err][:, None]  # setpoint - measured outlet, filtered
         if self.force_u is None:
-            x = np.repeat(self._inputs(st, y), nm, axis=0)
-            gains = np.empty((n * nm, 3))
-            base, scale = gain_bounds(self.commissioning(load).reshape(n * nm, 3))
-            npid_step(x, E.reshape(n * nm, 3), st["W"], st["G"], st["V"], st["Ebuf"],
-                      st["Sbuf"], st["nbuf"], st["head"], base, scale, self.mee, SIGMA_K,
-                      LAMBDA, WINDOW, self.eta, gains)  # fmt: skip
-            gains = gains.reshape(n, nm, 3)
-            self.gains = gains
-            self.outputs = ((gains.reshape(n * nm, 3) - base) / scale).reshape(n, nm, 3)
-            du = np.stack([E[..., 0] - E[..., 1], E[..., 0],
-                           E[..., 0] - 2.0 * E[..., 1] + E[..., 2]], axis=-1)  # fmt: skip
-            u_new = st["u"] + self.direction * np.einsum("nml,nml->nm", gains, du)  # eq. (4)
+            u_new = self._adapted_outputs(st, y, load)
         else:
             u_new = np.full((n, nm), float(self.force_u))
         v0 = st["y0"][:, self.i_valve]
@@ -295,8 +336,9 @@ class NeuroPID:
             elif self.p_inner is not None:  # the paper's P secondary, reverse acting
                 dyf = yf[:, i_in] - st["y0"][:, i_in]  # through the DCS input filter
                 # velocity-form saturation: u held where the valve reaches its stop
-                u_new[:, c] = np.clip(u_new[:, c], dyf - (1.0 - vj) / self.p_inner,
-                                      dyf + vj / self.p_inner)  # fmt: skip
+                u_new[:, c] = np.clip(
+                    u_new[:, c], dyf - (1.0 - vj) / self.p_inner, dyf + vj / self.p_inner
+                )
                 v = vj - self.p_inner * (u_new[:, c] - dyf)
                 push = np.zeros(n)
             else:  # cascade_pi_ff's load-scheduled inner PI on the filtered inner temperature

@@ -24,8 +24,7 @@ import baselines
 import steamtemp_gym
 
 
-def latency_us(env_id: str, name: str, batch: int,
-               calls: int) -> tuple[float, float, float, float]:  # fmt: skip
+def latency_us(env_id: str, name: str, batch: int, calls: int) -> tuple[float, float, float, float]:
     """(us per single-env predict, its 99th percentile, the slowest single-env call, us per
     env of a batched predict). The tail matters for controllers that work every n-th step or
     whose solver iterates (MPC)."""
@@ -45,8 +44,9 @@ def latency_us(env_id: str, name: str, batch: int,
         times[k] = time.perf_counter() - t0
     single, worst = times.mean() * 1e6, times[1:].max() * 1e6  # the first call builds state
     p99 = float(np.percentile(times[1:], 99)) * 1e6
-    venv = gym.make_vec(env_id, num_envs=batch, vectorization_mode="vector_entry_point",
-                        scenario="load_ramp_100_50")  # fmt: skip
+    venv = gym.make_vec(
+        env_id, num_envs=batch, vectorization_mode="vector_entry_point", scenario="load_ramp_100_50"
+    )
     vpol = baselines.make(name, venv)
     obs, _ = venv.reset(seed=0)
     start = np.ones(batch, dtype=bool)
@@ -80,15 +80,20 @@ def main(argv: list[str] | None = None) -> None:
         ap.error("--batch and --calls must be positive")
     ref = 1e6 / single_rate("CartPole-v1", 1.0)  # us per step, the same run's reference
     print(f"reference: CartPole-v1 step {ref:.1f} us\n")
-    print(f"| plant | baseline | single env, us/call | p99, us | slowest call, us | "
-          f"x CartPole step | batch {args.batch}, us/env |\n"
-          f"|---|---|---|---|---|---|---|")  # fmt: skip
+    print(
+        f"| plant | baseline | single env, us/call | p99, us | slowest call, us | "
+        f"x CartPole step | batch {args.batch}, us/env |\n"
+        f"|---|---|---|---|---|---|---|"
+    )
     for env_id in envs:
         for name in names:
             single, p99, worst, per_env = latency_us(env_id, name, args.batch, args.calls)
-            print(f"| {env_id.split('/')[-1]} | {name} | {single:.0f} | {p99:.0f} | {worst:.0f} | "
-                  f"{single / ref:.1f} | "
-                  f"{per_env:.1f} |", flush=True)  # fmt: skip
+            print(
+                f"| {env_id.split('/')[-1]} | {name} | {single:.0f} | {p99:.0f} | {worst:.0f} | "
+                f"{single / ref:.1f} | "
+                f"{per_env:.1f} |",
+                flush=True,
+            )
 
 
 if __name__ == "__main__":

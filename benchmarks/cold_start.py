@@ -68,8 +68,14 @@ def _env(cache: Path) -> dict[str, str]:
 
 def _run(code: str, cache: Path) -> float:
     """Wall time reported by ``code`` run in a fresh interpreter with cache folder ``cache``."""
-    out = subprocess.run([sys.executable, "-c", code], cwd=ROOT, env=_env(cache), check=True,
-                         capture_output=True, text=True)  # fmt: skip
+    out = subprocess.run(
+        [sys.executable, "-c", code],
+        cwd=ROOT,
+        env=_env(cache),
+        check=True,
+        capture_output=True,
+        text=True,
+    )
     return float(out.stdout.strip().splitlines()[-1])
 
 
@@ -82,8 +88,12 @@ def main(argv: list[str] | None = None) -> None:
     import steamtemp_gym
 
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("ids", nargs="*", metavar="ID",
-                        help=f"env ids (default: all of {', '.join(steamtemp_gym.ENV_IDS)})")
+    parser.add_argument(
+        "ids",
+        nargs="*",
+        metavar="ID",
+        help=f"env ids (default: all of {', '.join(steamtemp_gym.ENV_IDS)})",
+    )
     args = parser.parse_args(argv)
     unknown = sorted(set(args.ids) - set(steamtemp_gym.ENV_IDS))
     if unknown:
@@ -100,15 +110,24 @@ def main(argv: list[str] | None = None) -> None:
             cache = Path(tmp) / env_id.replace("/", "_")
             cold = _run(START.format(env_id=env_id), cache)
             warm = _run(START.format(env_id=env_id), cache)
-            print(f"| {env_id.split('/')[-1]} | {cold:.1f} | {cold / ref:.1f} | {warm:.2f} | "
-                  f"{warm / ref:.1f} | {size_mb(cache):.1f} |")  # fmt: skip
+            print(
+                f"| {env_id.split('/')[-1]} | {cold:.1f} | {cold / ref:.1f} | {warm:.2f} | "
+                f"{warm / ref:.1f} | {size_mb(cache):.1f} |"
+            )
         shared = Path(tmp) / "all"
         t0 = time.perf_counter()
-        subprocess.run([sys.executable, "-m", "steamtemp_gym.precompile", *ids], cwd=ROOT,
-                       env=_env(shared), check=True, capture_output=True)  # fmt: skip
+        subprocess.run(
+            [sys.executable, "-m", "steamtemp_gym.precompile", *ids],
+            cwd=ROOT,
+            env=_env(shared),
+            check=True,
+            capture_output=True,
+        )
         took = time.perf_counter() - t0
-        print(f"\nall {len(ids)} ids by python -m steamtemp_gym.precompile ({cpus} CPUs): "
-              f"{took:.0f} s ({took / ref:.1f} x reference), {size_mb(shared):.1f} MB")
+        print(
+            f"\nall {len(ids)} ids by python -m steamtemp_gym.precompile ({cpus} CPUs): "
+            f"{took:.0f} s ({took / ref:.1f} x reference), {size_mb(shared):.1f} MB"
+        )
 
 
 if __name__ == "__main__":

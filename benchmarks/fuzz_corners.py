@@ -30,17 +30,23 @@ def main(argv: list[str] | None = None) -> int:
     envs = [e for e in args.envs.split(",") if e]
     bad = [e for e in envs if e not in steamtemp_gym.ENV_IDS]
     if bad or args.rows < 1 or args.steps < 1:
-        ap.error(f"unknown env {bad}; valid: {list(steamtemp_gym.ENV_IDS)}" if bad
-                 else "--rows and --steps must be positive")  # fmt: skip
+        ap.error(
+            f"unknown env {bad}; valid: {list(steamtemp_gym.ENV_IDS)}"
+            if bad
+            else "--rows and --steps must be positive"
+        )
     failed = False
     for env_id in envs:
         t0 = time.perf_counter()
         c = run_corners(env_id, args.rows, args.steps, args.seed)
         failed |= c["non_finite"] > 0 or c["out_of_range"] > 0
-        print(f"{env_id}: {c['steps']} row-steps, {c['episodes']} episodes, "
-              f"{c['rejected']} starts rejected, trips {c['trips']}, "
-              f"non-finite {c['non_finite']}, out of range {c['out_of_range']} "
-              f"({time.perf_counter() - t0:.0f} s)", flush=True)  # fmt: skip
+        print(
+            f"{env_id}: {c['steps']} row-steps, {c['episodes']} episodes, "
+            f"{c['rejected']} starts rejected, trips {c['trips']}, "
+            f"non-finite {c['non_finite']}, out of range {c['out_of_range']} "
+            f"({time.perf_counter() - t0:.0f} s)",
+            flush=True,
+        )
     return 1 if failed else 0
 
 

@@ -29,11 +29,14 @@ from baselines.mpc_linear_design import MOVE_WEIGHT_LADDER, rule_move_weight
 from steamtemp_gym.scenarios import NAMED_DISTURBANCES, Scenario
 
 TESTS = (
-    Scenario(name="heat_step_commissioning", duration_s=2400.0,
-             heat_absorption_bias=((0.0, 0.0), (300.0, 0.0), (360.0, -0.05)),
-             **NAMED_DISTURBANCES),
+    Scenario(
+        name="heat_step_commissioning",
+        duration_s=2400.0,
+        heat_absorption_bias=((0.0, 0.0), (300.0, 0.0), (360.0, -0.05)),
+        **NAMED_DISTURBANCES,
+    ),
     dataclasses.replace(FF_RAMP, **NAMED_DISTURBANCES),
-)  # fmt: skip
+)
 
 
 def main(argv: list[str] | None = None) -> None:
@@ -41,8 +44,10 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--envs", default=",".join(steamtemp_gym.ENV_IDS))
     ap.add_argument("--seed", type=int, default=0)
     args = ap.parse_args(argv)
-    print("| plant | test | move weight | return | travel | cascade_pi_ff return | travel | "
-          "ratio |\n|---|---|---|---|---|---|---|---|")  # fmt: skip
+    print(
+        "| plant | test | move weight | return | travel | cascade_pi_ff return | travel | "
+        "ratio |\n|---|---|---|---|---|---|---|---|"
+    )
     for env_id in [e for e in args.envs.split(",") if e]:
         if env_id not in steamtemp_gym.ENV_IDS:
             ap.error(f"unknown env {env_id!r}; valid: {list(steamtemp_gym.ENV_IDS)}")
@@ -60,14 +65,19 @@ def main(argv: list[str] | None = None) -> None:
                 rm = ref["metrics"]
                 ratio = m["valve_travel"] / rm["valve_travel"]
                 fits &= ratio <= TRAVEL_RATIO_MAX
-                print(f"| {env_id.split('/')[-1]} | {sc.name} | {w:g} | {m['return']:.1f} | "
-                      f"{m['valve_travel']:.2f} | {rm['return']:.1f} | {rm['valve_travel']:.2f} "
-                      f"| {ratio:.2f} |", flush=True)  # fmt: skip
+                print(
+                    f"| {env_id.split('/')[-1]} | {sc.name} | {w:g} | {m['return']:.1f} | "
+                    f"{m['valve_travel']:.2f} | {rm['return']:.1f} | {rm['valve_travel']:.2f} "
+                    f"| {ratio:.2f} |",
+                    flush=True,
+                )
             if fits:
                 ok.append(w)
         choice = min(ok) if ok else max(MOVE_WEIGHT_LADDER)
-        print(f"\n{env_id}: rule gives {choice:g}; the plant declares "
-              f"{rule_move_weight(env_id)}\n", flush=True)  # fmt: skip
+        print(
+            f"\n{env_id}: rule gives {choice:g}; the plant declares {rule_move_weight(env_id)}\n",
+            flush=True,
+        )
 
 
 if __name__ == "__main__":

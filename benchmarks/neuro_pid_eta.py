@@ -45,8 +45,9 @@ def _seeds(text: str) -> list[int]:
 
 def run(env_id: str, scenario: str, seeds: list[int], criterion: str | None, eta: float):
     """(results, gains (steps, seeds, 3) or None) of one batch."""
-    venv = gym.make_vec(env_id, num_envs=len(seeds), scenario=scenario,
-                        vectorization_mode="vector_entry_point")  # fmt: skip
+    venv = gym.make_vec(
+        env_id, num_envs=len(seeds), scenario=scenario, vectorization_mode="vector_entry_point"
+    )
     if criterion is None:
         return run_batch(venv, baselines.make("cascade_pi_ff", venv), seeds), None
     rec = Recorder(NeuroPID(venv, criterion=criterion, eta=eta))
@@ -114,9 +115,11 @@ def ladder(args: argparse.Namespace, etas: list[float]) -> dict[str, float]:
             trips = np.mean([r["metrics"]["tripped"] for r in res])
             ap_, ai, near = adaptation(g[0])
             lp, li, ld = g[1].mean(axis=0)
-            print(f"| {crit} | {eta:g} | {dr.mean():+.2f} | {ratio:.2f} | {trips:.2f} | "
-                  f"{ap_:.3f} | {ai:.3f} | {near:.2f} | {lp:.3f} | {li:.3f} | {ld:.3f} |",
-                  flush=True)  # fmt: skip
+            print(
+                f"| {crit} | {eta:g} | {dr.mean():+.2f} | {ratio:.2f} | {trips:.2f} | "
+                f"{ap_:.3f} | {ai:.3f} | {near:.2f} | {lp:.3f} | {li:.3f} | {ld:.3f} |",
+                flush=True,
+            )
             fits = ratio <= TRAVEL_MAX and trips == 0 and li >= ADAPT_MIN and near < 0.05
             if fits and best is None:
                 best = (eta, dr.mean())
@@ -128,9 +131,11 @@ def ladder(args: argparse.Namespace, etas: list[float]) -> dict[str, float]:
 def compare(args: argparse.Namespace, chosen: dict[str, float]) -> None:
     """Part 2: MEE against MSE on the paper's step at the paper's and the chosen etas."""
     step = _seeds(args.step_seeds)
-    print(f"\npaper's step, seeds {step[0]}-{step[-1]}: e = setpoint - true outlet\n"
-          "| criterion | eta | mean e K | std e K | |kp/kp0-1| | |ki/ki0-1| | learned kp | ki "
-          "| kd |\n|---|---|---|---|---|---|---|---|---|")  # fmt: skip
+    print(
+        f"\npaper's step, seeds {step[0]}-{step[-1]}: e = setpoint - true outlet\n"
+        "| criterion | eta | mean e K | std e K | |kp/kp0-1| | |ki/ki0-1| | learned kp | ki "
+        "| kd |\n|---|---|---|---|---|---|---|---|---|"
+    )
     stats = {}
     for label, etas_c in (("paper", {"mee": ETA, "mse": ETA}), ("chosen", chosen)):
         for crit in ("mee", "mse"):
@@ -140,9 +145,11 @@ def compare(args: argparse.Namespace, chosen: dict[str, float]) -> None:
             ap_, ai, _ = adaptation(g[0])
             lp, li, ld = g[1].mean(axis=0)
             m = stats[label, crit].mean(axis=0)
-            print(f"| {crit} ({label}) | {etas_c[crit]:g} | {m[0]:.4f} | {m[1]:.4f} | "
-                  f"{ap_:.3f} | {ai:.3f} | {lp:.3f} | {li:.3f} | {ld:.3f} |",
-                  flush=True)  # fmt: skip
+            print(
+                f"| {crit} ({label}) | {etas_c[crit]:g} | {m[0]:.4f} | {m[1]:.4f} | "
+                f"{ap_:.3f} | {ai:.3f} | {lp:.3f} | {li:.3f} | {ld:.3f} |",
+                flush=True,
+            )
         d = stats[label, "mee"] - stats[label, "mse"]
         se = d.std(axis=0, ddof=1) / np.sqrt(len(step))
         print(

@@ -32,8 +32,9 @@ REF = "cascade_pi_ff"
 def measure(env_id: str, spec: str, policy: str, seeds: list[int], **kw) -> dict[str, float]:
     """Mean over seeds of the episode metrics of ``policy`` (keywords go to its factory)."""
     sc = scenarios.resolve(spec, env_id)
-    venv = gym.make_vec(env_id, num_envs=len(seeds), scenario=sc,
-                        vectorization_mode="vector_entry_point")  # fmt: skip
+    venv = gym.make_vec(
+        env_id, num_envs=len(seeds), scenario=sc, vectorization_mode="vector_entry_point"
+    )
     pol = baselines.make(policy, venv, **kw)
     res = run_batch(venv, pol, seeds)
     keys = res[0]["metrics"].keys()
@@ -54,7 +55,9 @@ def main(argv: list[str] | None = None) -> None:
     print("|---|---|---|---|---|---|---|---|---|")
     for env_id in [e for e in args.envs.split(",") if e]:
         specs = [s for s in args.scenarios.split(",") if s] or [
-            *DEFAULT_SCENARIOS, *OWN.get(env_id, ())]
+            *DEFAULT_SCENARIOS,
+            *OWN.get(env_id, ()),
+        ]
         for spec in specs:
             ref = measure(env_id, spec, REF, seeds)
             bound = max(2.0 * ref["quiet_p2p_K"], 1.5)
@@ -65,9 +68,12 @@ def main(argv: list[str] | None = None) -> None:
                 name = f"{name} (eta {eta})" if eta else name
                 ratio = m["valve_travel"] / ref["valve_travel"]
                 flag = " !" if ratio > 3.0 or m["quiet_p2p_K"] > bound else ""
-                print(f"| {short} | {spec} | {name} | {m['valve_travel']:.2f} | {ratio:.2f}{flag}"
-                      f" | {m['quiet_p2p_K']:.2f} | {bound:.2f} | {m['max_abs_dev_K']:.2f} | "
-                      f"{m['tripped']:.2f} |", flush=True)  # fmt: skip
+                print(
+                    f"| {short} | {spec} | {name} | {m['valve_travel']:.2f} | {ratio:.2f}{flag}"
+                    f" | {m['quiet_p2p_K']:.2f} | {bound:.2f} | {m['max_abs_dev_K']:.2f} | "
+                    f"{m['tripped']:.2f} |",
+                    flush=True,
+                )
 
 
 if __name__ == "__main__":

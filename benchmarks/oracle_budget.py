@@ -38,21 +38,28 @@ def main() -> None:
     ap.add_argument("--env", default="steamtemp/Cascade300MW-v0")
     ap.add_argument("--scenario", default="load_ramp_100_50")
     ap.add_argument("--seeds", default="0-2")
-    ap.add_argument("--ladder", default="8x2,16x2,16x4,32x4,32x8",
-                    help="comma list of samples x iterations")  # fmt: skip
+    ap.add_argument(
+        "--ladder", default="8x2,16x2,16x4,32x4,32x8", help="comma list of samples x iterations"
+    )
     ap.add_argument("--budget", default="{}", help="other Budget fields as JSON")
     ap.add_argument("--stop-pct", type=float, default=1.0)
     args = ap.parse_args()
     seeds = parse_seeds(ap, args.seeds)
     scenario = _resolve(args.scenario, args.env)
-    venv = gym.make_vec(args.env, num_envs=len(seeds), vectorization_mode="vector_entry_point",
-                        scenario=scenario)  # fmt: skip
+    venv = gym.make_vec(
+        args.env, num_envs=len(seeds), vectorization_mode="vector_entry_point", scenario=scenario
+    )
     ref = _means(run_batch(venv, CascadePIFF(venv), seeds))
-    print(f"{args.env} {args.scenario} seeds {seeds}; cascade_pi_ff: return "
-          f"{ref['return']:.2f}, IAE {ref['iae_K_s']:.0f} K s, travel {ref['valve_travel']:.2f}",
-          flush=True)  # fmt: skip
-    print("| samples x iterations | return | IAE [K s] | travel | trips | CPU s / episode | "
-          "change [%] |\n|---|---|---|---|---|---|---|", flush=True)
+    print(
+        f"{args.env} {args.scenario} seeds {seeds}; cascade_pi_ff: return "
+        f"{ref['return']:.2f}, IAE {ref['iae_K_s']:.0f} K s, travel {ref['valve_travel']:.2f}",
+        flush=True,
+    )
+    print(
+        "| samples x iterations | return | IAE [K s] | travel | trips | CPU s / episode | "
+        "change [%] |\n|---|---|---|---|---|---|---|",
+        flush=True,
+    )
     extra = json.loads(args.budget)
     prev = None
     for rung in args.ladder.split(","):
@@ -62,8 +69,11 @@ def main() -> None:
         m = _means(run_batch(venv, Oracle(venv, budget, engine="cem"), seeds))
         cpu = (time.process_time() - t0) / len(seeds)
         change = "" if prev is None else f"{100 * (m['return'] - prev) / abs(prev):+.1f}"
-        print(f"| {s} x {i} | {m['return']:.2f} | {m['iae_K_s']:.0f} | {m['valve_travel']:.2f} | "
-              f"{m['tripped']:.2f} | {cpu:.1f} | {change} |", flush=True)  # fmt: skip
+        print(
+            f"| {s} x {i} | {m['return']:.2f} | {m['iae_K_s']:.0f} | {m['valve_travel']:.2f} | "
+            f"{m['tripped']:.2f} | {cpu:.1f} | {change} |",
+            flush=True,
+        )
         if prev is not None and m["return"] - prev < args.stop_pct / 100 * abs(prev):
             break
         prev = m["return"]

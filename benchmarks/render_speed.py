@@ -55,8 +55,10 @@ def main(argv: list[str] | None = None) -> None:
         ap.error("--steps must be >= 1")
     ref = matplotlib_redraw_ms()
     print(f"reference: one matplotlib redraw of the figure, {ref:.1f} ms\n")
-    print("| id | frame, median ms | x reference | worst frame, ms | reset with display, ms | "
-          f"{args.steps} steps with frames, s |")
+    print(
+        "| id | frame, median ms | x reference | worst frame, ms | reset with display, ms | "
+        f"{args.steps} steps with frames, s |"
+    )
     print("|---|---|---|---|---|---|")
     for env_id in steamtemp_gym.ENV_IDS:
         env = gym.make(env_id, scenario="load_ramp_100_50", render_mode="rgb_array")
@@ -80,8 +82,10 @@ def main(argv: list[str] | None = None) -> None:
         t_ep = time.perf_counter() - t_ep
         assert frame.shape == (HEIGHT, WIDTH, 3)
         med = 1e3 * float(np.median(frames))
-        print(f"| {env_id.split('/')[-1]} | {med:.3f} | {med / ref:.4f} | "
-              f"{1e3 * max(frames):.2f} | {1e3 * setup:.0f} | {t_ep:.2f} |")
+        print(
+            f"| {env_id.split('/')[-1]} | {med:.3f} | {med / ref:.4f} | "
+            f"{1e3 * max(frames):.2f} | {1e3 * setup:.0f} | {t_ep:.2f} |"
+        )
 
 
 if __name__ == "__main__":

@@ -67,8 +67,9 @@ def step_time(env: gym.Env, n: int, block: int = 100) -> float:
 def vector_step_time(env_id: str, rows: int, n: int, **options) -> float:
     """Wall time per row of a native vector env step (the fastest of n steps, valves at
     mid stroke)."""
-    venv = gym.make_vec(env_id, num_envs=rows, vectorization_mode="vector_entry_point",
-                        scenario=SCENARIO, **options)  # fmt: skip
+    venv = gym.make_vec(
+        env_id, num_envs=rows, vectorization_mode="vector_entry_point", scenario=SCENARIO, **options
+    )
     venv.reset(seed=0)
     a = np.zeros(venv.action_space.shape, dtype=np.float32)
     best = float("inf")
@@ -86,9 +87,11 @@ def main() -> None:
     args = ap.parse_args()
     if args.resets < 1 or args.steps < 1:
         ap.error("--resets and --steps must be positive")
-    print("| env | nominal reset (ms) | randomized reset (ms) | ratio | nominal step (us) "
-          f"| randomized step (us) | ratio | vector B={VECTOR_ROWS} nominal (us/row) "
-          "| randomized (us/row) | ratio |")  # fmt: skip
+    print(
+        "| env | nominal reset (ms) | randomized reset (ms) | ratio | nominal step (us) "
+        f"| randomized step (us) | ratio | vector B={VECTOR_ROWS} nominal (us/row) "
+        "| randomized (us/row) | ratio |"
+    )
     print("|---|---|---|---|---|---|---|---|---|---|")
     for env_id in steamtemp_gym.ENV_IDS:
         nom = gym.make(env_id, scenario=SCENARIO)
@@ -99,9 +102,11 @@ def main() -> None:
         s_nom, s_rnd = min(s for s, _ in steps), min(s for _, s in steps)  # interleaved, best
         v_nom = vector_step_time(env_id, VECTOR_ROWS, 200)
         v_rnd = vector_step_time(env_id, VECTOR_ROWS, 200, plant_randomization=True)
-        print(f"| {env_id} | {1e3 * t_nom:.2f} | {1e3 * t_rnd:.1f} | {t_rnd / t_nom:.0f} "
-              f"| {1e6 * s_nom:.1f} | {1e6 * s_rnd:.1f} | {s_rnd / s_nom:.2f} "
-              f"| {1e6 * v_nom:.2f} | {1e6 * v_rnd:.2f} | {v_rnd / v_nom:.2f} |")  # fmt: skip
+        print(
+            f"| {env_id} | {1e3 * t_nom:.2f} | {1e3 * t_rnd:.1f} | {t_rnd / t_nom:.0f} "
+            f"| {1e6 * s_nom:.1f} | {1e6 * s_rnd:.1f} | {s_rnd / s_nom:.2f} "
+            f"| {1e6 * v_nom:.2f} | {1e6 * v_rnd:.2f} | {v_rnd / v_nom:.2f} |"
+        )
 
 
 if __name__ == "__main__":

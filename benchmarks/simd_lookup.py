@@ -107,8 +107,10 @@ def main() -> None:
             t0 = time.perf_counter()
             k(P, H, *out[name])
             best[name] = min(best[name], time.perf_counter() - t0)
-    same = {name: all(np.array_equal(a, b) for a, b in zip(out["scalar"], out[name], strict=True))
-            for name in kernels}  # fmt: skip
+    same = {
+        name: all(np.array_equal(a, b) for a, b in zip(out["scalar"], out[name], strict=True))
+        for name in kernels
+    }
     print(f"{args.batch} rows, ns per lookup (best of {args.repeats}):")
     for name, k in kernels.items():
         asm = _counts(k) if k is not _scalar else ""

@@ -129,8 +129,9 @@ print(json.dumps({"counts": counts, "samples": samples, "rhs_u": rhs_u}))
 def steam_calls(env_id: str) -> tuple[dict[str, int], dict[str, np.ndarray], np.ndarray]:
     """Steam calls of one step of one row, as {"phase:function": n}, their arguments, and
     the inputs the RHS receives (plants with exact lags pass interval means, not U)."""
-    out = subprocess.run([sys.executable, "-c", COUNT, env_id], capture_output=True, text=True,
-                         check=True).stdout  # fmt: skip
+    out = subprocess.run(
+        [sys.executable, "-c", COUNT, env_id], capture_output=True, text=True, check=True
+    ).stdout
     data = json.loads(out.strip().splitlines()[-1])
     samples = {k: np.array(v) for k, v in data["samples"].items()}
     return data["counts"], samples, np.array(data["rhs_u"])
@@ -159,8 +160,9 @@ def vector_units(env_id: str) -> dict[str, dict[str, int]]:
     """Packed and scalar double arithmetic in the plant step's and advance's machine code."""
     with tempfile.TemporaryDirectory() as cache:
         env = dict(os.environ, STEAMTEMP_GYM_CACHE_DIR=cache)
-        out = subprocess.run([sys.executable, "-c", ASM, env_id], capture_output=True,
-                             text=True, check=True, env=env).stdout  # fmt: skip
+        out = subprocess.run(
+            [sys.executable, "-c", ASM, env_id], capture_output=True, text=True, check=True, env=env
+        ).stdout
     return json.loads(out.strip().splitlines()[-1])
 
 
@@ -220,8 +222,12 @@ def _steam_loop1_tuple(A, reps):
 
 
 #: timing loop of a steam function by (number of arguments, returns a tuple)
-STEAM_LOOPS = {(2, False): _steam_loop, (2, True): _steam_loop_tuple,
-               (1, False): _steam_loop1, (1, True): _steam_loop1_tuple}  # fmt: skip
+STEAM_LOOPS = {
+    (2, False): _steam_loop,
+    (2, True): _steam_loop_tuple,
+    (1, False): _steam_loop1,
+    (1, True): _steam_loop1_tuple,
+}
 
 
 @njit(cache=True, error_model="numpy")
@@ -257,8 +263,9 @@ def per_row_ns(fn: Callable[[int], object], rows: int, seconds: float) -> tuple[
         reps *= 4
 
 
-def measure(timers: dict[str, tuple[Callable[[int], object], int]], seconds: float,
-            rounds: int) -> dict[str, float]:
+def measure(
+    timers: dict[str, tuple[Callable[[int], object], int]], seconds: float, rounds: int
+) -> dict[str, float]:
     """Best ns per row of each timer over ``rounds`` interleaved rounds (a slow spell of the
     host then hits every component, not one)."""
     reps = {}
@@ -273,10 +280,12 @@ def measure(timers: dict[str, tuple[Callable[[int], object], int]], seconds: flo
     return best
 
 
-def profile(env_id: str, batch: int, seconds: float, rounds: int, counts, samples, rhs_u
-            ) -> dict[str, float]:  # fmt: skip
-    venv = gym.make_vec(env_id, num_envs=batch, vectorization_mode="vector_entry_point",
-                        scenario="load_following")  # fmt: skip
+def profile(
+    env_id: str, batch: int, seconds: float, rounds: int, counts, samples, rhs_u
+) -> dict[str, float]:
+    venv = gym.make_vec(
+        env_id, num_envs=batch, vectorization_mode="vector_entry_point", scenario="load_following"
+    )
     venv.reset(seed=0)
     a = np.zeros(venv.action_space.shape, dtype=np.float32)
     for _ in range(50):
@@ -294,8 +303,17 @@ def profile(env_id: str, batch: int, seconds: float, rounds: int, counts, sample
         for _ in range(reps):
             plant.step(X, core.U, core.D, Z)
 
-    sched_args = (core.slot, core.ep, core.bp_t, core.bp_v, core.bp_n, plant.setpoint_C,
-                  core.ou.copy(), core.D.copy(), core.sp.copy())  # fmt: skip
+    sched_args = (
+        core.slot,
+        core.ep,
+        core.bp_t,
+        core.bp_v,
+        core.bp_n,
+        plant.setpoint_C,
+        core.ou.copy(),
+        core.D.copy(),
+        core.sp.copy(),
+    )
     # advance on copies of the rows' arrays (X and Z as the plant step found them)
     adv = core.state._replace(**{f: getattr(core, f).copy() for f in ROW_FIELDS})
     adv = adv._replace(X=X0.copy(), Z=Z.copy())
@@ -307,8 +325,11 @@ def profile(env_id: str, batch: int, seconds: float, rounds: int, counts, sample
         "advance": (lambda r: [advance(adv) for _ in range(r)], batch),
     }
     mod = sys.modules[plant.kernel().__module__]
-    fns = getattr(type(plant), "kernels", None) or (getattr(mod, "rhs", None),
-                                                   getattr(mod, "outputs", None), None)
+    fns = getattr(type(plant), "kernels", None) or (
+        getattr(mod, "rhs", None),
+        getattr(mod, "outputs", None),
+        None,
+    )
     steam: list[tuple[str, int, str]] = []  # (phase, calls per step, timer)
     if fns[0] is not None:
         name = f"{type(plant).__name__}.profile"
@@ -322,13 +343,17 @@ def profile(env_id: str, batch: int, seconds: float, rounds: int, counts, sample
         fns[0](Xw[0], Uc[0], core.D[0], P, np.empty(n), jd, ju, jl, True)
         gh = (1.0 + 1.0 / np.sqrt(2.0)) * plant.dt_s / plant.n_sub
         Zc = Z.copy()
-        timers.update({
-            "rhs+jac": (lambda r: rl(X0, Uc, core.D, P, nc, r, r >= 0), batch),
-            "rhs": (lambda r: rl(X0, Uc, core.D, P, nc, r, r < 0), batch),
-            "solve": (lambda r: _solve_loop(gh, Xw, jd, ju, jl, plant.jrow, plant.jcol, r),
-                      batch),
-            "outputs": (lambda r: ol(X0, core.U, core.D, P, Zc, r), batch),
-        })  # fmt: skip
+        timers.update(
+            {
+                "rhs+jac": (lambda r: rl(X0, Uc, core.D, P, nc, r, r >= 0), batch),
+                "rhs": (lambda r: rl(X0, Uc, core.D, P, nc, r, r < 0), batch),
+                "solve": (
+                    lambda r: _solve_loop(gh, Xw, jd, ju, jl, plant.jrow, plant.jcol, r),
+                    batch,
+                ),
+                "outputs": (lambda r: ol(X0, core.U, core.D, P, Zc, r), batch),
+            }
+        )
         for key, n_calls in counts.items():
             phase, fname = key.split(":")
             if phase not in ("rhs", "outputs") or n_calls == 0:
@@ -353,21 +378,40 @@ def profile(env_id: str, batch: int, seconds: float, rounds: int, counts, sample
     return row
 
 
-COLUMNS = ("env step", "commands", "plant step", "RHS", "steam lookups", "W solve", "outputs",
-           "integrator rest", "schedules", "observation + reward", "Python")  # fmt: skip
+COLUMNS = (
+    "env step",
+    "commands",
+    "plant step",
+    "RHS",
+    "steam lookups",
+    "W solve",
+    "outputs",
+    "integrator rest",
+    "schedules",
+    "observation + reward",
+    "Python",
+)
 
 
 def main(argv: list[str] | None = None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--envs", default=",".join(steamtemp_gym.ENV_IDS))
     ap.add_argument("--batch", type=int, default=4096)
-    ap.add_argument("--seconds", type=float, default=0.25,
-                    help="length of one timed call of each component")
-    ap.add_argument("--repeats", type=int, default=5,
-                    help="interleaved repetitions of each timing (the fastest kept)")
+    ap.add_argument(
+        "--seconds", type=float, default=0.25, help="length of one timed call of each component"
+    )
+    ap.add_argument(
+        "--repeats",
+        type=int,
+        default=5,
+        help="interleaved repetitions of each timing (the fastest kept)",
+    )
     ap.add_argument("--rounds", type=int, dest="repeats", help=argparse.SUPPRESS)  # old name
-    ap.add_argument("--asm", action="store_true",
-                    help="count packed vs scalar arithmetic in the machine code (compiles afresh)")
+    ap.add_argument(
+        "--asm",
+        action="store_true",
+        help="count packed vs scalar arithmetic in the machine code (compiles afresh)",
+    )
     args = ap.parse_args(argv)
     ids = args.envs.split(",")
     unknown = sorted(set(ids) - set(steamtemp_gym.ENV_IDS))
@@ -383,18 +427,21 @@ def main(argv: list[str] | None = None) -> None:
         for batch in (1, args.batch):
             row = profile(env_id, batch, args.seconds, args.repeats, counts, samples, rhs_u)
             cells = [f"{row[c]:,.0f}" if c in row else "-" for c in COLUMNS]
-            print(f"| {env_id.split('/')[1]} | {batch} | " + " | ".join(cells)
-                  + f" | {n_steam} |")  # fmt: skip
+            print(f"| {env_id.split('/')[1]} | {batch} | " + " | ".join(cells) + f" | {n_steam} |")
     if args.asm:
-        print("\ndouble arithmetic in the machine code: packed (SIMD) / scalar instructions, "
-              "and instructions on 256-bit registers\n")
+        print(
+            "\ndouble arithmetic in the machine code: packed (SIMD) / scalar instructions, "
+            "and instructions on 256-bit registers\n"
+        )
         print("| id | kernel | packed | scalar | packed share | ymm |")
         print("|---|---|---|---|---|---|")
         for env_id in ids:
             for name, c in vector_units(env_id).items():
                 share = c["packed"] / max(c["packed"] + c["scalar"], 1)
-                print(f"| {env_id.split('/')[1]} | {name} | {c['packed']} | {c['scalar']} | "
-                      f"{share:.1%} | {c['ymm']} |")
+                print(
+                    f"| {env_id.split('/')[1]} | {name} | {c['packed']} | {c['scalar']} | "
+                    f"{share:.1%} | {c['ymm']} |"
+                )
 
 
 if __name__ == "__main__":

@@ -51,8 +51,9 @@ def single_rate(env_id: str, seconds: float, **kwargs) -> float:
             return n / dt
 
 
-def vector_rate(env_id: str, batch: int, seconds: float, mode: str = "vector_entry_point",
-                **kwargs) -> float:
+def vector_rate(
+    env_id: str, batch: int, seconds: float, mode: str = "vector_entry_point", **kwargs
+) -> float:
     venv = gym.make_vec(env_id, num_envs=batch, vectorization_mode=mode, **kwargs)
     venv.reset(seed=0)
     a = np.zeros(venv.action_space.shape, dtype=venv.action_space.dtype)
@@ -77,11 +78,16 @@ def main() -> None:
     n_thr = threads.n_threads()
     ref1 = max(single_rate("CartPole-v1", args.seconds) for _ in range(args.repeats))
     sync1 = max(vector_rate("CartPole-v1", 1, args.seconds, "sync") for _ in range(args.repeats))
-    print(f"Gymnasium reference: CartPole-v1 {ref1:,.0f} steps/s through gym.make, "
-          f"{sync1:,.0f} /s as SyncVectorEnv of one env: B=1/single {sync1 / ref1:.2f}")
-    print(f"{'env id':36s} {'steps/s':>10s} {'CartPole':>10s} {'xCartPole':>9s} " + " ".join(
-        f"{'B=' + str(b):>12s}" for b in batches) + f" {'B=' + str(batches[-1]):>8s},"
-        f"{n_thr} thr {'B=1/single':>10s}")  # fmt: skip
+    print(
+        f"Gymnasium reference: CartPole-v1 {ref1:,.0f} steps/s through gym.make, "
+        f"{sync1:,.0f} /s as SyncVectorEnv of one env: B=1/single {sync1 / ref1:.2f}"
+    )
+    print(
+        f"{'env id':36s} {'steps/s':>10s} {'CartPole':>10s} {'xCartPole':>9s} "
+        + " ".join(f"{'B=' + str(b):>12s}" for b in batches)
+        + f" {'B=' + str(batches[-1]):>8s},"
+        f"{n_thr} thr {'B=1/single':>10s}"
+    )
     for env_id in args.envs.split(","):
         ref, r = 0.0, 0.0
         for _ in range(args.repeats):
@@ -92,10 +98,15 @@ def main() -> None:
         threads.set_threads(n_thr)
         vec.append(vector_rate(env_id, batches[-1], args.seconds, **LOADS))
         b1 = max(vector_rate(env_id, 1, args.seconds, **LOADS) for _ in range(args.repeats))
-        print(f"{env_id:36s} {r:10,.0f} {ref:10,.0f} {r / ref:9.2f} "
-              + " ".join(f"{v:12,.0f}" for v in vec) + f" {b1 / r:10.2f}")  # fmt: skip
-    print("vector columns: env-steps/s of the native vector env at batch B on one thread; "
-          f"the last on {n_thr} threads (plants/threads.py, STEAMTEMP_GYM_THREADS)")
+        print(
+            f"{env_id:36s} {r:10,.0f} {ref:10,.0f} {r / ref:9.2f} "
+            + " ".join(f"{v:12,.0f}" for v in vec)
+            + f" {b1 / r:10.2f}"
+        )
+    print(
+        "vector columns: env-steps/s of the native vector env at batch B on one thread; "
+        f"the last on {n_thr} threads (plants/threads.py, STEAMTEMP_GYM_THREADS)"
+    )
 
 
 if __name__ == "__main__":

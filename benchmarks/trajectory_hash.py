@@ -25,8 +25,9 @@ import numpy as np
 import steamtemp_gym  # noqa: F401  (registers the envs)
 
 
-def env_hash(env_id: str, seeds: list[int], steps: int, scenario: str,
-             skip: frozenset[str] = frozenset()) -> str:  # fmt: skip
+def env_hash(
+    env_id: str, seeds: list[int], steps: int, scenario: str, skip: frozenset[str] = frozenset()
+) -> str:
     """SHA-256 over ``steps`` steps of random actions for each seed of ``env_id``, without
     the info keys ``skip``."""
     h = hashlib.sha256()

@@ -67,24 +67,36 @@ def section(doc: dict, pareto: bool = False) -> str:
     score-against-travel figure below the table)."""
     run = doc["run"]
     n_eps = len(doc["episodes"])
-    lines = [f"{START} {_GEN}", "",
-             f"{len(run['envs'])} plants, {len(run['scenarios'])} scenarios, seeds "
-             f"{run['seeds']}, {n_eps} episodes (steamtemp_gym {run['steamtemp_gym_version']}).",
-             "", report.headline_markdown(doc, margins=False),
-             "The score's ends per plant (mean returns of `cascade_pi_ff` and the oracle) are "
-             "in a run's `leaderboard.md`.", ""]  # fmt: skip
+    lines = [
+        f"{START} {_GEN}",
+        "",
+        f"{len(run['envs'])} plants, {len(run['scenarios'])} scenarios, seeds "
+        f"{run['seeds']}, {n_eps} episodes (steamtemp_gym {run['steamtemp_gym_version']}).",
+        "",
+        report.headline_markdown(doc, margins=False),
+        "The score's ends per plant (mean returns of `cascade_pi_ff` and the oracle) are "
+        "in a run's `leaderboard.md`.",
+        "",
+    ]
     if pareto:
-        lines += [f"![Score against valve travel per plant](docs/img/{PARETO_IMAGE.name})", "",
-                  "*Per plant, each policy's score against its valve travel over "
-                  "`cascade_pi_ff`'s: the line joins the admissible policies that no other "
-                  "beats on both (the Pareto front); right of the dashed budget a policy is "
-                  "not admissible.*", ""]  # fmt: skip
+        lines += [
+            f"![Score against valve travel per plant](docs/img/{PARETO_IMAGE.name})",
+            "",
+            "*Per plant, each policy's score against its valve travel over "
+            "`cascade_pi_ff`'s: the line joins the admissible policies that no other "
+            "beats on both (the Pareto front); right of the dashed budget a policy is "
+            "not admissible.*",
+            "",
+        ]
     if mismatch.worst_markdown(doc):
-        lines += [f"Robustness to model mismatch (each policy commissioned on the nominal plant "
-                  f"and run on the plant's perturbed variants under `{mismatch.SCENARIO}`, "
-                  "its worst variant's cost over its nominal one per plant): "
-                  "[docs/robustness.md](docs/robustness.md#in-the-leaderboard-the-robustness-"
-                  "column).", ""]  # fmt: skip
+        lines += [
+            f"Robustness to model mismatch (each policy commissioned on the nominal plant "
+            f"and run on the plant's perturbed variants under `{mismatch.SCENARIO}`, "
+            "its worst variant's cost over its nominal one per plant): "
+            "[docs/robustness.md](docs/robustness.md#in-the-leaderboard-the-robustness-"
+            "column).",
+            "",
+        ]
     return "\n".join([*lines, END])
 
 
@@ -92,14 +104,20 @@ def picture(plot: str) -> str:
     """The README's picture: the trend plot and what it shows."""
     env, stem = plot.removesuffix(".png").split("__", 1)
     scenario = stem.replace("heldout_", "heldout:", 1) if stem.startswith("heldout_") else stem
-    return "\n".join([
-        f"{TREND_START} {_GEN}", "",
-        f"![{env}, scenario {scenario}](docs/img/{IMAGE.name})", "",
-        f"*{env}, scenario `{scenario}`, one episode each of the industrial reference "
-        "`cascade_pi_ff`, the clairvoyant `oracle`, `cascade_pi` and the plant's three "
-        "best-ranked policies: main-steam temperature in its +-5 / +-8 K bands, the valve "
-        "openings, load and heat-absorption disturbance.*", "",
-        TREND_END])  # fmt: skip
+    return "\n".join(
+        [
+            f"{TREND_START} {_GEN}",
+            "",
+            f"![{env}, scenario {scenario}](docs/img/{IMAGE.name})",
+            "",
+            f"*{env}, scenario `{scenario}`, one episode each of the industrial reference "
+            "`cascade_pi_ff`, the clairvoyant `oracle`, `cascade_pi` and the plant's three "
+            "best-ranked policies: main-steam temperature in its +-5 / +-8 K bands, the valve "
+            "openings, load and heat-absorption disturbance.*",
+            "",
+            TREND_END,
+        ]
+    )
 
 
 def replace(text: str, start: str, end: str, new: str, name: str) -> str:
@@ -107,15 +125,19 @@ def replace(text: str, start: str, end: str, new: str, name: str) -> str:
     i, j = text.find(start), text.find(end)
     if i < 0 or j < i:
         raise SystemExit(f"{name} has no {start}/{end} markers")
-    return text[:i] + new + text[j + len(end):]
+    return text[:i] + new + text[j + len(end) :]
 
 
 def main(argv: list[str] | None = None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--out", default="leaderboard_out",
-                    help="the run's output directory (default: %(default)s)")  # fmt: skip
-    ap.add_argument("--plot", default="BensonSubcritical-v0__heldout_mill_trip.png",
-                    help="trend plot of <out>/plots shown (default: %(default)s)")  # fmt: skip
+    ap.add_argument(
+        "--out", default="leaderboard_out", help="the run's output directory (default: %(default)s)"
+    )
+    ap.add_argument(
+        "--plot",
+        default="BensonSubcritical-v0__heldout_mill_trip.png",
+        help="trend plot of <out>/plots shown (default: %(default)s)",
+    )
     args = ap.parse_args(argv)
     out = Path(args.out)
     try:
@@ -123,8 +145,10 @@ def main(argv: list[str] | None = None) -> None:
     except (OSError, ValueError) as exc:
         ap.error(f"argument --out: cannot read {out / 'leaderboard.json'}: {exc}")
     if doc.get("schema_version") != SCHEMA_VERSION:
-        ap.error(f"argument --out: schema_version {doc.get('schema_version')!r}, "
-                 f"expected {SCHEMA_VERSION}")  # fmt: skip
+        ap.error(
+            f"argument --out: schema_version {doc.get('schema_version')!r}, "
+            f"expected {SCHEMA_VERSION}"
+        )
     trends = sorted(p.name for p in (out / "plots").glob("*__*.png"))
     if args.plot not in trends:
         ap.error(f"argument --plot: {args.plot!r} not in {out / 'plots'}; valid: {trends}")
@@ -138,13 +162,15 @@ def main(argv: list[str] | None = None) -> None:
     cmp = f"{CMP_START} {_GEN}\n\n" + pages.comparison_markdown(doc, COMPARED) + "\n" + CMP_END
     compare_text = replace(COMPARE_PAGE.read_text(), CMP_START, CMP_END, cmp, COMPARE_PAGE.name)
     real = f"{REAL_START} {_GEN}\n\n" + pages.realism_markdown(doc) + "\n" + REAL_END
-    baselines_text = replace(BASELINES_PAGE.read_text(), REAL_START, REAL_END, real,
-                             BASELINES_PAGE.name)  # fmt: skip
+    baselines_text = replace(
+        BASELINES_PAGE.read_text(), REAL_START, REAL_END, real, BASELINES_PAGE.name
+    )
     base = f"{BASE_START} {_GEN}\n\n" + pages.baselines_markdown(doc) + "\n" + BASE_END
     baselines_text = replace(baselines_text, BASE_START, BASE_END, base, BASELINES_PAGE.name)
     robust = f"{MIS_START} {_GEN}\n\n" + mismatch.markdown(doc, ZERO) + "\n" + MIS_END
-    robustness_text = replace(ROBUSTNESS_PAGE.read_text(), MIS_START, MIS_END, robust,
-                              ROBUSTNESS_PAGE.name)  # fmt: skip
+    robustness_text = replace(
+        ROBUSTNESS_PAGE.read_text(), MIS_START, MIS_END, robust, ROBUSTNESS_PAGE.name
+    )
     IMAGE.parent.mkdir(parents=True, exist_ok=True)
     shutil.copyfile(out / "plots" / args.plot, IMAGE)
     if figure.exists():
@@ -154,10 +180,12 @@ def main(argv: list[str] | None = None) -> None:
     BASELINES_PAGE.write_text(baselines_text)
     COMPARE_PAGE.write_text(compare_text)
     ROBUSTNESS_PAGE.write_text(robustness_text)
-    print(f"README.md, docs/agents/zoo.md, docs/baselines.md, docs/baselines/mpc_linear.md and "
-          f"docs/robustness.md updated; "
-          f"{IMAGE.relative_to(ROOT)} from {args.plot}"
-          + (f", {PARETO_IMAGE.relative_to(ROOT)}" if figure.exists() else ""))  # fmt: skip
+    print(
+        f"README.md, docs/agents/zoo.md, docs/baselines.md, docs/baselines/mpc_linear.md and "
+        f"docs/robustness.md updated; "
+        f"{IMAGE.relative_to(ROOT)} from {args.plot}"
+        + (f", {PARETO_IMAGE.relative_to(ROOT)}" if figure.exists() else "")
+    )
 
 
 if __name__ == "__main__":

@@ -13,8 +13,13 @@ FIXED = {"cascade_pi_ff": (-100.0, 2.0), "oracle": (-20.0, 3.0), "cascade_pi": (
 
 def metrics(ret: float, travel: float) -> dict:
     """One episode's metrics."""
-    return {"return": ret, "valve_travel": travel, "valve_reversals": 4.0, "iae_K_s": -30 * ret,
-            "tripped": 0.0}
+    return {
+        "return": ret,
+        "valve_travel": travel,
+        "valve_reversals": 4.0,
+        "iae_K_s": -30 * ret,
+        "tripped": 0.0,
+    }
 
 
 def rows(agent: str, offsets: dict[int | None, float], spread: bool = True) -> list[dict]:
@@ -26,16 +31,36 @@ def rows(agent: str, offsets: dict[int | None, float], spread: bool = True) -> l
         for seed in SEEDS:
             wobble = (1.5 * seed - 0.7 * i + 0.3 * (seed * i % 3)) if spread else 0.0
             for p, (ret, travel) in FIXED.items():
-                out.append({"env": ENV, "scenario": sc, "policy": p, "seed": seed,
-                            "fingerprint": "f", "metrics": metrics(ret + wobble, travel)})
+                out.append(
+                    {
+                        "env": ENV,
+                        "scenario": sc,
+                        "policy": p,
+                        "seed": seed,
+                        "fingerprint": "f",
+                        "metrics": metrics(ret + wobble, travel),
+                    }
+                )
             for run, off in offsets.items():
                 name = agent if run is None else f"{agent}@run{run}"
-                out.append({"env": ENV, "scenario": sc, "policy": name, "seed": seed,
-                            "fingerprint": "f",
-                            "metrics": metrics(-60.0 + off + 2 * wobble, 3.0 + 0.1 * seed)})
+                out.append(
+                    {
+                        "env": ENV,
+                        "scenario": sc,
+                        "policy": name,
+                        "seed": seed,
+                        "fingerprint": "f",
+                        "metrics": metrics(-60.0 + off + 2 * wobble, 3.0 + 0.1 * seed),
+                    }
+                )
     return out
 
 
 def run_info(policies: list[str]) -> dict:
-    return {"envs": [ENV], "scenarios": list(SCENARIOS), "policies": {ENV: policies},
-            "seeds": list(SEEDS), "travel_budget": 2.0}
+    return {
+        "envs": [ENV],
+        "scenarios": list(SCENARIOS),
+        "policies": {ENV: policies},
+        "seeds": list(SEEDS),
+        "travel_budget": 2.0,
+    }

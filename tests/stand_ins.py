@@ -25,9 +25,16 @@ def ppo_yaml(tmp_path, env_id: str, n_steps: int, **extra):
     one epoch, 8-unit nets) with the entries ``extra``; its path."""
     import yaml
 
-    hp = {"n_envs": 2, "policy": "MlpPolicy", "normalize": "dict(norm_obs=True)",
-          "n_steps": n_steps, "batch_size": n_steps, "n_epochs": 1,
-          "policy_kwargs": "dict(net_arch=dict(pi=[8], vf=[8]))", **extra}  # fmt: skip
+    hp = {
+        "n_envs": 2,
+        "policy": "MlpPolicy",
+        "normalize": "dict(norm_obs=True)",
+        "n_steps": n_steps,
+        "batch_size": n_steps,
+        "n_epochs": 1,
+        "policy_kwargs": "dict(net_arch=dict(pi=[8], vf=[8]))",
+        **extra,
+    }
     path = tmp_path / "ppo.yml"
     path.write_text(yaml.safe_dump({env_id: hp}))
     return path

@@ -12,8 +12,16 @@ from agents.caps import SACCAPS
 
 
 def _model(**caps) -> SACCAPS:
-    model = SACCAPS("MlpPolicy", gym.make("Pendulum-v1"), learning_starts=50, batch_size=32,
-                    policy_kwargs={"net_arch": [16]}, seed=0, device="cpu", **caps)  # fmt: skip
+    model = SACCAPS(
+        "MlpPolicy",
+        gym.make("Pendulum-v1"),
+        learning_starts=50,
+        batch_size=32,
+        policy_kwargs={"net_arch": [16]},
+        seed=0,
+        device="cpu",
+        **caps,
+    )
     model.learn(100)  # fills the replay buffer
     return model
 
@@ -52,8 +60,15 @@ def test_caps_gradient_joins_the_actor_step():
     assert not all(np.array_equal(a, b) for a, b in zip(tiny, large, strict=True))
 
 
-@pytest.mark.parametrize("bad", [{"caps_temporal": -1.0}, {"caps_spatial": float("nan")},
-                                 {"caps_sigma": "0.1"}, {"caps_temporal": True}])  # fmt: skip
+@pytest.mark.parametrize(
+    "bad",
+    [
+        {"caps_temporal": -1.0},
+        {"caps_spatial": float("nan")},
+        {"caps_sigma": "0.1"},
+        {"caps_temporal": True},
+    ],
+)
 def test_bad_weights_are_refused(bad):
     with pytest.raises(ValueError, match=next(iter(bad))):
         SACCAPS("MlpPolicy", gym.make("Pendulum-v1"), **bad)

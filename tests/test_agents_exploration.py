@@ -40,10 +40,16 @@ def test_reset_starts_from_the_stationary_spread():
     assert np.std(starts) == pytest.approx(0.1, rel=0.05)
 
 
-@pytest.mark.parametrize(("sigma", "a", "match"), [
-    ([0.1], 1.0, "gain a"), ([0.1], -0.1, "gain a"), ([0.1], 1, "gain a"),
-    ([-0.1], 0.5, "sigma"), ([np.nan], 0.5, "sigma"),
-])  # fmt: skip
+@pytest.mark.parametrize(
+    ("sigma", "a", "match"),
+    [
+        ([0.1], 1.0, "gain a"),
+        ([0.1], -0.1, "gain a"),
+        ([0.1], 1, "gain a"),
+        ([-0.1], 0.5, "sigma"),
+        ([np.nan], 0.5, "sigma"),
+    ],
+)
 def test_bad_noise_is_refused(sigma, a, match):
     with pytest.raises(ValueError, match=match):
         LowPassActionNoise(np.array(sigma), a)
@@ -51,18 +57,22 @@ def test_bad_noise_is_refused(sigma, a, match):
 
 def test_plant_sets_the_time_constant_to_the_time_scale():
     out = horizons.from_plant(ENV_ID, {"noise_tau_s": "plant"})
-    assert out["noise_tau_s"] == pytest.approx(horizons.EXPLORATION_FACTOR
-                                               * sum(horizons.time_scale(ENV_ID)), abs=1e-5)
+    assert out["noise_tau_s"] == pytest.approx(
+        horizons.EXPLORATION_FACTOR * sum(horizons.time_scale(ENV_ID)), abs=1e-5
+    )
 
 
-@pytest.mark.parametrize(("entry", "match"), [
-    ({"noise_type": "ou"}, "'normal' or 'lowpass'"),
-    ({"noise_type": "lowpass"}, "noise_tau_s"),
-    ({"noise_type": "normal", "noise_tau_s": 30.0}, "noise_tau_s"),
-    ({"noise_type": "lowpass", "noise_tau_s": 0.0}, "positive"),
-    ({"noise_type": "lowpass", "noise_tau_s": "30"}, "positive"),
-    ({"noise_type": "lowpass", "noise_tau_s": True}, "positive"),
-])  # fmt: skip
+@pytest.mark.parametrize(
+    ("entry", "match"),
+    [
+        ({"noise_type": "ou"}, "'normal' or 'lowpass'"),
+        ({"noise_type": "lowpass"}, "noise_tau_s"),
+        ({"noise_type": "normal", "noise_tau_s": 30.0}, "noise_tau_s"),
+        ({"noise_type": "lowpass", "noise_tau_s": 0.0}, "positive"),
+        ({"noise_type": "lowpass", "noise_tau_s": "30"}, "positive"),
+        ({"noise_type": "lowpass", "noise_tau_s": True}, "positive"),
+    ],
+)
 def test_bad_noise_settings_are_config_errors(tmp_path, entry, match):
     refused_entry(tmp_path, ENV_ID, "td3", entry, match)
 
@@ -71,15 +81,35 @@ def test_td3_explores_with_the_low_pass_noise_per_decision(tmp_path):
     """The model gets the noise of the entry, with the gain of its decision interval
     (action repeat x control interval) and the plant's time constant; training runs."""
     path = tmp_path / "td3.yml"
-    path.write_text(yaml.safe_dump({ENV_ID: {
-        "n_envs": 2, "policy": "MlpPolicy", "learning_starts": 50, "buffer_size": 2000,
-        "batch_size": 16, "train_freq": 1, "gradient_steps": 1, "noise_type": "lowpass",
-        "noise_std": 0.1, "noise_tau_s": "plant", "policy_kwargs": "dict(net_arch=[8])",
-        "action_repeat": 2}}))  # fmt: skip
+    path.write_text(
+        yaml.safe_dump(
+            {
+                ENV_ID: {
+                    "n_envs": 2,
+                    "policy": "MlpPolicy",
+                    "learning_starts": 50,
+                    "buffer_size": 2000,
+                    "batch_size": 16,
+                    "train_freq": 1,
+                    "gradient_steps": 1,
+                    "noise_type": "lowpass",
+                    "noise_std": 0.1,
+                    "noise_tau_s": "plant",
+                    "policy_kwargs": "dict(net_arch=[8])",
+                    "action_repeat": 2,
+                }
+            }
+        )
+    )
     hp = train_config.read_hyperparams(path, ENV_ID, "td3")
-    model = sb3_models.sb3_model(train_config.algo_class("td3"), hp,
-                                vec_env.make_training_env(ENV_ID, 2, 0, hp)[0], 0, None,
-                                decision_s=4.0)  # fmt: skip
+    model = sb3_models.sb3_model(
+        train_config.algo_class("td3"),
+        hp,
+        vec_env.make_training_env(ENV_ID, 2, 0, hp)[0],
+        0,
+        None,
+        decision_s=4.0,
+    )
     assert isinstance(model.action_noise, LowPassActionNoise)
     assert model.action_noise.a == pytest.approx(np.exp(-4.0 / hp["noise_tau_s"]))
     meta = training.train(ENV_ID, "td3", path, timesteps=200, seed=0, out=tmp_path, quiet=True)

@@ -33,10 +33,12 @@ ENV_ID = "steamtemp/SupercriticalFSH-v0"
 @pytest.mark.parametrize("env_id", steamtemp_gym.ENV_IDS)
 def test_time_scale_is_the_documented_step_response(env_id):
     if env_id not in DOCUMENTED:
-        pytest.skip(f"{env_id}'s time scale is not documented: add it to "
-                    "docs/agents/observation.md and DOCUMENTED "
-                    "(python -c 'from agents import horizons; "
-                    f"print(horizons.time_scale(\"{env_id}\"))')")  # fmt: skip
+        pytest.skip(
+            f"{env_id}'s time scale is not documented: add it to "
+            "docs/agents/observation.md and DOCUMENTED "
+            "(python -c 'from agents import horizons; "
+            f'print(horizons.time_scale("{env_id}"))\')'
+        )
     theta, tau = horizons.time_scale(env_id)
     assert (round(theta), round(tau)) == DOCUMENTED[env_id]
 
@@ -64,12 +66,16 @@ SHORT_OF_THE_PLANT = {
     ("steamtemp/BoilerTurbineMIMO-v0", "ppo"): "GAE window 34 s < dead time 47 s, memory 40 s",
     ("steamtemp/DrumBoilerSH-v0", "ppo"): "discount horizon 200 s < 328 s, GAE 34 s, memory 40 s",
     ("steamtemp/Cascade300MW-v0", "ppo_residual"): "discount horizon 333 s < 344 s, GAE 19 s",
-    **{(e, a): f"memory of 8 samples at a stride rounded to the nearest: {span}"
-       for e, span in (("steamtemp/BensonSubcritical-v0", "240 s < 249 s"),
-                       ("steamtemp/BoilerTurbineMIMO-v0", "176 s < 181 s"),
-                       ("steamtemp/DrumBoilerSH-v0", "320 s < 328 s"))
-       for a in ("bc", "ppo_imitation_mpc", "ppo_imitation_mpc_rl")},
-}  # fmt: skip
+    **{
+        (e, a): f"memory of 8 samples at a stride rounded to the nearest: {span}"
+        for e, span in (
+            ("steamtemp/BensonSubcritical-v0", "240 s < 249 s"),
+            ("steamtemp/BoilerTurbineMIMO-v0", "176 s < 181 s"),
+            ("steamtemp/DrumBoilerSH-v0", "320 s < 328 s"),
+        )
+        for a in ("bc", "ppo_imitation_mpc", "ppo_imitation_mpc_rl")
+    },
+}
 #: The kinds trained without a return to discount: cloning and DAgger alone.
 NOT_DISCOUNTED = ("bc", "ppo_imitation_mpc")
 
@@ -93,8 +99,11 @@ def test_every_shipped_agent_covers_the_plants_dead_time_and_lag(env_id, algo):
     from agents.files import steamtemp_files
 
     meta = json.loads(steamtemp_files(agents.ZOO, env_id, algo, 0).meta[0].read_text())
-    hp = {**meta.get("hyperparameters", {}), "env_wrapper": meta["memory"],
-          "action_repeat": meta.get("action_repeat")}  # fmt: skip
+    hp = {
+        **meta.get("hyperparameters", {}),
+        "env_wrapper": meta["memory"],
+        "action_repeat": meta.get("action_repeat"),
+    }
     short = horizons.shortfalls(env_id, hp)
     if algo in NOT_DISCOUNTED:
         short = [s for s in short if s.startswith("memory")]
@@ -103,14 +112,21 @@ def test_every_shipped_agent_covers_the_plants_dead_time_and_lag(env_id, algo):
 
 def test_plant_in_an_entry_asks_for_the_rules_values():
     env_id = "steamtemp/DrumBoilerSH-v0"
-    hp = {"gamma": "plant", "gae_lambda": "plant", "action_filter_s": "plant", "n_steps": 64,
-          "env_wrapper": [{"agents.wrappers.ControllerMemory": {"history": 8,
-                                                                "history_stride": "plant"}}]}
+    hp = {
+        "gamma": "plant",
+        "gae_lambda": "plant",
+        "action_filter_s": "plant",
+        "n_steps": 64,
+        "env_wrapper": [
+            {"agents.wrappers.ControllerMemory": {"history": 8, "history_stride": "plant"}}
+        ],
+    }
     out = horizons.from_plant(env_id, hp)
     assert out["gamma"] == round(horizons.discount(env_id), 5)
     assert out["gae_lambda"] == round(horizons.gae_lambda(env_id), 5)
-    assert out["action_filter_s"] == pytest.approx(horizons.FILTER_FACTOR
-                                                   * sum(horizons.time_scale(env_id)))
+    assert out["action_filter_s"] == pytest.approx(
+        horizons.FILTER_FACTOR * sum(horizons.time_scale(env_id))
+    )
     memory = out["env_wrapper"][0]["agents.wrappers.ControllerMemory"]
     assert memory["history_stride"] == horizons.history_stride(env_id, 8) == 21
     assert out["n_steps"] == 64 and hp["gamma"] == "plant"  # the entry itself is unchanged
@@ -132,13 +148,16 @@ def test_candidate_ppo_entries_take_the_rules_values():
 # --------------------------------------------------------------------------- observation
 def test_history_of_every_signal_spans_its_stride():
     env = gym.make(ENV_ID)
-    m = MemoryState(env, MemoryConfig(integral=False, history=2, history_stride=3,
-                                      history_signals="observation"))  # fmt: skip
+    m = MemoryState(
+        env,
+        MemoryConfig(integral=False, history=2, history_stride=3, history_signals="observation"),
+    )
     assert m.n_extra == 2 * m.n_obs
     seq = [np.full((1, m.n_obs), float(k)) for k in range(8)]
     out = [m(o) for o in seq][-1]
-    np.testing.assert_array_equal(out[0, m.n_obs:].reshape(2, m.n_obs), [[4.0] * m.n_obs,
-                                                                        [1.0] * m.n_obs])
+    np.testing.assert_array_equal(
+        out[0, m.n_obs :].reshape(2, m.n_obs), [[4.0] * m.n_obs, [1.0] * m.n_obs]
+    )
 
 
 def test_rates_are_the_filtered_per_minute_changes_of_load_and_setpoint():
@@ -159,11 +178,14 @@ def test_rates_are_the_filtered_per_minute_changes_of_load_and_setpoint():
     np.testing.assert_array_equal(out[0, -2:], [0.0, 0.0])
 
 
-@pytest.mark.parametrize(("kwargs", "match"), [
-    ({"history_signals": "all"}, "history_signals must be one of"),
-    ({"rates": 1}, "rates must be true or false"),
-    ({"rate_filter_s": 0.0}, "rate_filter_s must be a positive number"),
-])  # fmt: skip
+@pytest.mark.parametrize(
+    ("kwargs", "match"),
+    [
+        ({"history_signals": "all"}, "history_signals must be one of"),
+        ({"rates": 1}, "rates must be true or false"),
+        ({"rate_filter_s": 0.0}, "rate_filter_s must be a positive number"),
+    ],
+)
 def test_bad_memory_options_are_refused(kwargs, match):
     with pytest.raises(ValueError, match=match):
         MemoryConfig(**kwargs)
@@ -239,8 +261,9 @@ class _Model:
         import types
 
         obs = np.concatenate([actions[..., None], np.zeros((*actions.shape, 2))], axis=-1)
-        self.rollout_buffer = types.SimpleNamespace(observations=obs.astype(np.float32),
-                                                    episode_starts=starts, full=True)  # fmt: skip
+        self.rollout_buffer = types.SimpleNamespace(
+            observations=obs.astype(np.float32), episode_starts=starts, full=True
+        )
         self.policy, self.device = _Policy(), "cpu"
 
 
@@ -253,8 +276,9 @@ def test_policy_travel_is_the_deterministic_actions_travel_along_the_rollout():
     want = np.mean([0.25, 0.5, 0.0, 0.0, 0.0])  # row 0: 0.25, 0.5, 0; row 1: 0, (start), 0
     assert policy_travel(_Model(a, starts), None) == pytest.approx(want)
     # incremental: max_move times the clipped action
-    assert policy_travel(_Model(a, starts), 0.05) == pytest.approx(0.05 * np.abs(
-        np.clip(a, -1, 1)).mean())  # fmt: skip
+    assert policy_travel(_Model(a, starts), 0.05) == pytest.approx(
+        0.05 * np.abs(np.clip(a, -1, 1)).mean()
+    )
     assert policy_travel(object(), None) is None  # no rollout buffer: the rollout's travel
     # filtered: the change of the filter's output, restarted at an episode's first action
     p = 0.5 * (np.clip(a, -1, 1) + 1.0)
@@ -267,7 +291,8 @@ def test_policy_travel_is_the_deterministic_actions_travel_along_the_rollout():
     # one action for two tied valves and one for a third: the tied action moves both
     expand = np.array([0, 0])
     assert policy_travel(_Model(a, starts), 0.05, None, expand) == pytest.approx(
-        2 * 0.05 * np.abs(np.clip(a, -1, 1)).mean())  # fmt: skip
+        2 * 0.05 * np.abs(np.clip(a, -1, 1)).mean()
+    )
 
 
 def test_an_off_policy_travel_probe_is_the_scored_policys_closed_loop_travel():
@@ -279,6 +304,7 @@ def test_an_off_policy_travel_probe_is_the_scored_policys_closed_loop_travel():
 
     env_id = "steamtemp/Cascade300MW-v0"
     assert PROBE_SEED >= VALIDATION_SEED + 1000
+
     def make(venv):
         return CascadePI(venv)
 
@@ -298,8 +324,15 @@ def test_an_off_policy_buffer_holds_the_scored_reward_and_charges_the_price_it_s
 
     priced, _ = _priced(2.0)
     plain = NativeVecEnv(ENV_ID, 2, scenario=Scenario(name="short", duration_s=20.0))
-    model = TD3("MlpPolicy", priced, buffer_size=64, learning_starts=0, device="cpu",
-                policy_kwargs={"net_arch": [8]}, seed=0)  # fmt: skip
+    model = TD3(
+        "MlpPolicy",
+        priced,
+        buffer_size=64,
+        learning_starts=0,
+        device="cpu",
+        policy_kwargs={"net_arch": [8]},
+        seed=0,
+    )
     price_replay(model, priced)
     buf = model.replay_buffer
     assert isinstance(buf, PricedReplayBuffer) and not priced.charge
@@ -320,8 +353,10 @@ def test_an_off_policy_buffer_holds_the_scored_reward_and_charges_the_price_it_s
         got = buf._get_samples(idx)
         np.random.seed(1)  # noqa: NPY002
         rows = np.random.randint(0, high=2, size=6)  # noqa: NPY002
-        travel = np.abs(priced.opening(buf.next_observations[idx, rows])
-                        - priced.opening(buf.observations[idx, rows])).sum(axis=-1)  # fmt: skip
+        travel = np.abs(
+            priced.opening(buf.next_observations[idx, rows])
+            - priced.opening(buf.observations[idx, rows])
+        ).sum(axis=-1)
         assert np.all(travel > 0)
         want = buf.rewards[idx, rows] - price * travel
         np.testing.assert_allclose(got.rewards.numpy().ravel(), want, rtol=1e-6)
@@ -336,14 +371,31 @@ def test_an_off_policy_agents_price_moves_on_its_deterministic_travel(tmp_path):
 
     env_id = "steamtemp/Cascade300MW-v0"
     path = tmp_path / "td3.yml"
-    path.write_text(yaml.safe_dump({env_id: {
-        "n_envs": 8, "policy": "MlpPolicy", "normalize": "dict(norm_obs=True)",
-        "learning_starts": 100, "buffer_size": 20000, "batch_size": 32, "train_freq": 1,
-        "gradient_steps": 1, "noise_type": "normal", "noise_std": 0.3,
-        "policy_kwargs": "dict(net_arch=[8])", "max_move": 0.05, "action_repeat": 2,
-        "travel_price": 0.1}}))  # fmt: skip
-    meta = training.train(env_id, "td3", path, timesteps=2 * OFF_POLICY_EVERY + 8, seed=0,
-                          out=tmp_path, quiet=True)  # fmt: skip
+    path.write_text(
+        yaml.safe_dump(
+            {
+                env_id: {
+                    "n_envs": 8,
+                    "policy": "MlpPolicy",
+                    "normalize": "dict(norm_obs=True)",
+                    "learning_starts": 100,
+                    "buffer_size": 20000,
+                    "batch_size": 32,
+                    "train_freq": 1,
+                    "gradient_steps": 1,
+                    "noise_type": "normal",
+                    "noise_std": 0.3,
+                    "policy_kwargs": "dict(net_arch=[8])",
+                    "max_move": 0.05,
+                    "action_repeat": 2,
+                    "travel_price": 0.1,
+                }
+            }
+        )
+    )
+    meta = training.train(
+        env_id, "td3", path, timesteps=2 * OFF_POLICY_EVERY + 8, seed=0, out=tmp_path, quiet=True
+    )
     course = meta["travel_price"]["course"]
     assert [c[0] for c in course] == [OFF_POLICY_EVERY, 2 * OFF_POLICY_EVERY]
     assert all(c[1] != c[2] for c in course)  # the policy's travel, not the rollout's
@@ -355,23 +407,35 @@ def test_an_on_policy_price_can_read_the_closed_loop_travel(tmp_path):
     every that many transitions, on the scored policy's travel in closed loop (not on its
     rollout buffer's states); bad values are refused before training."""
     env_id = "steamtemp/Cascade300MW-v0"
-    entry = {"n_envs": 4, "policy": "MlpPolicy", "normalize": "dict(norm_obs=True)",
-             "n_steps": 64, "batch_size": 64, "n_epochs": 1,
-             "policy_kwargs": "dict(net_arch=dict(pi=[8], vf=[8]))", "max_move": 0.05,
-             "action_repeat": 2, "travel_price": 0.1, "price_probe_every": 512}  # fmt: skip
+    entry = {
+        "n_envs": 4,
+        "policy": "MlpPolicy",
+        "normalize": "dict(norm_obs=True)",
+        "n_steps": 64,
+        "batch_size": 64,
+        "n_epochs": 1,
+        "policy_kwargs": "dict(net_arch=dict(pi=[8], vf=[8]))",
+        "max_move": 0.05,
+        "action_repeat": 2,
+        "travel_price": 0.1,
+        "price_probe_every": 512,
+    }
     path = tmp_path / "ppo.yml"
-    for bad, match in ((0, "positive integer"), (1.5, "positive integer"),
-                       (True, "positive integer")):  # fmt: skip
+    for bad, match in (
+        (0, "positive integer"),
+        (1.5, "positive integer"),
+        (True, "positive integer"),
+    ):
         path.write_text(yaml.safe_dump({env_id: {**entry, "price_probe_every": bad}}))
         with pytest.raises(ValueError, match=match):
             train_config.read_hyperparams(path, env_id, "ppo")
-    path.write_text(yaml.safe_dump({env_id: {k: v for k, v in entry.items()
-                                             if k != "travel_price"}}))  # fmt: skip
+    path.write_text(
+        yaml.safe_dump({env_id: {k: v for k, v in entry.items() if k != "travel_price"}})
+    )
     with pytest.raises(ValueError, match="needs travel_price"):
         train_config.read_hyperparams(path, env_id, "ppo")
     path.write_text(yaml.safe_dump({env_id: entry}))
-    meta = training.train(env_id, "ppo", path, timesteps=4 * 256, seed=0, out=tmp_path,
-                          quiet=True)  # fmt: skip
+    meta = training.train(env_id, "ppo", path, timesteps=4 * 256, seed=0, out=tmp_path, quiet=True)
     course = meta["travel_price"]["course"]
     assert [c[0] for c in course] == [512, 1024]  # rollouts of 256 transitions
     assert all(c[1] != c[2] for c in course)  # the scored policy's travel, not the rollout's

@@ -22,14 +22,16 @@ SEEDS = [11, 12]
 
 
 def _expert_alone() -> list[dict]:
-    venv = gym.make_vec(ENV_ID, num_envs=len(SEEDS), vectorization_mode="vector_entry_point",
-                        scenario="random")  # fmt: skip
+    venv = gym.make_vec(
+        ENV_ID, num_envs=len(SEEDS), vectorization_mode="vector_entry_point", scenario="random"
+    )
     return run_batch(venv, baselines.make("mpc_linear", venv), SEEDS)
 
 
 def test_with_beta_one_the_pairs_are_the_experts_own_episodes():
-    x, y, x_next, y_next = imitation.collect(ENV_ID, "mpc_linear", MEMORY, SEEDS, 1.0,
-                                             None, np.random.default_rng(0))  # fmt: skip
+    x, y, x_next, y_next = imitation.collect(
+        ENV_ID, "mpc_linear", MEMORY, SEEDS, 1.0, None, np.random.default_rng(0)
+    )
     runs = _expert_alone()
     steps = [len(r["trace"]["time_s"]) - 1 for r in runs]  # actions per episode
     assert len(x) == sum(steps) - len(steps)  # every step but each episode's last
@@ -62,14 +64,16 @@ def test_the_learner_acts_and_the_expert_is_told_what_was_applied(monkeypatch):
 
     monkeypatch.setattr(MPCLinear, "applied", applied)
 
-    x, y, _, _ = imitation.collect(ENV_ID, "mpc_linear", MEMORY, SEEDS, 0.5, learner,
-                                   np.random.default_rng(0))  # fmt: skip
+    x, y, _, _ = imitation.collect(
+        ENV_ID, "mpc_linear", MEMORY, SEEDS, 0.5, learner, np.random.default_rng(0)
+    )
     assert calls and all(c == (len(SEEDS), x.shape[1]) for c in calls)
     assert len(told) == len(calls)  # every mixed step is told to the expert
     learners = np.concatenate([t for t in told]).reshape(-1, 2)
     assert 0.3 < np.mean(np.all(learners == 0.25, axis=1)) < 0.7  # beta 0.5: half the rows
-    ref_x, _, _, _ = imitation.collect(ENV_ID, "mpc_linear", MEMORY, SEEDS, 1.0, None,
-                                       np.random.default_rng(0))  # fmt: skip
+    ref_x, _, _, _ = imitation.collect(
+        ENV_ID, "mpc_linear", MEMORY, SEEDS, 1.0, None, np.random.default_rng(0)
+    )
     assert len(x) == len(ref_x)
     assert np.abs(x - ref_x).max() > 1e-3  # the learner's steps moved the plant
 
@@ -94,11 +98,17 @@ def test_the_move_term_pulls_the_learners_moves_to_the_experts():
     assert tied_moves < plain_moves
 
 
-@pytest.mark.parametrize(("extra", "match"), [
-    ({"dagger_iterations": 0}, "dagger_iterations"), ({"beta_decay": 1.0}, "beta_decay"),
-    ({"fit_seconds": -1}, "fit_seconds"), ({"move_weight": -0.1}, "move_weight"),
-    ({"fit_epochs": 2.5}, "fit_epochs"), ({"max_move": 0.05}, "positions"),
-])  # fmt: skip
+@pytest.mark.parametrize(
+    ("extra", "match"),
+    [
+        ({"dagger_iterations": 0}, "dagger_iterations"),
+        ({"beta_decay": 1.0}, "beta_decay"),
+        ({"fit_seconds": -1}, "fit_seconds"),
+        ({"move_weight": -0.1}, "move_weight"),
+        ({"fit_epochs": 2.5}, "fit_epochs"),
+        ({"max_move": 0.05}, "positions"),
+    ],
+)
 def test_bad_imitation_entries_are_config_errors(tmp_path, extra, match):
     refused_entry(tmp_path, ENV_ID, "ppo_imitation_mpc", extra, match)
 
@@ -107,14 +117,17 @@ def test_imitation_keys_are_refused_for_another_algo(tmp_path):
     refused_entry(tmp_path, ENV_ID, "ppo", {"dagger_iterations": 3}, "only for an imitation algo")
 
 
-@pytest.mark.parametrize(("algo", "extra", "match"), [
-    ("ppo_imitation_mpc", {"anchor_weight": 1.0}, "only for an imitation fine-tuned by RL"),
-    ("ppo_imitation_mpc_rl", {"anchor_weight": -1.0}, "anchor_weight"),
-    ("ppo_imitation_mpc_rl", {"anchor_fraction": 0.0}, "anchor_fraction"),
-    ("ppo_imitation_mpc_rl", {"anchor_fraction": 1.5}, "anchor_fraction"),
-    ("ppo_imitation_mpc_rl", {"dagger_minutes": 0}, "dagger_minutes"),
-    ("ppo_imitation_mpc_rl", {"dagger_minutes": "x"}, "dagger_minutes"),
-])  # fmt: skip
+@pytest.mark.parametrize(
+    ("algo", "extra", "match"),
+    [
+        ("ppo_imitation_mpc", {"anchor_weight": 1.0}, "only for an imitation fine-tuned by RL"),
+        ("ppo_imitation_mpc_rl", {"anchor_weight": -1.0}, "anchor_weight"),
+        ("ppo_imitation_mpc_rl", {"anchor_fraction": 0.0}, "anchor_fraction"),
+        ("ppo_imitation_mpc_rl", {"anchor_fraction": 1.5}, "anchor_fraction"),
+        ("ppo_imitation_mpc_rl", {"dagger_minutes": 0}, "dagger_minutes"),
+        ("ppo_imitation_mpc_rl", {"dagger_minutes": "x"}, "dagger_minutes"),
+    ],
+)
 def test_bad_fine_tuning_entries_are_config_errors(tmp_path, algo, extra, match):
     refused_entry(tmp_path, ENV_ID, algo, extra, match)
 
@@ -122,12 +135,17 @@ def test_bad_fine_tuning_entries_are_config_errors(tmp_path, algo, extra, match)
 def test_fine_tuning_keeps_the_frozen_standardization_and_moves_the_reward_scale():
     from agents.vec_env import make_training_env
 
-    hp = train_config.read_hyperparams(train_config.HYPERPARAMS / "ppo_imitation_mpc_rl.yml",
-                                       ENV_ID, "ppo_imitation_mpc_rl")  # fmt: skip
+    hp = train_config.read_hyperparams(
+        train_config.HYPERPARAMS / "ppo_imitation_mpc_rl.yml", ENV_ID, "ppo_imitation_mpc_rl"
+    )
     venv, _, _ = make_training_env(ENV_ID, 2, 0, {**hp, "normalize": False})
     n = venv.observation_space.shape[0]
-    stats = {"mean": list(np.linspace(-1, 1, n)), "var": list(np.linspace(0.5, 2, n)),
-             "epsilon": 1e-8, "clip_obs": 10.0}  # fmt: skip
+    stats = {
+        "mean": list(np.linspace(-1, 1, n)),
+        "var": list(np.linspace(0.5, 2, n)),
+        "epsilon": 1e-8,
+        "clip_obs": 10.0,
+    }
     norm = imitation.frozen_normalization(venv, stats, 0.99)
     raw = venv.reset()
     norm.reset()
@@ -149,8 +167,9 @@ def test_the_anchor_pulls_the_actor_to_the_experts_actions():
 
     from agents.vec_env import make_training_env
 
-    hp = train_config.read_hyperparams(train_config.HYPERPARAMS / "ppo_imitation_mpc_rl.yml",
-                                       ENV_ID, "ppo_imitation_mpc_rl")  # fmt: skip
+    hp = train_config.read_hyperparams(
+        train_config.HYPERPARAMS / "ppo_imitation_mpc_rl.yml", ENV_ID, "ppo_imitation_mpc_rl"
+    )
     venv, _, _ = make_training_env(ENV_ID, 2, 0, {**hp, "normalize": False})
     n = venv.observation_space.shape[0]
     rng = np.random.default_rng(0)
@@ -159,8 +178,16 @@ def test_the_anchor_pulls_the_actor_to_the_experts_actions():
     stats = {"mean": [0.0] * n, "var": [1.0] * n, "epsilon": 1e-8, "clip_obs": 10.0}
     errors = {}
     for weight in (0.0, 1.0, 10.0):
-        model = PPO("MlpPolicy", venv, n_steps=64, batch_size=64, n_epochs=2, seed=0,
-                    device="cpu", learning_rate=1e-3)  # fmt: skip
+        model = PPO(
+            "MlpPolicy",
+            venv,
+            n_steps=64,
+            batch_size=64,
+            n_epochs=2,
+            seed=0,
+            device="cpu",
+            learning_rate=1e-3,
+        )
         model.learn(128, callback=imitation.anchor([(x, y)], stats, weight, 10_000, 0))
         with torch.no_grad():
             a = imitation.actor_net(model)(torch.as_tensor(x, dtype=torch.float32)).numpy()

@@ -177,8 +177,15 @@ def test_an_incremental_agent_trains_and_acts_within_its_move_bound(tmp_path):
     import agents
     from agents import training
 
-    training.train(ENV, "ppo", _ppo_yaml(tmp_path, max_move=MAX_MOVE), timesteps=128, seed=0,
-                out=tmp_path, quiet=True)  # fmt: skip
+    training.train(
+        ENV,
+        "ppo",
+        _ppo_yaml(tmp_path, max_move=MAX_MOVE),
+        timesteps=128,
+        seed=0,
+        out=tmp_path,
+        quiet=True,
+    )
     meta = json.loads((tmp_path / "steamtemp__Cascade300MW-v0__ppo.json").read_text())
     assert meta["max_move"] == MAX_MOVE
     (files,) = agents.files.find(tmp_path)
@@ -196,18 +203,30 @@ def test_an_incremental_agent_trains_and_acts_within_its_move_bound(tmp_path):
         obs, *_ = env.step(a)
 
 
-@pytest.mark.parametrize(("extra", "match"), [({"max_move": 0.0}, "max_move"),
-                                              ({"max_move": "fast"}, "max_move"),
-                                              ({"max_move": 0.1, "residual_scale": 0.2},
-                                               "exclude each other")])  # fmt: skip
+@pytest.mark.parametrize(
+    ("extra", "match"),
+    [
+        ({"max_move": 0.0}, "max_move"),
+        ({"max_move": "fast"}, "max_move"),
+        ({"max_move": 0.1, "residual_scale": 0.2}, "exclude each other"),
+    ],
+)
 def test_bad_max_move_in_the_hyperparameters_is_refused_before_training(
     tmp_path, capsys, extra, match
 ):
     from agents import train
 
     algo = "ppo_residual" if "residual_scale" in extra else "ppo"
-    args = ["--env", ENV, "--algo", algo, "--hyperparams", str(_ppo_yaml(tmp_path, **extra)),
-            "--out", str(tmp_path / "out")]  # fmt: skip
+    args = [
+        "--env",
+        ENV,
+        "--algo",
+        algo,
+        "--hyperparams",
+        str(_ppo_yaml(tmp_path, **extra)),
+        "--out",
+        str(tmp_path / "out"),
+    ]
     with pytest.raises(SystemExit) as exc:
         train.main(args)
     assert exc.value.code == 2 and match in capsys.readouterr().err
@@ -227,11 +246,16 @@ def test_tie_map_gives_each_valve_its_action():
     np.testing.assert_array_equal(tie_map(valves, ["rgd_damper", "sp2_valve"]), [0, 1, 1, 2])
 
 
-@pytest.mark.parametrize(("bad", "match"), [(["sp1_valve"], "two or more"),
-                                            (["sp1_valve", "sp1_valve"], "two or more"),
-                                            ("sp1_valve", "two or more"),
-                                            (["sp1_valve", "spray3"], "spray3"),
-                                            (["sp1_valve", 2], "two or more")])  # fmt: skip
+@pytest.mark.parametrize(
+    ("bad", "match"),
+    [
+        (["sp1_valve"], "two or more"),
+        (["sp1_valve", "sp1_valve"], "two or more"),
+        ("sp1_valve", "two or more"),
+        (["sp1_valve", "spray3"], "spray3"),
+        (["sp1_valve", 2], "two or more"),
+    ],
+)
 def test_bad_tied_valves_are_refused(bad, match):
     from agents.moves import tie_map
 
@@ -251,8 +275,7 @@ def test_tied_sprays_take_one_action_and_move_together(mimo, form):
     """BoilerTurbineMIMO's two sprays tied: the agent has two actions (sprays, damper);
     started apart, incremental sprays move by the same amount every step (their split is
     held), filtered ones approach the same position; the damper moves on its own."""
-    wrapped = VecMoves(mimo, mimo.venv, form.get("max_move"), form.get("action_filter_s"),
-                       SPRAYS)  # fmt: skip
+    wrapped = VecMoves(mimo, mimo.venv, form.get("max_move"), form.get("action_filter_s"), SPRAYS)
     assert wrapped.action_space.shape == (2,) and mimo.action_space.shape == (3,)
     moves = wrapped.moves
     mimo.seed(4)
@@ -263,8 +286,8 @@ def test_tied_sprays_take_one_action_and_move_together(mimo, form):
     u0 = _openings(mimo.venv, obs)
     assert np.all(u0[:, 0] - u0[:, 1] > 0.19)
     model = Model(2, 2, seed=5)
-    u = np.array([(moves(model.predict(obs)[0]).astype(np.float64) + 1.0) / 2.0
-                  for _ in range(60)])  # (steps, rows, 3)  # fmt: skip
+    steps = [(moves(model.predict(obs)[0]).astype(np.float64) + 1.0) / 2.0 for _ in range(60)]
+    u = np.array(steps)  # (steps, rows, 3)
     if "max_move" in form:
         inside = ((u[:, :, :2] > 1e-9) & (u[:, :, :2] < 1 - 1e-9)).all(axis=-1)
         assert inside.mean() > 0.5
@@ -307,10 +330,14 @@ def test_tied_valves_in_the_hyperparameters_train_and_load(tmp_path):
     assert (u[0] - u[1]) == pytest.approx(u0[0] - u0[1], abs=1e-6)
 
 
-@pytest.mark.parametrize(("extra", "match"), [
-    ({"tied_valves": SPRAYS}, "tied_valves needs incremental"),
-    ({"max_move": 0.05, "tied_valves": ["sp1_valve", "sp3"]}, "sp3"),
-    ({"max_move": 0.05, "tied_valves": "sp1_valve"}, "two or more")])  # fmt: skip
+@pytest.mark.parametrize(
+    ("extra", "match"),
+    [
+        ({"tied_valves": SPRAYS}, "tied_valves needs incremental"),
+        ({"max_move": 0.05, "tied_valves": ["sp1_valve", "sp3"]}, "sp3"),
+        ({"max_move": 0.05, "tied_valves": "sp1_valve"}, "two or more"),
+    ],
+)
 def test_bad_tied_valves_in_the_hyperparameters_are_refused(tmp_path, extra, match):
     import yaml
 

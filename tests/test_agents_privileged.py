@@ -22,8 +22,12 @@ ENV = "steamtemp/DrumBoilerSH-v0"
 
 
 def test_the_look_ahead_is_the_scenario_as_the_env_schedules_it():
-    ramp = Scenario("ramp", 900.0, load=((0.0, 1.0), (100.0, 1.0), (400.0, 0.6)),
-                    setpoint_offset_C=((0.0, 0.0), (250.0, 0.0), (250.0, 5.0)))  # fmt: skip
+    ramp = Scenario(
+        "ramp",
+        900.0,
+        load=((0.0, 1.0), (100.0, 1.0), (400.0, 0.6)),
+        setpoint_offset_C=((0.0, 0.0), (250.0, 0.0), (250.0, 5.0)),
+    )
     venv = NativeVecEnv(ENV, 3, scenario=ramp)
     venv.seed(0)
     venv.reset()
@@ -81,8 +85,9 @@ def _policy(n_actor=5, n_all=9):
 
     space = spaces.Box(-np.inf, np.inf, (n_all,), np.float32)
     act = spaces.Box(-1.0, 1.0, (1,), np.float32)
-    return privileged.PrivilegedCriticPolicy(space, act, lambda _: 3e-4, actor_inputs=n_actor,
-                                             net_arch=dict(pi=[8], vf=[8]))  # fmt: skip
+    return privileged.PrivilegedCriticPolicy(
+        space, act, lambda _: 3e-4, actor_inputs=n_actor, net_arch=dict(pi=[8], vf=[8])
+    )
 
 
 def test_the_actor_never_reads_the_privileged_entries_and_the_critic_does():
@@ -91,8 +96,9 @@ def test_the_actor_never_reads_the_privileged_entries_and_the_critic_does():
     y = x.clone()
     y[0, 5:] = torch.tensor([3.0, -2.0, 1.0, 7.0])
     with torch.no_grad():
-        assert torch.equal(pol.get_distribution(x).distribution.mean,
-                           pol.get_distribution(y).distribution.mean)  # fmt: skip
+        assert torch.equal(
+            pol.get_distribution(x).distribution.mean, pol.get_distribution(y).distribution.mean
+        )
         assert not torch.equal(pol.predict_values(x), pol.predict_values(y))
     assert pol.mlp_extractor.policy_net[0].in_features == 5
     assert pol.mlp_extractor.value_net[0].in_features == 9
@@ -105,18 +111,19 @@ def test_bad_actor_inputs_are_refused(bad):
 
 
 def test_a_privileged_critic_is_the_algos_not_the_files(tmp_path):
-    refused_entry(tmp_path, ENV, "ppo_privileged", {"privileged_critic": True},
-                  "set by the algo")  # fmt: skip
+    refused_entry(tmp_path, ENV, "ppo_privileged", {"privileged_critic": True}, "set by the algo")
 
 
 def test_a_trained_agent_acts_on_its_observation_alone(tmp_path):
     """Trained with the wrapper; the metadata names what its critic saw; the loaded policy
     takes the env's observation, its actor the agent's normalized entries; SB3's own
     predict (the privileged entries zero) gives the same action."""
-    hp = ppo_yaml(tmp_path, ENV, 32,
-                  env_wrapper=[{"agents.wrappers.ControllerMemory": {"history": 2}}])  # fmt: skip
-    meta = training.train(ENV, "ppo_privileged", hp, timesteps=128, seed=0, out=tmp_path,
-                          quiet=True)  # fmt: skip
+    hp = ppo_yaml(
+        tmp_path, ENV, 32, env_wrapper=[{"agents.wrappers.ControllerMemory": {"history": 2}}]
+    )
+    meta = training.train(
+        ENV, "ppo_privileged", hp, timesteps=128, seed=0, out=tmp_path, quiet=True
+    )
     names = meta["privileged_critic"]["signals"]
     assert names == privileged.signal_names(gym.make(ENV).unwrapped.plant)
     stored = json.loads((tmp_path / "steamtemp__DrumBoilerSH-v0__ppo_privileged.json").read_text())

@@ -141,8 +141,14 @@ def _recurrent_policy(k):
     from sb3_contrib import RecurrentPPO
 
     native = NativeVecEnv(ENV, 1, scenario=SHORT)
-    model = RecurrentPPO("MlpLstmPolicy", native, seed=0, device="cpu", n_steps=8,
-                         policy_kwargs={"lstm_hidden_size": 8})  # fmt: skip
+    model = RecurrentPPO(
+        "MlpLstmPolicy",
+        native,
+        seed=0,
+        device="cpu",
+        n_steps=8,
+        policy_kwargs={"lstm_hidden_size": 8},
+    )
     native.close()
     import gymnasium as gym
 
@@ -191,9 +197,13 @@ def test_the_repeat_rule_and_the_per_decision_horizons(env_id):
     theta = horizons.time_scale(env_id)[0]
     k = horizons.action_repeat(env_id)
     assert k == max(1, int(horizons.REPEAT_FACTOR * theta / dt))
-    documented = {"steamtemp/SupercriticalFSH-v0": 2, "steamtemp/BensonSubcritical-v0": 1,
-                  "steamtemp/BoilerTurbineMIMO-v0": 2, "steamtemp/DrumBoilerSH-v0": 3,
-                  "steamtemp/Cascade300MW-v0": 11}  # docs/agents/observation.md  # fmt: skip
+    documented = {
+        "steamtemp/SupercriticalFSH-v0": 2,
+        "steamtemp/BensonSubcritical-v0": 1,
+        "steamtemp/BoilerTurbineMIMO-v0": 2,
+        "steamtemp/DrumBoilerSH-v0": 3,
+        "steamtemp/Cascade300MW-v0": 11,
+    }  # docs/agents/observation.md
     assert documented.get(env_id, k) == k  # as horizons.REPEAT_FACTOR says
     g1, gk = horizons.discount(env_id), horizons.discount(env_id, k)
     assert k * dt / (1 - gk) == pytest.approx(dt / (1 - g1))
@@ -204,8 +214,9 @@ def test_the_repeat_rule_and_the_per_decision_horizons(env_id):
 
 def test_plant_action_repeat_in_an_entry_sets_the_per_decision_discount():
     env_id = "steamtemp/Cascade300MW-v0"
-    out = horizons.from_plant(env_id, {"action_repeat": "plant", "gamma": "plant",
-                                       "gae_lambda": "plant"})  # fmt: skip
+    out = horizons.from_plant(
+        env_id, {"action_repeat": "plant", "gamma": "plant", "gae_lambda": "plant"}
+    )
     assert out["action_repeat"] == 11
     assert out["gamma"] == round(horizons.discount(env_id, 11), 5)
     assert out["gae_lambda"] == round(horizons.gae_lambda(env_id, 11), 5)
@@ -223,8 +234,15 @@ def test_an_agent_with_action_repeat_trains_and_acts_every_k_intervals(tmp_path)
     import agents
     from agents import training
 
-    training.train(ENV, "ppo", _ppo_yaml(tmp_path, max_move=0.05, action_repeat=3),
-                   timesteps=64, seed=0, out=tmp_path, quiet=True)  # fmt: skip
+    training.train(
+        ENV,
+        "ppo",
+        _ppo_yaml(tmp_path, max_move=0.05, action_repeat=3),
+        timesteps=64,
+        seed=0,
+        out=tmp_path,
+        quiet=True,
+    )
     meta = json.loads((tmp_path / "steamtemp__Cascade300MW-v0__ppo.json").read_text())
     assert meta["action_repeat"] == 3
     (files,) = agents.files.find(tmp_path)
@@ -244,10 +262,14 @@ def test_an_agent_with_action_repeat_trains_and_acts_every_k_intervals(tmp_path)
     assert np.abs(np.diff(c, axis=0)).max() > 0  # and it does decide
 
 
-@pytest.mark.parametrize(("algo", "extra", "match"), [
-    ("ppo", {"action_repeat": 0}, "action_repeat must be an integer"),
-    ("ppo", {"action_repeat": "often"}, "action_repeat must be an integer"),
-    ("ppo_imitation_mpc", {"action_repeat": 2}, "every interval")])  # fmt: skip
+@pytest.mark.parametrize(
+    ("algo", "extra", "match"),
+    [
+        ("ppo", {"action_repeat": 0}, "action_repeat must be an integer"),
+        ("ppo", {"action_repeat": "often"}, "action_repeat must be an integer"),
+        ("ppo_imitation_mpc", {"action_repeat": 2}, "every interval"),
+    ],
+)
 def test_bad_action_repeat_in_the_hyperparameters_is_refused(tmp_path, algo, extra, match):
     from agents.train_config import ConfigError, read_hyperparams
 

@@ -19,8 +19,12 @@ from agents.wrappers import VecResidual
 from steamtemp_gym.scenarios import Scenario
 
 ENV_ID = "steamtemp/BensonSubcritical-v0"  # two valves
-SHORT = Scenario(name="short_for_residual_test", duration_s=300.0, noise_std_C=0.3,
-                 load=((0.0, 0.9), (100.0, 0.9), (250.0, 0.7)))  # fmt: skip
+SHORT = Scenario(
+    name="short_for_residual_test",
+    duration_s=300.0,
+    noise_std_C=0.3,
+    load=((0.0, 0.9), (100.0, 0.9), (250.0, 0.7)),
+)
 ROWS = 2
 
 
@@ -116,10 +120,15 @@ def test_mpc_linear_refuses_bad_applied_commands_and_changes_nothing():
     assert all("applied" not in st for st in p._rows)
 
 
-@pytest.mark.parametrize(("scale", "base", "match"), [
-    (0.0, "mpc_linear", "residual_scale"), (True, "mpc_linear", "residual_scale"),
-    (float("nan"), None, "residual_scale"), (0.2, "no_such_controller", "residual_base"),
-])  # fmt: skip
+@pytest.mark.parametrize(
+    ("scale", "base", "match"),
+    [
+        (0.0, "mpc_linear", "residual_scale"),
+        (True, "mpc_linear", "residual_scale"),
+        (float("nan"), None, "residual_scale"),
+        (0.2, "no_such_controller", "residual_base"),
+    ],
+)
 def test_bad_residual_settings_are_refused(scale, base, match):
     venv = NativeVecEnv(ENV_ID, 1, scenario=SHORT)
     with pytest.raises(ValueError, match=match):
@@ -133,17 +142,21 @@ def test_a_zero_output_ppo_residual_acts_as_its_base(tmp_path):
     hp = train_config.read_hyperparams(path, ENV_ID, "ppo_residual_mpc")
     venv, native, _ = vec_env.make_training_env(ENV_ID, 2, 0, hp)
     model = sb3_models.sb3_model(train_config.algo_class("ppo_residual_mpc"), hp, venv, 0, None)
-    agent = AgentPolicy(model, native, memory=hp["env_wrapper"], obs_norm=None,
-                        residual_scale=hp["residual_scale"],
-                        residual_base="mpc_linear")  # fmt: skip
+    agent = AgentPolicy(
+        model,
+        native,
+        memory=hp["env_wrapper"],
+        obs_norm=None,
+        residual_scale=hp["residual_scale"],
+        residual_base="mpc_linear",
+    )
     _, act_base = _rollout(lambda v: baselines.make("mpc_linear", v), n=15)
     _, act_agent = _rollout(lambda v: agent, n=15)
     np.testing.assert_array_equal(act_agent, act_base)
     venv.close()
 
 
-def test_residual_entries_take_their_base_from_the_algo_and_plant_settings_from_the_rules(
-        tmp_path):  # fmt: skip
+def test_residual_entries_take_their_base_from_the_algo_and_plant_settings_from_the_rules(tmp_path):
     for algo, base in train_config.RESIDUAL_BASES.items():
         for env_id in ("steamtemp/SupercriticalFSH-v0", "steamtemp/Cascade300MW-v0"):
             f = train_config.HYPERPARAMS / f"{algo}.yml"
@@ -156,10 +169,12 @@ def test_residual_entries_take_their_base_from_the_algo_and_plant_settings_from_
                 assert hp["gae_lambda"] == round(horizons.gae_lambda(env_id), 5)
                 assert hp["env_wrapper"]["history_stride"] == horizons.history_stride(env_id, 8)
     entry = {"residual_scale": 0.2}
-    for hp, match in (({**entry, "residual_base": "mpc_linear"}, "set by the algo"),
-                      ({}, "residual_scale is required"),
-                      ({**entry, "residual_scale": 5.0}, "residual_scale must be"),
-                      ({**entry, "gamma": "plnt"}, "gamma")):  # fmt: skip
+    for hp, match in (
+        ({**entry, "residual_base": "mpc_linear"}, "set by the algo"),
+        ({}, "residual_scale is required"),
+        ({**entry, "residual_scale": 5.0}, "residual_scale must be"),
+        ({**entry, "gamma": "plnt"}, "gamma"),
+    ):
         refused_entry(tmp_path, ENV_ID, "ppo_residual_mpc", hp, match)
 
 
@@ -172,20 +187,28 @@ def test_the_actor_holds_still_while_the_critic_warms_up():
     actor0 = [p.detach().clone() for p in sb3_models.actor_parameters(model)]
     critic0 = [p.detach().clone() for p in model.policy.value_net.parameters()]
     model.learn(total_timesteps=128, callback=[sb3_models.critic_warmup(10_000)])
-    assert all(torch.equal(a, p) for a, p in zip(actor0, sb3_models.actor_parameters(model),
-                                                   strict=True))  # fmt: skip
-    assert not all(torch.equal(c, p) for c, p in zip(critic0, model.policy.value_net.parameters(),
-                                                     strict=True))  # fmt: skip
-    model.learn(total_timesteps=128, callback=[sb3_models.critic_warmup(64)],
-                reset_num_timesteps=False)  # past the warm-up: the actor learns
-    assert not all(torch.equal(a, p) for a, p in zip(actor0, sb3_models.actor_parameters(model),
-                                                     strict=True))  # fmt: skip
+    assert all(
+        torch.equal(a, p) for a, p in zip(actor0, sb3_models.actor_parameters(model), strict=True)
+    )
+    assert not all(
+        torch.equal(c, p) for c, p in zip(critic0, model.policy.value_net.parameters(), strict=True)
+    )
+    model.learn(
+        total_timesteps=128, callback=[sb3_models.critic_warmup(64)], reset_num_timesteps=False
+    )  # past the warm-up: the actor learns
+    assert not all(
+        torch.equal(a, p) for a, p in zip(actor0, sb3_models.actor_parameters(model), strict=True)
+    )
     venv.close()
 
 
-@pytest.mark.parametrize(("value", "algo", "match"), [
-    (-1, "ppo", "critic_warmup_steps must be"), (1.5, "ppo", "critic_warmup_steps must be"),
-    (100, "sac", "critic_warmup_steps is for PPO"),
-])  # fmt: skip
+@pytest.mark.parametrize(
+    ("value", "algo", "match"),
+    [
+        (-1, "ppo", "critic_warmup_steps must be"),
+        (1.5, "ppo", "critic_warmup_steps must be"),
+        (100, "sac", "critic_warmup_steps is for PPO"),
+    ],
+)
 def test_bad_critic_warmups_are_refused(tmp_path, value, algo, match):
     refused_entry(tmp_path, ENV_ID, algo, {"critic_warmup_steps": value}, match)

@@ -31,20 +31,44 @@ ENV_ID = "steamtemp/BensonSubcritical-v0"  # 5 s control interval: short validat
 SMALL = {
     "ppo": {"n_steps": 128, "batch_size": 64, "n_epochs": 2},
     "sac": {"learning_starts": 300, "batch_size": 64, "train_freq": 8, "gradient_steps": 1},
-    "td3": {"learning_starts": 300, "batch_size": 64, "train_freq": 8, "gradient_steps": 1,
-            "noise_type": "normal", "noise_std": 0.1},
+    "td3": {
+        "learning_starts": 300,
+        "batch_size": 64,
+        "train_freq": 8,
+        "gradient_steps": 1,
+        "noise_type": "normal",
+        "noise_std": 0.1,
+    },
     "trpo": {"n_steps": 128, "batch_size": 64, "n_critic_updates": 2},
     "ppo_residual": {"n_steps": 128, "batch_size": 64, "n_epochs": 2, "residual_scale": 0.2},
     "ppo_residual_mpc": {"n_steps": 128, "batch_size": 64, "n_epochs": 2, "residual_scale": 0.2},
     "ppo_imitation_mpc": {"dagger_iterations": 2, "fit_epochs": 1, "move_weight": 0.01},
-    "ppo_imitation_mpc_rl": {"dagger_iterations": 2, "fit_epochs": 1, "n_steps": 128,
-                             "batch_size": 64, "n_epochs": 2, "critic_warmup_steps": 512,
-                             "anchor_weight": 1.0, "anchor_fraction": 1.0},
-    "sac_caps": {"learning_starts": 300, "batch_size": 64, "train_freq": 8, "gradient_steps": 1,
-                 "caps_temporal": 0.1, "caps_spatial": 0.1},
-    "recurrentppo": {"n_steps": 128, "batch_size": 64, "n_epochs": 2, "policy": "MlpLstmPolicy",
-                     "policy_kwargs": "dict(lstm_hidden_size=8, net_arch=dict(pi=[16], vf=[16]))"},
-}  # fmt: skip
+    "ppo_imitation_mpc_rl": {
+        "dagger_iterations": 2,
+        "fit_epochs": 1,
+        "n_steps": 128,
+        "batch_size": 64,
+        "n_epochs": 2,
+        "critic_warmup_steps": 512,
+        "anchor_weight": 1.0,
+        "anchor_fraction": 1.0,
+    },
+    "sac_caps": {
+        "learning_starts": 300,
+        "batch_size": 64,
+        "train_freq": 8,
+        "gradient_steps": 1,
+        "caps_temporal": 0.1,
+        "caps_spatial": 0.1,
+    },
+    "recurrentppo": {
+        "n_steps": 128,
+        "batch_size": 64,
+        "n_epochs": 2,
+        "policy": "MlpLstmPolicy",
+        "policy_kwargs": "dict(lstm_hidden_size=8, net_arch=dict(pi=[16], vf=[16]))",
+    },
+}
 STEPS = {
     "ppo": 2048,
     "sac": 1200,
@@ -62,10 +86,17 @@ MEMORY = [{"agents.wrappers.ControllerMemory": {"integral_time_s": 60.0, "histor
 
 
 def _yaml(tmp_path: Path, algo: str, **extra) -> Path:
-    hp = {"n_envs": 4, "policy": "MlpPolicy", "normalize": "dict(norm_obs=True)",
-          "env_wrapper": MEMORY, "policy_kwargs": "dict(net_arch=dict(pi=[16], vf=[16]))"
-          if algo.startswith(("ppo", "trpo")) else "dict(net_arch=[16])",
-          **SMALL[algo], **extra}  # fmt: skip
+    hp = {
+        "n_envs": 4,
+        "policy": "MlpPolicy",
+        "normalize": "dict(norm_obs=True)",
+        "env_wrapper": MEMORY,
+        "policy_kwargs": "dict(net_arch=dict(pi=[16], vf=[16]))"
+        if algo.startswith(("ppo", "trpo"))
+        else "dict(net_arch=[16])",
+        **SMALL[algo],
+        **extra,
+    }
     if algo == "recurrentppo":  # the LSTM is its memory
         del hp["env_wrapper"]
     path = tmp_path / f"{algo}.yml"
@@ -78,8 +109,9 @@ def trained(tmp_path_factory) -> dict[str, Path]:
     out = {}
     for algo in ALGOS:
         d = tmp_path_factory.mktemp(algo)
-        training.train(ENV_ID, algo, _yaml(d, algo), timesteps=STEPS[algo], seed=1, out=d,
-                    quiet=True)  # fmt: skip
+        training.train(
+            ENV_ID, algo, _yaml(d, algo), timesteps=STEPS[algo], seed=1, out=d, quiet=True
+        )
         out[algo] = d
     return out
 
@@ -119,8 +151,10 @@ def test_smoke_training_writes_model_and_metadata(trained, algo):
             chosen = c
     assert meta["validation"]["best"]["return"] == chosen["return"]
     # every checkpoint ran the commissioning checks; the kept one passes them if any does
-    assert all(isinstance(c["check"], str) and c["check_travel_ratio"] > 0
-               for c in meta["validation"]["curve"])  # fmt: skip
+    assert all(
+        isinstance(c["check"], str) and c["check_travel_ratio"] > 0
+        for c in meta["validation"]["curve"]
+    )
     if any(not c["check"] for c in meta["validation"]["curve"]):
         assert meta["validation"]["best"]["check"] == ""
     ref = meta["validation"]["reference"]
@@ -129,14 +163,26 @@ def test_smoke_training_writes_model_and_metadata(trained, algo):
     assert meta["git_revision"] and meta["wall_time_s"] > 0
 
 
-@pytest.mark.parametrize("algo", ["ppo", "sac", "trpo", "recurrentppo", "ppo_residual_mpc",
-                                  "ppo_imitation_mpc", "ppo_imitation_mpc_rl"])  # fmt: skip
+@pytest.mark.parametrize(
+    "algo",
+    [
+        "ppo",
+        "sac",
+        "trpo",
+        "recurrentppo",
+        "ppo_residual_mpc",
+        "ppo_imitation_mpc",
+        "ppo_imitation_mpc_rl",
+    ],
+)
 def test_loaded_policy_reproduces_validation_and_is_deterministic(trained, algo):
     pol = agents.load(ENV_ID, algo, zoo=trained[algo])
     meta = json.loads(steamtemp_paths(trained[algo], ENV_ID, algo)[1].read_text())
     env = gym.make(ENV_ID, scenario="random")
-    rets = [run_episode(env, pol, validation.VALIDATION_SEED + k)["metrics"]["return"]
-            for k in range(validation.N_VALIDATION)]  # fmt: skip
+    rets = [
+        run_episode(env, pol, validation.VALIDATION_SEED + k)["metrics"]["return"]
+        for k in range(validation.N_VALIDATION)
+    ]
     # validation ran the episodes as one batch: torch's batched matmuls round differently
     assert np.mean(rets) == pytest.approx(meta["validation"]["best"]["return"], rel=1e-6)
     again = run_episode(env, pol, validation.VALIDATION_SEED)["metrics"]["return"]
@@ -188,8 +234,11 @@ def test_bad_input_fails_before_training(tmp_path, capsys, args, match):
         "BAD_KWARGS": tmp_path / "kwargs.yml",
     }
     files["MALFORMED"].write_text(f"{ENV_ID}: [unclosed\n")
-    files["BAD_WRAPPER"].write_text(yaml.safe_dump({ENV_ID: {"env_wrapper": [
-        {"agents.wrappers.ControllerMemory": {"integral_tme_s": 3}}]}}))  # fmt: skip
+    files["BAD_WRAPPER"].write_text(
+        yaml.safe_dump(
+            {ENV_ID: {"env_wrapper": [{"agents.wrappers.ControllerMemory": {"integral_tme_s": 3}}]}}
+        )
+    )
     files["NO_ENTRY"].write_text(yaml.safe_dump({"steamtemp/Cascade300MW-v0": {}}))
     files["RESIDUAL_KEY"].write_text(yaml.safe_dump({ENV_ID: {"residual_scale": 0.2}}))
     files["BAD_KWARGS"].write_text(yaml.safe_dump({ENV_ID: {"policy_kwargs": "__import__('os')"}}))
@@ -267,8 +316,9 @@ def test_train_reward_is_checked_and_applies_to_the_training_envs_only(tmp_path)
     path.write_text(yaml.safe_dump({ENV_ID: {"policy": "MlpPolicy", "train_reward": {"w_mov": 1}}}))
     with pytest.raises(train_config.ConfigError, match="train_reward: unknown reward option"):
         train_config.read_hyperparams(path, ENV_ID, "ppo")
-    path.write_text(yaml.safe_dump({ENV_ID: {"policy": "MlpPolicy",
-                                             "train_reward": {"w_move": 5.0}}}))  # fmt: skip
+    path.write_text(
+        yaml.safe_dump({ENV_ID: {"policy": "MlpPolicy", "train_reward": {"w_move": 5.0}}})
+    )
     hp = train_config.read_hyperparams(path, ENV_ID, "ppo")
     charged, _, _ = vec_env.make_training_env(ENV_ID, 2, 0, hp)
     plain, _, _ = vec_env.make_training_env(ENV_ID, 2, 0, {**hp, "train_reward": None})
@@ -304,9 +354,10 @@ def test_zoo_env_takes_the_short_name_and_refuses_an_empty_selection(tmp_path, c
     """``--zoo --env`` resolves the id as ``--env`` does elsewhere; a selection without any
     YAML entry is an error, not a run that trains nothing."""
     assert train_runs.zoo_env("Cascade300MW-v0") == "steamtemp/Cascade300MW-v0"
-    for args, match in ((["--env", "Nope-v0"], "unknown env id"),
-                        (["--env", "BensonSubcritical-v0", "--algo", "recurrentppo"],
-                         "no entry for")):  # fmt: skip
+    for args, match in (
+        (["--env", "Nope-v0"], "unknown env id"),
+        (["--env", "BensonSubcritical-v0", "--algo", "recurrentppo"], "no entry for"),
+    ):
         with pytest.raises(SystemExit) as exc:
             train.main(["--zoo", *args, "--out", str(tmp_path / "z")])
         assert exc.value.code == 2 and match in capsys.readouterr().err

@@ -15,8 +15,9 @@ ENV_ID = "steamtemp/Cascade300MW-v0"
 
 def test_trial_entry_maps_the_sampled_keys_onto_the_shipped_entry():
     base = {"gamma": 0.9, "policy_kwargs": {"net_arch": [8]}, "n_envs": 4}
-    entry = tune.trial_entry(base, {"train_ratio": [1, 4], "log_std_init": -2.0,
-                                    "net": [64, 64], "gamma": 0.99})  # fmt: skip
+    entry = tune.trial_entry(
+        base, {"train_ratio": [1, 4], "log_std_init": -2.0, "net": [64, 64], "gamma": 0.99}
+    )
     assert entry["train_freq"] == 1 and entry["gradient_steps"] == 4 and entry["gamma"] == 0.99
     assert entry["policy_kwargs"] == {"net_arch": [64, 64], "log_std_init": -2.0}
     assert base == {"gamma": 0.9, "policy_kwargs": {"net_arch": [8]}, "n_envs": 4}  # untouched
@@ -33,19 +34,23 @@ def test_every_space_key_is_a_valid_hyperparameter(algo, tmp_path):
     train_config.read_hyperparams(path, env_id, algo)
 
 
-@pytest.mark.parametrize(("argv", "match"), [
-    (["--env", "steamtemp/Nope-v0", "--algo", "sac"], "--env must be one of"),
-    (["--env", ENV_ID, "--algo", "ppo_residual"], "no search space"),
-    (["--env", ENV_ID, "--algo", "sac", "--trials", "0"], "must be positive"),
-])  # fmt: skip
+@pytest.mark.parametrize(
+    ("argv", "match"),
+    [
+        (["--env", "steamtemp/Nope-v0", "--algo", "sac"], "--env must be one of"),
+        (["--env", ENV_ID, "--algo", "ppo_residual"], "no search space"),
+        (["--env", ENV_ID, "--algo", "sac", "--trials", "0"], "must be positive"),
+    ],
+)
 def test_bad_input_is_an_argparse_error(argv, match, argparse_error):
     assert match in argparse_error(tune.main, argv)
 
 
 def test_a_short_search_records_every_trial_and_the_best(tmp_path):
     pytest.importorskip("optuna")
-    record = tune.search(ENV_ID, "ppo", trials=2, timesteps=2048, max_minutes=1.0, seed=0,
-                         out=tmp_path)  # fmt: skip
+    record = tune.search(
+        ENV_ID, "ppo", trials=2, timesteps=2048, max_minutes=1.0, seed=0, out=tmp_path
+    )
     saved = json.loads((tmp_path / f"{files.stem(ENV_ID, 'ppo')}__tuning.json").read_text())
     assert saved == json.loads(json.dumps(record))
     assert len(record["results"]) == 2

@@ -60,11 +60,11 @@ def test_history_holds_past_error_and_valves_oldest_last():
     assert m.n_extra == 2 * 3
     seq = [_obs_like(m, float(k), 0.1 * k) for k in range(8)]
     outs = [m(o) for o in seq]
-    past = outs[7][0, m.n_obs:].reshape(2, 3)
+    past = outs[7][0, m.n_obs :].reshape(2, 3)
     np.testing.assert_allclose(past[:, 0] * m.e_scale, [4.0, 1.0])  # 3 and 6 steps back
     np.testing.assert_allclose(past[0, 1:] * m.v_scale + m.v_center, [0.4, 0.4])
     # at an episode start the history is the first sample
-    first = outs[0][0, m.n_obs:].reshape(2, 3)
+    first = outs[0][0, m.n_obs :].reshape(2, 3)
     np.testing.assert_allclose(first[:, 0], seq[0][0, m.i_err])
 
 
@@ -112,9 +112,8 @@ def test_secondary_integral_integrates_each_scored_temperature():
     main-steam integral alone, bit for bit."""
     env = gym.make("steamtemp/BoilerTurbineMIMO-v0")
     plant = env.unwrapped.plant
-    (name, sp), = plant.secondary
-    both = MemoryState(env, MemoryConfig(secondary_integral=True, integral_time_s=20.0,
-                                         history=0))  # fmt: skip
+    ((name, sp),) = plant.secondary
+    both = MemoryState(env, MemoryConfig(secondary_integral=True, integral_time_s=20.0, history=0))
     main = MemoryState(env, MemoryConfig(integral_time_s=20.0, history=0))
     assert both.n_extra == 2 and main.n_extra == 1
     obs = _obs_like(both, 2.0, 0.5)

@@ -23,8 +23,10 @@ def test_every_plant_has_a_shipped_agent_with_three_training_runs(env_id):
     """A plant without a shipped agent (one just added) is skipped, saying how to train one."""
     algos = [a for e, a in agents.shipped() if e == env_id]
     if not algos:
-        pytest.skip(f"{env_id} has no shipped agent; train one with "
-                    f"python -m agents.train --zoo --env {env_id} --runs 3")  # fmt: skip
+        pytest.skip(
+            f"{env_id} has no shipped agent; train one with "
+            f"python -m agents.train --zoo --env {env_id} --runs 3"
+        )
     assert all(agents.runs(env_id, a) == [0, 1, 2] for a in algos)
 
 
@@ -67,9 +69,25 @@ def test_rl_zoo_trains_with_the_shipped_yaml(tmp_path, algo):
     pytest.importorskip("rl_zoo3")
     env_id = train_runs.zoo_entries_of(algo)[0]
     yml = train_config.HYPERPARAMS / f"{algo}.yml"
-    cmd = [sys.executable, "-m", "rl_zoo3.train", "--algo", RL_ZOO_ALGO[algo], "--env", env_id,
-           "--gym-packages", "steamtemp_gym", "--conf-file", str(yml),
-           "-n", "4096", "--log-folder", str(tmp_path), "--eval-freq", "-1"]  # fmt: skip
+    cmd = [
+        sys.executable,
+        "-m",
+        "rl_zoo3.train",
+        "--algo",
+        RL_ZOO_ALGO[algo],
+        "--env",
+        env_id,
+        "--gym-packages",
+        "steamtemp_gym",
+        "--conf-file",
+        str(yml),
+        "-n",
+        "4096",
+        "--log-folder",
+        str(tmp_path),
+        "--eval-freq",
+        "-1",
+    ]
     done = subprocess.run(cmd, capture_output=True, text=True, timeout=900)
     assert done.returncode == 0, done.stderr[-2000:]
     assert "Loading hyperparameters from" in done.stdout  # ours, not RL Zoo's defaults

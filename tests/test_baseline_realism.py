@@ -36,8 +36,12 @@ def _metrics(env_id: str, scenario: str, name: str) -> dict:
 
 
 def _cases() -> list:
-    return [pytest.param(env_id, name, id=f"{env_id}-{name}") for env_id in steamtemp_gym.ENV_IDS
-            for name in baselines.SHIPPED if name != REFERENCE]
+    return [
+        pytest.param(env_id, name, id=f"{env_id}-{name}")
+        for env_id in steamtemp_gym.ENV_IDS
+        for name in baselines.SHIPPED
+        if name != REFERENCE
+    ]
 
 
 @pytest.mark.parametrize(("env_id", "name"), _cases())

@@ -100,8 +100,7 @@ def test_the_robustness_checks_plants_lie_inside_the_ranges_and_are_no_named_var
                 lo, hi = perturb.RANGES[g]
                 assert lo < f < hi
         for v in perturb.variant_factors(env_id).values():
-            assert all(any(abs(c.get(g, 1.0) - f) > 1e-6 for g, f in v.items())
-                       for c in corners)  # fmt: skip
+            assert all(any(abs(c.get(g, 1.0) - f) > 1e-6 for g, f in v.items()) for c in corners)
 
 
 def test_the_robustness_check_tells_a_fragile_tuning():
@@ -113,10 +112,18 @@ def test_the_robustness_check_tells_a_fragile_tuning():
     env_id = "steamtemp/Cascade300MW-v0"
     ref, ref_breach = tt.robustness(env_id, lambda v: baselines.make(tt.ZERO, v))
     assert 0.9 < ref < 1.5 and ref_breach == ""
-    fragile, _ = tt.robustness(env_id, lambda v: baselines.make(
-        "mpc_linear", v, move_weight=1e-4, filter_noise_K=0.25, heat_std=0.02, robust=False))
-    detuned, _ = tt.robustness(env_id, lambda v: baselines.make(
-        "mpc_linear", v, move_weight=1e-4, filter_noise_K=10.0, heat_std=0.005, robust=False))
+    fragile, _ = tt.robustness(
+        env_id,
+        lambda v: baselines.make(
+            "mpc_linear", v, move_weight=1e-4, filter_noise_K=0.25, heat_std=0.02, robust=False
+        ),
+    )
+    detuned, _ = tt.robustness(
+        env_id,
+        lambda v: baselines.make(
+            "mpc_linear", v, move_weight=1e-4, filter_noise_K=10.0, heat_std=0.005, robust=False
+        ),
+    )
     assert fragile > tt.ROBUST_COST_MAX > detuned
 
 
@@ -129,11 +136,17 @@ def test_the_corner_checks_see_a_limit_cycle_the_training_episodes_miss():
     commissioning checks on the corner plants find it, and the untuned reference passes
     them."""
     env_id = "steamtemp/BensonSubcritical-v0"
-    edge = {"feedforward_gain": 1.0, "inner_gain": 1.19, "inner_reset": 0.59,
-            "outer_gain": 2.0, "outer_reset": 3.36}  # fmt: skip
+    edge = {
+        "feedforward_gain": 1.0,
+        "inner_gain": 1.19,
+        "inner_reset": 0.59,
+        "outer_gain": 2.0,
+        "outer_reset": 3.36,
+    }
     refs = tt.corner_check_metrics(env_id, lambda v: baselines.make(tt.ZERO, v))[1]
-    ratio, breach = tt.robustness(env_id, lambda v: baselines.make("cascade_pi_ff", v, **edge),
-                                  refs)  # fmt: skip
+    ratio, breach = tt.robustness(
+        env_id, lambda v: baselines.make("cascade_pi_ff", v, **edge), refs
+    )
     assert "commissioning_check_100 on the corner plant" in breach
     assert "commissioning_check_35" not in breach
     assert ratio > tt.ROBUST_COST_MAX
@@ -147,8 +160,15 @@ def test_a_broken_check_on_the_model_ranks_below_a_broken_one_on_a_corner_plant(
     a broken check on a corner plant costs as much as a unit of cost ratio above the
     bound (so a walk from a start that limit-cycles on a corner goes towards robustness,
     never to a candidate that limit-cycles on the model)."""
-    corner = bt.Evaluation({}, 0.1, 1.0, 0, check="", robust_ratio=3.0,
-                           robust_breach="commissioning_check_100 on the corner plant: ...")
+    corner = bt.Evaluation(
+        {},
+        0.1,
+        1.0,
+        0,
+        check="",
+        robust_ratio=3.0,
+        robust_breach="commissioning_check_100 on the corner plant: ...",
+    )
     ratio_only = bt.Evaluation({}, 0.1, 1.0, 0, check="", robust_ratio=3.0)
     model = bt.Evaluation({}, 0.9, 1.0, 0, check="at 35 % load, seed 1: tripped")
     assert not corner.feasible and not model.feasible
@@ -303,7 +323,8 @@ INFEASIBLE = {
         "sits at its closed stop, and with the reheat weighted as the main steam the MPC "
         "cools the reheat by over-spraying the main steam, through two sprays whose effects "
         "on the two temperatures are nearly collinear (singular values 46 and 0.05 K per "
-        "stroke); the stored knobs are the start, the commissioning rule's (0.682 at 1.08x)"),
+        "stroke); the stored knobs are the start, the commissioning rule's (0.682 at 1.08x)"
+    ),
 }
 
 
@@ -311,8 +332,11 @@ def _current_terms_pairs() -> list:
     out = []
     for p in _stored_pairs():
         why = INFEASIBLE.get(p.values)
-        out.append(pytest.param(*p.values, id=p.id, marks=pytest.mark.xfail(
-            strict=True, reason=why)) if why else p)  # fmt: skip
+        out.append(
+            pytest.param(*p.values, id=p.id, marks=pytest.mark.xfail(strict=True, reason=why))
+            if why
+            else p
+        )
     return out
 
 
@@ -347,11 +371,12 @@ def test_every_stored_tuning_was_chosen_under_the_current_terms(name, env_id):
     search replayed on its stored evaluations under the current terms is the stored one."""
     rec = json.loads(tuning.path(name).read_text())
     terms = rec["terms"]
-    assert terms.get("robustness") == {"plants": "corners of the parameter ranges",
-                                       "episodes": tt.ROBUST_EPISODES,
-                                       "margin": tt.ROBUST_MARGIN,
-                                       "cost_max": tt.ROBUST_COST_MAX}, (
-        "tuned without the current robustness check: rerun the tuning")  # fmt: skip
+    assert terms.get("robustness") == {
+        "plants": "corners of the parameter ranges",
+        "episodes": tt.ROBUST_EPISODES,
+        "margin": tt.ROBUST_MARGIN,
+        "cost_max": tt.ROBUST_COST_MAX,
+    }, "tuned without the current robustness check: rerun the tuning"
     assert terms["travel_budget"] == tt.TUNING_TRAVEL_BUDGET
     res = rec["plants"][env_id]
     assert res["feasible"] and res["travel_ratio"] <= tt.TUNING_TRAVEL_BUDGET
@@ -384,9 +409,16 @@ def test_every_stored_tuning_was_chosen_under_the_current_terms(name, env_id):
     with pytest.MonkeyPatch.context() as mp:
         mp.setattr(bt, "baselines", stub)
         mp.setattr(bt, "ends", lambda env_id: {})
-        mp.setattr(bt, "evaluate", lambda name, env_id, values, e: bt.Evaluation(
-            dict(values), row(values)["score"], row(values)["travel_ratio"],
-            row(values)["trips"]))  # fmt: skip
+        mp.setattr(
+            bt,
+            "evaluate",
+            lambda name, env_id, values, e: bt.Evaluation(
+                dict(values),
+                row(values)["score"],
+                row(values)["travel_ratio"],
+                row(values)["trips"],
+            ),
+        )
         mp.setattr(bt, "check_metrics", lambda env_id, make: make(None))
         mp.setattr(bt, "check_breach", breach)
         mp.setattr(bt, "corner_check_metrics", lambda env_id, make: (None, None))
@@ -417,8 +449,7 @@ def test_the_search_starts_from_the_best_of_the_defaults_and_the_declared_altern
 
     def fake_eval(name, env_id, values, e):
         calls.append(dict(values))
-        return bt.Evaluation(dict(values), -abs(values["a"] - 0.1) - abs(values["b"] - 0.9),
-                             1.0, 0)  # fmt: skip
+        return bt.Evaluation(dict(values), -abs(values["a"] - 0.1) - abs(values["b"] - 0.9), 1.0, 0)
 
     monkeypatch.setattr(bt.baselines, "factory", lambda name: Ctl)
     monkeypatch.setattr(bt, "ends", lambda env_id: {})

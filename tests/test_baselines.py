@@ -40,12 +40,17 @@ def test_baseline_is_a_policy_and_beats_open_loop(env_id, name):
 def _contracts(quick: bool = False):
     """Every baseline on every plant and every shipped trained agent (sb3:<algo>,
     agents/zoo/) on its own plant: the policy contracts of steamtemp_gym.testing."""
-    params = [*parametrize_with_checks(ids=IDS, policies=baselines.NAMES, env=False,
-                                       quick=quick).mark.args[1]]  # fmt: skip
+    params = [
+        *parametrize_with_checks(
+            ids=IDS, policies=baselines.NAMES, env=False, quick=quick
+        ).mark.args[1]
+    ]
     for env_id, algo in agents.shipped():
-        params += parametrize_with_checks(ids=[env_id], policies=[f"sb3:{algo}"], env=False,
-                                          quick=quick).mark.args[1]  # fmt: skip
+        params += parametrize_with_checks(
+            ids=[env_id], policies=[f"sb3:{algo}"], env=False, quick=quick
+        ).mark.args[1]
     return pytest.mark.parametrize(("env_id", "check"), params)
+
 
 #: Contracts a shipped baseline breaks today (docs/checking.md): (env id, baseline, check);
 #: strict xfail, so a fix shows up here. None at present.
@@ -77,8 +82,9 @@ def test_policy_contract_full(request, env_id, check):
 def test_cascade_pi_tracks_a_setpoint_step(env_id):
     """Without noise (settling is read in a 1 K band); ramp peaks against the field bands are
     in tests/test_difficulty.py."""
-    quiet = dataclasses.replace(scenarios.get("setpoint_step"), noise_std_C=0.0,
-                                heat_absorption_noise_std=0.0)  # fmt: skip
+    quiet = dataclasses.replace(
+        scenarios.get("setpoint_step"), noise_std_C=0.0, heat_absorption_noise_std=0.0
+    )
     params = {"omega_halfwidth_K": 0.0, "omega2_scale_kg_s": 0.0} if "Cascade" in env_id else {}
     sp = gym.make(env_id, scenario=quiet, params=params)
     m = run_episode(sp, baselines.make("cascade_pi", sp), seed=0)["metrics"]
@@ -121,8 +127,9 @@ def test_a_baseline_added_to_the_registry_is_held_to_the_observation_checks(monk
     added later passes check_bad_observations_rejected without code of its own."""
     monkeypatch.setitem(baselines._REGISTRY, "proportional", f"{__name__}:_Proportional")
     cascade = "steamtemp/Cascade300MW-v0"
-    check_bad_observations_rejected(lambda env: baselines.make("proportional", env), cascade,
-                                    quick=True)  # fmt: skip
+    check_bad_observations_rejected(
+        lambda env: baselines.make("proportional", env), cascade, quick=True
+    )
     with pytest.raises(AssertionError, match="accepted an observation all NaN"):
         check_bad_observations_rejected(_Proportional, cascade, quick=True)
 

@@ -33,13 +33,27 @@ PLANT = bs.BensonSubcritical()
 OPEN = bs.BensonSubcritical(fwr_ki_per_s=0.0)
 V = slice(bs.IX.V1, bs.IX.V2 + 1)
 # section -> (inlet, outlet, inlet flow) columns of section_temperatures
-SECTIONS = {"eco": (0, 1, 11), "evap": (1, 2, 11), "sh1": (2, 3, 11), "sh2": (3, 4, 11),
-            "sh3": (5, 6, 12), "sh4": (7, 8, 13), "rh": (9, 10, 14)}  # fmt: skip
+SECTIONS = {
+    "eco": (0, 1, 11),
+    "evap": (1, 2, 11),
+    "sh1": (2, 3, 11),
+    "sh2": (3, 4, 11),
+    "sh3": (5, 6, 12),
+    "sh4": (7, 8, 13),
+    "rh": (9, 10, 14),
+}
 # the inlet-temperature experiment of each section: feedwater temperature +10 K reaches the
 # economizer .. SH2; spray 1 closing by 0.1 heats the SH3 inlet, spray 2 the SH4 inlet and,
 # through the main steam and eq. (14), the reheater inlet.
-INLET_STEP = {"eco": "feedwater", "evap": "feedwater", "sh1": "feedwater", "sh2": "feedwater",
-              "sh3": "spray1", "sh4": "spray2", "rh": "spray2"}  # fmt: skip
+INLET_STEP = {
+    "eco": "feedwater",
+    "evap": "feedwater",
+    "sh1": "feedwater",
+    "sh2": "feedwater",
+    "sh3": "spray1",
+    "sh4": "spray2",
+    "rh": "spray2",
+}
 
 
 def steady(plant, load, bias=0.0, fouling=1.0, dT=0.0, sp=535.0):
@@ -66,7 +80,8 @@ def test_rated_steady_state_matches_the_paper():
         assert 0.05 < v < 0.95
     z = dict(zip(bs.IZ._fields, Z[0], strict=True))
     assert z["steam_flow_kg_s"] == pytest.approx(
-        z["feedwater_flow_kg_s"] + z["spray_flow_1_kg_s"] + z["spray_flow_2_kg_s"])
+        z["feedwater_flow_kg_s"] + z["spray_flow_1_kg_s"] + z["spray_flow_2_kg_s"]
+    )
     # subcooled economizer outlet, superheated evaporator outlet: once-through
     assert 0.0 < Z[0, bs.IZ.steam_generation_point] < 1.0
     # stationary: 20 control intervals change nothing measurable
@@ -80,8 +95,16 @@ def test_rated_steady_state_matches_the_paper():
 
 @pytest.mark.parametrize("load", [1.0, 0.75, 0.5])
 def test_steady_state_holds_setpoint_with_both_valves_inside(load):
-    for dist in ({}, {"bias": 0.08}, {"bias": -0.08}, {"fouling": 0.85}, {"fouling": 1.15},
-                 {"dT": 15.0}, {"dT": -15.0}, {"sp": 545.0}):  # fmt: skip
+    for dist in (
+        {},
+        {"bias": 0.08},
+        {"bias": -0.08},
+        {"fouling": 0.85},
+        {"fouling": 1.15},
+        {"dT": 15.0},
+        {"dT": -15.0},
+        {"sp": 545.0},
+    ):
         X, D, Z = steady(PLANT, load, **dist)
         sp = dist.get("sp", 535.0)
         assert Z[0, bs.IZ.outlet_temp_C] == pytest.approx(sp, abs=0.01), dist
@@ -150,16 +173,23 @@ def fit_section(experiments, sec):
     """Fitted eq. (7) of a section: (K, tau, R2) fuel step; (tau, R2) inlet step, same K;
     (gain, tau, R2) of a first-order fit with a free inlet gain (diagnostic)."""
     y, dTi, dr = section_data(experiments["fuel"][0], sec)
-    res = least_squares(lambda th: first_order(th[0], th[1], dTi, dr) - y, [60.0, 1000.0],
-                        bounds=([1.0, -1e5], [5000.0, 1e5]))  # fmt: skip
+    res = least_squares(
+        lambda th: first_order(th[0], th[1], dTi, dr) - y,
+        [60.0, 1000.0],
+        bounds=([1.0, -1e5], [5000.0, 1e5]),
+    )
     tau_f, K = res.x
     fuel = (K, tau_f, r_squared(y, first_order(tau_f, K, dTi, dr)))
     y, dTi, dr = section_data(experiments[INLET_STEP[sec]][0], sec)
-    res = least_squares(lambda th: first_order(th[0], K, dTi, dr) - y, [60.0],
-                        bounds=([1.0], [5000.0]))  # fmt: skip
+    res = least_squares(
+        lambda th: first_order(th[0], K, dTi, dr) - y, [60.0], bounds=([1.0], [5000.0])
+    )
     inlet = (res.x[0], r_squared(y, first_order(res.x[0], K, dTi, dr)))
-    res = least_squares(lambda th: first_order(th[0], K, th[1] * dTi, dr) - y, [60.0, 1.0],
-                        bounds=([1.0, 0.0], [5000.0, 5.0]))  # fmt: skip
+    res = least_squares(
+        lambda th: first_order(th[0], K, th[1] * dTi, dr) - y,
+        [60.0, 1.0],
+        bounds=([1.0, 0.0], [5000.0, 5.0]),
+    )
     free = (res.x[1], res.x[0], r_squared(y, first_order(res.x[0], K, res.x[1] * dTi, dr)))
     return fuel, inlet, free
 
@@ -181,14 +211,21 @@ def test_eq7_fits_fuel_step_and_inlet_step_shape(experiments, sec):
 #: Sections whose inlet-temperature gain departs from eq. (7)'s 1 by more than ~10 %:
 #: the paper assumes a constant C_p, IAPWS-IF97 steam does not (see the radiant test).
 CP_VARIES = {"eco", "evap", "sh1", "sh2", "sh3"}
-XFAIL_REASON = ("eq. (7) has unit inlet gain (constant C_p); IF97 gives C_p,in/C_p,out times "
-                "the convective factor: 0.65, 1.17, 1.17, 1.19, 1.05")  # fmt: skip
+XFAIL_REASON = (
+    "eq. (7) has unit inlet gain (constant C_p); IF97 gives C_p,in/C_p,out times "
+    "the convective factor: 0.65, 1.17, 1.17, 1.19, 1.05"
+)
 
 
-@pytest.mark.parametrize("sec", [
-    pytest.param(s, marks=pytest.mark.xfail(strict=True, reason=XFAIL_REASON))
-    if s in CP_VARIES else s for s in SECTIONS
-])  # fmt: skip
+@pytest.mark.parametrize(
+    "sec",
+    [
+        pytest.param(s, marks=pytest.mark.xfail(strict=True, reason=XFAIL_REASON))
+        if s in CP_VARIES
+        else s
+        for s in SECTIONS
+    ],
+)
 def test_eq7_with_unit_inlet_gain_describes_the_inlet_step(experiments, sec):
     _, (tau_i, r2_i), _ = fit_section(experiments, sec)
     assert r2_i >= 0.95
@@ -279,8 +316,14 @@ def test_ros2_at_5s_matches_a_fine_solution_over_the_load_ramp():
                 bs.derivatives(x, ut, d, P, f)
                 return f.copy()
 
-            sol = solve_ivp(rhs, (0.0, PLANT.dt_s), x_ref, method="Radau", rtol=1e-8,
-                            atol=1e-6 * np.maximum(1.0, np.abs(x_ref)))  # fmt: skip
+            sol = solve_ivp(
+                rhs,
+                (0.0, PLANT.dt_s),
+                x_ref,
+                method="Radau",
+                rtol=1e-8,
+                atol=1e-6 * np.maximum(1.0, np.abs(x_ref)),
+            )
             assert sol.success
             x_ref = sol.y[:, -1]
             x_ref[V] = X[0, V]

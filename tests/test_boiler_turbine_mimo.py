@@ -122,8 +122,10 @@ def test_step_responses_depend_strongly_on_load():
     """Fig. 6: 25 % (slow) vs 90 % load; tau = Tu + Tg of the inflection tangent."""
     m = step_responses()
     sign = {"SP1": -1.0, "SP2": -1.0, "RGD": 1.0}  # more spray colder; more recirculation hotter
-    lines = [f"{'pair':10s} {'K 25%':>7s} {'K 90%':>7s} {'tau 25%':>8s} {'tau 90%':>8s} "
-             f"{'K ratio':>7s} {'tau ratio':>9s}"]  # fmt: skip
+    lines = [
+        f"{'pair':10s} {'K 25%':>7s} {'K 90%':>7s} {'tau 25%':>8s} {'tau 90%':>8s} "
+        f"{'K ratio':>7s} {'tau ratio':>9s}"
+    ]
     for inp in ("SP1", "SP2", "RGD"):
         for out in ("STE", "RTE"):
             lo, hi = m[(0.25, inp, out)], m[(0.9, inp, out)]
@@ -131,8 +133,10 @@ def test_step_responses_depend_strongly_on_load():
             k_ratio = max(lo["gain"] / hi["gain"], hi["gain"] / lo["gain"])
             tau_lo, tau_hi = lo["Tu_s"] + lo["Tg_s"], hi["Tu_s"] + hi["Tg_s"]
             assert tau_lo > tau_hi  # slower at low load (less steam flow)
-            lines.append(f"{inp}->{out:6s} {lo['gain']:7.2f} {hi['gain']:7.2f} {tau_lo:8.0f} "
-                         f"{tau_hi:8.0f} {k_ratio:7.2f} {tau_lo / tau_hi:9.2f}")  # fmt: skip
+            lines.append(
+                f"{inp}->{out:6s} {lo['gain']:7.2f} {hi['gain']:7.2f} {tau_lo:8.0f} "
+                f"{tau_hi:8.0f} {k_ratio:7.2f} {tau_lo / tau_hi:9.2f}"
+            )
             assert max(k_ratio, tau_lo / tau_hi) >= 1.5, (inp, out, k_ratio, tau_lo / tau_hi)
     print("\nstep +0.05 opening, K in K:\n" + "\n".join(lines))
 

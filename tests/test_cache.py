@@ -104,15 +104,17 @@ def test_cached_steam_lookups_read_the_tables_of_the_process_that_loads_them():
     from steamtemp_gym.steam import h_pT, rho_ph
 
     here = [T_ph(20e6, 3.2e6), rho_ph(20e6, 3.2e6), h_pT(16e6, 800.0), T_ph(1e6, 5e5)]
-    out = subprocess.run([sys.executable, "-c", _LOOKUPS], capture_output=True, text=True,
-                         check=True).stdout
+    out = subprocess.run(
+        [sys.executable, "-c", _LOOKUPS], capture_output=True, text=True, check=True
+    ).stdout
     values, stats = json.loads(out.strip().splitlines()[-1])
     assert all(hits >= 1 and misses == 0 for hits, misses in stats), stats
     assert values == here
     iapws = pytest.importorskip("iapws")
     ref = iapws.IAPWS97(P=20.0, h=3200.0)
     assert values[0] == pytest.approx(ref.T, abs=1e-3) and values[1] == pytest.approx(
-        ref.rho, rel=1e-5)  # fmt: skip
+        ref.rho, rel=1e-5
+    )
 
 
 def test_steam_tables_are_not_frozen_into_cached_kernels():
@@ -167,8 +169,10 @@ def test_the_package_notice_hears_numbas_compile_events(caplog):
     kernel.__module__ = "steamtemp_gym.fake_module"
     with caplog.at_level(logging.WARNING, logger="steamtemp_gym"):
         njit(kernel)(np.float64(1.0))
-    assert any("compiling kernels" in r.getMessage() and steamtemp_gym.CACHE_DIR.name in
-               r.getMessage() for r in caplog.records), [r.getMessage() for r in caplog.records]
+    assert any(
+        "compiling kernels" in r.getMessage() and steamtemp_gym.CACHE_DIR.name in r.getMessage()
+        for r in caplog.records
+    ), [r.getMessage() for r in caplog.records]
 
 
 def test_notice_in_a_read_only_folder_warns_once():
@@ -206,8 +210,7 @@ def test_configure_with_unusable_folder_still_imports(monkeypatch, tmp_path):
 
 
 # ------------------------------------------------------------- numba's own configuration
-def test_kernels_defined_after_numba_reloads_its_configuration_cache_in_the_folder(
-        monkeypatch):  # fmt: skip
+def test_kernels_defined_after_numba_reloads_its_configuration_cache_in_the_folder(monkeypatch):
     """A NUMBA_* variable changed after import makes numba reload its configuration at the
     next compile, which resets numba.config.CACHE_DIR; kernels defined after that (a
     plant's specialised integrator step, say) still cache in this code version's folder."""
@@ -239,12 +242,18 @@ def _read_only_run(tmp_path: Path, cache: Path, code: str) -> subprocess.Complet
     if subprocess.run(["unshare", "-rm", "true"], capture_output=True).returncode != 0:
         pytest.skip("needs unshare -rm (a mount namespace) to make folders read-only")
     mounts = " && ".join(f"mount --bind -o ro {d} {d}" for d in (cache, src, home))
-    env = dict(os.environ, STEAMTEMP_GYM_CACHE_DIR=str(cache), XDG_CACHE_HOME=str(home),
-               HOME=str(home), PYTHONPATH=str(src.parent))  # fmt: skip
+    env = dict(
+        os.environ,
+        STEAMTEMP_GYM_CACHE_DIR=str(cache),
+        XDG_CACHE_HOME=str(home),
+        HOME=str(home),
+        PYTHONPATH=str(src.parent),
+    )
     env.pop("NUMBA_CACHE_DIR", None)
     script = f"{mounts} && exec {sys.executable} -c {shlex.quote(code)}"
-    return subprocess.run(["unshare", "-rm", "sh", "-c", script], env=env, text=True,
-                          capture_output=True, timeout=120)  # fmt: skip
+    return subprocess.run(
+        ["unshare", "-rm", "sh", "-c", script], env=env, text=True, capture_output=True, timeout=120
+    )
 
 
 _STEP = """
@@ -278,10 +287,12 @@ def test_a_read_only_populated_cache_is_loaded_from(tmp_path):
 def test_an_empty_read_only_cache_compiles_in_memory_with_one_warning(tmp_path):
     cache = tmp_path / "cache"
     cache.mkdir()
-    code = ("import numpy as np, steamtemp_gym\n"
-            "from steamtemp_gym.rewards import reward, temperature_cost\n"
-            "w = np.ones(9)\n"
-            "print(temperature_cost(3.0, w), reward(1.0, 0.0, 0.0, 0.0, False, w))")
+    code = (
+        "import numpy as np, steamtemp_gym\n"
+        "from steamtemp_gym.rewards import reward, temperature_cost\n"
+        "w = np.ones(9)\n"
+        "print(temperature_cost(3.0, w), reward(1.0, 0.0, 0.0, 0.0, False, w))"
+    )
     run = _read_only_run(tmp_path, cache, code)
     assert run.returncode == 0, run.stderr[-2000:]
     assert run.stdout.split() == ["14.0", "-2.0"], run.stdout

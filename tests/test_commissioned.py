@@ -105,12 +105,12 @@ def _blas_threads() -> dict:
 
 
 @pytest.mark.parametrize("where", ["cache", "no cache"])
-def test_a_result_is_computed_on_one_blas_thread_whatever_the_caller(monkeypatch, tmp_path,
-                                                                     where):  # fmt: skip
+def test_a_result_is_computed_on_one_blas_thread_whatever_the_caller(monkeypatch, tmp_path, where):
     """The stored result does not depend on the caller's thread pools: the function runs
     on one BLAS thread under a caller on two, with or without the disk cache."""
-    monkeypatch.setenv("STEAMTEMP_GYM_CACHE_DIR",
-                       str(tmp_path if where == "cache" else tmp_path / "file"))  # fmt: skip
+    monkeypatch.setenv(
+        "STEAMTEMP_GYM_CACHE_DIR", str(tmp_path if where == "cache" else tmp_path / "file")
+    )
     if where == "no cache":
         (tmp_path / "file").write_text("not a folder")
     memo_module.folder.cache_clear()
@@ -157,8 +157,9 @@ def test_a_second_process_reads_what_the_first_commissioned(tmp_path):
     env = {**os.environ, "STEAMTEMP_GYM_CACHE_DIR": str(tmp_path)}
 
     def run() -> list[str]:
-        return subprocess.run([sys.executable, "-c", _CHILD], env=env, capture_output=True,
-                              text=True, check=True).stdout.split(" ", 2)  # fmt: skip
+        return subprocess.run(
+            [sys.executable, "-c", _CHILD], env=env, capture_output=True, text=True, check=True
+        ).stdout.split(" ", 2)
 
     first = run()
     (folder,) = tmp_path.glob("commissioning-*")

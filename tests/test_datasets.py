@@ -48,9 +48,8 @@ def data_dir(tmp_path_factory):
 
 @pytest.fixture(scope="module")
 def dataset(data_dir):
-    assert datasets.main(["--env", "Cascade300MW-v0", "--policy", "cascade_pi_ff",
-                          "--episodes", "2", "--seed", "3", "--eval-seeds", "0",
-                          "--data-dir", str(data_dir)]) == 0  # fmt: skip
+    args = "--env Cascade300MW-v0 --policy cascade_pi_ff --episodes 2 --seed 3 --eval-seeds 0"
+    assert datasets.main([*args.split(), "--data-dir", str(data_dir)]) == 0
     return minari.load_dataset(DATASET)
 
 
@@ -65,9 +64,23 @@ def agent_dir(dataset, tmp_path_factory):
 def leaderboard(agent_dir, tmp_path_factory):
     """The leaderboard on the dataset's evaluation scenario and seed, with the cloned agent."""
     out = tmp_path_factory.mktemp("lb")
-    cli.main(["--policies", f"cascade_pi,zoo:{agent_dir}", "--envs", "Cascade300MW-v0",
-              "--scenarios", SCENARIO, "--seeds", "0", "--no-mismatch", "--jobs", "1",
-              "--out", str(out)])  # fmt: skip
+    cli.main(
+        [
+            "--policies",
+            f"cascade_pi,zoo:{agent_dir}",
+            "--envs",
+            "Cascade300MW-v0",
+            "--scenarios",
+            SCENARIO,
+            "--seeds",
+            "0",
+            "--no-mismatch",
+            "--jobs",
+            "1",
+            "--out",
+            str(out),
+        ]
+    )
     summary = json.loads((out / "leaderboard.json").read_text())
     rows = {r["policy"]: r for r in read_record(out / EPISODES)}
     return summary["plants"][ENV], rows
@@ -86,7 +99,8 @@ def test_the_dataset_holds_the_episodes_the_policy_runs(dataset):
         # the safe-RL cost is recorded: summed times dt it is the metric
         dt = env.unwrapped.plant.dt_s
         assert np.sum(ep.infos["cost"][1:] * dt) == pytest.approx(
-            ref["metrics"]["time_outside_5K_s"], abs=1e-9)  # fmt: skip
+            ref["metrics"]["time_outside_5K_s"], abs=1e-9
+        )
 
 
 def test_metadata(dataset):
@@ -125,7 +139,8 @@ def test_minaris_normalized_score_is_the_leaderboards(dataset, leaderboard):
 
 
 def test_a_cloned_agent_is_a_trained_agents_files_scored_by_the_leaderboard(
-        dataset, agent_dir, leaderboard):  # fmt: skip
+    dataset, agent_dir, leaderboard
+):
     (files,) = find(agent_dir)
     files.check()
     assert (files.env_id, files.algo) == (ENV, "bc")
@@ -152,23 +167,28 @@ def _refused(capsys, *args: str) -> str:
     return capsys.readouterr().err
 
 
-@pytest.mark.parametrize("args, says", [
-    (["--policy", "cascade_pi_ff", "--episodes", "0"], "--episodes must be in 1"),
-    (["--policy", "cascade_pi_ff", "--episodes", "two"], "--episodes must be an integer"),
-    (["--policy", "cascade_pi_ff", "--seed", "-1"], "--seed must be in 0"),
-    (["--policy", "cascade_pi_ff", "--mixed", "1.5"], "a fraction in (0, 1]"),
-    (["--policy", "cascade_pi_ff", "--noise", "0"], "a fraction of the stroke in (0, 0.5]"),
-    (["--policy", "cascade_pi_ff", "--noise", "0.6"], "a fraction of the stroke in (0, 0.5]"),
-    (["--policy", "cascade_pi_ff", "--noise", "much"], "a fraction of the stroke"),
-    (["--policy", "no_such_policy"], "unknown policy 'no_such_policy'"),
-    (["--policy", "cascade_pi_ff", "--env", "NoSuchPlant-v0"], "argument --env"),
-    (["--policy", "cascade_pi_ff", "--eval-scenario", "random"], "not 'random'"),
-    (["--policy", "cascade_pi_ff", "--eval-scenario", "no_such_scenario"],
-     "argument --eval-scenario"),
-    (["--policy", "cascade_pi_ff", "--eval-seeds", "0,-2"], "integers >= 0"),
-    (["--policy", "cascade_pi_ff", "--name", "a b"], "argument --name"),
-    (["--episodes", "2"], "--policy"),
-])  # fmt: skip
+@pytest.mark.parametrize(
+    "args, says",
+    [
+        (["--policy", "cascade_pi_ff", "--episodes", "0"], "--episodes must be in 1"),
+        (["--policy", "cascade_pi_ff", "--episodes", "two"], "--episodes must be an integer"),
+        (["--policy", "cascade_pi_ff", "--seed", "-1"], "--seed must be in 0"),
+        (["--policy", "cascade_pi_ff", "--mixed", "1.5"], "a fraction in (0, 1]"),
+        (["--policy", "cascade_pi_ff", "--noise", "0"], "a fraction of the stroke in (0, 0.5]"),
+        (["--policy", "cascade_pi_ff", "--noise", "0.6"], "a fraction of the stroke in (0, 0.5]"),
+        (["--policy", "cascade_pi_ff", "--noise", "much"], "a fraction of the stroke"),
+        (["--policy", "no_such_policy"], "unknown policy 'no_such_policy'"),
+        (["--policy", "cascade_pi_ff", "--env", "NoSuchPlant-v0"], "argument --env"),
+        (["--policy", "cascade_pi_ff", "--eval-scenario", "random"], "not 'random'"),
+        (
+            ["--policy", "cascade_pi_ff", "--eval-scenario", "no_such_scenario"],
+            "argument --eval-scenario",
+        ),
+        (["--policy", "cascade_pi_ff", "--eval-seeds", "0,-2"], "integers >= 0"),
+        (["--policy", "cascade_pi_ff", "--name", "a b"], "argument --name"),
+        (["--episodes", "2"], "--policy"),
+    ],
+)
 def test_bad_flags_are_refused_and_write_nothing(capsys, monkeypatch, tmp_path, args, says):
     monkeypatch.setenv("MINARI_DATASETS_PATH", str(tmp_path / "d"))  # restored after
     err = _refused(capsys, "--data-dir", str(tmp_path / "d"), *args)
@@ -178,8 +198,9 @@ def test_bad_flags_are_refused_and_write_nothing(capsys, monkeypatch, tmp_path, 
 
 def test_an_existing_dataset_is_refused(capsys, monkeypatch, dataset, data_dir):
     monkeypatch.setenv("MINARI_DATASETS_PATH", str(data_dir))
-    err = _refused(capsys, "--env", "Cascade300MW-v0", "--policy", "cascade_pi_ff",
-                   "--data-dir", str(data_dir))  # fmt: skip
+    err = _refused(
+        capsys, "--env", "Cascade300MW-v0", "--policy", "cascade_pi_ff", "--data-dir", str(data_dir)
+    )
     assert "exists already" in err
     assert minari.load_dataset(DATASET).total_episodes == 2  # unchanged
 
@@ -204,9 +225,8 @@ NOISY = "steamtemp/Cascade300MW/cascade_pi_ff-noisy5-v0"
 
 @pytest.fixture(scope="module")
 def noisy(data_dir):
-    assert datasets.main(["--env", "Cascade300MW-v0", "--policy", "cascade_pi_ff",
-                          "--episodes", "1", "--seed", "3", "--eval-seeds", "0",
-                          "--noise", "0.05", "--data-dir", str(data_dir)]) == 0  # fmt: skip
+    args = "--env Cascade300MW-v0 --policy cascade_pi_ff --episodes 1 --seed 3 --eval-seeds 0"
+    assert datasets.main([*args.split(), "--noise", "0.05", "--data-dir", str(data_dir)]) == 0
     return minari.load_dataset(NOISY)
 
 
@@ -219,8 +239,10 @@ def test_injected_noise_drives_the_plant_and_the_policys_own_action_is_the_label
     env = gym.make(ENV, scenario="random")
     policy = baselines.make("cascade_pi_ff", env)
     policy.reset()
-    chosen = [policy.predict(o, episode_start=np.array([i == 0]))[0]
-              for i, o in enumerate(ep.observations[:-1])]  # fmt: skip
+    chosen = [
+        policy.predict(o, episode_start=np.array([i == 0]))[0]
+        for i, o in enumerate(ep.observations[:-1])
+    ]
     np.testing.assert_array_equal(np.asarray(chosen, np.float64).reshape(label.shape), label)
     # the recorded actions are the noisy ones the plant got: they reproduce its rewards
     env.reset(seed=3)
@@ -264,20 +286,22 @@ def test_the_clones_memory_is_the_agents_and_plain_has_none(noisy, tmp_path):
     files.check()
 
 
-def test_the_zoo_command_chooses_the_noise_on_validation_and_fits_three_runs(
-        monkeypatch, tmp_path):  # fmt: skip
+def test_the_zoo_command_chooses_the_noise_on_validation_and_fits_three_runs(monkeypatch, tmp_path):
     monkeypatch.setenv("MINARI_DATASETS_PATH", str(tmp_path / "data"))
-    monkeypatch.setattr(behaviour_cloning, "ZOO_DATASET",
-                        {"policy": "cascade_pi_ff", "episodes": 1, "seed": 3})
+    monkeypatch.setattr(
+        behaviour_cloning, "ZOO_DATASET", {"policy": "cascade_pi_ff", "episodes": 1, "seed": 3}
+    )
     monkeypatch.setattr(behaviour_cloning, "ZOO_NOISES", (0.05, 0.2))
-    assert behaviour_cloning.main(["--zoo", "--env", "Cascade300MW-v0",
-                                   "--out", str(tmp_path / "zoo")]) == 0  # fmt: skip
+    argv = ["--zoo", "--env", "Cascade300MW-v0", "--out", str(tmp_path / "zoo")]
+    assert behaviour_cloning.main(argv) == 0
     for noise in ("5", "20"):  # recorded: they were missing
         assert minari.load_dataset(f"steamtemp/Cascade300MW/cascade_pi_ff-noisy{noise}-v0")
     runs = find(tmp_path / "zoo")
     assert sorted(f.model.name for f in runs) == [
-        "steamtemp__Cascade300MW-v0__bc.zip", "steamtemp__Cascade300MW-v0__bc__run1.zip",
-        "steamtemp__Cascade300MW-v0__bc__run2.zip"]  # fmt: skip
+        "steamtemp__Cascade300MW-v0__bc.zip",
+        "steamtemp__Cascade300MW-v0__bc__run1.zip",
+        "steamtemp__Cascade300MW-v0__bc__run2.zip",
+    ]
     metas = [json.loads(f.meta[0].read_text()) for f in runs]
     assert sorted(m["training"]["seed"] for m in metas) == [0, 1, 2]
     choice = metas[0]["noise_choice"]
@@ -316,8 +340,9 @@ def _spoiled(tmp_path, data_dir, how: str):
 
 
 @pytest.mark.parametrize("how", ["truncated", "empty", "garbage metadata", "another plant"])
-def test_a_spoiled_dataset_is_a_bad_dataset_flag(capsys, monkeypatch, tmp_path, dataset,
-                                                data_dir, how):  # fmt: skip
+def test_a_spoiled_dataset_is_a_bad_dataset_flag(
+    capsys, monkeypatch, tmp_path, dataset, data_dir, how
+):
     """A dataset whose files are damaged, or that names another plant than the one it was
     recorded on, ends behaviour cloning with exit 2 naming --dataset (it ended in a
     traceback: IndexError for the other plant), and nothing is written to --out."""
@@ -325,8 +350,9 @@ def test_a_spoiled_dataset_is_a_bad_dataset_flag(capsys, monkeypatch, tmp_path, 
     monkeypatch.setenv("MINARI_DATASETS_PATH", str(folder))  # restored after
     out = tmp_path / "bc"
     with pytest.raises(SystemExit) as exc:
-        behaviour_cloning.main(["--dataset", DATASET, "--out", str(out), "--epochs", "1",
-                                "--data-dir", str(folder)])  # fmt: skip
+        behaviour_cloning.main(
+            ["--dataset", DATASET, "--out", str(out), "--epochs", "1", "--data-dir", str(folder)]
+        )
     assert exc.value.code == 2
     err = capsys.readouterr().err
     assert "argument --dataset" in err and "Traceback" not in err

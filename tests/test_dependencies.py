@@ -13,8 +13,9 @@ from packaging.requirements import Requirement
 tomllib = pytest.importorskip("tomllib")  # Python >= 3.11
 
 PROJECT = tomllib.loads((Path(__file__).parents[1] / "pyproject.toml").read_text())["project"]
-REQUIREMENTS = [Requirement(r) for r in
-                [*PROJECT["dependencies"], *PROJECT["optional-dependencies"]["agents"]]]
+REQUIREMENTS = [
+    Requirement(r) for r in [*PROJECT["dependencies"], *PROJECT["optional-dependencies"]["agents"]]
+]
 
 
 @pytest.mark.parametrize("req", REQUIREMENTS, ids=[r.name for r in REQUIREMENTS])
@@ -26,7 +27,8 @@ def test_installed_version_is_within_the_declared_bounds(req):
     assert req.specifier.contains(got, prereleases=True), (
         f"{req.name} {got} is outside pyproject.toml's {req.specifier}: for numba and "
         "llvmlite, check every reliance of docs/architecture.md on the new version (their "
-        "tests) and then move the bound")
+        "tests) and then move the bound"
+    )
 
 
 def test_numba_and_llvmlite_are_bounded_above():

@@ -52,9 +52,13 @@ FF_SHORT = {
 
 @pytest.mark.parametrize(
     "env_id",
-    [pytest.param(i, marks=pytest.mark.xfail(strict=True, reason=FF_SHORT[i])) if i in FF_SHORT
-     else i for i in BOILERS],
-)  # fmt: skip
+    [
+        pytest.param(i, marks=pytest.mark.xfail(strict=True, reason=FF_SHORT[i]))
+        if i in FF_SHORT
+        else i
+        for i in BOILERS
+    ],
+)
 def test_load_feedforward_shows_headroom_over_cascade_pi(env_id):
     """A better-informed controller (the load demand is observed) beats plain PI clearly."""
     for sc in RAMPS:

@@ -29,7 +29,8 @@ def test_the_site_builds_strictly(tmp_path):
     done = _build(ROOT / "mkdocs.yml", tmp_path / "site")
     assert done.returncode == 0, (
         "mkdocs build --strict failed (mkdocs-material is in the [test] extra):\n"
-        + done.stdout + done.stderr
+        + done.stdout
+        + done.stderr
     )
     for page in ("index.html", "examples/index.html", "changelog/index.html",
                  "agents/plant_scale/index.html", "envs/index.html"):  # fmt: skip

@@ -12,13 +12,14 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).parents[1]
-JARGON = re.compile(r"\b(?:issues?|sessions?)\s*#?\d+|\bthis (?:round|session)\b|\brounds?\b",
-                    re.I)  # fmt: skip
+JARGON = re.compile(r"\b(?:issues?|sessions?)\s*#?\d+|\bthis (?:round|session)\b|\brounds?\b", re.I)
 
 
 def _hits(text: str) -> list[str]:
-    return [text[max(m.start() - 40, 0):m.end() + 40].replace("\n", " ")
-            for m in JARGON.finditer(text)]  # fmt: skip
+    return [
+        text[max(m.start() - 40, 0) : m.end() + 40].replace("\n", " ")
+        for m in JARGON.finditer(text)
+    ]
 
 
 def test_the_pattern_finds_history_words():
@@ -27,9 +28,11 @@ def test_the_pattern_finds_history_words():
     assert _hits("products are rounded differently; a sessionless run") == []
 
 
-@pytest.mark.parametrize("path", sorted([ROOT / "README.md", *ROOT.glob("docs/**/*.md"),
-                                         *ROOT.glob("examples/*")]),
-                         ids=lambda p: str(p.relative_to(ROOT)))  # fmt: skip
+@pytest.mark.parametrize(
+    "path",
+    sorted([ROOT / "README.md", *ROOT.glob("docs/**/*.md"), *ROOT.glob("examples/*")]),
+    ids=lambda p: str(p.relative_to(ROOT)),
+)
 def test_docs_have_no_history_words(path):
     assert not _hits(path.read_text(encoding="utf-8")), _hits(path.read_text(encoding="utf-8"))
 
@@ -41,12 +44,16 @@ def _package_helps() -> dict[str, str]:
     from steamtemp_gym import docs
     from steamtemp_gym.testing import cli
 
-    helps = {"steamtemp-leaderboard": leaderboard.make_parser().format_help(),
-             "steamtemp-train": train.make_parser().format_help(),
-             "steamtemp-check": cli._parser().format_help(),
-             "python -m steamtemp_gym": listing.report()}  # fmt: skip
-    for name, main in (("python -m agents.tune", tune.main), ("python -m steamtemp_gym.docs",
-                                                             docs.main)):  # fmt: skip
+    helps = {
+        "steamtemp-leaderboard": leaderboard.make_parser().format_help(),
+        "steamtemp-train": train.make_parser().format_help(),
+        "steamtemp-check": cli._parser().format_help(),
+        "python -m steamtemp_gym": listing.report(),
+    }
+    for name, main in (
+        ("python -m agents.tune", tune.main),
+        ("python -m steamtemp_gym.docs", docs.main),
+    ):
         helps[name] = _captured_help(main)
     return helps
 
@@ -70,8 +77,16 @@ def test_package_command_help_has_no_history_words():
 
 def test_benchmark_and_script_help_has_no_history_words():
     files = sorted([*ROOT.glob("benchmarks/*.py"), *ROOT.glob("scripts/*.py")])
-    procs = [subprocess.Popen([sys.executable, str(f), "--help"], cwd=ROOT, text=True,
-                              stdout=subprocess.PIPE, stderr=subprocess.PIPE) for f in files]
+    procs = [
+        subprocess.Popen(
+            [sys.executable, str(f), "--help"],
+            cwd=ROOT,
+            text=True,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+        )
+        for f in files
+    ]
     bad = {}
     for f, p in zip(files, procs, strict=True):
         out, err = p.communicate(timeout=300)

@@ -145,8 +145,15 @@ def test_drum_descriptor_form_conserves_the_balances(plant):
     xd0, u0, h_f, G, _ = drum_open_loop(plant, 1.0)
     P, o = plant.P, db.IP.DRUM
     u = u0 + np.array([10.0, -5.0, 5e6])  # steam +10 kg/s, feed -5 kg/s, heat +5 MW
-    sol = solve_ivp(lambda t, y: G(y, u), (0.0, 120.0), xd0, method="Radau", rtol=1e-11,
-                    atol=1e-12 * np.maximum(1.0, np.abs(xd0)), dense_output=True)  # fmt: skip
+    sol = solve_ivp(
+        lambda t, y: G(y, u),
+        (0.0, 120.0),
+        xd0,
+        method="Radau",
+        rtol=1e-11,
+        atol=1e-12 * np.maximum(1.0, np.abs(xd0)),
+        dense_output=True,
+    )
     Vt, Vr, Vdc, Cp = P[o + dr.D_VT], P[o + dr.D_VR], P[o + dr.D_VDC], P[o + dr.D_CP]
 
     def stores(y):
@@ -154,13 +161,15 @@ def test_drum_descriptor_form_conserves_the_balances(plant):
         Ts, rw, rs, hw, hs, *_ = sat_p(p)
         av, _, _ = dr.void_fraction(rw, rs, 0.0, 0.0, ar)
         Vst = Vt - Vwt
-        return np.array([
-            rs * Vst + rw * Vwt,
-            rs * hs * Vst + rw * hw * Vwt - p * Vt + P[o + dr.D_MT] * Cp * Ts,
-            Vr * (rs * av + rw * (1 - av)),
-            Vr * (rs * hs * av + rw * hw * (1 - av)) - p * Vr + P[o + dr.D_MR] * Cp * Ts,
-            rs * Vsd,
-        ])  # fmt: skip
+        return np.array(
+            [
+                rs * Vst + rw * Vwt,
+                rs * hs * Vst + rw * hw * Vwt - p * Vt + P[o + dr.D_MT] * Cp * Ts,
+                Vr * (rs * av + rw * (1 - av)),
+                Vr * (rs * hs * av + rw * hw * (1 - av)) - p * Vr + P[o + dr.D_MR] * Cp * Ts,
+                rs * Vsd,
+            ]
+        )
 
     q_s, q_f, Q = u
     for t in (1.0, 5.0, 20.0, 60.0, 110.0):
@@ -177,8 +186,10 @@ def test_drum_descriptor_form_conserves_the_balances(plant):
         Vwd = Vwt - Vdc - (1 - av) * Vr
         beta, Td, Vsd0 = P[o + dr.D_BETA], P[o + dr.D_TD], P[o + dr.D_VSD0]
         q_sd = rs / Td * (Vsd - Vsd0) + ar * qdc + ar * beta * (qdc - q_r)
-        q_cd = ((hw - h_f) * q_f + (rs * Vsd * dhs + rw * Vwd * dhw - Vsd - Vwd
-                                   + P[o + dr.D_MD] * Cp * dTs) * pdot) / hc  # fmt: skip
+        q_cd = (
+            (hw - h_f) * q_f
+            + (rs * Vsd * dhs + rw * Vwd * dhw - Vsd - Vwd + P[o + dr.D_MD] * Cp * dTs) * pdot
+        ) / hc
         residuals = {
             "global mass": (dS[0] - (q_f - q_s), 1.0),
             "global energy": (dS[1] - (Q + q_f * h_f - q_s * hs), 1e6),
@@ -195,8 +206,9 @@ def test_shrink_and_swell_open_loop(plant):
     xd0, u0, _, G, Y = drum_open_loop(plant, 1.0)
     u = u0 + np.array([10.0, 0.0, 0.0])
     ts = np.array([2.0, 5.0, 10.0, 20.0, 100.0, 200.0])
-    sol = solve_ivp(lambda t, y: G(y, u), (0.0, 200.0), xd0, method="Radau", rtol=1e-9,
-                    atol=1e-9, t_eval=ts)  # fmt: skip
+    sol = solve_ivp(
+        lambda t, y: G(y, u), (0.0, 200.0), xd0, method="Radau", rtol=1e-9, atol=1e-9, t_eval=ts
+    )
     dy = np.array([Y(sol.y[:, k]) - Y(xd0) for k in range(len(ts))])
     print("open-loop q_s +10 kg/s: level (m) at", dict(zip(ts, np.round(dy[:, 1], 4), strict=True)))
     assert dy[2, 1] > 0.02  # swell: +2-3 cm within 10 s
@@ -225,8 +237,10 @@ def test_shrink_and_swell_closed_loop():
             break
     t, lev, p = map(np.array, (t, lev, p))
     early = (t > 60.0) & (t <= 120.0)
-    print(f"closed loop: peak level {lev.max():.4f} m at {t[lev.argmax()]:.0f} s, "
-          f"min pressure {p.min():.4f} MPa")  # fmt: skip
+    print(
+        f"closed loop: peak level {lev.max():.4f} m at {t[lev.argmax()]:.0f} s, "
+        f"min pressure {p.min():.4f} MPa"
+    )
     assert lev[early].max() > 0.01  # swell first
     assert abs(lev[-1]) < 0.003 and abs(p[-1] - 8.5) < 0.005  # both loops recover
     assert p.min() < 8.5 - 0.02
@@ -255,8 +269,10 @@ def test_linearization_stable_with_thesis_gain_signs(plant, load):
     M[:4, :4], M[:4, 4:] = Ad, Bd
     S = Cd @ sla.expm(150.0 * M)[:4, 4:] * np.array([1.0, 1.0, 1e6])  # per kg/s, kg/s, MW
     dp_kPa, dl_mm = np.round(S[0] / 1e3, 2), np.round(S[1] * 1e3, 2)
-    print(f"load {load}: open-loop eigenvalues {np.round(np.linalg.eigvals(Ad), 5)}; "
-          f"150 s responses dp (kPa) {dp_kPa}, dl (mm) {dl_mm}")  # fmt: skip
+    print(
+        f"load {load}: open-loop eigenvalues {np.round(np.linalg.eigvals(Ad), 5)}; "
+        f"150 s responses dp (kPa) {dp_kPa}, dl (mm) {dl_mm}"
+    )
     assert S[0, 0] < 0  # more steam flow lowers pressure (Fig. 6.a)
     assert S[1, 1] > 0  # more feedwater raises level (Fig. 7.f)
     assert S[0, 2] > 0  # more heat raises pressure (Fig. 8.a)
@@ -271,15 +287,23 @@ def test_linear_model_follows_nonlinear_drum(plant):
     Cd = fd_jacobian(Y, xd0)
     du = np.array([-2.0, -2.0, 0.0])
     ts = np.linspace(10.0, 150.0, 15)
-    sol = solve_ivp(lambda t, y: G(y, u0 + du), (0.0, 150.0), xd0, method="Radau", rtol=1e-9,
-                    atol=1e-9, t_eval=ts)  # fmt: skip
+    sol = solve_ivp(
+        lambda t, y: G(y, u0 + du),
+        (0.0, 150.0),
+        xd0,
+        method="Radau",
+        rtol=1e-9,
+        atol=1e-9,
+        t_eval=ts,
+    )
     M = np.zeros((7, 7))
     M[:4, :4], M[:4, 4:] = Ad, Bd
     lin = np.array([Cd @ sla.expm(t * M)[:4, 4:] @ du for t in ts])
     nl = np.array([Y(sol.y[:, k]) - Y(xd0) for k in range(len(ts))])
     err = np.abs(lin - nl).max(axis=0) / np.abs(nl).max(axis=0)
-    print(f"linear vs nonlinear, max error / max response: pressure {err[0]:.4f}, "
-          f"level {err[1]:.4f}")  # fmt: skip
+    print(
+        f"linear vs nonlinear, max error / max response: pressure {err[0]:.4f}, level {err[1]:.4f}"
+    )
     assert err[0] < 0.02 and err[1] < 0.05
 
 
@@ -389,17 +413,25 @@ def test_ros2_matches_radau_over_the_load_ramp(plant):
         U = np.array([[v0 + 0.1 * np.sin(2 * np.pi * (t - t0) / 300.0)]])
         plant.step(X, U, D, Z)
         F = rhs_of(plant, U[0], D[0].copy())
-        sol = solve_ivp(lambda _t, y, F=F: F(y), (0.0, dt), x_ref, method="Radau", rtol=1e-8,
-                        atol=1e-6 * np.maximum(1.0, np.abs(x_ref)))  # fmt: skip
+        sol = solve_ivp(
+            lambda _t, y, F=F: F(y),
+            (0.0, dt),
+            x_ref,
+            method="Radau",
+            rtol=1e-8,
+            atol=1e-6 * np.maximum(1.0, np.abs(x_ref)),
+        )
         assert sol.success
         x_ref = sol.y[:, -1]
         db.outputs(x_ref, U[0], D[0], P, Zr)
         errs.append(np.abs(Z[0] - Zr))
     e = np.max(errs, axis=0)
-    print(f"ROS2 dt = {dt} s: outlet {e[db.IZ.outlet_temp_C] * 1e3:.1f} mK, attemperator "
-          f"{e[db.IZ.attemp_out_temp_C] * 1e3:.0f} mK, "
-          f"pressure {e[db.IZ.drum_pressure_MPa] * 1e6:.0f} Pa, "
-          f"level {e[db.IZ.drum_level_m] * 1e3:.2f} mm")  # fmt: skip
+    print(
+        f"ROS2 dt = {dt} s: outlet {e[db.IZ.outlet_temp_C] * 1e3:.1f} mK, attemperator "
+        f"{e[db.IZ.attemp_out_temp_C] * 1e3:.0f} mK, "
+        f"pressure {e[db.IZ.drum_pressure_MPa] * 1e6:.0f} Pa, "
+        f"level {e[db.IZ.drum_level_m] * 1e3:.2f} mm"
+    )
     assert e[db.IZ.outlet_temp_C] < 0.06
     assert e[db.IZ.outlet_temp_meas_C] < 0.06
     assert e[db.IZ.attemp_out_temp_C] < 0.4  # the 2 s valve lag at h = dt dominates here
@@ -416,8 +448,11 @@ def test_jacobian_entries_of_the_plant_match_finite_differences(plant):
     A = fd_jacobian(rhs_of(plant, u, d), x)
     st = db.sensors(plant.params.n_segments, plant.params.n_line)
     n_seg = plant.params.n_segments
-    mine = [c for c, (r, col) in enumerate(zip(plant.jrow, plant.jcol, strict=True))
-            if r < db.IX.CHAIN1 or r >= db.s_mill(n_seg) or col == db.IX.LF]  # fmt: skip
+    mine = [
+        c
+        for c, (r, col) in enumerate(zip(plant.jrow, plant.jcol, strict=True))
+        if r < db.IX.CHAIN1 or r >= db.s_mill(n_seg) or col == db.IX.LF
+    ]
     # feedwater 2, drum 16, firing columns 2n, mill 2, line n_line, thermowells 6
     assert len(mine) == 2 + 16 + 2 * n_seg + 2 + plant.params.n_line + 6
     for c in mine:
@@ -431,8 +466,13 @@ def test_jacobian_entries_of_the_plant_match_finite_differences(plant):
 
 # ----------------------------------------------------------------------------- parameters
 def test_impossible_parameters_name_the_field():
-    for field, value in (("tube_od_1_m", 0.03), ("V_wt_nom_m3", 200.0), ("p_fw_MPa", 8.0),
-                         ("T_primary_out_C", 250.0), ("spray_design_fraction", 0.2)):  # fmt: skip
+    for field, value in (
+        ("tube_od_1_m", 0.03),
+        ("V_wt_nom_m3", 200.0),
+        ("p_fw_MPa", 8.0),
+        ("T_primary_out_C", 250.0),
+        ("spray_design_fraction", 0.2),
+    ):
         with pytest.raises(ValueError, match=field):
             db.DrumBoilerParams(**{field: value})
     names = {f.name for f in dataclasses.fields(db.DrumBoilerParams)}

@@ -22,8 +22,9 @@ def test_pages_are_up_to_date():
     on_disk = {p.name: p.read_text(encoding="utf-8") for p in docs.DOCS_DIR.glob("*.md")}
     missing = sorted(set(generated) - set(on_disk))
     extra = sorted(set(on_disk) - set(generated))
-    assert not missing and not extra, (f"missing pages {missing}, pages of no env id {extra}; "
-                                       f"run python -m steamtemp_gym.docs")  # fmt: skip
+    assert not missing and not extra, (
+        f"missing pages {missing}, pages of no env id {extra}; run python -m steamtemp_gym.docs"
+    )
     stale = [n for n in generated if on_disk[n] != generated[n]]
     assert not stale, f"out of date: {stale}; run python -m steamtemp_gym.docs"
     assert docs.main(["--check"]) == 0
@@ -32,7 +33,7 @@ def test_pages_are_up_to_date():
 def _column(text: str, section: str, col: int = 0) -> list[str]:
     """Column ``col`` of the first table under ``## section``, backticks removed."""
     part = text.split(f"## {section}\n", 1)[1].split("\n## ", 1)[0]
-    table = part[part.index("\n| "):].strip().split("\n\n")[0]  # up to the next blank line
+    table = part[part.index("\n| ") :].strip().split("\n\n")[0]  # up to the next blank line
     rows = [r for r in table.splitlines()[2:] if not r.startswith("| **")]
     return [r.split(" | ")[col].strip("| `") for r in rows]
 
@@ -66,18 +67,24 @@ class _Documented:
     time_s: float = 2.0
     count: int = 3
     # --- a second section
-    share_fraction: float = 0.5  # of the flow (unverified)  # fmt: skip
+    share_fraction: float = 0.5  # of the flow (unverified)
 
 
 def test_field_notes_read_the_comments_of_the_source():
     notes, sections = docs.field_notes(_Documented)
-    assert notes == {"flow_kg_s": "rated flow (paper)", "time_s": "a note above on two lines",
-                     "count": "", "share_fraction": "of the flow (unverified)"}  # fmt: skip
-    assert sections == {"flow_kg_s": "rating (the paper unless noted)",
-                        "time_s": "rating (the paper unless noted)",
-                        "count": "rating (the paper unless noted)",
-                        "share_fraction": "a second section"}  # fmt: skip
-    assert [docs.unit_of(n) for n in ("flow_kg_s", "time_s", "count", "share_fraction",
-                                      "lead_gain_K_s_kg", "T_out_C")] == [
-        "kg/s", "s", "", "fraction", "K s/kg", "C"]  # fmt: skip
-
+    assert notes == {
+        "flow_kg_s": "rated flow (paper)",
+        "time_s": "a note above on two lines",
+        "count": "",
+        "share_fraction": "of the flow (unverified)",
+    }
+    assert sections == {
+        "flow_kg_s": "rating (the paper unless noted)",
+        "time_s": "rating (the paper unless noted)",
+        "count": "rating (the paper unless noted)",
+        "share_fraction": "a second section",
+    }
+    assert [
+        docs.unit_of(n)
+        for n in ("flow_kg_s", "time_s", "count", "share_fraction", "lead_gain_K_s_kg", "T_out_C")
+    ] == ["kg/s", "s", "", "fraction", "K s/kg", "C"]

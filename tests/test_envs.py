@@ -82,9 +82,11 @@ def test_scenario_yaml(tmp_path):
 @pytest.mark.parametrize("env_id", [i for i in IDS if plant_class(i).design_spray is not None])
 def test_holding_the_setpoint_with_design_spray_scores_about_zero(env_id):
     """The reward's spray term charges only spray above the plant's design spray."""
-    env = gym.make(env_id, scenario=Scenario(name="rated", duration_s=200.0, load=1.0),
-                   params={"omega_halfwidth_K": 0.0, "omega2_scale_kg_s": 0.0}
-                   if "Cascade" in env_id else {})  # fmt: skip
+    env = gym.make(
+        env_id,
+        scenario=Scenario(name="rated", duration_s=200.0, load=1.0),
+        params={"omega_halfwidth_K": 0.0, "omega2_scale_kg_s": 0.0} if "Cascade" in env_id else {},
+    )
     plant = env.unwrapped.plant
     assert plant.design_spray in plant.index, "design_spray names none of the plant's outputs"
     _, info = env.reset(seed=0)
@@ -106,8 +108,9 @@ def test_without_a_design_spray_the_reward_charges_all_spray(monkeypatch):
     env_id = IDS[0]
     monkeypatch.setattr(plant_class(env_id), "design_spray", None)
     only_spray = {"w_abs": 0.0, "w_band": 0.0, "w_secondary": 0.0, "w_move": 0.0, "w_spray": 1.0}
-    env = gym.make(env_id, scenario=Scenario(name="rated", duration_s=200.0, load=1.0),
-                   reward=only_spray)  # fmt: skip
+    env = gym.make(
+        env_id, scenario=Scenario(name="rated", duration_s=200.0, load=1.0), reward=only_spray
+    )
     _, info = env.reset(seed=0)
     hold = (2.0 * np.atleast_1d(info["spray_valve"]) - 1.0).astype(np.float32)
     core, plant = env.unwrapped.core, env.unwrapped.plant

@@ -102,8 +102,9 @@ def ramp_runs():
     """Per policy: time (steps,), true outlet error, true and estimated Q (MW) (steps, seeds)
     on load_ramp_100_50, seeds SEEDS in one vector env; valve travel and quiet p2p."""
     n = len(SEEDS)
-    venv = gym.make_vec(FSH, num_envs=n, vectorization_mode="vector_entry_point",
-                        scenario="load_ramp_100_50")  # fmt: skip
+    venv = gym.make_vec(
+        FSH, num_envs=n, vectorization_mode="vector_entry_point", scenario="load_ramp_100_50"
+    )
     runs = {}
     for name in ("cascade_pi", "cascade_pi_ff", "fao_sf", "fao_fac"):
         pol = baselines.make(name, venv)
@@ -191,8 +192,9 @@ def test_pin_peak_deviation_ratios(ramp_runs):
     """Regression pin of the measured ratios (seeds 0-7): early excursion SF 0.915, SF + FAC
     0.736; whole window 0.888, 0.698. Tolerance about 3 standard errors of the 8-seed mean
     (spread of the per-seed ratios 0.014 / 0.044 SF, 0.10 / 0.11 SF + FAC)."""
-    got = {(n, w): _ratio(ramp_runs, n, w) for n in ("fao_sf", "fao_fac")
-           for w in ("early", "whole")}  # fmt: skip
+    got = {
+        (n, w): _ratio(ramp_runs, n, w) for n in ("fao_sf", "fao_fac") for w in ("early", "whole")
+    }
     assert got["fao_sf", "early"] == pytest.approx(0.915, abs=0.02)
     assert got["fao_sf", "whole"] == pytest.approx(0.888, abs=0.05)
     assert got["fao_fac", "early"] == pytest.approx(0.736, abs=0.11)
@@ -214,8 +216,7 @@ def test_claim_compensation_is_zero_at_nominal_operation():
     compensator output is zero at nominal operation": in the undisturbed steady state at
     100, 75 and 50 % load (no noise) the bias stays within 0.05 K over 200 s."""
     for load in (1.0, 0.75, 0.5):
-        env = gym.make(FSH, scenario=Scenario(name="steady", duration_s=200.0,
-                                              load=((0.0, load),)))  # fmt: skip
+        env = gym.make(FSH, scenario=Scenario(name="steady", duration_s=200.0, load=((0.0, load),)))
         pol = FaoFAC(env)
         obs, _ = env.reset(seed=0)
         start = True
@@ -250,8 +251,12 @@ def test_knobs_scale_the_compensations_and_bad_values_raise():
     assert (default.kk1, default.kk2) == (KK1, KK2)
     obs, _ = env.reset(seed=0)
     biases = []
-    for kw in ({"sf": False}, {"sf": False, "kk1": 2 * KK1}, {"fuzzy": False},
-               {"fuzzy": False, "kk2": 2 * KK2}):  # fmt: skip
+    for kw in (
+        {"sf": False},
+        {"sf": False, "kk1": 2 * KK1},
+        {"fuzzy": False},
+        {"fuzzy": False, "kk2": 2 * KK2},
+    ):
         pol = FaoFAC(env, **kw)
         o = obs.copy()
         for k in range(30):

@@ -141,9 +141,13 @@ def _run(venv, policy, seeds) -> dict[str, np.ndarray]:
         if term.any() or trunc.any():
             break
     E = np.array(errs)
-    return {"iae": np.abs(E).sum(axis=0) * dt, "std": E.std(axis=0),
-            "fuel_kg": np.array(fuel).sum(axis=0) * dt,
-            "spray_kg": np.array(spray).sum(axis=0) * dt, "tripped": tripped}  # fmt: skip
+    return {
+        "iae": np.abs(E).sum(axis=0) * dt,
+        "std": E.std(axis=0),
+        "fuel_kg": np.array(fuel).sum(axis=0) * dt,
+        "spray_kg": np.array(spray).sum(axis=0) * dt,
+        "tripped": tripped,
+    }
 
 
 @functools.lru_cache(maxsize=1)
@@ -152,8 +156,9 @@ def _claim() -> dict:
     out = {}
     for sc in CLAIM_SCENARIOS:
         for name, cls in (("fuzzy_p2id", fp.FuzzyP2ID), ("cascade_pi", CascadePI)):
-            venv = gym.make_vec(BENSON, num_envs=len(SEEDS),
-                                vectorization_mode="vector_entry_point", scenario=sc)  # fmt: skip
+            venv = gym.make_vec(
+                BENSON, num_envs=len(SEEDS), vectorization_mode="vector_entry_point", scenario=sc
+            )
             out[sc, name] = _run(venv, cls(venv), SEEDS)
     return out
 
@@ -162,8 +167,11 @@ def _ratios(scenario: str) -> tuple[float, float, float]:
     res = _claim()
     f, p = res[scenario, "fuzzy_p2id"], res[scenario, "cascade_pi"]
     assert not f["tripped"].any()
-    return (f["iae"].mean() / p["iae"].mean(), f["std"].mean() / p["std"].mean(),
-            f["fuel_kg"].mean() / p["fuel_kg"].mean())  # fmt: skip
+    return (
+        f["iae"].mean() / p["iae"].mean(),
+        f["std"].mean() / p["std"].mean(),
+        f["fuel_kg"].mean() / p["fuel_kg"].mean(),
+    )
 
 
 #: Claim scenarios where the accuracy claim does not reproduce, with what was measured.
@@ -171,13 +179,20 @@ NOT_MORE_ACCURATE = {
     "load_ramp_100_50": (
         "measured: IAE ratio fuzzy_p2id / cascade_pi 1.031 (std ratio 0.859) on the 100 -> 50 % "
         "ramp with the gains the tuner chose under the commissioning checks on the corner "
-        "plants (docs/baseline_tuning.md); the gains chosen without them gave 0.937"),
+        "plants (docs/baseline_tuning.md); the gains chosen without them gave 0.937"
+    ),
 }
 
 
-@pytest.mark.parametrize("scenario", [
-    pytest.param(sc, marks=pytest.mark.xfail(strict=True, reason=NOT_MORE_ACCURATE[sc]))
-    if sc in NOT_MORE_ACCURATE else sc for sc in CLAIM_SCENARIOS])  # fmt: skip
+@pytest.mark.parametrize(
+    "scenario",
+    [
+        pytest.param(sc, marks=pytest.mark.xfail(strict=True, reason=NOT_MORE_ACCURATE[sc]))
+        if sc in NOT_MORE_ACCURATE
+        else sc
+        for sc in CLAIM_SCENARIOS
+    ],
+)
 def test_claim_more_accurate_and_less_fluctuation(scenario):
     """The paper: the P²ID is "more accurate and [has] less fluctuation" than the classic
     controller: a smaller IAE and a smaller std of the outlet temperature error than
@@ -186,10 +201,14 @@ def test_claim_more_accurate_and_less_fluctuation(scenario):
     assert iae_ratio < 1.0 and std_ratio < 1.0
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "measured: fuel ratio fuzzy_p2id / cascade_pi 1.0000 +- 1e-4 on the three load changes "
-    "(BensonSubcritical's fuel follows the load demand through its fuel/water-ratio "
-    "schedule; the spray loops hardly move it)"))
+@pytest.mark.xfail(
+    strict=True,
+    reason=(
+        "measured: fuel ratio fuzzy_p2id / cascade_pi 1.0000 +- 1e-4 on the three load changes "
+        "(BensonSubcritical's fuel follows the load demand through its fuel/water-ratio "
+        "schedule; the spray loops hardly move it)"
+    ),
+)
 def test_claim_less_fuel():
     """The paper: the P²ID also needs less fuel than the classic controller (5 seeds, means;
     at least 0.05 % less on every load change)."""

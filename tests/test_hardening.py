@@ -33,9 +33,13 @@ def test_benson_low_load_cold_steam_stays_finite():
     """110 % -> 20 % with -40 % heat absorption and a -40 K setpoint: the HP exhaust falls
     below saturation; it is taken as dry-saturated steam at worst, never as water (which
     made the reheat NaN)."""
-    sc = Scenario(name="r", duration_s=1800, load=[[0, 1.1], [394, 0.2]],
-                  heat_absorption_bias=[[0, 0.0], [100, -0.25]],
-                  setpoint_offset_C=[[0, 0.0], [100, -25.0]])  # fmt: skip
+    sc = Scenario(
+        name="r",
+        duration_s=1800,
+        load=[[0, 1.1], [394, 0.2]],
+        heat_absorption_bias=[[0, 0.0], [100, -0.25]],
+        setpoint_offset_C=[[0, 0.0], [100, -25.0]],
+    )
     env = gym.make(BENSON, scenario=sc)
     env.reset(seed=0)
     core = env.unwrapped.core
@@ -102,8 +106,9 @@ def test_corner_scenarios_never_give_non_finite_values(env_id):
 
 # ------------------------------------------------------ 2. scenarios that cannot start
 def test_scenario_the_plant_cannot_start_is_rejected_with_the_value():
-    env = gym.make("steamtemp/DrumBoilerSH-v0",
-                   scenario=Scenario(name="slagged", duration_s=60.0, fouling=0.6))  # fmt: skip
+    env = gym.make(
+        "steamtemp/DrumBoilerSH-v0", scenario=Scenario(name="slagged", duration_s=60.0, fouling=0.6)
+    )
     with pytest.raises(ValueError, match=r"cannot start.*fouling = 0\.6"):
         env.reset(seed=0)
     with pytest.raises(RuntimeError, match="reset"):  # nothing half-started
@@ -153,8 +158,13 @@ def test_action_dtypes():
         o1 = env.step(a)[0]
         o2 = ref.step(np.array([0.0, 1.0]))[0]
         np.testing.assert_array_equal(o1, o2)
-    for bad in (["0.5", "0.5"], np.array([1 + 0j, 0j]), np.array([True, False]),
-                np.array([None, None]), [[0.1], [0.2, 0.3]]):  # fmt: skip
+    for bad in (
+        ["0.5", "0.5"],
+        np.array([1 + 0j, 0j]),
+        np.array([True, False]),
+        np.array([None, None]),
+        [[0.1], [0.2, 0.3]],
+    ):
         with pytest.raises(ValueError, match="action"):
             env.step(bad)
 
@@ -183,8 +193,9 @@ def test_masked_actions_are_refused_unless_nothing_is_masked():
     venv.reset(seed=0)
     with pytest.raises(ValueError, match="1 masked entries"):
         venv.step(np.ma.masked_array([[0.3], [0.2]], mask=[[False], [True]]))
-    np.testing.assert_array_equal(env.step(np.ma.masked_array([0.3], mask=[False]))[0],
-                                  ref.step(np.array([0.3]))[0])  # fmt: skip
+    np.testing.assert_array_equal(
+        env.step(np.ma.masked_array([0.3], mask=[False]))[0], ref.step(np.array([0.3]))[0]
+    )
 
 
 def test_integers_beyond_int64_are_actions_and_tensors_are_refused_with_value_error():
@@ -216,22 +227,25 @@ def test_reset_options_and_num_envs_are_checked_with_value_error():
 
 
 # ------------------------------------------------------- 5./6. parameter types and bounds
-@pytest.mark.parametrize("env_id, params, match", [
-    ("steamtemp/SupercriticalFSH-v0", {"dt_s": "2"}, "dt_s must be of type float"),
-    ("steamtemp/SupercriticalFSH-v0", {"dt_s": None}, "dt_s must be of type float"),
-    ("steamtemp/DrumBoilerSH-v0", {"n_segments": 2.5}, "n_segments must be of type int"),
-    ("steamtemp/DrumBoilerSH-v0", {"n_segments": True}, "n_segments must be of type int"),
-    ("steamtemp/BoilerTurbineMIMO-v0", {"fuel_bias_action": "no"}, "fuel_bias_action"),
-    ("steamtemp/Cascade300MW-v0", {"load_dependent": "False"}, "load_dependent"),
-    ("steamtemp/SupercriticalFSH-v0", {"n_substeps": 2.5}, "n_substeps"),
-    ("steamtemp/SupercriticalFSH-v0", {"n_substeps": 10**6}, "n_substeps"),
-    ("steamtemp/BensonSubcritical-v0", {"dt_s": 1e6}, "dt_s"),
-    ("steamtemp/SupercriticalFSH-v0", {"tube_length_m": 1e9}, "tube_length_m"),
-    ("steamtemp/SupercriticalFSH-v0", {"n_segments": 2**70}, "n_segments .*physical range"),
-    ("steamtemp/SupercriticalFSH-v0", {"dt_s": 10**400}, "dt_s must be finite"),
-    ("steamtemp/SupercriticalFSH-v0", {"tube_length_m": Fraction(10**12)}, "tube_length_m"),
-    ("steamtemp/Cascade300MW-v0", {1: 0.0, "dt_s": 1.0}, "names must be strings, got 1"),
-])  # fmt: skip
+@pytest.mark.parametrize(
+    "env_id, params, match",
+    [
+        ("steamtemp/SupercriticalFSH-v0", {"dt_s": "2"}, "dt_s must be of type float"),
+        ("steamtemp/SupercriticalFSH-v0", {"dt_s": None}, "dt_s must be of type float"),
+        ("steamtemp/DrumBoilerSH-v0", {"n_segments": 2.5}, "n_segments must be of type int"),
+        ("steamtemp/DrumBoilerSH-v0", {"n_segments": True}, "n_segments must be of type int"),
+        ("steamtemp/BoilerTurbineMIMO-v0", {"fuel_bias_action": "no"}, "fuel_bias_action"),
+        ("steamtemp/Cascade300MW-v0", {"load_dependent": "False"}, "load_dependent"),
+        ("steamtemp/SupercriticalFSH-v0", {"n_substeps": 2.5}, "n_substeps"),
+        ("steamtemp/SupercriticalFSH-v0", {"n_substeps": 10**6}, "n_substeps"),
+        ("steamtemp/BensonSubcritical-v0", {"dt_s": 1e6}, "dt_s"),
+        ("steamtemp/SupercriticalFSH-v0", {"tube_length_m": 1e9}, "tube_length_m"),
+        ("steamtemp/SupercriticalFSH-v0", {"n_segments": 2**70}, "n_segments .*physical range"),
+        ("steamtemp/SupercriticalFSH-v0", {"dt_s": 10**400}, "dt_s must be finite"),
+        ("steamtemp/SupercriticalFSH-v0", {"tube_length_m": Fraction(10**12)}, "tube_length_m"),
+        ("steamtemp/Cascade300MW-v0", {1: 0.0, "dt_s": 1.0}, "names must be strings, got 1"),
+    ],
+)
 def test_parameters_are_typed_and_bounded(env_id, params, match):
     with pytest.raises(ValueError, match=match):
         gym.make(env_id, params=params)
@@ -242,12 +256,20 @@ def test_parameters_accept_numpy_numbers():
     assert p.dt_s == 1.0
 
 
-@pytest.mark.parametrize("reward, match", [
-    ({"w_abs": 1e308}, "w_abs"), ({"T0_K": 1e-200}, "T0_K"), ({"trip_penalty": -1}, "trip"),
-    ({"w_move": True}, "w_move"), ({"band_K": "5"}, "band_K"), ({"w_sq": float("inf")}, "w_sq"),
-    ({"w_abs": Fraction(10**9)}, "w_abs"), ({"w_abs": 10**400}, "w_abs"),
-    ({1: 0.0, "a": 0.0}, r"unknown reward option\(s\) \['a', 1\]"),
-])  # fmt: skip
+@pytest.mark.parametrize(
+    "reward, match",
+    [
+        ({"w_abs": 1e308}, "w_abs"),
+        ({"T0_K": 1e-200}, "T0_K"),
+        ({"trip_penalty": -1}, "trip"),
+        ({"w_move": True}, "w_move"),
+        ({"band_K": "5"}, "band_K"),
+        ({"w_sq": float("inf")}, "w_sq"),
+        ({"w_abs": Fraction(10**9)}, "w_abs"),
+        ({"w_abs": 10**400}, "w_abs"),
+        ({1: 0.0, "a": 0.0}, r"unknown reward option\(s\) \['a', 1\]"),
+    ],
+)
 def test_reward_options_are_bounded(reward, match):
     with pytest.raises(ValueError, match=match):
         gym.make(IDS[0], reward=reward)
@@ -349,9 +371,13 @@ def test_info_carries_each_rows_own_values(env_id):
     """Single-env and vector info (written by the compiled step and by reset) hold row b's
     outputs, reading, time, setpoint, load, spray and constraint cost, after a reset and
     after steps."""
-    sc = Scenario(name="distinct", duration_s=600.0, load=((0.0, 0.85), (600.0, 0.8)),
-                  fouling=((0.0, 1.05),),
-                  setpoint_offset_C=((0.0, 0.0), (600.0, -3.0)))  # fmt: skip
+    sc = Scenario(
+        name="distinct",
+        duration_s=600.0,
+        load=((0.0, 0.85), (600.0, 0.8)),
+        fouling=((0.0, 1.05),),
+        setpoint_offset_C=((0.0, 0.0), (600.0, -3.0)),
+    )
     venv = _vec(env_id, 2, scenario=sc)
     _, vinfo = venv.reset(seed=0)
     core = venv.unwrapped.core
@@ -365,12 +391,18 @@ def test_info_carries_each_rows_own_values(env_id):
             error = z[idx[plant.outlet]] - core.sp[b]
             cost = 0.0 if prev_error[b] is None else interval_cost(prev_error[b], error)
             prev_error[b] = error
-            expect = {"outlet_temp_C": z[idx[plant.outlet]],
-                      "measured_temp_noise_free_C": z[idx[plant.outlet_measured]],
-                      "measured_temp_C": core.meas[b], "time_s": k * plant.dt_s,
-                      "setpoint_C": core.sp[b], "load": core.D[b, 0],
-                      "spray_flow_kg_s": sum(z[idx[s]] for s in plant.sprays),
-                      "trip_reason": "", "cost": cost, "cost_band": cost}  # fmt: skip
+            expect = {
+                "outlet_temp_C": z[idx[plant.outlet]],
+                "measured_temp_noise_free_C": z[idx[plant.outlet_measured]],
+                "measured_temp_C": core.meas[b],
+                "time_s": k * plant.dt_s,
+                "setpoint_C": core.sp[b],
+                "load": core.D[b, 0],
+                "spray_flow_kg_s": sum(z[idx[s]] for s in plant.sprays),
+                "trip_reason": "",
+                "cost": cost,
+                "cost_band": cost,
+            }
             expect.update({name: z[idx[name]] for name in plant.extra_info})
             valves = [z[idx[v]] for v in plant.valves]
             expect["spray_valve"] = valves[0] if len(valves) == 1 else np.array(valves)
@@ -416,8 +448,11 @@ def test_a_copied_env_steps_as_the_original(copier):
 def test_schedule_tables_are_shared_across_rows():
     n = 10_000
     ts = np.linspace(0.0, 3600.0, n)
-    sc = Scenario(name="dense", duration_s=3600.0,
-                  load=tuple(zip(ts, 0.8 + 0.1 * np.sin(ts / 300.0), strict=True)))  # fmt: skip
+    sc = Scenario(
+        name="dense",
+        duration_s=3600.0,
+        load=tuple(zip(ts, 0.8 + 0.1 * np.sin(ts / 300.0), strict=True)),
+    )
     venv = _vec("steamtemp/Cascade300MW-v0", 256, scenario=sc)
     venv.reset(seed=0)
     core = venv.unwrapped.core

@@ -14,8 +14,14 @@ from agents.evaluation import run_episode
 from steamtemp_gym import scenarios
 from steamtemp_gym.scenarios import heldout
 
-REQUIRED = {"deep_fast_ramp", "mill_trip", "sootblowing", "hp_heater_out",
-            "setpoint_ramp_during_load_ramp", "high_noise"}  # fmt: skip
+REQUIRED = {
+    "deep_fast_ramp",
+    "mill_trip",
+    "sootblowing",
+    "hp_heater_out",
+    "setpoint_ramp_during_load_ramp",
+    "high_noise",
+}
 
 
 def test_the_six_held_out_kinds_are_shipped_and_not_registered():

@@ -37,8 +37,12 @@ def radau_reference(plant, x0, commands, D_of_k):
         x_ref = sol.y[:, -1]
         p = fsh._pressure(P, x_ref[fsh.IX.LW])
         # (FSH outlet, turbine inlet after the main-steam line) in C
-        out.append((T_ph(p, x_ref[fsh.IX.CHAIN + 2 * n - 1]) - 273.15,
-                    T_ph(p, x_ref[fsh.s_line(n) + int(P[fsh.IP.NL]) - 1]) - 273.15))  # fmt: skip
+        out.append(
+            (
+                T_ph(p, x_ref[fsh.IX.CHAIN + 2 * n - 1]) - 273.15,
+                T_ph(p, x_ref[fsh.s_line(n) + int(P[fsh.IP.NL]) - 1]) - 273.15,
+            )
+        )
     return np.array(out)
 
 

@@ -105,7 +105,8 @@ def test_no_kernel_compiles_twice_for_one_argument_type():
     """In a fresh process that makes, resets and steps every plant (calibration
     included), no project kernel holds two specialisations that differ only in a literal
     value, array mutability or layout: each would be a whole compilation on a cold start."""
-    out = subprocess.run([sys.executable, "-c", _SCRIPT], capture_output=True, text=True,
-                         check=True).stdout  # fmt: skip
+    out = subprocess.run(
+        [sys.executable, "-c", _SCRIPT], capture_output=True, text=True, check=True
+    ).stdout
     assert "twice:" not in out, out
     assert int(out.split("kernels:")[1]) > 100

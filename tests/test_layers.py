@@ -17,8 +17,11 @@ from steamtemp_gym.testing.cli import main
 
 ROOT = Path(__file__).resolve().parent.parent
 #: Each package and the packages of this distribution it may import.
-ALLOWED = {"steamtemp_gym": set(), "baselines": {"steamtemp_gym"},
-           "agents": {"steamtemp_gym", "baselines"}}  # fmt: skip
+ALLOWED = {
+    "steamtemp_gym": set(),
+    "baselines": {"steamtemp_gym"},
+    "agents": {"steamtemp_gym", "baselines"},
+}
 
 
 def _imports(path: Path) -> list[tuple[int, str]]:
@@ -63,32 +66,42 @@ def test_no_code_outside_a_plants_package_names_a_plant():
         for f in sorted((ROOT / package).rglob("*.py")):
             rel = f.relative_to(ROOT)
             if rel.as_posix() == "steamtemp_gym/catalog.py" or (
-                    rel.parts[:2] == ("steamtemp_gym", "plants")
-                    and (rel.parts[2] if len(rel.parts) > 3 else f.stem) in own):  # fmt: skip
+                rel.parts[:2] == ("steamtemp_gym", "plants")
+                and (rel.parts[2] if len(rel.parts) > 3 else f.stem) in own
+            ):
                 continue
             words = _code_words(ast.parse(f.read_bytes()))
-            bad += [f"{rel}:{line} {text[:60]!r}" for line, text in words
-                    if any(name in text for name in names)]  # fmt: skip
+            bad += [
+                f"{rel}:{line} {text[:60]!r}"
+                for line, text in words
+                if any(name in text for name in names)
+            ]
     assert not bad, bad
 
 
 @pytest.mark.parametrize("package", sorted(ALLOWED))
 def test_a_package_imports_only_the_packages_below_it(package):
     own = set(ALLOWED) - {package} - ALLOWED[package]
-    bad = [f"{f.relative_to(ROOT)}:{line} imports {name}"
-           for f in sorted((ROOT / package).rglob("*.py"))
-           for line, name in _imports(f) if name.split(".")[0] in own]  # fmt: skip
+    bad = [
+        f"{f.relative_to(ROOT)}:{line} imports {name}"
+        for f in sorted((ROOT / package).rglob("*.py"))
+        for line, name in _imports(f)
+        if name.split(".")[0] in own
+    ]
     assert not bad, bad
 
 
 def test_importing_the_envs_and_scenarios_loads_no_plant_and_no_policy():
-    code = ("import sys, gymnasium as gym, steamtemp_gym, steamtemp_gym.scenarios as s\n"
-            "own = s.names('steamtemp/Cascade300MW-v0')\n"
-            "print(sorted(m.split('.')[0] for m in sys.modules if m.split('.')[0] in "
-            "('baselines', 'agents')), 'steamtemp_gym.plants.supercritical_fsh' in sys.modules,"
-            " 'setpoint_step_535_545' in own)")  # fmt: skip
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                         cwd=ROOT, check=True).stdout.split()  # fmt: skip
+    code = (
+        "import sys, gymnasium as gym, steamtemp_gym, steamtemp_gym.scenarios as s\n"
+        "own = s.names('steamtemp/Cascade300MW-v0')\n"
+        "print(sorted(m.split('.')[0] for m in sys.modules if m.split('.')[0] in "
+        "('baselines', 'agents')), 'steamtemp_gym.plants.supercritical_fsh' in sys.modules,"
+        " 'setpoint_step_535_545' in own)"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT, check=True
+    ).stdout.split()
     # the plant's own scenarios are found through the catalog without a prior import
     assert out == ["[]", "False", "True"]
 
@@ -109,8 +122,12 @@ def _source(names: dict) -> types.SimpleNamespace:
             raise ValueError(f"unknown policy {name!r}; mine: {sorted(names)}")
         return names[name]
 
-    return types.SimpleNamespace(parse=parse, FORMS="one of mine", listing=lambda: ["mine"],
-                                 everyday_names=lambda: ["my_everyday"])  # fmt: skip
+    return types.SimpleNamespace(
+        parse=parse,
+        FORMS="one of mine",
+        listing=lambda: ["mine"],
+        everyday_names=lambda: ["my_everyday"],
+    )
 
 
 def test_a_registered_source_takes_precedence_and_leaves_cleanly(capsys):

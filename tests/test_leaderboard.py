@@ -92,8 +92,14 @@ def tiny(tmp_path) -> Path:
 
 
 def _args(tiny: Path, out: Path, **flags: str) -> list[str]:
-    base = {"--envs": ENV, "--policies": "frozen", "--scenarios": str(tiny), "--seeds": "0",
-            "--out": str(out), "--jobs": "1"}  # fmt: skip
+    base = {
+        "--envs": ENV,
+        "--policies": "frozen",
+        "--scenarios": str(tiny),
+        "--seeds": "0",
+        "--out": str(out),
+        "--jobs": "1",
+    }
     base.update(flags)
     oracle = base.pop("oracle", None)  # the oracle (the slowest policy) only where a test asks
     return [f"{k}={v}" for k, v in base.items()] + ([] if oracle else ["--no-oracle"])
@@ -236,7 +242,8 @@ def test_corrupt_record_line_is_an_error_on_resume(tiny, tmp_path, fake_policies
 
 @pytest.mark.parametrize("value", ["1e308", "true", "-2e15"])
 def test_a_row_with_a_return_no_episode_gives_is_an_error_on_resume(
-        tiny, tmp_path, fake_policies, capsys, value):  # fmt: skip
+    tiny, tmp_path, fake_policies, capsys, value
+):
     """A row appended to the record with a return of 1e308 or true was taken by --resume,
     and the run then crashed in matplotlib; now it is an argparse error naming the line and
     the file is left as it was."""
@@ -245,8 +252,9 @@ def test_a_row_with_a_return_no_episode_gives_is_an_error_on_resume(
     lines = (out / records.EPISODES).read_text().splitlines()
     row = json.loads(lines[0])
     forged = json.dumps({**row, "metrics": {**row["metrics"]}})
-    forged = forged.replace(f'"return": {json.dumps(row["metrics"]["return"])}',
-                            f'"return": {value}')  # fmt: skip
+    forged = forged.replace(
+        f'"return": {json.dumps(row["metrics"]["return"])}', f'"return": {value}'
+    )
     text = "\n".join([*lines, forged, lines[0]]) + "\n"
     (out / records.EPISODES).write_text(text)
     with pytest.raises(SystemExit) as exc:
@@ -284,8 +292,12 @@ def test_default_run_is_valid_without_running(monkeypatch, tmp_path):
     assert plan.scenarios == list(DEFAULT_SCENARIOS)
     assert {f"heldout:{n}" for n in steamtemp_gym.scenarios.heldout.NAMES} <= set(plan.scenarios)
     for env_id in IDS:  # every baseline, every shipped agent, the references
-        shipped = [n for e, a in agents.shipped() if e == env_id  # one name per training run
-                   for n in specs.training_runs(f"sb3:{a}", env_id)]  # fmt: skip
+        shipped = [
+            n
+            for e, a in agents.shipped()
+            if e == env_id  # one name per training run
+            for n in specs.training_runs(f"sb3:{a}", env_id)
+        ]
         assert plan.policies[env_id] == [*baselines.NAMES, *shipped, "oracle", REFERENCE]
     n = sum(len(p) for p in plan.policies.values())
     variants = {e: len(mismatch.labels(e)) for e in IDS}  # but the two references
@@ -300,8 +312,19 @@ def test_help_documents_failures_and_resume(capsys):
         lb.main(["--help"])
     assert exc.value.code == 0
     text = capsys.readouterr().out
-    for word in ("--resume", "episodes.jsonl", "exit code is 1", "0-4", "duplicates", "--jobs",
-                 "heldout:", "frozen_valve", "oracle", "--no-oracle", "default:"):
+    for word in (
+        "--resume",
+        "episodes.jsonl",
+        "exit code is 1",
+        "0-4",
+        "duplicates",
+        "--jobs",
+        "heldout:",
+        "frozen_valve",
+        "oracle",
+        "--no-oracle",
+        "default:",
+    ):
         assert word in text
 
 
@@ -313,15 +336,18 @@ def _board(out: Path) -> list[dict]:
 def test_resume_after_a_crash_completes_without_duplicates(tiny, tmp_path, fake_policies):
     """Killed in the 2nd of 6 batches, plus a half-written line: --resume runs the rest."""
     out = tmp_path / "out"
-    argv = _args(tiny, out, **{"--envs": f"{ENV},{ENV2}", "--seeds": "0,1",
-                               "--policies": "frozen,flaky"})  # fmt: skip
+    argv = _args(
+        tiny, out, **{"--envs": f"{ENV},{ENV2}", "--seeds": "0,1", "--policies": "frozen,flaky"}
+    )
     fake_policies[("flaky", 1)] = KeyboardInterrupt()  # ENV: frozen 0, 1, [flaky 0, 1]
     with pytest.raises(SystemExit) as exc:
         lb.main(argv)
     assert exc.value.code == 130
     rows = _jsonl(out / records.EPISODES)
     assert [(r["env"], r["policy"], r["seed"]) for r in rows] == [
-        (ENV, "frozen", 0), (ENV, "frozen", 1)]  # fmt: skip
+        (ENV, "frozen", 0),
+        (ENV, "frozen", 1),
+    ]
     assert len(_board(out)) == 2  # what finished, rebuilt
     with (out / records.EPISODES).open("a") as f:  # a crash in the middle of a write
         f.write(json.dumps(rows[-1])[:25])
@@ -332,11 +358,16 @@ def test_resume_after_a_crash_completes_without_duplicates(tiny, tmp_path, fake_
     assert len(keys) == len(set(keys)) == 16
     board = _board(out)
     assert [(r["env"], r["policy"], r["seed"]) for r in board] == [
-        (e, p, s) for e in (ENV, ENV2) for p in ("frozen", "flaky", "cascade_pi_ff", REFERENCE)
-        for s in (0, 1)]  # fmt: skip
+        (e, p, s)
+        for e in (ENV, ENV2)
+        for p in ("frozen", "flaky", "cascade_pi_ff", REFERENCE)
+        for s in (0, 1)
+    ]
     assert all(r["metrics"] is not None and "error" not in r for r in board)
     assert {p.name for p in (out / "plots").glob("*__*.png")} == {
-        "Cascade300MW-v0__tiny.png", "DrumBoilerSH-v0__tiny.png"}  # fmt: skip
+        "Cascade300MW-v0__tiny.png",
+        "DrumBoilerSH-v0__tiny.png",
+    }
     # a finished run resumed again runs nothing and rebuilds the same board
     lb.main([*argv, "--resume"])
     assert len(_jsonl(out / records.EPISODES)) == 16
@@ -344,21 +375,30 @@ def test_resume_after_a_crash_completes_without_duplicates(tiny, tmp_path, fake_
 
 
 @pytest.mark.parametrize("every", [False, True])
-def test_trend_plots_name_the_scenario_and_show_the_selection(tmp_path, fake_policies,
-                                                              monkeypatch, every):  # fmt: skip
+def test_trend_plots_name_the_scenario_and_show_the_selection(
+    tmp_path, fake_policies, monkeypatch, every
+):
     """A trend plot's title names the scenario (the YAML's name, not its path); by default it
     shows the reference and the best of the others (the frozen valve only with --trend-all),
     each plant drawn once all its episodes have finished."""
     path = tmp_path / "some_file.yaml"
     path.write_text(TINY)
     calls = []
-    monkeypatch.setattr(trends, "trend", lambda p, env, env_id, sc, traces, seed, **kw:
-                        calls.append((p.name, env_id, sc, list(traces), kw["colors"])))
-    argv = _args(path, tmp_path / "out", **{"--policies": "frozen,flaky",
-                                            "--envs": f"{ENV},{ENV2}"})  # fmt: skip
+    monkeypatch.setattr(
+        trends,
+        "trend",
+        lambda p, env, env_id, sc, traces, seed, **kw: calls.append(
+            (p.name, env_id, sc, list(traces), kw["colors"])
+        ),
+    )
+    argv = _args(
+        path, tmp_path / "out", **{"--policies": "frozen,flaky", "--envs": f"{ENV},{ENV2}"}
+    )
     lb.main(argv + (["--trend-all"] if every else []))
-    assert [c[:3] for c in calls] == [("Cascade300MW-v0__some_file.png", ENV, "tiny"),
-                                      ("DrumBoilerSH-v0__some_file.png", ENV2, "tiny")]
+    assert [c[:3] for c in calls] == [
+        ("Cascade300MW-v0__some_file.png", ENV, "tiny"),
+        ("DrumBoilerSH-v0__some_file.png", ENV2, "tiny"),
+    ]
     shown = ["cascade_pi_ff", "flaky", "frozen"] + (["frozen_valve"] if every else [])
     assert all(sorted(c[3]) == sorted(shown) and c[3][0] == "cascade_pi_ff" for c in calls)
     assert all(len(set(c[4].values())) == len(c[4]) for c in calls)
@@ -411,9 +451,15 @@ def test_policy_that_cannot_be_built_fails_its_episodes_only(
     assert exc.value.code == 1
     board = _board(out)
     assert [("error" in r, r["policy"]) for r in board] == [
-        (True, "flaky"), (True, "flaky"), (False, "frozen"), (False, "frozen"),
-        (False, "cascade_pi_ff"), (False, "cascade_pi_ff"), (False, REFERENCE),
-        (False, REFERENCE)]  # fmt: skip
+        (True, "flaky"),
+        (True, "flaky"),
+        (False, "frozen"),
+        (False, "frozen"),
+        (False, "cascade_pi_ff"),
+        (False, "cascade_pi_ff"),
+        (False, REFERENCE),
+        (False, REFERENCE),
+    ]
     assert list((out / "plots").glob("*.png"))
 
 
@@ -493,8 +539,10 @@ def test_run_batch_is_identical_to_run_episode():
 def test_rows_of_their_own_scenarios_equal_run_episode():
     """Rows of different scenarios side by side in one vector env (the leaderboard's
     batches: episodes.RowScenarios) give each scenario's single-env traces bit for bit."""
-    sc = [scenarios.Scenario.from_dict(yaml.safe_load(TINY)),
-          scenarios.Scenario.from_dict(yaml.safe_load(TINY.replace("0.95", "0.9")))]  # fmt: skip
+    sc = [
+        scenarios.Scenario.from_dict(yaml.safe_load(TINY)),
+        scenarios.Scenario.from_dict(yaml.safe_load(TINY.replace("0.95", "0.9"))),
+    ]
     rows, seeds = [sc[1], sc[0], sc[1]], [3, 7, 7]
     venv = gym.make_vec(ENV, num_envs=3, vectorization_mode="vector_entry_point", scenario=sc[0])
     venv = episodes.RowScenarios(venv, rows)
@@ -525,18 +573,39 @@ def test_batches_group_a_shipped_policy_s_scenarios_of_equal_length():
     short = scenarios.Scenario.from_dict(yaml.safe_load(TINY))
     other = scenarios.Scenario.from_dict(yaml.safe_load(TINY.replace("0.95", "0.9")))
     long = scenarios.Scenario.from_dict(yaml.safe_load(TINY.replace("60", "120")))
-    units = [_unit("a", short), _unit("b", long), _unit("c", other), _unit("a", short, "fao_sf"),
-             _unit("c", other, "fao_sf"), _unit("a", short, "oracle"), _unit("c", other, "oracle"),
-             _unit("a", short, "mpc_arx"), _unit("c", other, "mpc_arx"),
-             _unit("m", short, params={"k": 1}), _unit("n", other, params={"k": 1}),
-             _unit("a", short, OWN), _unit("c", other, OWN),
-             _unit("r", "random"), _unit("s", "random")]  # fmt: skip
+    units = [
+        _unit("a", short),
+        _unit("b", long),
+        _unit("c", other),
+        _unit("a", short, "fao_sf"),
+        _unit("c", other, "fao_sf"),
+        _unit("a", short, "oracle"),
+        _unit("c", other, "oracle"),
+        _unit("a", short, "mpc_arx"),
+        _unit("c", other, "mpc_arx"),
+        _unit("m", short, params={"k": 1}),
+        _unit("n", other, params={"k": 1}),
+        _unit("a", short, OWN),
+        _unit("c", other, OWN),
+        _unit("r", "random"),
+        _unit("s", "random"),
+    ]
     got = [[(u.spec, u.policy) for u in b] for b in episodes.batches(units)]
-    assert got == [[("a", "lqi"), ("c", "lqi")], [("b", "lqi")],
-                   [("a", "fao_sf"), ("c", "fao_sf")], [("a", "oracle")], [("c", "oracle")],
-                   [("a", "mpc_arx")], [("c", "mpc_arx")],
-                   [("m", "lqi")], [("n", "lqi")], [("a", OWN)],
-                   [("c", OWN)], [("r", "lqi")], [("s", "lqi")]]  # fmt: skip
+    assert got == [
+        [("a", "lqi"), ("c", "lqi")],
+        [("b", "lqi")],
+        [("a", "fao_sf"), ("c", "fao_sf")],
+        [("a", "oracle")],
+        [("c", "oracle")],
+        [("a", "mpc_arx")],
+        [("c", "mpc_arx")],
+        [("m", "lqi")],
+        [("n", "lqi")],
+        [("a", OWN)],
+        [("c", OWN)],
+        [("r", "lqi")],
+        [("s", "lqi")],
+    ]
 
 
 def test_a_batch_that_raises_runs_its_units_then_seeds_alone(tmp_path, fake_policies):
@@ -554,14 +623,18 @@ def test_a_batch_that_raises_runs_its_units_then_seeds_alone(tmp_path, fake_poli
     ok, bad = _board(tmp_path / "ok"), _board(tmp_path / "bad")
     failed = [(r["scenario"], r["seed"]) for r in bad if "error" in r]
     assert failed == [(str(paths[0]), 1), (str(paths[1]), 1)]
-    assert [r for r in bad if "error" not in r] == [r for r in ok if r["seed"] == 0
-                                                   or r["policy"] != "flaky"]  # fmt: skip
+    assert [r for r in bad if "error" not in r] == [
+        r for r in ok if r["seed"] == 0 or r["policy"] != "flaky"
+    ]
 
 
 def test_parallel_rows_equal_in_process_rows(tiny, tmp_path):
     """--jobs 2 (worker processes) writes the same rows as --jobs 1."""
-    flags = {"--policies": "cascade_pi,lqi", "--seeds": "0-2",
-             "--scenarios": f"{tiny},setpoint_step"}  # fmt: skip
+    flags = {
+        "--policies": "cascade_pi,lqi",
+        "--seeds": "0-2",
+        "--scenarios": f"{tiny},setpoint_step",
+    }
     lb.main(_args(tiny, tmp_path / "a", **flags))
     lb.main(_args(tiny, tmp_path / "b", **flags, **{"--jobs": "2"}))
     a = _strict_load(tmp_path / "a" / "leaderboard.json")
@@ -574,8 +647,11 @@ def test_ray_backend_rows_equal_local_rows(tiny, tmp_path):
     pytest.importorskip("ray")
     import ray
 
-    flags = {"--policies": "cascade_pi,lqi", "--seeds": "0-1",
-             "--scenarios": f"{tiny},setpoint_step"}  # fmt: skip
+    flags = {
+        "--policies": "cascade_pi,lqi",
+        "--seeds": "0-1",
+        "--scenarios": f"{tiny},setpoint_step",
+    }
     lb.main(_args(tiny, tmp_path / "a", **flags))
     try:
         lb.main([*_args(tiny, tmp_path / "b", **flags, **{"--jobs": "2"}), "--backend=ray"])
@@ -597,8 +673,18 @@ def test_ray_flags_are_checked(tiny, tmp_path, capsys):
 def test_leaderboard_cli_with_the_baseline(tmp_path):
     """The real baselines, agents and references on two scenarios: rows, summary (0 =
     cascade_pi_ff, 1 = oracle), markdown and plots."""
-    lb.main(["--envs", IDS[0], "--scenarios", "setpoint_step,heldout:mill_trip", "--seeds",
-             "0,1", "--out", str(tmp_path)])  # fmt: skip
+    lb.main(
+        [
+            "--envs",
+            IDS[0],
+            "--scenarios",
+            "setpoint_step,heldout:mill_trip",
+            "--seeds",
+            "0,1",
+            "--out",
+            str(tmp_path),
+        ]
+    )
     doc = _strict_load(tmp_path / "leaderboard.json")
     rows = doc["episodes"]
     trained = [f"sb3:{a}" for e, a in agents.shipped() if e == IDS[0]]  # shipped agents too
@@ -612,8 +698,9 @@ def test_leaderboard_cli_with_the_baseline(tmp_path):
     assert all("rank" not in pols[r] for r in refs)
     zero = ZERO
     assert f"p_improvement_over_{zero}" not in pols[zero]
-    assert all(0 <= e[f"p_improvement_over_{zero}"]["value"] <= 1
-               for p, e in pols.items() if p != zero)  # fmt: skip
+    assert all(
+        0 <= e[f"p_improvement_over_{zero}"]["value"] <= 1 for p, e in pols.items() if p != zero
+    )
     assert pols[zero]["normalized_score"]["mean"]["value"] == pytest.approx(0.0)
     for sc, ref in doc["plants"][IDS[0]]["reference"].items():  # the oracle at 1, or floored
         cell = doc["plants"][IDS[0]]["scenarios"][sc]["oracle"]
@@ -631,21 +718,30 @@ def test_leaderboard_cli_with_the_baseline(tmp_path):
     table = [line for line in part.splitlines() if line.startswith("| SupercriticalFSH")]
     others = [p for p in baselines.NAMES if p != zero]
     best_base = max(others, key=lambda p: pols[p]["normalized_score"]["iqm"]["value"])
-    assert [r.split(" | ")[1] for r in table] == [zero, f"{best_base} (best baseline)",
-                                                  *sorted(trained)]  # fmt: skip
-    assert [r.split(" | ")[2] for r in table] == ["baseline", "baseline",
-                                                  *(agents.kind(t[4:]) for t in sorted(trained))]
+    assert [r.split(" | ")[1] for r in table] == [
+        zero,
+        f"{best_base} (best baseline)",
+        *sorted(trained),
+    ]
+    assert [r.split(" | ")[2] for r in table] == [
+        "baseline",
+        "baseline",
+        *(agents.kind(t[4:]) for t in sorted(trained)),
+    ]
     assert sum(r.split(" | ")[3].startswith("**") for r in table) == 1
     names = {p.name for p in (tmp_path / "plots").glob("*.png")}
-    assert {"scores.png", "profiles.png", "pareto.png",
-            "SupercriticalFSH-v0__heldout_mill_trip.png"} <= names  # fmt: skip
+    assert {
+        "scores.png",
+        "profiles.png",
+        "pareto.png",
+        "SupercriticalFSH-v0__heldout_mill_trip.png",
+    } <= names
     with pytest.raises(SystemExit):
         lb.main(["--envs", "steamtemp/Nope-v0", "--out", str(tmp_path / "x")])
 
 
 # ------------------------------------------------------------- concurrency and signals
-def test_resume_refuses_a_hand_edited_row_without_metrics(tiny, tmp_path, fake_policies,
-                                                          capsys):  # fmt: skip
+def test_resume_refuses_a_hand_edited_row_without_metrics(tiny, tmp_path, fake_policies, capsys):
     """A well-formed row of a finished episode whose metrics were emptied by hand is an
     argparse error naming the line and what it lacks, not a KeyError traceback."""
     out = tmp_path / "out"
@@ -667,11 +763,32 @@ def _start_cli(out: Path, *extra: str):
     import sys
     import time
 
-    args = [sys.executable, "-m", "agents.leaderboard", "--envs", ENV, "--policies",
-            "cascade_pi,lqi", "--scenarios", "load_ramp_100_50", "--seeds", "0-63",
-            "--jobs", "2", "--no-oracle", "--out", str(out), *extra]  # fmt: skip
-    proc = subprocess.Popen(args, cwd=Path(__file__).parents[1], stdout=subprocess.DEVNULL,
-                            stderr=subprocess.PIPE, text=True)  # fmt: skip
+    args = [
+        sys.executable,
+        "-m",
+        "agents.leaderboard",
+        "--envs",
+        ENV,
+        "--policies",
+        "cascade_pi,lqi",
+        "--scenarios",
+        "load_ramp_100_50",
+        "--seeds",
+        "0-63",
+        "--jobs",
+        "2",
+        "--no-oracle",
+        "--out",
+        str(out),
+        *extra,
+    ]
+    proc = subprocess.Popen(
+        args,
+        cwd=Path(__file__).parents[1],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
     deadline = time.monotonic() + 60
     while len(workers := children(proc.pid)) < 2 and time.monotonic() < deadline:
         assert proc.poll() is None, proc.stderr.read()
@@ -714,11 +831,26 @@ def test_a_second_run_on_the_same_out_is_refused(tmp_path, capsys):
     try:
         before = (out / records.EPISODES).read_bytes()
         with pytest.raises(SystemExit) as exc:
-            lb.main(["--envs", ENV, "--policies", "cascade_pi", "--scenarios", "setpoint_step",
-                     "--seeds", "0", "--jobs", "1", "--out", str(out), "--resume"])  # fmt: skip
+            lb.main(
+                [
+                    "--envs",
+                    ENV,
+                    "--policies",
+                    "cascade_pi",
+                    "--scenarios",
+                    "setpoint_step",
+                    "--seeds",
+                    "0",
+                    "--jobs",
+                    "1",
+                    "--out",
+                    str(out),
+                    "--resume",
+                ]
+            )
         assert exc.value.code == 2
         assert "in use by another steamtemp-leaderboard run" in capsys.readouterr().err
-        assert (out / records.EPISODES).read_bytes()[:len(before)] == before
+        assert (out / records.EPISODES).read_bytes()[: len(before)] == before
         assert proc.poll() is None
     finally:
         proc.send_signal(signal.SIGTERM)

@@ -122,13 +122,29 @@ def files(tmp_path) -> tuple[Path, Path]:
     return tmp_path / "pols.py", tmp_path / "tiny.yaml"
 
 
-def _argv(files, out: Path, policies: list[str], seeds: str = "0,1", jobs: int = 1,
-          *extra: str) -> list[str]:  # fmt: skip
+def _argv(
+    files, out: Path, policies: list[str], seeds: str = "0,1", jobs: int = 1, *extra: str
+) -> list[str]:
     pols, tiny = files
-    names = ",".join(p if p in ("cascade_pi", "lqi", "cascade_pi_ff") else f"{pols}:{p}"
-                     for p in policies)  # fmt: skip
-    return ["--envs", ENV, "--policies", names, "--scenarios", str(tiny), "--seeds", seeds,
-            "--jobs", str(jobs), "--no-oracle", "--out", str(out), *extra]  # fmt: skip
+    names = ",".join(
+        p if p in ("cascade_pi", "lqi", "cascade_pi_ff") else f"{pols}:{p}" for p in policies
+    )
+    return [
+        "--envs",
+        ENV,
+        "--policies",
+        names,
+        "--scenarios",
+        str(tiny),
+        "--seeds",
+        seeds,
+        "--jobs",
+        str(jobs),
+        "--no-oracle",
+        "--out",
+        str(out),
+        *extra,
+    ]
 
 
 def _rows(out: Path) -> dict[tuple[str, int], dict]:
@@ -138,14 +154,18 @@ def _rows(out: Path) -> dict[tuple[str, int], dict]:
 
 @pytest.mark.parametrize("jobs", [1, 2])
 def test_a_policy_ending_its_process_fails_its_episodes_and_the_run_goes_on(
-        files, tmp_path, capsys, jobs):  # fmt: skip
+    files, tmp_path, capsys, jobs
+):
     """SystemExit, KeyboardInterrupt and os._exit in predict fail that policy's episodes;
     every other row is written, the outputs are built, the exit status is 1 with a message
     (SystemExit ended the run with status 3, nothing printed and no leaderboard.json)."""
     out = tmp_path / "out"
     with pytest.raises(SystemExit) as exc:
-        lb.main(_argv(files, out, ["cascade_pi", "sys_exit", "interrupt", "ends_its_process"],
-                      jobs=jobs))  # fmt: skip
+        lb.main(
+            _argv(
+                files, out, ["cascade_pi", "sys_exit", "interrupt", "ends_its_process"], jobs=jobs
+            )
+        )
     assert exc.value.code == 1
     rows = _rows(out)
     assert len(rows) == 6 * 2  # the four, cascade_pi_ff, frozen_valve x 2 seeds
@@ -195,8 +215,9 @@ def test_a_hanging_policy_times_out_and_resumes(files, tmp_path, monkeypatch, ca
 def test_episode_timeout_flag_is_checked(files, tmp_path, capsys):
     for bad in ("-1", "nan", "soon"):
         with pytest.raises(SystemExit) as exc:
-            lb.main(_argv(files, tmp_path / "out", ["cascade_pi"], "0", 1,
-                          "--episode-timeout", bad))  # fmt: skip
+            lb.main(
+                _argv(files, tmp_path / "out", ["cascade_pi"], "0", 1, "--episode-timeout", bad)
+            )
         assert exc.value.code == 2 and "--episode-timeout" in capsys.readouterr().err
     assert not (tmp_path / "out").exists()
     assert EPISODE_TIMEOUT_S >= 10 * 28  # the longest shipped episode measured: 28 s
@@ -281,10 +302,13 @@ def test_answers_read_numbers_strings_containers_and_arrays_only(tmp_path):
         def __reduce__(self):
             return payload
 
-    for bad, words in [(("ok", (a, Runs())), "names builtins.exec"),
-                       (("ok", np.array([Runs()], dtype=object)), "names builtins.exec"),
-                       (("ok", np.ma.masked_array([1.0])), "names numpy.ma"),
-                       (("error", 5), "another form"), (["ok", None], "another form")]:  # fmt: skip
+    for bad, words in [
+        (("ok", (a, Runs())), "names builtins.exec"),
+        (("ok", np.array([Runs()], dtype=object)), "names builtins.exec"),
+        (("ok", np.ma.masked_array([1.0])), "names numpy.ma"),
+        (("error", 5), "another form"),
+        (["ok", None], "another form"),
+    ]:
         with pytest.raises(ValueError, match=words):
             isolated.read_answer(dumps(bad))
     with pytest.raises(ValueError, match="cannot cross"):
@@ -343,8 +367,9 @@ def test_ctrl_c_still_stops_the_run_and_ends_the_policys_process(files, tmp_path
     out = tmp_path / "out"
     env = dict(os.environ, POLICY_SLEEPS="1")
     argv = [sys.executable, "-m", "agents.leaderboard", *_argv(files, out, ["sleeper"], "0")]
-    proc = subprocess.Popen(argv, cwd=ROOT, env=env, stdout=subprocess.DEVNULL,
-                            stderr=subprocess.PIPE, text=True)  # fmt: skip
+    proc = subprocess.Popen(
+        argv, cwd=ROOT, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True
+    )
     try:
         deadline = time.monotonic() + 60
         record = out / records.EPISODES  # opened once the plan is made: the run's process
@@ -411,27 +436,59 @@ def test_a_factory_module_that_patches_the_scoring_at_import_changes_nothing(tmp
     (tmp_path / "tiny.yaml").write_text(TINY)
     real = episodes._ok_row
     out = tmp_path / "out"
-    lb.main(["--envs", ENV, "--policies", f"cascade_pi,{tmp_path / 'patcher.py'}:make",
-             "--scenarios", str(tmp_path / "tiny.yaml"), "--seeds", "0", "--jobs", "1",
-             "--no-oracle", "--out", str(out)])  # fmt: skip
+    lb.main(
+        [
+            "--envs",
+            ENV,
+            "--policies",
+            f"cascade_pi,{tmp_path / 'patcher.py'}:make",
+            "--scenarios",
+            str(tmp_path / "tiny.yaml"),
+            "--seeds",
+            "0",
+            "--jobs",
+            "1",
+            "--no-oracle",
+            "--out",
+            str(out),
+        ]
+    )
     assert episodes._ok_row is real
     assert "patcher" not in sys.modules
     rows = _rows(out)
     assert rows["make", 0]["metrics"]["return"] < 0  # the valve held shut, scored as it is
     clean = tmp_path / "clean"
-    lb.main(["--envs", ENV, "--policies", "cascade_pi", "--scenarios",
-             str(tmp_path / "tiny.yaml"), "--seeds", "0", "--jobs", "1", "--no-oracle",
-             "--out", str(clean)])  # fmt: skip
+    lb.main(
+        [
+            "--envs",
+            ENV,
+            "--policies",
+            "cascade_pi",
+            "--scenarios",
+            str(tmp_path / "tiny.yaml"),
+            "--seeds",
+            "0",
+            "--jobs",
+            "1",
+            "--no-oracle",
+            "--out",
+            str(clean),
+        ]
+    )
     for key, row in _rows(clean).items():
         assert rows[key]["metrics"] == row["metrics"], key
 
 
-@pytest.mark.parametrize(("body", "words"), [
-    ("import os\nos._exit(0)\n", ["process ended (exit code 0) during its build"]),
-    ("import time\ntime.sleep(1000)\n", ["did not answer its build within 3 s"]),
-])  # fmt: skip
+@pytest.mark.parametrize(
+    ("body", "words"),
+    [
+        ("import os\nos._exit(0)\n", ["process ended (exit code 0) during its build"]),
+        ("import time\ntime.sleep(1000)\n", ["did not answer its build within 3 s"]),
+    ],
+)
 def test_a_factory_module_that_ends_or_hangs_at_import_is_a_bad_policies_value(
-        tmp_path, capsys, body, words):  # fmt: skip
+    tmp_path, capsys, body, words
+):
     """os._exit at import ended the run with status 0, no output and no --out; a sleep at
     import hung it past --episode-timeout. Now the module is first imported in the policy's
     own process, at the run's check of its policies: an argparse error naming it, in about
@@ -441,9 +498,23 @@ def test_a_factory_module_that_ends_or_hangs_at_import_is_a_bad_policies_value(
     out = tmp_path / "out"
     t0 = time.monotonic()
     with pytest.raises(SystemExit) as exc:
-        lb.main(["--envs", ENV, "--policies", f"{tmp_path / 'hostile.py'}:make",
-                 "--scenarios", str(tmp_path / "tiny.yaml"), "--seeds", "0", "--no-oracle",
-                 "--episode-timeout", "3", "--out", str(out)])  # fmt: skip
+        lb.main(
+            [
+                "--envs",
+                ENV,
+                "--policies",
+                f"{tmp_path / 'hostile.py'}:make",
+                "--scenarios",
+                str(tmp_path / "tiny.yaml"),
+                "--seeds",
+                "0",
+                "--no-oracle",
+                "--episode-timeout",
+                "3",
+                "--out",
+                str(out),
+            ]
+        )
     err = capsys.readouterr().err
     assert exc.value.code == 2 and "argument --policies" in err, err
     assert all(w in err for w in words), err
@@ -451,7 +522,9 @@ def test_a_factory_module_that_ends_or_hangs_at_import_is_a_bad_policies_value(
 
 
 # ------------------------------------ a policy cannot kill the run or rewrite its record
-HOSTILE = POLICIES + """
+HOSTILE = (
+    POLICIES
+    + """
 
 import signal
 
@@ -490,14 +563,19 @@ def kills_everything(env):
 def rewrites_the_record(env):
     return Scripted(env, _rewrite_the_record)
 """
+)
 
 
 @pytest.mark.skipif(sandbox.available() is not None, reason=f"no sandbox: {sandbox.available()}")
-@pytest.mark.parametrize(("hostile", "fails"), [
-    ("kills_the_run", None), ("kills_everything", "ProcessLookupError: [Errno 3] No such process"),
-    ("rewrites_the_record", "Read-only file system"),
-    ("bulky", "larger than 64 MiB: refused before it is read"),
-])  # fmt: skip
+@pytest.mark.parametrize(
+    ("hostile", "fails"),
+    [
+        ("kills_the_run", None),
+        ("kills_everything", "ProcessLookupError: [Errno 3] No such process"),
+        ("rewrites_the_record", "Read-only file system"),
+        ("bulky", "larger than 64 MiB: refused before it is read"),
+    ],
+)
 def test_a_policy_can_neither_kill_the_run_nor_rewrite_its_record(tmp_path, hostile, fails):
     """A policy that signals its parent (SIGKILL ended the run with status 137, and --resume
     reran it forever), every process it may, or appends to the run's episodes.jsonl
@@ -513,9 +591,24 @@ def test_a_policy_can_neither_kill_the_run_nor_rewrite_its_record(tmp_path, host
     (tmp_path / "tiny.yaml").write_text(TINY)
 
     def run(out: Path, policies: str) -> subprocess.CompletedProcess:
-        argv = [sys.executable, "-m", "agents.leaderboard", "--envs", ENV, "--policies",
-                policies, "--scenarios", str(tmp_path / "tiny.yaml"), "--seeds", "0,1",
-                "--jobs", "1", "--no-oracle", "--out", str(out)]  # fmt: skip
+        argv = [
+            sys.executable,
+            "-m",
+            "agents.leaderboard",
+            "--envs",
+            ENV,
+            "--policies",
+            policies,
+            "--scenarios",
+            str(tmp_path / "tiny.yaml"),
+            "--seeds",
+            "0,1",
+            "--jobs",
+            "1",
+            "--no-oracle",
+            "--out",
+            str(out),
+        ]
         return subprocess.run(argv, cwd=ROOT, capture_output=True, text=True, timeout=600)
 
     attacked = run(tmp_path / "out", f"cascade_pi,{tmp_path / 'pols.py'}:{hostile}")

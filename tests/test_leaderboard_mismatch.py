@@ -23,9 +23,24 @@ FSH = "steamtemp/SupercriticalFSH-v0"
 
 
 def _run(out: Path, *extra: str) -> dict:
-    lb.main(["--envs", ENV, "--policies", "cascade_pi", "--scenarios",
-             f"{mismatch.SCENARIO},setpoint_step", "--seeds", "0", "--no-oracle", "--jobs",
-             "1", "--out", str(out), *extra])  # fmt: skip
+    lb.main(
+        [
+            "--envs",
+            ENV,
+            "--policies",
+            "cascade_pi",
+            "--scenarios",
+            f"{mismatch.SCENARIO},setpoint_step",
+            "--seeds",
+            "0",
+            "--no-oracle",
+            "--jobs",
+            "1",
+            "--out",
+            str(out),
+            *extra,
+        ]
+    )
     return json.loads((out / "leaderboard.json").read_text())
 
 
@@ -40,8 +55,11 @@ def test_a_mismatch_row_is_the_model_commissioned_policy_on_the_variant(runs):
     plant and run on the variant, bit for bit, not a controller retuned on the variant."""
     doc, _ = runs
     variant = "high_gain_slow"
-    row = next(r for r in doc["episodes"] if r["policy"] == ZERO
-               and r["scenario"] == mismatch.PREFIX + variant)  # fmt: skip
+    row = next(
+        r
+        for r in doc["episodes"]
+        if r["policy"] == ZERO and r["scenario"] == mismatch.PREFIX + variant
+    )
     params = perturb.mismatch(ENV)[variant]
     unit = gym.make(ENV, scenario=mismatch.SCENARIO, params=params)
     model = gym.make(ENV, scenario=mismatch.SCENARIO)
@@ -67,17 +85,24 @@ def test_rows_policies_and_scores(runs):
     assert nominal == plain["episodes"]
     assert doc["run"]["mismatch"] == {ENV: variants} and plain["run"]["mismatch"] == {}
     rob = doc["plants"][ENV]["robustness"]
-    plants = {e: {k: v for k, v in p.items() if k != "robustness"}
-              for e, p in doc["plants"].items()}  # fmt: skip
+    plants = {
+        e: {k: v for k, v in p.items() if k != "robustness"} for e, p in doc["plants"].items()
+    }
     assert plants == plain["plants"] and doc["ranking"] == plain["ranking"]
     for p in ("cascade_pi", ZERO):  # the ratio over the same policy's nominal episode
-        nom = next(r["metrics"]["return"] for r in nominal if r["policy"] == p
-                   and r["scenario"] == mismatch.SCENARIO)  # fmt: skip
+        nom = next(
+            r["metrics"]["return"]
+            for r in nominal
+            if r["policy"] == p and r["scenario"] == mismatch.SCENARIO
+        )
         e = rob["policies"][p]
         assert e["nominal_return"] == nom and e["episodes"] == len(variants)
         for v in variants:
-            ret = next(r["metrics"]["return"] for r in mis if r["policy"] == p
-                       and r["scenario"] == mismatch.PREFIX + v)  # fmt: skip
+            ret = next(
+                r["metrics"]["return"]
+                for r in mis
+                if r["policy"] == p and r["scenario"] == mismatch.PREFIX + v
+            )
             assert e["variants"][v]["return"] == ret
             assert e["variants"][v]["relative"] == pytest.approx(ret / nom, rel=1e-15)
         worst = max(variants, key=lambda v: e["variants"][v]["relative"])
@@ -96,8 +121,13 @@ def test_markdown_has_the_robustness_section(runs):
 
 
 def _row(policy: str, scenario: str, seed: int, ret: float, tripped: float = 0.0) -> dict:
-    return {"env": FSH, "scenario": scenario, "policy": policy, "seed": seed,
-            "metrics": {"return": ret, "tripped": tripped}}  # fmt: skip
+    return {
+        "env": FSH,
+        "scenario": scenario,
+        "policy": policy,
+        "seed": seed,
+        "metrics": {"return": ret, "tripped": tripped},
+    }
 
 
 def test_summary_by_hand():
@@ -143,8 +173,12 @@ def test_summary_by_hand():
     assert mismatch.summarize(rows[:2], FSH, pols, ZERO, ()) is None
     ok = [r for r in rows if not r.get("error")]
     s = mismatch.summarize(ok, FSH, pols, ZERO, ())
-    assert s["versus"][v1] == {"zero_return": -130.0, "policy": "sb3:x", "return": -71.5,
-                               "at_least_zero": True}  # fmt: skip
+    assert s["versus"][v1] == {
+        "zero_return": -130.0,
+        "policy": "sb3:x",
+        "return": -71.5,
+        "at_least_zero": True,
+    }
     assert s["versus"][v2]["at_least_zero"] is False
 
 

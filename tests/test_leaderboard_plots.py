@@ -69,8 +69,7 @@ def test_colours_are_unique_and_by_family(monkeypatch):
         r, g, b = to_rgb(colors[name])
         assert r == g == b
     # the reference keeps its colour wherever it stands
-    assert plots.policy_colors(["sb3:ppo", "mpc_linear", ZERO])[ZERO] == \
-        plots.BASELINE_COLORS[0]
+    assert plots.policy_colors(["sb3:ppo", "mpc_linear", ZERO])[ZERO] == plots.BASELINE_COLORS[0]
 
 
 def _plant(ranks: dict[str, int]) -> dict:
@@ -79,8 +78,8 @@ def _plant(ranks: dict[str, int]) -> dict:
 
 def test_trend_shows_the_reference_the_oracle_cascade_pi_and_the_top_three():
     available = [*baselines.NAMES, *AGENTS[:3], *REFERENCES]
-    ranks = {p: k for k, p in enumerate(
-        ["mpc_linear", "cascade_pi_ff", "sb3:ppo", "lqi", "fao_fac", "cascade_pi", "sb3:sac"], 1)}
+    order = ["mpc_linear", "cascade_pi_ff", "sb3:ppo", "lqi", "fao_fac", "cascade_pi", "sb3:sac"]
+    ranks = {p: k for k, p in enumerate(order, 1)}
     shown = plots.trend_policies(_plant(ranks), available)
     assert shown == ["cascade_pi_ff", "oracle", "cascade_pi", "mpc_linear", "sb3:ppo", "lqi"]
     plant = _plant(ranks)
@@ -89,20 +88,30 @@ def test_trend_shows_the_reference_the_oracle_cascade_pi_and_the_top_three():
     every = plots.trend_policies(_plant(ranks), available, every=True)
     assert sorted(every) == sorted(available) and every[:6] == shown
     # without the score (no oracle): by the IQM of the return
-    rets = {p: {"return": {"iqm": {"value": v}}} for p, v in
-            (("lqi", -5.0), ("fao_sf", -1.0), ("sb3:sac", -3.0), ("mpc_arx", -9.0))}
-    shown = plots.trend_policies({"policies": rets}, ["cascade_pi_ff", "cascade_pi", "lqi",
-                                                      "fao_sf", "sb3:sac", "mpc_arx"])
+    rets = {
+        p: {"return": {"iqm": {"value": v}}}
+        for p, v in (("lqi", -5.0), ("fao_sf", -1.0), ("sb3:sac", -3.0), ("mpc_arx", -9.0))
+    }
+    shown = plots.trend_policies(
+        {"policies": rets}, ["cascade_pi_ff", "cascade_pi", "lqi", "fao_sf", "sb3:sac", "mpc_arx"]
+    )
     assert shown == ["cascade_pi_ff", "cascade_pi", "fao_sf", "sb3:sac", "lqi"]
 
 
 def _trace(n: int, offset: float, n_act: int, secondary: bool) -> dict:
     t = np.arange(n) * 2.0
-    tr = {"time_s": t, "outlet_temp_C": 540.0 + offset * np.sin(t / 100),
-          "measured_temp_C": 540.0 + offset * np.sin(t / 100), "setpoint_C": np.full(n, 540.0),
-          "load": np.linspace(1.0, 0.5, n), "spray_valve": np.full((n, n_act), 0.4),
-          "spray_flow_kg_s": np.full(n, 5.0), "heat_absorption_bias": np.zeros(n),
-          "fouling": np.ones(n), "spray_water_temp_offset_C": np.zeros(n)}  # fmt: skip
+    tr = {
+        "time_s": t,
+        "outlet_temp_C": 540.0 + offset * np.sin(t / 100),
+        "measured_temp_C": 540.0 + offset * np.sin(t / 100),
+        "setpoint_C": np.full(n, 540.0),
+        "load": np.linspace(1.0, 0.5, n),
+        "spray_valve": np.full((n, n_act), 0.4),
+        "spray_flow_kg_s": np.full(n, 5.0),
+        "heat_absorption_bias": np.zeros(n),
+        "fouling": np.ones(n),
+        "spray_water_temp_offset_C": np.zeros(n),
+    }
     if secondary:
         tr["reheat_temp_C"] = 566.0 + offset * np.cos(t / 100)
     return tr
@@ -111,16 +120,32 @@ def _trace(n: int, offset: float, n_act: int, secondary: bool) -> dict:
 def _env(n_act: int, secondary: bool):
     plant = SimpleNamespace(secondary=(("reheat_temp_C", 566.0),) if secondary else ())
     acts = [SimpleNamespace(name=f"v{j}", description=f"valve {j} command") for j in range(n_act)]
-    return SimpleNamespace(unwrapped=SimpleNamespace(plant=plant,
-                                                     signals=SimpleNamespace(action=acts)))
+    return SimpleNamespace(
+        unwrapped=SimpleNamespace(plant=plant, signals=SimpleNamespace(action=acts))
+    )
 
 
 def test_trend_colours_are_unique_and_the_title_names_the_scenario(figures, tmp_path):
-    names = ["cascade_pi_ff", "oracle", "cascade_pi", "mpc_linear", "sb3:ppo", "lqi",
-             "sb3:sac", "frozen_valve"]  # fmt: skip
+    names = [
+        "cascade_pi_ff",
+        "oracle",
+        "cascade_pi",
+        "mpc_linear",
+        "sb3:ppo",
+        "lqi",
+        "sb3:sac",
+        "frozen_valve",
+    ]
     traces = {n: _trace(50, 1.0 + k, 3, True) for k, n in enumerate(names)}
-    trends.trend(tmp_path / "x.png", _env(3, True), "steamtemp/BoilerTurbineMIMO-v0",
-                 "my_test", traces, 0, notes={"mpc_linear": "#1, score 0.75"})  # fmt: skip
+    trends.trend(
+        tmp_path / "x.png",
+        _env(3, True),
+        "steamtemp/BoilerTurbineMIMO-v0",
+        "my_test",
+        traces,
+        0,
+        notes={"mpc_linear": "#1, score 0.75"},
+    )
     (fig,) = figures
     main = fig.axes[0]
     lines = [ln for ln in main.get_lines() if ln.get_label().endswith(": true")]
@@ -130,23 +155,29 @@ def test_trend_colours_are_unique_and_the_title_names_the_scenario(figures, tmp_
     assert main.get_title().startswith("BoilerTurbineMIMO-v0 - my_test:")
     # the same colour for a policy in every panel: main steam, reheat, three actuators
     for ax in fig.axes[1:5]:
-        assert _colors(ax.get_lines()[-len(names):]) == _colors(lines)
+        assert _colors(ax.get_lines()[-len(names) :]) == _colors(lines)
 
 
 def test_profiles_span_the_score_range_and_mark_clipped_runs(figures, tmp_path):
     lo, hi = plots.PROFILE_RANGE
     rng = np.random.default_rng(0)
-    scores = {"steamtemp/A-v0": {
-        "cascade_pi_ff": [rng.normal(0.0, 0.1, 5) for _ in range(3)],
-        "sb3:sac": [np.array([-9.0, -4.0, 0.2, 0.3, -0.1]) for _ in range(3)],
-        "mpc_linear": [np.array([0.7, 0.8, 0.9, 3.0, 0.75]) for _ in range(3)],
-        "oracle": [np.ones(5) for _ in range(3)]}}  # fmt: skip
+    scores = {
+        "steamtemp/A-v0": {
+            "cascade_pi_ff": [rng.normal(0.0, 0.1, 5) for _ in range(3)],
+            "sb3:sac": [np.array([-9.0, -4.0, 0.2, 0.3, -0.1]) for _ in range(3)],
+            "mpc_linear": [np.array([0.7, 0.8, 0.9, 3.0, 0.75]) for _ in range(3)],
+            "oracle": [np.ones(5) for _ in range(3)],
+        }
+    }
     plots.profiles(tmp_path / "p.png", scores, 5)
     (fig,) = figures
     ax = fig.axes[0]
     assert ax.get_xlim() == (lo, hi)
-    marks = {(m.get_marker(), to_rgb(m.get_color())) for m in ax.get_lines()
-             if m.get_marker() in ("<", ">")}  # fmt: skip
+    marks = {
+        (m.get_marker(), to_rgb(m.get_color()))
+        for m in ax.get_lines()
+        if m.get_marker() in ("<", ">")
+    }
     colors = plots.policy_colors(list(scores["steamtemp/A-v0"]))
     assert marks == {("<", to_rgb(colors["sb3:sac"])), (">", to_rgb(colors["mpc_linear"]))}
     curves = [ln for ln in ax.get_lines() if ln.get_label() in scores["steamtemp/A-v0"]]
@@ -154,11 +185,16 @@ def test_profiles_span_the_score_range_and_mark_clipped_runs(figures, tmp_path):
 
 
 def test_bars_colour_by_family(figures, tmp_path):
-    pols = {p: {"rank": k, "normalized_score": {"iqm": {"value": v, "ci95": [v - 0.1, v + 0.1]}}}
-            for k, (p, v) in enumerate((("mpc_linear", 0.8), ("sb3:ppo", 0.3),
-                                        ("cascade_pi", -0.2), ("sb3:sac", -3.0)), 1)}  # fmt: skip
-    summary = {"run": {"seeds": [0, 1], "policies": {"e": list(pols)}},
-               "plants": {"steamtemp/A-v0": {"policies": pols}}, "ranking": []}  # fmt: skip
+    scores = {"mpc_linear": 0.8, "sb3:ppo": 0.3, "cascade_pi": -0.2, "sb3:sac": -3.0}
+    pols = {
+        p: {"rank": k, "normalized_score": {"iqm": {"value": v, "ci95": [v - 0.1, v + 0.1]}}}
+        for k, (p, v) in enumerate(scores.items(), 1)
+    }
+    summary = {
+        "run": {"seeds": [0, 1], "policies": {"e": list(pols)}},
+        "plants": {"steamtemp/A-v0": {"policies": pols}},
+        "ranking": [],
+    }
     plots.bars(tmp_path / "s.png", summary)
     (fig,) = figures
     ax = fig.axes[0]
@@ -172,12 +208,17 @@ def test_bars_colour_by_family(figures, tmp_path):
 
 
 def test_bars_label_travel_and_the_inadmissible_mark(figures, tmp_path):
-    pols = {"mpc_linear": {"rank": 1, "travel_ratio": 1.24, "admissible": True},
-            "sb3:sac": {"rank": 2, "travel_ratio": 9.5, "admissible": False}}  # fmt: skip
+    pols = {
+        "mpc_linear": {"rank": 1, "travel_ratio": 1.24, "admissible": True},
+        "sb3:sac": {"rank": 2, "travel_ratio": 9.5, "admissible": False},
+    }
     for k, p in enumerate(pols):
         pols[p]["normalized_score"] = {"iqm": {"value": 0.5 - k, "ci95": [0.4 - k, 0.6 - k]}}
-    summary = {"run": {"seeds": [0], "policies": {"e": list(pols)}, "travel_budget": 2.0},
-               "plants": {"steamtemp/A-v0": {"policies": pols}}, "ranking": []}  # fmt: skip
+    summary = {
+        "run": {"seeds": [0], "policies": {"e": list(pols)}, "travel_budget": 2.0},
+        "plants": {"steamtemp/A-v0": {"policies": pols}},
+        "ranking": [],
+    }
     plots.bars(tmp_path / "s.png", summary)
     (fig,) = figures
     labels = [t.get_text() for t in fig.axes[0].get_yticklabels()]
@@ -200,16 +241,33 @@ def _rows() -> list[dict]:
     for p, base in (("cascade_pi_ff", -100.1), ("oracle", -40.0), ("mpc_linear", -50.0)):
         for seed in range(3):
             ret = base - 0.1 * seed  # the reference's mean normalized score: 7.9e-17, not 0
-            rows.append({"env": "steamtemp/A-v0", "scenario": "s", "policy": p, "seed": seed,
-                         "metrics": {"return": ret, "tripped": 0.0, "iae_K_s": 1234.5678,
-                                     "max_abs_dev_K": 3.14159, "spray_used_kg": 79750.0,
-                                     "valve_travel": 3e-9, "time_outside_5K_s": 0.0}})
+            rows.append(
+                {
+                    "env": "steamtemp/A-v0",
+                    "scenario": "s",
+                    "policy": p,
+                    "seed": seed,
+                    "metrics": {
+                        "return": ret,
+                        "tripped": 0.0,
+                        "iae_K_s": 1234.5678,
+                        "max_abs_dev_K": 3.14159,
+                        "spray_used_kg": 79750.0,
+                        "valve_travel": 3e-9,
+                        "time_outside_5K_s": 0.0,
+                    },
+                }
+            )
     return rows
 
 
 def test_markdown_has_no_exponents_and_carries_units():
-    run = {"envs": ["steamtemp/A-v0"], "scenarios": ["s"], "seeds": [0, 1, 2],
-           "policies": {"steamtemp/A-v0": ["cascade_pi_ff", "oracle", "mpc_linear"]}}
+    run = {
+        "envs": ["steamtemp/A-v0"],
+        "scenarios": ["s"],
+        "seeds": [0, 1, 2],
+        "policies": {"steamtemp/A-v0": ["cascade_pi_ff", "oracle", "mpc_linear"]},
+    }
     summary, _ = summarize(_rows(), run)
     text = report.markdown(summary, [])
     import re
@@ -217,8 +275,13 @@ def test_markdown_has_no_exponents_and_carries_units():
     assert not re.search(r"\d[eE][+-]?\d", text), re.findall(r"\S*\d[eE][+-]?\d\S*", text)
     assert "-0.00" not in text
     header = next(ln for ln in text.splitlines() if ln.startswith("| policy | seeds"))
-    for unit in ("IAE [K s]", "max\\|dev\\| [K]", "spray [t]", "valve travel [strokes]",
-                 "t>5K [s]"):  # fmt: skip
+    for unit in (
+        "IAE [K s]",
+        "max\\|dev\\| [K]",
+        "spray [t]",
+        "valve travel [strokes]",
+        "t>5K [s]",
+    ):
         assert unit in header, header
     assert "| 1235 |" in text and "| 79.8 |" in text and "| 3.14 |" in text
 
@@ -239,9 +302,16 @@ def test_long_policy_names_keep_their_end_on_the_bars():
 
 # --------------------------------------------------------------------------- pareto
 def test_the_pareto_front_keeps_the_policies_no_other_beats_on_both():
-    points = {"cheap": (0.5, -0.3), "ref": (1.0, 0.0), "worse": (1.2, -0.1),  # ref beats it
-              "good": (1.5, 0.4), "same_travel_less": (1.5, 0.2), "best": (1.9, 0.8),
-              "costly_no_gain": (1.95, 0.8), "twin": (1.5, 0.4)}  # fmt: skip
+    points = {
+        "cheap": (0.5, -0.3),
+        "ref": (1.0, 0.0),
+        "worse": (1.2, -0.1),  # ref beats it
+        "good": (1.5, 0.4),
+        "same_travel_less": (1.5, 0.2),
+        "best": (1.9, 0.8),
+        "costly_no_gain": (1.95, 0.8),
+        "twin": (1.5, 0.4),
+    }
     assert pareto.pareto_front(points) == ["cheap", "ref", "good", "best"]  # "good" < "twin"
     assert pareto.pareto_front({}) == []
     assert pareto.pareto_front({"a": (1.0, 0.0)}) == ["a"]
@@ -251,19 +321,33 @@ def _pareto_summary(budget: float = 2.0) -> dict:
     """One plant: the reference, the oracle, the frozen valve (far below the axis), two
     policies on the front, one behind it, one over the budget that no admissible one beats
     and one over the budget that is beaten."""
-    pts = {ZERO: (1.0, 0.0), "oracle": (0.6, 1.0), "frozen_valve": (0.0, -10.0),
-           "cascade_pi_ff_tuned": (1.4, 0.25), "mpc_linear": (2.04, 0.76), "lqi": (2.1, 0.15),
-           "fao_sf": (0.9, -0.5), "cascade_pi": (0.7, -0.4)}  # fmt: skip
+    pts = {
+        ZERO: (1.0, 0.0),
+        "oracle": (0.6, 1.0),
+        "frozen_valve": (0.0, -10.0),
+        "cascade_pi_ff_tuned": (1.4, 0.25),
+        "mpc_linear": (2.04, 0.76),
+        "lqi": (2.1, 0.15),
+        "fao_sf": (0.9, -0.5),
+        "cascade_pi": (0.7, -0.4),
+    }
     pols = {}
     for p, (travel, v) in pts.items():
         est = {"value": v, "ci95": [v - 0.05, v + 0.05]}
-        pols[p] = {"travel_ratio": travel, "trips": 0, "failed": 0,
-                   "normalized_score": {"iqm": est}}  # fmt: skip
+        pols[p] = {
+            "travel_ratio": travel,
+            "trips": 0,
+            "failed": 0,
+            "normalized_score": {"iqm": est},
+        }
         if p not in REFERENCES:
             pols[p]["admissible"] = travel <= budget
             pols[p]["rank"] = 1
-    return {"run": {"seeds": [0, 1], "travel_budget": budget, "policies": {"e": list(pols)}},
-            "plants": {"steamtemp/A-v0": {"policies": pols}}, "ranking": []}  # fmt: skip
+    return {
+        "run": {"seeds": [0, 1], "travel_budget": budget, "policies": {"e": list(pols)}},
+        "plants": {"steamtemp/A-v0": {"policies": pols}},
+        "ranking": [],
+    }
 
 
 def test_the_pareto_figure_draws_the_budget_the_front_and_its_labels(figures, tmp_path):
@@ -292,16 +376,24 @@ def test_the_labels_of_the_pareto_figure_do_not_overlap(figures, tmp_path):
     for k in range(8):
         v = 0.05 * k
         est = {"value": 0.26 + v, "ci95": [0.25 + v, 0.27 + v]}
-        pols[f"policy_{k}"] = {"travel_ratio": 1.45 + 0.02 * k, "trips": 0, "failed": 0,
-                               "admissible": True, "rank": 1,
-                               "normalized_score": {"iqm": est}}  # fmt: skip
+        pols[f"policy_{k}"] = {
+            "travel_ratio": 1.45 + 0.02 * k,
+            "trips": 0,
+            "failed": 0,
+            "admissible": True,
+            "rank": 1,
+            "normalized_score": {"iqm": est},
+        }
     s["run"]["policies"]["e"] = list(pols)
     pareto.pareto(tmp_path / pareto.PARETO, s)
     (fig,) = figures
     ax = fig.axes[0]
     renderer = fig.canvas.get_renderer()
-    boxes = [t.get_window_extent(renderer) for t in ax.texts if t.get_text()
-             and not t.get_text().startswith(" budget")]  # fmt: skip
+    boxes = [
+        t.get_window_extent(renderer)
+        for t in ax.texts
+        if t.get_text() and not t.get_text().startswith(" budget")
+    ]
     assert len(boxes) >= 11
     overlaps = [(a, b) for i, a in enumerate(boxes) for b in boxes[i + 1 :] if a.overlaps(b)]
     assert not overlaps
@@ -309,9 +401,13 @@ def test_the_labels_of_the_pareto_figure_do_not_overlap(figures, tmp_path):
 
 def test_the_rebuild_writes_the_pareto_figure(tmp_path):
     """A real file from the summary of hand-made rows, as outputs._rebuild draws it."""
-    run = {"envs": ["steamtemp/A-v0"], "scenarios": ["s"], "seeds": [0, 1, 2],
-           "policies": {"steamtemp/A-v0": ["cascade_pi_ff", "oracle", "mpc_linear"]},
-           "travel_budget": 2.0}  # fmt: skip
+    run = {
+        "envs": ["steamtemp/A-v0"],
+        "scenarios": ["s"],
+        "seeds": [0, 1, 2],
+        "policies": {"steamtemp/A-v0": ["cascade_pi_ff", "oracle", "mpc_linear"]},
+        "travel_budget": 2.0,
+    }
     rows = _rows()
     for r in rows:
         r["metrics"]["valve_travel"] = 1.0 if r["policy"] != "mpc_linear" else 2.5

@@ -23,8 +23,13 @@ def _rows(policies: dict[str, tuple[float, float, bool]], env: str = ENV) -> lis
     for p, (ret, travel, trip) in policies.items():
         for sc in SCENARIOS:
             for seed in range(3):
-                m = {"return": ret + 0.1 * seed, "valve_travel": travel, "valve_reversals": 4.0,
-                     "iae_K_s": -ret, "tripped": float(trip and sc == "b" and seed == 0)}
+                m = {
+                    "return": ret + 0.1 * seed,
+                    "valve_travel": travel,
+                    "valve_reversals": 4.0,
+                    "iae_K_s": -ret,
+                    "tripped": float(trip and sc == "b" and seed == 0),
+                }
                 rows.append({"env": env, "scenario": sc, "policy": p, "seed": seed, "metrics": m})
     return rows
 
@@ -40,8 +45,12 @@ POLICIES = {
 
 
 def _summary(budget: float | None = None) -> dict:
-    run = {"envs": [ENV], "scenarios": list(SCENARIOS), "policies": {ENV: list(POLICIES)},
-           "seeds": [0, 1, 2]}  # fmt: skip
+    run = {
+        "envs": [ENV],
+        "scenarios": list(SCENARIOS),
+        "policies": {ENV: list(POLICIES)},
+        "seeds": [0, 1, 2],
+    }
     if budget is not None:
         run["travel_budget"] = budget
     return summarize(_rows(POLICIES), run)[0]
@@ -54,8 +63,7 @@ def test_admissible_policies_rank_first_and_the_others_are_marked():
     assert pols["chatter"]["admissible"] is False  # travel over 2x
     assert pols["tripper"]["admissible"] is False  # a trip
     assert "admissible" not in pols[ONE] and "rank" not in pols[ONE]
-    ranks = {p: pols[p]["rank"] for p in ("fine", ZERO, "cascade_pi", "chatter",
-                                          "tripper")}  # fmt: skip
+    ranks = {p: pols[p]["rank"] for p in ("fine", ZERO, "cascade_pi", "chatter", "tripper")}
     # chatter has the best score and tripper the second best: both after every admissible one
     assert ranks == {"fine": 1, ZERO: 2, "cascade_pi": 3, "chatter": 4, "tripper": 5}
 
@@ -84,21 +92,37 @@ def test_the_comparison_table_puts_the_policies_side_by_side_per_scenario():
 OTHER = "steamtemp/Cascade300MW-v0"
 #: Per plant, (return, travel): the score is (return + 100) / 80 (0 = -100, 1 = -20), the
 #: reference's travel 2, so a travel of 6 is 3x, over the budget.
-PLANT_A = {ZERO: (-100.0, 2.0), ONE: (-20.0, 2.0), "cascade_pi": (-110.0, 1.5),
-           "mpc": (-36.0, 6.0),  # 0.8, not admissible: counts as 0
-           "tuned": (-76.0, 2.0),  # 0.3
-           "chatter": (-140.0, 6.0)}  # fmt: skip  # -0.5, not admissible: counts as -0.5
-PLANT_B = {ZERO: (-100.0, 2.0), ONE: (-20.0, 2.0), "cascade_pi": (-110.0, 1.5),
-           "mpc": (-36.0, 2.0), "tuned": (-76.0, 2.0), "chatter": (-100.0, 2.0),
-           "agent": (-28.0, 2.0)}  # fmt: skip  # 0.9, but on plant B only
+PLANT_A = {
+    ZERO: (-100.0, 2.0),
+    ONE: (-20.0, 2.0),
+    "cascade_pi": (-110.0, 1.5),
+    "mpc": (-36.0, 6.0),  # 0.8, not admissible: counts as 0
+    "tuned": (-76.0, 2.0),  # 0.3
+    "chatter": (-140.0, 6.0),  # -0.5, not admissible: counts as -0.5
+}
+PLANT_B = {
+    ZERO: (-100.0, 2.0),
+    ONE: (-20.0, 2.0),
+    "cascade_pi": (-110.0, 1.5),
+    "mpc": (-36.0, 2.0),
+    "tuned": (-76.0, 2.0),
+    "chatter": (-100.0, 2.0),
+    "agent": (-28.0, 2.0),  # 0.9, but on plant B only
+}
 
 
 def _two_plants() -> dict:
-    rows = [*_rows({p: (*v, False) for p, v in PLANT_A.items()}),
-            *_rows({p: (*v, False) for p, v in PLANT_B.items()}, OTHER)]  # fmt: skip
-    run = {"envs": [ENV, OTHER], "scenarios": list(SCENARIOS), "seeds": [0, 1, 2],
-           "policies": {ENV: list(PLANT_A), OTHER: list(PLANT_B)},
-           "travel_budget": 2.0}  # fmt: skip
+    rows = [
+        *_rows({p: (*v, False) for p, v in PLANT_A.items()}),
+        *_rows({p: (*v, False) for p, v in PLANT_B.items()}, OTHER),
+    ]
+    run = {
+        "envs": [ENV, OTHER],
+        "scenarios": list(SCENARIOS),
+        "seeds": [0, 1, 2],
+        "policies": {ENV: list(PLANT_A), OTHER: list(PLANT_B)},
+        "travel_budget": 2.0,
+    }
     return summarize(rows, run)[0]
 
 
@@ -128,8 +152,10 @@ def test_the_headline_states_its_order_and_the_reasons():
     text = report.headline_markdown(s, margins=False)
     assert f"Rows are {ORDER_RULE}." in text
     rows = {r.split(" | ")[1]: r for r in text.splitlines() if r.startswith("| ")}
-    assert rows["mpc"] == ("| 1 | mpc | 0.80 [0.80, 0.80] † travel 3.0x > 2x | "
-                           "0.80 [0.80, 0.80] (2), travel 1.0x | 0.40, † on 1 |")  # fmt: skip
+    assert rows["mpc"] == (
+        "| 1 | mpc | 0.80 [0.80, 0.80] † travel 3.0x > 2x | "
+        "0.80 [0.80, 0.80] (2), travel 1.0x | 0.40, † on 1 |"
+    )
     assert rows["agent"].endswith("| 0.90 (1 of 2 plants) |")
     assert rows["tuned"].endswith("| 0.30 |")
     assert "score over plants" in text and "mean rank" not in text
@@ -143,14 +169,28 @@ def test_the_docs_and_the_readme_state_the_order():
     doc = " ".join((root / "docs" / "leaderboard.md").read_text().replace("`", "").split())
     assert ORDER_RULE in doc
     readme = " ".join((root / "README.md").read_text().split())
-    assert ("ordered by the mean over plants of each policy's score, a positive score on a "
-            "plant where it is not admissible counting as 0") in readme  # fmt: skip
+    rule = (
+        "ordered by the mean over plants of each policy's score, a positive score on a "
+        "plant where it is not admissible counting as 0"
+    )
+    assert rule in readme
 
 
-@pytest.mark.parametrize(("r", "text"), [
-    (1.7, "1.7x"), (2.04, "2.04x"), (1.96, "1.96x"), (2.05, "2.05x"), (2.06, "2.1x"),
-    (1.94, "1.9x"), (2.0, "2.0x"), (2.004, "2.004x"), (1.9999, "1.9999x"), (9.5, "9.5x"),
-])  # fmt: skip
+@pytest.mark.parametrize(
+    ("r", "text"),
+    [
+        (1.7, "1.7x"),
+        (2.04, "2.04x"),
+        (1.96, "1.96x"),
+        (2.05, "2.05x"),
+        (2.06, "2.1x"),
+        (1.94, "1.9x"),
+        (2.0, "2.0x"),
+        (2.004, "2.004x"),
+        (1.9999, "1.9999x"),
+        (9.5, "9.5x"),
+    ],
+)
 def test_a_travel_ratio_shows_on_which_side_of_the_budget_it_is(r, text):
     assert report.ratio(r, 2.0) == text
     assert report.ratio(r) == f"{r:.1f}x"  # no budget: one decimal
@@ -159,6 +199,6 @@ def test_a_travel_ratio_shows_on_which_side_of_the_budget_it_is(r, text):
 def test_the_reason_names_every_cause():
     pe = {"admissible": False, "travel_ratio": 2.04, "trips": 1, "failed": 2}
     assert report.inadmissible_reason(pe, 2.0) == "travel 2.04x > 2x, 1 trip, 2 failed episodes"
-    assert report.inadmissible_reason({"admissible": False, "travel_ratio": 1.2, "trips": 3,
-                                       "failed": 0}, 2.0) == "3 trips"  # fmt: skip
+    pe = {"admissible": False, "travel_ratio": 1.2, "trips": 3, "failed": 0}
+    assert report.inadmissible_reason(pe, 2.0) == "3 trips"
     assert report.inadmissible_reason({"admissible": True, "travel_ratio": 1.2}, 2.0) == ""

@@ -12,10 +12,26 @@ import sys
 def _returns(tmp_path, threads: int) -> dict:
     out = tmp_path / f"threads{threads}"
     env = {**os.environ, "OPENBLAS_NUM_THREADS": str(threads), "OMP_NUM_THREADS": str(threads)}
-    subprocess.run([sys.executable, "-m", "agents.leaderboard", "--envs",
-                    "steamtemp/BoilerTurbineMIMO-v0", "--policies", "mpc_evarx", "--scenarios",
-                    "load_ramp_100_50", "--seeds", "0", "--out", str(out)],
-                   check=True, env=env, capture_output=True)  # fmt: skip
+    subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "agents.leaderboard",
+            "--envs",
+            "steamtemp/BoilerTurbineMIMO-v0",
+            "--policies",
+            "mpc_evarx",
+            "--scenarios",
+            "load_ramp_100_50",
+            "--seeds",
+            "0",
+            "--out",
+            str(out),
+        ],
+        check=True,
+        env=env,
+        capture_output=True,
+    )
     rows = [json.loads(line) for line in (out / "episodes.jsonl").read_text().splitlines()]
     return {r["scenario"]: r["metrics"]["return"] for r in rows if r["policy"] == "mpc_evarx"}
 

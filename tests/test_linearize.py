@@ -68,8 +68,10 @@ def linear_step_response(A, B, C, j: int) -> np.ndarray:
 #: default run: the claim plant and the plant with internal random generators (their states
 #: must cancel); every id under ``-m slow`` (about 2 min: the large plants' numba compiles)
 DEFAULT_IDS = ("steamtemp/DrumBoilerSH-v0", "steamtemp/Cascade300MW-v0")
-ENV_ID_PARAMS = [i if i in DEFAULT_IDS else pytest.param(i, marks=pytest.mark.slow)
-                 for i in steamtemp_gym.ENV_IDS]  # fmt: skip
+ENV_ID_PARAMS = [
+    i if i in DEFAULT_IDS else pytest.param(i, marks=pytest.mark.slow)
+    for i in steamtemp_gym.ENV_IDS
+]
 
 
 @pytest.mark.parametrize("env_id", ENV_ID_PARAMS)
@@ -115,8 +117,11 @@ def _quiet(env_id: str) -> dict:
 def env_disturbance_response(env_id: str, channel: str, size: float) -> np.ndarray:
     """Response of the observed plant outputs (physical units) to a step of ``channel`` by
     ``size`` from the second control interval on, valves held."""
-    env0 = gym.make(env_id, scenario=Scenario(name="lin_check", duration_s=1e5, load=DIST_LOAD),
-                    params=_quiet(env_id))  # fmt: skip
+    env0 = gym.make(
+        env_id,
+        scenario=Scenario(name="lin_check", duration_s=1e5, load=DIST_LOAD),
+        params=_quiet(env_id),
+    )
     dt = env0.unwrapped.plant.dt_s
     n_y = sum(s.observed for s in env0.unwrapped.plant.outputs)
     scale = np.array([s.scale for s in env0.unwrapped.signals.observation[:n_y]])

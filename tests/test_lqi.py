@@ -33,10 +33,16 @@ HEAT_STEP = 0.05
 
 def _scenario(kind: str, size: float | None = None) -> Scenario:
     if kind == "setpoint":
-        return Scenario(name="sp_step", duration_s=2400.0, setpoint_offset_C=(
-            (0.0, 0.0), (200.0, 0.0), (200.0, 5.0 if size is None else size)))  # fmt: skip
-    return Scenario(name="heat_step", duration_s=2400.0, heat_absorption_bias=(
-        (0.0, 0.0), (200.0, 0.0), (200.0, HEAT_STEP)))  # fmt: skip
+        return Scenario(
+            name="sp_step",
+            duration_s=2400.0,
+            setpoint_offset_C=((0.0, 0.0), (200.0, 0.0), (200.0, 5.0 if size is None else size)),
+        )
+    return Scenario(
+        name="heat_step",
+        duration_s=2400.0,
+        heat_absorption_bias=((0.0, 0.0), (200.0, 0.0), (200.0, HEAT_STEP)),
+    )
 
 
 def _thesis_form(pol: LQI) -> LQI:
@@ -161,8 +167,7 @@ def test_bumpless_start_and_batched_equals_single():
     batch = [pol.predict(o, episode_start=np.array([k == 0] * 3))[0] for k, o in enumerate(seq)]
     for i in range(3):
         pol.reset()
-        single = [pol.predict(o[i], episode_start=np.array([k == 0]))[0]
-                  for k, o in enumerate(seq)]  # fmt: skip
+        single = [pol.predict(o[i], episode_start=np.array([k == 0]))[0] for k, o in enumerate(seq)]
         np.testing.assert_allclose(np.array(batch)[:, i], np.array(single), rtol=0, atol=1e-12)
 
 
@@ -191,8 +196,13 @@ def test_knobs_are_keywords_and_bad_values_raise():
             LQI(env, e_max_K=bad)
 
 
-PLANTS = ["SupercriticalFSH", "BensonSubcritical", "BoilerTurbineMIMO", "DrumBoilerSH",
-          "Cascade300MW"]  # fmt: skip
+PLANTS = [
+    "SupercriticalFSH",
+    "BensonSubcritical",
+    "BoilerTurbineMIMO",
+    "DrumBoilerSH",
+    "Cascade300MW",
+]
 
 
 @pytest.mark.parametrize("plant", PLANTS)
@@ -201,8 +211,9 @@ def test_realism_on_the_load_ramp(plant):
     max(2x cascade_pi_ff's, 1.5 K) on load_ramp_100_50 (seeds 0-1; measured travel ratios
     1.0-2.9 over the named and held-out scenarios, 3 seeds)."""
     env_id = f"steamtemp/{plant}-v0"
-    venv = gym.make_vec(env_id, num_envs=2, vectorization_mode="vector_entry_point",
-                        scenario="load_ramp_100_50")  # fmt: skip
+    venv = gym.make_vec(
+        env_id, num_envs=2, vectorization_mode="vector_entry_point", scenario="load_ramp_100_50"
+    )
     ours = [r["metrics"] for r in run_batch(venv, LQI(venv), [0, 1])]
     ref = [r["metrics"] for r in run_batch(venv, baselines.make("cascade_pi_ff", venv), [0, 1])]
     for m, f in zip(ours, ref, strict=True):

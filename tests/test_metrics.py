@@ -490,8 +490,9 @@ def test_quiet_peak_to_peak_does_not_apply_to_a_short_stretch():
         metrics.quiet_peak_to_peak(t, e, float("nan"))
 
 
-def _frac_above_numpy(a: NDArray[np.float64], c: NDArray[np.float64], level: float,
-                      inclusive: bool) -> NDArray[np.float64]:  # fmt: skip
+def _frac_above_numpy(
+    a: NDArray[np.float64], c: NDArray[np.float64], level: float, inclusive: bool
+) -> NDArray[np.float64]:
     """The fraction above ``level`` of each linear segment, in numpy (the reference)."""
     d = c - a
     flat = d == 0.0

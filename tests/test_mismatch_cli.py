@@ -12,16 +12,19 @@ from steamtemp_gym.plants import perturb
 BENSON = "steamtemp/BensonSubcritical-v0"
 
 
-@pytest.mark.parametrize("argv, match", [
-    (["--env", "NoSuchPlant-v0"], "--env.*not a plant with mismatch variants"),
-    (["--policies", "no_such_policy"], "--policies"),
-    (["--policies", ""], "--policies: empty list"),
-    (["--seeds", "x"], "--seeds: invalid seed"),
-    (["--seeds", "3-1"], "--seeds: empty range"),
-    (["--heldout", "load_ramp_100_50"], "--heldout.*not a held-out scenario"),
-    (["--heldout", "heldout:no_such"], "--heldout"),
-    (["--out", "/no/such/dir/table.md"], "--out"),
-])  # fmt: skip
+@pytest.mark.parametrize(
+    "argv, match",
+    [
+        (["--env", "NoSuchPlant-v0"], "--env.*not a plant with mismatch variants"),
+        (["--policies", "no_such_policy"], "--policies"),
+        (["--policies", ""], "--policies: empty list"),
+        (["--seeds", "x"], "--seeds: invalid seed"),
+        (["--seeds", "3-1"], "--seeds: empty range"),
+        (["--heldout", "load_ramp_100_50"], "--heldout.*not a held-out scenario"),
+        (["--heldout", "heldout:no_such"], "--heldout"),
+        (["--out", "/no/such/dir/table.md"], "--out"),
+    ],
+)
 def test_bad_flags_are_argparse_errors(argv, match, capsys):
     with pytest.raises(SystemExit) as exc:
         mismatch.main(["--env", BENSON, *argv] if argv[0] != "--env" else argv)
@@ -31,8 +34,18 @@ def test_bad_flags_are_argparse_errors(argv, match, capsys):
 
 def test_a_run_writes_the_robustness_table(tmp_path, capsys):
     out = tmp_path / "table.md"
-    mismatch.main(["--env", "BensonSubcritical-v0", "--policies", "cascade_pi",
-                   "--seeds", "0", "--out", str(out)])  # fmt: skip
+    mismatch.main(
+        [
+            "--env",
+            "BensonSubcritical-v0",
+            "--policies",
+            "cascade_pi",
+            "--seeds",
+            "0",
+            "--out",
+            str(out),
+        ]
+    )
     text = out.read_text()
     assert text in capsys.readouterr().out
     rows = [line.split(" | ") for line in text.splitlines() if line.startswith("| cascade_pi |")]

@@ -47,8 +47,7 @@ def _synthetic(kind: str, noise: float, seed: int = 0) -> tuple:
     gamma = np.array([[20.0, 30.0, 25.0], [25.0, 20.0, 30.0]])[:, :n0]
     w = 0.45 + 0.6 * rng.random((K, S))
     phi = np.concatenate([np.zeros((K, S, E.N_Y * no)), rng.standard_normal((K, S, 4))], 2)
-    C = np.einsum("ksjb,jbp->ksjp", np.stack([E._basis(w, gamma[j]) for j in range(no)], 2),
-                  theta)  # fmt: skip
+    C = np.einsum("ksjb,jbp->ksjp", np.stack([E._basis(w, gamma[j]) for j in range(no)], 2), theta)
     y = E._simulate(C, phi)[0] + noise * rng.standard_normal((K, S, no))
     return theta, gamma, phi, w, y
 
@@ -61,12 +60,18 @@ def test_simulation_sensitivities_match_finite_differences():
     for q in (0, 5, E.N_Y * 2 + 1, th.size + 1, th.size + 4):  # theta (lags, inputs), gamma
         h = np.zeros_like(x)
         h[q] = 1e-6
-        yp = E.simulation_sensitivities((x + h)[: th.size].reshape(th.shape),
-                                        (x + h)[th.size :].reshape(gamma.shape), phi[:60],
-                                        w[:60])[0]  # fmt: skip
-        ym = E.simulation_sensitivities((x - h)[: th.size].reshape(th.shape),
-                                        (x - h)[th.size :].reshape(gamma.shape), phi[:60],
-                                        w[:60])[0]  # fmt: skip
+        yp = E.simulation_sensitivities(
+            (x + h)[: th.size].reshape(th.shape),
+            (x + h)[th.size :].reshape(gamma.shape),
+            phi[:60],
+            w[:60],
+        )[0]
+        ym = E.simulation_sensitivities(
+            (x - h)[: th.size].reshape(th.shape),
+            (x - h)[th.size :].reshape(gamma.shape),
+            phi[:60],
+            w[:60],
+        )[0]
         np.testing.assert_allclose(D[..., q], (yp - ym) / 2e-6, rtol=1e-5, atol=1e-7)
 
 
@@ -102,8 +107,7 @@ def test_one_step_fit_is_biased_where_the_simulation_fit_is_not():
     x = phi[E.N_Y :].copy()  # the measured (noisy) output lags in the regressors
     for lag in range(E.N_Y):
         x[:, :, 2 * lag : 2 * lag + 2] = y[E.N_Y - 1 - lag : K - 1 - lag]
-    ee = np.array([E.lstsq_scaled(x.reshape(-1, p), y[E.N_Y :, :, j].ravel())
-                   for j in (0, 1)])  # fmt: skip
+    ee = np.array([E.lstsq_scaled(x.reshape(-1, p), y[E.N_Y :, :, j].ravel()) for j in (0, 1)])
     oe = E.fit_output_error(ee[:, None], gamma, phi, w, y)[0][:, 0]
     assert abs(ee[0, 0] - 0.7) > 0.15 and abs(ee[1, 3] - 0.5) > 0.15  # biased to zero
     assert abs(oe[0, 0] - 0.7) < 0.05 and abs(oe[1, 3] - 0.5) < 0.05
@@ -119,10 +123,20 @@ def steps():
     return EI.closed_loop_steps(BTM, "{}")
 
 
-@pytest.mark.parametrize("kind", [pytest.param("evarx", marks=pytest.mark.xfail(
-    strict=True, reason="measured: EV-ARX at 100 % load, RGD -> STE first lobe -5.59 against "
-    "the closed loop's +5.39 (50 and 75 % match); the sign monitor falls back there")),
-    "arx"])  # fmt: skip
+@pytest.mark.parametrize(
+    "kind",
+    [
+        pytest.param(
+            "evarx",
+            marks=pytest.mark.xfail(
+                strict=True,
+                reason="measured: EV-ARX at 100 % load, RGD -> STE first lobe -5.59 against "
+                "the closed loop's +5.39 (50 and 75 % match); the sign monitor falls back there",
+            ),
+        ),
+        "arx",
+    ],
+)
 def test_model_gains_match_closed_loop_step_tests_at_three_loads(ident, steps, kind):
     """The identified model against step tests of the real closed loop at 50, 75 and 100 %
     load: zero steady gains (the loops integrate every bias out; the closed loop ends within
@@ -175,8 +189,7 @@ def test_qp_respects_bias_and_rate_bounds():
     qp, mats, na = _toy_qp(0.05)
     warm = (np.zeros(qp.nz), np.zeros(qp.nc))
     lo, hi = np.array([-0.2, -0.1]), np.array([0.15, 0.2])
-    ok, moves, _, _ = qp.solve(mats, np.full((qp.N, qp.n_out), 50.0), np.zeros(na), lo, hi,
-                               warm)  # fmt: skip
+    ok, moves, _, _ = qp.solve(mats, np.full((qp.N, qp.n_out), 50.0), np.zeros(na), lo, hi, warm)
     assert ok
     assert np.all(np.abs(moves) <= 0.05 + 1e-4)
     b = np.cumsum(moves, 0)
@@ -283,8 +296,9 @@ def _iae(names: tuple[str, ...], seeds: range) -> dict[str, np.ndarray]:
         pol = baselines.make(name, env)
         m = [run_episode(env, pol, seed=s)["metrics"] for s in seeds]
         assert all(x["tripped"] == 0.0 for x in m)
-        out[name] = np.array([[x["iae_K_s"], x["reheat_temp_C_iae_K_s"], x["valve_travel"]]
-                              for x in m]).mean(0)  # fmt: skip
+        out[name] = np.array(
+            [[x["iae_K_s"], x["reheat_temp_C_iae_K_s"], x["valve_travel"]] for x in m]
+        ).mean(0)
     return out
 
 
@@ -293,9 +307,20 @@ def ramp():
     return _iae(("cascade_pi", "cascade_pi_ff", "mpc_evarx", "mpc_arx"), range(2))
 
 
-@pytest.mark.parametrize("name", ["mpc_evarx", pytest.param("mpc_arx", marks=pytest.mark.xfail(
-    strict=True, reason="load_ramp_100_50, seeds 0-1, IAE K s STE / RTE: mpc_arx 2327 / 5671 "
-    "against cascade_pi 2336 / 5666 (RTE 0.1 % worse)"))])  # fmt: skip
+@pytest.mark.parametrize(
+    "name",
+    [
+        "mpc_evarx",
+        pytest.param(
+            "mpc_arx",
+            marks=pytest.mark.xfail(
+                strict=True,
+                reason="load_ramp_100_50, seeds 0-1, IAE K s STE / RTE: mpc_arx 2327 / 5671 "
+                "against cascade_pi 2336 / 5666 (RTE 0.1 % worse)",
+            ),
+        ),
+    ],
+)
 def test_claim_mpc_beats_pi_on_ste_and_rte(ramp, name):
     """Section 7.2 / Fig. 9: the MPC on the model keeps STE and RTE closer than the
     conventional PI under a ramped load change. Measured (seeds 0-1, IAE K s STE / RTE):

@@ -19,8 +19,11 @@ from steamtemp_gym.scenarios import NAMED_DISTURBANCES, Scenario, heldout
 IDS = steamtemp_gym.ENV_IDS
 FAST = "steamtemp/SupercriticalFSH-v0"
 #: +5 % heat absorption over a minute at minute 5, no noise, rated load
-HEAT_STEP = Scenario(name="heat_step", duration_s=3600.0,
-                     heat_absorption_bias=((0.0, 0.0), (300.0, 0.0), (360.0, 0.05)))  # fmt: skip
+HEAT_STEP = Scenario(
+    name="heat_step",
+    duration_s=3600.0,
+    heat_absorption_bias=((0.0, 0.0), (300.0, 0.0), (360.0, 0.05)),
+)
 
 #: 100 -> 80 % at 2 %/min from the start
 RAMP = Scenario(name="ramp", duration_s=900.0, load=((0.0, 1.0), (600.0, 0.8)))
@@ -43,7 +46,8 @@ def _offsets(env_id: str, disturbance_model: bool) -> list[float]:
 
 
 @pytest.mark.parametrize(
-    "env_id", [i if i == FAST else pytest.param(i, marks=pytest.mark.slow) for i in IDS])
+    "env_id", [i if i == FAST else pytest.param(i, marks=pytest.mark.slow) for i in IDS]
+)
 def test_no_offset_under_a_constant_heat_absorption_step(env_id):
     """With the disturbance states every scored temperature settles at its setpoint (measured:
     <= 5e-4 K); without them (the negative control) an offset of 1-5 K is left."""
@@ -52,7 +56,8 @@ def test_no_offset_under_a_constant_heat_absorption_step(env_id):
 
 
 @pytest.mark.parametrize(
-    "env_id", [i if "MIMO" in i else pytest.param(i, marks=pytest.mark.slow) for i in IDS])
+    "env_id", [i if "MIMO" in i else pytest.param(i, marks=pytest.mark.slow) for i in IDS]
+)
 def test_batched_predict_equals_unbatched_bit_for_bit(env_id):
     """A vector env of 3 seeds under one policy acts exactly as 3 single envs with a policy
     each (noise on, along a load ramp from the start: the local models and QP matrices
@@ -67,14 +72,14 @@ def test_batched_predict_equals_unbatched_bit_for_bit(env_id):
     start = np.ones(3, dtype=bool)
     for _ in range(150):
         a_b, _ = batched.predict(obs_b, episode_start=start)
-        a_s = np.stack([p.predict(o, episode_start=start[:1])[0]
-                        for p, o in zip(singles, obs_s, strict=True)])  # fmt: skip
+        a_s = np.stack(
+            [p.predict(o, episode_start=start[:1])[0] for p, o in zip(singles, obs_s, strict=True)]
+        )
         np.testing.assert_array_equal(a_b, a_s)
         start[:] = False
         obs_b, *_ = venv.step(a_b)
         obs_s = [e.step(a)[0] for e, a in zip(envs, a_s, strict=True)]
     assert batched.stats["failures"] == 0
-
 
 
 def test_the_solver_called_directly_acts_as_through_osqps_wrapper(monkeypatch):
@@ -112,6 +117,7 @@ def test_the_solver_called_directly_acts_as_through_osqps_wrapper(monkeypatch):
     assert made and iters_w == iters
     np.testing.assert_array_equal(direct, wrapped)
 
+
 def _scenario(name: str):
     return heldout.load(name) if heldout.is_heldout(name) else name
 
@@ -128,8 +134,9 @@ def test_completes_the_deep_fast_ramp():
 @pytest.mark.parametrize("scenario", DEFAULT_SCENARIOS)
 def test_no_trip_on_the_leaderboard_scenarios(env_id, scenario):
     """Every named and held-out scenario of the leaderboard, seeds 0-4."""
-    venv = gym.make_vec(env_id, num_envs=5, scenario=_scenario(scenario),
-                        vectorization_mode="vector_entry_point")  # fmt: skip
+    venv = gym.make_vec(
+        env_id, num_envs=5, scenario=_scenario(scenario), vectorization_mode="vector_entry_point"
+    )
     res = run_batch(venv, MPCLinear(venv), [0, 1, 2, 3, 4])
     assert [r["metrics"]["tripped"] for r in res] == [0.0] * 5
 
@@ -149,12 +156,16 @@ def _actions(policy: MPCLinear, env, bad_at: int | None, bad_obs, steps: int = 4
     return np.array(out)
 
 
-@pytest.mark.parametrize("bad", [
-    lambda o: np.full_like(o, np.nan),
-    lambda o: np.where(np.arange(o.size) == 0, np.nan, o),  # one NaN, the load still finite
-    lambda o: o[:-1],  # wrong length
-    lambda o: np.full_like(o, np.inf),
-], ids=["all_nan", "one_nan", "short", "inf"])  # fmt: skip
+@pytest.mark.parametrize(
+    "bad",
+    [
+        lambda o: np.full_like(o, np.nan),
+        lambda o: np.where(np.arange(o.size) == 0, np.nan, o),  # one NaN, the load still finite
+        lambda o: o[:-1],  # wrong length
+        lambda o: np.full_like(o, np.inf),
+    ],
+    ids=["all_nan", "one_nan", "short", "inf"],
+)
 def test_a_bad_observation_raises_and_leaves_the_policy_unchanged(bad):
     env = gym.make(FAST, scenario="load_ramp_100_50")
     clean = _actions(MPCLinear(env), env, None, bad)
@@ -163,7 +174,11 @@ def test_a_bad_observation_raises_and_leaves_the_policy_unchanged(bad):
 
 def test_bad_weights_are_rejected():
     env = gym.make(FAST)
-    for kw in ({"move_weight": 0.0}, {"move_weight": np.nan}, {"u_weight": -1.0},
-               {"move_weight": "0.1"}):  # fmt: skip
+    for kw in (
+        {"move_weight": 0.0},
+        {"move_weight": np.nan},
+        {"u_weight": -1.0},
+        {"move_weight": "0.1"},
+    ):
         with pytest.raises(ValueError, match="weight"):
             MPCLinear(env, **kw)

@@ -36,9 +36,8 @@ def test_the_rule_keeps_every_vertex_damped_with_the_least_detuning(env_id):
 #: The knobs stored for each plant before the rule (a filter at the named noise on the MIMO).
 FORMER = {
     CASCADE: {"filter_noise_K": 2.8117, "heat_std": 0.005, "move_weight": 1e-4, "u_weight": 1e-3},
-    MIMO: {"filter_noise_K": 0.25, "heat_std": 0.01566, "move_weight": 1.7783e-4,
-           "u_weight": 0.01},
-}  # fmt: skip
+    MIMO: {"filter_noise_K": 0.25, "heat_std": 0.01566, "move_weight": 1.7783e-4, "u_weight": 0.01},
+}
 
 
 def _hold(env_id: str, load: float, factors: dict, robust: bool) -> list[float]:
@@ -47,8 +46,12 @@ def _hold(env_id: str, load: float, factors: dict, robust: bool) -> list[float]:
     ``load`` after a +2 K setpoint step at minute 5 (no noise, no plant-internal random
     disturbances)."""
     quiet = {"omega_halfwidth_K": 0.0, "omega2_scale_kg_s": 0.0} if env_id == CASCADE else {}
-    sc = Scenario(name="hold", duration_s=3600.0, load=((0.0, load),),
-                  setpoint_offset_C=((0.0, 0.0), (300.0, 0.0), (310.0, 2.0)))  # fmt: skip
+    sc = Scenario(
+        name="hold",
+        duration_s=3600.0,
+        load=((0.0, load),),
+        setpoint_offset_C=((0.0, 0.0), (300.0, 0.0), (310.0, 2.0)),
+    )
     model = gym.make(env_id, scenario=sc, params=quiet)
     unit = gym.make(env_id, scenario=sc, params=perturb.scaled(env_id, quiet, factors))
     tr = run_episode(unit, MPCLinear(model, robust=robust, **FORMER[env_id]), 0)["trace"]
@@ -56,13 +59,25 @@ def _hold(env_id: str, load: float, factors: dict, robust: bool) -> list[float]:
     return [float(np.ptp(e[(t >= a) & (t < a + 600.0)])) for a in (1200.0, 1800.0, 2400.0, 3000.0)]
 
 
-@pytest.mark.parametrize(("env_id", "load", "factors"), [
-    (CASCADE, 0.5, {"section_gains": 1.3, "section_time_constants": 0.7}),
-    (MIMO, 0.35, {"heat_transfer": 0.8, "metal_heat_capacity": 0.75, "firing_lag": 0.5,
-                  "sensor_lag": 2.0}),
-])  # fmt: skip
+@pytest.mark.parametrize(
+    ("env_id", "load", "factors"),
+    [
+        (CASCADE, 0.5, {"section_gains": 1.3, "section_time_constants": 0.7}),
+        (
+            MIMO,
+            0.35,
+            {
+                "heat_transfer": 0.8,
+                "metal_heat_capacity": 0.75,
+                "firing_lag": 0.5,
+                "sensor_lag": 2.0,
+            },
+        ),
+    ],
+)
 def test_a_loop_the_check_finds_undamped_oscillates_on_that_unit_and_the_rule_damps_it(
-        env_id, load, factors):  # fmt: skip
+    env_id, load, factors
+):
     """The vertices where the former tuning's linear loop is least damped (Cascade300MW:
     damping ratio -0.027 at 50 % load; BoilerTurbineMIMO: -0.027 at 35 %), on the nonlinear
     unit: without the rule the oscillation grows or persists (measured: 14.7 -> 35.0 K and

@@ -68,8 +68,9 @@ def _run_kernel(mee, es, xs, w, L, eta=0.0):
     Gs, Vs = [], []
     for k in range(len(es)):
         E = np.array([[es[k], es[k - 1] if k else es[0], es[k - 2] if k > 1 else es[0]]])
-        npnet.npid_step(xs[k][None], E, W, G, V, Eb, Sb, nb, hd, base, scale, mee, SIG, LAM, L,
-                       eta, gains)  # fmt: skip
+        npnet.npid_step(
+            xs[k][None], E, W, G, V, Eb, Sb, nb, hd, base, scale, mee, SIG, LAM, L, eta, gains
+        )
         Gs.append(G[0].copy())
         Vs.append(V[0])
     return np.array(Gs), np.array(Vs)
@@ -221,17 +222,25 @@ def test_inner_p_is_8_pct_of_stroke_per_K_through_the_input_filter():
 # ------------------------------------------------------------- realism and stability
 @functools.cache
 def _metrics(env_id: str, scenario: str, name: str, eta: float | None, seeds: int) -> dict:
-    venv = gym.make_vec(env_id, num_envs=seeds, scenario=scenarios.resolve(scenario, env_id),
-                        vectorization_mode="vector_entry_point")  # fmt: skip
+    venv = gym.make_vec(
+        env_id,
+        num_envs=seeds,
+        scenario=scenarios.resolve(scenario, env_id),
+        vectorization_mode="vector_entry_point",
+    )
     kw = {} if eta is None else {"eta": eta}
     res = run_batch(venv, baselines.make(name, venv, **kw), list(range(seeds)))
     return {k: float(np.mean([r["metrics"][k] for r in res])) for k in res[0]["metrics"]}
 
 
-@pytest.mark.parametrize("scenario", ["setpoint_step_535_545",
-                                      pytest.param("load_ramp_100_50", marks=pytest.mark.slow),
-                                      pytest.param("heldout:high_noise",
-                                                   marks=pytest.mark.slow)])  # fmt: skip
+@pytest.mark.parametrize(
+    "scenario",
+    [
+        "setpoint_step_535_545",
+        pytest.param("load_ramp_100_50", marks=pytest.mark.slow),
+        pytest.param("heldout:high_noise", marks=pytest.mark.slow),
+    ],
+)
 def test_travel_within_three_times_cascade_pi_ff_on_the_papers_plant(scenario):
     """The paper's P inner loop through the filter strokes the valve about as much as the
     industrial cascade (measured 0.80x, 0.95x and 0.94x; 40x, 52x and 25x with G_C2 read
@@ -247,9 +256,13 @@ def test_travel_within_three_times_cascade_pi_ff_on_the_papers_plant(scenario):
 ETA_SATURATING = 10.0
 
 
-@pytest.mark.parametrize("env_id", ["steamtemp/SupercriticalFSH-v0",
-                                    pytest.param("steamtemp/DrumBoilerSH-v0",
-                                                 marks=pytest.mark.slow)])  # fmt: skip
+@pytest.mark.parametrize(
+    "env_id",
+    [
+        "steamtemp/SupercriticalFSH-v0",
+        pytest.param("steamtemp/DrumBoilerSH-v0", marks=pytest.mark.slow),
+    ],
+)
 def test_bounded_gains_keep_the_deep_fast_ramp_stable(env_id):
     """Even with its gains driven to their bounds, the MSE net holds the held-out deep fast
     ramp: no trip, no limit cycle against cascade_pi_ff, a peak no larger than the plain
@@ -272,11 +285,14 @@ def test_realism_on_every_named_and_heldout_scenario(env_id):
     """Every variant (the paper's eta, the adapting etas, the top of each knob's box) on
     every named and held-out scenario: no trip, travel within 3x cascade_pi_ff's, no limit
     cycle (seeds 0-1)."""
-    variants = [("neuro_pid_mee", None), ("neuro_pid_mse", None),
-                ("neuro_pid_mee", npid.ADAPTING_ETA["mee"]),
-                ("neuro_pid_mse", npid.ADAPTING_ETA["mse"]),
-                ("neuro_pid_mee", npid.NeuroPIDMEE.KNOBS[0].hi),
-                ("neuro_pid_mse", npid.NeuroPIDMSE.KNOBS[0].hi)]  # fmt: skip
+    variants = [
+        ("neuro_pid_mee", None),
+        ("neuro_pid_mse", None),
+        ("neuro_pid_mee", npid.ADAPTING_ETA["mee"]),
+        ("neuro_pid_mse", npid.ADAPTING_ETA["mse"]),
+        ("neuro_pid_mee", npid.NeuroPIDMEE.KNOBS[0].hi),
+        ("neuro_pid_mse", npid.NeuroPIDMSE.KNOBS[0].hi),
+    ]
     for scenario in DEFAULT_SCENARIOS:
         ref = _metrics(env_id, scenario, "cascade_pi_ff", None, 2)
         for name, eta in variants:
@@ -318,16 +334,24 @@ class _NoDisturbanceInputs(npid.NeuroPID):
 @functools.cache
 def step_runs(setting: str, seeds: int, disturbance_inputs: bool = True) -> dict:
     """Per criterion, per seed: the error trace, the gains and the weights."""
-    venv = gym.make_vec(ID, num_envs=seeds, scenario="setpoint_step_535_545",
-                        vectorization_mode="vector_entry_point")  # fmt: skip
+    venv = gym.make_vec(
+        ID,
+        num_envs=seeds,
+        scenario="setpoint_step_535_545",
+        vectorization_mode="vector_entry_point",
+    )
     cls = npid.NeuroPID if disturbance_inputs else _NoDisturbanceInputs
     out = {}
     for crit, eta in SETTINGS[setting].items():
         rec = npid.Recorder(cls(venv, criterion=crit, eta=eta))
         res = run_batch(venv, rec, list(range(seeds)))
         e = np.array([r["trace"]["setpoint_C"] - r["trace"]["outlet_temp_C"] for r in res])
-        out[crit] = {"t": res[0]["trace"]["time_s"], "e": e, "gains": np.array(rec.gains),
-                     "W": np.array(rec.weights)}  # fmt: skip
+        out[crit] = {
+            "t": res[0]["trace"]["time_s"],
+            "e": e,
+            "gains": np.array(rec.gains),
+            "W": np.array(rec.weights),
+        }
     return out
 
 
@@ -357,14 +381,31 @@ def check_mee_below_mse(stat: str, setting: str, seeds: int) -> None:
     assert 2.0 * paper <= _paired(rel)[0] <= 0.5 * paper, _paired(rel)
 
 
-@pytest.mark.parametrize("setting", [
-    pytest.param("paper", marks=pytest.mark.xfail(strict=True, reason=(
-        "MEE - MSE error mean +0.18 % (+0.0012 K) at the paper's eta (20 seeds; paper "
-        "-12.6 %): the nets barely learn"))),
-    pytest.param("adapting", marks=pytest.mark.xfail(strict=True, reason=(
-        "MEE - MSE error mean +9.2 % (+0.050 K) between adapting nets (20 seeds; paper "
-        "-12.6 %): MEE is shift-invariant, it does not act on the mean, MSE does"))),
-])  # fmt: skip
+@pytest.mark.parametrize(
+    "setting",
+    [
+        pytest.param(
+            "paper",
+            marks=pytest.mark.xfail(
+                strict=True,
+                reason=(
+                    "MEE - MSE error mean +0.18 % (+0.0012 K) at the paper's eta (20 seeds; paper "
+                    "-12.6 %): the nets barely learn"
+                ),
+            ),
+        ),
+        pytest.param(
+            "adapting",
+            marks=pytest.mark.xfail(
+                strict=True,
+                reason=(
+                    "MEE - MSE error mean +9.2 % (+0.050 K) between adapting nets (20 seeds; paper "
+                    "-12.6 %): MEE is shift-invariant, it does not act on the mean, MSE does"
+                ),
+            ),
+        ),
+    ],
+)
 @SEEDS
 def test_claim_mee_smaller_error_mean(setting, seeds):
     """Claim: MEE's error mean below MSE's, by the paper's -12.6 % (0.4452 against 0.5093)
@@ -372,12 +413,22 @@ def test_claim_mee_smaller_error_mean(setting, seeds):
     check_mee_below_mse("mean", setting, seeds)
 
 
-@pytest.mark.parametrize("setting", [
-    pytest.param("paper", marks=pytest.mark.xfail(strict=True, reason=(
-        "MEE - MSE error std -0.023 % (-0.0007 K) at the paper's eta (20 seeds; paper "
-        "-0.61 %): right direction, a 26th of the size, the nets barely learn"))),
-    "adapting",
-])  # fmt: skip
+@pytest.mark.parametrize(
+    "setting",
+    [
+        pytest.param(
+            "paper",
+            marks=pytest.mark.xfail(
+                strict=True,
+                reason=(
+                    "MEE - MSE error std -0.023 % (-0.0007 K) at the paper's eta (20 seeds; paper "
+                    "-0.61 %): right direction, a 26th of the size, the nets barely learn"
+                ),
+            ),
+        ),
+        "adapting",
+    ],
+)
 @SEEDS
 def test_claim_mee_smaller_error_std(setting, seeds):
     """Claim: MEE's error std below MSE's, by the paper's -0.61 % (1.7049 against 1.7153)
@@ -457,16 +508,32 @@ def test_claim_mee_smaller_error_entropy(setting, seeds):
     _assert_negative(d, seeds)
 
 
-@pytest.mark.parametrize("seeds", [4, pytest.param(20, marks=[pytest.mark.slow, pytest.mark.xfail(
-    strict=True, reason="MEE - MSE entropy fall -0.0064 +- 0.0052 nats (20 seeds, adapting): "
-    "the direction, not significant")])])  # fmt: skip
+@pytest.mark.parametrize(
+    "seeds",
+    [
+        4,
+        pytest.param(
+            20,
+            marks=[
+                pytest.mark.slow,
+                pytest.mark.xfail(
+                    strict=True,
+                    reason="MEE - MSE entropy fall -0.0064 +- 0.0052 nats (20 seeds, adapting): "
+                    "the direction, not significant",
+                ),
+            ],
+        ),
+    ],
+)
 def test_claim_mee_pdf_narrows_along_time(seeds):
     """Claim (Fig. 9-12): under MEE the error PDF becomes narrower and sharper along the
     sampling time, against MSE: from 800-1400 s to 1400-2000 s its entropy falls by more
     than the MSE one does (adapting nets)."""
     r = step_runs("adapting", seeds)
-    fall = {c: _entropies(r[c], 1400.0, np.inf) - _entropies(r[c], SETTLED_S, 1400.0)
-            for c in ("mee", "mse")}  # fmt: skip
+    fall = {
+        c: _entropies(r[c], 1400.0, np.inf) - _entropies(r[c], SETTLED_S, 1400.0)
+        for c in ("mee", "mse")
+    }
     _assert_negative(fall["mee"] - fall["mse"], seeds)
 
 

@@ -30,11 +30,15 @@ def Oracle(env, *args, **kw):  # noqa: N802 - the oracle with its CEM engine
 
 #: A short scenario with the disturbances of the named ones: a load ramp at 5 %/min, then a
 #: heat-absorption step, with sensor noise and the coloured heat-absorption disturbance.
-SHORT = Scenario(name="oracle_check", duration_s=900.0,
-                 load=((0.0, 1.0), (120.0, 1.0), (300.0, 0.85)),
-                 heat_absorption_bias=((0.0, 0.0), (500.0, 0.0), (560.0, 0.04)),
-                 noise_std_C=0.25, heat_absorption_noise_std=0.02,
-                 heat_absorption_noise_tau_s=300.0)  # fmt: skip
+SHORT = Scenario(
+    name="oracle_check",
+    duration_s=900.0,
+    load=((0.0, 1.0), (120.0, 1.0), (300.0, 0.85)),
+    heat_absorption_bias=((0.0, 0.0), (500.0, 0.0), (560.0, 0.04)),
+    noise_std_C=0.25,
+    heat_absorption_noise_std=0.02,
+    heat_absorption_noise_tau_s=300.0,
+)
 
 
 def _contenders(env_id: str) -> list[str]:
@@ -53,18 +57,24 @@ def test_the_oracle_beats_every_baseline_and_shipped_agent(env_id):
     env = gym.make(env_id, scenario=SHORT)
     oracle = run_episode(env, Oracle(env), 0)["metrics"]
     assert not oracle["tripped"]
-    returns = {p: run_episode(env, _make_policy(p, env_id, env), 0)["metrics"]["return"]
-               for p in _contenders(env_id)}  # fmt: skip
+    returns = {
+        p: run_episode(env, _make_policy(p, env_id, env), 0)["metrics"]["return"]
+        for p in _contenders(env_id)
+    }
     best = max(returns, key=returns.get)
     assert oracle["return"] >= returns[best], (oracle["return"], best, returns)
 
 
 def test_the_oracle_is_deterministic_and_the_same_alone_and_batched():
     env_id = "steamtemp/Cascade300MW-v0"
-    sc = Scenario(name="tiny", duration_s=240.0, load=((0.0, 1.0), (60.0, 1.0), (180.0, 0.9)),
-                  noise_std_C=0.25, heat_absorption_noise_std=0.02)  # fmt: skip
-    budget = Budget(horizon_s=120.0, knot_s=20.0, replan_s=10.0, samples=6, iterations=2,
-                    elites=2)  # fmt: skip
+    sc = Scenario(
+        name="tiny",
+        duration_s=240.0,
+        load=((0.0, 1.0), (60.0, 1.0), (180.0, 0.9)),
+        noise_std_C=0.25,
+        heat_absorption_noise_std=0.02,
+    )
+    budget = Budget(horizon_s=120.0, knot_s=20.0, replan_s=10.0, samples=6, iterations=2, elites=2)
     env = gym.make(env_id, scenario=sc)
     alone = [run_episode(env, Oracle(env, budget), s) for s in (3, 4)]
     again = run_episode(env, Oracle(env, budget), 3)
@@ -77,10 +87,17 @@ def test_the_oracle_is_deterministic_and_the_same_alone_and_batched():
     assert alone[0]["metrics"]["return"] != alone[1]["metrics"]["return"]  # seeds differ
 
 
-@pytest.mark.parametrize(("field", "value", "words"), [
-    ("samples", 0, "samples"), ("iterations", 1.5, "iterations"), ("horizon_s", -1.0, "horizon"),
-    ("elites", 99, "elites"), ("knot_s", 1e6, "knot_s"), ("sigma0", float("nan"), "sigma0"),
-])  # fmt: skip
+@pytest.mark.parametrize(
+    ("field", "value", "words"),
+    [
+        ("samples", 0, "samples"),
+        ("iterations", 1.5, "iterations"),
+        ("horizon_s", -1.0, "horizon"),
+        ("elites", 99, "elites"),
+        ("knot_s", 1e6, "knot_s"),
+        ("sigma0", float("nan"), "sigma0"),
+    ],
+)
 def test_bad_budgets_are_refused(field, value, words):
     with pytest.raises(ValueError, match=words):
         Budget(**{field: value})
@@ -89,17 +106,26 @@ def test_bad_budgets_are_refused(field, value, words):
 def test_the_oracle_refuses_other_envs_and_batch_sizes():
     with pytest.raises(ValueError, match="steamtemp_gym env"):
         Oracle(gym.make("CartPole-v1"))
-    venv = gym.make_vec("steamtemp/Cascade300MW-v0", num_envs=2, scenario="setpoint_step",
-                        vectorization_mode="vector_entry_point")  # fmt: skip
+    venv = gym.make_vec(
+        "steamtemp/Cascade300MW-v0",
+        num_envs=2,
+        scenario="setpoint_step",
+        vectorization_mode="vector_entry_point",
+    )
     obs, _ = venv.reset(seed=0)
     with pytest.raises(ValueError, match="2 row"):
         Oracle(venv).predict(obs[:1])
 
 
 #: A setpoint step and a load change, short: what the oracle's model must get right.
-STEP = Scenario(name="oracle_step", duration_s=600.0, load=((0.0, 1.0), (300.0, 1.0), (420.0, 0.9)),
-                setpoint_offset_C=((0.0, 0.0), (60.0, 0.0), (60.0, 10.0)),
-                noise_std_C=0.25, heat_absorption_noise_std=0.02)  # fmt: skip
+STEP = Scenario(
+    name="oracle_step",
+    duration_s=600.0,
+    load=((0.0, 1.0), (300.0, 1.0), (420.0, 0.9)),
+    setpoint_offset_C=((0.0, 0.0), (60.0, 0.0), (60.0, 10.0)),
+    noise_std_C=0.25,
+    heat_absorption_noise_std=0.02,
+)
 
 
 @pytest.mark.parametrize("env_id", steamtemp_gym.ENV_IDS)
@@ -113,10 +139,12 @@ def test_the_oracle_plans_on_each_rows_drawn_plant(env_id):
     if not factors:
         pytest.skip(f"{env_id} declares no perturbation_groups (steamtemp_gym/plants/perturb.py)")
     dt = plants.plant_class(env_id).Params().dt_s
-    budget = Budget(horizon_s=60 * dt, tail_s=0.0, knot_s=10 * dt, replan_s=5 * dt, samples=4,
-                    iterations=2)  # fmt: skip
-    env = gym.make(env_id, scenario=STEP,
-                   plant_randomization={g: (k, k) for g, k in factors.items()})  # fmt: skip
+    budget = Budget(
+        horizon_s=60 * dt, tail_s=0.0, knot_s=10 * dt, replan_s=5 * dt, samples=4, iterations=2
+    )
+    env = gym.make(
+        env_id, scenario=STEP, plant_randomization={g: (k, k) for g, k in factors.items()}
+    )
     made = gym.make(env_id, scenario=STEP, params=perturb.scaled(env_id, {}, factors))
     u = env.unwrapped
     oracle = Oracle(env, budget, incumbents=())
@@ -138,8 +166,9 @@ def test_the_oracle_plans_on_each_rows_drawn_plant(env_id):
 
 
 #: A CEM that can hardly move the valves from where they start: the incumbents win.
-WEAK = Budget(horizon_s=60.0, tail_s=0.0, knot_s=30.0, replan_s=60.0, samples=2, iterations=1,
-              sigma0=0.005)  # fmt: skip
+WEAK = Budget(
+    horizon_s=60.0, tail_s=0.0, knot_s=30.0, replan_s=60.0, samples=2, iterations=1, sigma0=0.005
+)
 
 
 @pytest.mark.parametrize("env_id", ["steamtemp/SupercriticalFSH-v0", "steamtemp/Cascade300MW-v0"])
@@ -151,8 +180,9 @@ def test_the_oracle_is_at_least_each_incumbent_by_construction(env_id):
     oracle = Oracle(env, WEAK)
     got = run_episode(env, oracle, 0)["metrics"]["return"]
     c = oracle.committed[0]
-    theirs = {n: run_episode(env, baselines.make(n, env), 0)["metrics"]["return"]
-              for n in INCUMBENTS}  # fmt: skip
+    theirs = {
+        n: run_episode(env, baselines.make(n, env), 0)["metrics"]["return"] for n in INCUMBENTS
+    }
     assert c.source in INCUMBENTS and c.returns["cem"] < got
     assert got == theirs[c.source] == max(theirs.values())
     cem = run_episode(env, Oracle(env, WEAK, incumbents=()), 0)["metrics"]["return"]

@@ -57,8 +57,24 @@ def at_root(monkeypatch):
 
 def _run(tmp_path: Path, tiny: Path, policies: str, *extra: str) -> list[dict]:
     out = tmp_path / "out"
-    lb.main(["--envs", ENV, "--policies", policies, "--scenarios", str(tiny), "--seeds", "0,1",
-             "--out", str(out), "--jobs", "1", "--no-oracle", *extra])  # fmt: skip
+    lb.main(
+        [
+            "--envs",
+            ENV,
+            "--policies",
+            policies,
+            "--scenarios",
+            str(tiny),
+            "--seeds",
+            "0,1",
+            "--out",
+            str(out),
+            "--jobs",
+            "1",
+            "--no-oracle",
+            *extra,
+        ]
+    )
     return json.loads((out / "leaderboard.json").read_text())["episodes"]
 
 
@@ -82,8 +98,9 @@ def test_example_readme_command_scores_the_factory(tmp_path, tiny, at_root, caps
     assert argv[0] == "steamtemp-leaderboard" and FACTORY in argv[argv.index("--policies") + 1]
     assert "--no-oracle" in argv
     out = tmp_path / "out"
-    lb.main([*argv[1:], "--scenarios", str(tiny), "--seeds", "0,1", "--out", str(out),
-             "--jobs", "1"])  # fmt: skip
+    lb.main(
+        [*argv[1:], "--scenarios", str(tiny), "--seeds", "0,1", "--out", str(out), "--jobs", "1"]
+    )
     rows = json.loads((out / "leaderboard.json").read_text())["episodes"]
     mine = {r["seed"]: r for r in rows if r["policy"] == FACTORY}
     assert sorted(mine) == [0, 1] and not any(r.get("error") for r in rows)
@@ -111,8 +128,11 @@ def test_factory_is_fingerprinted_by_its_file(tmp_path):
 # --------------------------------------------------------------------------- agent files
 def _run0_stem() -> str:
     """The file stem of the shipped agent's run 0 (with or without the run index)."""
-    return next(s for s in (files.stem(ENV, ALGO, 0), files.stem(ENV, ALGO))
-                if (agents.ZOO / f"{s}.zip").is_file())  # fmt: skip
+    return next(
+        s
+        for s in (files.stem(ENV, ALGO, 0), files.stem(ENV, ALGO))
+        if (agents.ZOO / f"{s}.zip").is_file()
+    )
 
 
 def test_trained_agent_files_score_as_the_shipped_agent(tmp_path, tiny):
@@ -155,8 +175,7 @@ def _rl_zoo_run(tmp_path: Path) -> tuple[Path, object, object]:
 
     from agents.wrappers import ControllerMemory
 
-    memory = {"integral_time_s": 60.0, "integral_limit_K": 40.0, "history": 2,
-              "history_stride": 3}  # fmt: skip
+    memory = {"integral_time_s": 60.0, "integral_limit_K": 40.0, "history": 2, "history_stride": 3}
     venv = VecNormalize(DummyVecEnv([lambda: ControllerMemory(gym.make(ENV), **memory)]))
     venv.seed(0)
     venv.reset()
@@ -169,9 +188,14 @@ def _rl_zoo_run(tmp_path: Path) -> tuple[Path, object, object]:
     (run / name).mkdir(parents=True)
     model.save(run / f"{name}.zip")
     venv.save(str(run / name / "vecnormalize.pkl"))
-    config = OrderedDict([("env_wrapper", [{"agents.wrappers.ControllerMemory": memory}]),
-                          ("n_timesteps", 1000), ("normalize", "dict(norm_obs=True)"),
-                          ("policy", "MlpPolicy")])  # fmt: skip
+    config = OrderedDict(
+        [
+            ("env_wrapper", [{"agents.wrappers.ControllerMemory": memory}]),
+            ("n_timesteps", 1000),
+            ("normalize", "dict(norm_obs=True)"),
+            ("policy", "MlpPolicy"),
+        ]
+    )
     (run / name / "config.yml").write_text(yaml.dump(config))
     args = OrderedDict([("algo", "ppo"), ("env", ENV), ("seed", 0)])
     (run / name / "args.yml").write_text(yaml.dump(args))
@@ -182,8 +206,8 @@ def test_rl_zoo_run_acts_as_its_model_on_its_normalized_memory(tmp_path):
     """The loaded RL Zoo agent acts as SB3's predict on what RL Zoo's env stack (the memory
     wrapper, then VecNormalize frozen) shows the model, along a closed-loop episode."""
     run, model, venv = _rl_zoo_run(tmp_path)
-    assert "python/object/apply:collections.OrderedDict" in (run / ENV.replace("/", "-")
-                                                             / "config.yml").read_text()
+    config = (run / ENV.replace("/", "-") / "config.yml").read_text()
+    assert "python/object/apply:collections.OrderedDict" in config
     (agent,) = files.find(run)
     assert (agent.env_id, agent.algo, agent.layout) == (ENV, "ppo", files.RL_ZOO)
     assert files.find(agent.model) == [agent]
@@ -191,8 +215,13 @@ def test_rl_zoo_run_acts_as_its_model_on_its_normalized_memory(tmp_path):
     venv.training = False
     from agents.wrappers import ControllerMemory
 
-    env = ControllerMemory(gym.make(ENV, scenario=TINY), integral_time_s=60.0,
-                           integral_limit_K=40.0, history=2, history_stride=3)  # fmt: skip
+    env = ControllerMemory(
+        gym.make(ENV, scenario=TINY),
+        integral_time_s=60.0,
+        integral_limit_K=40.0,
+        history=2,
+        history_stride=3,
+    )
     n_raw = env.unwrapped.observation_space.shape[0]
     obs, _ = env.reset(seed=3)
     for _ in range(40):
@@ -209,15 +238,18 @@ def test_rl_zoo_run_is_scored_by_the_leaderboard(tmp_path, tiny):
     mine = [r for r in rows if r["policy"] == f"zoo:{run}"]
     assert len(mine) == 2 and all(np.isfinite(r["metrics"]["iae_K_s"]) for r in mine)
     for r in mine:
-        assert r["metrics"] == _alone(lambda env: specs.parse(f"zoo:{run}").make(ENV, env),
-                                      r["seed"])  # fmt: skip
+        assert r["metrics"] == _alone(
+            lambda env: specs.parse(f"zoo:{run}").make(ENV, env), r["seed"]
+        )
 
 
 # --------------------------------------------------------------------------- bad names
 def _bad_module(tmp_path: Path) -> Path:
     path = tmp_path / "not_a_policy.py"
-    path.write_text("VALUE = 3\n\ndef make(env):\n    return object()\n\n"
-                    "def broken(env):\n    raise RuntimeError('no plant for me')\n")  # fmt: skip
+    path.write_text(
+        "VALUE = 3\n\ndef make(env):\n    return object()\n\n"
+        "def broken(env):\n    raise RuntimeError('no plant for me')\n"
+    )
     return path
 
 
@@ -237,13 +269,23 @@ BAD = [
 
 
 @pytest.mark.parametrize(("name", "words"), BAD, ids=[n for n, _ in BAD])
-def test_bad_policy_is_an_argparse_error_of_both_clis(name, words, tmp_path, tiny, at_root,
-                                                      capsys):  # fmt: skip
+def test_bad_policy_is_an_argparse_error_of_both_clis(name, words, tmp_path, tiny, at_root, capsys):
     name = name.format(bad=_bad_module(tmp_path), tmp=tmp_path)
     out = tmp_path / "out"
     with pytest.raises(SystemExit) as exc:
-        lb.main(["--envs", ENV, "--policies", name, "--scenarios", str(tiny), "--out", str(out),
-                 "--no-oracle"])  # fmt: skip
+        lb.main(
+            [
+                "--envs",
+                ENV,
+                "--policies",
+                name,
+                "--scenarios",
+                str(tiny),
+                "--out",
+                str(out),
+                "--no-oracle",
+            ]
+        )
     err = capsys.readouterr().err
     assert exc.value.code == 2 and "--policies" in err and "Traceback" not in err
     assert all(w in err for w in words), err
@@ -261,8 +303,11 @@ FSH = "steamtemp/SupercriticalFSH-v0"
 def _mislabelled(tmp_path: Path) -> Path:
     """The FSH agent's files named and labelled as an agent of ENV."""
     algo = next(a for e, a in agents.shipped() if e == FSH)
-    src = next(s for s in (files.stem(FSH, algo, 0), files.stem(FSH, algo))
-               if (agents.ZOO / f"{s}.zip").is_file())  # fmt: skip
+    src = next(
+        s
+        for s in (files.stem(FSH, algo, 0), files.stem(FSH, algo))
+        if (agents.ZOO / f"{s}.zip").is_file()
+    )
     d = tmp_path / "mislabelled"
     d.mkdir()
     stem = files.stem(ENV, algo)
@@ -291,17 +336,22 @@ def _corrupt(tmp_path: Path) -> Path:
 
 
 UNFIT = [
-    (_mislabelled, ["does not fit steamtemp/Cascade300MW-v0", "observations of shape",
-                    "another env"]),
-    (_zoo_without_wrapper, ["does not fit", "without controller memory",
-                            "config.yml has no env_wrapper"]),
+    (
+        _mislabelled,
+        ["does not fit steamtemp/Cascade300MW-v0", "observations of shape", "another env"],
+    ),
+    (
+        _zoo_without_wrapper,
+        ["does not fit", "without controller memory", "config.yml has no env_wrapper"],
+    ),
     (_corrupt, ["is not a Stable-Baselines3 model file", "corrupt"]),
-]  # fmt: skip
+]
 
 
 @pytest.mark.parametrize(("make", "words"), UNFIT, ids=[m.__name__ for m, _ in UNFIT])
 def test_agent_files_that_do_not_fit_their_env_are_refused_when_named(
-        make, words, tmp_path, tiny, capsys):  # fmt: skip
+    make, words, tmp_path, tiny, capsys
+):
     """A model of another env, an RL Zoo run without its memory wrapper and a corrupt .zip
     are refused by both CLIs before anything runs, naming the shapes (each episode failed
     with a broadcast or matmul error, or 'No data found')."""
@@ -311,8 +361,19 @@ def test_agent_files_that_do_not_fit_their_env_are_refused_when_named(
     assert all(w in str(exc.value) for w in words), str(exc.value)
     out = tmp_path / "out"
     with pytest.raises(SystemExit) as code:
-        lb.main(["--envs", ENV, "--policies", name, "--scenarios", str(tiny), "--out", str(out),
-                 "--no-oracle"])  # fmt: skip
+        lb.main(
+            [
+                "--envs",
+                ENV,
+                "--policies",
+                name,
+                "--scenarios",
+                str(tiny),
+                "--out",
+                str(out),
+                "--no-oracle",
+            ]
+        )
     assert code.value.code == 2 and not out.exists()
     err = capsys.readouterr().err
     assert all(w in err for w in words), err
@@ -333,13 +394,24 @@ def test_shipped_agents_fit_their_envs():
 
 # --------------------------------------------------------------------------- steamtemp-check
 def test_check_cli_takes_sb3_names_and_factories(at_root, capsys):
-    code = cli.main([ENV, "--no-env-checks", "--check", "check_predict_signature",
-                     "--policy", f"sb3:{ALGO}", "--policy", FACTORY])  # fmt: skip
+    code = cli.main(
+        [
+            ENV,
+            "--no-env-checks",
+            "--check",
+            "check_predict_signature",
+            "--policy",
+            f"sb3:{ALGO}",
+            "--policy",
+            FACTORY,
+        ]
+    )
     out = capsys.readouterr().out
     assert code == 0, out
     assert re.search(rf"Cascade300MW-v0\s+sb3:{ALGO}\s+check_predict_signature\s+PASS", out)
-    assert re.search(rf"Cascade300MW-v0\s+{re.escape(FACTORY)}\s+check_predict_signature\s+PASS",
-                     out)  # fmt: skip
+    assert re.search(
+        rf"Cascade300MW-v0\s+{re.escape(FACTORY)}\s+check_predict_signature\s+PASS", out
+    )
 
 
 # --------------------------------------------------------------------------- registration
@@ -363,29 +435,34 @@ def test_register_a_baseline(registry, at_root):
     baselines.register("by_ref", "examples.my_controller:make_controller")
     assert isinstance(baselines.make("by_ref", gym.make(ENV)).policy, SingleLoopPI)
     before = baselines.NAMES
-    for name, factory, word in [("cascade_pi", make_controller, "shipped"),
-                                ("single_loop_pi", SingleLoopPI, "already registered"),
-                                ("a:b", make_controller, "letter"), ("a,b", make_controller,
-                                "letter"), ("", make_controller, "letter"),
-                                ("x", 3, "callable"), ("x", "not a ref", "callable")]:  # fmt: skip
+    for name, factory, word in [
+        ("cascade_pi", make_controller, "shipped"),
+        ("single_loop_pi", SingleLoopPI, "already registered"),
+        ("a:b", make_controller, "letter"),
+        ("a,b", make_controller, "letter"),
+        ("", make_controller, "letter"),
+        ("x", 3, "callable"),
+        ("x", "not a ref", "callable"),
+    ]:
         with pytest.raises(ValueError, match=word):
             baselines.register(name, factory)
     assert baselines.NAMES == before
 
 
-def test_registered_baseline_reaches_a_worker_through_import(registry, tmp_path, tiny,
-                                                             monkeypatch):  # fmt: skip
+def test_registered_baseline_reaches_a_worker_through_import(registry, tmp_path, tiny, monkeypatch):
     """--import: the leaderboard knows the name, and a worker that has not imported the
     module (a spawned process, a Ray task) imports it before it builds the policy."""
     (tmp_path / "my_registry.py").write_text(
         "import baselines\nfrom examples.my_controller import make_controller\n"
-        "baselines.register('single_loop_pi', make_controller)\n")  # fmt: skip
+        "baselines.register('single_loop_pi', make_controller)\n"
+    )
     monkeypatch.syspath_prepend(str(tmp_path))
     monkeypatch.syspath_prepend(str(ROOT))
     monkeypatch.delitem(__import__("sys").modules, "my_registry", raising=False)
     rows = _run(tmp_path, tiny, "single_loop_pi", "--import", "my_registry")
     assert {r["policy"] for r in rows} >= {"single_loop_pi"} and not any(
-        r.get("error") for r in rows)
+        r.get("error") for r in rows
+    )
     # a fresh worker: the registry without the name, the module not imported
     monkeypatch.setattr(baselines, "_REGISTRY", dict(baselines._REGISTRY))
     del baselines._REGISTRY["single_loop_pi"]
@@ -401,11 +478,13 @@ def test_register_a_scenario(registry, tmp_path, capsys):
     scenarios.register(sc)  # the same again: nothing happens
     assert "my_ramp" in scenarios.names(ENV)
     assert gym.make(ENV, scenario="my_ramp").unwrapped._scenario_spec == sc
-    for bad, word in [(Scenario(name="my_ramp", duration_s=30.0), "already registered"),
-                      (Scenario(name="setpoint_step", duration_s=30.0), "already registered"),
-                      (Scenario(name="heldout:x", duration_s=30.0), "held-out"),
-                      (Scenario(name="a.yaml", duration_s=30.0), "file"),
-                      (Scenario(name="a,b", duration_s=30.0), "list")]:  # fmt: skip
+    for bad, word in [
+        (Scenario(name="my_ramp", duration_s=30.0), "already registered"),
+        (Scenario(name="setpoint_step", duration_s=30.0), "already registered"),
+        (Scenario(name="heldout:x", duration_s=30.0), "held-out"),
+        (Scenario(name="a.yaml", duration_s=30.0), "file"),
+        (Scenario(name="a,b", duration_s=30.0), "list"),
+    ]:
         with pytest.raises(ValueError, match=word):
             scenarios.register(bad)
     assert scenarios.get("setpoint_step").duration_s != 30.0

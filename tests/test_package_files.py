@@ -47,8 +47,9 @@ def test_license_citation_and_changelog_agree_with_pyproject():
 
 
 def test_changelog_dates_are_commit_dates():
-    done = subprocess.run(["git", "log", "--format=%ad", "--date=short"], cwd=ROOT,
-                          capture_output=True, text=True)  # fmt: skip
+    done = subprocess.run(
+        ["git", "log", "--format=%ad", "--date=short"], cwd=ROOT, capture_output=True, text=True
+    )
     if done.returncode != 0:
         pytest.skip("not a git checkout")
     commits = set(done.stdout.split())
@@ -65,22 +66,31 @@ def test_py_typed_markers_ship():
 
 def test_python_m_steamtemp_gym_lists_everything_and_compiles_nothing(tmp_path):
     """In a fresh process with an empty kernel cache: no numba compilation at all."""
-    code = ("import numba.core.event as ev, runpy, sys\n"
-            "class L(ev.Listener):\n"
-            "    def on_start(self, e): print('COMPILED', e.data['dispatcher'], file=sys.stderr)\n"
-            "    def on_end(self, e): pass\n"
-            "ev.register('numba:compile', L())\n"
-            "runpy.run_module('steamtemp_gym', run_name='__main__')\n")  # fmt: skip
+    code = (
+        "import numba.core.event as ev, runpy, sys\n"
+        "class L(ev.Listener):\n"
+        "    def on_start(self, e): print('COMPILED', e.data['dispatcher'], file=sys.stderr)\n"
+        "    def on_end(self, e): pass\n"
+        "ev.register('numba:compile', L())\n"
+        "runpy.run_module('steamtemp_gym', run_name='__main__')\n"
+    )
     env = {**os.environ, "STEAMTEMP_GYM_CACHE_DIR": str(tmp_path / "cache")}
-    done = subprocess.run([sys.executable, "-c", code], cwd=ROOT, env=env, capture_output=True,
-                          text=True, timeout=300)  # fmt: skip
+    done = subprocess.run(
+        [sys.executable, "-c", code], cwd=ROOT, env=env, capture_output=True, text=True, timeout=300
+    )
     assert done.returncode == 0, done.stderr
     assert "COMPILED" not in done.stderr and "compiling" not in done.stderr, done.stderr
     out = done.stdout
     own = [i for i in steamtemp_gym.ENV_IDS if catalog.packaged(i)]  # a fresh process's ids
-    for name in (*own, *baselines.NAMES, "setpoint_step",
-                 "setpoint_step_535_545", *(heldout.PREFIX + n for n in heldout.NAMES),
-                 "random", "sb3:ppo"):  # fmt: skip
+    for name in (
+        *own,
+        *baselines.NAMES,
+        "setpoint_step",
+        "setpoint_step_535_545",
+        *(heldout.PREFIX + n for n in heldout.NAMES),
+        "random",
+        "sb3:ppo",
+    ):
         assert name in out, name
 
 
@@ -97,10 +107,10 @@ def test_contract(env_id, check):
 def test_pytest_plugin_registers_the_slow_mark(pytester, monkeypatch):
     monkeypatch.setenv("PYTHONPATH", str(ROOT))  # this source tree in the subprocesses
     assert PYPROJECT["project"]["entry-points"]["pytest11"] == {
-        "steamtemp_gym": "steamtemp_gym.testing.pytest_plugin"}
+        "steamtemp_gym": "steamtemp_gym.testing.pytest_plugin"
+    }
     pytester.makepyfile(test_contract=_CONTRACT)
-    args = ("--strict-markers", "--collect-only", "-q", "-p", "no:cacheprovider",
-            "-p", "no:xdist")  # fmt: skip
+    args = ("--strict-markers", "--collect-only", "-q", "-p", "no:cacheprovider", "-p", "no:xdist")
     without = pytester.runpytest_subprocess(*args, "-p", "no:steamtemp_gym")
     assert without.ret != 0 and "'slow' not found in `markers`" in without.stdout.str()
     from importlib.metadata import entry_points
@@ -108,8 +118,9 @@ def test_pytest_plugin_registers_the_slow_mark(pytester, monkeypatch):
     installed = any(e.name == "steamtemp_gym" for e in entry_points(group="pytest11"))
     load = () if installed else ("-p", "steamtemp_gym.testing.pytest_plugin")  # else it is
     plugin = pytester.runpytest_subprocess(*args, *load)  # loaded by its entry point
-    plugin.stdout.fnmatch_lines(["*cascade_pi-check_completes_every_scenario*",
-                                 f"{len(POLICY_CHECKS)} tests collected*"])  # fmt: skip
+    plugin.stdout.fnmatch_lines(
+        ["*cascade_pi-check_completes_every_scenario*", f"{len(POLICY_CHECKS)} tests collected*"]
+    )
     assert plugin.ret == 0
 
 
@@ -117,6 +128,9 @@ def test_make_with_the_module_prefix():
     """``gym.make("steamtemp_gym:<id>")`` (docs/envs/README.md) imports and makes the id."""
     env = gym.make("steamtemp_gym:steamtemp/Cascade300MW-v0")
     assert env.spec.id == "steamtemp/Cascade300MW-v0"
-    venv = gym.make_vec("steamtemp_gym:steamtemp/Cascade300MW-v0", num_envs=2,
-                        vectorization_mode="vector_entry_point")  # fmt: skip
+    venv = gym.make_vec(
+        "steamtemp_gym:steamtemp/Cascade300MW-v0",
+        num_envs=2,
+        vectorization_mode="vector_entry_point",
+    )
     assert venv.num_envs == 2

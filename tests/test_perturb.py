@@ -53,12 +53,13 @@ def trajectory_hash(env_id: str, seed: int, n_steps: int = 300, **make_kwargs) -
 
 
 @pytest.mark.parametrize("env_id", IDS)
-@pytest.mark.parametrize("off", [{}, {"plant_randomization": False},
-                                 {"plant_randomization": None}])  # fmt: skip
+@pytest.mark.parametrize("off", [{}, {"plant_randomization": False}, {"plant_randomization": None}])
 def test_pinned_trajectories_without_the_option(env_id, off):
     if env_id not in PINNED_TRAJECTORY_HASHES:
-        pytest.skip(f"{env_id} has no pinned trajectory hashes; pin trajectory_hash of seeds "
-                    f"0 and 1 in PINNED_TRAJECTORY_HASHES")  # fmt: skip
+        pytest.skip(
+            f"{env_id} has no pinned trajectory hashes; pin trajectory_hash of seeds "
+            f"0 and 1 in PINNED_TRAJECTORY_HASHES"
+        )
     got = tuple(trajectory_hash(env_id, s, **off) for s in (0, 1))
     assert got == PINNED_TRAJECTORY_HASHES[env_id]
 
@@ -68,31 +69,36 @@ def test_pinned_hash_sees_a_changed_plant():
     assert trajectory_hash(FSH, 0, params={"tau_tc2_s": 21.0}) != PINNED_TRAJECTORY_HASHES[FSH][0]
 
 
-@pytest.mark.parametrize("value, match", [
-    ({"no_such_group": (0.9, 1.1)}, "unknown group.*valid groups"),
-    ({"section_gains": (0.9, 1.1)}, "unknown group"),  # a Cascade300MW group, not FSH's
-    ({"heat_transfer": (1.2, 0.8)}, "lo = 1.2 is above hi = 0.8"),
-    ({"heat_transfer": (-0.5, 1.2)}, "lo = -0.5 must be a positive factor"),
-    ({"heat_transfer": (0.0, 1.2)}, "positive factor"),
-    ({"heat_transfer": ("a", 1.2)}, "lo must be a finite number"),
-    ({"heat_transfer": (0.8, float("nan"))}, "hi must be a finite number"),
-    ({"heat_transfer": (True, 1.2)}, "lo must be a finite number"),
-    ({"heat_transfer": 1.1}, r"must be a pair \(lo, hi\)"),
-    ({"heat_transfer": (0.8, 1.0, 1.2)}, r"must be a pair \(lo, hi\)"),
-    ({"heat_transfer": "0.8,1.2"}, r"must be a pair \(lo, hi\)"),
-    ({}, "empty dict"),
-    ("yes", "must be True, False, None or a dict"),
-    (1, "must be True, False, None or a dict"),
-])  # fmt: skip
+@pytest.mark.parametrize(
+    "value, match",
+    [
+        ({"no_such_group": (0.9, 1.1)}, "unknown group.*valid groups"),
+        ({"section_gains": (0.9, 1.1)}, "unknown group"),  # a Cascade300MW group, not FSH's
+        ({"heat_transfer": (1.2, 0.8)}, "lo = 1.2 is above hi = 0.8"),
+        ({"heat_transfer": (-0.5, 1.2)}, "lo = -0.5 must be a positive factor"),
+        ({"heat_transfer": (0.0, 1.2)}, "positive factor"),
+        ({"heat_transfer": ("a", 1.2)}, "lo must be a finite number"),
+        ({"heat_transfer": (0.8, float("nan"))}, "hi must be a finite number"),
+        ({"heat_transfer": (True, 1.2)}, "lo must be a finite number"),
+        ({"heat_transfer": 1.1}, r"must be a pair \(lo, hi\)"),
+        ({"heat_transfer": (0.8, 1.0, 1.2)}, r"must be a pair \(lo, hi\)"),
+        ({"heat_transfer": "0.8,1.2"}, r"must be a pair \(lo, hi\)"),
+        ({}, "empty dict"),
+        ("yes", "must be True, False, None or a dict"),
+        (1, "must be True, False, None or a dict"),
+    ],
+)
 def test_bad_option_values_raise(value, match):
     with pytest.raises(ValueError, match=match):
         gym.make(FSH, plant_randomization=value)
     with pytest.raises(ValueError, match=match):
-        gym.make_vec(FSH, num_envs=2, vectorization_mode="vector_entry_point",
-                     plant_randomization=value)  # fmt: skip
+        gym.make_vec(
+            FSH, num_envs=2, vectorization_mode="vector_entry_point", plant_randomization=value
+        )
     with pytest.raises(ValueError, match=match):
-        steamtemp_gym.envs.register_variant("test/BadRandomization-v0", FSH,
-                                            plant_randomization=value)  # fmt: skip
+        steamtemp_gym.envs.register_variant(
+            "test/BadRandomization-v0", FSH, plant_randomization=value
+        )
     assert "test/BadRandomization-v0" not in gym.registry
 
 
@@ -120,9 +126,11 @@ def test_groups_ranges_and_variants_are_consistent():
 
 def _skip_without_variants(env_id: str) -> None:
     if not perturb.variant_factors(env_id):
-        pytest.skip(f"{env_id} has no model-mismatch variants; declare its "
-                    "perturbation_groups and mismatch_variants on its plant class "
-                    "(steamtemp_gym/plants/perturb.py)")  # fmt: skip
+        pytest.skip(
+            f"{env_id} has no model-mismatch variants; declare its "
+            "perturbation_groups and mismatch_variants on its plant class "
+            "(steamtemp_gym/plants/perturb.py)"
+        )
 
 
 @pytest.mark.parametrize("env_id", IDS)
@@ -174,8 +182,7 @@ def test_same_seed_same_plant_and_paired_with_the_nominal_episode():
 
 def test_ranges_and_params_combine():
     """A dict draws its groups only, over the env's own ``params``; lo == hi fixes it."""
-    env = gym.make(FSH, params={"tau_tc2_s": 30.0},
-                   plant_randomization={"sensor_lag": (2.0, 2.0)})  # fmt: skip
+    env = gym.make(FSH, params={"tau_tc2_s": 30.0}, plant_randomization={"sensor_lag": (2.0, 2.0)})
     env.reset(seed=3)
     p = env.unwrapped.episode_plant.params
     assert (p.tau_tc1_s, p.tau_tc2_s) == (10.0, 60.0)
@@ -187,12 +194,22 @@ def test_vector_env_rows_match_single_envs(env_id):
     """Row i of the native vector env is the single env seeded seed + i, plant included,
     bit for bit, also over an autoreset (which draws the next episode's plant)."""
     dt = plant_class(env_id).Params().dt_s
-    short = Scenario(name="short", duration_s=15 * dt, load=((0.0, 0.9), (15 * dt, 0.85)),
-                     noise_std_C=0.5, heat_absorption_noise_std=0.02,
-                     heat_absorption_noise_tau_s=60.0)  # fmt: skip
+    short = Scenario(
+        name="short",
+        duration_s=15 * dt,
+        load=((0.0, 0.9), (15 * dt, 0.85)),
+        noise_std_C=0.5,
+        heat_absorption_noise_std=0.02,
+        heat_absorption_noise_tau_s=60.0,
+    )
     n, steps = 3, 40
-    venv = gym.make_vec(env_id, num_envs=n, vectorization_mode="vector_entry_point",
-                        scenario=short, plant_randomization=True)  # fmt: skip
+    venv = gym.make_vec(
+        env_id,
+        num_envs=n,
+        vectorization_mode="vector_entry_point",
+        scenario=short,
+        plant_randomization=True,
+    )
     singles = [gym.make(env_id, scenario=short, plant_randomization=True) for _ in range(n)]
     obs, _ = venv.reset(seed=11)
     single_obs = [e.reset(seed=11 + i)[0] for i, e in enumerate(singles)]

@@ -16,13 +16,19 @@ from steamtemp_gym.rewards import RewardConfig
 from steamtemp_gym.scenarios import Scenario
 
 ENV = "steamtemp/Cascade300MW-v0"
-SHORT = Scenario(name="planning_api", duration_s=60.0, noise_std_C=0.25,
-                 heat_absorption_noise_std=0.02)  # fmt: skip
+SHORT = Scenario(
+    name="planning_api", duration_s=60.0, noise_std_C=0.25, heat_absorption_noise_std=0.02
+)
 
 
 def _venv(n: int = 3):
-    venv = gym.make_vec(ENV, num_envs=n, vectorization_mode="vector_entry_point",
-                        scenario=SHORT, autoreset_mode="Disabled")  # fmt: skip
+    venv = gym.make_vec(
+        ENV,
+        num_envs=n,
+        vectorization_mode="vector_entry_point",
+        scenario=SHORT,
+        autoreset_mode="Disabled",
+    )
     venv.reset(seed=0)
     return venv
 
@@ -84,18 +90,21 @@ def test_copied_rows_continue_as_their_source():
         assert dst.reward[d] == src.reward[s]
 
 
-@pytest.mark.parametrize(("call", "words"), [
-    (lambda s, d: copy_rows(s, [0, 5], d, [0, 1]), "source rows .*out of range"),
-    (lambda s, d: copy_rows(s, [0, 1], d, [1, 1]), "destination rows has duplicates"),
-    (lambda s, d: copy_rows(s, [0, 1], d, [0]), "2 source row.* 1 destination"),
-    (lambda s, d: copy_rows(s, [0.5], d, [0]), "must be integers"),
-    (lambda s, d: copy_rows(s, [0], object(), [0]), "destination must be a Core"),
-    (lambda s, d: copy_rows(s, [0], d, [-1]), "out of range"),
-    (lambda s, d: planning_core(s, 0), "positive integer"),
-    (lambda s, d: planning_core(s, True), "positive integer"),
-    (lambda s, d: planning_core(object(), 2), "plans from a Core"),
-    (lambda s, d: env_core(gym.make("CartPole-v1")), "steamtemp_gym env"),
-])  # fmt: skip
+@pytest.mark.parametrize(
+    ("call", "words"),
+    [
+        (lambda s, d: copy_rows(s, [0, 5], d, [0, 1]), "source rows .*out of range"),
+        (lambda s, d: copy_rows(s, [0, 1], d, [1, 1]), "destination rows has duplicates"),
+        (lambda s, d: copy_rows(s, [0, 1], d, [0]), "2 source row.* 1 destination"),
+        (lambda s, d: copy_rows(s, [0.5], d, [0]), "must be integers"),
+        (lambda s, d: copy_rows(s, [0], object(), [0]), "destination must be a Core"),
+        (lambda s, d: copy_rows(s, [0], d, [-1]), "out of range"),
+        (lambda s, d: planning_core(s, 0), "positive integer"),
+        (lambda s, d: planning_core(s, True), "positive integer"),
+        (lambda s, d: planning_core(object(), 2), "plans from a Core"),
+        (lambda s, d: env_core(gym.make("CartPole-v1")), "steamtemp_gym env"),
+    ],
+)
 def test_bad_input_is_refused_and_changes_nothing(call, words):
     src = env_core(_venv())
     dst = planning_core(src, 2)

@@ -32,12 +32,21 @@ def test_a_precompiled_plant_loads_every_step_kernel_from_the_cache(tmp_path):
     loads every kernel of its reset and step from the cache and compiles none."""
     env = dict(os.environ, STEAMTEMP_GYM_CACHE_DIR=str(tmp_path))
     env.pop("NUMBA_CACHE_DIR", None)
-    run = subprocess.run([sys.executable, "-m", "steamtemp_gym.precompile", "Cascade300MW-v0",
-                          "--jobs", "1"], env=env, capture_output=True, text=True)  # fmt: skip
+    run = subprocess.run(
+        [sys.executable, "-m", "steamtemp_gym.precompile", "Cascade300MW-v0", "--jobs", "1"],
+        env=env,
+        capture_output=True,
+        text=True,
+    )
     assert run.returncode == 0, run.stderr[-2000:]
     assert "steamtemp/Cascade300MW-v0" in run.stdout and "done in" in run.stdout
-    out = subprocess.run([sys.executable, "-c", _USE, "steamtemp/Cascade300MW-v0"], env=env,
-                         check=True, capture_output=True, text=True)  # fmt: skip
+    out = subprocess.run(
+        [sys.executable, "-c", _USE, "steamtemp/Cascade300MW-v0"],
+        env=env,
+        check=True,
+        capture_output=True,
+        text=True,
+    )
     stats = json.loads(out.stdout.strip().splitlines()[-1])
     assert len(stats) == 9  # to_commands twice (float32, float64 actions)
     for name, (hits, misses) in stats.items():
@@ -45,10 +54,13 @@ def test_a_precompiled_plant_loads_every_step_kernel_from_the_cache(tmp_path):
     assert "compiling" not in out.stderr
 
 
-@pytest.mark.parametrize(("argv", "message"), [
-    (["NoSuchPlant-v0"], "unknown env id 'NoSuchPlant-v0'"),
-    (["--jobs", "0"], "--jobs must be at least 1"),
-])  # fmt: skip
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (["NoSuchPlant-v0"], "unknown env id 'NoSuchPlant-v0'"),
+        (["--jobs", "0"], "--jobs must be at least 1"),
+    ],
+)
 def test_bad_arguments_are_refused_before_compiling(argv, message, capsys):
     with pytest.raises(SystemExit) as exit_info:
         precompile.main(argv)

@@ -16,8 +16,18 @@ from agents import specs
 from agents.leaderboard.plan import _policy_digest
 from steamtemp_gym import catalog, provenance
 
-POLICIES = ("cascade_pi", "cascade_pi_ff", "cascade_pi_ff_tuned", "fao_sf", "fao_fac",
-            "mpc_linear", "lqi", "neuro_pid_mee", "oracle", "frozen_valve")  # fmt: skip
+POLICIES = (
+    "cascade_pi",
+    "cascade_pi_ff",
+    "cascade_pi_ff_tuned",
+    "fao_sf",
+    "fao_fac",
+    "mpc_linear",
+    "lqi",
+    "neuro_pid_mee",
+    "oracle",
+    "frozen_valve",
+)
 
 #: The package's own plants (a plant registered from outside depends on every file of the
 #: package and on its own).
@@ -56,8 +66,7 @@ def test_the_digests_read_the_copy(tree):
     before = _digests()
     _edit(tree / "agents" / "oracle.py", "import sys\n", "import sys\n_PROBE = 1\n")
     after = _digests()
-    assert {k for k in before if before[k] != after[k]} == {
-        (e, "oracle") for e in OWN}  # fmt: skip
+    assert {k for k in before if before[k] != after[k]} == {(e, "oracle") for e in OWN}
 
 
 def test_a_docstring_or_comment_edit_changes_no_digest(tree):
@@ -65,8 +74,11 @@ def test_a_docstring_or_comment_edit_changes_no_digest(tree):
     _edit(tree / "steamtemp_gym" / "envs" / "core.py", '"""', '"""Edited. ')
     _edit(tree / "baselines" / "cascade_pi.py", '"""', '"""Edited. ')
     _edit(tree / "agents" / "oracle.py", '"""', '"""Edited. ')
-    _edit(tree / "agents" / "evaluation.py", "import numpy as np\n",
-          "import numpy as np  # a comment\n\n\n")  # fmt: skip
+    _edit(
+        tree / "agents" / "evaluation.py",
+        "import numpy as np\n",
+        "import numpy as np  # a comment\n\n\n",
+    )
     plant = tree / "steamtemp_gym" / "plants" / "drum_boiler" / "kernel.py"
     _edit(plant, '"""', '"""Edited. ')
     assert _digests() == before
@@ -74,8 +86,11 @@ def test_a_docstring_or_comment_edit_changes_no_digest(tree):
 
 def test_editing_one_baseline_changes_only_the_rows_of_the_controllers_that_use_it(tree):
     before = _digests()
-    _edit(tree / "baselines" / "fao.py", "from __future__ import annotations\n",
-          "from __future__ import annotations\n\n_PROBE = 1\n")  # fmt: skip
+    _edit(
+        tree / "baselines" / "fao.py",
+        "from __future__ import annotations\n",
+        "from __future__ import annotations\n\n_PROBE = 1\n",
+    )
     after = _digests()
     changed = {n for (e, n) in before if before[e, n] != after[e, n]}
     assert changed == {"fao_sf", "fao_fac"}
@@ -85,24 +100,29 @@ def test_editing_one_baseline_changes_only_the_rows_of_the_controllers_that_use_
 def test_editing_one_plant_changes_only_that_plants_digests(tree):
     before = _digests()
     drum = "steamtemp/DrumBoilerSH-v0"
-    _edit(tree / "steamtemp_gym" / "plants" / "drum_boiler" / "kernel.py",
-          "from __future__ import annotations\n",
-          "from __future__ import annotations\n\n_PROBE = 1\n")  # fmt: skip
+    _edit(
+        tree / "steamtemp_gym" / "plants" / "drum_boiler" / "kernel.py",
+        "from __future__ import annotations\n",
+        "from __future__ import annotations\n\n_PROBE = 1\n",
+    )
     after = _digests()
     assert {k for k in before if before[k] != after[k]} == {(drum, "source")}
 
 
 def test_editing_shared_code_changes_every_plants_digest(tree):
     before = _digests()
-    _edit(tree / "steamtemp_gym" / "rewards.py", "from __future__ import annotations\n",
-          "from __future__ import annotations\n\n_PROBE = 1\n")  # fmt: skip
+    _edit(
+        tree / "steamtemp_gym" / "rewards.py",
+        "from __future__ import annotations\n",
+        "from __future__ import annotations\n\n_PROBE = 1\n",
+    )
     after = _digests()
     assert all(before[e, "source"] != after[e, "source"] for e in OWN)
 
 
 def test_a_policys_code_digest_follows_its_imports():
-    files = {f.name for f in provenance.module_files(
-        baselines.factory("mpc_linear").__module__, specs.POLICY_PACKAGES)}  # fmt: skip
+    module = baselines.factory("mpc_linear").__module__
+    files = {f.name for f in provenance.module_files(module, specs.POLICY_PACKAGES)}
     assert {"mpc_linear.py", "mpc_linear_design.py", "linear_models.py"} <= files
     assert "fao.py" not in files and "cascade_pi.py" not in files
     with pytest.raises(ValueError, match="not a module of steamtemp_gym.plants"):

@@ -23,7 +23,7 @@ def _section(title: str) -> str:
     text = README.read_text(encoding="utf-8")
     start = text.index(f"\n## {title}\n")
     end = text.find("\n## ", start + 1)
-    return text[start:end if end > 0 else None]
+    return text[start : end if end > 0 else None]
 
 
 def _blocks(text: str, lang: str) -> list[str]:
@@ -48,12 +48,23 @@ def test_quick_start_runs_and_prints_the_kpis(tmp_path):
     for key in ("HOME", "XDG_CACHE_HOME", "STEAMTEMP_GYM_CACHE_DIR"):  # the compile cache
         if key in os.environ:
             env[key] = os.environ[key]
-    proc = subprocess.run([sys.executable, str(script)], cwd=tmp_path, env=env, text=True,
-                          capture_output=True, timeout=300)  # fmt: skip
+    proc = subprocess.run(
+        [sys.executable, str(script)],
+        cwd=tmp_path,
+        env=env,
+        text=True,
+        capture_output=True,
+        timeout=300,
+    )
     assert proc.returncode == 0, proc.stderr[-2000:]
     values = dict(re.findall(r"^\s*(\w+):\s+(-?\d+\.\d\d)$", proc.stdout, flags=re.M))
-    assert list(values) == ["iae_K_s", "max_abs_dev_K", "time_outside_5K_s", "valve_travel",
-                            "return"], proc.stdout  # fmt: skip
+    assert list(values) == [
+        "iae_K_s",
+        "max_abs_dev_K",
+        "time_outside_5K_s",
+        "valve_travel",
+        "return",
+    ], proc.stdout
     assert float(values["iae_K_s"]) > 0 and float(values["return"]) < 0
     assert 0 < float(values["max_abs_dev_K"]) < 28  # held inside the trip band
 
@@ -67,8 +78,12 @@ def test_the_two_commands_are_the_ones_ci_runs():
     make = (ROOT / "Makefile").read_text()
     assert "\nleaderboard: setup\n\t$(BIN)/steamtemp-leaderboard --out $(OUT)\n" in make
     assert "\ntest: setup\n\t$(BIN)/python -m pytest -n 2 -q\n" in make
-    for step in ("-m venv", "--index-url $(TORCH_INDEX)", '-e ".[test]"',
-                 "-m steamtemp_gym.precompile"):  # fmt: skip
+    for step in (
+        "-m venv",
+        "--index-url $(TORCH_INDEX)",
+        '-e ".[test]"',
+        "-m steamtemp_gym.precompile",
+    ):
         assert step in make, step
     assert "\nmake test\n" in (ROOT / ".ci" / "run").read_text()
     install = _blocks(_section("Your own environment"), "bash")[0]
@@ -98,14 +113,17 @@ def test_readme_is_a_guide():
         assert (ROOT / link).exists(), link
 
 
-MARKERS = [(README, "leaderboard"), (README, "trend"),
-           (ROOT / "docs" / "agents" / "zoo.md", "zoo"),
-           (ROOT / "docs" / "agents" / "zoo.md", "training"),
-           (ROOT / "docs" / "baselines.md", "baselines"),
-           (ROOT / "docs" / "baselines" / "mpc_linear.md", "compare"),
-           (ROOT / "docs" / "baselines.md", "realism"),
-           (ROOT / "docs" / "robustness.md", "mismatch"),
-           (ROOT / "docs" / "difficulty.md", "difficulty")]  # fmt: skip
+MARKERS = [
+    (README, "leaderboard"),
+    (README, "trend"),
+    (ROOT / "docs" / "agents" / "zoo.md", "zoo"),
+    (ROOT / "docs" / "agents" / "zoo.md", "training"),
+    (ROOT / "docs" / "baselines.md", "baselines"),
+    (ROOT / "docs" / "baselines" / "mpc_linear.md", "compare"),
+    (ROOT / "docs" / "baselines.md", "realism"),
+    (ROOT / "docs" / "robustness.md", "mismatch"),
+    (ROOT / "docs" / "difficulty.md", "difficulty"),
+]
 
 
 @pytest.mark.parametrize(("page", "name"), MARKERS, ids=[f"{p.name}:{n}" for p, n in MARKERS])
@@ -129,10 +147,12 @@ def test_leaderboard_generator_rewrites_readme_and_agents_page(tmp_path, monkeyp
     baselines_page, robustness_page = tmp_path / "baselines.md", tmp_path / "robustness.md"
     compare_page = tmp_path / "mpc_linear.md"
     shutil.copy(README, readme)
-    pages = {(ROOT / "docs" / "agents" / "zoo.md", agents_page): gen.AGENTS_PAGE,
-             (ROOT / "docs" / "baselines.md", baselines_page): gen.BASELINES_PAGE,
-             (ROOT / "docs" / "baselines" / "mpc_linear.md", compare_page): gen.COMPARE_PAGE,
-             (ROOT / "docs" / "robustness.md", robustness_page): gen.ROBUSTNESS_PAGE}  # fmt: skip
+    pages = {
+        (ROOT / "docs" / "agents" / "zoo.md", agents_page): gen.AGENTS_PAGE,
+        (ROOT / "docs" / "baselines.md", baselines_page): gen.BASELINES_PAGE,
+        (ROOT / "docs" / "baselines" / "mpc_linear.md", compare_page): gen.COMPARE_PAGE,
+        (ROOT / "docs" / "robustness.md", robustness_page): gen.ROBUSTNESS_PAGE,
+    }
     for (page, copy), written in pages.items():
         assert written == page  # the generator writes the pages that hold the markers
         shutil.copy(page, copy)
@@ -145,13 +165,29 @@ def test_leaderboard_generator_rewrites_readme_and_agents_page(tmp_path, monkeyp
     monkeypatch.setattr(gen, "IMAGE", tmp_path / "img" / "trend.png")
     monkeypatch.setattr(gen, "PARETO_IMAGE", tmp_path / "img" / "leaderboard_pareto.png")
     env = "steamtemp/A-v0"
-    rows = [{"env": env, "scenario": "s", "policy": p, "seed": s, "metrics": {
-        "return": r - s, "tripped": 0.0, "iae_K_s": 100.0, "valve_travel": 1.0}}
-        for p, r in (("cascade_pi_ff", -100.0), ("oracle", -40.0), ("sb3:ppo", -70.0),
-                     ("lqi", -90.0))
-        for s in range(2)]  # fmt: skip
-    run = {"envs": [env], "scenarios": ["s"], "seeds": [0, 1], "steamtemp_gym_version": "x",
-           "policies": {env: ["cascade_pi_ff", "oracle", "sb3:ppo", "lqi"]}}  # fmt: skip
+    rows = [
+        {
+            "env": env,
+            "scenario": "s",
+            "policy": p,
+            "seed": s,
+            "metrics": {"return": r - s, "tripped": 0.0, "iae_K_s": 100.0, "valve_travel": 1.0},
+        }
+        for p, r in (
+            ("cascade_pi_ff", -100.0),
+            ("oracle", -40.0),
+            ("sb3:ppo", -70.0),
+            ("lqi", -90.0),
+        )
+        for s in range(2)
+    ]
+    run = {
+        "envs": [env],
+        "scenarios": ["s"],
+        "seeds": [0, 1],
+        "steamtemp_gym_version": "x",
+        "policies": {env: ["cascade_pi_ff", "oracle", "sb3:ppo", "lqi"]},
+    }
     doc, _ = summarize(rows, run)
     out = tmp_path / "out"
     (out / "plots").mkdir(parents=True)
@@ -174,7 +210,8 @@ def test_leaderboard_generator_rewrites_readme_and_agents_page(tmp_path, monkeyp
     assert "| A-v0 | sb3:ppo | model-free | **0.50" in agents_page.read_text()
     assert "| A-v0 | lqi (best baseline) | baseline |" in agents_page.read_text()
     assert "| s | - / - / -100.5 | - / - / 100 | - / - / 1.00 | - / - / - |" in (
-        compare_page.read_text())  # mpc_linear / cascade_pi / cascade_pi_ff, two not run
+        compare_page.read_text()
+    )  # mpc_linear / cascade_pi / cascade_pi_ff, two not run
     assert "1 of 1 baseline-plant pairs have no episode" in baselines_page.read_text()
     assert (tmp_path / "img" / "trend.png").read_bytes() == b"png"
     assert "<!-- mismatch:start" in robustness_page.read_text()  # no mismatch rows: empty
@@ -185,7 +222,9 @@ def test_difficulty_generator_replaces_only_its_block():
     text = (ROOT / "docs" / "difficulty.md").read_text()
     block = "<!-- difficulty:start (generated) -->\nnew \\1 table\n<!-- difficulty:end -->"
     new = diff.replace_block(text, block)
-    assert block in new and new.split("<!-- difficulty:start")[0] == text.split(
-        "<!-- difficulty:start")[0]  # fmt: skip
+    assert (
+        block in new
+        and new.split("<!-- difficulty:start")[0] == text.split("<!-- difficulty:start")[0]
+    )
     with pytest.raises(SystemExit, match="0 difficulty"):
         diff.replace_block("no markers", block)

@@ -24,27 +24,30 @@ def test_the_toy_plant_is_registered_as_the_package_plants_are():
     assert specs.source_digest(TOY) != specs.source_digest("steamtemp/Cascade300MW-v0")
 
 
-@pytest.mark.parametrize(("plant_id", "entry", "match"), [
-    ("ToyLags-v0", "toy_plant:ToyLags", "namespace/Name-vN"),
-    (7, "toy_plant:ToyLags", "namespace/Name-vN"),
-    (TOY, "toy_plant:ToyLags", "is taken"),
-    ("steamtemp/SupercriticalFSH-v0", "toy_plant:ToyLags", "is taken"),
-    ("test/Other-v0", "no_such_module:X", "No module named 'no_such_module'"),
-    ("test/Other-v0", "toy_plant:NoSuchClass", "NoSuchClass"),
-    ("test/Other-v0", "toy_plant", "must name a subclass of Plant"),
-    ("test/Other-v0", "toy_plant:ToyParams", "must name a subclass of Plant"),
-    ("test/Other-v0", "toy_plant:ToyLags", "whose id is 'test/Other-v0'"),
-    # Gymnasium reads -v00 as -v0: it replaced the shipped env, fingerprints and all
-    ("steamtemp/SupercriticalFSH-v00", "toy_plant:ToyLags", "without leading zeros"),
-    # an id Gymnasium already holds, or whose unversioned name it holds
-    ("test/CartPole-v1", "toy_plant:ToyLags", "taken in Gymnasium's registry"),
-    ("test/Unversioned-v0", "toy_plant:ToyLags", "taken in Gymnasium's registry"),
-    # a module that fails at import in any way, and a Plant with no declarations
-    ("test/Other-v0", "hostile_plants_raise:X", "RuntimeError: at import"),
-    ("test/Other-v0", "hostile_plants_syntax:X", "SyntaxError"),
-    ("test/Other-v0", "hostile_plants_exit:X", "SystemExit"),
-    ("test/Bare-v0", "hostile_plants:Bare", "not a complete plant"),
-])  # fmt: skip
+@pytest.mark.parametrize(
+    ("plant_id", "entry", "match"),
+    [
+        ("ToyLags-v0", "toy_plant:ToyLags", "namespace/Name-vN"),
+        (7, "toy_plant:ToyLags", "namespace/Name-vN"),
+        (TOY, "toy_plant:ToyLags", "is taken"),
+        ("steamtemp/SupercriticalFSH-v0", "toy_plant:ToyLags", "is taken"),
+        ("test/Other-v0", "no_such_module:X", "No module named 'no_such_module'"),
+        ("test/Other-v0", "toy_plant:NoSuchClass", "NoSuchClass"),
+        ("test/Other-v0", "toy_plant", "must name a subclass of Plant"),
+        ("test/Other-v0", "toy_plant:ToyParams", "must name a subclass of Plant"),
+        ("test/Other-v0", "toy_plant:ToyLags", "whose id is 'test/Other-v0'"),
+        # Gymnasium reads -v00 as -v0: it replaced the shipped env, fingerprints and all
+        ("steamtemp/SupercriticalFSH-v00", "toy_plant:ToyLags", "without leading zeros"),
+        # an id Gymnasium already holds, or whose unversioned name it holds
+        ("test/CartPole-v1", "toy_plant:ToyLags", "taken in Gymnasium's registry"),
+        ("test/Unversioned-v0", "toy_plant:ToyLags", "taken in Gymnasium's registry"),
+        # a module that fails at import in any way, and a Plant with no declarations
+        ("test/Other-v0", "hostile_plants_raise:X", "RuntimeError: at import"),
+        ("test/Other-v0", "hostile_plants_syntax:X", "SyntaxError"),
+        ("test/Other-v0", "hostile_plants_exit:X", "SystemExit"),
+        ("test/Bare-v0", "hostile_plants:Bare", "not a complete plant"),
+    ],
+)
 def test_a_bad_registration_is_refused_and_registers_nothing(
     plant_id, entry, match, tmp_path, monkeypatch
 ):

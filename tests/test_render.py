@@ -9,13 +9,19 @@ from steamtemp_gym.envs.render import HEIGHT, WIDTH, TrendDisplay
 
 
 def _info(t: float, temp: float, sp: float = 540.0, valve=(0.5,)) -> dict:
-    return {"time_s": t, "outlet_temp_C": temp, "measured_temp_C": temp, "setpoint_C": sp,
-            "load": 0.8, "spray_flow_kg_s": 5.0, "spray_valve": np.array(valve)}
+    return {
+        "time_s": t,
+        "outlet_temp_C": temp,
+        "measured_temp_C": temp,
+        "setpoint_C": sp,
+        "load": 0.8,
+        "spray_flow_kg_s": 5.0,
+        "spray_valve": np.array(valve),
+    }
 
 
 def test_traces_land_on_their_values_and_frames_are_copies():
-    d = TrendDisplay("test", 600.0, _info(0.0, 540.0), spray_max_kg_s=20.0,
-                     valve_names=("spray",))
+    d = TrendDisplay("test", 600.0, _info(0.0, 540.0), spray_max_kg_s=20.0, valve_names=("spray",))
     first = d.frame()
     assert first.shape == (HEIGHT, WIDTH, 3) and first.dtype == np.uint8
     for k in range(1, 61):
@@ -63,11 +69,21 @@ def test_render_before_reset_is_an_error():
 
 def test_secondary_temperatures_have_their_own_panel():
     first = dict(_info(0.0, 540.0, valve=(0.5, 0.5, 0.3)), reheat_temp_C=566.0)
-    d = TrendDisplay("test", 600.0, first, spray_max_kg_s=20.0,
-                     valve_names=("SP1", "SP2", "RGD"), secondary=(("reheat_temp_C", 566.0),))
+    d = TrendDisplay(
+        "test",
+        600.0,
+        first,
+        spray_max_kg_s=20.0,
+        valve_names=("SP1", "SP2", "RGD"),
+        secondary=(("reheat_temp_C", 566.0),),
+    )
     for k in range(1, 61):
-        d.add(dict(_info(10.0 * k, 540.0, valve=(0.5, 0.5, 0.3)),
-                   reheat_temp_C=566.0 - 15.0 * (k >= 30)))  # a 15 K drop at 5 min
+        d.add(
+            dict(
+                _info(10.0 * k, 540.0, valve=(0.5, 0.5, 0.3)),
+                reheat_temp_C=566.0 - 15.0 * (k >= 30),
+            )
+        )  # a 15 K drop at 5 min
     temp, reheat, load, act, spray = d.axes
     assert reheat.top > temp.bottom and load.top > reheat.bottom
     red = np.array([214, 39, 40])
@@ -77,7 +93,7 @@ def test_secondary_temperatures_have_their_own_panel():
     rows = rows[(rows >= reheat.rows[0]) & (rows <= reheat.rows[1])]
     assert rows.size and abs(rows.mean() - reheat.y(551.0)) <= 1.5
     # the main steam held its setpoint meanwhile
-    rows = np.flatnonzero(np.all(img[temp.rows[0]:temp.rows[1], col] == red, axis=1))
+    rows = np.flatnonzero(np.all(img[temp.rows[0] : temp.rows[1], col] == red, axis=1))
     assert rows.size and abs(rows.mean() + temp.rows[0] - temp.y(540.0)) <= 1.5
 
 
@@ -102,7 +118,7 @@ def test_every_plant_shows_every_scored_temperature_and_actuator(env_id):
     n = len(u.signals.action)
     assert np.atleast_1d(info["spray_valve"]).size == n
     act = d.axes[-2]
-    region = env.render()[act.rows[0]:act.rows[1] + 1, round(act.left) + 2:round(act.x(1.0))]
+    region = env.render()[act.rows[0] : act.rows[1] + 1, round(act.left) + 2 : round(act.x(1.0))]
     for j in range(n):
         color = render._rgb(render._VALVE_COLORS[j % len(render._VALVE_COLORS)])
         assert np.all(region == color, axis=2).any(), (env_id, j)

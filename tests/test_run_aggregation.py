@@ -50,10 +50,16 @@ def _definition(runs, statistic, n_boot, seed):
     rng = np.random.default_rng(seed)
     n = len(runs)
     pick = rng.integers(0, n, (n_boot, n))
-    drawn = [[r[t][rng.integers(0, r[t].size, (n_boot, n, r[t].size))] for r in runs]
-             for t in range(len(runs[0]))]  # fmt: skip
-    return np.array([statistic(np.concatenate([d[pick[b, j]][b, j] for d in drawn
-                                               for j in range(n)])) for b in range(n_boot)])
+    drawn = [
+        [r[t][rng.integers(0, r[t].size, (n_boot, n, r[t].size))] for r in runs]
+        for t in range(len(runs[0]))
+    ]
+    return np.array(
+        [
+            statistic(np.concatenate([d[pick[b, j]][b, j] for d in drawn for j in range(n)]))
+            for b in range(n_boot)
+        ]
+    )
 
 
 @pytest.mark.parametrize("sizes", [(5, 5, 5), (5, 3, 4)])  # equal sizes: the batched path
@@ -77,12 +83,15 @@ def test_one_run_is_the_stratified_bootstrap_and_the_same_seed_the_same_interval
     assert stats.training_run_bootstrap_ci(runs, seed=1) != stats.training_run_bootstrap_ci(runs)
 
 
-@pytest.mark.parametrize(("runs", "match"), [
-    ([], "no training runs"),
-    ([[np.ones(2)], [np.ones(2), np.ones(2)]], "different task counts"),
-    ([[np.ones(2)], [np.array([])]], "training run 1: no scores"),
-    ([[np.ones(2)], [np.array([np.nan])]], "training run 1: scores must be finite"),
-])  # fmt: skip
+@pytest.mark.parametrize(
+    ("runs", "match"),
+    [
+        ([], "no training runs"),
+        ([[np.ones(2)], [np.ones(2), np.ones(2)]], "different task counts"),
+        ([[np.ones(2)], [np.array([])]], "training run 1: no scores"),
+        ([[np.ones(2)], [np.array([np.nan])]], "training run 1: scores must be finite"),
+    ],
+)
 def test_bad_runs_are_refused(runs, match):
     with pytest.raises(ValueError, match=match):
         stats.training_run_bootstrap_ci(runs)
@@ -128,8 +137,10 @@ def test_three_runs_are_one_row_with_the_hand_computed_iqm_and_ci():
     assert e["return"]["iqm"]["per_run"] == pytest.approx([-60.0, -52.0, -70.0])
     cell = s["plants"][ENV]["scenarios"]["a"][AGENT]
     assert cell["seeds"] == 12 and cell["training_runs"] == 3
-    assert "training_runs" not in pols["cascade_pi"] and "per_run" not in pols[
-        "cascade_pi"]["normalized_score"]["iqm"]  # fmt: skip
+    assert (
+        "training_runs" not in pols["cascade_pi"]
+        and "per_run" not in pols["cascade_pi"]["normalized_score"]["iqm"]
+    )
     md = report.markdown(s, r)
     spread = f"{report.num(0.375)} to {report.num(0.6)} (3 runs)"
     assert md.count(spread) == 2  # the plant's ranking table and the agents' table
@@ -142,14 +153,16 @@ def test_three_runs_with_spread_the_ci_resamples_the_runs():
     are those of each run scored alone."""
     s, _ = _summary({0: 0.0, 1: 8.0, 2: -10.0})
     est = s["plants"][ENV]["policies"][AGENT]["normalized_score"]["iqm"]
-    alone = [_summary({k: off})[0]["plants"][ENV]["policies"][AGENT]["normalized_score"]["iqm"]
-             for k, off in ((0, 0.0), (1, 8.0), (2, -10.0))]  # fmt: skip
+    alone = [
+        _summary({k: off})[0]["plants"][ENV]["policies"][AGENT]["normalized_score"]["iqm"]
+        for k, off in ((0, 0.0), (1, 8.0), (2, -10.0))
+    ]
     assert est["per_run"] == pytest.approx([a["value"] for a in alone], abs=1e-15)
     lo, hi = est["ci95"]
     assert lo < min(est["per_run"]) + 0.02 and hi > max(est["per_run"]) - 0.02
     pooled = summarize(rows("pooled", {None: 0.0}), run_info([*FIXED, "pooled"]))
-    assert hi - lo > 3 * np.diff(pooled[0]["plants"][ENV]["policies"]["pooled"][
-        "normalized_score"]["iqm"]["ci95"])[0]  # fmt: skip
+    pooled_ci = pooled[0]["plants"][ENV]["policies"]["pooled"]["normalized_score"]["iqm"]["ci95"]
+    assert hi - lo > 3 * np.diff(pooled_ci)[0]
 
 
 def test_failed_episodes_of_a_run_count_for_the_agent():
@@ -165,9 +178,13 @@ def test_failed_episodes_of_a_run_count_for_the_agent():
 def test_a_run_without_scored_episodes_is_left_out_of_the_score_s_runs():
     """Run 2 ran only scenario c, where cascade_pi_ff did not run (not normalized): the
     return counts three runs, the normalized score two."""
-    r = [x for x in rows(AGENT, {0: 0.0, 1: 8.0, 2: -10.0})
-         if not (x["policy"] == f"{AGENT}@run2" and x["scenario"] != "c")
-         and not (x["policy"] == "cascade_pi_ff" and x["scenario"] == "c")]  # fmt: skip
+
+    def ran(x: dict) -> bool:
+        if x["policy"] == f"{AGENT}@run2":
+            return x["scenario"] == "c"
+        return not (x["policy"] == "cascade_pi_ff" and x["scenario"] == "c")
+
+    r = [x for x in rows(AGENT, {0: 0.0, 1: 8.0, 2: -10.0}) if ran(x)]
     names = [f"{AGENT}@run{k}" for k in range(3)]
     s, _ = summarize(r, run_info([*FIXED, *names]))
     e = s["plants"][ENV]["policies"][AGENT]
@@ -191,18 +208,24 @@ def test_realism_counts_the_episodes_a_plant_engineer_would_reject():
     s, _ = summarize(r, run_info([*FIXED, AGENT]))
     pol = s["plants"][ENV]["policies"]
     assert pol["cascade_pi"]["realism"] == {
-        "episodes": 12, "breaches": 1,
-        "listed": ["cascade_pi a seed 2: quiet p2p 2.50 K against the reference's 1.00 K"]}
+        "episodes": 12,
+        "breaches": 1,
+        "listed": ["cascade_pi a seed 2: quiet p2p 2.50 K against the reference's 1.00 K"],
+    }
     assert pol[AGENT]["realism"]["episodes"] == 12 and pol[AGENT]["realism"]["breaches"] == 2
     assert pol[AGENT]["realism"]["listed"] == [
         f"{AGENT} b seed 1: travel 6.50 = 3.25x the reference's 2.00",
-        f"{AGENT} c seed 3: tripped"]
+        f"{AGENT} c seed 3: tripped",
+    ]
     assert all("realism" not in pol[p] for p in ("cascade_pi_ff", "oracle"))
     assert "1/12" in pages.baselines_markdown(s)
     md = pages.realism_markdown(s)  # baselines only: the agent is not listed
     assert "0 of 1 baseline-plant pairs have no episode" in md
-    assert ("| `cascade_pi` | SupercriticalFSH-v0 | 1/12 | a seed 2: quiet p2p 2.50 K against "
-            "the reference's 1.00 K |") in md and AGENT not in md
+    row = (
+        "| `cascade_pi` | SupercriticalFSH-v0 | 1/12 | a seed 2: quiet p2p 2.50 K against "
+        "the reference's 1.00 K |"
+    )
+    assert row in md and AGENT not in md
 
 
 def test_training_table_gives_each_agent_s_budget_over_its_runs(tmp_path):
@@ -210,17 +233,25 @@ def test_training_table_gives_each_agent_s_budget_over_its_runs(tmp_path):
     runs' own metadata (hand-made runs: 1.2M and 2.5M decisions, 10 and 12.5 minutes; the
     first run's checkpoint passed its commissioning checks, the second's limit-cycled)."""
     best = {"return": -50.0, "iae_K_s": 1.0, "valve_travel": 1.0, "travel_ratio": 1.0}
-    for run, (steps, minutes, ret, check) in enumerate([
-            (1_200_000, 10.0, -50.0, ""), (2_500_000, 12.5, -40.0, "quiet p2p 3 K")]):  # fmt: skip
-        meta = {"timesteps_trained": steps, "timesteps_of_best": steps // 2,
-                "wall_time_s": 60 * minutes,
-                "validation": {"best": {**best, "return": ret, "check": check},
-                               "reference": {"return": -90.0}}}  # fmt: skip
+    for run, (steps, minutes, ret, check) in enumerate(
+        [(1_200_000, 10.0, -50.0, ""), (2_500_000, 12.5, -40.0, "quiet p2p 3 K")]
+    ):
+        meta = {
+            "timesteps_trained": steps,
+            "timesteps_of_best": steps // 2,
+            "wall_time_s": 60 * minutes,
+            "validation": {
+                "best": {**best, "return": ret, "check": check},
+                "reference": {"return": -90.0},
+            },
+        }
         stem = f"steamtemp__{ENV.split('/')[-1]}__trpo" + (f"__run{run}" if run else "")
         (tmp_path / f"{stem}.json").write_text(json.dumps(meta))
         (tmp_path / f"{stem}.zip").write_bytes(b"")
     lines = pages.training_markdown(tmp_path).splitlines()
     assert len(lines) == 3
-    assert lines[2] == (f"| {ENV.split('/')[-1]} | sb3:trpo | model-free | 2 | 1.20 to 2.50M | "
-                        "0.60 to 1.25M | 10.0 to 12.5 | -50.0 to -40.0 (-90.0) | 1.00x | "
-                        "1 of 2 runs |")
+    assert lines[2] == (
+        f"| {ENV.split('/')[-1]} | sb3:trpo | model-free | 2 | 1.20 to 2.50M | "
+        "0.60 to 1.25M | 10.0 to 12.5 | -50.0 to -40.0 (-90.0) | 1.00x | "
+        "1 of 2 runs |"
+    )

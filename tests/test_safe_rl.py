@@ -35,10 +35,20 @@ def _actions(env_id: str, n: int, rows: int = 1) -> np.ndarray:
 
 @pytest.mark.parametrize(
     ("e0", "e1", "cost"),
-    [(0.0, 0.0, 0.0), (4.9, -4.9, 0.0), (5.0, 5.0, 0.0), (-5.0, 5.0, 0.0), (6.0, 6.0, 1.0),
-     (-6.0, 7.0, 1.0 - 10.0 / 13.0), (4.0, 6.0, 0.5), (-6.0, -4.0, 0.5), (6.0, 4.0, 0.5),
-     (math.nan, 0.0, 1.0), (0.0, math.inf, 1.0)],
-)  # fmt: skip
+    [
+        (0.0, 0.0, 0.0),
+        (4.9, -4.9, 0.0),
+        (5.0, 5.0, 0.0),
+        (-5.0, 5.0, 0.0),
+        (6.0, 6.0, 1.0),
+        (-6.0, 7.0, 1.0 - 10.0 / 13.0),
+        (4.0, 6.0, 0.5),
+        (-6.0, -4.0, 0.5),
+        (6.0, 4.0, 0.5),
+        (math.nan, 0.0, 1.0),
+        (0.0, math.inf, 1.0),
+    ],
+)
 def test_interval_cost_is_the_fraction_outside_the_band(e0, e1, cost):
     assert interval_cost(e0, e1) == pytest.approx(cost, abs=1e-15)
     assert interval_cost(-e0, -e1) == pytest.approx(cost, abs=1e-15)
@@ -90,13 +100,21 @@ def test_vector_env_cost_equals_the_single_envs_per_row(mode, tmp_path):
     costs of the steps whose rewards it returns."""
     env_id, n, steps = IDS[0], 3, 150
     path = tmp_path / "short.yaml"
-    path.write_text("name: short\nduration_s: 60\nload: [[0, 1.0]]\n"
-                    "setpoint_offset_C: [[0, 0], [5, 9]]\nnoise_std_C: 0.3\n"
-                    "heat_absorption_noise_std: 0.02\n")  # fmt: skip
+    path.write_text(
+        "name: short\nduration_s: 60\nload: [[0, 1.0]]\n"
+        "setpoint_offset_C: [[0, 0], [5, 9]]\nnoise_std_C: 0.3\n"
+        "heat_absorption_noise_std: 0.02\n"
+    )
     actions = _actions(env_id, steps, n)
-    venv = SafetyVectorStep(gym.make_vec(env_id, num_envs=n, autoreset_mode=mode,
-                                         vectorization_mode="vector_entry_point",
-                                         scenario=str(path)))  # fmt: skip
+    venv = SafetyVectorStep(
+        gym.make_vec(
+            env_id,
+            num_envs=n,
+            autoreset_mode=mode,
+            vectorization_mode="vector_entry_point",
+            scenario=str(path),
+        )
+    )
     venv.reset(seed=10)
     assert np.array_equal(venv.cost_limit, np.full(n, DEFAULT_COST_LIMIT_SHARE * 60.0))
     got_cost, got_info_cost, got_reward = [], [], []

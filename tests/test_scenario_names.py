@@ -37,8 +37,9 @@ def _run(env, steps: int = 8, seed: int = 4, **reset) -> list:
     obs, info = env.reset(seed=seed, **reset)
     out = [obs]
     for k in range(steps):
-        obs, r, term, trunc, info = env.step(np.full(env.action_space.shape, 0.1 * (k % 3),
-                                                     dtype=np.float32))  # fmt: skip
+        obs, r, term, trunc, info = env.step(
+            np.full(env.action_space.shape, 0.1 * (k % 3), dtype=np.float32)
+        )
         out += [obs, r, info["outlet_temp_C"]]
     return out
 
@@ -54,8 +55,9 @@ def test_make_takes_held_out_names():
     env = gym.make(ENV, scenario="heldout:mill_trip")
     env.reset(seed=0)
     assert env.unwrapped.scenario == heldout.load("mill_trip")
-    venv = gym.make_vec(ENV, num_envs=2, vectorization_mode="vector_entry_point",
-                        scenario="heldout:mill_trip")  # fmt: skip
+    venv = gym.make_vec(
+        ENV, num_envs=2, vectorization_mode="vector_entry_point", scenario="heldout:mill_trip"
+    )
     venv.reset(seed=0)
     assert venv.unwrapped.core.scenario[1] == heldout.load("mill_trip")
 
@@ -68,15 +70,17 @@ def test_reset_option_is_the_made_scenario_for_that_episode(form, tiny):
     made = _run(gym.make(ENV, scenario=spec))
     env = gym.make(ENV, scenario="load_cycle")
     assert _same(_run(env, options={"scenario": spec}), made)
-    assert env.unwrapped.scenario.name == ("random" if spec == "random" else
-                                           scenarios.resolve(spec, ENV).name)  # fmt: skip
+    assert env.unwrapped.scenario.name == (
+        "random" if spec == "random" else scenarios.resolve(spec, ENV).name
+    )
     assert _same(_run(env), _run(gym.make(ENV, scenario="load_cycle")))
     assert env.unwrapped.scenario.name == "load_cycle"
 
 
 def test_vector_reset_option_matches_single_envs(tiny):
-    venv = gym.make_vec(ENV, num_envs=3, vectorization_mode="vector_entry_point",
-                        scenario="load_cycle")  # fmt: skip
+    venv = gym.make_vec(
+        ENV, num_envs=3, vectorization_mode="vector_entry_point", scenario="load_cycle"
+    )
     sync = gym.vector.SyncVectorEnv([lambda: gym.make(ENV, scenario="load_cycle")] * 3)
     for v in (venv, sync):
         v.reset(seed=7, options={"scenario": "heldout:mill_trip"})
@@ -88,18 +92,22 @@ def test_vector_reset_option_matches_single_envs(tiny):
         np.testing.assert_array_equal(r1, r2)
     mask = np.array([False, True, False])  # a partial reset under another scenario
     venv.reset(options={"scenario": tiny, "reset_mask": mask})
-    assert [venv.unwrapped.core.scenario[i].name for i in range(3)] == ["mill_trip", "tiny",
-                                                                        "mill_trip"]
+    assert [venv.unwrapped.core.scenario[i].name for i in range(3)] == [
+        "mill_trip",
+        "tiny",
+        "mill_trip",
+    ]
 
 
 def test_bad_reset_option_names_every_form_and_changes_nothing():
     env = gym.make(ENV, scenario="setpoint_step")
     env.reset(seed=1)
     twin = copy.deepcopy(env)
-    for bad, words in [({"scenario": "nope"}, ["nope", "setpoint_step", "heldout:mill_trip",
-                                                "'random'", ".yaml"]),
-                       ({"scenario": "heldout:nope"}, ["heldout:nope", "heldout:mill_trip"]),
-                       ({"no_such": 1}, ["no_such", "scenario"])]:  # fmt: skip
+    for bad, words in [
+        ({"scenario": "nope"}, ["nope", "setpoint_step", "heldout:mill_trip", "'random'", ".yaml"]),
+        ({"scenario": "heldout:nope"}, ["heldout:nope", "heldout:mill_trip"]),
+        ({"no_such": 1}, ["no_such", "scenario"]),
+    ]:
         with pytest.raises(ValueError) as exc:
             env.reset(seed=9, options=bad)
         assert all(w in str(exc.value) for w in words), str(exc.value)
@@ -131,9 +139,23 @@ def test_env_ids_without_namespace():
 
 def test_leaderboard_takes_short_ids_and_every_scenario_form(tmp_path, tiny):
     out = tmp_path / "out"
-    lb.main(["--envs", f"{SHORT},{ENV}", "--policies", "frozen_valve", "--scenarios",
-             f"{tiny},random", "--seeds", "0", "--out", str(out), "--jobs", "1",
-             "--no-oracle"])  # fmt: skip
+    lb.main(
+        [
+            "--envs",
+            f"{SHORT},{ENV}",
+            "--policies",
+            "frozen_valve",
+            "--scenarios",
+            f"{tiny},random",
+            "--seeds",
+            "0",
+            "--out",
+            str(out),
+            "--jobs",
+            "1",
+            "--no-oracle",
+        ]
+    )
     doc = json.loads((out / "leaderboard.json").read_text())
     assert doc["run"]["envs"] == [ENV]  # one env: the two spellings are one id
     assert {r["scenario"] for r in doc["episodes"]} == {tiny, "random"}
@@ -142,23 +164,39 @@ def test_leaderboard_takes_short_ids_and_every_scenario_form(tmp_path, tiny):
 
 def test_leaderboard_scenario_error_lists_every_form(tmp_path, capsys):
     with pytest.raises(SystemExit) as exc:
-        lb.main(["--envs", SHORT, "--scenarios", "nope", "--out", str(tmp_path / "o"),
-                 "--no-oracle"])  # fmt: skip
+        lb.main(
+            ["--envs", SHORT, "--scenarios", "nope", "--out", str(tmp_path / "o"), "--no-oracle"]
+        )
     err = capsys.readouterr().err
     assert exc.value.code == 2
-    assert all(w in err for w in ["nope", "setpoint_step", "heldout:mill_trip", "'random'",
-                                  ".yaml"]), err  # fmt: skip
+    assert all(
+        w in err for w in ["nope", "setpoint_step", "heldout:mill_trip", "'random'", ".yaml"]
+    ), err
 
 
 def test_check_cli_takes_short_ids_and_scenarios(capsys):
-    code = cli.main([SHORT, "--no-env-checks", "--policy", "cascade_pi", "--check",
-                     "check_completes_a_scenario", "--scenario", "heldout:mill_trip",
-                     "--scenario", "random"])  # fmt: skip
+    code = cli.main(
+        [
+            SHORT,
+            "--no-env-checks",
+            "--policy",
+            "cascade_pi",
+            "--check",
+            "check_completes_a_scenario",
+            "--scenario",
+            "heldout:mill_trip",
+            "--scenario",
+            "random",
+        ]
+    )
     out = capsys.readouterr().out
     assert code == 0, out
     for sc in ("heldout:mill_trip", "random"):
-        assert re.search(rf"Cascade300MW-v0\s+cascade_pi\s+check_completes_a_scenario"
-                         rf"\[{sc}\]\s+PASS", out), out  # fmt: skip
+        assert re.search(
+            rf"Cascade300MW-v0\s+cascade_pi\s+check_completes_a_scenario"
+            rf"\[{sc}\]\s+PASS",
+            out,
+        ), out
     with pytest.raises(SystemExit) as exc:
         cli.main([SHORT, "--policy", "cascade_pi", "--scenario", "heldout:nope"])
     err = capsys.readouterr().err

@@ -92,10 +92,20 @@ def test_coloured_heat_absorption_is_an_ornstein_uhlenbeck_process():
     import gymnasium as gym
 
     std, tau = 0.03, 60.0
-    sc = Scenario(name="ou", duration_s=4000.0, load=1.0, heat_absorption_bias=0.01,
-                  heat_absorption_noise_std=std, heat_absorption_noise_tau_s=tau)  # fmt: skip
-    venv = gym.make_vec("steamtemp/Cascade300MW-v0", num_envs=64,
-                        vectorization_mode="vector_entry_point", scenario=sc)  # fmt: skip
+    sc = Scenario(
+        name="ou",
+        duration_s=4000.0,
+        load=1.0,
+        heat_absorption_bias=0.01,
+        heat_absorption_noise_std=std,
+        heat_absorption_noise_tau_s=tau,
+    )
+    venv = gym.make_vec(
+        "steamtemp/Cascade300MW-v0",
+        num_envs=64,
+        vectorization_mode="vector_entry_point",
+        scenario=sc,
+    )
     venv.reset(seed=0)
     core = venv.unwrapped.core
     a = np.zeros((64, 1), np.float32)
@@ -405,12 +415,16 @@ def test_random_scenario_rejects_a_bad_duration_before_drawing():
 
 
 def test_last_change_is_the_end_of_the_last_ramp_or_step_of_any_channel():
-    s = Scenario(name="x", duration_s=3600.0, load=((0.0, 1.0), (600.0, 1.0), (1200.0, 0.5)),
-                 fouling=((0.0, 1.0), (1500.0, 1.0), (1500.0, 0.9), (2000.0, 0.9)))
+    s = Scenario(
+        name="x",
+        duration_s=3600.0,
+        load=((0.0, 1.0), (600.0, 1.0), (1200.0, 0.5)),
+        fouling=((0.0, 1.0), (1500.0, 1.0), (1500.0, 0.9), (2000.0, 0.9)),
+    )
     assert s.last_change_s() == 1500.0
     assert Scenario(name="flat", duration_s=60.0).last_change_s() == 0.0
-    assert Scenario(name="held", duration_s=60.0,
-                    load=((0.0, 0.8), (30.0, 0.8))).last_change_s() == 0.0
+    held = Scenario(name="held", duration_s=60.0, load=((0.0, 0.8), (30.0, 0.8)))
+    assert held.last_change_s() == 0.0
 
 
 # ----------------------------------------------------------------- plants' own scenarios
@@ -463,14 +477,16 @@ def test_a_plant_declares_its_named_scenarios_as_data():
         scenarios.names("steamtemp/NoSuchPlant-v0")
 
 
-
 def test_declare_checks_names_and_switches_the_disturbances_on():
     s = Scenario(name="mine", duration_s=60.0)
     (declared,) = scenarios.declare(s).values()
     assert declared.noise_std_C == scenarios.NAMED_DISTURBANCES["noise_std_C"]
-    for bad, word in [((s, s), "twice"), (("mine",), "Scenario"),
-                      ((Scenario(name="random", duration_s=1.0),), "reserved"),
-                      ((Scenario(name="heldout:x", duration_s=1.0),), "held-out"),
-                      ((Scenario(name="a.yml", duration_s=1.0),), "file")]:  # fmt: skip
+    for bad, word in [
+        ((s, s), "twice"),
+        (("mine",), "Scenario"),
+        ((Scenario(name="random", duration_s=1.0),), "reserved"),
+        ((Scenario(name="heldout:x", duration_s=1.0),), "held-out"),
+        ((Scenario(name="a.yml", duration_s=1.0),), "file"),
+    ]:
         with pytest.raises(ValueError, match=word):
             scenarios.declare(*bad)

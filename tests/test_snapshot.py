@@ -14,13 +14,23 @@ import steamtemp_gym
 from steamtemp_gym import scenarios
 from steamtemp_gym.envs.snapshot import ROW_ARRAYS
 
-SHORT = scenarios.Scenario(name="short", duration_s=120.0, load=((0.0, 1.0), (60.0, 0.9)),
-                           noise_std_C=0.5, heat_absorption_noise_std=0.03)  # fmt: skip
+SHORT = scenarios.Scenario(
+    name="short",
+    duration_s=120.0,
+    load=((0.0, 1.0), (60.0, 0.9)),
+    noise_std_C=0.5,
+    heat_absorption_noise_std=0.03,
+)
 
 
 def _venv(env_id, n, **kw):
-    return gym.make_vec(env_id, num_envs=n, vectorization_mode="vector_entry_point",
-                        scenario=kw.pop("scenario", SHORT), **kw)  # fmt: skip
+    return gym.make_vec(
+        env_id,
+        num_envs=n,
+        vectorization_mode="vector_entry_point",
+        scenario=kw.pop("scenario", SHORT),
+        **kw,
+    )
 
 
 def _actions(rng, n_steps, shape):
@@ -31,8 +41,16 @@ def _run(venv, actions, rows):
     out = []
     for a in actions:
         obs, r, term, trunc, info = venv.step(a)
-        out.append((obs[rows].copy(), r[rows].copy(), term[rows].copy(), trunc[rows].copy(),
-                    info["outlet_temp_C"][rows].copy(), info["time_s"][rows].copy()))  # fmt: skip
+        out.append(
+            (
+                obs[rows].copy(),
+                r[rows].copy(),
+                term[rows].copy(),
+                trunc[rows].copy(),
+                info["outlet_temp_C"][rows].copy(),
+                info["time_s"][rows].copy(),
+            )
+        )
     return out
 
 
@@ -195,8 +213,8 @@ def _corruptions(snap, env_id: str) -> list[tuple[str, dict, str]]:
     other_env = next(e for e in steamtemp_gym.ENV_IDS if e != env_id)
     params = plant_class(env_id).Params
     first = next(f.name for f in dataclasses.fields(params) if f.type in (float, "float"))
-    variant = next(iter(perturb.mismatch(env_id).values()),  # or 1 % off one parameter
-                   {first: 1.01 * getattr(params(), first)})  # fmt: skip
+    one_off = {first: 1.01 * getattr(params(), first)}  # 1 % off one parameter
+    variant = next(iter(perturb.mismatch(env_id).values()), one_off)
     other_params = params(**variant)
     mt = np.random.MT19937(0).state
     bad_pcg = {**snap.rng_states[0], "state": {"state": "x", "inc": 1}}
@@ -243,11 +261,14 @@ def _corruptions(snap, env_id: str) -> list[tuple[str, dict, str]]:
         ("waiting long", {"waiting": np.zeros(n + 1, dtype=bool)}, "waiting"),
         ("waiting a list", {"waiting": [False] * n}, "waiting"),
         ("plants strings", {"plants": ("x",) * n}, r"plants\[0\]"),
-        ("plants other kind", {"plants": (steamtemp_gym.plants.make(other_env),) * n},
-         r"plants\[0\]"),
+        (
+            "plants other kind",
+            {"plants": (steamtemp_gym.plants.make(other_env),) * n},
+            r"plants\[0\]",
+        ),
         ("plants long", {"plants": snap.plants * 2}, "plants"),
         ("params other", {"params": other_params, "plants": ()}, "other plant parameters"),
-    ]  # fmt: skip
+    ]
 
 
 _KINDS = [("single", False), ("vector", False), ("single", True), ("vector", True)]
@@ -267,8 +288,7 @@ def _snap(env):
 
 @pytest.mark.parametrize("env_id", steamtemp_gym.ENV_IDS)
 @pytest.mark.parametrize(("kind", "drawn"), _KINDS)
-def test_a_corrupted_snapshot_is_refused_naming_its_field_and_changes_nothing(env_id, kind,
-                                                                             drawn):  # fmt: skip
+def test_a_corrupted_snapshot_is_refused_naming_its_field_and_changes_nothing(env_id, kind, drawn):
     """Each field of a snapshot corrupted in turn: restore raises a ValueError naming the
     field, and every array, scenario, plant and generator of the env is as before; the env
     then restores the good snapshot and goes on bit for bit, and resets as a fresh one."""
@@ -358,8 +378,9 @@ def test_a_failed_reset_changes_nothing(kind):
     def make(**kw):
         if kind == "single":
             return gym.make(env_id, **opts, **kw)
-        return gym.make_vec(env_id, num_envs=n, vectorization_mode="vector_entry_point",
-                            **opts, **kw)  # fmt: skip
+        return gym.make_vec(
+            env_id, num_envs=n, vectorization_mode="vector_entry_point", **opts, **kw
+        )
 
     twin = make(plant_randomization=True)
     twin.reset(seed=0)
@@ -374,14 +395,19 @@ def test_a_failed_reset_changes_nothing(kind):
     before = _whole_state(env)
     slagged = scenarios.Scenario(name="slagged", duration_s=60.0, fouling=0.6)
     # seeds 4 and 11 draw plants that hold SHORT's start, 0-3 and 5-10 none
-    calls = [lambda: env.reset(seed=0), lambda: env.reset(seed=5),
-             lambda: env.reset(seed=3, options={"scenario": slagged})]  # fmt: skip
+    calls = [
+        lambda: env.reset(seed=0),
+        lambda: env.reset(seed=5),
+        lambda: env.reset(seed=3, options={"scenario": slagged}),
+    ]
     if kind == "vector":  # rows that start before one that cannot
         mask = np.zeros(n, dtype=bool)
         mask[3:] = True
         seeds = [None, None, None, 4, 11, 0, 4, 4]
-        calls += [lambda: env.reset(seed=4),
-                  lambda: env.reset(seed=seeds, options={"reset_mask": mask})]  # fmt: skip
+        calls += [
+            lambda: env.reset(seed=4),
+            lambda: env.reset(seed=seeds, options={"reset_mask": mask}),
+        ]
     for call in calls:
         with pytest.raises(ValueError, match="plant_randomization|cannot start"):
             call()

@@ -71,13 +71,15 @@ def test_performance_profile_averages_tasks():
 
 
 def test_normalize_and_small_headroom():
-    np.testing.assert_allclose(stats.normalize(np.array([-100.0, -50.0, -10.0]), -100.0, -10.0),
-                               [0.0, 50 / 90, 1.0])  # fmt: skip
+    np.testing.assert_allclose(
+        stats.normalize(np.array([-100.0, -50.0, -10.0]), -100.0, -10.0), [0.0, 50 / 90, 1.0]
+    )
     # headroom below MIN_SPAN of the reference's cost: the scale is held at MIN_SPAN |R0|
     span = stats.MIN_SPAN * 100.0
     assert stats.score_span(-100.0, -99.0) == pytest.approx(span)
-    np.testing.assert_allclose(stats.normalize(np.array([-99.0, -110.0]), -100.0, -99.0),
-                               [1.0 / span, -10.0 / span])  # fmt: skip
+    np.testing.assert_allclose(
+        stats.normalize(np.array([-99.0, -110.0]), -100.0, -99.0), [1.0 / span, -10.0 / span]
+    )
     assert stats.score_span(-100.0, -120.0) == pytest.approx(span)  # an oracle that lost
     with pytest.raises(ValueError, match="finite"):
         stats.score_span(-100.0, float("nan"))

@@ -107,8 +107,16 @@ def random_ph():
     h = lo + rng.random(n) * (hi - lo)
     T_ref, rho_ref, x_ref = _ref_ph(p, h)
     T, dT, rho = _batch_ph(p * MPA, h * KJ)
-    return {"p": p, "h": h, "T_ref": T_ref, "rho_ref": rho_ref, "x_ref": x_ref, "T": T,
-            "dT": dT, "rho": rho}
+    return {
+        "p": p,
+        "h": h,
+        "T_ref": T_ref,
+        "rho_ref": rho_ref,
+        "x_ref": x_ref,
+        "T": T,
+        "dT": dT,
+        "rho": rho,
+    }
 
 
 @pytest.fixture(scope="module")
@@ -140,9 +148,18 @@ def pseudo_critical():
     h_ref, cp_ref = _ref_pT(p, T)
     T_ref, rho_ref, _ = _ref_ph(p, h_ref)
     Tt, dT, rho = _batch_ph(p * MPA, h_ref * KJ)
-    return {"p": p, "T": T, "h_ref": h_ref, "cp_ref": cp_ref, "T_ref": T_ref,
-            "rho_ref": rho_ref, "h": _batch_h(p * MPA, T) / KJ, "T_tab": Tt, "dT": dT,
-            "rho": rho}
+    return {
+        "p": p,
+        "T": T,
+        "h_ref": h_ref,
+        "cp_ref": cp_ref,
+        "T_ref": T_ref,
+        "rho_ref": rho_ref,
+        "h": _batch_h(p * MPA, T) / KJ,
+        "T_tab": Tt,
+        "dT": dT,
+        "rho": rho,
+    }
 
 
 @pytest.fixture(scope="module")
@@ -155,8 +172,16 @@ def sat_vapour_side():
     h_ref, cp_ref = _ref_pT(p, T)
     T_ref, rho_ref, _ = _ref_ph(p, h_ref)
     Tt, dT, rho = _batch_ph(p * MPA, h_ref * KJ)
-    return {"p": p, "T": T, "h_ref": h_ref, "T_ref": T_ref, "rho_ref": rho_ref,
-            "h": _batch_h(p * MPA, T) / KJ, "T_tab": Tt, "rho": rho}
+    return {
+        "p": p,
+        "T": T,
+        "h_ref": h_ref,
+        "T_ref": T_ref,
+        "rho_ref": rho_ref,
+        "h": _batch_h(p * MPA, T) / KJ,
+        "T_tab": Tt,
+        "rho": rho,
+    }
 
 
 @pytest.fixture(scope="module")
@@ -166,8 +191,7 @@ def fast_ph():
     400 uniform, 100 within 40 kJ/kg of its lower-h edge at 25-35 MPa (largest cp) and
     100 within 40 kJ/kg of that edge at 2-5 MPa (largest interpolation error).
     """
-    p0, p1, h0, h1 = (v / s for v, s in zip(steam.FAST_RECT, (MPA, MPA, KJ, KJ),
-                                            strict=True))
+    p0, p1, h0, h1 = (v / s for v, s in zip(steam.FAST_RECT, (MPA, MPA, KJ, KJ), strict=True))
     rng = np.random.default_rng(20240605)
     p = np.r_[rng.uniform(p0, p1, 400), rng.uniform(25.0, p1, 100), rng.uniform(p0, 5.0, 100)]
     h = np.r_[rng.uniform(h0, h1, 400), h0 + rng.uniform(0.0, 40.0, 200)]
@@ -176,9 +200,19 @@ def fast_ph():
         w = IAPWS97(P=float(a), h=float(b))
         T_ref[k], rho_ref[k], cp_ref[k], region[k] = w.T, w.rho, w.cp, w.region
     T, dT, rho = _batch_ph(p * MPA, h * KJ)
-    return {"p": p, "h": h, "T_ref": T_ref, "rho_ref": rho_ref, "cp_ref": cp_ref,
-            "region": region, "T": T, "dT": dT, "rho": rho,
-            "h_back": _batch_h(p * MPA, T_ref) / KJ, "h_trip": _batch_h(p * MPA, T) / KJ}
+    return {
+        "p": p,
+        "h": h,
+        "T_ref": T_ref,
+        "rho_ref": rho_ref,
+        "cp_ref": cp_ref,
+        "region": region,
+        "T": T,
+        "dT": dT,
+        "rho": rho,
+        "h_back": _batch_h(p * MPA, T_ref) / KJ,
+        "h_trip": _batch_h(p * MPA, T) / KJ,
+    }
 
 
 # ---------------------------------------------------------------------------------------
@@ -250,8 +284,12 @@ def test_T_dTdh_matches_finite_difference_and_cp(random_pT):
     h = d["h"][keep] * KJ
     dh = 10.0  # J/kg
     dT = np.array([steam.T_dTdh_ph(a, b)[1] for a, b in zip(p, h, strict=True)])
-    fd = np.array([(steam.T_ph(a, b + dh) - steam.T_ph(a, b - dh)) / (2 * dh)
-                   for a, b in zip(p, h, strict=True)])
+    fd = np.array(
+        [
+            (steam.T_ph(a, b + dh) - steam.T_ph(a, b - dh)) / (2 * dh)
+            for a, b in zip(p, h, strict=True)
+        ]
+    )
     assert np.max(np.abs(dT / fd - 1.0)) < 1e-5
     # and against the IF97 heat capacity: dT/dh = 1/cp
     cp = d["cp_ref"][keep] * KJ
@@ -308,12 +346,14 @@ def test_fast_path_agrees_with_patches_on_its_edges():
     """Both paths at the same points of the rectangle's edges (h = h_min, h = h_max and
     p = p_min; p_max is the table edge) agree to the tables' accuracy, so T_ph, rho_ph and
     h_pT jump by no more than that when (p, h) crosses an edge."""
-    p0, p1, h0, h1 = (v / s for v, s in zip(steam.FAST_RECT, (MPA, MPA, KJ, KJ),
-                                            strict=True))
+    p0, p1, h0, h1 = (v / s for v, s in zip(steam.FAST_RECT, (MPA, MPA, KJ, KJ), strict=True))
     ps = np.linspace(p0, p1, 331)
     hs = np.linspace(h0, h1, 441)
-    pts = np.r_[np.c_[ps, np.full(ps.size, h0)], np.c_[ps, np.full(ps.size, h1)],
-                np.c_[np.full(hs.size, p0), hs]]
+    pts = np.r_[
+        np.c_[ps, np.full(ps.size, h0)],
+        np.c_[ps, np.full(ps.size, h1)],
+        np.c_[np.full(hs.size, p0), hs],
+    ]
     for p, h in pts:
         fast = np.array(_fast(p, h, 2))
         patch = np.array(_patch_lookup(p, h, 2))
@@ -351,8 +391,9 @@ def test_h_pT_at_tsat_is_vapour():
 
 def test_cp_pT(random_pT):
     d = random_pT
-    cp = np.array([steam.cp_pT(a * MPA, b) for a, b in zip(d["p"][:300], d["T"][:300],
-                                                          strict=True)])
+    cp = np.array(
+        [steam.cp_pT(a * MPA, b) for a, b in zip(d["p"][:300], d["T"][:300], strict=True)]
+    )
     rel = np.abs(cp / (d["cp_ref"][:300] * KJ) - 1.0)
     assert rel.max() < 1e-3
 
@@ -421,8 +462,12 @@ def test_out_of_domain_is_finite_and_clamped():
     bad_h = [-1e7, 0.0, 1e3, 3e6, 5e6, 1e8, np.inf, np.nan]
     for p in bad_p:
         for h in bad_h:
-            vals = (steam.T_ph(p, h), *steam.T_dTdh_ph(p, h), steam.rho_ph(p, h),
-                    *steam.T_rho_ph(p, h))
+            vals = (
+                steam.T_ph(p, h),
+                *steam.T_dTdh_ph(p, h),
+                steam.rho_ph(p, h),
+                *steam.T_rho_ph(p, h),
+            )
             assert np.all(np.isfinite(vals)), (p, h, vals)
         for T in (-10.0, 0.0, 200.0, 700.0, 2000.0, np.inf, np.nan):
             assert np.isfinite(steam.h_pT(p, T)) and np.isfinite(steam.cp_pT(p, T))
@@ -462,7 +507,15 @@ def test_callable_from_jitted_kernel():
         return a + b + c + r + r2 + dr + hh + s[0] + s[9] + steam.cp_pT(p, T) + steam.Tsat_p(p)
 
     p, h, T = 10e6, 3e6, 700.0
-    expect = (steam.T_ph(p, h) + sum(steam.T_dTdh_ph(p, h)) + steam.rho_ph(p, h)
-              + sum(steam.rho_drhodh_ph(p, h)) + steam.h_pT(p, T) + steam.sat_p(p)[0]
-              + steam.sat_p(p)[9] + steam.cp_pT(p, T) + steam.Tsat_p(p))
+    expect = (
+        steam.T_ph(p, h)
+        + sum(steam.T_dTdh_ph(p, h))
+        + steam.rho_ph(p, h)
+        + sum(steam.rho_drhodh_ph(p, h))
+        + steam.h_pT(p, T)
+        + steam.sat_p(p)[0]
+        + steam.sat_p(p)[9]
+        + steam.cp_pT(p, T)
+        + steam.Tsat_p(p)
+    )
     assert kernel(p, h, T) == pytest.approx(expect, rel=1e-14)

@@ -68,21 +68,30 @@ def test_vector_comparison_accepts_gymnasium_semantics(mode):
     autoresets, final_obs / final_info and DISABLED resets, and sees every episode end."""
     target = resolve_env(CASCADE)
     sc = {"scenario": short_scenario(1.0)}
-    endings = compare_vector_envs(reference_vector_env(target, 3, mode, **sc),
-                                  reference_vector_env(target, 3, mode, **sc), mode)  # fmt: skip
+    endings = compare_vector_envs(
+        reference_vector_env(target, 3, mode, **sc),
+        reference_vector_env(target, 3, mode, **sc),
+        mode,
+    )
     assert endings >= 3
 
 
-@pytest.mark.parametrize("mode, other", [
-    (AutoresetMode.SAME_STEP, AutoresetMode.NEXT_STEP),
-    (AutoresetMode.NEXT_STEP, AutoresetMode.SAME_STEP),
-])  # fmt: skip
+@pytest.mark.parametrize(
+    "mode, other",
+    [
+        (AutoresetMode.SAME_STEP, AutoresetMode.NEXT_STEP),
+        (AutoresetMode.NEXT_STEP, AutoresetMode.SAME_STEP),
+    ],
+)
 def test_vector_comparison_catches_another_autoreset_semantics(mode, other):
     target = resolve_env(CASCADE)
     sc = {"scenario": short_scenario(1.0)}
     with pytest.raises(AssertionError, match=rf"mode {mode.name}, seed 11, .*step 12"):
-        compare_vector_envs(reference_vector_env(target, 3, other, **sc),
-                            reference_vector_env(target, 3, mode, **sc), mode)  # fmt: skip
+        compare_vector_envs(
+            reference_vector_env(target, 3, other, **sc),
+            reference_vector_env(target, 3, mode, **sc),
+            mode,
+        )
 
 
 class _Forgetful:
@@ -90,8 +99,9 @@ class _Forgetful:
 
     def __init__(self, env, gain=0.05, bound=1.0, batched_bug=False):
         self.acc, self.gain, self.bound, self.batched_bug = 0.0, gain, bound, batched_bug
-        self.n_u = (env.single_action_space if hasattr(env, "single_action_space")
-                    else env.action_space).shape[0]  # fmt: skip
+        vector = hasattr(env, "single_action_space")
+        space = env.single_action_space if vector else env.action_space
+        self.n_u = space.shape[0]
 
     def predict(self, observation, state=None, episode_start=None, deterministic=True):
         obs = np.atleast_2d(observation)
@@ -109,13 +119,15 @@ def test_policy_checks_catch_broken_policies():
     with pytest.raises(AssertionError, match="after reset\\(\\) the policy acts differently"):
         check_reset_clears_state(_Forgetful, CASCADE, quick=True)
     with pytest.raises(AssertionError, match="check_actions_in_bounds failed on _wild"):
+
         def _wild(env):
             return _Forgetful(env, gain=1e3, bound=2.0)
 
         check_actions_in_bounds(_wild, CASCADE, quick=True)
     with pytest.raises(AssertionError, match="batched .* != unbatched"):
-        check_batched_equals_unbatched(lambda env: _Forgetful(env, batched_bug=True), CASCADE,
-                                       quick=True)  # fmt: skip
+        check_batched_equals_unbatched(
+            lambda env: _Forgetful(env, batched_bug=True), CASCADE, quick=True
+        )
 
 
 def test_bad_observation_check_holds_user_policies_to_it():
@@ -125,8 +137,7 @@ def test_bad_observation_check_holds_user_policies_to_it():
 
     with pytest.raises(AssertionError, match="predict accepted an observation all NaN"):
         check_bad_observations_rejected(_Forgetful, CASCADE, quick=True)
-    check_bad_observations_rejected(lambda env: checked(_Forgetful(env), env), CASCADE,
-                                    quick=True)  # fmt: skip
+    check_bad_observations_rejected(lambda env: checked(_Forgetful(env), env), CASCADE, quick=True)
 
 
 class _Refuses(_Forgetful):
@@ -177,9 +188,11 @@ def test_parametrize_with_checks_ids_and_marks():
 
 # ------------------------------------------------------------------------------ CLI
 def test_cli_rejects_bad_arguments_listing_the_choices(capsys):
-    for argv, needle in ((["steamtemp/NoSuch-v0"], "valid ids: steamtemp/SupercriticalFSH-v0"),
-                         (["--policy", "nope"], "valid names: cascade_pi"),
-                         (["--check", "nope"], "valid: check_gymnasium_env")):  # fmt: skip
+    for argv, needle in (
+        (["steamtemp/NoSuch-v0"], "valid ids: steamtemp/SupercriticalFSH-v0"),
+        (["--policy", "nope"], "valid names: cascade_pi"),
+        (["--check", "nope"], "valid: check_gymnasium_env"),
+    ):
         with pytest.raises(SystemExit) as exc:
             main(argv)
         assert exc.value.code == 2
@@ -196,11 +209,22 @@ class _SmallFrames(gym.Wrapper):
 
 
 def test_cli_table_and_exit_status(capsys):
-    gym.register("testing/SmallFrames-v0",
-                 entry_point=lambda **kw: _SmallFrames(gym.make(CASCADE, **kw)))  # fmt: skip
+    gym.register(
+        "testing/SmallFrames-v0", entry_point=lambda **kw: _SmallFrames(gym.make(CASCADE, **kw))
+    )
     try:
-        code = main(["testing/SmallFrames-v0", CASCADE, "--check", "check_render_frame",
-                     "--check", "check_predict_signature", "--policy", "cascade_pi"])
+        code = main(
+            [
+                "testing/SmallFrames-v0",
+                CASCADE,
+                "--check",
+                "check_render_frame",
+                "--check",
+                "check_predict_signature",
+                "--policy",
+                "cascade_pi",
+            ]
+        )
     finally:
         del gym.registry["testing/SmallFrames-v0"]
     out = capsys.readouterr().out
@@ -220,8 +244,9 @@ def test_register_variant_validates_merges_and_is_idempotent():
         register_variant("testing/Cascade2b-v0", "testing/Cascade2-v0", params={"dt_s": 2.0})
         env = gym.make("testing/Cascade2b-v0")
         assert env.unwrapped.plant.params.lead_order == 3 and env.unwrapped.plant.dt_s == 2.0
-        venv = gym.make_vec("testing/Cascade2b-v0", num_envs=2,
-                            vectorization_mode="vector_entry_point")  # fmt: skip
+        venv = gym.make_vec(
+            "testing/Cascade2b-v0", num_envs=2, vectorization_mode="vector_entry_point"
+        )
         assert venv.unwrapped.plant.params.lead_order == 3
         with pytest.raises(ValueError, match="already registered"):
             register_variant("testing/Cascade2-v0", CASCADE, params={"lead_order": 4})
@@ -291,9 +316,13 @@ def _run_documented_pytest_file(tmp_path, pytester, *args, subprocess=False):
 def test_documented_example_pytest_form_collects(tmp_path, pytester):
     """The docs' pytest file collects one test per check, with the documented ids."""
     result = _run_documented_pytest_file(tmp_path, pytester, "--collect-only", "-q")
-    result.stdout.fnmatch_lines(["*test_contract[[]FSH12Fouled-v0-check_determinism[]]",
-                                 "*FSH12Fouled-v0-cascade_pi-check_reset_clears_state*",
-                                 "19 tests collected*"])  # fmt: skip
+    result.stdout.fnmatch_lines(
+        [
+            "*test_contract[[]FSH12Fouled-v0-check_determinism[]]",
+            "*FSH12Fouled-v0-cascade_pi-check_reset_clears_state*",
+            "19 tests collected*",
+        ]
+    )
 
 
 @pytest.mark.slow
@@ -305,7 +334,7 @@ def test_documented_example_pytest_form(tmp_path, pytester, monkeypatch):
 
 
 # ------------------------------------------------ the checked code cannot end the run
-_ENDING = '''
+_ENDING = """
 import sys
 import baselines
 
@@ -331,7 +360,7 @@ def interrupt(env):
 
 def exit_when_built(env):
     sys.exit(4)
-'''
+"""
 
 
 @pytest.fixture
@@ -346,16 +375,28 @@ def default_sigint():
     signal.signal(signal.SIGINT, before)
 
 
-@pytest.mark.parametrize(("factory", "raised"), [("sys_exit", "SystemExit: 3"),
-                                                 ("interrupt", "KeyboardInterrupt")])
+@pytest.mark.parametrize(
+    ("factory", "raised"), [("sys_exit", "SystemExit: 3"), ("interrupt", "KeyboardInterrupt")]
+)
 def test_a_policy_ending_the_process_fails_its_checks_and_the_run_goes_on(
-        tmp_path, capsys, factory, raised, default_sigint):  # fmt: skip
+    tmp_path, capsys, factory, raised, default_sigint
+):
     """A policy's SystemExit or KeyboardInterrupt fails each check it ends; the table, the
     messages and the exit status 1 follow (once they ended the checker, exit 3, silently)."""
     (tmp_path / "ending.py").write_text(_ENDING)
-    code = main([CASCADE, "--policy", f"{tmp_path / 'ending.py'}:{factory}", "--no-env-checks",
-                 "--quick", "--check", "check_predict_signature", "--check",
-                 "check_actions_in_bounds"])  # fmt: skip
+    code = main(
+        [
+            CASCADE,
+            "--policy",
+            f"{tmp_path / 'ending.py'}:{factory}",
+            "--no-env-checks",
+            "--quick",
+            "--check",
+            "check_predict_signature",
+            "--check",
+            "check_actions_in_bounds",
+        ]
+    )
     out = capsys.readouterr().out
     assert code == 1
     assert len(re.findall(r"check_\w+\s+FAIL", out)) == 2
@@ -398,16 +439,28 @@ def test_code_that_ends_its_process_fails_the_command(tmp_path, where):
     fails the run, exit 1, saying so; a passing run keeps its status 0."""
     (tmp_path / "exiting.py").write_text(_EXITING)
     (tmp_path / "exit_on_import.py").write_text("import os\nos._exit(0)\n")
-    extra = (["--policy", f"{tmp_path / 'exiting.py'}:make"] if where == "predict"
-             else ["--import", "exit_on_import", "--policy", "cascade_pi"])  # fmt: skip
-    argv = [sys.executable, "-m", "steamtemp_gym.testing.cli", CASCADE, "--no-env-checks",
-            "--quick", "--check", "check_predict_signature"]  # fmt: skip
+    extra = (
+        ["--policy", f"{tmp_path / 'exiting.py'}:make"]
+        if where == "predict"
+        else ["--import", "exit_on_import", "--policy", "cascade_pi"]
+    )
+    argv = [
+        sys.executable,
+        "-m",
+        "steamtemp_gym.testing.cli",
+        CASCADE,
+        "--no-env-checks",
+        "--quick",
+        "--check",
+        "check_predict_signature",
+    ]
     env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(tmp_path), *sys.path])}
     run = subprocess.run(argv + extra, env=env, capture_output=True, text=True, timeout=300)
     assert run.returncode == 1, run.stderr
     assert "ended before they finished (exit status 0)" in run.stderr
-    ok = subprocess.run(argv + ["--policy", "cascade_pi"], env=env, capture_output=True,
-                        text=True, timeout=300)  # fmt: skip
+    ok = subprocess.run(
+        argv + ["--policy", "cascade_pi"], env=env, capture_output=True, text=True, timeout=300
+    )
     assert ok.returncode == 0 and "1 passed, 0 failed" in ok.stdout, ok.stderr
 
 
@@ -425,8 +478,7 @@ def test_a_subject_whose_every_check_was_skipped_is_not_a_pass(capsys, monkeypat
     import agents
     from agents import specs
 
-    where = {n: {e for e, a in agents.shipped() if f"sb3:{a}" == n}
-             for n in specs.shipped_names()}  # fmt: skip
+    where = {n: {e for e, a in agents.shipped() if f"sb3:{a}" == n} for n in specs.shipped_names()}
     other, env = next((n, e) for n in where for e in steamtemp_gym.ENV_IDS if e not in where[n])
     code = main([env, "--policy", other, "--no-env-checks", "--quick"])
     out = capsys.readouterr().out

@@ -27,8 +27,9 @@ def restore_threads():
 
 def _trajectory(env_id: str, n: int) -> np.ndarray:
     threads.set_threads(n)
-    venv = gym.make_vec(env_id, num_envs=B, vectorization_mode="vector_entry_point",
-                        scenario="random")  # fmt: skip
+    venv = gym.make_vec(
+        env_id, num_envs=B, vectorization_mode="vector_entry_point", scenario="random"
+    )
     obs, _ = venv.reset(seed=3)
     rng = np.random.default_rng(0)
     out = [obs]

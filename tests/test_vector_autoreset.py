@@ -20,8 +20,13 @@ SHORT = Scenario(name="short_for_autoreset_test", duration_s=150.0)
 
 
 def _pair(mode: AutoresetMode, scenario, env_id: str = ENV_ID):
-    native = gym.make_vec(env_id, num_envs=N, vectorization_mode="vector_entry_point",
-                          autoreset_mode=mode, scenario=scenario)  # fmt: skip
+    native = gym.make_vec(
+        env_id,
+        num_envs=N,
+        vectorization_mode="vector_entry_point",
+        autoreset_mode=mode,
+        scenario=scenario,
+    )
     sync = SyncVectorEnv([lambda: gym.make(env_id, scenario=scenario)] * N, autoreset_mode=mode)
     return native, sync
 
@@ -133,6 +138,10 @@ def test_unknown_autoreset_mode_names_the_valid_ones(bad):
 
 def test_registered_ids_take_the_mode():
     for env_id in steamtemp_gym.ENV_IDS[:1]:
-        env = gym.make_vec(env_id, num_envs=2, vectorization_mode="vector_entry_point",
-                           autoreset_mode=AutoresetMode.SAME_STEP)  # fmt: skip
+        env = gym.make_vec(
+            env_id,
+            num_envs=2,
+            vectorization_mode="vector_entry_point",
+            autoreset_mode=AutoresetMode.SAME_STEP,
+        )
         assert env.metadata["autoreset_mode"] is AutoresetMode.SAME_STEP

@@ -34,11 +34,17 @@ TINY_SCENARIO = "name: tiny\nduration_s: 60\nload: [[0, 1.0], [30, 0.95]]\n"
 
 
 # --------------------------------------------------------------------------- names
-@pytest.mark.parametrize(("env_id", "algo", "run"), [
-    ("steamtemp/Cascade300MW-v0", "ppo", None), ("steamtemp/Cascade300MW-v0", "ppo", 0),
-    ("steamtemp/DrumBoilerSH-v0", "sac_caps", 2), ("steamtemp/X-v0", "ppo_residual", 10),
-    ("MyEnv-v1", "td3", 99), ("a/b/c-v0", "recurrentppo", 1),
-])  # fmt: skip
+@pytest.mark.parametrize(
+    ("env_id", "algo", "run"),
+    [
+        ("steamtemp/Cascade300MW-v0", "ppo", None),
+        ("steamtemp/Cascade300MW-v0", "ppo", 0),
+        ("steamtemp/DrumBoilerSH-v0", "sac_caps", 2),
+        ("steamtemp/X-v0", "ppo_residual", 10),
+        ("MyEnv-v1", "td3", 99),
+        ("a/b/c-v0", "recurrentppo", 1),
+    ],
+)
 def test_stems_read_back(env_id, algo, run):
     name = files.stem(env_id, algo, run)
     assert files.parse_stem(name) == (env_id, algo, run)
@@ -49,25 +55,55 @@ def test_the_stem_of_a_run():
     name = files.stem("steamtemp/Cascade300MW-v0", "ppo", 2)
     assert name == "steamtemp__Cascade300MW-v0__ppo__run2"
     assert files.parse_stem("steamtemp__Cascade300MW-v0__ppo") == (
-        "steamtemp/Cascade300MW-v0", "ppo", None)  # fmt: skip
+        "steamtemp/Cascade300MW-v0",
+        "ppo",
+        None,
+    )
 
 
-@pytest.mark.parametrize("name", [
-    "", "ppo", "__ppo", "steamtemp__X-v0__", "steamtemp__X-v0__ppo__", "e__ppo__run",
-    "e__ppo__run01", "e__ppo__run-1", "e__ppo__run1.5", "e__run3", "e__run", "e____x__ppo",
-    "e__pp o", "e__ppo__run 1", "e__ppo___run1", None, 3,
-])  # fmt: skip
+@pytest.mark.parametrize(
+    "name",
+    [
+        "",
+        "ppo",
+        "__ppo",
+        "steamtemp__X-v0__",
+        "steamtemp__X-v0__ppo__",
+        "e__ppo__run",
+        "e__ppo__run01",
+        "e__ppo__run-1",
+        "e__ppo__run1.5",
+        "e__run3",
+        "e__run",
+        "e____x__ppo",
+        "e__pp o",
+        "e__ppo__run 1",
+        "e__ppo___run1",
+        None,
+        3,
+    ],
+)
 def test_bad_stems_are_refused(name):
     with pytest.raises(ValueError, match="not a trained agent's file stem"):
         files.parse_stem(name)
 
 
-@pytest.mark.parametrize(("args", "match"), [
-    (("steamtemp__X-v0", "ppo"), "env id"), (("", "ppo"), "env id"), (("e/", "ppo"), "env id"),
-    (("e", "ppo", -1), "run index"), (("e", "ppo", True), "run index"),
-    (("e", "ppo", 1.0), "run index"), (("e", "ppo", "1"), "run index"),
-    (("e", ""), "algo"), (("e", "a__b"), "algo"), (("e", "p o"), "algo"), (("e", "run2"), "algo"),
-])  # fmt: skip
+@pytest.mark.parametrize(
+    ("args", "match"),
+    [
+        (("steamtemp__X-v0", "ppo"), "env id"),
+        (("", "ppo"), "env id"),
+        (("e/", "ppo"), "env id"),
+        (("e", "ppo", -1), "run index"),
+        (("e", "ppo", True), "run index"),
+        (("e", "ppo", 1.0), "run index"),
+        (("e", "ppo", "1"), "run index"),
+        (("e", ""), "algo"),
+        (("e", "a__b"), "algo"),
+        (("e", "p o"), "algo"),
+        (("e", "run2"), "algo"),
+    ],
+)
 def test_bad_stem_parts_are_refused(args, match):
     with pytest.raises(ValueError, match=match):
         files.stem(*args)
@@ -110,10 +146,12 @@ def test_the_shipped_zoo_holds_runs_0_to_k_of_each_agent():
         ks = agents.runs(env_id, algo)
         assert ks == list(range(len(ks))), (env_id, algo, ks)
         assert files.steamtemp_files(agents.ZOO, env_id, algo).model.stem == files.stem(
-            env_id, algo)  # fmt: skip
+            env_id, algo
+        )
         names = specs.training_runs(f"sb3:{algo}", env_id)
-        assert names == ([f"sb3:{algo}"] if ks == [0] else
-                         [specs.run_name(f"sb3:{algo}", k) for k in ks])  # fmt: skip
+        assert names == (
+            [f"sb3:{algo}"] if ks == [0] else [specs.run_name(f"sb3:{algo}", k) for k in ks]
+        )
     assert specs.parse("sb3:ppo@run0").run == 0
 
 
@@ -141,27 +179,41 @@ def test_policy_names_of_runs(tmp_path, monkeypatch):
     assert specs.training_runs("sb3:sac", ENV) == ["sb3:sac"]
     assert specs.training_runs("sb3:ppo@run1", ENV) == ["sb3:ppo@run1"]
     assert specs.training_runs("cascade_pi", ENV) == ["cascade_pi"]
-    for name, want in (("sb3:ppo@run2", ("sb3:ppo", 2)), ("sb3:ppo", ("sb3:ppo", None)),
-                       ("sb3:ppo@run02", ("sb3:ppo@run02", None)),
-                       ("cascade_pi", ("cascade_pi", None))):  # fmt: skip
+    for name, want in (
+        ("sb3:ppo@run2", ("sb3:ppo", 2)),
+        ("sb3:ppo", ("sb3:ppo", None)),
+        ("sb3:ppo@run02", ("sb3:ppo@run02", None)),
+        ("cascade_pi", ("cascade_pi", None)),
+    ):
         assert specs.split_run(name) == want
     assert specs.split_run(specs.run_name("sb3:sac_caps", 7)) == ("sb3:sac_caps", 7)
     spec = specs.parse("sb3:ppo@run2")
-    assert (spec.kind, spec.target, spec.run, spec.envs) == (specs.SHIPPED, "ppo", 2,
-                                                             frozenset({ENV}))  # fmt: skip
+    assert (spec.kind, spec.target, spec.run, spec.envs) == (
+        specs.SHIPPED,
+        "ppo",
+        2,
+        frozenset({ENV}),
+    )
     digests = {specs.parse(f"sb3:ppo@run{k}").digest(ENV).split(":", 2)[2] for k in (0, 1, 2)}
     assert len(digests) == 3  # each run's own files
-    assert specs.parse("sb3:ppo").digest(ENV).endswith(specs.parse("sb3:ppo@run0").digest(
-        ENV).split(":", 2)[2])  # fmt: skip
+    run0 = specs.parse("sb3:ppo@run0").digest(ENV).split(":", 2)[2]
+    assert specs.parse("sb3:ppo").digest(ENV).endswith(run0)
     with pytest.raises(ValueError, match="no shipped trained agent 'sb3:ppo@run02'"):
         specs.parse("sb3:ppo@run02")
 
 
 # --------------------------------------------------------------------------- the CLI
-@pytest.mark.parametrize(("value", "match"), [
-    ("0", "from 1 to 100, got 0"), ("-1", "from 1 to 100, got -1"), ("101", "got 101"),
-    ("x", "integer >= 1, got 'x'"), ("1.5", "integer >= 1, got '1.5'"), ("", "got ''"),
-])  # fmt: skip
+@pytest.mark.parametrize(
+    ("value", "match"),
+    [
+        ("0", "from 1 to 100, got 0"),
+        ("-1", "from 1 to 100, got -1"),
+        ("101", "got 101"),
+        ("x", "integer >= 1, got 'x'"),
+        ("1.5", "integer >= 1, got '1.5'"),
+        ("", "got ''"),
+    ],
+)
 def test_bad_runs_are_argparse_errors(value, match, capsys):
     with pytest.raises(SystemExit) as exc:
         train.main(["--zoo", "--runs", value])
@@ -169,19 +221,27 @@ def test_bad_runs_are_argparse_errors(value, match, capsys):
     assert exc.value.code == 2 and "argument --runs" in err and match in err
 
 
-@pytest.mark.parametrize(("argv", "match"), [
-    (["--env", ENV, "--algo", "ppo", "--runs", "2"], "argument --runs: only with --zoo"),
-    (["--env", ENV, "--algo", "ppo", "--backend", "ray"], "argument --backend: only with --zoo"),
-    (["--zoo", "--address", "auto"], "argument --address: only with --backend ray"),
-    (["--zoo", "--backend", "ray", "--jobs", "0"], "argument --jobs: must be >= 1"),
-    (["--zoo", "--jobs", "2"], "argument --jobs: only with --backend ray"),
-    (["--zoo", "--backend", "dask"], "invalid choice: 'dask'"),
-    (["--zoo", "--max-minutes", "0"], "--max-minutes must be > 0"),
-    (["--env", ENV, "--algo", "ppo", "--resume"], "argument --resume: only with --zoo"),
-    (["--zoo", "--algo", "ppo", "--hyperparams", "/no/such.yml"], "/no/such.yml: no such file"),
-    (["--zoo", "--algo", "nope", "--hyperparams", str(train_config.HYPERPARAMS / "ppo.yml")],
-     "unknown algo 'nope'"),
-])  # fmt: skip
+@pytest.mark.parametrize(
+    ("argv", "match"),
+    [
+        (["--env", ENV, "--algo", "ppo", "--runs", "2"], "argument --runs: only with --zoo"),
+        (
+            ["--env", ENV, "--algo", "ppo", "--backend", "ray"],
+            "argument --backend: only with --zoo",
+        ),
+        (["--zoo", "--address", "auto"], "argument --address: only with --backend ray"),
+        (["--zoo", "--backend", "ray", "--jobs", "0"], "argument --jobs: must be >= 1"),
+        (["--zoo", "--jobs", "2"], "argument --jobs: only with --backend ray"),
+        (["--zoo", "--backend", "dask"], "invalid choice: 'dask'"),
+        (["--zoo", "--max-minutes", "0"], "--max-minutes must be > 0"),
+        (["--env", ENV, "--algo", "ppo", "--resume"], "argument --resume: only with --zoo"),
+        (["--zoo", "--algo", "ppo", "--hyperparams", "/no/such.yml"], "/no/such.yml: no such file"),
+        (
+            ["--zoo", "--algo", "nope", "--hyperparams", str(train_config.HYPERPARAMS / "ppo.yml")],
+            "unknown algo 'nope'",
+        ),
+    ],
+)
 def test_zoo_flags_are_checked_before_training(argv, match, argparse_error):
     assert match in argparse_error(train.main, argv)
 
@@ -190,8 +250,17 @@ def test_every_entry_is_checked_before_the_first_run(tmp_path, argparse_error):
     yml = tmp_path / "ppo.yml"
     other = "steamtemp/Cascade300MW-v0"
     yml.write_text(yaml.safe_dump({ENV: TINY_PPO[ENV], other: {**TINY_PPO[ENV], "speed": 3}}))
-    argv = ["--zoo", "--algo", "ppo", "--runs", "2", "--hyperparams", str(yml), "--out",
-            str(tmp_path / "zoo")]  # fmt: skip
+    argv = [
+        "--zoo",
+        "--algo",
+        "ppo",
+        "--runs",
+        "2",
+        "--hyperparams",
+        str(yml),
+        "--out",
+        str(tmp_path / "zoo"),
+    ]
     assert "unknown key(s) ['speed']" in argparse_error(train.main, argv)
     assert not (tmp_path / "zoo").exists()
 
@@ -211,13 +280,21 @@ def test_run_seeds_never_share_a_training_env_seed(tmp_path):
     assert [train_runs.run_seed(5, k) for k in range(3)] == [5, 1005, 2005]
     jobs = train_runs.zoo_jobs([(ENV, "ppo"), (ENV, "sac")], tmp_path, 7, 3, 2.0, timesteps=None)
     assert [(j["algo"], j["run"], j["seed"]) for j in jobs] == [
-        ("ppo", 0, 7), ("ppo", 1, 1007), ("ppo", 2, 2007),
-        ("sac", 0, 7), ("sac", 1, 1007), ("sac", 2, 2007)]  # fmt: skip
+        ("ppo", 0, 7),
+        ("ppo", 1, 1007),
+        ("ppo", 2, 2007),
+        ("sac", 0, 7),
+        ("sac", 1, 1007),
+        ("sac", 2, 2007),
+    ]
     assert all(j["max_minutes"] == 2.0 and "timesteps" not in j for j in jobs)
     (one,) = train_runs.zoo_jobs([(ENV, "ppo")], tmp_path, 7, None, 2.0, timesteps=300)
     assert (one["run"], one["seed"], one["timesteps"]) == (None, 7, 300)
-    n_envs = [hp.get("n_envs", 1) for f in train_config.HYPERPARAMS.glob("*.yml")
-              for hp in (yaml.safe_load(f.read_text()) or {}).values()]  # fmt: skip
+    n_envs = [
+        hp.get("n_envs", 1)
+        for f in train_config.HYPERPARAMS.glob("*.yml")
+        for hp in (yaml.safe_load(f.read_text()) or {}).values()
+    ]
     assert n_envs and max(n_envs) < train_runs.RUN_SEED_STRIDE
     assert train_runs.run_seed(0, train_runs.MAX_RUNS) < validation.VALIDATION_SEED
 
@@ -261,8 +338,10 @@ def _meta(zoo: Path, run: int) -> dict:
 
 def _outcome(meta: dict) -> dict:
     """What a run's result is, without its times."""
-    curve = [{k: v for k, v in c.items() if k not in ("wall_s", "cpu_s")}
-             for c in meta["validation"]["curve"]]  # fmt: skip
+    curve = [
+        {k: v for k, v in c.items() if k not in ("wall_s", "cpu_s")}
+        for c in meta["validation"]["curve"]
+    ]
     return {
         "seed": meta["seed"],
         "run": meta["run"],
@@ -282,8 +361,17 @@ def test_local_runs_write_run_indexed_files_with_their_seeds(local_zoo, tmp_path
     assert agents.runs(ENV, "ppo", zoo=local_zoo) == [0, 1]
     pol = agents.load(ENV, "ppo", zoo=local_zoo, run=1)
     assert pol.predict(np.zeros(pol.n_obs))[0].shape == (2,)
-    again = training.train(ENV, "ppo", local_zoo.parent / "ppo.yml", timesteps=256, seed=1000,
-                        out=tmp_path, max_minutes=30, quiet=True, run=1)  # fmt: skip
+    again = training.train(
+        ENV,
+        "ppo",
+        local_zoo.parent / "ppo.yml",
+        timesteps=256,
+        seed=1000,
+        out=tmp_path,
+        max_minutes=30,
+        quiet=True,
+        run=1,
+    )
     assert _outcome(again) == _outcome(m1)  # same seed, same run
     assert files.steamtemp_paths(tmp_path, ENV, "ppo", 1)[0].is_file()
 
@@ -300,7 +388,8 @@ def test_a_resumed_rebuild_trains_only_the_runs_not_there(local_zoo, tmp_path):
     after = {f.name: f.stat().st_mtime_ns for f in zoo.iterdir()}
     assert {k: after[k] for k in before} == before  # runs 0 and 1 untouched
     assert sorted(set(after) - set(before)) == [
-        f"{files.stem(ENV, 'ppo', 2)}{ext}" for ext in (".json", ".zip")]  # fmt: skip
+        f"{files.stem(ENV, 'ppo', 2)}{ext}" for ext in (".json", ".zip")
+    ]
     assert _meta(zoo, 2)["seed"] == 2 * train_runs.RUN_SEED_STRIDE
 
 
@@ -339,8 +428,10 @@ def test_the_leaderboard_scores_each_run_and_reports_the_agent(local_zoo, tmp_pa
     )
     doc = json.loads((tmp_path / "lb" / "leaderboard.json").read_text())
     assert doc["run"]["policies"][ENV][:3] == ["cascade_pi", "sb3:ppo@run0", "sb3:ppo@run1"]
-    by_run = {k: [r["metrics"]["return"] for r in doc["episodes"]
-                  if r["policy"] == f"sb3:ppo@run{k}"] for k in (0, 1)}  # fmt: skip
+    by_run = {
+        k: [r["metrics"]["return"] for r in doc["episodes"] if r["policy"] == f"sb3:ppo@run{k}"]
+        for k in (0, 1)
+    }
     assert [len(v) for v in by_run.values()] == [3, 3]
     e = doc["plants"][ENV]["policies"]["sb3:ppo"]
     assert "sb3:ppo@run0" not in doc["plants"][ENV]["policies"]
@@ -388,8 +479,9 @@ def test_an_entrys_max_minutes_bounds_its_runs_where_the_command_does_not(tmp_pa
     assert meta["timesteps_trained"] < 100_000
     (job,) = train_runs.zoo_jobs([(ENV, "ppo")], tmp_path, 0, None, None)
     assert job["max_minutes"] is None and job["default_minutes"] == train_runs.ZOO_MINUTES
-    meta = training.train(ENV, "ppo", yml, timesteps=128, seed=0, out=tmp_path, quiet=True,
-                          max_minutes=5.0)  # fmt: skip
+    meta = training.train(
+        ENV, "ppo", yml, timesteps=128, seed=0, out=tmp_path, quiet=True, max_minutes=5.0
+    )
     assert meta["timesteps_trained"] == 128
     # a run under a time budget is validated at its marks of that budget and at the end of
     # the step budget, not also at the marks of the step budget

@@ -60,15 +60,22 @@ class ToyParams:
 OUTPUTS = (
     Signal("outlet_temp_C", "C", 540.0, 20.0, observed=False, description="true outlet"),
     Signal("outlet_temp_meas_C", "C", 540.0, 20.0, noisy=True, description="outlet reading"),
-    Signal("attemp_out_temp_meas_C", "C", 460.0, 30.0, noisy=True,
-           description="attemperator outlet reading (inner loop)"),
+    Signal(
+        "attemp_out_temp_meas_C",
+        "C",
+        460.0,
+        30.0,
+        noisy=True,
+        description="attemperator outlet reading (inner loop)",
+    ),
     Signal("spray_valve", "1", 0.5, 0.5, description="valve position feedback"),
     Signal("spray_flow_kg_s", "kg/s", 10.0, 10.0),
     design_spray_signal(10.0, 10.0, "the spray the design inlet temperature needs at this load"),
-)  # fmt: skip
+)
 IZ = slots("ToyOutputs", *(s.name for s in OUTPUTS))
-IP = slots("ToyPacked", "TOUT", "TIN", "RISE", "WMAX", "WDES", "COOL", "NL", "TAUL", "TAUV",
-           "TAUTC")  # fmt: skip
+IP = slots(
+    "ToyPacked", "TOUT", "TIN", "RISE", "WMAX", "WDES", "COOL", "NL", "TAUL", "TAUV", "TAUTC"
+)
 #: states: the valve, the two thermowells (attemperator, outlet), then the lags
 IX = slots("ToyStates", "V", "TCA", "TCO", "LAG")
 
@@ -136,9 +143,20 @@ def steady(D, sp_C, P, X):
 
 @functools.lru_cache(maxsize=8)
 def _pack(params: ToyParams) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
-    P = np.array([params.T_out_C, params.T_in_C, params.rise_K, params.spray_max_kg_s,
-                  params.spray_design_kg_s, params.cooling_K_s_kg, params.n_lags,
-                  params.tau_lag_s, params.tau_valve_s, params.tau_tc_s])  # fmt: skip
+    P = np.array(
+        [
+            params.T_out_C,
+            params.T_in_C,
+            params.rise_K,
+            params.spray_max_kg_s,
+            params.spray_design_kg_s,
+            params.cooling_K_s_kg,
+            params.n_lags,
+            params.tau_lag_s,
+            params.tau_valve_s,
+            params.tau_tc_s,
+        ]
+    )
     empty = np.zeros(0, dtype=np.int64)
     return read_only(P), empty, empty, IX.LAG + params.n_lags
 

@@ -173,18 +173,72 @@ def make_parser() -> argparse.ArgumentParser:
         epilog=doc.split("\n", 2)[2],
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    ap.add_argument("--envs", default=",".join(steamtemp_gym.ENV_IDS),
-                    help="comma list of env ids, with or without the steamtemp/ namespace "
-                    "(default: all: %(default)s)")  # fmt: skip
-    ap.add_argument("--policies", default=None,
-                    help="comma list of baseline names, sb3:<algo>, zoo:DIR or paths to a "
-                    "trained agent's files, and module:callable factories (default: every "
-                    "baseline of baselines.NAMES and every shipped agent sb3:<algo> of "
-                    "agents.shipped(); cascade_pi_ff, oracle and frozen_valve are always "
-                    "added)")  # fmt: skip
-    ap.add_argument("--import", dest="modules", action="append", default=[], metavar="MODULE",
-                    help="import this module first, in every worker too (one that registers "
-                    "baselines, scenarios or env variants; repeatable)")  # fmt: skip
+    ap.add_argument(
+        "--envs",
+        default=",".join(steamtemp_gym.ENV_IDS),
+        help="comma list of env ids, with or without the steamtemp/ namespace "
+        "(default: all: %(default)s)",
+    )
+    ap.add_argument(
+        "--policies",
+        default=None,
+        help="comma list of baseline names, sb3:<algo>, zoo:DIR or paths to a "
+        "trained agent's files, and module:callable factories (default: every "
+        "baseline of baselines.NAMES and every shipped agent sb3:<algo> of "
+        "agents.shipped(); cascade_pi_ff, oracle and frozen_valve are always "
+        "added)",
+    )
+    ap.add_argument(
+        "--import",
+        dest="modules",
+        action="append",
+        default=[],
+        metavar="MODULE",
+        help="import this module first, in every worker too (one that registers "
+        "baselines, scenarios or env variants; repeatable)",
+    )
+    _add_scoring_arguments(ap)
+    ap.add_argument(
+        "--episode-timeout",
+        default=f"{EPISODE_TIMEOUT_S:g}",
+        metavar="S",
+        help="a policy that is not shipped (a factory, a trained agent's files, a "
+        "registered baseline) runs in a process of its own; an episode of it that "
+        "takes longer than S seconds fails (rerun by --resume), and so does "
+        "building it; 0: no limit (default: %(default)s, about 10 times the "
+        "longest episode of a shipped policy)",
+    )
+    ap.add_argument(
+        "--scenarios",
+        default=",".join(DEFAULT_SCENARIOS),
+        help="comma list of scenario names, heldout:<name>, random (the seeded "
+        "training distribution) or YAML paths, as gym.make(..., scenario=...) "
+        "takes them (default: %(default)s)",
+    )
+    ap.add_argument(
+        "--seeds", default=DEFAULT_SEEDS, help="integers >= 0 or ranges a-b (default: %(default)s)"
+    )
+    ap.add_argument(
+        "--out", default="leaderboard_out", help="output directory (default: %(default)s)"
+    )
+    ap.add_argument(
+        "--trend-all",
+        action="store_true",
+        help="trend plots show every policy (default: cascade_pi_ff, the oracle, "
+        "cascade_pi and the plant's three best-ranked policies)",
+    )
+    ap.add_argument(
+        "--resume",
+        action="store_true",
+        help="continue in --out: skip the episodes already in its episodes.jsonl (default: off)",
+    )
+    _add_worker_arguments(ap)
+    return ap
+
+
+def _add_scoring_arguments(ap: argparse.ArgumentParser) -> None:
+    """The options of what scores a policy: the oracle (the score's 1), the model-mismatch
+    episodes and the travel budget of admissibility."""
     ap.add_argument(
         "--oracle",
         choices=ENGINES,
@@ -195,49 +249,55 @@ def make_parser() -> argparse.ArgumentParser:
         "or 'cem', the receding-horizon CEM search (faster; a lower bound of "
         "the optimum, and every output says so) (default: %(default)s)",
     )
-    ap.add_argument("--no-oracle", action="store_true",
-                    help="leave the oracle out (its episodes are the run's longest); the "
-                    "normalized score is then not computed (default: off)")  # fmt: skip
-    ap.add_argument("--no-mismatch", action="store_true",
-                    help="leave out the model-mismatch episodes (every policy but the "
-                    "references, commissioned on the nominal plant, on each variant of "
-                    "the model-mismatch set under load_ramp_100_50; run when load_ramp_100_50 is "
-                    "among --scenarios) and the robustness column (default: off)")  # fmt: skip
-    ap.add_argument("--travel-budget", type=str, default=str(stats.TRAVEL_BUDGET),
-                    metavar="X", help="a policy is admissible on a plant when its mean valve "
-                    "travel there is at most X times cascade_pi_ff's and it never trips; "
-                    "rankings list admissible policies first (default: %(default)s)")  # fmt: skip
-    ap.add_argument("--episode-timeout", default=f"{EPISODE_TIMEOUT_S:g}", metavar="S",
-                    help="a policy that is not shipped (a factory, a trained agent's files, a "
-                    "registered baseline) runs in a process of its own; an episode of it that "
-                    "takes longer than S seconds fails (rerun by --resume), and so does "
-                    "building it; 0: no limit (default: %(default)s, about 10 times the "
-                    "longest episode of a shipped policy)")  # fmt: skip
-    ap.add_argument("--scenarios", default=",".join(DEFAULT_SCENARIOS),
-                    help="comma list of scenario names, heldout:<name>, random (the seeded "
-                    "training distribution) or YAML paths, as gym.make(..., scenario=...) "
-                    "takes them (default: %(default)s)")  # fmt: skip
-    ap.add_argument("--seeds", default=DEFAULT_SEEDS,
-                    help="integers >= 0 or ranges a-b (default: %(default)s)")  # fmt: skip
-    ap.add_argument("--out", default="leaderboard_out",
-                    help="output directory (default: %(default)s)")  # fmt: skip
-    ap.add_argument("--trend-all", action="store_true",
-                    help="trend plots show every policy (default: cascade_pi_ff, the oracle, "
-                    "cascade_pi and the plant's three best-ranked policies)")  # fmt: skip
-    ap.add_argument("--resume", action="store_true",
-                    help="continue in --out: skip the episodes already in its episodes.jsonl "
-                    "(default: off)")  # fmt: skip
-    ap.add_argument("--jobs", type=int, default=os.cpu_count() or 1,
-                    help="worker processes (CPUs of a new local Ray); 1 runs in this "
-                    "process (default: the number of CPUs, %(default)s)")  # fmt: skip
-    ap.add_argument("--backend", choices=("local", "ray"), default="local",
-                    help="local: a process pool; ray: one Ray task per env, scenario and "
-                    "policy (needs the ray extra: pip install 'steamtemp-gym[ray]'); rows "
-                    "are the same (default: %(default)s)")  # fmt: skip
-    ap.add_argument("--ray-address", default=None, metavar="ADDRESS",
-                    help="with --backend ray: an existing Ray cluster (e.g. ray://host:10001 "
-                    "or auto); default: start a local Ray with --jobs CPUs")  # fmt: skip
-    return ap
+    ap.add_argument(
+        "--no-oracle",
+        action="store_true",
+        help="leave the oracle out (its episodes are the run's longest); the "
+        "normalized score is then not computed (default: off)",
+    )
+    ap.add_argument(
+        "--no-mismatch",
+        action="store_true",
+        help="leave out the model-mismatch episodes (every policy but the "
+        "references, commissioned on the nominal plant, on each variant of "
+        "the model-mismatch set under load_ramp_100_50; run when load_ramp_100_50 is "
+        "among --scenarios) and the robustness column (default: off)",
+    )
+    ap.add_argument(
+        "--travel-budget",
+        type=str,
+        default=str(stats.TRAVEL_BUDGET),
+        metavar="X",
+        help="a policy is admissible on a plant when its mean valve "
+        "travel there is at most X times cascade_pi_ff's and it never trips; "
+        "rankings list admissible policies first (default: %(default)s)",
+    )
+
+
+def _add_worker_arguments(ap: argparse.ArgumentParser) -> None:
+    """The options of where the episodes run: worker processes, a local pool or Ray."""
+    ap.add_argument(
+        "--jobs",
+        type=int,
+        default=os.cpu_count() or 1,
+        help="worker processes (CPUs of a new local Ray); 1 runs in this "
+        "process (default: the number of CPUs, %(default)s)",
+    )
+    ap.add_argument(
+        "--backend",
+        choices=("local", "ray"),
+        default="local",
+        help="local: a process pool; ray: one Ray task per env, scenario and "
+        "policy (needs the ray extra: pip install 'steamtemp-gym[ray]'); rows "
+        "are the same (default: %(default)s)",
+    )
+    ap.add_argument(
+        "--ray-address",
+        default=None,
+        metavar="ADDRESS",
+        help="with --backend ray: an existing Ray cluster (e.g. ray://host:10001 "
+        "or auto); default: start a local Ray with --jobs CPUs",
+    )
 
 
 class _Stderr(logging.StreamHandler):
@@ -304,8 +364,10 @@ def _main(argv: list[str] | None) -> None:
     except OSError as exc:
         ap.error(f"argument --out: cannot write {str(out)!r}: {exc.strerror or exc}")
     if lock is None:
-        ap.error(f"argument --out: {str(out)!r} is in use by another steamtemp-leaderboard "
-                 "run; wait for it to end or choose another --out")  # fmt: skip
+        ap.error(
+            f"argument --out: {str(out)!r} is in use by another steamtemp-leaderboard "
+            "run; wait for it to end or choose another --out"
+        )
     try:
         done = _latest(read_record(out / EPISODES)) if args.resume else {}
     except (OSError, ValueError) as exc:
@@ -319,15 +381,17 @@ def _main(argv: list[str] | None) -> None:
     figures = Plots(out, plan, units, every=args.trend_all)
     try:
         with _sigterm_stops():
-            _execute(plan, units, args.jobs, record, figures.add, args.backend,
-                     args.ray_address)  # fmt: skip
+            _execute(plan, units, args.jobs, record, figures.add, args.backend, args.ray_address)
             for key in figures.missing():
                 figures.draw(*key)
     except KeyboardInterrupt as exc:
         record.close()
         _rebuild(out, plan, figures=False)
-        print(f"\ninterrupted: finished episodes are in {out / EPISODES}; "
-              "run the same command with --resume to continue", file=sys.stderr)  # fmt: skip
+        print(
+            f"\ninterrupted: finished episodes are in {out / EPISODES}; "
+            "run the same command with --resume to continue",
+            file=sys.stderr,
+        )
         raise SystemExit(143 if isinstance(exc, Terminated) else 130) from None
     record.close()
     rows, summary = _rebuild(out, plan)
@@ -335,13 +399,17 @@ def _main(argv: list[str] | None) -> None:
         print(report.console(summary))
     bad = [r for r in rows if r.get("error")]
     n_run = sum(len(u.seeds) for u in units)
-    print(f"wrote {out / 'leaderboard.json'}, {out / 'leaderboard.md'} and plots/ "
-          f"({len(rows)} episodes, {n_run} run now, {time.time() - t0:.0f} s)")  # fmt: skip
+    print(
+        f"wrote {out / 'leaderboard.json'}, {out / 'leaderboard.md'} and plots/ "
+        f"({len(rows)} episodes, {n_run} run now, {time.time() - t0:.0f} s)"
+    )
     if bad:
         print(f"{len(bad)} of {len(rows)} episodes failed:", file=sys.stderr)
         for r in bad[:10]:
-            print(f"  {r['env']} {r['scenario']} {r['policy']} seed {r['seed']}: {r['error']}",
-                  file=sys.stderr)  # fmt: skip
+            print(
+                f"  {r['env']} {r['scenario']} {r['policy']} seed {r['seed']}: {r['error']}",
+                file=sys.stderr,
+            )
         print(
             "fix the cause and run the same command with --resume to run only those again",
             file=sys.stderr,

@@ -71,8 +71,9 @@ def _ci(est: dict[str, Any] | None, decimals: int = 2) -> str:
 
 def _multi_run(summary: dict[str, Any]) -> bool:
     """Whether any policy of the summary is a trained agent over several training runs."""
-    return any("training_runs" in e for p in summary["plants"].values()
-               for e in p["policies"].values())  # fmt: skip
+    return any(
+        "training_runs" in e for p in summary["plants"].values() for e in p["policies"].values()
+    )
 
 
 def _run_range(est: dict[str, Any] | None, decimals: int = 2) -> str:
@@ -93,8 +94,10 @@ RUNS_NOTE = (
 
 def stat_label(n_seeds: int) -> str:
     """How the headline statistic is labelled everywhere (console, markdown, plots)."""
-    return (f"IQM of the normalized score over scenario × seed ({n_seeds} seeds), "
-            "95 % stratified-bootstrap CI")  # fmt: skip
+    return (
+        f"IQM of the normalized score over scenario × seed ({n_seeds} seeds), "
+        "95 % stratified-bootstrap CI"
+    )
 
 
 #: Marks a policy that is not admissible on a plant (travel over budget, a trip or a failure).
@@ -157,9 +160,11 @@ def _headline_cell(pe: dict[str, Any], limit: float) -> str:
 
 def admissibility_note(summary: dict[str, Any]) -> str:
     """What the travel column and the mark mean, with the run's budget."""
-    return (f"travel: mean valve travel over {ZERO}'s on the same episodes; {INADMISSIBLE}: not "
-            f"admissible on that plant (travel above {budget(summary):g}x {ZERO}'s, a trip or "
-            "a failed episode), listed after every admissible policy.")  # fmt: skip
+    return (
+        f"travel: mean valve travel over {ZERO}'s on the same episodes; {INADMISSIBLE}: not "
+        f"admissible on that plant (travel above {budget(summary):g}x {ZERO}'s, a trip or "
+        "a failed episode), listed after every admissible policy."
+    )
 
 
 def order_note() -> str:
@@ -177,8 +182,9 @@ def headline_rows(summary: dict[str, Any]) -> tuple[list[str], list[list[str]]]:
     for e in summary["ranking"]:
         cells = []
         for env_id in plants:
-            cells.append(_headline_cell(summary["plants"][env_id]["policies"].get(
-                e["policy"], {}), limit))  # fmt: skip
+            cells.append(
+                _headline_cell(summary["plants"][env_id]["policies"].get(e["policy"], {}), limit)
+            )
         score = num(e["score"])
         if e["plants"] < len(plants):
             score += f" ({e['plants']} of {len(plants)} plants)"
@@ -186,16 +192,21 @@ def headline_rows(summary: dict[str, Any]) -> tuple[list[str], list[list[str]]]:
             score += f", {INADMISSIBLE} on {e['plants'] - e['admissible_plants']}"
         rows.append([str(e["position"]), e["policy"], *cells, score])
     for ref in REFERENCES:  # listed below the ranking, never ranked
-        ests = [summary["plants"][p]["policies"].get(ref, {}).get("normalized_score", {}).get(
-            "iqm") for p in plants]  # fmt: skip
+        ests = [
+            summary["plants"][p]["policies"].get(ref, {}).get("normalized_score", {}).get("iqm")
+            for p in plants
+        ]
         if any(ests):
             rows.append(["ref.", ref, *[_ci(est) if est else "-" for est in ests], "-"])
     return header, rows
 
 
 def table_lines(header: list[str], rows: list[list[str]]) -> list[str]:
-    return ["| " + " | ".join(header) + " |", "|" + "---|" * len(header),
-            *["| " + " | ".join(r) + " |" for r in rows]]  # fmt: skip
+    return [
+        "| " + " | ".join(header) + " |",
+        "|" + "---|" * len(header),
+        *["| " + " | ".join(r) + " |" for r in rows],
+    ]
 
 
 def one_label(summary: dict[str, Any]) -> str:
@@ -207,12 +218,14 @@ def headline_markdown(summary: dict[str, Any], margins: bool = True) -> str:
     """The headline table with its label (also in the README), and below it the score's
     ends per plant (:func:`margin_markdown`) unless ``margins`` is False."""
     n = len(summary["run"]["seeds"])
-    lines = [f"{order_note()} Score: {stat_label(n)}: the share of the achievable improvement "
-             f"over the industrial reference that a policy realizes (0 = {ZERO}, the cascade a "
-             f"commissioned unit runs; 1 = {ONE}, {one_label(summary)}; per "
-             f"scenario); (k) = rank among the policies admissible on that plant; "
-             f"{admissibility_note(summary)}"
-             + (f" {RUNS_NOTE}" if _multi_run(summary) else ""), ""]  # fmt: skip
+    lines = [
+        f"{order_note()} Score: {stat_label(n)}: the share of the achievable improvement "
+        f"over the industrial reference that a policy realizes (0 = {ZERO}, the cascade a "
+        f"commissioned unit runs; 1 = {ONE}, {one_label(summary)}; per "
+        f"scenario); (k) = rank among the policies admissible on that plant; "
+        f"{admissibility_note(summary)}" + (f" {RUNS_NOTE}" if _multi_run(summary) else ""),
+        "",
+    ]
     lines += table_lines(*headline_rows(summary))
     if margins:
         lines += ["", *margin_markdown(summary)]
@@ -231,14 +244,24 @@ def margin_markdown(summary: dict[str, Any]) -> list[str]:
         zero = float(np.mean([r["zero_return"] for r in refs]))
         one = float(np.mean([r["one_return"] for r in refs]))
         floored = sum(r["span"] > r["headroom"] for r in refs)
-        body.append([env_id.split("/")[-1], num(zero, 1), num(one, 1), f"{one - zero:+.1f}",
-                     f"{floored} of {len(refs)}"])  # fmt: skip
+        body.append(
+            [
+                env_id.split("/")[-1],
+                num(zero, 1),
+                num(one, 1),
+                f"{one - zero:+.1f}",
+                f"{floored} of {len(refs)}",
+            ]
+        )
     if not body:
         return [f"Not normalized: the run has no {ZERO} or no {ONE} episodes."]
-    return [f"Mean return over scenario × seed of the score's ends (the oracle's margin is "
-            f"the achievable improvement; where it is below {stats.MIN_SPAN:.0%} of "
-            f"{ZERO}'s cost the scale is held there: floored):", "",
-            *table_lines(header, body)]  # fmt: skip
+    return [
+        f"Mean return over scenario × seed of the score's ends (the oracle's margin is "
+        f"the achievable improvement; where it is below {stats.MIN_SPAN:.0%} of "
+        f"{ZERO}'s cost the scale is held there: floored):",
+        "",
+        *table_lines(header, body),
+    ]
 
 
 def _iqm_score(entry: dict[str, Any]) -> float:
@@ -250,7 +273,7 @@ def _kind(name: str) -> str:
     (``agents.kind``: model-free, residual over X, imitation of X)."""
     import agents
 
-    return agents.kind(name[len("sb3:"):]) if name.startswith("sb3:") else "baseline"
+    return agents.kind(name[len("sb3:") :]) if name.startswith("sb3:") else "baseline"
 
 
 def agents_markdown(summary: dict[str, Any]) -> str:
@@ -260,12 +283,24 @@ def agents_markdown(summary: dict[str, Any]) -> str:
     engineer would reject (:func:`rejected_cell`). The zoo table of docs/agents/zoo.md."""
     n = len(summary["run"]["seeds"])
     multi = _multi_run(summary)
-    lines = [f"{stat_label(n)}; return and IAE: means over scenario × seed. **Bold**: the "
-             f"best of the plant's rows; {admissibility_note(summary)} {rejected_note()}"
-             + (f" {RUNS_NOTE}" if multi else ""), ""]  # fmt: skip
-    header = ["plant", "policy", "kind", "IQM norm. score", *(["runs"] if multi else []),
-              "mean return", COLUMNS["iae_K_s"][0], f"travel / {ZERO}'s", "trips",
-              "rejected"]  # fmt: skip
+    lines = [
+        f"{stat_label(n)}; return and IAE: means over scenario × seed. **Bold**: the "
+        f"best of the plant's rows; {admissibility_note(summary)} {rejected_note()}"
+        + (f" {RUNS_NOTE}" if multi else ""),
+        "",
+    ]
+    header = [
+        "plant",
+        "policy",
+        "kind",
+        "IQM norm. score",
+        *(["runs"] if multi else []),
+        "mean return",
+        COLUMNS["iae_K_s"][0],
+        f"travel / {ZERO}'s",
+        "trips",
+        "rejected",
+    ]
     body = []
     limit = budget(summary)
     for env_id, p in summary["plants"].items():
@@ -284,23 +319,32 @@ def agents_markdown(summary: dict[str, Any]) -> str:
             score = _ci(e.get("normalized_score", {}).get("iqm"))
             ret, iae = cell("return", met.get("return")), cell("iae_K_s", met.get("iae_K_s"))
             spread = [_run_range(e.get("normalized_score", {}).get("iqm"))] if multi else []
-            body.append([env_id.split("/")[-1],
-                         f"{k} (best baseline)" if k == best_base else k, _kind(k),
-                         f"**{score}**" if k == top else score, *spread,
-                         f"**{ret}**" if met.get("return") == best_ret else ret,
-                         f"**{iae}**" if met.get("iae_K_s") == best_iae else iae,
-                         travel_cell(e, limit) + (f" {INADMISSIBLE}" if e.get("admissible")
-                                              is False else ""), str(e["trips"]),
-                         rejected_cell(e)])  # fmt: skip
+            body.append(
+                [
+                    env_id.split("/")[-1],
+                    f"{k} (best baseline)" if k == best_base else k,
+                    _kind(k),
+                    f"**{score}**" if k == top else score,
+                    *spread,
+                    f"**{ret}**" if met.get("return") == best_ret else ret,
+                    f"**{iae}**" if met.get("iae_K_s") == best_iae else iae,
+                    travel_cell(e, limit)
+                    + (f" {INADMISSIBLE}" if e.get("admissible") is False else ""),
+                    str(e["trips"]),
+                    rejected_cell(e),
+                ]
+            )
     return "\n".join(lines + table_lines(header, body)) + "\n"
 
 
 def rejected_note() -> str:
     """What the tables' ``rejected`` column counts."""
-    return (f"rejected: the episodes a plant engineer would reject against cascade_pi_ff's "
-            f"on the same scenario and seed (a trip, valve travel above "
-            f"{num(stats.REALISM_TRAVEL_MAX, 0)}x, or a limit cycle in the quiet stretch "
-            f"after the last scheduled change).")  # fmt: skip
+    return (
+        f"rejected: the episodes a plant engineer would reject against cascade_pi_ff's "
+        f"on the same scenario and seed (a trip, valve travel above "
+        f"{num(stats.REALISM_TRAVEL_MAX, 0)}x, or a limit cycle in the quiet stretch "
+        f"after the last scheduled change)."
+    )
 
 
 def rejected_cell(pe: dict[str, Any]) -> str:
@@ -313,79 +357,138 @@ def markdown(summary: dict[str, Any], rows: list[dict]) -> str:
     """leaderboard.md."""
     run = summary["run"]
     n = len(run["seeds"])
-    lines = ["# steamtemp_gym leaderboard", "",
-             f"Seeds {run['seeds']}; scenarios: {', '.join(run['scenarios'])}. "
-             "Return: the default reward summed over an episode (higher is better). "
-             f"Normalized score per scenario: (R - R0) / (R1 - R0) with R0 the mean return "
-             f"over seeds of {ZERO} (the industrial reference: load-scheduled cascade PI "
-             f"with load feed-forward) and R1 that of {ONE} ({one_label(summary)}; "
-             f"no causal controller can exceed the optimum): the share of the "
-             f"achievable improvement a policy realizes, negative when it is worse than "
-             f"{ZERO}. {ONE} and {REFERENCE} (every actuator held at its reset opening) are "
-             "references, listed and never ranked.",
-             "", "## Headline", "", headline_markdown(summary),
-             "## Trained agents against the baselines", "", agents_markdown(summary)]  # fmt: skip
+    lines = [
+        "# steamtemp_gym leaderboard",
+        "",
+        f"Seeds {run['seeds']}; scenarios: {', '.join(run['scenarios'])}. "
+        "Return: the default reward summed over an episode (higher is better). "
+        f"Normalized score per scenario: (R - R0) / (R1 - R0) with R0 the mean return "
+        f"over seeds of {ZERO} (the industrial reference: load-scheduled cascade PI "
+        f"with load feed-forward) and R1 that of {ONE} ({one_label(summary)}; "
+        f"no causal controller can exceed the optimum): the share of the "
+        f"achievable improvement a policy realizes, negative when it is worse than "
+        f"{ZERO}. {ONE} and {REFERENCE} (every actuator held at its reset opening) are "
+        "references, listed and never ranked.",
+        "",
+        "## Headline",
+        "",
+        headline_markdown(summary),
+        "## Trained agents against the baselines",
+        "",
+        agents_markdown(summary),
+    ]
     robust = mismatch.markdown(summary, ZERO)
     if robust:
         lines += ["## Robustness to model mismatch", "", robust]
     multi = _multi_run(summary)
     limit = budget(summary)
     for env_id, p in summary["plants"].items():
-        pols = p["policies"]
-        order = sorted(pols, key=lambda k: (pols[k].get("rank", 10**6), k))
-        lines += [f"## {env_id}", "", f"Ranking: statistics over scenario × seed ({n} seeds), "
-                  f"95 % stratified-bootstrap CIs; P(> {VERSUS}): probability that an "
-                  f"episode of the policy has a higher return than one of {VERSUS} on the "
-                  "same scenario, averaged over scenarios. IAE, max\\|dev\\| and time outside "
-                  "±5 K: mean over scenario × seed where they apply. The admissible policies "
-                  f"by score, then those not admissible ({INADMISSIBLE}), with the reason."
-                  + (f" {RUNS_NOTE}" if multi else ""), ""]  # fmt: skip
-        header = ["rank", "policy", "IQM norm. score", *(["runs"] if multi else []),
-                  "mean norm. score", "IQM return",
-                  f"P(> {VERSUS})", *(COLUMNS[k][0] for k in RANK_METRICS),
-                  f"travel / {ZERO}'s", COLUMNS["valve_reversals"][0], "admissible", "trips",
-                  "failed"]  # fmt: skip
-        body = []
-        for k in order:
-            e = pols[k]
-            ns = e.get("normalized_score", {})
-            met = e["metrics"]
-            travel = ratio(e["travel_ratio"], limit, 2)[:-1] if "travel_ratio" in e else "-"
-            verdict = {True: "yes", False: f"no {INADMISSIBLE}: {inadmissible_reason(e, limit)}"
-                       }.get(e.get("admissible"), "-")  # fmt: skip
-            rank = INADMISSIBLE if e.get("admissible") is False else e.get("rank")
-            body.append([str(rank or ("ref." if k in REFERENCES else "-")), k,
-                         _ci(ns.get("iqm")), *([_run_range(ns.get("iqm"))] if multi else []),
-                         _ci(ns.get("mean")),
-                         _ci(e["return"]["iqm"], 0),
-                         _ci(e.get(f"p_improvement_over_{VERSUS}")),
-                         *(cell(k, met.get(k)) for k in RANK_METRICS), travel,
-                         cell("valve_reversals", met.get("valve_reversals")), verdict,
-                         str(e["trips"]), str(e["failed"])])  # fmt: skip
-        lines += table_lines(header, body) + [""]
-        lines += ["<details><summary>per scenario (mean over seeds)</summary>", ""]
-        for sc, cells in p["scenarios"].items():
-            ref = p["reference"][sc]
-            note = (f"0 = {ZERO} (return {num(ref['zero_return'], 1)}), 1 = {ONE} (return "
-                    f"{num(ref['one_return'], 1)}), scale {num(ref['span'], 1)}"
-                    if ref["normalized"]
-                    else f"not normalized ({ZERO} or {ONE} not run)")  # fmt: skip
-            cols = [m for m in TABLE_METRICS if any(m in c for c in cells.values())]
-            lines += [f"### {env_id.split('/')[-1]} - {sc}", "", f"Normalized score: {note}.", ""]
-            header = ["policy", "seeds", "norm. score", *(COLUMNS[m][0] for m in cols), "trips"]
-            body = [[k, str(c["seeds"]), num(c.get("normalized_score")),
-                     *[cell(m, c.get(m)) for m in cols], str(c["trips"])]
-                    for k, c in cells.items()]  # fmt: skip
-            lines += table_lines(header, body) + [""]
-        lines += ["</details>", ""]
+        lines += _plant_markdown(env_id, p, n, multi, limit)
     failed = [r for r in rows if r.get("error")]
     if failed:
-        lines += ["## Failed episodes", ""]
-        body = [[r["env"], r["scenario"], r["policy"], str(r["seed"]),
-                 head(str(r["error"]), 160).replace("|", "\\|").replace("\n", " ")]
-                for r in failed]  # fmt: skip
-        lines += table_lines(["env", "scenario", "policy", "seed", "error"], body) + [""]
+        lines += ["## Failed episodes", "", *_failed_table(failed), ""]
     return "\n".join(lines)
+
+
+def _plant_markdown(env_id: str, p: dict[str, Any], n: int, multi: bool, limit: float) -> list[str]:
+    """A plant's section of leaderboard.md: the ranking over ``n`` seeds (with the training
+    runs' range where ``multi``), then the per-scenario tables folded away."""
+    pols = p["policies"]
+    order = sorted(pols, key=lambda k: (pols[k].get("rank", 10**6), k))
+    lines = [
+        f"## {env_id}",
+        "",
+        f"Ranking: statistics over scenario × seed ({n} seeds), "
+        f"95 % stratified-bootstrap CIs; P(> {VERSUS}): probability that an "
+        f"episode of the policy has a higher return than one of {VERSUS} on the "
+        "same scenario, averaged over scenarios. IAE, max\\|dev\\| and time outside "
+        "±5 K: mean over scenario × seed where they apply. The admissible policies "
+        f"by score, then those not admissible ({INADMISSIBLE}), with the reason."
+        + (f" {RUNS_NOTE}" if multi else ""),
+        "",
+    ]
+    header = [
+        "rank",
+        "policy",
+        "IQM norm. score",
+        *(["runs"] if multi else []),
+        "mean norm. score",
+        "IQM return",
+        f"P(> {VERSUS})",
+        *(COLUMNS[k][0] for k in RANK_METRICS),
+        f"travel / {ZERO}'s",
+        COLUMNS["valve_reversals"][0],
+        "admissible",
+        "trips",
+        "failed",
+    ]
+    body = [_ranking_row(k, pols[k], multi, limit) for k in order]
+    lines += table_lines(header, body) + [""]
+    lines += ["<details><summary>per scenario (mean over seeds)</summary>", ""]
+    for sc, cells in p["scenarios"].items():
+        lines += _scenario_table(env_id, sc, cells, p["reference"][sc])
+    return lines + ["</details>", ""]
+
+
+def _ranking_row(k: str, e: dict[str, Any], multi: bool, limit: float) -> list[str]:
+    """Policy ``k``'s row of a plant's ranking (``e``: its entry in the summary)."""
+    ns = e.get("normalized_score", {})
+    met = e["metrics"]
+    travel = ratio(e["travel_ratio"], limit, 2)[:-1] if "travel_ratio" in e else "-"
+    verdict = {
+        True: "yes",
+        False: f"no {INADMISSIBLE}: {inadmissible_reason(e, limit)}",
+    }.get(e.get("admissible"), "-")
+    rank = INADMISSIBLE if e.get("admissible") is False else e.get("rank")
+    return [
+        str(rank or ("ref." if k in REFERENCES else "-")),
+        k,
+        _ci(ns.get("iqm")),
+        *([_run_range(ns.get("iqm"))] if multi else []),
+        _ci(ns.get("mean")),
+        _ci(e["return"]["iqm"], 0),
+        _ci(e.get(f"p_improvement_over_{VERSUS}")),
+        *(cell(k, met.get(k)) for k in RANK_METRICS),
+        travel,
+        cell("valve_reversals", met.get("valve_reversals")),
+        verdict,
+        str(e["trips"]),
+        str(e["failed"]),
+    ]
+
+
+def _scenario_table(env_id: str, sc: str, cells: dict[str, Any], ref: dict[str, Any]) -> list[str]:
+    """The table of scenario ``sc`` on a plant: per policy the mean over seeds of the
+    normalized score and of the metrics any policy has there (``ref``: the score's ends)."""
+    note = (
+        f"0 = {ZERO} (return {num(ref['zero_return'], 1)}), 1 = {ONE} (return "
+        f"{num(ref['one_return'], 1)}), scale {num(ref['span'], 1)}"
+        if ref["normalized"]
+        else f"not normalized ({ZERO} or {ONE} not run)"
+    )
+    cols = [m for m in TABLE_METRICS if any(m in c for c in cells.values())]
+    header = ["policy", "seeds", "norm. score", *(COLUMNS[m][0] for m in cols), "trips"]
+    body = []
+    for k, c in cells.items():
+        metrics = [cell(m, c.get(m)) for m in cols]
+        body.append([k, str(c["seeds"]), num(c.get("normalized_score")), *metrics, str(c["trips"])])
+    return [
+        f"### {env_id.split('/')[-1]} - {sc}",
+        "",
+        f"Normalized score: {note}.",
+        "",
+        *table_lines(header, body),
+        "",
+    ]
+
+
+def _failed_table(failed: list[dict]) -> list[str]:
+    """The failed episodes: env, scenario, policy, seed and the start of the error."""
+    body = []
+    for r in failed:
+        error = head(str(r["error"]), 160).replace("|", "\\|").replace("\n", " ")
+        body.append([r["env"], r["scenario"], r["policy"], str(r["seed"]), error])
+    return table_lines(["env", "scenario", "policy", "seed", "error"], body)
 
 
 def console(summary: dict[str, Any]) -> str:
@@ -394,6 +497,10 @@ def console(summary: dict[str, Any]) -> str:
     widths = [max(len(r[i]) for r in [header, *rows]) for i in range(len(header))]
     fmt = "  ".join(f"{{:<{w}}}" for w in widths)
     n = len(summary["run"]["seeds"])
-    return "\n".join([f"{stat_label(n)} (k: rank among the plant's admissible policies). "
-                      f"{order_note()}", fmt.format(*header),
-                      *[fmt.format(*r) for r in rows]])  # fmt: skip
+    return "\n".join(
+        [
+            f"{stat_label(n)} (k: rank among the plant's admissible policies). {order_note()}",
+            fmt.format(*header),
+            *[fmt.format(*r) for r in rows],
+        ]
+    )

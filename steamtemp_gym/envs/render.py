@@ -47,11 +47,13 @@ class _Axis:
 
     def x(self, v: float) -> float:
         return self.left + (v - self.xlim[0]) / (self.xlim[1] - self.xlim[0]) * (
-            self.right - self.left)  # fmt: skip
+            self.right - self.left
+        )
 
     def y(self, v: float) -> float:
         y = self.bottom - (v - self.ylim[0]) / (self.ylim[1] - self.ylim[0]) * (
-            self.bottom - self.top)  # fmt: skip
+            self.bottom - self.top
+        )
         return min(max(y, self.top), self.bottom) if math.isfinite(y) else self.bottom
 
 
@@ -68,21 +70,50 @@ class TrendDisplay:
             each (``Plant.secondary``).
     """
 
-    def __init__(self, title: str, duration_s: float, first: dict[str, Any],
-                 spray_max_kg_s: float, valve_names: tuple[str, ...] = (),
-                 secondary: tuple[tuple[str, float], ...] = ()) -> None:  # fmt: skip
+    def __init__(
+        self,
+        title: str,
+        duration_s: float,
+        first: dict[str, Any],
+        spray_max_kg_s: float,
+        valve_names: tuple[str, ...] = (),
+        secondary: tuple[tuple[str, float], ...] = (),
+    ) -> None:
+        n_valves = np.atleast_1d(first["spray_valve"]).size
+        self.secondary = tuple(secondary)
+        self.t_max = max(duration_s, 1.0) / 60.0
+        self.valve_names = tuple(
+            valve_names[j] if j < len(valve_names) else f"actuator {j + 1}" for j in range(n_valves)
+        )
+        self.background, frame = self._draw_frame(title, float(first["setpoint_C"]), spray_max_kg_s)
+        xl = (0.0, self.t_max)
+        self.axes = [_Axis(ax, xl, ylim) for ax, ylim in frame]
+        self.colors = {
+            "true": _rgb("tab:red"),
+            "meas": _rgb("tab:orange"),
+            "sp": _rgb("black"),
+            "load": _rgb("tab:blue"),
+            "spray": _rgb("tab:gray"),
+        }
+        self.valve_colors = [_rgb(_VALVE_COLORS[j % len(_VALVE_COLORS)]) for j in range(n_valves)]
+        self.bands = [_rgb(c) for c in _BAND_COLORS]
+        self.image = self.background.copy()
+        self.last: dict[str, Any] | None = None
+        self.filled = -1  # last image column with bands drawn
+        self.add(first)
+
+    def _draw_frame(
+        self, title: str, sp0: float, spray_max_kg_s: float
+    ) -> tuple[np.ndarray, list[tuple[Any, tuple[float, float]]]]:
+        """What stays fixed over the episode (axes, labels, legends), drawn once: the image,
+        (HEIGHT, WIDTH, 3) uint8, and each axes with its y-limits in the order of
+        ``self.axes`` (main steam, the secondary temperatures, load, openings, spray flow)."""
         import matplotlib
 
         matplotlib.use("Agg", force=False)
         from matplotlib.backends.backend_agg import FigureCanvasAgg
         from matplotlib.figure import Figure
-        from matplotlib.lines import Line2D
-        from matplotlib.patches import Patch
 
-        n_valves = np.atleast_1d(first["spray_valve"]).size
-        self.secondary = tuple(secondary)
-        self.t_max = max(duration_s, 1.0) / 60.0
-        sp0 = float(first["setpoint_C"])
         fig = Figure(figsize=(WIDTH / DPI, HEIGHT / DPI), dpi=DPI)
         n_sec = len(self.secondary)
         ratios = [2.0] + [1.1] * n_sec + [0.8, 1.3]
@@ -90,10 +121,15 @@ class TrendDisplay:
         ax1, sec_axes, ax2, ax3 = axs[0], list(axs[1 : 1 + n_sec]), axs[-2], axs[-1]
         ax3b = ax3.twinx()
         temps = [(ax1, (sp0 - SPAN_K, sp0 + SPAN_K))] + [
-            (ax, (sp2 - SPAN_K, sp2 + SPAN_K)) for ax, (_, sp2) in zip(sec_axes, self.secondary,
-                                                                    strict=True)]  # fmt: skip
-        frame = [*temps, (ax2, (0.0, 110.0)), (ax3, (-5.0, 105.0)),
-                 (ax3b, (0.0, max(spray_max_kg_s, 1e-3)))]  # fmt: skip
+            (ax, (sp2 - SPAN_K, sp2 + SPAN_K))
+            for ax, (_, sp2) in zip(sec_axes, self.secondary, strict=True)
+        ]
+        frame = [
+            *temps,
+            (ax2, (0.0, 110.0)),
+            (ax3, (-5.0, 105.0)),
+            (ax3b, (0.0, max(spray_max_kg_s, 1e-3))),
+        ]
         for ax, ylim in frame:
             ax.set_xlim(0.0, self.t_max)
             ax.set_ylim(*ylim)
@@ -107,37 +143,50 @@ class TrendDisplay:
         ax3b.set_ylabel("spray [kg/s]", color="tab:gray")
         ax3.set_xlabel("time [min]")
         ax1.set_title(title, fontsize=9)
-        small = {"fontsize": 7, "frameon": False, "borderaxespad": 0.1, "handlelength": 1.5,
-                 "columnspacing": 1.0}  # fmt: skip
-        ax1.legend(handles=[
-            Line2D([], [], color="tab:red", lw=2, label="true"),
-            Line2D([], [], color="tab:orange", lw=1, label="measured"),
-            Line2D([], [], color="k", lw=1, label="setpoint"),
-            Patch(color=_BAND_COLORS[0], label="±5 K"), Patch(color=_BAND_COLORS[1], label="±8 K"),
-        ], loc="lower right", ncol=5, **dict(small, frameon=True))  # fmt: skip
-        self.valve_names = tuple(valve_names[j] if j < len(valve_names) else f"actuator {j + 1}"
-                                 for j in range(n_valves))  # fmt: skip
-        ax3.legend(handles=[
-            *(Line2D([], [], color=_VALVE_COLORS[j % len(_VALVE_COLORS)], lw=1, label=name)
-              for j, name in enumerate(self.valve_names)),
-            Line2D([], [], color="tab:gray", lw=1, label="spray flow"),
-        ], loc="lower left", bbox_to_anchor=(0.0, 1.0), ncol=min(n_valves + 1, 4),
-            **small)  # fmt: skip
+        self._draw_legends(ax1, ax3)
         fig.tight_layout(h_pad=0.3)
         canvas = FigureCanvasAgg(fig)
         canvas.draw()
-        self.background = np.asarray(canvas.buffer_rgba())[:, :, :3].copy()
-        xl = (0.0, self.t_max)
-        self.axes = [_Axis(ax, xl, ylim) for ax, ylim in frame]
-        self.colors = {k: _rgb(c) for k, c in (
-            ("true", "tab:red"), ("meas", "tab:orange"), ("sp", "black"), ("load", "tab:blue"),
-            ("spray", "tab:gray"))}  # fmt: skip
-        self.valve_colors = [_rgb(_VALVE_COLORS[j % len(_VALVE_COLORS)]) for j in range(n_valves)]
-        self.bands = [_rgb(c) for c in _BAND_COLORS]
-        self.image = self.background.copy()
-        self.last: dict[str, Any] | None = None
-        self.filled = -1  # last image column with bands drawn
-        self.add(first)
+        return np.asarray(canvas.buffer_rgba())[:, :, :3].copy(), frame
+
+    def _draw_legends(self, ax1: Any, ax3: Any) -> None:
+        """The legends: the main-steam panel's lines and bands over it, the actuators'
+        openings and the spray flow above the bottom panel."""
+        from matplotlib.lines import Line2D
+        from matplotlib.patches import Patch
+
+        small = {
+            "fontsize": 7,
+            "frameon": False,
+            "borderaxespad": 0.1,
+            "handlelength": 1.5,
+            "columnspacing": 1.0,
+        }
+        ax1.legend(
+            handles=[
+                Line2D([], [], color="tab:red", lw=2, label="true"),
+                Line2D([], [], color="tab:orange", lw=1, label="measured"),
+                Line2D([], [], color="k", lw=1, label="setpoint"),
+                Patch(color=_BAND_COLORS[0], label="±5 K"),
+                Patch(color=_BAND_COLORS[1], label="±8 K"),
+            ],
+            loc="lower right",
+            ncol=5,
+            **dict(small, frameon=True),
+        )
+        ax3.legend(
+            handles=[
+                *(
+                    Line2D([], [], color=_VALVE_COLORS[j % len(_VALVE_COLORS)], lw=1, label=name)
+                    for j, name in enumerate(self.valve_names)
+                ),
+                Line2D([], [], color="tab:gray", lw=1, label="spray flow"),
+            ],
+            loc="lower left",
+            bbox_to_anchor=(0.0, 1.0),
+            ncol=min(len(self.valve_names) + 1, 4),
+            **small,
+        )
 
     def frame(self) -> np.ndarray:
         """The image so far, (HEIGHT, WIDTH, 3) uint8 (a copy)."""
@@ -163,8 +212,9 @@ class TrendDisplay:
             pairs.append((ax, key, self.colors["true"], 2, 1.0))
         self.filled = max(self.filled, c1)
         for ax, key, color, width, scale in pairs:
-            self._segment(ax, t0, scale * float(prev[key]), t1, scale * float(info[key]), color,
-                          width)  # fmt: skip
+            self._segment(
+                ax, t0, scale * float(prev[key]), t1, scale * float(info[key]), color, width
+            )
         v0, v1 = np.atleast_1d(prev["spray_valve"]), np.atleast_1d(info["spray_valve"])
         for j, color in enumerate(self.valve_colors):
             self._segment(act, t0, 100.0 * v0[j], t1, 100.0 * v1[j], color, 1)
@@ -183,8 +233,9 @@ class TrendDisplay:
             r0, r1 = round(ax.y(sp + band)), round(ax.y(sp - band))
             self.image[r0 : r1 + 1, c0 : c1 + 1] = color
 
-    def _segment(self, ax: _Axis, t0: float, v0: float, t1: float, v1: float,
-                 color: np.ndarray, width: int) -> None:  # fmt: skip
+    def _segment(
+        self, ax: _Axis, t0: float, v0: float, t1: float, v1: float, color: np.ndarray, width: int
+    ) -> None:
         """A line from (t0, v0) to (t1, v1): per image column, a vertical run joining the
         previous column's height to this one's (continuous at any slope)."""
         x0, x1 = ax.x(t0), ax.x(t1)

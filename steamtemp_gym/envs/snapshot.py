@@ -108,13 +108,15 @@ def row_indices(rows: Any, n_rows: int, what: str = "rows", distinct: bool = Tru
     if isinstance(rows, (int, np.integer)) and not isinstance(rows, (bool, np.bool_)):
         rows = [rows]
     if isinstance(rows, (str, bytes)) or not isinstance(rows, (Iterable, np.ndarray)):
-        raise ValueError(f"{what} must be None, an integer or a sequence of integers, "
-                         f"got {type(rows).__name__}")  # fmt: skip
+        raise ValueError(
+            f"{what} must be None, an integer or a sequence of integers, got {type(rows).__name__}"
+        )
     items = list(rows)
     if not items:
         raise ValueError(f"{what} is empty")
-    bad = [r for r in items if not isinstance(r, (int, np.integer)) or isinstance(
-        r, (bool, np.bool_))]  # fmt: skip
+    bad = [
+        r for r in items if not isinstance(r, (int, np.integer)) or isinstance(r, (bool, np.bool_))
+    ]
     if bad:
         raise ValueError(f"{what} must be integers, got {str(bad[:3])[:80]}")
     ints = [int(r) for r in items]  # Python integers: any size compares
@@ -177,17 +179,21 @@ def check(core: Any, snap: Any, rows: Any) -> Restore:
     elif n == 1:
         source = np.zeros(len(target), dtype=np.int64)
     else:
-        raise ValueError(f"snapshot holds {n} rows; restoring into {len(target)} row(s) needs "
-                         "a snapshot of as many rows or a one-row snapshot")  # fmt: skip
+        raise ValueError(
+            f"snapshot holds {n} rows; restoring into {len(target)} row(s) needs "
+            "a snapshot of as many rows or a one-row snapshot"
+        )
     fresh = []
     for i in source.tolist():
         rng = np.random.Generator(GENERATOR())
         try:
             rng.bit_generator.state = snap.rng_states[i]
         except Exception as exc:  # noqa: BLE001 - the setter's ValueError, TypeError, KeyError
-            raise ValueError(f"snapshot's rng_states[{i}] cannot set this env's "
-                             f"{type(rng.bit_generator).__name__} generator: "
-                             f"{type(exc).__name__}: {exc}") from None  # fmt: skip
+            raise ValueError(
+                f"snapshot's rng_states[{i}] cannot set this env's "
+                f"{type(rng.bit_generator).__name__} generator: "
+                f"{type(exc).__name__}: {exc}"
+            ) from None
         fresh.append(rng)
     return Restore(target, source, tuple(fresh))
 
@@ -196,68 +202,106 @@ def _check_fields(core: Any, snap: Snapshot) -> int:
     """The number of rows of ``snap`` after checking its fields against ``core``."""
     own = core.plant.params
     if type(snap.params) is not type(own):
-        raise ValueError(f"snapshot's params must be a {type(own).__name__}, "
-                         f"got {type(snap.params).__name__}")  # fmt: skip
+        raise ValueError(
+            f"snapshot's params must be a {type(own).__name__}, got {type(snap.params).__name__}"
+        )
     if not isinstance(snap.rows, (tuple, list)):
-        raise ValueError(f"snapshot's rows must be a tuple of row indices, "
-                         f"got {type(snap.rows).__name__}")  # fmt: skip
+        raise ValueError(
+            f"snapshot's rows must be a tuple of row indices, got {type(snap.rows).__name__}"
+        )
     n = len(row_indices(snap.rows, 2**63, "snapshot's rows"))
 
     def sequence(name: str) -> tuple:
         value = getattr(snap, name)
         if not isinstance(value, (tuple, list)) or len(value) != n:
-            got = (f"{len(value)} entries" if isinstance(value, (tuple, list))
-                   else type(value).__name__)  # fmt: skip
-            raise ValueError(f"snapshot's {name} must be a tuple of one entry per row of "
-                             f"its rows ({n}), got {got}")  # fmt: skip
+            got = (
+                f"{len(value)} entries"
+                if isinstance(value, (tuple, list))
+                else type(value).__name__
+            )
+            raise ValueError(
+                f"snapshot's {name} must be a tuple of one entry per row of "
+                f"its rows ({n}), got {got}"
+            )
         return tuple(value)
 
     empty = isinstance(snap.plants, (tuple, list)) and not snap.plants
     plants = () if empty else sequence("plants")
+    _check_plants(core, snap, plants)
+    waiting = snap.waiting
+    if not (
+        isinstance(waiting, np.ndarray) and waiting.dtype == np.bool_ and waiting.shape == (n,)
+    ):
+        got = (
+            f"{waiting.dtype} {waiting.shape}"
+            if isinstance(waiting, np.ndarray)
+            else type(waiting).__name__
+        )
+        raise ValueError(
+            f"snapshot's waiting must be a bool array of shape ({n},) (an entry "
+            f"per entry of its rows), got {got}"
+        )
+    _check_arrays(core, snap.arrays, n, waiting)
+    _check_scenarios(sequence("scenarios"))
+    for i, state in enumerate(sequence("rng_states")):
+        if not isinstance(state, dict):
+            raise ValueError(
+                f"snapshot's rng_states[{i}] must be a dict "
+                f"(bit_generator.state), got {type(state).__name__}"
+            )
+    return n
+
+
+def _check_plants(core: Any, snap: Snapshot, plants: tuple) -> None:
+    """Check the snapshot's per-row ``plants`` (empty where the rows keep the env's): each of
+    the core's plant class, on the plant parameters the env runs, of its sizes and time step."""
+    own = core.plant.params
     kind = type(core.plant)
     for i, p in enumerate(plants):
         if not isinstance(p, kind) or type(p.params) is not type(own):
-            raise ValueError(f"snapshot's plants[{i}] must be a {kind.__name__}, got "
-                             f"{type(p).__name__}")  # fmt: skip
+            raise ValueError(
+                f"snapshot's plants[{i}] must be a {kind.__name__}, got {type(p).__name__}"
+            )
     # an env drawing its rows' plants takes the snapshot's; any other needs its own in each
     wanted = [snap.params] if own_rows(core) else [p.params for p in plants] or [snap.params]
     for params in wanted:
         if params != own:
-            diff = [f.name for f in dataclasses.fields(params)
-                    if getattr(params, f.name) != getattr(own, f.name)]  # fmt: skip
-            raise ValueError(f"snapshot of {snap.plant_id} with other plant parameters "
-                             f"(differing: {diff}) cannot be restored into this env")  # fmt: skip
+            diff = [
+                f.name
+                for f in dataclasses.fields(params)
+                if getattr(params, f.name) != getattr(own, f.name)
+            ]
+            raise ValueError(
+                f"snapshot of {snap.plant_id} with other plant parameters "
+                f"(differing: {diff}) cannot be restored into this env"
+            )
     sizes = core.plant.n_x, core.plant.P.shape, core.plant.dt_s
     for i, p in enumerate(plants):
         if (p.n_x, p.P.shape, p.dt_s) != sizes:
-            raise ValueError(f"snapshot's plants[{i}] differs from this env's plant in its "
-                             "state or parameter sizes or its time step")  # fmt: skip
-    waiting = snap.waiting
-    if not (isinstance(waiting, np.ndarray) and waiting.dtype == np.bool_
-            and waiting.shape == (n,)):  # fmt: skip
-        got = (f"{waiting.dtype} {waiting.shape}" if isinstance(waiting, np.ndarray)
-               else type(waiting).__name__)  # fmt: skip
-        raise ValueError(f"snapshot's waiting must be a bool array of shape ({n},) (an entry "
-                         f"per entry of its rows), got {got}")  # fmt: skip
-    _check_arrays(core, snap.arrays, n, waiting)
-    for i, s in enumerate(sequence("scenarios")):
+            raise ValueError(
+                f"snapshot's plants[{i}] differs from this env's plant in its "
+                "state or parameter sizes or its time step"
+            )
+
+
+def _check_scenarios(scenarios: tuple) -> None:
+    """Check the snapshot's per-row scenarios: each a valid Scenario (its rows were reset)."""
+    for i, s in enumerate(scenarios):
         if s is None:
             raise ValueError("snapshot of rows that were never reset")
         if not isinstance(s, sc.Scenario):
-            raise ValueError(f"snapshot's scenarios[{i}] must be a Scenario, got "
-                             f"{type(s).__name__} {str(s)[:60]!r}")  # fmt: skip
+            raise ValueError(
+                f"snapshot's scenarios[{i}] must be a Scenario, got "
+                f"{type(s).__name__} {str(s)[:60]!r}"
+            )
         try:  # its fields as construction checks them (a frozen one can be forged)
             valid = dataclasses.replace(s) == s
         except (ValueError, TypeError) as exc:
             raise ValueError(f"snapshot's scenarios[{i}] is not a valid Scenario: {exc}") from None
         if not valid:
-            raise ValueError(f"snapshot's scenarios[{i}] holds fields of other types than a "
-                             "Scenario's")  # fmt: skip
-    for i, state in enumerate(sequence("rng_states")):
-        if not isinstance(state, dict):
-            raise ValueError(f"snapshot's rng_states[{i}] must be a dict "
-                             f"(bit_generator.state), got {type(state).__name__}")  # fmt: skip
-    return n
+            raise ValueError(
+                f"snapshot's scenarios[{i}] holds fields of other types than a Scenario's"
+            )
 
 
 def _check_arrays(core: Any, arrays: Any, n: int, waiting: np.ndarray) -> None:
@@ -273,13 +317,15 @@ def _check_arrays(core: Any, arrays: Any, n: int, waiting: np.ndarray) -> None:
         a, own = arrays[name], getattr(core, name)
         want = (n, *own.shape[1:])
         if not isinstance(a, np.ndarray) or a.dtype != own.dtype or a.shape != want:
-            got = (f"{a.dtype} {a.shape}" if isinstance(a, np.ndarray)
-                   else type(a).__name__)  # fmt: skip
-            raise ValueError(f"snapshot's arrays[{name!r}] must be a {own.dtype} array of "
-                             f"shape {want} (a row per entry of its rows), got {got}")  # fmt: skip
+            got = f"{a.dtype} {a.shape}" if isinstance(a, np.ndarray) else type(a).__name__
+            raise ValueError(
+                f"snapshot's arrays[{name!r}] must be a {own.dtype} array of "
+                f"shape {want} (a row per entry of its rows), got {got}"
+            )
         if a.dtype.kind == "f" and not np.isfinite(a[running]).all():
-            raise ValueError(f"snapshot's arrays[{name!r}] holds NaN or infinite values in a "
-                             "running row")  # fmt: skip
+            raise ValueError(
+                f"snapshot's arrays[{name!r}] holds NaN or infinite values in a running row"
+            )
         if name in HANDED_OUT and not np.isfinite(a).all():  # the env never hands these out
             raise ValueError(
                 f"snapshot's arrays[{name!r}] holds NaN or infinite values (the "
@@ -319,8 +365,10 @@ def env_core(env: Any) -> Core:
     u = getattr(env, "unwrapped", env)
     core = getattr(u, "core", None)
     if not isinstance(core, Core):
-        raise ValueError("expected a steamtemp_gym env (SteamTempEnv or the native vector "
-                         f"env), got {type(u).__name__}")  # fmt: skip
+        raise ValueError(
+            "expected a steamtemp_gym env (SteamTempEnv or the native vector "
+            f"env), got {type(u).__name__}"
+        )
     return core
 
 
@@ -333,10 +381,14 @@ def planning_core(src: Any, batch: int) -> Core:
         ValueError: ``src`` is not a Core or ``batch`` not a positive integer.
     """
     if not isinstance(src, Core):
-        raise ValueError(f"planning_core plans from a Core (env_core(env)), got "
-                         f"{type(src).__name__}")  # fmt: skip
-    if not isinstance(batch, (int, np.integer)) or isinstance(batch, (bool, np.bool_)) or (
-            batch < 1):  # fmt: skip
+        raise ValueError(
+            f"planning_core plans from a Core (env_core(env)), got {type(src).__name__}"
+        )
+    if (
+        not isinstance(batch, (int, np.integer))
+        or isinstance(batch, (bool, np.bool_))
+        or (batch < 1)
+    ):
         raise ValueError(f"planning_core: batch must be a positive integer, got {batch!r}")
     if own_rows(src):
         core = PlantRowsCore(src.plant, int(batch), RewardConfig(), src.ranges, src.base)
@@ -363,8 +415,9 @@ def copy_rows(src: Any, src_rows: Any, dst: Any, dst_rows: Any) -> None:
     src_rows = row_indices(src_rows, src.B, "copy_rows: source rows", distinct=False).tolist()
     dst_rows = row_indices(dst_rows, dst.B, "copy_rows: destination rows").tolist()
     if len(src_rows) != len(dst_rows):
-        raise ValueError(f"copy_rows: {len(src_rows)} source row(s) into {len(dst_rows)} "
-                         "destination row(s)")  # fmt: skip
+        raise ValueError(
+            f"copy_rows: {len(src_rows)} source row(s) into {len(dst_rows)} destination row(s)"
+        )
     never = sorted({i for i in src_rows if src.scenario[i] is None})
     if never:
         raise ValueError(f"copy_rows: source rows {never[:5]} were never reset")
@@ -372,8 +425,10 @@ def copy_rows(src: Any, src_rows: Any, dst: Any, dst_rows: Any) -> None:
     if not per_row:
         copied = map(src.row_plant, set(src_rows)) if drawn else (src.plant,)
         if any(p is not dst.plant and p.params != dst.plant.params for p in copied):
-            raise ValueError("copy_rows: the copied rows simulate other plants than the "
-                             "destination core's; make it with planning_core(src, n)")  # fmt: skip
+            raise ValueError(
+                "copy_rows: the copied rows simulate other plants than the "
+                "destination core's; make it with planning_core(src, n)"
+            )
     for name in ROW_ARRAYS:
         getattr(dst, name)[dst_rows] = getattr(src, name)[src_rows]
     for b, i in zip(dst_rows, src_rows, strict=True):
@@ -391,5 +446,6 @@ def _check_copy(src: Any, dst: Any) -> None:
         if not isinstance(core, Core):
             raise ValueError(f"copy_rows: the {name} must be a Core, got {type(core).__name__}")
     if src.plant.id != dst.plant.id or src.X.shape[1:] != dst.X.shape[1:]:
-        raise ValueError(f"copy_rows: rows of {src.plant.id} cannot be copied into a core of "
-                         f"{dst.plant.id}")  # fmt: skip
+        raise ValueError(
+            f"copy_rows: rows of {src.plant.id} cannot be copied into a core of {dst.plant.id}"
+        )

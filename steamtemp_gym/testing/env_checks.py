@@ -24,10 +24,16 @@ from steamtemp_gym.testing.subjects import CheckSkipped, EnvTarget, env_check, r
 
 #: info keys every env reports (README, "info"), with their units.
 INFO_UNITS: dict[str, str] = {
-    "outlet_temp_C": "C", "measured_temp_C": "C", "measured_temp_noise_free_C": "C",
-    "setpoint_C": "C", "load": "fraction of rated", "spray_valve": "opening 0-1",
-    "spray_flow_kg_s": "kg/s", "time_s": "s", "trip_reason": "'' or a TRIP_REASONS entry",
-}  # fmt: skip
+    "outlet_temp_C": "C",
+    "measured_temp_C": "C",
+    "measured_temp_noise_free_C": "C",
+    "setpoint_C": "C",
+    "load": "fraction of rated",
+    "spray_valve": "opening 0-1",
+    "spray_flow_kg_s": "kg/s",
+    "time_s": "s",
+    "trip_reason": "'' or a TRIP_REASONS entry",
+}
 #: Shape of a rendered frame (the 8 x 6 in trend display at 80 dpi, envs/render.py).
 FRAME_SHAPE = (480, 640, 3)
 #: Bounds a physical steam temperature stays within in every accepted run, C.
@@ -38,12 +44,17 @@ STEADY_START_K = 0.05
 
 def fingerprint(obs: Any, reward: Any, terminated: Any, truncated: Any, info: dict) -> bytes:
     """Exact bytes of one step's output (bit-for-bit comparisons; info keys sorted)."""
-    parts = [np.asarray(obs, dtype=np.float64).tobytes(), np.float64(reward).tobytes(),
-             bytes([bool(terminated), bool(truncated)])]  # fmt: skip
+    parts = [
+        np.asarray(obs, dtype=np.float64).tobytes(),
+        np.float64(reward).tobytes(),
+        bytes([bool(terminated), bool(truncated)]),
+    ]
     for k in sorted(info):
         v = info[k]
-        parts.append(k.encode() + (str(v).encode() if isinstance(v, str)
-                                   else np.asarray(v, dtype=np.float64).tobytes()))  # fmt: skip
+        parts.append(
+            k.encode()
+            + (str(v).encode() if isinstance(v, str) else np.asarray(v, dtype=np.float64).tobytes())
+        )
     return b"|".join(parts)
 
 
@@ -110,41 +121,52 @@ def check_spaces_match_signals(target: EnvTarget, quick: bool = False) -> None:
     sig, plant = env.unwrapped.signals, env.unwrapped.plant
     obs_space, act_space = env.observation_space, env.action_space
     assert isinstance(obs_space, gym.spaces.Box) and isinstance(act_space, gym.spaces.Box), (
-        f"spaces must be Boxes, got {obs_space} and {act_space}")  # fmt: skip
+        f"spaces must be Boxes, got {obs_space} and {act_space}"
+    )
     assert obs_space.shape == (len(sig.observation),), (
-        f"observation space {obs_space.shape} but {len(sig.observation)} observation signals")
+        f"observation space {obs_space.shape} but {len(sig.observation)} observation signals"
+    )
     assert act_space.shape == (len(sig.action),), (
-        f"action space {act_space.shape} but {len(sig.action)} action signals")
+        f"action space {act_space.shape} but {len(sig.action)} action signals"
+    )
     assert np.all(act_space.low == -1.0) and np.all(act_space.high == 1.0), (
-        f"action space must be [-1, 1], got [{act_space.low}, {act_space.high}]")
+        f"action space must be [-1, 1], got [{act_space.low}, {act_space.high}]"
+    )
     assert np.all(obs_space.low == -OBS_LIMIT) and np.all(obs_space.high == OBS_LIMIT), (
-        f"observation space must be [-{OBS_LIMIT}, {OBS_LIMIT}]")
+        f"observation space must be [-{OBS_LIMIT}, {OBS_LIMIT}]"
+    )
     for group in (sig.observation, sig.action):
         names = [s.name for s in group]
         assert len(set(names)) == len(names), f"duplicate signal names in {names}"
         for s in group:
             assert isinstance(s.name, str) and s.name and isinstance(s.unit, str) and s.unit, (
-                f"signal {s!r} needs a name and a unit")  # fmt: skip
+                f"signal {s!r} needs a name and a unit"
+            )
             assert np.isfinite(s.center) and np.isfinite(s.scale) and s.scale > 0, (
-                f"signal {s.name}: centre {s.center} and scale {s.scale} must be finite, "
-                "scale > 0")  # fmt: skip
+                f"signal {s.name}: centre {s.center} and scale {s.scale} must be finite, scale > 0"
+            )
     obs, info = env.reset(seed=0)
     for k in range(3):
         dec = sig.decode(obs)
         assert list(dec) == [s.name for s in sig.observation], "decode() keys != signal names"
         where = f"(scenario setpoint_step, seed 0, step {k})"
-        for name, value in (("setpoint_C", info["setpoint_C"]), ("load_demand", info["load"]),
-                            (plant.outlet_measured, info["measured_temp_C"]),
-                            ("error_K", info["setpoint_C"] - info["measured_temp_C"])):  # fmt: skip
+        for name, value in (
+            ("setpoint_C", info["setpoint_C"]),
+            ("load_demand", info["load"]),
+            (plant.outlet_measured, info["measured_temp_C"]),
+            ("error_K", info["setpoint_C"] - info["measured_temp_C"]),
+        ):
             assert np.isclose(dec[name], value, rtol=1e-9, atol=1e-9), (
-                f"decode(obs)[{name!r}] = {dec[name]!r} but info says {value!r} {where}")
+                f"decode(obs)[{name!r}] = {dec[name]!r} but info says {value!r} {where}"
+            )
         batch = sig.decode(np.stack([obs, obs]))
         assert all(np.shape(v) == (2,) for v in batch.values()), "decode() of a batch"
         obs, _, _, _, info = env.step(act_space.sample())
     opening = sig.decode_action(np.array([[-1.0], [0.0], [1.0]]).repeat(len(sig.action), 1))
     for j, s in enumerate(sig.action):
         assert np.allclose(opening[s.name], [0.0, 0.5, 1.0]), (
-            f"decode_action: action -1, 0, 1 of {s.name} (entry {j}) must open 0, 0.5, 1")
+            f"decode_action: action -1, 0, 1 of {s.name} (entry {j}) must open 0, 0.5, 1"
+        )
 
 
 @env_check
@@ -161,7 +183,8 @@ def check_info_keys_and_units(target: EnvTarget, quick: bool = False) -> None:
     assert not missing, f"info at reset lacks {missing} (has {sorted(info)})"
     assert abs(info["outlet_temp_C"] - info["setpoint_C"]) <= STEADY_START_K, (
         f"not a steady start: outlet {info['outlet_temp_C']:.3f} C, setpoint "
-        f"{info['setpoint_C']:.3f} C (scenario setpoint_step, seed 0)")  # fmt: skip
+        f"{info['setpoint_C']:.3f} C (scenario setpoint_step, seed 0)"
+    )
     keys = set(info)
     env.action_space.seed(0)
     for k in range(0, 31):
@@ -176,18 +199,23 @@ def check_info_keys_and_units(target: EnvTarget, quick: bool = False) -> None:
             assert np.all(np.isfinite(arr)), f"info[{key!r}] = {v!r} is not finite {where}"
         n_valves = len(plant.valves)
         assert np.shape(info["spray_valve"]) == (() if n_valves == 1 else (n_valves,)), (
-            f"info['spray_valve'] shape {np.shape(info['spray_valve'])} for {n_valves} valves")
+            f"info['spray_valve'] shape {np.shape(info['spray_valve'])} for {n_valves} valves"
+        )
         checks = {
-            "outlet_temp_C": STEAM_C, "measured_temp_C": STEAM_C,
-            "measured_temp_noise_free_C": STEAM_C, "load": scenarios.LIMITS["load"],
-            "spray_valve": (0.0, 1.0), "spray_flow_kg_s": (0.0, np.inf),
-        }  # fmt: skip
+            "outlet_temp_C": STEAM_C,
+            "measured_temp_C": STEAM_C,
+            "measured_temp_noise_free_C": STEAM_C,
+            "load": scenarios.LIMITS["load"],
+            "spray_valve": (0.0, 1.0),
+            "spray_flow_kg_s": (0.0, np.inf),
+        }
         checks.update({name: STEAM_C for name, _ in plant.secondary})
         for key, (lo, hi) in checks.items():
             arr = np.asarray(info[key])
             assert np.all((arr >= lo) & (arr <= hi)), (
                 f"info[{key!r}] = {info[key]!r} outside [{lo}, {hi}] ({INFO_UNITS.get(key, 'C')})"
-                f" {where}")  # fmt: skip
+                f" {where}"
+            )
         lim = scenarios.LIMITS["setpoint_offset_C"]
         off = info["setpoint_C"] - plant.setpoint_C
         assert lim[0] <= off <= lim[1], f"setpoint offset {off} K outside {lim} {where}"
@@ -203,14 +231,18 @@ def check_determinism(target: EnvTarget, quick: bool = False) -> None:
     a = _run(target.make(scenario="random"), 3, steps)
     env = target.make(scenario="random")
     _run(env, 7, 10)
-    for label, b in (("a second env", _run(target.make(scenario="random"), 3, steps)),
-                     ("the same env re-seeded", _run(env, 3, steps))):  # fmt: skip
+    for label, b in (
+        ("a second env", _run(target.make(scenario="random"), 3, steps)),
+        ("the same env re-seeded", _run(env, 3, steps)),
+    ):
         k = first_difference(a, b)
         assert k is None, (
             f"{label} differs from the first at step {k} (scenario random, seed 3, "
-            f"action_space seeded 3)")  # fmt: skip
+            f"action_space seeded 3)"
+        )
     assert first_difference(a, _run(target.make(scenario="random"), 4, steps)) is not None, (
-        "seeds 3 and 4 give the same trajectory: the seed is ignored")
+        "seeds 3 and 4 give the same trajectory: the seed is ignored"
+    )
 
 
 @env_check
@@ -229,7 +261,8 @@ def check_pickle_and_deepcopy(target: EnvTarget, quick: bool = False) -> None:
         for how, clone in clones.items():
             assert fingerprint(*clone.step(a)) == ref, (
                 f"the {how} copy (made after 5 steps, scenario random, seed 5) differs from "
-                f"the original {k + 1} steps later")  # fmt: skip
+                f"the original {k + 1} steps later"
+            )
 
 
 def _drive(env: gym.Env, policy: Any, seed: int, max_steps: int | None) -> tuple[int, dict, bool]:
@@ -241,10 +274,12 @@ def _drive(env: gym.Env, policy: Any, seed: int, max_steps: int | None) -> tuple
         obs, r, term, trunc, info = env.step(policy.predict(obs)[0])
         k += 1
         assert np.all(np.isfinite(obs)) and np.isfinite(r), (
-            f"non-finite observation or reward (scenario {name}, seed {seed}, step {k})")
+            f"non-finite observation or reward (scenario {name}, seed {seed}, step {k})"
+        )
         assert not term, (
             f"tripped ({info['trip_reason']}) at t = {info['time_s']} s under the reference "
-            f"controller (scenario {name}, seed {seed}, step {k})")  # fmt: skip
+            f"controller (scenario {name}, seed {seed}, step {k})"
+        )
         if trunc:
             return k, info, True
     return k, info, False
@@ -267,7 +302,8 @@ def check_named_scenarios_run_to_end(target: EnvTarget, quick: bool = False) -> 
         if limit is None:
             dur, dt = env.unwrapped.scenario.duration_s, env.unwrapped.plant.dt_s
             assert ended and abs(info["time_s"] - dur) < 1e-6, (
-                f"scenario {name} ended at t = {info['time_s']} s, not at its duration {dur} s")
+                f"scenario {name} ended at t = {info['time_s']} s, not at its duration {dur} s"
+            )
             assert steps == round(dur / dt), f"scenario {name}: {steps} steps for {dur} s / {dt}"
 
 
@@ -284,12 +320,19 @@ def _expect_value_error(what: str, fn: Any, *args: Any, **kwargs: Any) -> str:
 
 def _bad_actions(n_u: int) -> list[tuple[str, Any]]:
     z = np.zeros(n_u)
-    cases = [("NaN", np.full(n_u, np.nan)), ("+inf", np.full(n_u, np.inf)),
-             ("-inf", np.full(n_u, -np.inf)), ("one entry too many", np.zeros(n_u + 1)),
-             ("a batch of one, shape (1, n)", z[None, :]), ("3-d", np.zeros((2, 2, 2))),
-             ("strings", ["0.5"] * n_u), ("complex", z.astype(complex)),
-             ("bool", z.astype(bool)), ("None", None),
-             ("a masked array with a masked entry", np.ma.masked_array(z, mask=z == 0))]
+    cases = [
+        ("NaN", np.full(n_u, np.nan)),
+        ("+inf", np.full(n_u, np.inf)),
+        ("-inf", np.full(n_u, -np.inf)),
+        ("one entry too many", np.zeros(n_u + 1)),
+        ("a batch of one, shape (1, n)", z[None, :]),
+        ("3-d", np.zeros((2, 2, 2))),
+        ("strings", ["0.5"] * n_u),
+        ("complex", z.astype(complex)),
+        ("bool", z.astype(bool)),
+        ("None", None),
+        ("a masked array with a masked entry", np.ma.masked_array(z, mask=z == 0)),
+    ]
     if n_u > 1:
         cases.append(("a column, shape (n, 1)", z[:, None]))
     return cases
@@ -316,7 +359,8 @@ def check_bad_inputs_rejected(target: EnvTarget, quick: bool = False) -> None:
         assert "action" in msg, f"the error for action {what} does not say 'action': {msg!r}"
     a = np.full(n_u, 0.2, dtype=np.float32)
     assert fingerprint(*env.step(a)) == fingerprint(*twin.step(a)), (
-        "rejected actions changed the env (it no longer steps as a copy made before them)")
+        "rejected actions changed the env (it no longer steps as a copy made before them)"
+    )
     if target.has_native_vector_env:
         _vector_bad_actions(target, n_u)
     for what, kwargs, needle in (
@@ -332,20 +376,23 @@ def check_bad_inputs_rejected(target: EnvTarget, quick: bool = False) -> None:
         assert needle in msg, f"the error for {what} does not name {needle!r}: {msg!r}"
     msg = _expect_value_error("an unknown reset() option", env.reset, options={"no_such": 1})
     assert "no_such" in msg, f"the error for an unknown reset option does not name it: {msg!r}"
-    _expect_value_error("reset() options with keys of mixed types", env.reset,
-                        options={1: 0, "no_such": 1})  # fmt: skip
+    _expect_value_error(
+        "reset() options with keys of mixed types", env.reset, options={1: 0, "no_such": 1}
+    )
     _expect_value_error("reset() options that are not a dict", env.reset, options="ab")
     params_cls = type(env.unwrapped.plant.params)
     defaults = params_cls()
     for f in dataclasses.fields(params_cls):
         v = getattr(defaults, f.name)
         if isinstance(v, (int, float)) and not isinstance(v, bool):
-            msg = _expect_value_error(f"params {{{f.name!r}: nan}}", target.make,
-                                      params={f.name: float("nan")})  # fmt: skip
+            msg = _expect_value_error(
+                f"params {{{f.name!r}: nan}}", target.make, params={f.name: float("nan")}
+            )
             assert f.name in msg, f"the error for a NaN {f.name} does not name it: {msg!r}"
         if isinstance(v, float) and v > 0:
-            _expect_value_error(f"params {{{f.name!r}: -1e12}}", target.make,
-                                params={f.name: -1e12})  # fmt: skip
+            _expect_value_error(
+                f"params {{{f.name!r}: -1e12}}", target.make, params={f.name: -1e12}
+            )
 
 
 def _vector_bad_actions(target: EnvTarget, n_u: int) -> None:
@@ -355,16 +402,20 @@ def _vector_bad_actions(target: EnvTarget, n_u: int) -> None:
     twin.reset(seed=0)
     nan_row = np.zeros((n, n_u))
     nan_row[1] = np.nan
-    for what, bad in (("transposed, shape (n_actuators, num_envs)", np.zeros((n_u, n))),
-                      ("flattened", np.zeros(n * n_u)), ("one row", np.zeros(n_u)),
-                      ("NaN in one row", nan_row)):  # fmt: skip
+    for what, bad in (
+        ("transposed, shape (n_actuators, num_envs)", np.zeros((n_u, n))),
+        ("flattened", np.zeros(n * n_u)),
+        ("one row", np.zeros(n_u)),
+        ("NaN in one row", nan_row),
+    ):
         msg = _expect_value_error(f"vector env action {what}", venv.step, bad)
         assert "action" in msg, f"the error for vector action {what} does not say 'action'"
     a = np.full((n, n_u), 0.2, dtype=np.float32)
     o1, r1, *_ = venv.step(a)
     o2, r2, *_ = twin.step(a)
     assert np.array_equal(o1, o2) and np.array_equal(r1, r2), (
-        "rejected actions changed the vector env")
+        "rejected actions changed the vector env"
+    )
     _expect_value_error("an unknown vector reset() option", venv.reset, options={"no_such": 1})
     _expect_value_error("vector reset() options that are not a dict", venv.reset, options="ab")
 
@@ -383,8 +434,12 @@ def check_physical_under_random_and_corner_runs(target: EnvTarget, quick: bool =
     for k in range(steps):
         a = motion(rng, a, k)
         obs, r, term, trunc, info = venv.step(a)
-        _assert_physical(obs, r, info, f"(vector env, {n} rows, scenario random, seed 123, "
-                                       f"actions rng 1, step {k + 1})")  # fmt: skip
+        _assert_physical(
+            obs,
+            r,
+            info,
+            f"(vector env, {n} rows, scenario random, seed 123, actions rng 1, step {k + 1})",
+        )
     rng = np.random.default_rng(2)
     n_corners, rejected = (4 if quick else 16), 0
     for c in range(n_corners):
@@ -401,9 +456,14 @@ def check_physical_under_random_and_corner_runs(target: EnvTarget, quick: bool =
         for k in range(300):
             a = motion(rng, a, k)
             obs, r, term, trunc, info = env.step(a)
-            _assert_physical(obs, r, info, f"(corner scenario {c} of steamtemp_gym.scenarios."
-                                           f"stress.corner_scenario(np.random.default_rng(2)) "
-                                           f"draws, seed {c}, step {k + 1}): {sc}")  # fmt: skip
+            _assert_physical(
+                obs,
+                r,
+                info,
+                f"(corner scenario {c} of steamtemp_gym.scenarios."
+                f"stress.corner_scenario(np.random.default_rng(2)) "
+                f"draws, seed {c}, step {k + 1}): {sc}",
+            )
             if term or trunc:
                 break
 
@@ -417,7 +477,8 @@ def _assert_physical(obs: np.ndarray, r: Any, info: dict, where: str) -> None:
     assert np.all((v >= 0.0) & (v <= 1.0)), f"valve opening {v} outside [0, 1] {where}"
     assert np.all(np.asarray(info["spray_flow_kg_s"]) >= 0.0), f"negative spray flow {where}"
     assert not np.any(np.asarray(info["trip_reason"]) == TRIP_REASONS[-1]), (
-        f"the plant left its valid region (non_finite_state trip) {where}")
+        f"the plant left its valid region (non_finite_state trip) {where}"
+    )
 
 
 @env_check
@@ -431,7 +492,8 @@ def check_render_frame(target: EnvTarget, quick: bool = False) -> None:
             env.step(env.action_space.sample())
         img = env.render()
         assert isinstance(img, np.ndarray) and img.dtype == np.uint8, (
-            f"render() gave {type(img).__name__} {getattr(img, 'dtype', '')}, not uint8")
+            f"render() gave {type(img).__name__} {getattr(img, 'dtype', '')}, not uint8"
+        )
         assert img.shape == FRAME_SHAPE, f"frame shape {img.shape} != {FRAME_SHAPE} (call {k})"
         assert img.std() > 5, "the frame is blank"
     plain = target.make(scenario="setpoint_step")

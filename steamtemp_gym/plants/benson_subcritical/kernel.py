@@ -87,8 +87,17 @@ def _boundary_v(x, d, P, v1, v2):
     w1 = spray_flow(v1, P[IP.CV1], rho_sp, (P[IP.DPPUMP] - P_SHARE[SEC.SH2] * P[IP.DPB]) * r2)
     w2 = spray_flow(v2, P[IP.CV2], rho_sp, (P[IP.DPPUMP] - P_SHARE[SEC.SH3] * P[IP.DPB]) * r2)
     p = x[IX.P]
-    return (L, r2, W_eco, w1, w2, h_fw, h_sp, p + P_SHARE[SEC.SH2] * P[IP.DPB] * r2,
-            p + P_SHARE[SEC.SH3] * P[IP.DPB] * r2)  # fmt: skip
+    return (
+        L,
+        r2,
+        W_eco,
+        w1,
+        w2,
+        h_fw,
+        h_sp,
+        p + P_SHARE[SEC.SH2] * P[IP.DPB] * r2,
+        p + P_SHARE[SEC.SH3] * P[IP.DPB] * r2,
+    )
 
 
 @njit(cache=True)
@@ -113,10 +122,30 @@ def _section(x, P, k, h0, dh0, W, dW, p, dp, lf, d, f, jd, ju, jl, want_jac):
     kA = steam_side_kA(_s(P, k, IF.KA), W, _s(P, k, IF.WN))
     UAg, Tg, Qrad = _gas(P, k, lf, d)
     return chain_rhs(
-        x, int(_s(P, k, IF.OFF)), int(_s(P, k, IF.N)), h0, dh0, W, dW, p, dp, kA[0], kA[1],
-        _s(P, k, IF.V), _s(P, k, IF.CM), UAg, Tg, Qrad, f, jd, ju, jl, int(_s(P, k, IF.JOFF)),
-        want_jac, PRESSURE_JAC,
-    )  # fmt: skip
+        x,
+        int(_s(P, k, IF.OFF)),
+        int(_s(P, k, IF.N)),
+        h0,
+        dh0,
+        W,
+        dW,
+        p,
+        dp,
+        kA[0],
+        kA[1],
+        _s(P, k, IF.V),
+        _s(P, k, IF.CM),
+        UAg,
+        Tg,
+        Qrad,
+        f,
+        jd,
+        ju,
+        jl,
+        int(_s(P, k, IF.JOFF)),
+        want_jac,
+        PRESSURE_JAC,
+    )
 
 
 @njit(cache=True)
@@ -196,30 +225,111 @@ def rhs(x, u, d, P, f, jd, ju, jl, want_jac):
     dh0[3] = 1.0
     none, one = dh0[0:0], dh0[3:4]
     # water/steam path
-    _section(x, P, SEC.ECO, h_fw, none, W_eco, 0.0, p + P_SHARE[SEC.ECO] * dpb, 1.0, lf, d,
-             f, jd, ju, jl, want_jac)  # fmt: skip
-    _, T_ev, _ = _section(x, P, SEC.EV, _last_h(x, P, SEC.ECO), one, W_eco, 0.0,
-                          p + P_SHARE[SEC.EV] * dpb, 1.0, lf, d, f, jd, ju, jl,
-                          want_jac)  # fmt: skip
+    _section(
+        x,
+        P,
+        SEC.ECO,
+        h_fw,
+        none,
+        W_eco,
+        0.0,
+        p + P_SHARE[SEC.ECO] * dpb,
+        1.0,
+        lf,
+        d,
+        f,
+        jd,
+        ju,
+        jl,
+        want_jac,
+    )
+    _, T_ev, _ = _section(
+        x,
+        P,
+        SEC.EV,
+        _last_h(x, P, SEC.ECO),
+        one,
+        W_eco,
+        0.0,
+        p + P_SHARE[SEC.EV] * dpb,
+        1.0,
+        lf,
+        d,
+        f,
+        jd,
+        ju,
+        jl,
+        want_jac,
+    )
     h_ev = _last_h(x, P, SEC.EV)
-    _, T_1, _ = _section(x, P, SEC.SH1, h_ev, one, W_eco, 0.0, p + P_SHARE[SEC.SH1] * dpb, 1.0,
-                         lf, d, f, jd, ju, jl, want_jac)  # fmt: skip
-    _, T_2, _ = _section(x, P, SEC.SH2, _last_h(x, P, SEC.SH1), one, W_eco, 0.0, p_a1, 1.0, lf, d,
-                         f, jd, ju, jl, want_jac)  # fmt: skip
+    _, T_1, _ = _section(
+        x,
+        P,
+        SEC.SH1,
+        h_ev,
+        one,
+        W_eco,
+        0.0,
+        p + P_SHARE[SEC.SH1] * dpb,
+        1.0,
+        lf,
+        d,
+        f,
+        jd,
+        ju,
+        jl,
+        want_jac,
+    )
+    _, T_2, _ = _section(
+        x,
+        P,
+        SEC.SH2,
+        _last_h(x, P, SEC.SH1),
+        one,
+        W_eco,
+        0.0,
+        p_a1,
+        1.0,
+        lf,
+        d,
+        f,
+        jd,
+        ju,
+        jl,
+        want_jac,
+    )
     h2 = _last_h(x, P, SEC.SH2)
     W3, h_a1 = mix(W_eco, h2, w1, h_sp)
     dh0[0] = W_eco / W3  # by h2
-    _, T_3, _ = _section(x, P, SEC.SH3, h_a1, dh0[0:1], W3, 0.0, p_a2, 1.0, lf, d,
-                         f, jd, ju, jl, want_jac)  # fmt: skip
+    _, T_3, _ = _section(
+        x, P, SEC.SH3, h_a1, dh0[0:1], W3, 0.0, p_a2, 1.0, lf, d, f, jd, ju, jl, want_jac
+    )
     h3 = _last_h(x, P, SEC.SH3)
     W4, h_a2 = mix(W3, h3, w2, h_sp)
     dh0[1] = W3 / W4  # by h3
-    _, T_4, _ = _section(x, P, SEC.SH4, h_a2, dh0[1:2], W4, 0.0, p, 1.0, lf, d,
-                         f, jd, ju, jl, want_jac)  # fmt: skip
+    _, T_4, _ = _section(
+        x, P, SEC.SH4, h_a2, dh0[1:2], W4, 0.0, p, 1.0, lf, d, f, jd, ju, jl, want_jac
+    )
     # outlet header and main-steam line to the turbine (superheater.pipe_rhs)
     loff, nl = int(P[IP.LOFF]), int(P[IP.NL])
-    T_ms, _ = pipe_rhs(x, loff, nl, _last_h(x, P, SEC.SH4), one, W4, 0.0, p, P[IP.LV], P[IP.LCM],
-                    f, jd, jl, int(P[IP.JLINE]), want_jac, False)  # fmt: skip
+    T_ms, _ = pipe_rhs(
+        x,
+        loff,
+        nl,
+        _last_h(x, P, SEC.SH4),
+        one,
+        W4,
+        0.0,
+        p,
+        P[IP.LV],
+        P[IP.LCM],
+        f,
+        jd,
+        jl,
+        int(P[IP.JLINE]),
+        want_jac,
+        False,
+    )
     # turbine and reheater (eq. 14)
     W_t, W_rh, p_rh, p_crh, dWt = _reheat(P, p, L)
     ratio = (p_crh / p) ** P[IP.KE]
@@ -227,8 +337,9 @@ def rhs(x, u, d, P, f, jd, ju, jl, want_jac):
     dh0[2] = P[IP.CPRAT] * ratio  # by h_ms (cp_crh / cp_ms at rated)
     dWrh = P[IP.RHF] * dWt
     dp_rh = P[IP.PRH] / P[IP.WRHN] * dWrh
-    _, T_rh, _ = _section(x, P, SEC.RH, h_crh, dh0[2:3], W_rh, dWrh, p_rh, dp_rh, lf, d, f, jd,
-                          ju, jl, want_jac)  # fmt: skip
+    _, T_rh, _ = _section(
+        x, P, SEC.RH, h_crh, dh0[2:3], W_rh, dWrh, p_rh, dp_rh, lf, d, f, jd, ju, jl, want_jac
+    )
     # pressure, eq. (13)
     f[IX.P] = P[IP.CSTOR] * (W_eco + w1 + w2 - W_t)
     # fuel/water-ratio trim (integral part; see fuel_demand)
@@ -255,10 +366,16 @@ def rhs(x, u, d, P, f, jd, ju, jl, want_jac):
         for j in range(s0, s0 + 2 * N_SENS, 2):
             jd[j] = -1.0 / tc1
             jd[j + 1] = -1.0 / tc2
-        dT = (_dTdh_out(x, P, SEC.EV, p + P_SHARE[SEC.EV] * dpb),
-              _dTdh_out(x, P, SEC.SH1, p + P_SHARE[SEC.SH1] * dpb), _dTdh_out(x, P, SEC.SH2, p_a1),
-              dT_a1 * W_eco / W3, _dTdh_out(x, P, SEC.SH3, p_a2), dT_a2 * W3 / W4,
-              T_dTdh_ph(p, x[loff + nl - 1])[1], _dTdh_out(x, P, SEC.RH, p_rh))  # fmt: skip
+        dT = (
+            _dTdh_out(x, P, SEC.EV, p + P_SHARE[SEC.EV] * dpb),
+            _dTdh_out(x, P, SEC.SH1, p + P_SHARE[SEC.SH1] * dpb),
+            _dTdh_out(x, P, SEC.SH2, p_a1),
+            dT_a1 * W_eco / W3,
+            _dTdh_out(x, P, SEC.SH3, p_a2),
+            dT_a2 * W3 / W4,
+            T_dTdh_ph(p, x[loff + nl - 1])[1],
+            _dTdh_out(x, P, SEC.RH, p_rh),
+        )
         jo = int(P[IP.JSEN])
         for g in dT:
             jl[jo] = g / tc1
@@ -366,10 +483,13 @@ def design_spray(P, L):
     L = min(max(L, 0.05), 1.3)
     r2 = L * L
     rho_sp = _table(P, ITB.RHOSP, L)
-    return (spray_flow(P[IP.V1D], P[IP.CV1], rho_sp,
-                       (P[IP.DPPUMP] - P_SHARE[SEC.SH2] * P[IP.DPB]) * r2)
-            + spray_flow(P[IP.V2D], P[IP.CV2], rho_sp,
-                         (P[IP.DPPUMP] - P_SHARE[SEC.SH3] * P[IP.DPB]) * r2))  # fmt: skip
+    w1 = spray_flow(
+        P[IP.V1D], P[IP.CV1], rho_sp, (P[IP.DPPUMP] - P_SHARE[SEC.SH2] * P[IP.DPB]) * r2
+    )
+    w2 = spray_flow(
+        P[IP.V2D], P[IP.CV2], rho_sp, (P[IP.DPPUMP] - P_SHARE[SEC.SH3] * P[IP.DPB]) * r2
+    )
+    return w1 + w2
 
 
 @njit(cache=True)

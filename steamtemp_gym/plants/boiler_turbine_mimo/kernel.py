@@ -70,8 +70,15 @@ def _gas(P, lf, g, d):
     dT = P[IP.DTG] * (1.0 - lf)
     dTr = P[IP.DTGR] * (1.0 - lf)
     q_pl = P[IP.Q_PL] * lf ** P[IP.REXP] * heat * max(1.0 - P[IP.PLGR] * (r - P[IP.RNOM]), 0.0)
-    return (P[IP.UAG_P] * conv, P[IP.UAG_F] * conv, P[IP.UAG_R] * conv,
-            P[IP.TG_P] - dT, P[IP.TG_F] - dT, P[IP.TG_R] - dTr, q_pl)  # fmt: skip
+    return (
+        P[IP.UAG_P] * conv,
+        P[IP.UAG_F] * conv,
+        P[IP.UAG_R] * conv,
+        P[IP.TG_P] - dT,
+        P[IP.TG_F] - dT,
+        P[IP.TG_R] - dTr,
+        q_pl,
+    )
 
 
 @njit(cache=True)
@@ -99,8 +106,11 @@ def _h_up_target(P, lf, lw, bias):
     lw = min(max(lw, 0.05), 1.3)
     lf = min(max(lf, 0.05), 1.3)
     ratio = lf * max(1.0 + P[IP.BUP] * bias, 0.0) / lw
-    return (_tab(P, ITAB.HUP, lw) + P[IP.HERR] * 4.0 * lw * (1.0 - lw)
-            + P[IP.FWR] * (ratio - 1.0) * _tab(P, ITAB.RISE, lw))  # fmt: skip
+    return (
+        _tab(P, ITAB.HUP, lw)
+        + P[IP.HERR] * 4.0 * lw * (1.0 - lw)
+        + P[IP.FWR] * (ratio - 1.0) * _tab(P, ITAB.RISE, lw)
+    )
 
 
 @njit(cache=True)
@@ -204,40 +214,160 @@ def rhs(x, u, d, P, f, jd, ju, jl, want_jac):
     Wp = W - w1 - w2
     kA, dkA = _kA(P[IP.KAF_P], P[IP.KAW_P], Wp, P[IP.WNOM])
     dh0 = np.ones(1)
-    chain_rhs(x, o_p, n1, x[IX.HUP], dh0, Wp, dW * Wp / W, p, dp, kA / n1, dkA / n1,
-              P[IP.V_P] / n1, P[IP.CM_P] / n1, uag_p / n1, tg_p, 0.0, f, jd, ju, jl, 0,
-              want_jac, True)  # fmt: skip
+    chain_rhs(
+        x,
+        o_p,
+        n1,
+        x[IX.HUP],
+        dh0,
+        Wp,
+        dW * Wp / W,
+        p,
+        dp,
+        kA / n1,
+        dkA / n1,
+        P[IP.V_P] / n1,
+        P[IP.CM_P] / n1,
+        uag_p / n1,
+        tg_p,
+        0.0,
+        f,
+        jd,
+        ju,
+        jl,
+        0,
+        want_jac,
+        True,
+    )
     # SP1 attemperator and platen (the eq. (1)-(6) section: radiant heat, no gas feedback)
     h_po = x[o_pl - 1]
     Wpl = W - w2
     h_pli = (Wp * h_po + w1 * h_sp) / Wpl
     dh1 = np.array([Wp / Wpl, (h_sp - h_po) * c1 / Wpl, (h_pli - h_po) * c2 / Wpl])
     kA, dkA = _kA(P[IP.KAF_PL], P[IP.KAW_PL], Wpl, P[IP.WNOM])
-    chain_rhs(x, o_pl, n2, h_pli, dh1, Wpl, dW * Wpl / W, p, dp, kA / n2, dkA / n2,
-              P[IP.V_PL] / n2, P[IP.CM_PL] / n2, 0.0, 0.0, q_pl / n2, f, jd, ju, jl,
-              int(P[IP.JOFF_PL]), want_jac, True)  # fmt: skip
+    chain_rhs(
+        x,
+        o_pl,
+        n2,
+        h_pli,
+        dh1,
+        Wpl,
+        dW * Wpl / W,
+        p,
+        dp,
+        kA / n2,
+        dkA / n2,
+        P[IP.V_PL] / n2,
+        P[IP.CM_PL] / n2,
+        0.0,
+        0.0,
+        q_pl / n2,
+        f,
+        jd,
+        ju,
+        jl,
+        int(P[IP.JOFF_PL]),
+        want_jac,
+        True,
+    )
     # SP2 attemperator and final SH
     h_plo = x[o_f - 1]
     h_fi = (Wpl * h_plo + w2 * h_sp) / W
     dh2 = np.array([Wpl / W, (h_sp - h_plo) * c2 / W])
     kA, dkA = _kA(P[IP.KAF_F], P[IP.KAW_F], W, P[IP.WNOM])
-    chain_rhs(x, o_f, n3, h_fi, dh2, W, dW, p, dp, kA / n3, dkA / n3, P[IP.V_F] / n3,
-              P[IP.CM_F] / n3, uag_f / n3, tg_f, 0.0, f, jd, ju, jl, int(P[IP.JOFF_F]), want_jac,
-              True)  # fmt: skip
+    chain_rhs(
+        x,
+        o_f,
+        n3,
+        h_fi,
+        dh2,
+        W,
+        dW,
+        p,
+        dp,
+        kA / n3,
+        dkA / n3,
+        P[IP.V_F] / n3,
+        P[IP.CM_F] / n3,
+        uag_f / n3,
+        tg_f,
+        0.0,
+        f,
+        jd,
+        ju,
+        jl,
+        int(P[IP.JOFF_F]),
+        want_jac,
+        True,
+    )
     # SH outlet header and main-steam line to the turbine (superheater.pipe_rhs)
     o_l, o_rl = _line_offsets(P)
-    T_ms, _ = pipe_rhs(x, o_l, int(P[IP.NL]), x[o_r - 1], dh0, W, dW, p, P[IP.LV], P[IP.LCM], f, jd,
-                    jl, int(P[IP.JOFF_L]), want_jac, True)  # fmt: skip
+    T_ms, _ = pipe_rhs(
+        x,
+        o_l,
+        int(P[IP.NL]),
+        x[o_r - 1],
+        dh0,
+        W,
+        dW,
+        p,
+        P[IP.LV],
+        P[IP.LCM],
+        f,
+        jd,
+        jl,
+        int(P[IP.JOFF_L]),
+        want_jac,
+        True,
+    )
     # HP turbine exhaust and reheater
     f[IX.CRH] = (_h_crh_target(P, T_ms, lw) - x[IX.CRH]) / P[IP.TAUHP]
     prh, dprh = _reheat_pressure(P, lw)
     Wr = P[IP.FRH] * W
     kA, dkA = _kA(P[IP.KAF_R], P[IP.KAW_R], Wr, P[IP.FRH] * P[IP.WNOM])
-    chain_rhs(x, o_r, n4, x[IX.CRH], dh0, Wr, P[IP.FRH] * dW, prh, dprh, kA / n4, dkA / n4,
-              P[IP.V_R] / n4, P[IP.CM_R] / n4, uag_r / n4, tg_r, 0.0, f, jd, ju, jl,
-              int(P[IP.JOFF_R]), want_jac, True)  # fmt: skip
-    T_rh, _ = pipe_rhs(x, o_rl, int(P[IP.NRL]), x[o_l - 1], dh0, Wr, P[IP.FRH] * dW, prh, P[IP.RLV],
-                    P[IP.RLCM], f, jd, jl, int(P[IP.JOFF_RL]), want_jac, True)  # fmt: skip
+    chain_rhs(
+        x,
+        o_r,
+        n4,
+        x[IX.CRH],
+        dh0,
+        Wr,
+        P[IP.FRH] * dW,
+        prh,
+        dprh,
+        kA / n4,
+        dkA / n4,
+        P[IP.V_R] / n4,
+        P[IP.CM_R] / n4,
+        uag_r / n4,
+        tg_r,
+        0.0,
+        f,
+        jd,
+        ju,
+        jl,
+        int(P[IP.JOFF_R]),
+        want_jac,
+        True,
+    )
+    T_rh, _ = pipe_rhs(
+        x,
+        o_rl,
+        int(P[IP.NRL]),
+        x[o_l - 1],
+        dh0,
+        Wr,
+        P[IP.FRH] * dW,
+        prh,
+        P[IP.RLV],
+        P[IP.RLCM],
+        f,
+        jd,
+        jl,
+        int(P[IP.JOFF_RL]),
+        want_jac,
+        True,
+    )
     # thermowells: STE, RTE, SP1 outlet, SP2 outlet
     T1, _ = T_dTdh_ph(p, h_pli)
     T2, _ = T_dTdh_ph(p, h_fi)
@@ -352,8 +482,9 @@ def step(X, U, D, P, jrow, jcol, dt, n_sub, Z):  # noqa: N803
     for b in range(nb):
         for j in range(N_U_HELD - 1):
             Uh[b, j] = U[b, j] if j < U.shape[1] else 0.5
-        m, lf, mean = firing_travel(X[b, IX.MILL], X[b, IX.LF], fuel_demand(X[b], D[b], P),
-                                    P[IP.TAUM], P[IP.TAUF], dt)  # fmt: skip
+        m, lf, mean = firing_travel(
+            X[b, IX.MILL], X[b, IX.LF], fuel_demand(X[b], D[b], P), P[IP.TAUM], P[IP.TAUF], dt
+        )
         ends[b, 0], ends[b, 1], Uh[b, N_U_HELD - 1] = m, lf, mean
     _ROS2(X, Uh, D, P, jrow, jcol, dt, n_sub, Z)
     for b in range(nb):

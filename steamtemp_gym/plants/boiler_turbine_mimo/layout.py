@@ -43,7 +43,7 @@ OUTPUTS = (
         20.0,
         observed=False,
         description="true final SH outlet (header inlet)",
-    ),  # fmt: skip
+    ),
     Signal(
         "reheater_out_temp_C",
         "C",
@@ -51,7 +51,7 @@ OUTPUTS = (
         20.0,
         observed=False,
         description="true reheater outlet (hot-reheat line inlet)",
-    ),  # fmt: skip
+    ),
 )
 #: Index of each output in z, by name.
 IZ = slots("MimoOutputs", *(s.name for s in OUTPUTS))

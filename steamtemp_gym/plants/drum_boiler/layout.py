@@ -33,10 +33,16 @@ OUTPUTS = (
     Signal("riser_exit_quality", "1", 0.05, 0.02, observed=False),
     Signal("downcomer_flow_kg_s", "kg/s", 1150.0, 100.0, observed=False),
     design_spray_signal(2.0, 2.0, "scheduled design spray (function generator over load)"),
-    Signal("sh2_outlet_temp_C", "C", 505.0, 20.0, observed=False,
-           description="final SH outlet, ahead of the outlet header and main-steam line"),
+    Signal(
+        "sh2_outlet_temp_C",
+        "C",
+        505.0,
+        20.0,
+        observed=False,
+        description="final SH outlet, ahead of the outlet header and main-steam line",
+    ),
     MILL_OUTPUT,
-)  # fmt: skip
+)
 #: Index of each output in z, by name.
 IZ = slots("DrumOutputs", *(s.name for s in OUTPUTS))
 

@@ -25,8 +25,9 @@ OUTPUTS = (
     Signal("firing_rate", "1", 0.75, 0.3, description="fuel flow, fraction of rated"),
     Signal("heat_absorption_MW", "MW", 100.0, 50.0, observed=False, description="hidden"),
     Signal("metal_temp_max_C", "C", 620.0, 40.0, observed=False),
-    design_spray_signal(14.0, 14.0, "spray the FWR schedule is designed for: design "
-                        "fraction x flow"),  # fmt: skip
+    design_spray_signal(
+        14.0, 14.0, "spray the FWR schedule is designed for: design fraction x flow"
+    ),
     Signal(
         "fsh_outlet_temp_C",
         "C",
