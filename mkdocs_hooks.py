@@ -22,8 +22,11 @@ from mkdocs.structure.files import File
 
 ROOT = Path(__file__).resolve().parent
 #: Site pages generated from files outside docs/: site path -> repository path.
-GENERATED = {"index.md": "README.md", "examples.md": "examples/README.md",
-             "changelog.md": "CHANGELOG.md"}  # fmt: skip
+GENERATED = {
+    "index.md": "README.md",
+    "examples.md": "examples/README.md",
+    "changelog.md": "CHANGELOG.md",
+}
 PAGE_OF = {repo: site for site, repo in GENERATED.items()}
 LINK = re.compile(r"(!?)\[((?:[^\[\]]|\[[^\[\]]*\])*)\]\(([^()\s]+)\)")
 FENCE = re.compile(r"^(```|~~~)")

@@ -19,10 +19,23 @@ MAX_LINES = 300
 def _build(config: Path, site: Path) -> subprocess.CompletedProcess:
     env = dict(os.environ, NO_MKDOCS_2_WARNING="1")  # mkdocs-material's notice, not ours
     return subprocess.run(
-        [sys.executable, "-m", "mkdocs", "build", "--strict", "--config-file", str(config),
-         "-d", str(site)],
-        cwd=ROOT, env=env, capture_output=True, text=True, timeout=300,
-    )  # fmt: skip
+        [
+            sys.executable,
+            "-m",
+            "mkdocs",
+            "build",
+            "--strict",
+            "--config-file",
+            str(config),
+            "-d",
+            str(site),
+        ],
+        cwd=ROOT,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
 
 
 def test_the_site_builds_strictly(tmp_path):
@@ -32,8 +45,13 @@ def test_the_site_builds_strictly(tmp_path):
         + done.stdout
         + done.stderr
     )
-    for page in ("index.html", "examples/index.html", "changelog/index.html",
-                 "agents/plant_scale/index.html", "envs/index.html"):  # fmt: skip
+    for page in (
+        "index.html",
+        "examples/index.html",
+        "changelog/index.html",
+        "agents/plant_scale/index.html",
+        "envs/index.html",
+    ):
         assert (tmp_path / "site" / page).is_file(), page
 
 
@@ -43,13 +61,16 @@ def test_a_broken_link_or_anchor_fails_the_build(tmp_path):
     docs = tmp_path / "docs"
     shutil.copytree(ROOT / "docs", docs)
     page = docs / "agents.md"
-    page.write_text(page.read_text(encoding="utf-8")
-                    + "\n[a](agents/zoo.md#no-such-anchor) [b](no_such_page.md)\n",
-                    encoding="utf-8")  # fmt: skip
+    page.write_text(
+        page.read_text(encoding="utf-8")
+        + "\n[a](agents/zoo.md#no-such-anchor) [b](no_such_page.md)\n",
+        encoding="utf-8",
+    )
     config = (ROOT / "mkdocs.yml").read_text(encoding="utf-8")
     assert config.count("docs_dir: docs\n") == 1 and config.count("  - mkdocs_hooks.py\n") == 1
     config = config.replace("docs_dir: docs\n", f"docs_dir: {docs}\n").replace(
-        "  - mkdocs_hooks.py\n", f"  - {ROOT / 'mkdocs_hooks.py'}\n")  # fmt: skip
+        "  - mkdocs_hooks.py\n", f"  - {ROOT / 'mkdocs_hooks.py'}\n"
+    )
     (tmp_path / "mkdocs.yml").write_text(config, encoding="utf-8")
     done = _build(tmp_path / "mkdocs.yml", tmp_path / "site")
     out = done.stdout + done.stderr
@@ -60,6 +81,9 @@ def test_a_broken_link_or_anchor_fails_the_build(tmp_path):
 def test_no_docs_page_is_longer_than_the_limit():
     pages = sorted(ROOT.glob("docs/**/*.md"))
     assert len(pages) > 40
-    long = {str(p.relative_to(ROOT)): n for p in pages
-            if (n := len(p.read_text(encoding="utf-8").splitlines())) > MAX_LINES}  # fmt: skip
+    long = {
+        str(p.relative_to(ROOT)): n
+        for p in pages
+        if (n := len(p.read_text(encoding="utf-8").splitlines())) > MAX_LINES
+    }
     assert not long, f"pages over {MAX_LINES} lines (split them by topic): {long}"
