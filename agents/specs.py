@@ -16,6 +16,14 @@ take them: one parser for both, so a name means the same policy everywhere.
   env; the policy needs ``predict`` and ``reset``, baselines/policy.py), with ``module`` a
   dotted module importable from ``sys.path`` (``PYTHONPATH=.`` adds the current directory)
   or a ``.py`` file; ``callable`` may be dotted (``MyController.create``).
+- with ``parse(name, references=True)`` (the leaderboard's names), the references that are
+  no baselines: ``oracle`` (the score's 1, agents/oracle.py) and ``frozen_valve``
+  (agents/difficulty.py).
+
+A :class:`Spec` carries what the leaderboard asks of a policy: whether it is a reference
+(listed, never ranked) and which end of the score it is (:attr:`Spec.score_end`), whether
+it runs in a process of its own (:attr:`Spec.own_process`: user code does), and what its
+digest covers (:meth:`Spec.modules`, :meth:`Spec.digest`).
 
 :func:`parse` checks a name (finding a factory's module file without importing it, an
 agent's files, and checking that its model fits the observation and action spaces of the
@@ -23,7 +31,7 @@ env it names);
 :meth:`Spec.make` builds the policy for an env; :func:`check_built` checks what a factory
 returns; :meth:`Spec.digest` is what the leaderboard's fingerprint hashes: the name, with
 a baseline's stored tuning on the env, or the hash of a trained agent's files or of a
-factory's module file.
+factory's module file; the oracle's with its incumbents' and its engine's.
 """
 
 from __future__ import annotations

@@ -19,7 +19,6 @@ import numpy as np
 
 from agents import specs
 from agents.evaluation import run_batch, run_episode
-from agents.leaderboard import summary
 from agents.leaderboard.isolated import PolicyFailed, PolicyProcess, PolicyTimeout, make_env
 from agents.leaderboard.plan import Plan, episode_fingerprint
 from agents.leaderboard.records import Key
@@ -315,9 +314,10 @@ def score_ends(env_id: str, scenario: str, seeds: tuple[int, ...]) -> tuple[floa
     """
     sc = scenarios.resolve(scenario, env_id)
     means = []
-    for name in (summary.ZERO, summary.ONE):
-        fp = episode_fingerprint(env_id, scenario, name)
-        rows = run_unit(Unit(env_id, scenario, sc, name, list(seeds), fp, None))[0]
+    for name in (specs.ZERO, specs.ONE):
+        spec = specs.parse(name, references=True)
+        fp = episode_fingerprint(env_id, scenario, spec)
+        rows = run_unit(Unit(env_id, scenario, sc, name, list(seeds), fp, None, parsed=spec))[0]
         failed = [r for r in rows if r.get("error")]
         if failed:
             raise RuntimeError(

@@ -49,7 +49,7 @@ DEFAULT_SEEDS = "0-4"
 #: The frozen-valve reference run on every plant (agents/difficulty.py).
 REFERENCE = summary.REFERENCE
 #: Policies that join every run: the score's 0, its 1 and the frozen valve.
-ALWAYS = (summary.ZERO, summary.ONE, REFERENCE)
+ALWAYS = (specs.ZERO, *specs.REFERENCES)
 #: Upper bound on the number of seeds (a range such as ``0-1000000000`` is a typo).
 MAX_SEEDS = 10_000
 MAX_SEED = 2**63 - 1
@@ -166,7 +166,7 @@ def available_policies(env_id: str) -> list[str]:
         if _sb3()
         else []
     )
-    return list(baselines.NAMES) + trained + [summary.ONE, REFERENCE]
+    return list(baselines.NAMES) + trained + list(specs.REFERENCES)
 
 
 @functools.lru_cache(maxsize=1)
@@ -301,10 +301,11 @@ def _check_out(ap: argparse.ArgumentParser, out: Path, resume: bool) -> None:
         )
 
 
-def policy_digest(env_id: str, name: str, oracle: str = DEFAULT_ENGINE) -> str:
+def policy_digest(env_id: str, name: str | specs.Spec, oracle: str = DEFAULT_ENGINE) -> str:
     """The policy's part of the fingerprint (:meth:`agents.specs.Spec.digest`, ``oracle``
-    the oracle's engine)."""
-    return specs.parse(name, references=True).digest(env_id, oracle)
+    the oracle's engine) of a policy name or its Spec."""
+    spec = name if isinstance(name, specs.Spec) else specs.parse(name, references=True)
+    return spec.digest(env_id, oracle)
 
 
 def fingerprint(
@@ -326,9 +327,12 @@ def fingerprint(
     return hashlib.sha256(text.encode()).hexdigest()[:16]
 
 
-def episode_fingerprint(env_id: str, scenario: str, name: str, oracle: str = DEFAULT_ENGINE) -> str:
-    """The fingerprint :func:`build_plan` gives the episodes of policy ``name`` on the
-    nominal plant of ``env_id`` under ``scenario`` (a name as ``--scenarios`` takes it)."""
+def episode_fingerprint(
+    env_id: str, scenario: str, name: str | specs.Spec, oracle: str = DEFAULT_ENGINE
+) -> str:
+    """The fingerprint :func:`build_plan` gives the episodes of policy ``name`` (or its
+    Spec) on the nominal plant of ``env_id`` under ``scenario`` (a name as ``--scenarios``
+    takes it)."""
     return fingerprint(
         env_id,
         resolve_scenario(scenario, env_id),
