@@ -31,9 +31,9 @@ import gymnasium as gym
 import numpy as np
 
 import steamtemp_gym
+from agents import specs
 from agents.evaluation import run_batch
-from agents.leaderboard.episodes import _make_policy
-from agents.leaderboard.plan import _env_id, _items, _policies, parse_seeds
+from agents.leaderboard.plan import env_id_of, items, parse_seeds, policies
 from steamtemp_gym import scenarios
 from steamtemp_gym.plants import perturb
 
@@ -85,7 +85,7 @@ def make_parser() -> argparse.ArgumentParser:
 def _envs(ap: argparse.ArgumentParser, name: str | None) -> list[str]:
     if name is None:
         return [e for e in steamtemp_gym.ENV_IDS if perturb.variant_factors(e)]
-    env_id = _env_id(name)
+    env_id = env_id_of(name)
     if env_id not in steamtemp_gym.ENV_IDS or not perturb.variant_factors(env_id):
         valid = [e for e in steamtemp_gym.ENV_IDS if perturb.variant_factors(e)]
         ap.error(
@@ -105,9 +105,12 @@ def _heldout(ap: argparse.ArgumentParser, spec: str, envs: list[str]) -> str:
     return spec
 
 
-def evaluate(env_id: str, policy: str, scenario: str, seeds: list[int]) -> dict[str, Any]:
-    """{variant: (mean return, trips)} of ``policy`` commissioned on the nominal plant and
-    run on it (``nominal``) and on every variant of ``env_id``, under ``scenario``."""
+def evaluate(
+    env_id: str, policy: str, scenario: str, seeds: list[int], spec: specs.Spec | None = None
+) -> dict[str, Any]:
+    """{variant: (mean return, trips)} of ``policy`` (its Spec ``spec``, None: parsed here)
+    commissioned on the nominal plant and run on it (``nominal``) and on every variant of
+    ``env_id``, under ``scenario``."""
 
     def venv(params: dict | None = None) -> Any:
         return gym.make_vec(
@@ -119,7 +122,8 @@ def evaluate(env_id: str, policy: str, scenario: str, seeds: list[int]) -> dict[
         )
 
     nominal = venv()
-    pol = _make_policy(policy, env_id, nominal)  # commissioned on the model
+    spec = spec or specs.parse(policy, references=True)
+    pol = spec.make(env_id, nominal)  # commissioned on the model
     out = {}
     for name, params in [(NOMINAL, None), *perturb.mismatch(env_id).items()]:
         rows = run_batch(nominal if params is None else venv(params), pol, seeds)
@@ -158,8 +162,8 @@ def main(argv: list[str] | None = None) -> None:
     args = ap.parse_args(argv)
     envs = _envs(ap, args.env)
     seeds = parse_seeds(ap, args.seeds)
-    requested = _items(ap, "--policies", args.policies)
-    available = _policies(ap, envs, args.policies, oracle=False)
+    requested = items(ap, "--policies", args.policies)
+    available, parsed = policies(ap, envs, args.policies, oracle=False)
     heldout = _heldout(ap, args.heldout, envs)
     scenario_names = [RAMP, heldout]
     if args.out is not None:
@@ -171,7 +175,7 @@ def main(argv: list[str] | None = None) -> None:
     for e in envs:
         results: dict[str, dict[str, Any]] = {}
         for pol in [p for p in requested if p in available[e]]:
-            results[pol] = {s: evaluate(e, pol, s, seeds) for s in scenario_names}
+            results[pol] = {s: evaluate(e, pol, s, seeds, parsed[pol]) for s in scenario_names}
             print(f"note: {e} {pol} done ({time.perf_counter() - t0:.0f} s)", file=sys.stderr)
         parts.append(table(e, results, scenario_names))
     text = "\n".join(parts)

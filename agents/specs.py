@@ -16,6 +16,14 @@ take them: one parser for both, so a name means the same policy everywhere.
   env; the policy needs ``predict`` and ``reset``, baselines/policy.py), with ``module`` a
   dotted module importable from ``sys.path`` (``PYTHONPATH=.`` adds the current directory)
   or a ``.py`` file; ``callable`` may be dotted (``MyController.create``).
+- with ``parse(name, references=True)`` (the leaderboard's names), the references that are
+  no baselines: ``oracle`` (the score's 1, agents/oracle.py) and ``frozen_valve``
+  (agents/difficulty.py).
+
+A :class:`Spec` carries what the leaderboard asks of a policy: whether it is a reference
+(listed, never ranked) and which end of the score it is (:attr:`Spec.score_end`), whether
+it runs in a process of its own (:attr:`Spec.own_process`: user code does), and what its
+digest covers (:meth:`Spec.modules`, :meth:`Spec.digest`).
 
 :func:`parse` checks a name (finding a factory's module file without importing it, an
 agent's files, and checking that its model fits the observation and action spaces of the
@@ -23,7 +31,7 @@ env it names);
 :meth:`Spec.make` builds the policy for an env; :func:`check_built` checks what a factory
 returns; :meth:`Spec.digest` is what the leaderboard's fingerprint hashes: the name, with
 a baseline's stored tuning on the env, or the hash of a trained agent's files or of a
-factory's module file.
+factory's module file; the oracle's with its incumbents' and its engine's.
 """
 
 from __future__ import annotations
@@ -41,12 +49,28 @@ from typing import Any
 
 import agents
 import baselines
+from agents.difficulty import FrozenValves
+from agents.oracle import DEFAULT_ENGINE, INCUMBENTS, Oracle
 from baselines import tuning
 from steamtemp_gym import plants, provenance
 from steamtemp_gym.checks import head
 from steamtemp_gym.testing import guard
 
 BASELINE, SHIPPED, FILES, FACTORY = "baseline", "shipped", "files", "factory"
+#: The kinds of the references that are no baselines: the oracle and the frozen valve.
+ORACLE, FROZEN = "oracle", "frozen"
+#: The score's 0: the cascade as a commissioned unit runs it (a baseline).
+ZERO = baselines.INDUSTRIAL_REFERENCE
+#: The score's 1: the clairvoyant oracle on the true plant (agents/oracle.py).
+ONE = "oracle"
+#: Every actuator held at its reset opening (agents/difficulty.py).
+FROZEN_VALVE = "frozen_valve"
+#: The references: listed and plotted, never ranked; :func:`parse` takes them with
+#: ``references=True`` (the leaderboard's names), name -> (kind, the module of its code).
+REFERENCE_KINDS = {ONE: (ORACLE, "agents.oracle"), FROZEN_VALVE: (FROZEN, "agents.difficulty")}
+REFERENCES = tuple(REFERENCE_KINDS)
+#: The code of the oracle's certified optimizer (every engine but ``cem``).
+OPTIMUM_MODULE = "agents.optimum"
 SB3_PREFIX, ZOO_PREFIX = "sb3:", "zoo:"
 #: ``sb3:<algo>@run<k>``: training run k of a shipped agent.
 RUN_SUFFIX = "@run"
@@ -67,8 +91,10 @@ class Spec:
 
     Attributes:
         name: The name as given.
-        kind: :data:`BASELINE`, :data:`SHIPPED`, :data:`FILES` or :data:`FACTORY`.
-        target: The baseline name, the algo, the path, or ``module:callable``.
+        kind: :data:`BASELINE`, :data:`SHIPPED`, :data:`FILES`, :data:`FACTORY`, or a
+            reference's: :data:`ORACLE`, :data:`FROZEN`.
+        target: The baseline name, the algo, the path, ``module:callable``, or a
+            reference's name.
         envs: Env ids it is available for (None: every env).
         run: A shipped agent's training run (None: run 0, the agent's default).
     """
@@ -81,9 +107,30 @@ class Spec:
 
     @property
     def shipped(self) -> bool:
-        """Whether it is the benchmark's own code: a shipped baseline or trained agent (the
-        leaderboard runs every other policy in a process of its own)."""
-        return self.kind == SHIPPED or (self.kind == BASELINE and self.target in baselines.SHIPPED)
+        """Whether it is the benchmark's own code: a shipped baseline or trained agent, or a
+        reference (the leaderboard runs every other policy in a process of its own)."""
+        own = self.kind == BASELINE and self.target in baselines.SHIPPED
+        return own or self.kind in (SHIPPED, ORACLE, FROZEN)
+
+    @property
+    def reference(self) -> bool:
+        """Whether it is a reference (:data:`REFERENCES`): listed, never ranked."""
+        return self.kind in (ORACLE, FROZEN)
+
+    @property
+    def score_end(self) -> int | None:
+        """Which end of the normalized score it is: 1 (the oracle), 0 (:data:`ZERO`), or
+        None."""
+        if self.kind == ORACLE:
+            return 1
+        return 0 if self.kind == BASELINE and self.target == ZERO else None
+
+    @property
+    def own_process(self) -> bool:
+        """Whether the leaderboard runs it in a process of its own: user code (a factory, a
+        trained agent's files, a registered baseline); the shipped policies and the
+        references run in the leaderboard's."""
+        return not self.shipped
 
     @property
     def is_factory(self) -> bool:
@@ -99,8 +146,13 @@ class Spec:
         """Whether it can act on ``env_id``."""
         return self.envs is None or env_id in self.envs
 
-    def make(self, env_id: str, env: Any) -> Any:
-        """The policy for ``env`` (a single or vector env of ``env_id``)."""
+    def make(self, env_id: str, env: Any, engine: str = DEFAULT_ENGINE) -> Any:
+        """The policy for ``env`` (a single or vector env of ``env_id``; ``engine``: the
+        oracle's, agents/oracle.py)."""
+        if self.kind == FROZEN:
+            return FrozenValves(env)
+        if self.kind == ORACLE:
+            return Oracle(env, engine=engine)
         if self.kind == BASELINE:
             return baselines.make(self.target, env)
         if self.kind == SHIPPED:
@@ -111,21 +163,43 @@ class Spec:
         check_built(self.name, policy)
         return policy
 
-    def digest(self, env_id: str) -> str:
-        """The name, and the provenance digests of what decides its actions: its code (the
-        module and what it imports from baselines and agents, :func:`code_digest`) and a
-        baseline's stored tuning on the env (:func:`tuning_digest`), a trained agent's
-        files, a factory's module."""
+    def modules(self, engine: str = DEFAULT_ENGINE) -> tuple[str, ...]:
+        """The modules of its code that its digest covers (with what they import from
+        baselines and agents, :func:`code_digest`); none for a factory (its file is)."""
         if self.kind == BASELINE:
-            module = baselines.factory(self.target).__module__
-            return f"{self.name}:{tuning_digest(self.target, env_id)}:{code_digest(module)}"
+            return (baselines.factory(self.target).__module__,)
+        if self.kind in (SHIPPED, FILES):
+            return (AGENT_MODULE,)
+        if self.reference:
+            own = (REFERENCE_KINDS[self.name][1],)
+            return own + ((OPTIMUM_MODULE,) if self.kind == ORACLE and engine != "cem" else ())
+        return ()
+
+    def digest(self, env_id: str, engine: str = DEFAULT_ENGINE) -> str:
+        """The name, and the provenance digests of what decides its actions: its code (the
+        modules of :meth:`modules`, :func:`code_digest`) and a baseline's stored tuning on
+        the env (:func:`tuning_digest`), a trained agent's files, a factory's module; the
+        oracle's with its incumbents' (their episodes are candidates of its own) and its
+        engine's."""
+        if self.kind == FROZEN:
+            return f"{self.name}:{code_digest(*self.modules())}"
+        if self.kind == ORACLE:
+            own = f"{self.name}:{code_digest(*self.modules()[:1])}"
+            own += "".join(f"+{parse(i).digest(env_id)}" for i in INCUMBENTS)
+            if engine != "cem":
+                own += f"+{engine}:{code_digest(*self.modules(engine)[1:])}"
+            return own
+        if self.kind == BASELINE:
+            own = code_digest(*self.modules())
+            return f"{self.name}:{tuning_digest(self.target, env_id)}:{own}"
         if self.kind == SHIPPED:
             from agents.files import steamtemp_files
 
             files = steamtemp_files(agents.ZOO, env_id, self.target, self.run or 0)
-            return f"{self.name}:{files.digest()}:{code_digest(AGENT_MODULE)}"
+            return f"{self.name}:{files.digest()}:{code_digest(*self.modules())}"
         if self.kind == FILES:
-            return f"{self.name}:{_agent(self.target, env_id).digest()}:{code_digest(AGENT_MODULE)}"
+            files = _agent(self.target, env_id)
+            return f"{self.name}:{files.digest()}:{code_digest(*self.modules())}"
         if self.kind == FACTORY:
             path = module_file(self.name, self.target.rsplit(":", 1)[0])
             return self.name + ":" + provenance.file_digest(path)
@@ -183,8 +257,9 @@ def tuning_digest(name: str, env_id: str) -> str:
     return hashlib.sha256(json.dumps(knobs, sort_keys=True).encode()).hexdigest()[:16]
 
 
-def parse(name: str) -> Spec:
-    """The Spec of a policy name (module docstring).
+def parse(name: str, references: bool = False) -> Spec:
+    """The Spec of a policy name (module docstring); with ``references``, the names of the
+    references that are no baselines too (:data:`REFERENCES`, the leaderboard's).
 
     Raises:
         ValueError: an unknown name (listing every form and the valid names), a factory
@@ -194,6 +269,8 @@ def parse(name: str) -> Spec:
         raise ValueError(f"a policy name must be a non-empty string, got {_show(name)}; {FORMS}")
     if name in baselines.NAMES:
         return Spec(name, BASELINE, name)
+    if references and name in REFERENCE_KINDS:
+        return Spec(name, REFERENCE_KINDS[name][0], name)
     if name.startswith(SB3_PREFIX):
         agent, run = split_run(name)
         algo = agent[len(SB3_PREFIX) :]

@@ -23,7 +23,7 @@ import numpy as np
 import steamtemp_gym  # noqa: F401  (registers the ids)
 from agents.cem import Budget
 from agents.evaluation import run_batch
-from agents.leaderboard.plan import _resolve, parse_seeds
+from agents.leaderboard.plan import parse_seeds, resolve_scenario
 from agents.oracle import Oracle
 from baselines.cascade_pi import CascadePIFF
 
@@ -45,7 +45,7 @@ def main() -> None:
     ap.add_argument("--stop-pct", type=float, default=1.0)
     args = ap.parse_args()
     seeds = parse_seeds(ap, args.seeds)
-    scenario = _resolve(args.scenario, args.env)
+    scenario = resolve_scenario(args.scenario, args.env)
     venv = gym.make_vec(
         args.env, num_envs=len(seeds), vectorization_mode="vector_entry_point", scenario=scenario
     )

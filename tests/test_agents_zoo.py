@@ -15,7 +15,7 @@ import agents
 import steamtemp_gym
 from agents import behaviour_cloning, files, train_config, train_runs
 from agents.evaluation import run_episode
-from agents.leaderboard.plan import _available
+from agents.leaderboard.plan import available_policies
 
 
 @pytest.mark.parametrize("env_id", steamtemp_gym.ENV_IDS)
@@ -50,7 +50,7 @@ def test_shipped_agent_runs_a_named_scenario_deterministically(env_id, algo):
     # the leaderboard scores it, once per training run where the zoo holds several
     from agents import specs
 
-    named = [specs.split_run(n)[0] for n in _available(env_id)]
+    named = [specs.split_run(n)[0] for n in available_policies(env_id)]
     assert f"sb3:{algo}" in named
 
 

@@ -72,14 +72,14 @@ def fake_policies(monkeypatch):
         monkeypatch.setitem(baselines._REGISTRY, name, lambda env, name=name: Scripted(env, name))
     monkeypatch.setattr(baselines, "NAMES", (*baselines.NAMES, "frozen", "flaky"))
     monkeypatch.setattr(baselines, "SHIPPED", (*baselines.SHIPPED, "frozen", "flaky"))
-    real = episodes._make_policy
+    real = specs.Spec.make
 
-    def make(name, env_id, env, *rest):
-        if name in ("frozen", "flaky"):
-            return Scripted(env, name)
-        return real(name, env_id, env, *rest)
+    def make(spec, env_id, env, *rest):
+        if spec.name in ("frozen", "flaky"):
+            return Scripted(env, spec.name)
+        return real(spec, env_id, env, *rest)
 
-    monkeypatch.setattr(episodes, "_make_policy", make)
+    monkeypatch.setattr(specs.Spec, "make", make)
     monkeypatch.setattr(Scripted, "FAIL", {})
     return Scripted.FAIL
 
@@ -437,14 +437,14 @@ def test_failed_episode_is_recorded_and_the_run_goes_on(tiny, tmp_path, fake_pol
 def test_policy_that_cannot_be_built_fails_its_episodes_only(
     tiny, tmp_path, fake_policies, monkeypatch
 ):
-    make = episodes._make_policy
+    make = specs.Spec.make
 
-    def broken(name, env_id, env, *rest):
-        if name == "flaky":
+    def broken(spec, env_id, env, *rest):
+        if spec.name == "flaky":
             raise ValueError("no such tuning")
-        return make(name, env_id, env, *rest)
+        return make(spec, env_id, env, *rest)
 
-    monkeypatch.setattr(episodes, "_make_policy", broken)
+    monkeypatch.setattr(specs.Spec, "make", broken)
     out = tmp_path / "out"
     with pytest.raises(SystemExit) as exc:
         lb.main(_args(tiny, out, **{"--seeds": "0,1", "--policies": "flaky,frozen"}))
@@ -527,8 +527,11 @@ def test_run_batch_is_identical_to_run_episode():
     env = gym.make(env_id, scenario=sc)
     venv = gym.make_vec(env_id, num_envs=2, vectorization_mode="vector_entry_point", scenario=sc)
     for name in (*baselines.NAMES, REFERENCE):
-        serial = [run_episode(env, episodes._make_policy(name, env_id, env), s) for s in (3, 7)]
-        batch = run_batch(venv, episodes._make_policy(name, env_id, venv), [3, 7])
+        serial = [
+            run_episode(env, specs.parse(name, references=True).make(env_id, env), s)
+            for s in (3, 7)
+        ]
+        batch = run_batch(venv, specs.parse(name, references=True).make(env_id, venv), [3, 7])
         for a, b in zip(serial, batch, strict=True):
             assert a["metrics"] == b["metrics"], name
             for k in a["trace"]:
@@ -547,10 +550,10 @@ def test_rows_of_their_own_scenarios_equal_run_episode():
     venv = gym.make_vec(ENV, num_envs=3, vectorization_mode="vector_entry_point", scenario=sc[0])
     venv = episodes.RowScenarios(venv, rows)
     for name in ("cascade_pi_ff", "lqi", "mpc_linear"):
-        batch = run_batch(venv, episodes._make_policy(name, ENV, venv), seeds)
+        batch = run_batch(venv, specs.parse(name, references=True).make(ENV, venv), seeds)
         for s, row, b in zip(seeds, rows, batch, strict=True):
             env = gym.make(ENV, scenario=row)
-            a = run_episode(env, episodes._make_policy(name, ENV, env), s)
+            a = run_episode(env, specs.parse(name, references=True).make(ENV, env), s)
             assert a["metrics"] == b["metrics"], name
             for k in a["trace"]:
                 np.testing.assert_array_equal(a["trace"][k], b["trace"][k], err_msg=name)
@@ -866,7 +869,7 @@ def test_library_log_writes_to_the_stderr_of_the_moment(monkeypatch):
     monkeypatch.setattr(logging.getLogger("steamtemp_gym"), "handlers", [])
     first = io.StringIO()
     monkeypatch.setattr("sys.stderr", first)
-    cli._show_library_log()
+    cli.show_library_log()
     first.close()
     now = io.StringIO()
     monkeypatch.setattr("sys.stderr", now)

@@ -23,6 +23,7 @@ import pytest
 from processes import alive, children
 
 from agents import leaderboard as lb
+from agents import specs
 from agents.evaluation import run_batch
 from agents.leaderboard import episodes, isolated, records, sandbox
 from agents.leaderboard.plan import EPISODE_TIMEOUT_S
@@ -259,7 +260,7 @@ def test_baselines_commission_alike_on_an_env_of_their_own(name):
     for separate in (False, True):
         venv = isolated.make_env(ENV, sc, 2)
         model = isolated.make_env(ENV, sc, 2) if separate else venv
-        out = run_batch(venv, episodes._make_policy(name, ENV, model), [0, 1])
+        out = run_batch(venv, specs.parse(name, references=True).make(ENV, model), [0, 1])
         traces.append(out)
     for a, b in zip(*traces, strict=True):
         assert a["metrics"] == b["metrics"]
@@ -346,7 +347,7 @@ def test_policy_process_answers_bit_for_bit():
     """A PolicyProcess's actions are its policy's, bit for bit, and it ends on close."""
     env = gym.make(ENV)
     obs, _ = env.reset(seed=0)
-    here = episodes._make_policy("cascade_pi", ENV, gym.make(ENV))
+    here = specs.parse("cascade_pi", references=True).make(ENV, gym.make(ENV))
     with isolated.PolicyProcess("cascade_pi", ENV, None, None) as there:
         for k in range(5):
             a = here.predict(obs, episode_start=np.array([k == 0]))[0]

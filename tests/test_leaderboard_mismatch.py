@@ -11,8 +11,9 @@ import gymnasium as gym
 import pytest
 
 from agents import leaderboard as lb
+from agents import specs
 from agents.evaluation import run_episode
-from agents.leaderboard import cli, episodes, mismatch
+from agents.leaderboard import cli, mismatch
 from agents.leaderboard.plan import DEFAULT_SCENARIOS, Plan, build_plan
 from agents.leaderboard.summary import ZERO
 from steamtemp_gym.plants import perturb
@@ -63,9 +64,13 @@ def test_a_mismatch_row_is_the_model_commissioned_policy_on_the_variant(runs):
     params = perturb.mismatch(ENV)[variant]
     unit = gym.make(ENV, scenario=mismatch.SCENARIO, params=params)
     model = gym.make(ENV, scenario=mismatch.SCENARIO)
-    want = run_episode(unit, episodes._make_policy(ZERO, ENV, model), 0)["metrics"]["return"]
+    want = run_episode(unit, specs.parse(ZERO, references=True).make(ENV, model), 0)["metrics"][
+        "return"
+    ]
     assert row["metrics"]["return"] == want
-    retuned = run_episode(unit, episodes._make_policy(ZERO, ENV, unit), 0)["metrics"]["return"]
+    retuned = run_episode(unit, specs.parse(ZERO, references=True).make(ENV, unit), 0)["metrics"][
+        "return"
+    ]
     assert retuned != want
 
 

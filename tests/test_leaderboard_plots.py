@@ -400,7 +400,7 @@ def test_the_labels_of_the_pareto_figure_do_not_overlap(figures, tmp_path):
 
 
 def test_the_rebuild_writes_the_pareto_figure(tmp_path):
-    """A real file from the summary of hand-made rows, as outputs._rebuild draws it."""
+    """A real file from the summary of hand-made rows, as outputs.rebuild draws it."""
     run = {
         "envs": ["steamtemp/A-v0"],
         "scenarios": ["s"],

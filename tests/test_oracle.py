@@ -13,9 +13,9 @@ from tunings import missing
 import agents
 import baselines
 import steamtemp_gym
+from agents import specs
 from agents.cem import Budget
 from agents.evaluation import run_batch, run_episode
-from agents.leaderboard.episodes import _make_policy
 from agents.oracle import INCUMBENTS
 from agents.oracle import Oracle as _Oracle
 from steamtemp_gym import plants
@@ -58,7 +58,9 @@ def test_the_oracle_beats_every_baseline_and_shipped_agent(env_id):
     oracle = run_episode(env, Oracle(env), 0)["metrics"]
     assert not oracle["tripped"]
     returns = {
-        p: run_episode(env, _make_policy(p, env_id, env), 0)["metrics"]["return"]
+        p: run_episode(env, specs.parse(p, references=True).make(env_id, env), 0)["metrics"][
+            "return"
+        ]
         for p in _contenders(env_id)
     }
     best = max(returns, key=returns.get)

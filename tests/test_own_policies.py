@@ -27,7 +27,7 @@ from agents import files, specs
 from agents import leaderboard as lb
 from agents.evaluation import run_episode
 from agents.leaderboard import episodes
-from agents.leaderboard.plan import REFERENCE, _policy_digest
+from agents.leaderboard.plan import REFERENCE, policy_digest
 from agents.leaderboard.records import strict
 from steamtemp_gym import scenarios
 from steamtemp_gym.scenarios import Scenario
@@ -117,12 +117,12 @@ def test_factory_is_fingerprinted_by_its_file(tmp_path):
     mod = tmp_path / "ctl.py"
     mod.write_text(EXAMPLE.read_text())
     name = f"{mod}:make_controller"
-    first = _policy_digest(ENV, name)
+    first = policy_digest(ENV, name)
     assert first.startswith(name + ":") and len(first) == len(name) + 65
     mod.write_text(EXAMPLE.read_text() + "\n# a comment changes no action\n")
-    assert _policy_digest(ENV, name) == first
+    assert policy_digest(ENV, name) == first
     mod.write_text(EXAMPLE.read_text() + "\nANOTHER_VERSION = 2\n")
-    assert _policy_digest(ENV, name) != first
+    assert policy_digest(ENV, name) != first
 
 
 # --------------------------------------------------------------------------- agent files
@@ -151,7 +151,7 @@ def test_trained_agent_files_score_as_the_shipped_agent(tmp_path, tiny):
     for name in names:
         for seed in (0, 1):
             assert by[name, seed]["metrics"] == by[shipped, seed]["metrics"], name
-    digests = {n: _policy_digest(ENV, n) for n in [shipped, *names]}
+    digests = {n: policy_digest(ENV, n) for n in [shipped, *names]}
     assert len({d.rsplit(":", 1)[1] for d in digests.values()}) == 1  # the same files' hash
 
 
@@ -498,14 +498,14 @@ def test_a_new_tuning_changes_only_its_controllers_fingerprints(tmp_path, monkey
 
     other = "steamtemp/SupercriticalFSH-v0"
     names = ["cascade_pi", "cascade_pi_tuned", "cascade_pi_ff", "lqi", "oracle", REFERENCE]
-    before = {(e, n): _policy_digest(e, n) for e in (ENV, other) for n in names}
+    before = {(e, n): policy_digest(e, n) for e in (ENV, other) for n in names}
     stored = tuning.TUNED
     monkeypatch.setattr(tuning, "TUNED", tmp_path)
     for f in stored.glob("*.json"):
         shutil.copy(f, tmp_path)
-    assert {(e, n): _policy_digest(e, n) for e, n in before} == before
+    assert {(e, n): policy_digest(e, n) for e, n in before} == before
     src = json.loads(tuning.path("cascade_pi").read_text())
     src["plants"][ENV]["knobs"]["outer_gain"] *= 1.5
     tuning.path("cascade_pi").write_text(json.dumps(src))
-    changed = [k for k in before if _policy_digest(*k) != before[k]]
+    changed = [k for k in before if policy_digest(*k) != before[k]]
     assert changed == [(ENV, "cascade_pi"), (ENV, "cascade_pi_tuned")]

@@ -13,7 +13,7 @@ import pytest
 import baselines
 import steamtemp_gym
 from agents import specs
-from agents.leaderboard.plan import _policy_digest
+from agents.leaderboard.plan import policy_digest
 from steamtemp_gym import catalog, provenance
 
 POLICIES = (
@@ -51,7 +51,7 @@ def _digests() -> dict[tuple[str, str], str]:
     for e in OWN:
         out[e, "source"] = specs.source_digest(e)
         for n in POLICIES:
-            out[e, n] = _policy_digest(e, n)
+            out[e, n] = policy_digest(e, n)
     return out
 
 

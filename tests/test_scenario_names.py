@@ -16,7 +16,7 @@ import pytest
 import yaml
 
 from agents import leaderboard as lb
-from agents.leaderboard.plan import _resolve
+from agents.leaderboard.plan import resolve_scenario
 from steamtemp_gym import envs, scenarios
 from steamtemp_gym.scenarios import Scenario, heldout
 from steamtemp_gym.testing import cli
@@ -209,4 +209,4 @@ def test_check_cli_takes_short_ids_and_scenarios(capsys):
 def test_named_scenarios_are_resolved_by_one_function():
     """The leaderboard resolves as gym.make does (one function, no second parser)."""
     for spec in ("setpoint_step", "heldout:mill_trip", "random"):
-        assert _resolve(spec, ENV) == scenarios.resolve(spec, ENV)
+        assert resolve_scenario(spec, ENV) == scenarios.resolve(spec, ENV)

@@ -108,7 +108,7 @@ def _ray_results(units: list[Unit], jobs: int, address: str | None):
         yield from zip(batch, results, strict=True)
 
 
-def _execute(
+def execute(
     plan: Plan,
     units: list[Unit],
     jobs: int,

@@ -101,18 +101,18 @@ from typing import Any
 import steamtemp_gym
 from agents import ray_backend, stats
 from agents.leaderboard import report, sandbox
-from agents.leaderboard.backends import _execute
-from agents.leaderboard.episodes import _units, own_process
+from agents.leaderboard.backends import execute
+from agents.leaderboard.episodes import pending
 from agents.leaderboard.isolated import OUT_ENV
-from agents.leaderboard.outputs import Plots, _rebuild
+from agents.leaderboard.outputs import Plots, rebuild
 from agents.leaderboard.plan import (
-    _EXCERPT,
     DEFAULT_SCENARIOS,
     DEFAULT_SEEDS,
     EPISODE_TIMEOUT_S,
+    EXCERPT,
     build_plan,
 )
-from agents.leaderboard.records import EPISODES, Record, _latest, read_record
+from agents.leaderboard.records import EPISODES, Record, latest_rows, read_record
 from agents.oracle import DEFAULT_ENGINE, ENGINES
 from steamtemp_gym.checks import head
 from steamtemp_gym.testing import guard
@@ -313,7 +313,7 @@ class _Stderr(logging.StreamHandler):
         pass
 
 
-def _show_library_log() -> None:
+def show_library_log() -> None:
     """steamtemp_gym's INFO lines (e.g. the notice while kernels compile) on stderr."""
     log = logging.getLogger("steamtemp_gym")
     if not log.handlers:
@@ -326,7 +326,7 @@ def _show_library_log() -> None:
 def _say_what_walls_hold(plan: Any) -> None:
     """A note at the start of a run with a policy in a process of its own where the OS
     allows no namespaces (agents/leaderboard/sandbox.py): what does not hold then."""
-    if not any(own_process(p) for pols in plan.policies.values() for p in pols):
+    if not any(plan.spec(p).own_process for pols in plan.policies.values() for p in pols):
         return
     why = sandbox.available()
     if why:
@@ -345,7 +345,7 @@ def main(argv: list[str] | None = None) -> None:
 
 
 def _main(argv: list[str] | None) -> None:
-    _show_library_log()
+    show_library_log()
     ap = make_parser()
     args = ap.parse_args(argv)
     if args.jobs < 1:
@@ -369,24 +369,24 @@ def _main(argv: list[str] | None) -> None:
             "run; wait for it to end or choose another --out"
         )
     try:
-        done = _latest(read_record(out / EPISODES)) if args.resume else {}
+        done = latest_rows(read_record(out / EPISODES)) if args.resume else {}
     except (OSError, ValueError) as exc:
-        ap.error(f"argument --resume: {head(str(exc), _EXCERPT)}")
+        ap.error(f"argument --resume: {head(str(exc), EXCERPT)}")
     try:
         record = Record(out / EPISODES)
     except OSError as exc:
         ap.error(f"argument --out: cannot write {str(out)!r}: {exc.strerror or exc}")
     t0 = time.time()
-    units = _units(plan, done)
+    units = pending(plan, done)
     figures = Plots(out, plan, units, every=args.trend_all)
     try:
         with _sigterm_stops():
-            _execute(plan, units, args.jobs, record, figures.add, args.backend, args.ray_address)
+            execute(plan, units, args.jobs, record, figures.add, args.backend, args.ray_address)
             for key in figures.missing():
                 figures.draw(*key)
     except KeyboardInterrupt as exc:
         record.close()
-        _rebuild(out, plan, figures=False)
+        rebuild(out, plan, figures=False)
         print(
             f"\ninterrupted: finished episodes are in {out / EPISODES}; "
             "run the same command with --resume to continue",
@@ -394,7 +394,7 @@ def _main(argv: list[str] | None) -> None:
         )
         raise SystemExit(143 if isinstance(exc, Terminated) else 130) from None
     record.close()
-    rows, summary = _rebuild(out, plan)
+    rows, summary = rebuild(out, plan)
     if summary is not None:
         print(report.console(summary))
     bad = [r for r in rows if r.get("error")]

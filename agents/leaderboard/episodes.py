@@ -1,5 +1,5 @@
 """The work of a leaderboard run in units: one policy on one env and scenario for the seeds
-left to run (a row per seed and the trace kept for the plot); :func:`_units` lists what is
+left to run (a row per seed and the trace kept for the plot); :func:`pending` lists what is
 left, the oracle's first. Units run in batches (:func:`batches`, :func:`run_units`): a
 shipped policy's units of one env on the nominal plant whose scenarios last as long run
 side by side in one vector env, a scenario per row, so the per-step work of the env loop
@@ -18,33 +18,17 @@ import gymnasium as gym
 import numpy as np
 
 from agents import specs
-from agents.difficulty import FrozenValves
 from agents.evaluation import run_batch, run_episode
-from agents.leaderboard import summary
 from agents.leaderboard.isolated import PolicyFailed, PolicyProcess, PolicyTimeout, make_env
-from agents.leaderboard.plan import REFERENCE, Plan, episode_fingerprint
+from agents.leaderboard.plan import Plan, episode_fingerprint
 from agents.leaderboard.records import Key
-from agents.oracle import DEFAULT_ENGINE, Oracle
+from agents.oracle import DEFAULT_ENGINE
 from steamtemp_gym import scenarios
 from steamtemp_gym.checks import head
 
 
-def _make_policy(name: str, env_id: str, env, oracle: str = DEFAULT_ENGINE):
-    if name == REFERENCE:
-        return FrozenValves(env)
-    if name == summary.ONE:
-        return Oracle(env, engine=oracle)
-    return specs.parse(name).make(env_id, env)
-
-
-def own_process(name: str) -> bool:
-    """Whether the policy ``name`` runs in a process of its own: every one but the shipped
-    baselines and trained agents and the references."""
-    return name not in (REFERENCE, summary.ONE) and not specs.parse(name).shipped
-
-
 def make_policy(
-    name: str,
+    spec: specs.Spec,
     env_id: str,
     env: Any,
     scenario: Any,
@@ -54,12 +38,13 @@ def make_policy(
     episodes: int = 1,
     oracle: str = DEFAULT_ENGINE,
 ) -> Any:
-    """The policy ``name`` to act on ``env`` (of ``num_envs`` rows, None: a single env): a
-    shipped one built here on ``env``, any other a :class:`PolicyProcess` (commissioned on
-    an env of its own made with ``scenario``; close it)."""
-    if own_process(name):
-        return PolicyProcess(name, env_id, scenario, num_envs, imports, timeout, episodes)
-    return _make_policy(name, env_id, env, oracle)
+    """The policy of ``spec`` to act on ``env`` (of ``num_envs`` rows, None: a single env):
+    one of this process (:attr:`agents.specs.Spec.own_process` false) built here on ``env``,
+    any other a :class:`PolicyProcess` (commissioned on an env of its own made with
+    ``scenario``; close it)."""
+    if spec.own_process:
+        return PolicyProcess(spec.name, env_id, scenario, num_envs, imports, timeout, episodes)
+    return spec.make(env_id, env, oracle)
 
 
 def close(policy: Any) -> None:
@@ -84,6 +69,11 @@ class Unit:
     params: dict | None = None  # a mismatch variant's plant; the policy sees the nominal one
     timeout: float | None = None  # --episode-timeout (s) of a policy in a process of its own
     oracle: str = DEFAULT_ENGINE  # --oracle: the oracle's engine
+    parsed: specs.Spec | None = None  # the policy's Spec (None: parsed from ``policy``)
+
+    def __post_init__(self) -> None:
+        if self.parsed is None:
+            self.parsed = specs.parse(self.policy, references=True)
 
 
 class RowScenarios(gym.vector.VectorWrapper):
@@ -133,7 +123,7 @@ def run_units(batch: list[Unit]) -> list[tuple[list[dict], dict | None]]:
     from threadpoolctl import threadpool_limits
 
     with threadpool_limits(limits=1):
-        return _run_units(batch)
+        return _run_units(batch, batch[0].parsed.own_process)
 
 
 #: Shipped policies whose rows are not independent of the rows solved before them in a
@@ -154,8 +144,9 @@ def batches(units: list[Unit]) -> list[list[Unit]]:
     for i, u in enumerate(units):
         together = (
             u.params is None
-            and u.policy not in (summary.ONE, *ALONE)
-            and not own_process(u.policy)
+            and u.parsed.score_end != 1
+            and u.policy not in ALONE
+            and not u.parsed.own_process
             and not isinstance(u.scenario, str)
         )  # "random": lengths drawn per row
         key = (u.env_id, u.policy, u.scenario.duration_s) if together else i
@@ -163,17 +154,18 @@ def batches(units: list[Unit]) -> list[list[Unit]]:
     return list(groups.values())
 
 
-def _run_units(batch: list[Unit]) -> list[tuple[list[dict], dict | None]]:
-    """:func:`run_units` (its docstring). Every seed of the batch is a row of one native
-    vector env (:func:`_side_by_side`). If anything raises there, a batch of several units
-    runs each unit on its own, and a unit each seed alone (:func:`_seed_by_seed`, identical
-    results), so that only the episodes that fail are recorded as failed. A policy of a
-    process of its own that does not answer in time fails every seed with the timeout
-    (alone, each would take as long)."""
+def _run_units(batch: list[Unit], own: bool) -> list[tuple[list[dict], dict | None]]:
+    """:func:`run_units` (its docstring); ``own``: whether the batch's policy runs in a
+    process of its own, decided once for the batch and shared by both paths. Every seed of
+    the batch is a row of one native vector env (:func:`_side_by_side`). If anything raises
+    there, a batch of several units runs each unit on its own, and a unit each seed alone
+    (:func:`_seed_by_seed`, identical results), so that only the episodes that fail are
+    recorded as failed. A policy of a process of its own that does not answer in time fails
+    every seed with the timeout (alone, each would take as long)."""
     for module in batch[0].imports:  # a spawned worker or a Ray task has not imported them
         importlib.import_module(module)
     try:
-        return _side_by_side(batch)
+        return _side_by_side(batch, own)
     except PolicyTimeout as exc:
         return [
             (
@@ -184,11 +176,11 @@ def _run_units(batch: list[Unit]) -> list[tuple[list[dict], dict | None]]:
         ]
     except Exception:  # noqa: BLE001 - isolate the failing units, then seeds, below
         if len(batch) > 1:
-            return [out for u in batch for out in _run_units([u])]
-        return [_seed_by_seed(batch[0])]
+            return [out for u in batch for out in _run_units([u], own)]
+        return [_seed_by_seed(batch[0], own)]
 
 
-def _side_by_side(batch: list[Unit]) -> list[tuple[list[dict], dict | None]]:
+def _side_by_side(batch: list[Unit], own: bool) -> list[tuple[list[dict], dict | None]]:
     """Each unit's rows and trace, all seeds rows of one vector env (:func:`run_batch`),
     each row under its unit's scenario. The units share env, policy and plant (batches); a
     policy that is not shipped is built and acts in a process of its own on a
@@ -196,14 +188,14 @@ def _side_by_side(batch: list[Unit]) -> list[tuple[list[dict], dict | None]]:
     u0 = batch[0]
     seeds = [s for u in batch for s in u.seeds]
     plant = {"params": u0.params} if u0.params else {}
-    n, own = len(seeds), own_process(u0.policy)
+    n = len(seeds)
     unit = make_env(u0.env_id, u0.scenario, n, **plant)
     if len(batch) > 1:
         unit = RowScenarios(unit, [u.scenario for u in batch for _ in u.seeds])
     # the nominal plant (a policy of its own process commissions on an env of its own)
     model = make_env(u0.env_id, u0.scenario, n) if plant and not own else unit
     policy = make_policy(
-        u0.policy, u0.env_id, model, u0.scenario, n, u0.imports, u0.timeout, n, u0.oracle
+        u0.parsed, u0.env_id, model, u0.scenario, n, u0.imports, u0.timeout, n, u0.oracle
     )
     try:
         results = run_batch(unit, policy, seeds)
@@ -218,16 +210,15 @@ def _side_by_side(batch: list[Unit]) -> list[tuple[list[dict], dict | None]]:
     return out
 
 
-def _seed_by_seed(u: Unit) -> tuple[list[dict], dict | None]:
+def _seed_by_seed(u: Unit, own: bool) -> tuple[list[dict], dict | None]:
     """Rows of a unit and the trace of ``u.trace_seed``, each seed alone in a single env
     (:func:`run_episode`); a seed that raises is a failed row."""
     trace = None
     plant = {"params": u.params} if u.params else {}
-    own = own_process(u.policy)
     env = make_env(u.env_id, u.scenario, **plant)
     model = make_env(u.env_id, u.scenario) if plant and not own else env
     try:
-        policy = None if own else _make_policy(u.policy, u.env_id, model, u.oracle)
+        policy = None if own else u.parsed.make(u.env_id, model, u.oracle)
     except Exception as exc:  # noqa: BLE001 - every seed of it fails alike
         policy = exc
     rows = []
@@ -239,7 +230,7 @@ def _seed_by_seed(u: Unit) -> tuple[list[dict], dict | None]:
             alone = (
                 policy
                 if not own
-                else make_policy(u.policy, u.env_id, model, u.scenario, None, u.imports, u.timeout)
+                else make_policy(u.parsed, u.env_id, model, u.scenario, None, u.imports, u.timeout)
             )
             try:
                 res = run_episode(env, alone, seed)
@@ -275,7 +266,7 @@ def _error_row(key: Key, fp: str, exc: BaseException) -> dict:
     }
 
 
-def _units(plan: Plan, done: dict) -> list[Unit]:
+def pending(plan: Plan, done: dict) -> list[Unit]:
     """What is left to run, one unit per env, scenario and policy; the oracle's first
     (they take the longest: the pool then ends with short units on every worker)."""
     out = []
@@ -302,9 +293,10 @@ def _units(plan: Plan, done: dict) -> list[Unit]:
                             params,
                             plan.episode_timeout,
                             plan.oracle,
+                            plan.spec(name),
                         )
                     )
-    return sorted(out, key=lambda u: u.policy != summary.ONE)  # stable: run order otherwise
+    return sorted(out, key=lambda u: u.parsed.score_end != 1)  # stable: run order otherwise
 
 
 def _finished(row: dict | None) -> bool:
@@ -322,9 +314,10 @@ def score_ends(env_id: str, scenario: str, seeds: tuple[int, ...]) -> tuple[floa
     """
     sc = scenarios.resolve(scenario, env_id)
     means = []
-    for name in (summary.ZERO, summary.ONE):
-        fp = episode_fingerprint(env_id, scenario, name)
-        rows = run_unit(Unit(env_id, scenario, sc, name, list(seeds), fp, None))[0]
+    for name in (specs.ZERO, specs.ONE):
+        spec = specs.parse(name, references=True)
+        fp = episode_fingerprint(env_id, scenario, spec)
+        rows = run_unit(Unit(env_id, scenario, sc, name, list(seeds), fp, None, parsed=spec))[0]
         failed = [r for r in rows if r.get("error")]
         if failed:
             raise RuntimeError(

@@ -1,5 +1,5 @@
 """The outputs of a leaderboard run rebuilt from episodes.jsonl: leaderboard.json,
-leaderboard.md and the figures of plots/ (:func:`_rebuild`), and the trend plots drawn for a
+leaderboard.md and the figures of plots/ (:func:`rebuild`), and the trend plots drawn for a
 plant as soon as all its episodes have finished (:class:`Plots`).
 """
 
@@ -16,7 +16,7 @@ from agents.evaluation import run_episode
 from agents.leaderboard import episodes, mismatch, pareto, plots, report, trends
 from agents.leaderboard.episodes import Unit
 from agents.leaderboard.plan import Plan
-from agents.leaderboard.records import EPISODES, _latest, dumps, read_record
+from agents.leaderboard.records import EPISODES, dumps, latest_rows, read_record
 from agents.leaderboard.summary import REFERENCE, SCHEMA_VERSION, VERSUS, agent_names, summarize
 
 
@@ -83,7 +83,7 @@ class Plots:
                 try:
                     runs = [r for r in self.plan.policies[env_id] if specs.split_run(r)[0] == name]
                     pol = episodes.make_policy(
-                        runs[0] if runs else name,
+                        self.plan.spec(runs[0] if runs else name),
                         env_id,
                         env,
                         self.plan.resolved[env_id, sc],
@@ -124,7 +124,7 @@ class Plots:
 def _grid_rows(out: Path, plan: Plan) -> list[dict]:
     """The rows of the run's grid from episodes.jsonl: the last line of each episode with
     the current fingerprint, without its traceback."""
-    latest = _latest(read_record(out / EPISODES))
+    latest = latest_rows(read_record(out / EPISODES))
     rows = []
     for key in plan.grid():
         r = latest.get((key, plan.fingerprints[key[:3]]))
@@ -155,7 +155,7 @@ def _run_info(plan: Plan, envs: list[str] | None = None) -> dict[str, Any]:
     }
 
 
-def _rebuild(out: Path, plan: Plan, figures: bool = True) -> tuple[list[dict], dict | None]:
+def rebuild(out: Path, plan: Plan, figures: bool = True) -> tuple[list[dict], dict | None]:
     """leaderboard.json, leaderboard.md and the summary figures from episodes.jsonl."""
     rows = _grid_rows(out, plan)
     run = _run_info(plan)

@@ -18,13 +18,13 @@ from agents.leaderboard.plots import (
     BASELINE_COLORS,
     RC,
     REFERENCE_COLORS,
-    _grid,
     figure_order,
     policy_colors,
     pyplot,
     save,
     short_env,
     short_name,
+    subplot_grid,
 )
 from agents.leaderboard.report import INADMISSIBLE, ratio
 from agents.leaderboard.summary import ONE, REFERENCES, ZERO
@@ -208,7 +208,7 @@ def pareto(path: Path, summary: dict[str, Any]) -> Path:
     the axis sits at the edge with its value."""
     plt = pyplot()
     plants = list(summary["plants"])
-    rows, cols = _grid(len(plants))
+    rows, cols = subplot_grid(len(plants))
     colors = policy_colors(figure_order(summary))
     limit = float(summary["run"].get("travel_budget", stats.TRAVEL_BUDGET))
     with plt.rc_context(RC):

@@ -28,7 +28,7 @@ from agents import specs, stats
 from agents.leaderboard import mismatch, summary
 from agents.leaderboard.isolated import PolicyFailed, PolicyProcess
 from agents.leaderboard.records import EPISODES, SCHEMA, Key
-from agents.oracle import DEFAULT_ENGINE, INCUMBENTS
+from agents.oracle import DEFAULT_ENGINE
 from steamtemp_gym import envs as envs_
 from steamtemp_gym import scenarios
 from steamtemp_gym.checks import head, tail
@@ -49,7 +49,7 @@ DEFAULT_SEEDS = "0-4"
 #: The frozen-valve reference run on every plant (agents/difficulty.py).
 REFERENCE = summary.REFERENCE
 #: Policies that join every run: the score's 0, its 1 and the frozen valve.
-ALWAYS = (summary.ZERO, summary.ONE, REFERENCE)
+ALWAYS = (specs.ZERO, *specs.REFERENCES)
 #: Upper bound on the number of seeds (a range such as ``0-1000000000`` is a typo).
 MAX_SEEDS = 10_000
 MAX_SEED = 2**63 - 1
@@ -58,7 +58,7 @@ MAX_SEED = 2**63 - 1
 #: 24 s wall on 2 shared cores).
 EPISODE_TIMEOUT_S = 300.0
 #: Longest excerpt of an exception message quoted in an argparse error.
-_EXCERPT = 400
+EXCERPT = 400
 _SEED_ITEM = re.compile(r"^(\d+)(?:-(\d+))?$")
 
 
@@ -79,6 +79,14 @@ class Plan:
     #: env -> mismatch label -> the variant's params (agents/leaderboard/mismatch.py)
     variants: dict[str, dict[str, dict]] = field(default_factory=dict)
     oracle: str = DEFAULT_ENGINE  # --oracle: the engine of the score's 1 (agents/oracle.py)
+    #: policy name -> its Spec (agents/specs.py), parsed once for the run
+    parsed: dict[str, specs.Spec] = field(default_factory=dict)
+
+    def spec(self, name: str) -> specs.Spec:
+        """The Spec of the policy ``name`` (parsed on first use, then kept)."""
+        if name not in self.parsed:
+            self.parsed[name] = specs.parse(name, references=True)
+        return self.parsed[name]
 
     def scenarios_of(self, env_id: str) -> list[str]:
         """The run's scenarios on ``env_id``, then its mismatch labels."""
@@ -88,7 +96,7 @@ class Plan:
         """The policies run on ``env_id`` under ``sc``: all but the references on a
         mismatch variant."""
         if sc in self.variants.get(env_id, {}):
-            return [p for p in self.policies[env_id] if p not in summary.REFERENCES]
+            return [p for p in self.policies[env_id] if not self.spec(p).reference]
         return self.policies[env_id]
 
     def grid(self) -> Iterable[Key]:
@@ -100,7 +108,7 @@ class Plan:
                         yield env_id, sc, name, seed
 
 
-def _items(ap: argparse.ArgumentParser, flag: str, text: str, key=None) -> list[str]:
+def items(ap: argparse.ArgumentParser, flag: str, text: str, key=None) -> list[str]:
     """Comma list: stripped, empty items ignored, duplicates dropped (first kept)."""
     items = [s.strip() for s in text.split(",")]
     items = [s for s in items if s]
@@ -122,7 +130,7 @@ def _items(ap: argparse.ArgumentParser, flag: str, text: str, key=None) -> list[
 def parse_seeds(ap: argparse.ArgumentParser, text: str) -> list[int]:
     """``--seeds``: integers >= 0 and inclusive ranges ``a-b``, comma separated, deduplicated."""
     seeds: list[int] = []
-    for item in _items(ap, "--seeds", text):
+    for item in items(ap, "--seeds", text):
         m = _SEED_ITEM.match(item)
         if not m:
             ap.error(
@@ -145,7 +153,9 @@ def parse_seeds(ap: argparse.ArgumentParser, text: str) -> list[int]:
     return unique
 
 
-def _available(env_id: str) -> list[str]:
+def available_policies(env_id: str) -> list[str]:
+    """The policies of a run on ``env_id`` without ``--policies``: every baseline, every
+    training run of the shipped agents there (with the agents extra), the references."""
     trained = (
         [
             r
@@ -156,7 +166,7 @@ def _available(env_id: str) -> list[str]:
         if _sb3()
         else []
     )
-    return list(baselines.NAMES) + trained + [summary.ONE, REFERENCE]
+    return list(baselines.NAMES) + trained + list(specs.REFERENCES)
 
 
 @functools.lru_cache(maxsize=1)
@@ -175,69 +185,87 @@ def _sb3() -> bool:
     return False
 
 
-def _resolve(spec: str, env_id: str) -> Any:
+def resolve_scenario(spec: str, env_id: str) -> Any:
     """A scenario name, ``heldout:<name>``, ``random`` or a YAML file as a Scenario (or
     ``random``): steamtemp_gym.scenarios.resolve, as gym.make takes them."""
     return scenarios.resolve(spec, env_id)
 
 
-def _policies(
+def parse_policy(ap: argparse.ArgumentParser, name: str, parsed: dict[str, specs.Spec]) -> None:
+    """Parse the policy ``name`` into ``parsed`` (once: a name already there is kept); a name
+    that does not parse (agents/specs.py), or a trained agent without the agents extra, is a
+    bad --policies value."""
+    if name in parsed:
+        return
+    try:
+        parsed[name] = specs.parse(name, references=True)
+    except ValueError as exc:
+        ap.error(f"argument --policies: {head(str(exc), 1000)}")
+    if parsed[name].needs_extra and not _sb3():
+        ap.error(
+            f"argument --policies: {head(name, 60)!r} is a trained agent: it needs the "
+            "agents extra, pip install 'steamtemp-gym[agents]'"
+        )
+
+
+def policies(
     ap: argparse.ArgumentParser,
     envs: list[str],
     text: str | None,
     oracle: bool = True,
     imports: tuple[str, ...] = (),
     timeout: float | None = EPISODE_TIMEOUT_S,
-) -> dict:
-    """Policies per env; every requested name must parse (agents/specs.py) and be available
-    for at least one env, and a factory's policy is built once on each env and checked, in
-    a process of its own as it runs (agents/leaderboard/isolated.py), within ``timeout``.
-    :data:`ALWAYS` joins every env (the oracle only with ``oracle``)."""
-    always = [p for p in ALWAYS if oracle or p != summary.ONE]
+) -> tuple[dict[str, list[str]], dict[str, specs.Spec]]:
+    """Policies per env, and the Spec of each (parsed once); every requested name must parse
+    (agents/specs.py) and be available for at least one env, and a factory's policy is
+    built once on each env and checked, in a process of its own as it runs
+    (agents/leaderboard/isolated.py), within ``timeout``. :data:`ALWAYS` joins every env
+    (the oracle only with ``oracle``)."""
+    parsed: dict[str, specs.Spec] = {}
+    names = [] if text is None else items(ap, "--policies", text)
+    for n in [*names, *ALWAYS]:
+        parse_policy(ap, n, parsed)
     if text is None:
-        return {e: [p for p in _available(e) if oracle or p != summary.ONE] for e in envs}
-    names = _items(ap, "--policies", text)
-    if not oracle and summary.ONE in names:
-        ap.error(f"argument --policies: {summary.ONE} is listed but --no-oracle is given")
-    parsed = {}
-    for n in names:
-        if n in (summary.ONE, REFERENCE):
-            continue
-        try:
-            parsed[n] = specs.parse(n)
-        except ValueError as exc:
-            ap.error(f"argument --policies: {head(str(exc), 1000)}")
-        if parsed[n].kind in (specs.SHIPPED, specs.FILES) and not _sb3():
-            ap.error(
-                f"argument --policies: {head(n, 60)!r} is a trained agent: it needs the "
-                "agents extra, pip install 'steamtemp-gym[agents]'"
-            )
+        out = {e: available_policies(e) for e in envs}
+    else:
+        if not oracle and any(parsed[n].score_end == 1 for n in names):
+            ap.error(f"argument --policies: {summary.ONE} is listed but --no-oracle is given")
+        out = _requested(ap, envs, names, parsed)
+    for e, pols in out.items():
+        if text is not None:
+            pols[:] = list(dict.fromkeys(r for n in pols for r in specs.training_runs(n, e)))
+        for n in pols:
+            parse_policy(ap, n, parsed)
+        for n in [n for n in pols if parsed[n].is_factory]:
+            try:
+                PolicyProcess(n, e, None, None, imports, timeout).close()
+            except PolicyFailed as exc:  # any failure is a bad --policies value
+                ap.error(f"argument --policies: {head(n, 60)!r} on {e}: {head(str(exc), EXCERPT)}")
+        pols += [p for p in ALWAYS if p not in pols]
+        pols[:] = [p for p in pols if oracle or parsed[p].score_end != 1]
+    return out, parsed
 
-    def here(n: str, e: str) -> bool:
-        return n not in parsed or parsed[n].available(e)
 
-    nowhere = [n for n in names if not any(here(n, e) for e in envs)]
+def _requested(
+    ap: argparse.ArgumentParser, envs: list[str], names: list[str], parsed: dict[str, specs.Spec]
+) -> dict[str, list[str]]:
+    """The requested ``names`` available on each env (a note for each env that lacks some);
+    a name available on none of ``envs`` is a bad --policies value."""
+    nowhere = [n for n in names if not any(parsed[n].available(e) for e in envs)]
     if nowhere:
         ap.error(
             f"argument --policies: {[head(n, 60) for n in nowhere]} not available for envs "
             f"{envs}: only for {[sorted(parsed[n].envs) for n in nowhere]}"
         )
-    out = {e: [n for n in names if here(n, e)] for e in envs}
+    out = {e: [n for n in names if parsed[n].available(e)] for e in envs}
     for e, pols in out.items():
         missing = [n for n in names if n not in pols]
-        pols[:] = list(dict.fromkeys(r for n in pols for r in specs.training_runs(n, e)))
         if missing:
             print(f"note: {missing} not available for {e}; skipped there", file=sys.stderr)
-        for n in [n for n in pols if n in parsed and parsed[n].kind == specs.FACTORY]:
-            try:
-                PolicyProcess(n, e, None, None, imports, timeout).close()
-            except PolicyFailed as exc:  # any failure is a bad --policies value
-                ap.error(f"argument --policies: {head(n, 60)!r} on {e}: {head(str(exc), _EXCERPT)}")
-        pols += [p for p in always if p not in pols]
     return out
 
 
-def _env_id(name: str) -> str:
+def env_id_of(name: str) -> str:
     """The id an --envs item names (with or without the namespace); itself if none."""
     try:
         return envs_.resolve_id(name)
@@ -273,22 +301,11 @@ def _check_out(ap: argparse.ArgumentParser, out: Path, resume: bool) -> None:
         )
 
 
-#: The code of the references that are no baselines.
-_REFERENCE_MODULES = {summary.ONE: "agents.oracle", REFERENCE: "agents.difficulty"}
-
-
-def _policy_digest(env_id: str, name: str, oracle: str = DEFAULT_ENGINE) -> str:
-    """The policy's part of the fingerprint: the name, with the provenance digest of its
-    code and of a baseline's stored tuning, a trained agent's files or a factory's module
-    (agents/specs.py); the oracle's with its engine and the code of the optimizer."""
-    if name in _REFERENCE_MODULES:
-        own = f"{name}:{specs.code_digest(_REFERENCE_MODULES[name])}"
-        if name == summary.ONE:  # its incumbents' episodes are candidates of its own
-            own += "".join(f"+{specs.parse(i).digest(env_id)}" for i in INCUMBENTS)
-            if oracle != "cem":
-                own += f"+{oracle}:{specs.code_digest('agents.optimum')}"
-        return own
-    return specs.parse(name).digest(env_id)
+def policy_digest(env_id: str, name: str | specs.Spec, oracle: str = DEFAULT_ENGINE) -> str:
+    """The policy's part of the fingerprint (:meth:`agents.specs.Spec.digest`, ``oracle``
+    the oracle's engine) of a policy name or its Spec."""
+    spec = name if isinstance(name, specs.Spec) else specs.parse(name, references=True)
+    return spec.digest(env_id, oracle)
 
 
 def fingerprint(
@@ -310,13 +327,16 @@ def fingerprint(
     return hashlib.sha256(text.encode()).hexdigest()[:16]
 
 
-def episode_fingerprint(env_id: str, scenario: str, name: str, oracle: str = DEFAULT_ENGINE) -> str:
-    """The fingerprint :func:`build_plan` gives the episodes of policy ``name`` on the
-    nominal plant of ``env_id`` under ``scenario`` (a name as ``--scenarios`` takes it)."""
+def episode_fingerprint(
+    env_id: str, scenario: str, name: str | specs.Spec, oracle: str = DEFAULT_ENGINE
+) -> str:
+    """The fingerprint :func:`build_plan` gives the episodes of policy ``name`` (or its
+    Spec) on the nominal plant of ``env_id`` under ``scenario`` (a name as ``--scenarios``
+    takes it)."""
     return fingerprint(
         env_id,
-        _resolve(scenario, env_id),
-        _policy_digest(env_id, name, oracle),
+        resolve_scenario(scenario, env_id),
+        policy_digest(env_id, name, oracle),
         specs.source_digest(env_id),
     )
 
@@ -332,7 +352,7 @@ def _import_modules(ap: argparse.ArgumentParser, imports: tuple[str, ...]) -> tu
                 raise
             ap.error(
                 f"argument --import: cannot import {head(module, 100)!r}: "
-                f"{head(guard.describe(exc, 'the module'), _EXCERPT)}"
+                f"{head(guard.describe(exc, 'the module'), EXCERPT)}"
             )
     return imports
 
@@ -351,14 +371,14 @@ def _number(ap: argparse.ArgumentParser, flag: str, value, ok, expected: str) ->
 def build_plan(ap: argparse.ArgumentParser, args: argparse.Namespace) -> Plan:
     """Check every flag (argparse errors, exit code 2) and build the envs; runs nothing."""
     imports = _import_modules(ap, tuple(getattr(args, "modules", None) or ()))
-    envs = _items(ap, "--envs", args.envs, key=_env_id)
-    unknown = [e for e in envs if _env_id(e) not in envs_.ids()]
+    envs = items(ap, "--envs", args.envs, key=env_id_of)
+    unknown = [e for e in envs if env_id_of(e) not in envs_.ids()]
     if unknown:
         ap.error(
             f"argument --envs: unknown {[head(e, 60) for e in unknown]}; "
             f"valid choices: {envs_.ids()} (the name after 'steamtemp/' is enough)"
         )
-    envs = [_env_id(e) for e in envs]
+    envs = [env_id_of(e) for e in envs]
     seeds = parse_seeds(ap, args.seeds)
     budget = _number(
         ap,
@@ -375,10 +395,10 @@ def build_plan(ap: argparse.ArgumentParser, args: argparse.Namespace) -> Plan:
         "a number of seconds >= 0 (0: no limit)",
     )
     timeout = timeout or None
-    pols = _policies(
+    pols, parsed = policies(
         ap, envs, args.policies, oracle=not args.no_oracle, imports=imports, timeout=timeout
     )
-    scs = _items(ap, "--scenarios", args.scenarios, key=_scenario_key)
+    scs = items(ap, "--scenarios", args.scenarios, key=_scenario_key)
     if args.out is None or str(args.out).strip() == "":
         ap.error("argument --out: empty path")
     _check_out(ap, Path(args.out), args.resume)
@@ -386,7 +406,7 @@ def build_plan(ap: argparse.ArgumentParser, args: argparse.Namespace) -> Plan:
     for env_id in envs:  # cheap pass first: names and YAML files
         for sc in scs:
             try:
-                resolved[env_id, sc] = _resolve(sc, env_id)
+                resolved[env_id, sc] = resolve_scenario(sc, env_id)
             except Exception as exc:  # noqa: BLE001 - any failure is a bad --scenarios value
                 ap.error(
                     f"argument --scenarios: {tail(sc, 80)!r} for {env_id}: "
@@ -402,6 +422,7 @@ def build_plan(ap: argparse.ArgumentParser, args: argparse.Namespace) -> Plan:
         travel_budget=budget,
         episode_timeout=timeout,
         oracle=getattr(args, "oracle", DEFAULT_ENGINE),
+        parsed=parsed,
     )
     if not args.no_mismatch and mismatch.SCENARIO in scs:
         for env_id in envs:
@@ -410,14 +431,14 @@ def build_plan(ap: argparse.ArgumentParser, args: argparse.Namespace) -> Plan:
                 resolved[env_id, label] = resolved[env_id, mismatch.SCENARIO]
     for env_id in envs:
         source = specs.source_digest(env_id)
-        digests = {n: _policy_digest(env_id, n, plan.oracle) for n in pols[env_id]}  # per env
+        digests = {n: parsed[n].digest(env_id, plan.oracle) for n in pols[env_id]}  # per env
         for sc in scs:
             try:
                 plan.envs_made[env_id, sc] = gym.make(env_id, scenario=resolved[env_id, sc])
             except Exception as exc:  # noqa: BLE001
                 ap.error(
                     f"argument --scenarios: {tail(sc, 80)!r} for {env_id}: "
-                    f"{type(exc).__name__}: {head(str(exc), _EXCERPT)}"
+                    f"{type(exc).__name__}: {head(str(exc), EXCERPT)}"
                 )
         for sc in plan.scenarios_of(env_id):
             params = plan.variants.get(env_id, {}).get(sc)

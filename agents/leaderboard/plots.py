@@ -199,7 +199,8 @@ def figure_order(summary: dict[str, Any]) -> list[str]:
     return list(dict.fromkeys(order))
 
 
-def _grid(n: int):
+def subplot_grid(n: int):
+    """(rows, columns) of a figure of ``n`` panels, at most three a row."""
     cols = min(n, 3)
     rows = (n + cols - 1) // cols
     return rows, cols
@@ -231,7 +232,7 @@ def bars(path: Path, summary: dict[str, Any]) -> Path:
     policies down to -1, a bar beyond it ends at the edge with its value written there."""
     plt = pyplot()
     plants = list(summary["plants"])
-    rows, cols = _grid(len(plants))
+    rows, cols = subplot_grid(len(plants))
     colors = policy_colors(figure_order(summary))
     with plt.rc_context(RC):
         width = max(5.2 * cols, 8.0)  # one plant: room for the title and the labels
@@ -310,7 +311,7 @@ def profiles(
     """
     plt = pyplot()
     plants = list(scores)
-    rows, cols = _grid(len(plants))
+    rows, cols = subplot_grid(len(plants))
     names = list(dict.fromkeys([*(order or []), *(p for e in scores.values() for p in e)]))
     colors = policy_colors(names)
     lo, hi = PROFILE_RANGE

@@ -137,7 +137,7 @@ class Record:
         self.f.close()
 
 
-def _latest(rows: list[dict]) -> dict[tuple[Key, str], dict]:
+def latest_rows(rows: list[dict]) -> dict[tuple[Key, str], dict]:
     """The last row of each (episode, fingerprint)."""
     out = {}
     for r in rows:

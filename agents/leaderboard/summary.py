@@ -33,9 +33,9 @@ from agents.leaderboard import mismatch
 #: Version of leaderboard.json's format (docs/leaderboard_schema.json).
 SCHEMA_VERSION = 9
 #: The 0 of the normalized score: the cascade as a commissioned unit runs it.
-ZERO = baselines.INDUSTRIAL_REFERENCE
+ZERO = specs.ZERO
 #: The 1: the clairvoyant NMPC on the true plant (agents/oracle.py).
-ONE = "oracle"
+ONE = specs.ONE
 #: What the 1 is, by the oracle's engine (agents/oracle.py: ENGINES; every output of the
 #: leaderboard says which).
 ONE_LABELS = {
@@ -45,8 +45,8 @@ ONE_LABELS = {
     "the clairvoyant optimum",
 }
 #: Policies listed and plotted but never ranked (not admissible controllers).
-REFERENCES = ("oracle", "frozen_valve")
-REFERENCE = "frozen_valve"
+REFERENCES = specs.REFERENCES
+REFERENCE = specs.FROZEN_VALVE
 #: The policy the probability of improvement compares against.
 VERSUS = ZERO
 TABLE_METRICS = (
