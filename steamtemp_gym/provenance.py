@@ -41,7 +41,7 @@ _NO_DYNAMICS_PACKAGES = ("testing",)
 LENGTH = 16
 
 
-def _strip_docstrings(tree: ast.AST) -> ast.AST:
+def strip_docstrings(tree: ast.AST) -> ast.AST:
     for node in ast.walk(tree):
         body = getattr(node, "body", None)
         if (
@@ -60,7 +60,7 @@ def _file_digest(path: str, size: int, mtime_ns: int) -> str:
     """SHA-256 of one file's normalized content (see the module docstring)."""
     data = Path(path).read_bytes()
     if path.endswith(".py"):
-        data = ast.dump(_strip_docstrings(ast.parse(data))).encode()
+        data = ast.dump(strip_docstrings(ast.parse(data))).encode()
     return hashlib.sha256(data).hexdigest()
 
 

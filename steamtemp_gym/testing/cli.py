@@ -33,7 +33,7 @@ from steamtemp_gym.testing.runner import CHECK_NAMES, Result, bound_checks, run,
 from steamtemp_gym.testing.subjects import short_id
 
 
-def _parser() -> argparse.ArgumentParser:
+def make_parser() -> argparse.ArgumentParser:
     source = policy_sources.find()
     names = (
         "a policy factory module:callable (env -> Policy; module a dotted name or a .py "
@@ -160,7 +160,7 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 def _main(argv: Sequence[str] | None) -> int:
-    parser = _parser()
+    parser = make_parser()
     args = parser.parse_args(argv)
     for module in args.modules:
         try:

@@ -154,7 +154,12 @@ class) and ``scenarios`` (the paper's named scenarios, declared on the class).
 
 from steamtemp_gym.plants.base import K0
 from steamtemp_gym.plants.cascade_300mw import scenarios as _scenarios  # noqa: F401 (declares them)
-from steamtemp_gym.plants.cascade_300mw.discretization import _block, _pack, continuous_model, zoh
+from steamtemp_gym.plants.cascade_300mw.discretization import (
+    block,
+    continuous_model,
+    pack_params,
+    zoh,
+)
 from steamtemp_gym.plants.cascade_300mw.kernel import SEED_SALT, steady, step
 from steamtemp_gym.plants.cascade_300mw.layout import IP, IX, IZ, LOAD_STEP, N_GRID, OUTPUTS
 from steamtemp_gym.plants.cascade_300mw.params import (
@@ -175,8 +180,8 @@ __all__ = [
     "LOAD_MAX",
     "continuous_model",
     "zoh",
-    "_block",
-    "_pack",
+    "block",
+    "pack_params",
     "step",
     "steady",
     "SEED_SALT",

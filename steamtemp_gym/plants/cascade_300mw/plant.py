@@ -9,7 +9,7 @@ from steamtemp_gym.plants.base import (
     Plant,
     Signal,
 )
-from steamtemp_gym.plants.cascade_300mw.discretization import _pack
+from steamtemp_gym.plants.cascade_300mw.discretization import pack_params
 from steamtemp_gym.plants.cascade_300mw.kernel import SEED_SALT, steady, step
 from steamtemp_gym.plants.cascade_300mw.layout import IX, OUTPUTS
 from steamtemp_gym.plants.cascade_300mw.params import (
@@ -53,7 +53,7 @@ class Cascade300MW(Plant):
     extra_info = ("intermediate_temp_C", "omega_K", "omega2_kg_s", "outer_disturbance_K")
     default_duration_s = 3600.0
 
-    pack = staticmethod(_pack)
+    pack = staticmethod(pack_params)
     setpoint_param = "T_out_C"
 
     def kernel(self):
