@@ -32,6 +32,7 @@ from typing import Any
 
 import numpy as np
 
+from steamtemp_gym import catalog, scenarios
 from steamtemp_gym._jit import njit
 from steamtemp_gym.metrics.calculus import frac_outside
 from steamtemp_gym.metrics.names import METRIC_NAMES, band_key
@@ -127,10 +128,6 @@ def cost_limit(scenario: Any, dt_s: float) -> float:
 def _shipped(scenario: Scenario) -> bool:
     """Whether ``scenario`` is the package's scenario of its name (named or held-out, for
     some plant or none), not a scenario of one's own that bears the name."""
-    # imported here: the scenario registry reads the plant catalog, whose plants import the
-    # env core, which imports this module
-    from steamtemp_gym import catalog, scenarios
-
     for spec in (scenario.name, scenarios.HELDOUT_PREFIX + scenario.name):
         for plant_id in (None, *catalog.PLANTS):
             try:
