@@ -149,11 +149,10 @@ The package, one task per module: ``params`` (CascadeParams, with the parameters
 sources), ``layout`` (the outputs and the named slots of the packed parameters, states
 and outputs), ``discretization`` (the sections' exact zero-order-hold models over load,
 packed into P), ``kernel`` (the compiled step and steady state), ``plant`` (the Plant
-class) and ``scenarios`` (the paper's named scenarios, declared on the class).
+class) and ``scenarios`` (the paper's named scenarios, the class's ``scenarios``).
 """
 
 from steamtemp_gym.plants.base import K0
-from steamtemp_gym.plants.cascade_300mw import scenarios as _scenarios  # noqa: F401 (declares them)
 from steamtemp_gym.plants.cascade_300mw.discretization import (
     block,
     continuous_model,

@@ -16,6 +16,7 @@ from steamtemp_gym.plants.cascade_300mw.params import (
     PLANT_ID,
     CascadeParams,
 )
+from steamtemp_gym.plants.cascade_300mw.scenarios import SCENARIOS
 from steamtemp_gym.rng import splitmix64
 
 
@@ -52,6 +53,7 @@ class Cascade300MW(Plant):
     }
     extra_info = ("intermediate_temp_C", "omega_K", "omega2_kg_s", "outer_disturbance_K")
     default_duration_s = 3600.0
+    scenarios = SCENARIOS
 
     pack = staticmethod(pack_params)
     setpoint_param = "T_out_C"
