@@ -10,8 +10,8 @@ states (10-25 MPa, 3000-3400 kJ/kg):
 
 - ``scalar``: the plants' way, one ``steam.T_rho_ph`` call per row;
 - ``batch``: one loop over the rows that locates each row's cell branch-free and
-  evaluates it with the steam package's own Hermite bicubic (``_hermite``, ``_fbasis_h``
-  and ``_fval``, as ``steam.T_rho_ph`` does), as numba compiles it;
+  evaluates it with the steam package's own Hermite bicubic (``hermite``, ``fast_basis_h``
+  and ``fast_value``, as ``steam.T_rho_ph`` does), as numba compiles it;
 - ``batch, noalias``: the same loop compiled with numba's internal ``noalias`` flag (the
   arrays declared not to overlap), which is what lets LLVM vectorize its table reads into
   gathers. The flag is not a public numba option; the script sets it for this one compile.
@@ -34,8 +34,8 @@ from numba import carray, float64, njit
 
 from steamtemp_gym.steam import T_rho_ph
 from steamtemp_gym.steam import tables as tb
-from steamtemp_gym.steam.cubic import _hermite
-from steamtemp_gym.steam.fast import _fbasis_h, _fval
+from steamtemp_gym.steam.cubic import hermite
+from steamtemp_gym.steam.fast import fast_basis_h, fast_value
 
 SIG = (float64[::1],) * 5
 
@@ -43,18 +43,18 @@ SIG = (float64[::1],) * 5
 def _batch(P, H, T, dT, R):  # noqa: N803
     """T, dT/dh and rho of every row (P Pa, H J/kg) on the fast table, cells located
     branch-free."""
-    ft = carray(tb._FT_PTR(), tb._FT_SHAPE)
-    fr = carray(tb._FR_PTR(), tb._FT_SHAPE)
+    ft = carray(tb.FT_PTR(), tb.FT_SHAPE)
+    fr = carray(tb.FR_PTR(), tb.FT_SHAPE)
     for k in range(P.shape[0]):
-        x = min(max((min(P[k] * 1e-6, 35.0) - tb._FP0) * tb._FPINV, 0.0), float(tb._FNP))
-        i = min(int(x), tb._FNP - 1)
-        y = min(max((H[k] * 1e-3 - tb._FH0) * tb._FHINV, 0.0), float(tb._FNH))
-        j = min(int(y), tb._FNH - 1)
-        a = _hermite(x - i)
-        b, e = _fbasis_h(y - j)
-        T[k], dT_kJ = _fval(ft, i, j, a, b, e)
+        x = min(max((min(P[k] * 1e-6, 35.0) - tb.FP0) * tb.FPINV, 0.0), float(tb.FNP))
+        i = min(int(x), tb.FNP - 1)
+        y = min(max((H[k] * 1e-3 - tb.FH0) * tb.FHINV, 0.0), float(tb.FNH))
+        j = min(int(y), tb.FNH - 1)
+        a = hermite(x - i)
+        b, e = fast_basis_h(y - j)
+        T[k], dT_kJ = fast_value(ft, i, j, a, b, e)
         dT[k] = dT_kJ * 1e-3
-        R[k] = _fval(fr, i, j, a, b, e)[0]
+        R[k] = fast_value(fr, i, j, a, b, e)[0]
 
 
 @njit(error_model="numpy")

@@ -27,6 +27,7 @@ CACHE_DIR = _cache.configure(__version__)
 _cache.announce_compiles()
 
 from steamtemp_gym import catalog  # noqa: E402
+from steamtemp_gym.plants.base import Plant  # noqa: E402
 
 #: Every registered env id: the catalog's plants in the order of the reference documents,
 #: then those added with :func:`register_plant`.
@@ -54,8 +55,6 @@ def register_plant(plant_id: str, entry: str) -> None:
             that cannot be imported or is no such class; nothing is registered.
     """
     global ENV_IDS
-    from steamtemp_gym.plants.base import Plant
-
     catalog.add(plant_id, entry, Plant)
     try:
         _register(plant_id)

@@ -9,13 +9,13 @@ from __future__ import annotations
 
 import sys
 
+import steamtemp_gym
+from steamtemp_gym import envs, plants, policy_sources, scenarios
+from steamtemp_gym.scenarios import heldout
+
 
 def report() -> str:
     """The listing (module docstring)."""
-    import steamtemp_gym
-    from steamtemp_gym import envs, plants, policy_sources, scenarios
-    from steamtemp_gym.scenarios import heldout
-
     common = [n for n in scenarios.names() if n != scenarios.RANDOM]
     lines = [
         f"steamtemp_gym {steamtemp_gym.__version__}",

@@ -1,6 +1,6 @@
 """The project's ``njit``: numba's, without one compilation per literal argument.
 
-When compiled code calls a compiled function with a constant (``_s(P, 3, F_KA)``, a
+When compiled code calls a compiled function with a constant (``section_param(P, 3, F_KA)``, a
 named offset, ``True``), numba types that argument as ``Literal[int](3)`` and compiles a
 specialisation of the callee for each distinct constant. Nothing here uses literal
 values (no ``literally``, no indexing of heterogeneous tuples by an argument), so those

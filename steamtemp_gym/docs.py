@@ -26,6 +26,13 @@ import tokenize
 from pathlib import Path
 from typing import Any
 
+import steamtemp_gym
+from steamtemp_gym import catalog, plants, scenarios, signals
+from steamtemp_gym.envs.core import INFO_DOC, INFO_TAIL, info_sources
+from steamtemp_gym.plants.base import MAIN, SCHEDULED
+from steamtemp_gym.scenarios import heldout
+from steamtemp_gym.signals import OBS_LIMIT
+
 #: Where the pages go in a source tree.
 DOCS_DIR = Path(__file__).resolve().parents[1] / "docs" / "envs"
 #: Unit of a parameter from the end of its name (longest first).
@@ -129,8 +136,6 @@ def field_notes(cls: type) -> tuple[dict[str, str], dict[str, str]]:
 
 
 def _loops(plant) -> list[list[object]]:
-    from steamtemp_gym.plants.base import MAIN, SCHEDULED
-
     rows = []
     for action, (inner, outer) in zip(plant.actions, plant.control_loops, strict=True):
         if outer == MAIN and inner:
@@ -155,8 +160,6 @@ def _loops(plant) -> list[list[object]]:
 
 def page(env_id: str) -> str:
     """The reference page of one env id (module docstring)."""
-    from steamtemp_gym import plants, signals
-
     cls = plants.plant_class(env_id)
     plant = cls.skeleton()
     sig = signals.for_plant(plant)
@@ -202,8 +205,6 @@ def page(env_id: str) -> str:
 
 def _signal_sections(sig: Any) -> list[str]:
     """The observation and action sections of a page."""
-    from steamtemp_gym.signals import OBS_LIMIT
-
     out = [
         "## Observation",
         "",
@@ -245,8 +246,6 @@ def _signal_sections(sig: Any) -> list[str]:
 
 def _info_section(plant: Any) -> list[str]:
     """The info section of a page."""
-    from steamtemp_gym.envs.core import INFO_DOC, INFO_TAIL, info_sources
-
     out: list[str] = []
     outputs = {s.name: s for s in plant.outputs}
     info = [
@@ -278,9 +277,6 @@ def _info_section(plant: Any) -> list[str]:
 
 def _scenario_section(env_id: str) -> list[str]:
     """The scenario section of a page: named and held-out."""
-    from steamtemp_gym import scenarios
-    from steamtemp_gym.scenarios import heldout
-
     out: list[str] = []
     named = [n for n in scenarios.names(env_id) if n != scenarios.RANDOM]
     out += [
@@ -360,9 +356,6 @@ def _parameter_section(cls: Any) -> list[str]:
 
 def index() -> str:
     """``README.md`` of the pages: one row per env id."""
-    import steamtemp_gym
-    from steamtemp_gym import plants
-
     rows, ids = [], list(_packaged(steamtemp_gym.ENV_IDS))
     for env_id in ids:
         cls = plants.plant_class(env_id)
@@ -395,8 +388,6 @@ def index() -> str:
 def pages() -> dict[str, str]:
     """File name -> page of every env id of the suite, and the index ``README.md`` (the
     package's own plants: a plant registered from outside has no page here)."""
-    import steamtemp_gym
-
     return {
         "README.md": index(),
         **{page_name(i): page(i) for i in _packaged(steamtemp_gym.ENV_IDS)},
@@ -404,8 +395,6 @@ def pages() -> dict[str, str]:
 
 
 def _packaged(ids: tuple[str, ...]) -> list[str]:
-    from steamtemp_gym import catalog
-
     return [i for i in ids if catalog.packaged(i)]
 
 

@@ -18,6 +18,8 @@ import time
 from concurrent.futures import ProcessPoolExecutor
 from multiprocessing import get_context
 
+import steamtemp_gym
+from steamtemp_gym.envs import resolve_id
 from steamtemp_gym.plants.threads import usable_cpus
 
 
@@ -26,8 +28,6 @@ def compile_plant(env_id: str) -> float:
     took (compiling on a cold cache, loading on a warm one)."""
     import gymnasium as gym
     import numpy as np
-
-    import steamtemp_gym  # noqa: F401  (registers the envs, chooses the cache folder)
 
     t0 = time.perf_counter()
     env = gym.make(env_id)
@@ -39,9 +39,6 @@ def compile_plant(env_id: str) -> float:
 
 
 def main(argv: list[str] | None = None) -> None:
-    import steamtemp_gym
-    from steamtemp_gym.envs import resolve_id
-
     ap = argparse.ArgumentParser(
         prog="python -m steamtemp_gym.precompile", description=__doc__.split("\n\n")[0]
     )

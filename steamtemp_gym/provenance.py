@@ -30,6 +30,8 @@ import hashlib
 from collections.abc import Iterable
 from pathlib import Path
 
+from steamtemp_gym import catalog
+
 #: The folder that holds steamtemp_gym (and, beside it, baselines and agents).
 ROOT = Path(__file__).resolve().parent.parent
 #: Modules of steamtemp_gym that no trajectory depends on (drawing, docs, the command line,
@@ -41,7 +43,7 @@ _NO_DYNAMICS_PACKAGES = ("testing",)
 LENGTH = 16
 
 
-def _strip_docstrings(tree: ast.AST) -> ast.AST:
+def strip_docstrings(tree: ast.AST) -> ast.AST:
     for node in ast.walk(tree):
         body = getattr(node, "body", None)
         if (
@@ -60,7 +62,7 @@ def _file_digest(path: str, size: int, mtime_ns: int) -> str:
     """SHA-256 of one file's normalized content (see the module docstring)."""
     data = Path(path).read_bytes()
     if path.endswith(".py"):
-        data = ast.dump(_strip_docstrings(ast.parse(data))).encode()
+        data = ast.dump(strip_docstrings(ast.parse(data))).encode()
     return hashlib.sha256(data).hexdigest()
 
 
@@ -137,8 +139,6 @@ def outside_plant_files(plant_id: str) -> list[Path]:
     """The files of a plant registered from outside steamtemp_gym (``register_plant``): its
     module and what it imports from its own top-level package; none for the package's own
     plants and for an id that is no plant."""
-    from steamtemp_gym import catalog
-
     entry = catalog.PLANTS.get(plant_id) if isinstance(plant_id, str) else None
     module = entry.split(":")[0] if entry else "steamtemp_gym"
     if module.split(".")[0] == "steamtemp_gym":

@@ -68,7 +68,7 @@ def steady(plant, load, bias=0.0, fouling=1.0, dT=0.0, sp=535.0):
 def test_rated_steady_state_matches_the_paper():
     X, D, Z = steady(PLANT, 1.0)
     T = bs.section_temperatures(X[0], D[0], PLANT.P)
-    W_t, W_rh, p_rh, p_crh, _ = bs._reheat(PLANT.P, X[0, bs.IX.P], 1.0)
+    W_t, W_rh, p_rh, p_crh, _ = bs.reheat(PLANT.P, X[0, bs.IX.P], 1.0)
     assert Z[0, bs.IZ.pressure_MPa] == pytest.approx(18.1, abs=0.01)
     assert Z[0, bs.IZ.outlet_temp_C] == pytest.approx(535.0, abs=0.01)
     assert Z[0, bs.IZ.reheat_temp_C] == pytest.approx(530.0, abs=2.0)
@@ -376,7 +376,7 @@ def test_design_spray_and_the_schedule_error():
     print(f"\n50 %: design spray {Z[0, bs.IZ.design_spray_kg_s]:.2f} kg/s, steady {w:.2f} kg/s")
     design = Z[0, bs.IZ.design_spray_kg_s]
     assert abs(w - design) > 0.1 * design  # the documented mismatch
-    assert bs.h_ev_setpoint(PLANT.P, 0.5) - bs._table(PLANT.P, ITB.HEV, 0.5) == pytest.approx(
+    assert bs.h_ev_setpoint(PLANT.P, 0.5) - bs.table(PLANT.P, ITB.HEV, 0.5) == pytest.approx(
         PLANT.params.fwr_schedule_error_kJ_kg * 1e3
     )
     # a design-spray plant (no schedule error) holds the setpoint with design openings

@@ -46,7 +46,7 @@ def steady(loads, plant=PLANT, fouling=1.0, bias=0.0, spray_dT=0.0):
 def section_jacobian(x, u, d):
     """Central-difference Jacobian of the plant rhs on the platen's (metal, fluid) states."""
     P = PLANT.P
-    o_pl = bt._offsets(P)[1]
+    o_pl = bt.offsets(P)[1]
     idx, eps = [o_pl, o_pl + 1], [1e-2, 10.0]  # K, J/kg
     J = np.zeros((2, 2))
     for j, (i, e) in enumerate(zip(idx, eps, strict=True)):
@@ -201,7 +201,7 @@ def test_heat_absorption_bias_reaches_the_evaporator_outlet():
     for load in (1.0, 0.5):
         X0, *_ = steady(load)
         X1, *_ = steady(load, bias=0.05)
-        rise = bt._tab(PLANT.P, bt.ITAB.RISE, load)
+        rise = bt.table(PLANT.P, bt.ITAB.RISE, load)
         expected = q.fwr_coupling * q.bias_upstream_share * 0.05 * rise
         assert X1[0, bt.IX.HUP] - X0[0, bt.IX.HUP] == pytest.approx(expected, rel=1e-6)
         assert expected > 10e3  # J/kg

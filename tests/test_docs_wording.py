@@ -47,7 +47,7 @@ def _package_helps() -> dict[str, str]:
     helps = {
         "steamtemp-leaderboard": leaderboard.make_parser().format_help(),
         "steamtemp-train": train.make_parser().format_help(),
-        "steamtemp-check": cli._parser().format_help(),
+        "steamtemp-check": cli.make_parser().format_help(),
         "python -m steamtemp_gym": listing.report(),
     }
     for name, main in (

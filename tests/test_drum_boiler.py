@@ -77,7 +77,7 @@ def drum_open_loop(plant, load):
     """Open-loop drum at a plant steady state: G(x_drum, (q_s, q_f, Q)), outputs (p, level)."""
     x, d, _ = steady(plant, load)
     P = plant.P
-    _, _, _, q_s, _, _, h_f, *_ = db._boundary(x, d, P)
+    _, _, _, q_s, _, _, h_f, *_ = db.boundary(x, d, P)
     u0 = np.array([q_s, q_s, x[db.IX.LF] * P[db.IP.QNOM]])
     fd, jd = np.zeros(4), np.zeros(4)
 
@@ -385,7 +385,7 @@ def test_protection_keeps_attemperator_above_saturation(plant, load):
     margin = []
     for _ in range(300):
         plant.step(X, U, D, Z)
-        W, lw, _, q_s, w_sp, _, _, _, _, p1, *_ = db._boundary(X[0], D[0], plant.P)
+        W, lw, _, q_s, w_sp, _, _, _, _, p1, *_ = db.boundary(X[0], D[0], plant.P)
         margin.append(Z[0, db.IZ.attemp_out_temp_C] - (Tsat_p(p1) - 273.15))
     assert min(margin) >= plant.params.attemp_margin_K - 1e-6
     assert margin[-1] == pytest.approx(plant.params.attemp_margin_K, abs=1e-6)  # it binds

@@ -35,7 +35,7 @@ def radau_reference(plant, x0, commands, D_of_k):
         sol = solve_ivp(rhs, (0.0, dt), x_ref, method="Radau", rtol=1e-8, atol=atol)
         assert sol.success
         x_ref = sol.y[:, -1]
-        p = fsh._pressure(P, x_ref[fsh.IX.LW])
+        p = fsh.pressure(P, x_ref[fsh.IX.LW])
         # (FSH outlet, turbine inlet after the main-steam line) in C
         out.append(
             (

@@ -38,7 +38,7 @@ def _code_words(tree: ast.AST) -> list[tuple[int, str]]:
     """(line, text) of every name, attribute, imported module and string constant but the
     docstrings of a module's syntax tree (removed as the provenance digests remove them)."""
     out = []
-    for node in ast.walk(provenance._strip_docstrings(tree)):
+    for node in ast.walk(provenance.strip_docstrings(tree)):
         if isinstance(node, ast.Name):
             out.append((node.lineno, node.id))
         elif isinstance(node, ast.Attribute):

@@ -513,7 +513,7 @@ def test_compiled_band_fractions_equal_the_numpy_formula_bit_for_bit() -> None:
     def bits(x: np.ndarray) -> np.ndarray:
         return (x + 0.0).view(np.int64)  # -0.0 + 0.0 is +0.0; every other value unchanged
 
-    from steamtemp_gym.metrics.calculus import _frac_above, _frac_outside
+    from steamtemp_gym.metrics.calculus import frac_above_each, frac_outside_each
 
     edge = np.array([5.0, -5.0, 0.0, -0.0, 1e-310, -1e-310, 5 + 1e-15, 5 - 1e-15, 1e300, 0.995])
     a, c = (x.ravel() for x in np.meshgrid(edge, edge))
@@ -522,7 +522,7 @@ def test_compiled_band_fractions_equal_the_numpy_formula_bit_for_bit() -> None:
         for level in (5.0, 8.0, 0.995, -0.005, 0.0):
             for inclusive in (False, True):
                 want = _frac_above_numpy(e0, e1, level, inclusive)
-                got = _frac_above(e0, e1, level, inclusive=inclusive)
+                got = frac_above_each(e0, e1, level, inclusive=inclusive)
                 assert np.array_equal(bits(got), bits(want))
         want = _frac_above_numpy(e0, e1, 5.0, False) + _frac_above_numpy(-e0, -e1, 5.0, False)
-        assert np.array_equal(bits(_frac_outside(e0, e1, 5.0)), bits(want))
+        assert np.array_equal(bits(frac_outside_each(e0, e1, 5.0)), bits(want))

@@ -120,7 +120,7 @@ def test_every_plant_shows_every_scored_temperature_and_actuator(env_id):
     act = d.axes[-2]
     region = env.render()[act.rows[0] : act.rows[1] + 1, round(act.left) + 2 : round(act.x(1.0))]
     for j in range(n):
-        color = render._rgb(render._VALVE_COLORS[j % len(render._VALVE_COLORS)])
+        color = render.rgb(render.VALVE_COLORS[j % len(render.VALVE_COLORS)])
         assert np.all(region == color, axis=2).any(), (env_id, j)
     assert len(set(map(tuple, d.valve_colors))) == n
     assert d.valve_names == tuple(s.description.removesuffix(" command") for s in u.signals.action)

@@ -20,8 +20,8 @@ iapws = pytest.importorskip("iapws")
 from iapws import IAPWS97  # noqa: E402
 
 from steamtemp_gym import steam  # noqa: E402
-from steamtemp_gym.steam.fast import _fast, _fast_h_of_T  # noqa: E402
-from steamtemp_gym.steam.patches import _patch_h_of_T, _patch_lookup  # noqa: E402
+from steamtemp_gym.steam.fast import fast_h_of_T, fast_lookup  # noqa: E402
+from steamtemp_gym.steam.patches import patch_h_of_T, patch_lookup  # noqa: E402
 
 MPA = 1e6
 KJ = 1e3
@@ -335,7 +335,7 @@ def test_fast_path_is_used_inside_the_rectangle_only():
         lo, hi = steam.h_limits_p(p)
         h = lo + rng.random() * (hi - lo)
         inside = p0 <= p <= p1 and h0 <= h <= h1
-        ref = (_fast if inside else _patch_lookup)(p * 1e-6, h * 1e-3, 2)
+        ref = (fast_lookup if inside else patch_lookup)(p * 1e-6, h * 1e-3, 2)
         T, dT, rho, drho = steam.T_rho_ph(p, h)
         assert (T, dT, rho, drho) == (ref[0], ref[1] * 1e-3, ref[2], ref[3] * 1e-3)
     # p above P_MAX is clamped before the rectangle test
@@ -355,12 +355,12 @@ def test_fast_path_agrees_with_patches_on_its_edges():
         np.c_[np.full(hs.size, p0), hs],
     ]
     for p, h in pts:
-        fast = np.array(_fast(p, h, 2))
-        patch = np.array(_patch_lookup(p, h, 2))
+        fast = np.array(fast_lookup(p, h, 2))
+        patch = np.array(patch_lookup(p, h, 2))
         assert abs(fast[0] - patch[0]) <= 2e-4, (p, h, fast, patch)  # K
         assert np.all(np.abs(fast[1:] / patch[1:] - 1.0) <= [1e-4, 1e-6, 1e-4]), (p, h)
         T = fast[0]
-        assert abs(_fast_h_of_T(p, T) - _patch_h_of_T(p, T)) <= 2e-3  # kJ/kg
+        assert abs(fast_h_of_T(p, T) - patch_h_of_T(p, T)) <= 2e-3  # kJ/kg
     # the public lookups 1 mJ/kg (1 Pa) inside and outside the edges
     for p in ps[::10]:
         for h in (h0, h1):

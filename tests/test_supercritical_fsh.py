@@ -43,7 +43,7 @@ def test_rated_balance_matches_the_paper():
     p = Z[0, fsh.IZ.pressure_MPa] * 1e6
     n = PLANT.params.n_segments
     h_out = X[0, fsh.IX.CHAIN + 2 * n - 1]
-    W, _, w_sp, h0, *_ = fsh._boundary(X[0], X[0, 3:4], D[0], PLANT.P)
+    W, _, w_sp, h0, *_ = fsh.boundary(X[0], X[0, 3:4], D[0], PLANT.P)
     assert (h_out - h0) / 1e3 == pytest.approx(217.8, abs=0.5)
     rise = Z[0, fsh.IZ.outlet_temp_C] - Z[0, fsh.IZ.attemp_out_temp_C]
     assert rise == pytest.approx(68.5, abs=0.3)
@@ -114,7 +114,7 @@ def test_heat_absorption_bias_reaches_the_upstream_enthalpy():
     X1, _, Z1 = steady(1.0, bias=0.05)
     # share bias_upstream_share of the enthalpy rise from the feedwater
     dh = X1[0, fsh.IX.HUP] - X0[0, fsh.IX.HUP]
-    rise = fsh._table(PLANT.P, fsh.IP.DHUP, 1.0)
+    rise = fsh.table(PLANT.P, fsh.IP.DHUP, 1.0)
     assert dh == pytest.approx(0.05 * PLANT.params.bias_upstream_share * rise, rel=1e-6)
     assert Z1[0, fsh.IZ.attemp_in_temp_C] > Z0[0, fsh.IZ.attemp_in_temp_C] + 5.0
 

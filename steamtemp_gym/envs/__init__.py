@@ -2,6 +2,8 @@
 
 from typing import Any
 
+import steamtemp_gym
+from steamtemp_gym.envs import options as opts
 from steamtemp_gym.envs.steam_temp_env import SteamTempEnv
 from steamtemp_gym.envs.vector_env import SteamTempVectorEnv
 
@@ -11,8 +13,6 @@ __all__ = ["SteamTempEnv", "SteamTempVectorEnv", "ids", "register_variant", "res
 def ids() -> list[str]:
     """Every registered id built by SteamTempEnv: the suite's and registered variants."""
     import gymnasium as gym
-
-    import steamtemp_gym
 
     entry = gym.spec(steamtemp_gym.ENV_IDS[0]).entry_point
     return [i for i, spec in gym.registry.items() if spec.entry_point == entry]
@@ -59,8 +59,6 @@ def register_variant(new_id: str, base_id: str, **options: Any) -> None:
     import copy
 
     import gymnasium as gym
-
-    from steamtemp_gym.envs import options as opts
 
     base = gym.registry.get(base_id)
     if base is None or "plant_id" not in base.kwargs:

@@ -32,16 +32,17 @@ from typing import Any
 
 import numpy as np
 
+from steamtemp_gym import catalog, scenarios
 from steamtemp_gym._jit import njit
 from steamtemp_gym.metrics.calculus import frac_outside
-from steamtemp_gym.metrics.names import METRIC_NAMES, _band_key
+from steamtemp_gym.metrics.names import METRIC_NAMES, band_key
 from steamtemp_gym.scenarios import Scenario
 
 #: Half-width (K) of the band around the setpoint whose excursions cost: the band of the
 #: metric :data:`COST_METRIC`.
 COST_BAND_K: float = 5.0
 #: The metric whose per-interval integrand the band cost is.
-COST_METRIC: str = _band_key(COST_BAND_K)
+COST_METRIC: str = band_key(COST_BAND_K)
 assert COST_METRIC in METRIC_NAMES
 #: The info keys of the cost: the total, then its components.
 COST_KEYS: tuple[str, ...] = ("cost", "cost_band")
@@ -127,10 +128,6 @@ def cost_limit(scenario: Any, dt_s: float) -> float:
 def _shipped(scenario: Scenario) -> bool:
     """Whether ``scenario`` is the package's scenario of its name (named or held-out, for
     some plant or none), not a scenario of one's own that bears the name."""
-    # imported here: the scenario registry reads the plant catalog, whose plants import the
-    # env core, which imports this module
-    from steamtemp_gym import catalog, scenarios
-
     for spec in (scenario.name, scenarios.HELDOUT_PREFIX + scenario.name):
         for plant_id in (None, *catalog.PLANTS):
             try:

@@ -26,10 +26,10 @@ WIDTH, HEIGHT, DPI = 640, 480, 80
 #: temperature axis half-width around the setpoint at reset, K
 SPAN_K = 30.0
 _BAND_COLORS = ("#bfe3bf", "#e5f3e5")  # +-5 K, +-8 K (green at alpha 0.25 / 0.12 on white)
-_VALVE_COLORS = ("tab:purple", "tab:brown", "tab:olive", "tab:cyan", "tab:pink", "tab:green")
+VALVE_COLORS = ("tab:purple", "tab:brown", "tab:olive", "tab:cyan", "tab:pink", "tab:green")
 
 
-def _rgb(color: str) -> np.ndarray:
+def rgb(color: str) -> np.ndarray:
     from matplotlib.colors import to_rgb
 
     return np.array([round(255 * c) for c in to_rgb(color)], dtype=np.uint8)
@@ -89,14 +89,14 @@ class TrendDisplay:
         xl = (0.0, self.t_max)
         self.axes = [_Axis(ax, xl, ylim) for ax, ylim in frame]
         self.colors = {
-            "true": _rgb("tab:red"),
-            "meas": _rgb("tab:orange"),
-            "sp": _rgb("black"),
-            "load": _rgb("tab:blue"),
-            "spray": _rgb("tab:gray"),
+            "true": rgb("tab:red"),
+            "meas": rgb("tab:orange"),
+            "sp": rgb("black"),
+            "load": rgb("tab:blue"),
+            "spray": rgb("tab:gray"),
         }
-        self.valve_colors = [_rgb(_VALVE_COLORS[j % len(_VALVE_COLORS)]) for j in range(n_valves)]
-        self.bands = [_rgb(c) for c in _BAND_COLORS]
+        self.valve_colors = [rgb(VALVE_COLORS[j % len(VALVE_COLORS)]) for j in range(n_valves)]
+        self.bands = [rgb(c) for c in _BAND_COLORS]
         self.image = self.background.copy()
         self.last: dict[str, Any] | None = None
         self.filled = -1  # last image column with bands drawn
@@ -177,7 +177,7 @@ class TrendDisplay:
         ax3.legend(
             handles=[
                 *(
-                    Line2D([], [], color=_VALVE_COLORS[j % len(_VALVE_COLORS)], lw=1, label=name)
+                    Line2D([], [], color=VALVE_COLORS[j % len(VALVE_COLORS)], lw=1, label=name)
                     for j, name in enumerate(self.valve_names)
                 ),
                 Line2D([], [], color="tab:gray", lw=1, label="spray flow"),

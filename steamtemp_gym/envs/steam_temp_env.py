@@ -24,6 +24,7 @@ from steamtemp_gym.envs import snapshot as snap_
 from steamtemp_gym.envs.actions import check_action
 from steamtemp_gym.envs.core import Core
 from steamtemp_gym.envs.cost import cost_limit
+from steamtemp_gym.envs.render import TrendDisplay, spray_range
 from steamtemp_gym.signals import OBS_LIMIT
 
 
@@ -144,8 +145,6 @@ class SteamTempEnv(gym.Env):
         info = self._info()
         self._display = None
         if self.render_mode:
-            from steamtemp_gym.envs.render import TrendDisplay, spray_range
-
             title = f"{self.plant.id}  scenario: {getattr(scenario, 'name', '')}"
             names = tuple(
                 (s.description or s.name).removesuffix(" command") for s in self.signals.action

@@ -13,7 +13,7 @@ from steamtemp_gym._jit import njit
 # --------------------------------------------------------------------------- validation
 
 
-def _as_time(time_s: ArrayLike) -> NDArray[np.float64]:
+def as_time(time_s: ArrayLike) -> NDArray[np.float64]:
     t = np.asarray(time_s, dtype=float)
     if t.ndim != 1:
         raise ValueError(f"time_s must be one-dimensional, got shape {t.shape}")
@@ -31,7 +31,7 @@ def _as_time(time_s: ArrayLike) -> NDArray[np.float64]:
     return t
 
 
-def _as_signal(x: ArrayLike, name: str, n: int, allow_2d: bool = False) -> NDArray[np.float64]:
+def as_signal(x: ArrayLike, name: str, n: int, allow_2d: bool = False) -> NDArray[np.float64]:
     a = np.asarray(x, dtype=float)
     if a.ndim == 0 or a.ndim > (2 if allow_2d else 1):
         shapes = "(T,) or (T, k)" if allow_2d else "(T,)"
@@ -96,7 +96,7 @@ def _flat_pair(a: ArrayLike, c: ArrayLike) -> tuple[NDArray[np.float64], ...]:
     return a.reshape(-1), c.reshape(-1)
 
 
-def _frac_above(
+def frac_above_each(
     a: NDArray[np.float64], c: NDArray[np.float64], level: float, *, inclusive: bool
 ) -> NDArray[np.float64]:
     """:func:`frac_above` of each interval of the arrays ``a`` and ``c`` (the same shape)."""
@@ -105,7 +105,7 @@ def _frac_above(
     return out
 
 
-def _frac_outside(
+def frac_outside_each(
     e0: NDArray[np.float64], e1: NDArray[np.float64], band: float
 ) -> NDArray[np.float64]:
     """:func:`frac_outside` of each interval of the arrays ``e0`` and ``e1`` (one shape)."""
@@ -114,7 +114,7 @@ def _frac_outside(
     return out
 
 
-def _integral_abs(e: NDArray[np.float64], dt: NDArray[np.float64]) -> float:
+def integral_abs(e: NDArray[np.float64], dt: NDArray[np.float64]) -> float:
     """Exact integral of ``|e|`` for the piecewise-linear interpolant of ``e``."""
     e0, e1 = e[:-1], e[1:]
     a0, a1 = np.abs(e0), np.abs(e1)
@@ -124,13 +124,13 @@ def _integral_abs(e: NDArray[np.float64], dt: NDArray[np.float64]) -> float:
     return float(np.sum(seg * dt))
 
 
-def _integral_sq(e: NDArray[np.float64], dt: NDArray[np.float64]) -> float:
+def integral_sq(e: NDArray[np.float64], dt: NDArray[np.float64]) -> float:
     """Exact integral of ``e**2`` for the piecewise-linear interpolant of ``e``."""
     e0, e1 = e[:-1], e[1:]
     return float(np.sum(dt * (e0 * e0 + e0 * e1 + e1 * e1)) / 3.0)
 
 
-def _trapezoid(x: NDArray[np.float64], dt: NDArray[np.float64]) -> float:
+def trapezoid(x: NDArray[np.float64], dt: NDArray[np.float64]) -> float:
     """Trapezoid integral of ``x`` (shape (T,) or (T, k), columns summed)."""
     seg = 0.5 * (x[:-1] + x[1:])
     if seg.ndim == 2:
@@ -138,7 +138,7 @@ def _trapezoid(x: NDArray[np.float64], dt: NDArray[np.float64]) -> float:
     return float(np.sum(seg * dt))
 
 
-def _first_crossing(
+def first_crossing(
     t: NDArray[np.float64], y: NDArray[np.float64], level: float, direction: float
 ) -> float:
     """First time the linear interpolant of ``y`` reaches ``level`` going in ``direction``.

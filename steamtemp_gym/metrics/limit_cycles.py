@@ -8,7 +8,7 @@ import math
 import numpy as np
 from numpy.typing import ArrayLike
 
-from steamtemp_gym.metrics.calculus import _as_signal, _as_time
+from steamtemp_gym.metrics.calculus import as_signal, as_time
 
 #: The quiet stretch of :func:`quiet_peak_to_peak` starts this long after a scenario's last
 #: scheduled change (s): the time a well-damped loop needs to settle after it.
@@ -44,8 +44,8 @@ def quiet_peak_to_peak(
         ValueError: On mismatched lengths, fewer than 2 samples, non-finite values or
             non-increasing time.
     """
-    t = _as_time(time_s)
-    e = _as_signal(error_K, "error_K", t.size)
+    t = as_time(time_s)
+    e = as_signal(error_K, "error_K", t.size)
     if not math.isfinite(quiet_from_s) or not math.isfinite(min_length_s):
         raise ValueError(
             f"quiet_from_s and min_length_s must be finite, got {quiet_from_s!r}, {min_length_s!r}"

@@ -4,14 +4,14 @@
 from __future__ import annotations
 
 #: Deviation bands (K) of :func:`~steamtemp_gym.metrics.trajectory_metrics` by default.
-_DEFAULT_BANDS_K: tuple[float, ...] = (5.0, 8.0)
+DEFAULT_BANDS_K: tuple[float, ...] = (5.0, 8.0)
 
 
-def _band_key(band_K: float) -> str:
+def band_key(band_K: float) -> str:
     return f"time_outside_{band_K:g}K_s"
 
 
-def metric_names(bands_K: tuple[float, ...] | list[float] = _DEFAULT_BANDS_K) -> tuple[str, ...]:
+def metric_names(bands_K: tuple[float, ...] | list[float] = DEFAULT_BANDS_K) -> tuple[str, ...]:
     """Keys of :func:`trajectory_metrics` for the given bands, in table order.
 
     Args:
@@ -26,7 +26,7 @@ def metric_names(bands_K: tuple[float, ...] | list[float] = _DEFAULT_BANDS_K) ->
         "rmse_K",
         "max_abs_dev_K",
         "mean_dev_K",
-        *(_band_key(float(b)) for b in bands_K),
+        *(band_key(float(b)) for b in bands_K),
         "overshoot_pct",
         "settling_time_s",
         "rise_time_s",
@@ -38,7 +38,7 @@ def metric_names(bands_K: tuple[float, ...] | list[float] = _DEFAULT_BANDS_K) ->
 
 
 #: Keys of :func:`trajectory_metrics` with the default bands, in table order.
-METRIC_NAMES: tuple[str, ...] = metric_names(_DEFAULT_BANDS_K)
+METRIC_NAMES: tuple[str, ...] = metric_names(DEFAULT_BANDS_K)
 
 #: Unit of each metric in :data:`METRIC_NAMES` ("1" = dimensionless).
 METRIC_UNITS: dict[str, str] = {
@@ -47,7 +47,7 @@ METRIC_UNITS: dict[str, str] = {
     "rmse_K": "K",
     "max_abs_dev_K": "K",
     "mean_dev_K": "K",
-    **{_band_key(b): "s" for b in _DEFAULT_BANDS_K},
+    **{band_key(b): "s" for b in DEFAULT_BANDS_K},
     "overshoot_pct": "%",
     "settling_time_s": "s",
     "rise_time_s": "s",

@@ -8,7 +8,7 @@ import math
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from steamtemp_gym.metrics.calculus import _as_signal, _as_time, _first_crossing
+from steamtemp_gym.metrics.calculus import as_signal, as_time, first_crossing
 
 
 def _inflection(t: NDArray[np.float64], z: NDArray[np.float64]) -> tuple[float, float, float]:
@@ -70,8 +70,8 @@ def step_response_metrics(
         ValueError: On bad input (see :func:`trajectory_metrics`), ``t_step`` outside
             the record or fewer than 3 samples from ``t_step`` on, or zero gain.
     """
-    t = _as_time(time_s)
-    ya = _as_signal(y, "y", t.size)
+    t = as_time(time_s)
+    ya = as_signal(y, "y", t.size)
     if not (math.isfinite(t_step) and t[0] <= t_step < t[-1]):
         raise ValueError(f"t_step = {t_step!r} must lie in [time_s[0], time_s[-1])")
     n_tail = max(1, math.ceil(0.02 * t.size))
@@ -93,6 +93,6 @@ def step_response_metrics(
 
     tu = t_i - z_i / s_i - t_step
     tg = 1.0 / s_i
-    t50 = _first_crossing(tw, zw, 0.5, 1.0) - t_step
-    t90 = _first_crossing(tw, zw, 0.9, 1.0) - t_step
+    t50 = first_crossing(tw, zw, 0.5, 1.0) - t_step
+    t90 = first_crossing(tw, zw, 0.9, 1.0) - t_step
     return {"gain": gain, "Tu_s": float(tu), "Tg_s": float(tg), "t50_s": t50, "t90_s": t90}

@@ -9,16 +9,16 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from steamtemp_gym.metrics.calculus import (
-    _as_signal,
-    _as_time,
-    _first_crossing,
-    _frac_above,
-    _frac_outside,
-    _integral_abs,
-    _integral_sq,
-    _trapezoid,
+    as_signal,
+    as_time,
+    first_crossing,
+    frac_above_each,
+    frac_outside_each,
+    integral_abs,
+    integral_sq,
+    trapezoid,
 )
-from steamtemp_gym.metrics.names import _DEFAULT_BANDS_K, _band_key
+from steamtemp_gym.metrics.names import DEFAULT_BANDS_K, band_key
 
 #: Smallest setpoint jump (K) between two samples treated as a setpoint step.
 STEP_MIN_K: float = 1.0
@@ -91,8 +91,8 @@ def _step_metrics(
         settling = float(tw[j] + frac * (tw[j + 1] - tw[j])) - t_step
 
     sp_old = float(sp[m - 1])
-    t10 = _first_crossing(tw, yw, sp_old + 0.1 * jump, direction)
-    t90 = _first_crossing(tw, yw, sp_old + 0.9 * jump, direction)
+    t10 = first_crossing(tw, yw, sp_old + 0.1 * jump, direction)
+    t90 = first_crossing(tw, yw, sp_old + 0.9 * jump, direction)
     rise = t90 - t10 if np.isfinite(t90) else math.nan
     return overshoot, settling, rise
 
@@ -143,7 +143,7 @@ def trajectory_metrics(
     spray_valve: ArrayLike,
     spray_flow_kg_s: ArrayLike,
     *,
-    bands_K: tuple[float, ...] | list[float] = _DEFAULT_BANDS_K,
+    bands_K: tuple[float, ...] | list[float] = DEFAULT_BANDS_K,
     settle_band_K: float | None = None,
     reversal_deadband: float = REVERSAL_DEADBAND,
 ) -> dict[str, float]:
@@ -192,12 +192,12 @@ def _as_signals(
     spray_flow_kg_s: ArrayLike,
 ) -> tuple[NDArray[np.float64], ...]:
     """The checked arrays ``(t, y, sp, valve, flow)`` of :func:`trajectory_metrics`."""
-    t = _as_time(time_s)
+    t = as_time(time_s)
     n = t.size
-    y = _as_signal(outlet_temp_C, "outlet_temp_C", n)
-    sp = _as_signal(setpoint_C, "setpoint_C", n)
-    valve = _as_signal(spray_valve, "spray_valve", n, allow_2d=True)
-    flow = _as_signal(spray_flow_kg_s, "spray_flow_kg_s", n, allow_2d=True)
+    y = as_signal(outlet_temp_C, "outlet_temp_C", n)
+    sp = as_signal(setpoint_C, "setpoint_C", n)
+    valve = as_signal(spray_valve, "spray_valve", n, allow_2d=True)
+    flow = as_signal(spray_flow_kg_s, "spray_flow_kg_s", n, allow_2d=True)
     return t, y, sp, valve, flow
 
 
@@ -237,17 +237,17 @@ def _deviation_metrics(
     duration = float(t[-1] - t[0])
     e0, e1 = e[:-1], e[1:]
 
-    ise = _integral_sq(e, dt)
+    ise = integral_sq(e, dt)
     out: dict[str, float] = {
-        "iae_K_s": _integral_abs(e, dt),
+        "iae_K_s": integral_abs(e, dt),
         "ise_K2_s": ise,
         "rmse_K": math.sqrt(ise / duration),
         "max_abs_dev_K": float(np.max(np.abs(e))),
-        "mean_dev_K": _trapezoid(e, dt) / duration,
+        "mean_dev_K": trapezoid(e, dt) / duration,
     }
     for b in bands:
-        frac = _frac_outside(e0, e1, b)
-        out[_band_key(b)] = float(np.sum(frac * dt))
+        frac = frac_outside_each(e0, e1, b)
+        out[band_key(b)] = float(np.sum(frac * dt))
     return out
 
 
@@ -259,11 +259,11 @@ def _spray_metrics(
 ) -> dict[str, float]:
     """Spray water used, valve travel, reversals and time saturated."""
     out: dict[str, float] = {}
-    out["spray_used_kg"] = _trapezoid(flow, dt)
+    out["spray_used_kg"] = trapezoid(flow, dt)
     out["valve_travel"] = float(np.sum(np.abs(np.diff(valve, axis=0))))
     out["valve_reversals"] = float(_count_reversals(valve, reversal_deadband))
     v0, v1 = valve[:-1], valve[1:]
-    sat = _frac_above(-v0, -v1, -SATURATION_LOW, inclusive=True) + _frac_above(
+    sat = frac_above_each(-v0, -v1, -SATURATION_LOW, inclusive=True) + frac_above_each(
         v0, v1, SATURATION_HIGH, inclusive=True
     )
     if sat.ndim == 2:

@@ -17,8 +17,11 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+from steamtemp_gym._jit import read_only
 from steamtemp_gym.checks import key_list
+from steamtemp_gym.plants.integrator import make_batched_step
 from steamtemp_gym.plants.threads import run_rows
+from steamtemp_gym.plants.valve import valve_rhs
 
 #: Disturbance vector entries handed to every plant kernel, in order.
 DIST: tuple[str, ...] = (
@@ -193,8 +196,6 @@ class Plant:
         For reading a plant's layout without its numbers (steamtemp_gym/docs.py); its
         kernels must never run on its arrays.
         """
-        from steamtemp_gym._jit import read_only
-
         plant = cls.__new__(cls)
         empty = np.zeros(0, dtype=np.int64)
         plant.pack = lambda params: (read_only(np.zeros(1)), empty, empty, 1)
@@ -216,8 +217,6 @@ class Plant:
         cls = type(self)
         step = Plant._compiled.get(cls)
         if step is None:
-            from steamtemp_gym.plants.integrator import make_batched_step
-
             step = Plant._compiled[cls] = make_batched_step(
                 cls.__name__, *cls.kernels, cls.actuators or None
             )
@@ -245,8 +244,6 @@ class Plant:
         commands (plants/integrator.py); this maps commands through the valve ODE of
         plants/valve.py first. For tests, linearization and reference solutions.
         """
-        from steamtemp_gym.plants.valve import valve_rhs
-
         P = self.P
         uc = np.array(u, dtype=np.float64)
         for j, (iv, it, ir) in enumerate(self.actuators):

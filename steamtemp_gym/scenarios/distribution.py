@@ -6,7 +6,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from steamtemp_gym.scenarios.model import Scenario, _as_duration
+from steamtemp_gym.scenarios.model import Scenario, as_duration
 from steamtemp_gym.scenarios.registry import RANDOM
 
 #: The documented training distribution of ``random`` (see random_scenario).
@@ -40,7 +40,7 @@ def random_scenario(rng: np.random.Generator, duration_s: float | None = None) -
     heat-absorption disturbance of 0-4 % std with a 2-15 min correlation time.
     """
     dist = RANDOM_DISTRIBUTION
-    duration = _as_duration(duration_s if duration_s is not None else dist["duration_s"])
+    duration = as_duration(duration_s if duration_s is not None else dist["duration_s"])
     u = rng.uniform
     load = u(*dist["initial_load"])
     t = 0.0

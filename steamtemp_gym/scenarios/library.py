@@ -27,7 +27,7 @@ from types import MappingProxyType
 
 import numpy as np
 
-from steamtemp_gym.scenarios.model import Scenario, _describe
+from steamtemp_gym.scenarios.model import Scenario, describe
 from steamtemp_gym.scenarios.registry import check_name
 from steamtemp_gym.scenarios.registry import register as _register
 
@@ -59,7 +59,7 @@ def declare(*scenarios: Scenario) -> Mapping[str, Scenario]:
     out: dict[str, Scenario] = {}
     for scenario in scenarios:
         if not isinstance(scenario, Scenario):
-            raise ValueError(f"declare() needs Scenarios, got {_describe(scenario)}")
+            raise ValueError(f"declare() needs Scenarios, got {describe(scenario)}")
         check_name(scenario.name)
         if scenario.name in out:
             raise ValueError(f"scenario {scenario.name!r} is declared twice")

@@ -70,7 +70,7 @@ _REPR.maxlevel, _REPR.maxlist, _REPR.maxtuple, _REPR.maxdict = 2, 4, 4, 4
 _REPR.maxstring, _REPR.maxother, _REPR.maxlong = 60, 60, 40
 
 
-def _excerpt(value: Any, limit: int = 120) -> str:
+def excerpt(value: Any, limit: int = 120) -> str:
     """A short, bounded repr of a (possibly huge) user input for error messages."""
     try:
         text = _REPR.repr(value)
@@ -79,26 +79,26 @@ def _excerpt(value: Any, limit: int = 120) -> str:
     return head(text, limit)
 
 
-def _clip(text: str, limit: int = 300) -> str:
+def clip(text: str, limit: int = 300) -> str:
     """``text`` cut to ``limit`` characters (its end kept: the file name of a path)."""
     return tail(text, limit)
 
 
-def _describe(value: Any) -> str:
+def describe(value: Any) -> str:
     """``type excerpt`` of a bad value, e.g. ``bool True`` or ``str '60'``."""
-    return f"{type(value).__name__} {_excerpt(value)}"
+    return f"{type(value).__name__} {excerpt(value)}"
 
 
 def _as_float(name: str, value: Any) -> float:
     """A finite float from a number (bool, str, containers and complex rejected)."""
     if not is_real(value):
-        raise ValueError(f"scenario {name!r} must be a number, got {_describe(value)}")
+        raise ValueError(f"scenario {name!r} must be a number, got {describe(value)}")
     try:
         v = float(value)
     except (OverflowError, ValueError, TypeError):
         v = math.inf
     if not math.isfinite(v):
-        raise ValueError(f"scenario {name!r} must be finite, got {_excerpt(value)}")
+        raise ValueError(f"scenario {name!r} must be finite, got {excerpt(value)}")
     return v
 
 
@@ -106,23 +106,23 @@ def _as_scalar(name: str, value: Any, lo: float, hi: float) -> float:
     """Validate a scalar scenario field (a finite number inside [lo, hi])."""
     v = _as_float(name, value)
     if not lo <= v <= hi:
-        raise ValueError(f"scenario {name!r} must be in [{lo}, {hi}], got {_excerpt(value)}")
+        raise ValueError(f"scenario {name!r} must be in [{lo}, {hi}], got {excerpt(value)}")
     return v
 
 
 def _as_string(name: str, value: Any, min_len: int, max_len: int, printable: bool) -> str:
     """Validate a string field (type, length, optionally printable characters)."""
     if not isinstance(value, str):
-        raise ValueError(f"scenario {name!r} must be a string, got {_describe(value)}")
+        raise ValueError(f"scenario {name!r} must be a string, got {describe(value)}")
     if not min_len <= len(value) <= max_len:
         raise ValueError(
             f"scenario {name!r} must have {min_len} to {max_len} characters, "
-            f"got {len(value)}: {_excerpt(value)}"
+            f"got {len(value)}: {excerpt(value)}"
         )
     if printable and not value.isprintable():
         raise ValueError(
             f"scenario {name!r} must be printable (no newlines or control characters), "
-            f"got {_excerpt(value)}"
+            f"got {excerpt(value)}"
         )
     return value
 
@@ -136,7 +136,7 @@ def _as_schedule(name: str, value: Any) -> Schedule:
     if not isinstance(value, (list, tuple)) or len(value) == 0:
         raise ValueError(
             f"scenario field {name!r} must be a number or a non-empty list of [t_s, value] "
-            f"breakpoints, got {_describe(value)}"
+            f"breakpoints, got {describe(value)}"
         )
     if len(value) > MAX_BREAKPOINTS_PER_CHANNEL:
         raise ValueError(
@@ -147,7 +147,7 @@ def _as_schedule(name: str, value: Any) -> Schedule:
     t_lo, t_hi = _TIME_LIMITS_S
     pts: list[tuple[float, float]] = []
     for k, item in enumerate(value):
-        where = f"scenario field {name!r}: breakpoint {k} ({_excerpt(item)})"
+        where = f"scenario field {name!r}: breakpoint {k} ({excerpt(item)})"
         if not isinstance(item, (list, tuple)) or len(item) != 2:
             raise ValueError(f"{where} is not a [t_s, value] pair")
         if not (is_real(item[0]) and is_real(item[1])):
@@ -175,7 +175,7 @@ def _as_schedule(name: str, value: Any) -> Schedule:
     return tuple(pts)
 
 
-def _as_duration(value: Any) -> float:
+def as_duration(value: Any) -> float:
     """Validate an episode length (a number in DURATION_LIMITS_S)."""
     return _as_scalar("duration_s", value, *DURATION_LIMITS_S)
 
@@ -217,7 +217,7 @@ class Scenario:
     def __post_init__(self) -> None:
         _as_string("name", self.name, 1, MAX_NAME_CHARS, printable=True)
         _as_string("description", self.description, 0, MAX_DESCRIPTION_CHARS, printable=False)
-        object.__setattr__(self, "duration_s", _as_duration(self.duration_s))
+        object.__setattr__(self, "duration_s", as_duration(self.duration_s))
         for ch in CHANNELS:
             object.__setattr__(self, ch, _as_schedule(ch, getattr(self, ch)))
         for name, (lo, hi) in _SCALAR_LIMITS.items():
@@ -226,7 +226,7 @@ class Scenario:
     def value(self, channel: str, t: float) -> float:
         """Value of one channel at time ``t`` (linear interpolation, held at the ends)."""
         if channel not in CHANNELS:
-            raise ValueError(f"unknown channel {_excerpt(channel)}; valid: {list(CHANNELS)}")
+            raise ValueError(f"unknown channel {excerpt(channel)}; valid: {list(CHANNELS)}")
         pts = np.asarray(getattr(self, channel))
         return float(np.interp(t, pts[:, 0], pts[:, 1]))
 
@@ -267,12 +267,12 @@ class Scenario:
         bad_keys = [k for k in data if not isinstance(k, str)]
         if bad_keys:
             raise ValueError(
-                f"{source}: scenario field names must be strings, got {_describe(bad_keys[0])}"
+                f"{source}: scenario field names must be strings, got {describe(bad_keys[0])}"
             )
         unknown = sorted(set(data) - set(valid))
         if unknown:
             raise ValueError(
-                f"{source}: unknown scenario field(s) {_excerpt(unknown, 200)}; "
+                f"{source}: unknown scenario field(s) {excerpt(unknown, 200)}; "
                 f"valid fields: {valid}"
             )
         for key in ("name", "duration_s", "load"):

@@ -18,8 +18,8 @@ import os
 from collections.abc import Mapping, Sequence
 
 from steamtemp_gym import catalog
-from steamtemp_gym.scenarios.model import Scenario, _clip, _describe, _excerpt
-from steamtemp_gym.scenarios.yaml_loader import _as_path, load_yaml
+from steamtemp_gym.scenarios.model import Scenario, clip, describe, excerpt
+from steamtemp_gym.scenarios.yaml_loader import as_path, load_yaml
 
 #: The name of the seeded training distribution (steamtemp_gym/scenarios/distribution.py).
 RANDOM = "random"
@@ -41,7 +41,7 @@ def check_name(name: str) -> None:
         raise ValueError(f"{RANDOM!r} is reserved for the seeded training distribution")
     if name.startswith(HELDOUT_PREFIX) or name.lower().endswith((".yaml", ".yml")) or "," in name:
         raise ValueError(
-            f"scenario name {_excerpt(name)} would read as a held-out scenario, "
+            f"scenario name {excerpt(name)} would read as a held-out scenario, "
             "a file or a list; choose another name"
         )
 
@@ -61,22 +61,20 @@ def register(scenario: Scenario, plants: Sequence[str] | None = None) -> Scenari
             registered with another scenario; nothing is registered then.
     """
     if not isinstance(scenario, Scenario):
-        raise ValueError(f"register() needs a Scenario, got {_describe(scenario)}")
+        raise ValueError(f"register() needs a Scenario, got {describe(scenario)}")
     if plants is not None and (
         isinstance(plants, str)
         or not isinstance(plants, Sequence)
         or not all(isinstance(p, str) for p in plants)
     ):
-        raise ValueError(
-            f"register() 'plants' must be a list of plant ids, got {_describe(plants)}"
-        )
+        raise ValueError(f"register() 'plants' must be a list of plant ids, got {describe(plants)}")
     name = scenario.name
     check_name(name)
     entry = (scenario, tuple(plants) if plants is not None else None)
     old = _REGISTRY.get(name)
     if old is not None and (old[0].to_dict() != scenario.to_dict() or old[1] != entry[1]):
         raise ValueError(
-            f"scenario {_excerpt(name)} is already registered (with another "
+            f"scenario {excerpt(name)} is already registered (with another "
             "schedule or other plants); choose another name"
         )
     _REGISTRY[name] = entry
@@ -103,13 +101,13 @@ def get(name: str, plant_id: str | None = None) -> Scenario:
     if entry is None or (
         plant_id is not None and entry[1] is not None and plant_id not in entry[1]
     ):
-        raise ValueError(f"unknown scenario {_excerpt(name)}; {forms(plant_id)}")
+        raise ValueError(f"unknown scenario {excerpt(name)}; {forms(plant_id)}")
     return entry[0]
 
 
 def forms(plant_id: str | None = None) -> str:
     """Every way to name a scenario (for error messages and help texts)."""
-    from steamtemp_gym.scenarios import heldout
+    from steamtemp_gym.scenarios import heldout  # a circle at the top: heldout imports this package
 
     named = [n for n in names(plant_id) if n != RANDOM]
     return (
@@ -135,10 +133,10 @@ def resolve(spec: str | os.PathLike[str] | Scenario, plant_id: str | None = None
     if isinstance(spec, Scenario):
         return spec
     if isinstance(spec, os.PathLike):
-        path = _as_path(spec)
+        path = as_path(spec)
         if path.suffix.lower() not in (".yaml", ".yml"):
             raise ValueError(
-                f"scenario file {_clip(str(path), 200)!r} must end in .yaml or .yml "
+                f"scenario file {clip(str(path), 200)!r} must end in .yaml or .yml "
                 "(a path is always read as a file, never as a scenario name)"
             )
         return load_yaml(path)
@@ -148,21 +146,23 @@ def resolve(spec: str | os.PathLike[str] | Scenario, plant_id: str | None = None
         if spec == RANDOM:
             return RANDOM
         if spec.startswith(HELDOUT_PREFIX):
-            from steamtemp_gym.scenarios import heldout
+            from steamtemp_gym.scenarios import (
+                heldout,
+            )  # a circle at the top: heldout imports this package
 
             if spec[len(HELDOUT_PREFIX) :] not in heldout.NAMES:
-                raise ValueError(f"unknown held-out scenario {_excerpt(spec)}; {forms(plant_id)}")
+                raise ValueError(f"unknown held-out scenario {excerpt(spec)}; {forms(plant_id)}")
             return heldout.load(spec)
         try:
             return get(spec, plant_id)
         except ValueError as exc:
             if len(spec) < 4096 and os.path.isfile(spec):
                 raise ValueError(
-                    f"{exc} (a file {_clip(spec, 200)!r} exists, but scenario files must end "
+                    f"{exc} (a file {clip(spec, 200)!r} exists, but scenario files must end "
                     "in .yaml or .yml)"
                 ) from None
             raise
     raise ValueError(
         "scenario must be a name, 'random', a YAML file (str or os.PathLike) or a Scenario, "
-        f"got {_describe(spec)}"
+        f"got {describe(spec)}"
     )

@@ -21,9 +21,9 @@ from steamtemp_gym.scenarios.model import (
     CHANNELS,
     MAX_BREAKPOINTS_PER_CHANNEL,
     Scenario,
-    _clip,
-    _describe,
-    _excerpt,
+    clip,
+    describe,
+    excerpt,
 )
 
 #: Largest scenario file read, in bytes.
@@ -50,7 +50,7 @@ class _ScenarioLoader(_YamlLoader):  # type: ignore[misc,valid-type]
                     continue
                 if duplicate:
                     raise yaml.constructor.ConstructorError(
-                        None, None, f"duplicate key {_excerpt(key)}", key_node.start_mark
+                        None, None, f"duplicate key {excerpt(key)}", key_node.start_mark
                     )
         return super().construct_mapping(node, deep)
 
@@ -110,13 +110,13 @@ def _parse_yaml(text: str) -> Any:
         loader.dispose()
 
 
-def _as_path(spec: Any) -> Path:
+def as_path(spec: Any) -> Path:
     """A Path from a str or os.PathLike (bytes paths decoded with the file-system codec)."""
     try:
         return Path(os.fsdecode(os.fspath(spec)))
     except TypeError as exc:
         raise ValueError(
-            f"a scenario file must be a str or os.PathLike, got {_describe(spec)}"
+            f"a scenario file must be a str or os.PathLike, got {describe(spec)}"
         ) from exc
 
 
@@ -128,8 +128,8 @@ def load_yaml(path: str | os.PathLike[str]) -> Scenario:
             unreadable, larger than MAX_FILE_BYTES, not UTF-8, malformed YAML, or an
             invalid scenario (the message then also names the field).
     """
-    p = _as_path(path)
-    shown = repr(_clip(str(p), 200))
+    p = as_path(path)
+    shown = repr(clip(str(p), 200))
     try:
         st = p.stat()
     except OSError as exc:
@@ -160,7 +160,7 @@ def load_yaml(path: str | os.PathLike[str]) -> Scenario:
         data = _parse_yaml(text)
     except yaml.YAMLError as exc:
         where = str(exc).replace('in "<unicode string>", ', "at ")
-        raise ValueError(f"malformed scenario YAML {shown}: {_clip(where)}") from None
+        raise ValueError(f"malformed scenario YAML {shown}: {clip(where)}") from None
     except RecursionError:
         raise ValueError(f"malformed scenario YAML {shown}: nested too deeply") from None
     except ValueError as exc:

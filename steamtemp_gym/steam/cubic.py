@@ -7,7 +7,7 @@ from steamtemp_gym._jit import njit
 
 
 @njit(cache=True, error_model="numpy")
-def _hermite(t: float) -> tuple[float, float, float, float]:
+def hermite(t: float) -> tuple[float, float, float, float]:
     """Cubic Hermite basis on a unit cell: weights of f(0), f'(0), f(1), f'(1)."""
     t2 = t * t
     t3 = t2 * t
@@ -15,23 +15,23 @@ def _hermite(t: float) -> tuple[float, float, float, float]:
 
 
 @njit(cache=True, error_model="numpy")
-def _hermite_cell(t: float, w: float) -> tuple[float, float, float, float]:
+def hermite_cell(t: float, w: float) -> tuple[float, float, float, float]:
     """Cubic Hermite basis at local coordinate t of a cell of width w: weights of f(0),
     f'(0), f(1), f'(1) with the derivatives per unit of the axis (not of the cell)."""
-    a0, a1, a2, a3 = _hermite(t)
+    a0, a1, a2, a3 = hermite(t)
     return a0, a1 * w, a2, a3 * w
 
 
 @njit(cache=True, error_model="numpy")
-def _hermite_slope(t: float, w: float) -> tuple[float, float, float, float]:
-    """d/dx of the weights of :func:`_hermite_cell` (x = w t along the axis)."""
+def hermite_slope(t: float, w: float) -> tuple[float, float, float, float]:
+    """d/dx of the weights of :func:`hermite_cell` (x = w t along the axis)."""
     t2 = t * t
     d0 = (6.0 * t2 - 6.0 * t) / w
     return d0, 3.0 * t2 - 4.0 * t + 1.0, -d0, 3.0 * t2 - 2.0 * t
 
 
 @njit(cache=True, error_model="numpy")
-def _cell_root(f0: float, f1: float, c0: float, c1: float, u: float) -> float:
+def cell_root(f0: float, f1: float, c0: float, c1: float, u: float) -> float:
     """Root in [0, 1] of the cubic Hermite F with F(0) = f0 <= 0 <= F(1) = f1, F'(0) = c0,
     F'(1) = c1 (derivatives per unit cell): safeguarded Halley iteration from u.
 

@@ -9,21 +9,21 @@ import numpy as np
 from numba import carray
 
 from steamtemp_gym._jit import njit
-from steamtemp_gym.steam.cubic import _cell_root, _hermite, _hermite_slope
+from steamtemp_gym.steam.cubic import cell_root, hermite, hermite_slope
 from steamtemp_gym.steam.tables import (
-    _FDH,
-    _FG_PTR,
-    _FG_SHAPE,
-    _FH0,
-    _FHINV,
-    _FNG,
-    _FNH,
-    _FNP,
-    _FP0,
-    _FPINV,
-    _FR_PTR,
-    _FT_PTR,
-    _FT_SHAPE,
+    FDH,
+    FG_PTR,
+    FG_SHAPE,
+    FH0,
+    FHINV,
+    FNG,
+    FNH,
+    FNP,
+    FP0,
+    FPINV,
+    FR_PTR,
+    FT_PTR,
+    FT_SHAPE,
 )
 
 
@@ -54,16 +54,16 @@ def _fcol(
 
 
 @njit(cache=True, error_model="numpy")
-def _fbasis_h(u: float) -> tuple[tuple[float, float, float, float], tuple[float, float, float]]:
+def fast_basis_h(u: float) -> tuple[tuple[float, float, float, float], tuple[float, float, float]]:
     """Hermite weights in h at local coordinate u of a fast-table cell: those of the value
-    (:func:`_hermite`) and those of d/dh per kJ/kg, for f(0), f'(0), f'(1) (that of f(1) is
+    (:func:`hermite`) and those of d/dh per kJ/kg, for f(0), f'(0), f'(1) (that of f(1) is
     minus the first)."""
-    d0, d1, _, d3 = _hermite_slope(u, 1.0)
-    return _hermite(u), (d0 * _FHINV, d1 * _FHINV, d3 * _FHINV)
+    d0, d1, _, d3 = hermite_slope(u, 1.0)
+    return hermite(u), (d0 * FHINV, d1 * FHINV, d3 * FHINV)
 
 
 @njit(cache=True, error_model="numpy")
-def _fval(
+def fast_value(
     tab: np.ndarray,
     i: int,
     j: int,
@@ -72,7 +72,7 @@ def _fval(
     e: tuple[float, float, float],
 ) -> tuple[float, float]:
     """Value and d/dh of a fast table in cell (i, j): Hermite weights a in p, b and e in h
-    (:func:`_fbasis_h`)."""
+    (:func:`fast_basis_h`)."""
     g0, gu0 = _fcol(tab, i, j, a[0], a[1], a[2], a[3])
     g1, gu1 = _fcol(tab, i, j + 1, a[0], a[1], a[2], a[3])
     value = (b[0] * g0 + b[1] * gu0) + (b[2] * g1 + b[3] * gu1)
@@ -81,47 +81,47 @@ def _fval(
 
 
 @njit(cache=True, error_model="numpy")
-def _fast(pm: float, hk: float, want: int) -> tuple[float, float, float, float]:
+def fast_lookup(pm: float, hk: float, want: int) -> tuple[float, float, float, float]:
     """``_lookup`` on the fast rectangle: plain Hermite bicubic on the uniform (p, h) grid.
 
-    The caller ensures _FP0 <= pm <= _FP1 and _FH0 <= hk <= _FH1.
+    The caller ensures FP0 <= pm <= _FP1 and FH0 <= hk <= _FH1.
     """
-    ft = carray(_FT_PTR(), _FT_SHAPE)
-    fr = carray(_FR_PTR(), _FT_SHAPE)
-    i, t = _ucell((pm - _FP0) * _FPINV, _FNP)
-    j, u = _ucell((hk - _FH0) * _FHINV, _FNH)
-    a = _hermite(t)
-    b, e = _fbasis_h(u)
+    ft = carray(FT_PTR(), FT_SHAPE)
+    fr = carray(FR_PTR(), FT_SHAPE)
+    i, t = _ucell((pm - FP0) * FPINV, FNP)
+    j, u = _ucell((hk - FH0) * FHINV, FNH)
+    a = hermite(t)
+    b, e = fast_basis_h(u)
     T = dT = rho = drho = 0.0
     if want != 1:
-        T, dT = _fval(ft, i, j, a, b, e)
+        T, dT = fast_value(ft, i, j, a, b, e)
     if want != 0:
-        rho, drho = _fval(fr, i, j, a, b, e)
+        rho, drho = fast_value(fr, i, j, a, b, e)
     return T, dT, rho, drho
 
 
 @njit(cache=True, error_model="numpy")
-def _fast_h_of_T(pm: float, T: float) -> float:
+def fast_h_of_T(pm: float, T: float) -> float:
     """h (kJ/kg) inverting the fast T table at (MPa, K), NaN if T lies outside its range.
 
     Start value from the h(p, tau) table, tau = (T - T_lo(p)) / (T_hi(p) - T_lo(p)) with
     T_lo, T_hi the T table at the rectangle's h edges; then a walk to the h-cell whose
     node temperatures bracket T and a safeguarded Halley solve of its cubic. The caller
-    ensures _FP0 <= pm <= _FP1.
+    ensures FP0 <= pm <= _FP1.
     """
-    ft = carray(_FT_PTR(), _FT_SHAPE)
-    fg = carray(_FG_PTR(), _FG_SHAPE)
-    i, t = _ucell((pm - _FP0) * _FPINV, _FNP)
-    a0, a1, a2, a3 = _hermite(t)
+    ft = carray(FT_PTR(), FT_SHAPE)
+    fg = carray(FG_PTR(), FG_SHAPE)
+    i, t = _ucell((pm - FP0) * FPINV, FNP)
+    a0, a1, a2, a3 = hermite(t)
     t_lo = _fcol(ft, i, 0, a0, a1, a2, a3)[0]
-    t_hi = _fcol(ft, i, _FNH, a0, a1, a2, a3)[0]
+    t_hi = _fcol(ft, i, FNH, a0, a1, a2, a3)[0]
     if not t_lo <= T <= t_hi:
         return math.nan
-    k, w = _ucell((T - t_lo) / (t_hi - t_lo) * _FNG, _FNG)
+    k, w = _ucell((T - t_lo) / (t_hi - t_lo) * FNG, FNG)
     g0, gw0 = _fcol(fg, i, k, a0, a1, a2, a3)
     g1, gw1 = _fcol(fg, i, k + 1, a0, a1, a2, a3)
-    c0, c1, c2, c3 = _hermite(w)
-    j, u = _ucell(((c0 * g0 + c1 * gw0) + (c2 * g1 + c3 * gw1) - _FH0) * _FHINV, _FNH)
+    c0, c1, c2, c3 = hermite(w)
+    j, u = _ucell(((c0 * g0 + c1 * gw0) + (c2 * g1 + c3 * gw1) - FH0) * FHINV, FNH)
     g0, gu0 = _fcol(ft, i, j, a0, a1, a2, a3)
     g1, gu1 = _fcol(ft, i, j + 1, a0, a1, a2, a3)
     while T < g0 and j > 0:  # rarely taken: the start value is within ~0.01 kJ/kg
@@ -129,9 +129,9 @@ def _fast_h_of_T(pm: float, T: float) -> float:
         u = 1.0
         g1, gu1 = g0, gu0
         g0, gu0 = _fcol(ft, i, j, a0, a1, a2, a3)
-    while T > g1 and j < _FNH - 1:
+    while T > g1 and j < FNH - 1:
         j += 1
         u = 0.0
         g0, gu0 = g1, gu1
         g1, gu1 = _fcol(ft, i, j + 1, a0, a1, a2, a3)
-    return _FH0 + (j + _cell_root(g0 - T, g1 - T, gu0, gu1, u)) * _FDH
+    return FH0 + (j + cell_root(g0 - T, g1 - T, gu0, gu1, u)) * FDH

@@ -7,18 +7,18 @@ from __future__ import annotations
 import numpy as np
 
 from steamtemp_gym._jit import njit
-from steamtemp_gym.steam.fast import _fast, _fast_h_of_T
-from steamtemp_gym.steam.patches import _curve, _patch_h_of_T, _patch_lookup, _qcell, _sat
+from steamtemp_gym.steam.fast import fast_h_of_T, fast_lookup
+from steamtemp_gym.steam.patches import curve, patch_h_of_T, patch_lookup, qcell, saturation
 from steamtemp_gym.steam.tables import (
-    _FH0,
-    _FH1,
-    _FP0,
-    _FP1,
-    _PC,
-    _PMAX,
-    _TC,
+    FH0,
+    FH1,
+    FP0,
+    FP1,
     P_MAX,
     P_MIN,
+    PC,
+    PMAX,
+    TC,
 )
 
 
@@ -29,11 +29,11 @@ def _lookup(pm: float, hk: float, want: int) -> tuple[float, float, float, float
     ``want``: 0 computes T only, 1 rho only, 2 both (the others are returned as 0).
     The fast table inside its rectangle, the patch tables elsewhere.
     """
-    if pm > _PMAX:  # clamp first, so that the fast path also serves p > P_MAX
-        pm = _PMAX
-    if _FP0 <= pm <= _FP1 and _FH0 <= hk <= _FH1:  # False for NaN
-        return _fast(pm, hk, want)
-    return _patch_lookup(pm, hk, want)
+    if pm > PMAX:  # clamp first, so that the fast path also serves p > P_MAX
+        pm = PMAX
+    if FP0 <= pm <= FP1 and FH0 <= hk <= FH1:  # False for NaN
+        return fast_lookup(pm, hk, want)
+    return patch_lookup(pm, hk, want)
 
 
 @njit(cache=True, error_model="numpy")
@@ -43,13 +43,13 @@ def _h_of_T(pm: float, T: float) -> float:
     The fast table if T lies within its range at p (then h lies in the fast rectangle),
     the patch tables otherwise.
     """
-    if pm > _PMAX:
-        pm = _PMAX
-    if _FP0 <= pm <= _FP1:
-        h = _fast_h_of_T(pm, T)
+    if pm > PMAX:
+        pm = PMAX
+    if FP0 <= pm <= FP1:
+        h = fast_h_of_T(pm, T)
         if h == h:
             return h
-    return _patch_h_of_T(pm, T)
+    return patch_h_of_T(pm, T)
 
 
 @njit(cache=True, error_model="numpy")
@@ -168,7 +168,7 @@ def sat_p(p: float) -> tuple[float, float, float, float, float, float, float, fl
         (Tsat K, rho_l kg/m3, rho_v kg/m3, h_l J/kg, h_v J/kg, dTsat/dp K/Pa,
         drho_l/dp, drho_v/dp in kg/m3/Pa, dh_l/dp, dh_v/dp in J/kg/Pa).
     """
-    Ts, rl, rv, hl, hv, dTs, drl, drv, dhl, dhv = _sat(p * 1e-6)
+    Ts, rl, rv, hl, hv, dTs, drl, drv, dhl, dhv = saturation(p * 1e-6)
     return (
         Ts,
         rl,
@@ -191,9 +191,9 @@ def Tsat_p(p: float) -> float:
         p: Pressure (Pa).
     """
     pm = p * 1e-6
-    if pm >= _PC:
-        return _TC
-    return _sat(pm)[0]
+    if pm >= PC:
+        return TC
+    return saturation(pm)[0]
 
 
 @njit(cache=True, error_model="numpy")
@@ -203,9 +203,9 @@ def h_limits_p(p: float) -> tuple[float, float]:
     Args:
         p: Pressure (Pa).
     """
-    seg, i, a0, a1, a2, a3, _, _ = _qcell(p * 1e-6)
+    seg, i, a0, a1, a2, a3, _, _ = qcell(p * 1e-6)
     ctop = 5 if seg == 1 else 3
-    return _curve(seg, i, 0, a0, a1, a2, a3) * 1e3, _curve(seg, i, ctop, a0, a1, a2, a3) * 1e3
+    return curve(seg, i, 0, a0, a1, a2, a3) * 1e3, curve(seg, i, ctop, a0, a1, a2, a3) * 1e3
 
 
 def check_domain(p: float | np.ndarray, h: float | np.ndarray | None = None) -> None:

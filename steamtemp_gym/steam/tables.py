@@ -86,16 +86,16 @@ def _axes(zone_list: list[np.ndarray]) -> tuple[np.ndarray, ...]:
 
 
 _D = _load_tables()
-(_PC, _TC, _P13, _T13, _TMIN, _TMAX, _PMIN, _PMAX, _SMIN) = (float(v) for v in _D["constants"])
-_MARG = np.ascontiguousarray(_D["block_margins"], dtype=np.float64)  # (lo, hi) per patch
-_M13, _M23 = float(_MARG[7, 0]), float(_MARG[7, 1])
+(PC, TC, P13, T13, _TMIN, _TMAX, PMIN, PMAX, SMIN) = (float(v) for v in _D["constants"])
+MARG = np.ascontiguousarray(_D["block_margins"], dtype=np.float64)  # (lo, hi) per patch
+M13, M23 = float(MARG[7, 0]), float(MARG[7, 1])
 
 # axes 0..2: segment q axes; axes 3..11: patch xi axes (in _BLOCK_NAMES order)
-_AX_X0, _AX_DX, _AX_INV, _AX_OFF, _AX_NZ = _axes(
+AX_X0, AX_DX, AX_INV, AX_OFF, AX_NZ = _axes(
     [_D[f"qzones{s}"] for s in range(3)] + [_D[f"xizones_{b}"] for b in _BLOCK_NAMES]
 )
-_NXI = np.array([_D[f"T_{b}"].shape[1] for b in _BLOCK_NAMES], dtype=np.int64)
-_NCURVE = np.array([len(c) for c in _CURVE_NAMES], dtype=np.int64)
+NXI = np.array([_D[f"T_{b}"].shape[1] for b in _BLOCK_NAMES], dtype=np.int64)
+NCURVE = np.array([len(c) for c in _CURVE_NAMES], dtype=np.int64)
 
 
 def _concat(arrays: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
@@ -106,8 +106,8 @@ def _concat(arrays: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
 
 
 # one flat array per quantity (numba freezes arrays <= 1 MB into the compiled code)
-_CDAT, _COFF = _concat([_D[f"curves{s}"] for s in range(3)])
-_TDAT, _POFF = _concat([_D[f"T_{b}"] for b in _BLOCK_NAMES])
+_CDAT, COFF = _concat([_D[f"curves{s}"] for s in range(3)])
+_TDAT, POFF = _concat([_D[f"T_{b}"] for b in _BLOCK_NAMES])
 _RDAT, _ = _concat([_D[f"rho_{b}"] for b in _BLOCK_NAMES])
 
 
@@ -117,16 +117,16 @@ def _unit_cell(tab: np.ndarray, dx: float, dy: float) -> np.ndarray:
 
 
 # fast path: uniform (p, h) rectangle in region 2; rows of fast_axes: p, h, tau axes
-(_FP0, _FP1, _FNP), (_FH0, _FH1, _FNH), (_, _, _FNG) = (
+(FP0, FP1, FNP), (FH0, FH1, FNH), (_, _, FNG) = (
     (float(a), float(b), int(n)) for a, b, n in _D["fast_axes"]
 )
-_FDP = (_FP1 - _FP0) / _FNP  # MPa
-_FDH = (_FH1 - _FH0) / _FNH  # kJ/kg
-_FPINV = 1.0 / _FDP
-_FHINV = 1.0 / _FDH
-_FT = _unit_cell(_D["fast_T"], _FDP, _FDH)  # (p node, h node, 4)
-_FR = _unit_cell(_D["fast_rho"], _FDP, _FDH)
-_FG = _unit_cell(_D["fast_h"], _FDP, 1.0 / _FNG)  # h(p, tau): start values for h_pT
+_FDP = (FP1 - FP0) / FNP  # MPa
+FDH = (FH1 - FH0) / FNH  # kJ/kg
+FPINV = 1.0 / _FDP
+FHINV = 1.0 / FDH
+_FT = _unit_cell(_D["fast_T"], _FDP, FDH)  # (p node, h node, 4)
+_FR = _unit_cell(_D["fast_rho"], _FDP, FDH)
+_FG = _unit_cell(_D["fast_h"], _FDP, 1.0 / FNG)  # h(p, tau): start values for h_pT
 del _D
 
 
@@ -160,26 +160,26 @@ def _external_table(name: str, arr: np.ndarray):
     return address
 
 
-_CDAT_PTR = _external_table("curves", _CDAT)
-_TDAT_PTR = _external_table("T", _TDAT)
-_RDAT_PTR = _external_table("rho", _RDAT)
-_FT_PTR = _external_table("fast_T", _FT)
-_FR_PTR = _external_table("fast_rho", _FR)
-_FG_PTR = _external_table("fast_h", _FG)
-_NCDAT, _NTDAT, _FT_SHAPE, _FG_SHAPE = _CDAT.size, _TDAT.size, _FT.shape, _FG.shape
+CDAT_PTR = _external_table("curves", _CDAT)
+TDAT_PTR = _external_table("T", _TDAT)
+RDAT_PTR = _external_table("rho", _RDAT)
+FT_PTR = _external_table("fast_T", _FT)
+FR_PTR = _external_table("fast_rho", _FR)
+FG_PTR = _external_table("fast_h", _FG)
+NCDAT, NTDAT, FT_SHAPE, FG_SHAPE = _CDAT.size, _TDAT.size, _FT.shape, _FG.shape
 
-P_MIN = _PMIN * 1e6  # Pa, lower table edge
-P_MAX = _PMAX * 1e6  # Pa, upper table edge
-P_CRIT = _PC * 1e6  # Pa
-T_CRIT = _TC  # K
+P_MIN = PMIN * 1e6  # Pa, lower table edge
+P_MAX = PMAX * 1e6  # Pa, upper table edge
+P_CRIT = PC * 1e6  # Pa
+T_CRIT = TC  # K
 T_MIN = _TMIN  # K, table edge (10 C)
 T_MAX = _TMAX  # K, table edge (800 C)
 # (p_min Pa, p_max Pa, h_min J/kg, h_max J/kg): where the uniform fast table is used
-FAST_RECT = (_FP0 * 1e6, _FP1 * 1e6, _FH0 * 1e3, _FH1 * 1e3)
+FAST_RECT = (FP0 * 1e6, FP1 * 1e6, FH0 * 1e3, FH1 * 1e3)
 
 # patch ids, in _BLOCK_NAMES order
-_S0_L1, _S0_V2, _S1_L1, _S1_L3, _S1_V3, _S1_V2, _S2_L1, _S2_S3, _S2_V2 = range(9)
+S0_L1, S0_V2, S1_L1, S1_L3, S1_V3, S1_V2, S2_L1, S2_S3, S2_V2 = range(9)
 # B23 boundary T(p) coefficients (IF97 eq. 6)
-_B23_N3 = 0.10192970039326e-2
-_B23_N4 = 0.57254459862746e3
-_B23_N5 = 0.13918839778870e2
+B23_N3 = 0.10192970039326e-2
+B23_N4 = 0.57254459862746e3
+B23_N5 = 0.13918839778870e2

@@ -27,13 +27,15 @@ from collections.abc import Sequence
 
 import gymnasium as gym
 
-from steamtemp_gym import policy_sources
+import steamtemp_gym
+from steamtemp_gym import policy_sources, scenarios
+from steamtemp_gym.envs import resolve_id
 from steamtemp_gym.testing import guard
 from steamtemp_gym.testing.runner import CHECK_NAMES, Result, bound_checks, run, unchecked
 from steamtemp_gym.testing.subjects import short_id
 
 
-def _parser() -> argparse.ArgumentParser:
+def make_parser() -> argparse.ArgumentParser:
     source = policy_sources.find()
     names = (
         "a policy factory module:callable (env -> Policy; module a dotted name or a .py "
@@ -111,8 +113,6 @@ def _table(results: list[Result]) -> str:
 
 def _env_id(parser: argparse.ArgumentParser, name: str) -> str:
     """The registered id of an ID argument (the namespace may be left out)."""
-    from steamtemp_gym.envs import resolve_id
-
     try:
         return resolve_id(name)
     except ValueError as exc:
@@ -121,8 +121,6 @@ def _env_id(parser: argparse.ArgumentParser, name: str) -> str:
 
 def _check_scenarios(parser: argparse.ArgumentParser, specs: list[str], ids: list[str]) -> None:
     """Every --scenario resolves for every id's plant (steamtemp_gym.scenarios.resolve)."""
-    from steamtemp_gym import scenarios
-
     for spec in specs:
         for env_id in ids:
             try:
@@ -134,8 +132,6 @@ def _check_scenarios(parser: argparse.ArgumentParser, specs: list[str], ids: lis
 def _check_policies(parser: argparse.ArgumentParser, policies: list[str], ids: list[str]) -> None:
     """Every --policy parses (the installed policy source, steamtemp_gym/policy_sources.py);
     a factory's policy is built on the first id and must have predict and reset."""
-    import steamtemp_gym
-
     for name in policies:
         try:
             spec = policy_sources.parse(name)
@@ -160,7 +156,7 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 def _main(argv: Sequence[str] | None) -> int:
-    parser = _parser()
+    parser = make_parser()
     args = parser.parse_args(argv)
     for module in args.modules:
         try:
@@ -182,7 +178,6 @@ def _main(argv: Sequence[str] | None) -> int:
     bad = [c for c in args.check or () if c not in CHECK_NAMES]
     if bad:
         parser.error(f"unknown check {bad}; valid: {', '.join(CHECK_NAMES)}")
-    import steamtemp_gym
 
     ids = args.ids or list(steamtemp_gym.ENV_IDS)
     _check_scenarios(parser, args.scenario, ids)

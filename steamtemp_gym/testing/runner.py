@@ -9,6 +9,7 @@ from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
+import steamtemp_gym
 from steamtemp_gym.testing import env_checks as ec
 from steamtemp_gym.testing import guard
 from steamtemp_gym.testing import policy_checks as pc
@@ -129,8 +130,6 @@ def parametrize_with_checks(
             check(env_id)
     """
     import pytest
-
-    import steamtemp_gym
 
     params = []
     for env_id in steamtemp_gym.ENV_IDS if ids is None else ids:

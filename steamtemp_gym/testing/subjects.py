@@ -14,6 +14,7 @@ import gymnasium as gym
 from gymnasium.vector import SyncVectorEnv
 
 from steamtemp_gym import policy_sources
+from steamtemp_gym.envs import ids, resolve_id
 from steamtemp_gym.testing import guard
 
 
@@ -24,8 +25,6 @@ class CheckSkipped(unittest.SkipTest):
 
 def steamtemp_ids() -> list[str]:
     """Every registered id built by SteamTempEnv: the suite's ids and registered variants."""
-    from steamtemp_gym.envs import ids
-
     return ids()
 
 
@@ -71,8 +70,6 @@ def resolve_env(env: str | Callable[..., gym.Env] | EnvTarget) -> EnvTarget:
     if isinstance(env, EnvTarget):
         return env
     if isinstance(env, str):
-        from steamtemp_gym.envs import resolve_id
-
         env_id = resolve_id(env)  # also the name without the namespace
         return EnvTarget(env_id, env_id, None)
     if callable(env):

@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 from gymnasium.vector import AutoresetMode, SyncVectorEnv, VectorEnv
 
+from steamtemp_gym.envs import vector_env
 from steamtemp_gym.scenarios import Scenario
 from steamtemp_gym.testing.subjects import CheckSkipped, EnvTarget, env_check
 
@@ -25,8 +26,6 @@ EPISODE_STEPS = 12
 
 def autoreset_modes() -> tuple[AutoresetMode, ...]:
     """The autoreset modes the native vector env declares (NEXT_STEP if it declares none)."""
-    from steamtemp_gym.envs import vector_env
-
     return tuple(getattr(vector_env, "AUTORESET_MODES", (AutoresetMode.NEXT_STEP,)))
 
 
@@ -46,8 +45,6 @@ def short_scenario(dt_s: float, steps: int = EPISODE_STEPS) -> Scenario:
 def native_vector_env(target: EnvTarget, n: int, mode: AutoresetMode, **options: Any) -> VectorEnv:
     """The env's native vector env in ``mode`` (the mode is passed only where the vector env
     declares AUTORESET_MODES; before that it has NEXT_STEP only)."""
-    from steamtemp_gym.envs import vector_env
-
     if hasattr(vector_env, "AUTORESET_MODES"):
         options["autoreset_mode"] = mode
     return target.make_vec(n, **options)

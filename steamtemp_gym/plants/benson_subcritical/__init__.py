@@ -142,10 +142,8 @@ point) and ``plant`` (the Plant class).
 """
 
 from steamtemp_gym.plants.base import K0
-from steamtemp_gym.plants.benson_subcritical.calibration import _pack
+from steamtemp_gym.plants.benson_subcritical.calibration import pack_params
 from steamtemp_gym.plants.benson_subcritical.kernel import (
-    _reheat,
-    _table,
     cold_reheat,
     derivatives,
     design_spray,
@@ -155,8 +153,10 @@ from steamtemp_gym.plants.benson_subcritical.kernel import (
     outputs,
     p_setpoint,
     project,
+    reheat,
     rhs,
     step,
+    table,
 )
 from steamtemp_gym.plants.benson_subcritical.layout import IP, IX, IZ, OUTPUTS
 from steamtemp_gym.plants.benson_subcritical.params import P_SHARE, SEC, SECTIONS, BensonParams
@@ -190,9 +190,9 @@ __all__ = [
     "design_spray",
     "section_enthalpies",
     "section_temperatures",
-    "_pack",
-    "_reheat",
-    "_table",
+    "pack_params",
+    "reheat",
+    "table",
     # the layout: outputs and the named slots of P, x and z (the section blocks, tables and
     # thermowells in the layout module)
     "OUTPUTS",

@@ -12,7 +12,7 @@ import numpy as np
 from steamtemp_gym._jit import read_only
 from steamtemp_gym.plants.attemperator import mix
 from steamtemp_gym.plants.base import K0, nominal_disturbances
-from steamtemp_gym.plants.benson_subcritical.kernel import _boundary, _reheat, _table, p_setpoint
+from steamtemp_gym.plants.benson_subcritical.kernel import boundary, p_setpoint, reheat, table
 from steamtemp_gym.plants.benson_subcritical.layout import (
     COPIED,
     IF,
@@ -28,9 +28,9 @@ from steamtemp_gym.plants.benson_subcritical.layout import (
 )
 from steamtemp_gym.plants.benson_subcritical.params import P_SHARE, SEC, SECTIONS, BensonParams
 from steamtemp_gym.plants.benson_subcritical.steady_state import (
-    _section_steady,
-    _sh_steady,
-    _upstream_steady,
+    section_steady,
+    sh_steady,
+    upstream_steady,
 )
 from steamtemp_gym.plants.copies import write_copies
 from steamtemp_gym.plants.integrator import pattern_arrays
@@ -58,7 +58,7 @@ def _calibrate(pr: BensonParams, P: np.ndarray) -> None:
     h_ev = _rated_design(pr, P, Pk, x)
     _storage(pr, P, x)
     _load_schedules(pr, P, Pk, n_x)
-    if abs(_table(Pk, ITB.HEV, 1.0) - h_ev) > 1.0:  # the schedule must pass the design point
+    if abs(table(Pk, ITB.HEV, 1.0) - h_ev) > 1.0:  # the schedule must pass the design point
         raise ValueError("BensonParams: inconsistent calibration at rated load")
 
 
@@ -103,7 +103,7 @@ def _rated_design(pr: BensonParams, P: np.ndarray, Pk: np.ndarray, x: np.ndarray
 
         def resid(uag: float) -> float:
             setf(k, IF.UAG, uag)
-            return (_section_steady(x, Pk, k, h0, W, pk, 1.0, d) - target) * 1e-3
+            return (section_steady(x, Pk, k, h0, W, pk, 1.0, d) - target) * 1e-3
 
         Tg = P[sec + NF * k + IF.TGN]
         T_mean = 0.5 * (T_out + K0 + T_ph(pk, h0))
@@ -116,17 +116,17 @@ def _rated_design(pr: BensonParams, P: np.ndarray, Pk: np.ndarray, x: np.ndarray
         if target <= h0:
             raise ValueError(f"BensonParams: the {SECTIONS[k]} design outlet is below its inlet")
         setf(k, IF.QRAD, W * (target - h0) / int(P[sec + NF * k + IF.N]))
-        return _section_steady(x, Pk, k, h0, W, pk, 1.0, d)
+        return section_steady(x, Pk, k, h0, W, pk, 1.0, d)
 
-    h_fw = _table(Pk, ITB.HFW, 1.0)
+    h_fw = table(Pk, ITB.HFW, 1.0)
     h = conv(SEC.ECO, h_fw, W_eco, p + P_SHARE[SEC.ECO] * dpb, pr.T_eco_out_C)
     h = rad(SEC.EV, h, W_eco, p + P_SHARE[SEC.EV] * dpb, pr.T_evap_out_C)
     h_ev = h
     h = conv(SEC.SH1, h, W_eco, p + P_SHARE[SEC.SH1] * dpb, pr.T_sh1_out_C)
     h = rad(SEC.SH2, h, W_eco, p + P_SHARE[SEC.SH2] * dpb, pr.T_sh2_out_C)
     # spray valves: fully open passes spray*_max_fraction of W_nom at rated load
-    rho_sp = _table(Pk, ITB.RHOSP, 1.0)
-    h_sp = _table(Pk, ITB.HSP, 1.0)
+    rho_sp = table(Pk, ITB.RHOSP, 1.0)
+    h_sp = table(Pk, ITB.HSP, 1.0)
     for i_cv, share, smax in (
         (IP.CV1, P_SHARE[SEC.SH2], pr.spray1_max_fraction),
         (IP.CV2, P_SHARE[SEC.SH3], pr.spray2_max_fraction),
@@ -140,7 +140,7 @@ def _rated_design(pr: BensonParams, P: np.ndarray, Pk: np.ndarray, x: np.ndarray
     h = conv(SEC.SH3, h, W3, p + P_SHARE[SEC.SH3] * dpb, pr.T_sh3_out_C)
     W4, h = mix(W3, h, w2, h_sp)
     h_ms = conv(SEC.SH4, h, W4, p, pr.T_ms_C)
-    W_t, W_rh, p_rh, p_crh, _ = _reheat(Pk, p, 1.0)
+    W_t, W_rh, p_rh, p_crh, _ = reheat(Pk, p, 1.0)
     T_crh = (pr.T_ms_C + K0) * (p_crh / p) ** P[IP.KE]
     h_crh = h_pT(p_crh, T_crh)
     h_rh = conv(SEC.RH, h_crh, W_rh, p_rh, pr.T_rh_C)
@@ -173,26 +173,26 @@ def _load_schedules(pr: BensonParams, P: np.ndarray, Pk: np.ndarray, n_x: int) -
     for i, L in enumerate(TAB_LOADS):
         dL = nominal_disturbances(L)[0]
         xs[IX.V1], xs[IX.V2] = P[IP.V1D], P[IP.V2D]
-        _, _, W_e, w1, w2, *_ = _boundary(xs, dL, Pk)
+        _, _, W_e, w1, w2, *_ = boundary(xs, dL, Pk)
         pL = p_setpoint(Pk, L) * (W_e + w1 + w2) / (W_nom * L)
         xs[IX.P] = pL
         target = h_pT(pL, pr.T_ms_C + K0)
 
         def resid(lf: float, dL=dL, pL=pL, target=target) -> float:
-            _upstream_steady(xs, dL, Pk, lf, pL)
-            return (_sh_steady(xs, dL, Pk, lf, pL, 4) - target) * 1e-3
+            upstream_steady(xs, dL, Pk, lf, pL)
+            return (sh_steady(xs, dL, Pk, lf, pL, 4) - target) * 1e-3
 
         lf = _secant(resid, L, 1.02 * L, f"the firing schedule at {L:.2f} load")
         P[IP.TAB + ITB.FUEL * N_TAB + i] = lf
-        P[IP.TAB + ITB.HEV * N_TAB + i] = _upstream_steady(xs, dL, Pk, lf, pL)
-        P[IP.TAB + ITB.H3 * N_TAB + i] = _sh_steady(xs, dL, Pk, lf, pL, 3)
-        _, _, _, p_crh, _ = _reheat(Pk, pL, L)
+        P[IP.TAB + ITB.HEV * N_TAB + i] = upstream_steady(xs, dL, Pk, lf, pL)
+        P[IP.TAB + ITB.H3 * N_TAB + i] = sh_steady(xs, dL, Pk, lf, pL, 3)
+        _, _, _, p_crh, _ = reheat(Pk, pL, L)
         T_crh = (pr.T_ms_C + K0) * (p_crh / pL) ** P[IP.KE]
         P[IP.TAB + ITB.HCRH * N_TAB + i] = h_pT(p_crh, T_crh)
 
 
 @functools.lru_cache(maxsize=32)
-def _pack(pr: BensonParams) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
+def pack_params(pr: BensonParams) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
     P = np.zeros(N_P)
     _pack_scalars(pr, P)
     pat, off = _pack_sections(pr, P)

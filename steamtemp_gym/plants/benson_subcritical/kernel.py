@@ -38,13 +38,13 @@ from steamtemp_gym.steam import T_dTdh_ph, T_ph, sat_p
 
 
 @njit(cache=True)
-def _s(P, k, f):
+def section_param(P, k, f):
     """Per-section parameter f of section k."""
     return P[IP.SEC + NF * k + f]
 
 
 @njit(cache=True)
-def _table(P, tb, load):
+def table(P, tb, load):
     """Linear interpolation of schedule table tb over TAB_LOADS."""
     x = (min(max(load, 0.2), 1.2) - 0.2) / 0.05
     k = min(int(x), N_TAB - 2)
@@ -61,14 +61,14 @@ def p_setpoint(P, load):
 
 
 @njit(cache=True)
-def _gas(P, k, lf, d):
+def gas_side(P, k, lf, d):
     """(UA_g, T_g, Q_rad) per segment of section k at firing fraction lf, disturbances d."""
     bias = d[D_HEAT_BIAS]
     mult = 1.0 + bias if k >= SEC.SH1 else (1.0 + P[IP.BEV] * bias if k == SEC.EV else 1.0)
     mult = max(mult, 0.0)
-    UAg = _s(P, k, IF.UAG) * lf ** P[IP.GEXP] * max(d[D_FOULING], 0.0) * mult
-    Tg = _s(P, k, IF.TGN) * (1.0 - P[IP.GCOEF] * (1.0 - lf))
-    Qrad = _s(P, k, IF.QRAD) * lf ** P[IP.REXP] * mult
+    UAg = section_param(P, k, IF.UAG) * lf ** P[IP.GEXP] * max(d[D_FOULING], 0.0) * mult
+    Tg = section_param(P, k, IF.TGN) * (1.0 - P[IP.GCOEF] * (1.0 - lf))
+    Qrad = section_param(P, k, IF.QRAD) * lf ** P[IP.REXP] * mult
     return UAg, Tg, Qrad
 
 
@@ -81,9 +81,9 @@ def _boundary_v(x, d, P, v1, v2):
     L = min(max(d[D_LOAD], 0.05), 1.3)
     r2 = L * L
     W_eco = P[IP.WECO] * L
-    h_fw = _table(P, ITB.HFW, L) + _table(P, ITB.CPFW, L) * d[D_SPRAY_T]
-    h_sp = _table(P, ITB.HSP, L) + _table(P, ITB.CPSP, L) * d[D_SPRAY_T]
-    rho_sp = _table(P, ITB.RHOSP, L)
+    h_fw = table(P, ITB.HFW, L) + table(P, ITB.CPFW, L) * d[D_SPRAY_T]
+    h_sp = table(P, ITB.HSP, L) + table(P, ITB.CPSP, L) * d[D_SPRAY_T]
+    rho_sp = table(P, ITB.RHOSP, L)
     w1 = spray_flow(v1, P[IP.CV1], rho_sp, (P[IP.DPPUMP] - P_SHARE[SEC.SH2] * P[IP.DPB]) * r2)
     w2 = spray_flow(v2, P[IP.CV2], rho_sp, (P[IP.DPPUMP] - P_SHARE[SEC.SH3] * P[IP.DPB]) * r2)
     p = x[IX.P]
@@ -101,13 +101,13 @@ def _boundary_v(x, d, P, v1, v2):
 
 
 @njit(cache=True)
-def _boundary(x, d, P):
+def boundary(x, d, P):
     """_boundary_v at the valve positions held in the state."""
     return _boundary_v(x, d, P, x[IX.V1], x[IX.V2])
 
 
 @njit(cache=True)
-def _reheat(P, p, L):
+def reheat(P, p, L):
     """Turbine side: (W_t, W_rh, p_rh, p_crh, dW_t/dp) at main-steam pressure p, demand L."""
     W_t = P[IP.WNOM] * L * p / p_setpoint(P, L)
     W_rh = P[IP.RHF] * W_t
@@ -119,12 +119,12 @@ def _reheat(P, p, L):
 @njit(cache=True)
 def _section(x, P, k, h0, dh0, W, dW, p, dp, lf, d, f, jd, ju, jl, want_jac):
     """chain_rhs of section k (returns heat to steam W, outlet T K, max metal T K)."""
-    kA = steam_side_kA(_s(P, k, IF.KA), W, _s(P, k, IF.WN))
-    UAg, Tg, Qrad = _gas(P, k, lf, d)
+    kA = steam_side_kA(section_param(P, k, IF.KA), W, section_param(P, k, IF.WN))
+    UAg, Tg, Qrad = gas_side(P, k, lf, d)
     return chain_rhs(
         x,
-        int(_s(P, k, IF.OFF)),
-        int(_s(P, k, IF.N)),
+        int(section_param(P, k, IF.OFF)),
+        int(section_param(P, k, IF.N)),
         h0,
         dh0,
         W,
@@ -133,8 +133,8 @@ def _section(x, P, k, h0, dh0, W, dW, p, dp, lf, d, f, jd, ju, jl, want_jac):
         dp,
         kA[0],
         kA[1],
-        _s(P, k, IF.V),
-        _s(P, k, IF.CM),
+        section_param(P, k, IF.V),
+        section_param(P, k, IF.CM),
         UAg,
         Tg,
         Qrad,
@@ -142,16 +142,16 @@ def _section(x, P, k, h0, dh0, W, dW, p, dp, lf, d, f, jd, ju, jl, want_jac):
         jd,
         ju,
         jl,
-        int(_s(P, k, IF.JOFF)),
+        int(section_param(P, k, IF.JOFF)),
         want_jac,
         PRESSURE_JAC,
     )
 
 
 @njit(cache=True)
-def _last_h(x, P, k):
+def last_h(x, P, k):
     """Outlet enthalpy state of section k."""
-    return x[int(_s(P, k, IF.OFF)) + 2 * int(_s(P, k, IF.N)) - 1]
+    return x[int(section_param(P, k, IF.OFF)) + 2 * int(section_param(P, k, IF.N)) - 1]
 
 
 @njit(cache=True)
@@ -162,7 +162,7 @@ def h_ev_setpoint(P, load):
     plus the commissioning error e_50 4 L (1 - L): zero at rated load, e_50 at half load.
     """
     L = min(max(load, 0.05), 1.3)
-    return _table(P, ITB.HEV, L) + P[IP.HERR] * 4.0 * L * (1.0 - L)
+    return table(P, ITB.HEV, L) + P[IP.HERR] * 4.0 * L * (1.0 - L)
 
 
 @njit(cache=True)
@@ -182,9 +182,9 @@ def fuel_demand(x, d, P):
     tau_furnace (state IX.F).
     """
     L = min(max(d[D_LOAD], 0.05), 1.3)
-    e = (_last_h(x, P, SEC.EV) - h_ev_setpoint(P, L)) * 1e-5
+    e = (last_h(x, P, SEC.EV) - h_ev_setpoint(P, L)) * 1e-5
     L_ff = min(max(L + P[IP.TBIR] * d[D_LOAD_RATE], 0.05), 1.3)
-    demand = _table(P, ITB.FUEL, L_ff) * (1.0 + x[int(P[IP.STRIM])] - P[IP.KP] * e)
+    demand = table(P, ITB.FUEL, L_ff) * (1.0 + x[int(P[IP.STRIM])] - P[IP.KP] * e)
     return min(max(demand, 0.02), 1.5)
 
 
@@ -203,7 +203,7 @@ def cold_reheat(P, L, p_crh, T_crh):
     h_v = sat[4]
     if T_crh <= sat[0] + 0.01:
         return h_v, T_dTdh_ph(p_crh, h_v + 10.0)[1]
-    h = max(_table(P, ITB.HCRH, L), h_v + 10.0)
+    h = max(table(P, ITB.HCRH, L), h_v + 10.0)
     T, dTdh = T_dTdh_ph(p_crh, h)
     for _ in range(3):
         h = max(h + (T_crh - T) / dTdh, h_v)
@@ -247,7 +247,7 @@ def rhs(x, u, d, P, f, jd, ju, jl, want_jac):
         x,
         P,
         SEC.EV,
-        _last_h(x, P, SEC.ECO),
+        last_h(x, P, SEC.ECO),
         one,
         W_eco,
         0.0,
@@ -261,7 +261,7 @@ def rhs(x, u, d, P, f, jd, ju, jl, want_jac):
         jl,
         want_jac,
     )
-    h_ev = _last_h(x, P, SEC.EV)
+    h_ev = last_h(x, P, SEC.EV)
     _, T_1, _ = _section(
         x,
         P,
@@ -284,7 +284,7 @@ def rhs(x, u, d, P, f, jd, ju, jl, want_jac):
         x,
         P,
         SEC.SH2,
-        _last_h(x, P, SEC.SH1),
+        last_h(x, P, SEC.SH1),
         one,
         W_eco,
         0.0,
@@ -298,13 +298,13 @@ def rhs(x, u, d, P, f, jd, ju, jl, want_jac):
         jl,
         want_jac,
     )
-    h2 = _last_h(x, P, SEC.SH2)
+    h2 = last_h(x, P, SEC.SH2)
     W3, h_a1 = mix(W_eco, h2, w1, h_sp)
     dh0[0] = W_eco / W3  # by h2
     _, T_3, _ = _section(
         x, P, SEC.SH3, h_a1, dh0[0:1], W3, 0.0, p_a2, 1.0, lf, d, f, jd, ju, jl, want_jac
     )
-    h3 = _last_h(x, P, SEC.SH3)
+    h3 = last_h(x, P, SEC.SH3)
     W4, h_a2 = mix(W3, h3, w2, h_sp)
     dh0[1] = W3 / W4  # by h3
     _, T_4, _ = _section(
@@ -316,7 +316,7 @@ def rhs(x, u, d, P, f, jd, ju, jl, want_jac):
         x,
         loff,
         nl,
-        _last_h(x, P, SEC.SH4),
+        last_h(x, P, SEC.SH4),
         one,
         W4,
         0.0,
@@ -331,7 +331,7 @@ def rhs(x, u, d, P, f, jd, ju, jl, want_jac):
         False,
     )
     # turbine and reheater (eq. 14)
-    W_t, W_rh, p_rh, p_crh, dWt = _reheat(P, p, L)
+    W_t, W_rh, p_rh, p_crh, dWt = reheat(P, p, L)
     ratio = (p_crh / p) ** P[IP.KE]
     h_crh, _ = cold_reheat(P, L, p_crh, T_ms * ratio)
     dh0[2] = P[IP.CPRAT] * ratio  # by h_ms (cp_crh / cp_ms at rated)
@@ -393,7 +393,7 @@ def derivatives(x, u, d, P, f):
 @njit(cache=True)
 def _dTdh_out(x, P, k, p):
     """dT/dh (K per J/kg) at the outlet of section k."""
-    return T_dTdh_ph(p, _last_h(x, P, k))[1]
+    return T_dTdh_ph(p, last_h(x, P, k))[1]
 
 
 @njit(cache=True)
@@ -411,9 +411,9 @@ def _sections_heat(x, P, lf, d, first, last):
     q = 0.0
     tm_max = 0.0
     for k in range(first, last + 1):
-        UAg, Tg, Qrad = _gas(P, k, lf, d)
-        off = int(_s(P, k, IF.OFF))
-        for i in range(int(_s(P, k, IF.N))):
+        UAg, Tg, Qrad = gas_side(P, k, lf, d)
+        off = int(section_param(P, k, IF.OFF))
+        for i in range(int(section_param(P, k, IF.N))):
             tm = x[off + 2 * i]
             q += UAg * (Tg - tm) + Qrad
             tm_max = max(tm_max, tm)
@@ -423,14 +423,14 @@ def _sections_heat(x, P, lf, d, first, last):
 @njit(cache=True)
 def outputs(x, u, d, P, z):
     """Physical outputs (order of BensonSubcritical.outputs)."""
-    L, r2, W_eco, w1, w2, h_fw, h_sp, p_a1, p_a2 = _boundary(x, d, P)
+    L, r2, W_eco, w1, w2, h_fw, h_sp, p_a1, p_a2 = boundary(x, d, P)
     p = x[IX.P]
     lf = firing(x, d, P)
     T_ms = T_ph(p, x[int(P[IP.LOFF]) + int(P[IP.NL]) - 1])
-    W_t, W_rh, p_rh, p_crh, _ = _reheat(P, p, L)
-    T_rh = T_ph(p_rh, _last_h(x, P, SEC.RH))
-    W3, _ = mix(W_eco, _last_h(x, P, SEC.SH2), w1, h_sp)
-    _, h_a2 = mix(W3, _last_h(x, P, SEC.SH3), w2, h_sp)
+    W_t, W_rh, p_rh, p_crh, _ = reheat(P, p, L)
+    T_rh = T_ph(p_rh, last_h(x, P, SEC.RH))
+    W3, _ = mix(W_eco, last_h(x, P, SEC.SH2), w1, h_sp)
+    _, h_a2 = mix(W3, last_h(x, P, SEC.SH3), w2, h_sp)
     s0 = int(P[IP.S0])
     z[IZ.outlet_temp_C] = T_ms - K0
     z[IZ.outlet_temp_meas_C] = x[s0 + 2 * ISEN.MS + 1] - K0
@@ -456,13 +456,13 @@ def outputs(x, u, d, P, z):
     z[IZ.heat_absorption_MW] = q * 1e-6
     z[IZ.metal_temp_max_C] = tm_max - K0
     z[IZ.design_spray_kg_s] = design_spray(P, L)
-    z[IZ.sh4_out_temp_C] = T_ph(p, _last_h(x, P, SEC.SH4)) - K0
+    z[IZ.sh4_out_temp_C] = T_ph(p, last_h(x, P, SEC.SH4)) - K0
     # steam-generation point: where the evaporator enthalpy crosses h_l(p), 0..1 along it
     p_ev = p + P_SHARE[SEC.EV] * P[IP.DPB] * r2
     h_l = sat_p(p_ev)[3]
-    n = int(_s(P, SEC.EV, IF.N))
-    off = int(_s(P, SEC.EV, IF.OFF))
-    h_prev = _last_h(x, P, SEC.ECO)
+    n = int(section_param(P, SEC.EV, IF.N))
+    off = int(section_param(P, SEC.EV, IF.OFF))
+    h_prev = last_h(x, P, SEC.ECO)
     sgp = 1.0
     if h_prev >= h_l:
         sgp = 0.0
@@ -482,7 +482,7 @@ def design_spray(P, L):
     are designed for (without the schedule error, the undisturbed plant's steady spray)."""
     L = min(max(L, 0.05), 1.3)
     r2 = L * L
-    rho_sp = _table(P, ITB.RHOSP, L)
+    rho_sp = table(P, ITB.RHOSP, L)
     w1 = spray_flow(
         P[IP.V1D], P[IP.CV1], rho_sp, (P[IP.DPPUMP] - P_SHARE[SEC.SH2] * P[IP.DPB]) * r2
     )
@@ -503,8 +503,8 @@ def project(x, P):
     s0 = int(P[IP.S0])
     loff, nl = int(P[IP.LOFF]), int(P[IP.NL])
     for k in range(7):
-        off = int(_s(P, k, IF.OFF))
-        for j in range(off, off + 2 * int(_s(P, k, IF.N)), 2):
+        off = int(section_param(P, k, IF.OFF))
+        for j in range(off, off + 2 * int(section_param(P, k, IF.N)), 2):
             x[j] = min(max(x[j], 300.0), 1400.0)
             x[j + 1] = min(max(x[j + 1], 2.0e5), 4.2e6)
     for j in range(loff, loff + nl):

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from steamtemp_gym.plants.base import MAIN, SCHEDULED, Plant, Signal
-from steamtemp_gym.plants.benson_subcritical.calibration import _pack
+from steamtemp_gym.plants.benson_subcritical.calibration import pack_params
 from steamtemp_gym.plants.benson_subcritical.kernel import step
 from steamtemp_gym.plants.benson_subcritical.layout import OUTPUTS
 from steamtemp_gym.plants.benson_subcritical.params import BensonParams
@@ -34,7 +34,7 @@ class BensonSubcritical(Plant):
         "heat_absorption_MW",
     )
 
-    pack = staticmethod(_pack)
+    pack = staticmethod(pack_params)
     steady = staticmethod(_steady)
     setpoint_param = "T_ms_C"
     control_loops = (

@@ -20,7 +20,7 @@ Steam path (states in SI; superheater.py chains of fluid enthalpy + tube metal):
 - Heat-exchanger section, eq. (1)-(3): per segment, fluid M dh/dt = w (h_in - h) + UA (T_m - T)
   and metal M_m c_m dT_m/dt = q - UA (T_m - T) (the fluid state is the outlet, subscript l).
   Eq. (4)-(6): UA = A / ((r_o - r_i)/(2k) + 1/h) with h ~ Re^0.8 ~ w^0.8, i.e. a wall
-  conductance in series with a Dittus-Boelter film (``_kA``; the film part is the shared
+  conductance in series with a Dittus-Boelter film (``tube_kA``; the film part is the shared
   ``steam_side_kA``). The secondary SH (platen) is that section exactly: radiant heat q
   independent of the metal temperature, lumped as one segment by default
   (``n_seg_platen = 1``). Its effective volume, metal heat capacity and conductances are
@@ -125,20 +125,20 @@ Jacobian pattern), ``kernel`` (rhs, outputs, projection and the compiled step),
 """
 
 from steamtemp_gym.plants.base import K0
-from steamtemp_gym.plants.boiler_turbine_mimo.calibration import _pack
+from steamtemp_gym.plants.boiler_turbine_mimo.calibration import pack_params
 from steamtemp_gym.plants.boiler_turbine_mimo.kernel import (
     ACTUATORS,
     KERNELS,
     N_U_HELD,
-    _offsets,
-    _tab,
     design_spray,
     firing_travel,
     fuel_demand,
+    offsets,
     outputs,
     project,
     rhs,
     step,
+    table,
 )
 from steamtemp_gym.plants.boiler_turbine_mimo.layout import (
     IP,
@@ -171,9 +171,9 @@ __all__ = [
     "ACTUATORS",
     "N_U_HELD",
     "patterns",
-    "_pack",
-    "_offsets",
-    "_tab",
+    "pack_params",
+    "offsets",
+    "table",
     # the layout: outputs and the named slots of P, x, z and the load schedules
     "OUTPUTS",
     "IP",

@@ -12,12 +12,12 @@ import numpy as np
 from steamtemp_gym._jit import read_only
 from steamtemp_gym.plants.base import D_LOAD, K0, nominal_disturbances
 from steamtemp_gym.plants.boiler_turbine_mimo.kernel import (
-    _h_crh_target,
-    _kA,
-    _offsets,
-    _pressure,
-    _reheat_pressure,
-    _tab,
+    h_crh_target,
+    offsets,
+    pressure,
+    reheat_pressure,
+    table,
+    tube_kA,
 )
 from steamtemp_gym.plants.boiler_turbine_mimo.layout import (
     COPIED,
@@ -30,7 +30,7 @@ from steamtemp_gym.plants.boiler_turbine_mimo.layout import (
     patterns,
 )
 from steamtemp_gym.plants.boiler_turbine_mimo.params import BoilerTurbineParams
-from steamtemp_gym.plants.boiler_turbine_mimo.steady_state import _bisect_rgd, _sh_steady
+from steamtemp_gym.plants.boiler_turbine_mimo.steady_state import bisect_rgd, sh_steady
 from steamtemp_gym.plants.copies import write_copies
 from steamtemp_gym.plants.integrator import pattern_arrays
 from steamtemp_gym.plants.roots import secant
@@ -68,17 +68,17 @@ def _calibrate(params: BoilerTurbineParams, P: np.ndarray, n_x: int) -> None:
         d[D_LOAD] = L
         x[IX.LF] = x[IX.LW] = L
         x[IX.FB] = 0.5
-        x[IX.CRH] = _h_crh_target(Pk, T_ms, L)
-        x[IX.G] = _bisect_rgd(x, d, Pk, P[IP.TRH])
-        p, _ = _pressure(Pk, L)
+        x[IX.CRH] = h_crh_target(Pk, T_ms, L)
+        x[IX.G] = bisect_rgd(x, d, Pk, P[IP.TRH])
+        p, _ = pressure(Pk, L)
 
         def ste(h, L=L, p=p):
             x[IX.HUP] = h
-            return T_ph(p, _sh_steady(x, P[IP.VD], d, Pk)) - T_ms
+            return T_ph(p, sh_steady(x, P[IP.VD], d, Pk)) - T_ms
 
         h = _secant(ste, h_up, h_up + 50e3, f"the evaporator-outlet schedule at load {L:.2f}")
         P[IP.TAB + ITAB.HUP * N_TAB + k] = h
-        P[IP.TAB + ITAB.RISE * N_TAB + k] = h - _tab(Pk, ITAB.HSP, L)
+        P[IP.TAB + ITAB.RISE * N_TAB + k] = h - table(Pk, ITAB.HSP, L)
 
 
 def _water_and_reheat_tables(params: BoilerTurbineParams, P: np.ndarray, Pk: np.ndarray) -> None:
@@ -88,14 +88,14 @@ def _water_and_reheat_tables(params: BoilerTurbineParams, P: np.ndarray, Pk: np.
         params.p_rh_nom_MPa / params.p_nom_MPa
     )
     for k, L in enumerate(TAB_LOADS):
-        p, _ = _pressure(Pk, L)
+        p, _ = pressure(Pk, L)
         p_sp = p + P[IP.DPB] * L * L
         T_fw = params.T_fw_nom_C + K0 - params.dT_fw_dload_K * (1.0 - L)
         h = h_pT(p_sp, T_fw)
         P[IP.TAB + ITAB.HSP * N_TAB + k] = h
         P[IP.TAB + ITAB.RHOSP * N_TAB + k] = rho_ph(p_sp, h)
         P[IP.TAB + ITAB.CPSP * N_TAB + k] = cp_pT(p_sp, T_fw)
-        prh, _ = _reheat_pressure(Pk, L)
+        prh, _ = reheat_pressure(Pk, L)
         ratio = (prh / p) ** kappa
         P[IP.TAB + ITAB.CRHR * N_TAB + k] = ratio
         P[IP.TAB + ITAB.TCRH * N_TAB + k] = T_ms * ratio
@@ -109,14 +109,14 @@ def _rated_design(
     """Size the spray valves, the platen's radiant heat and the convective UA_g of the
     primary SH, final SH and reheater on the rated design balance; the design evaporator
     outlet enthalpy (J/kg)."""
-    o_p, o_pl, o_f, o_r = _offsets(Pk)
+    o_p, o_pl, o_f, o_r = offsets(Pk)
     n1, n2, n3, n4 = (int(P[i]) for i in (IP.N1, IP.N2, IP.N3, IP.N4))
     W = params.W_nom_kg_s
     T_ms = params.T_ms_C + K0
     p_nom = params.p_nom_MPa * 1e6
     # spray valves: the design opening passes the design fraction at rated load
-    h_sp = _tab(Pk, ITAB.HSP, 1.0)
-    s = math.sqrt(_tab(Pk, ITAB.RHOSP, 1.0) * P[IP.DPB])
+    h_sp = table(Pk, ITAB.HSP, 1.0)
+    s = math.sqrt(table(Pk, ITAB.RHOSP, 1.0) * P[IP.DPB])
     P[IP.CV1] = params.sp1_design_fraction * W / (params.valve_design_opening * s)
     P[IP.CV2] = params.sp2_design_fraction * W / (params.valve_design_opening * s)
     # rated design balance
@@ -150,7 +150,7 @@ def _rated_design(
         h_fi,
         W,
         p_nom,
-        _kA(P[IP.KAF_F], P[IP.KAW_F], W, W)[0],
+        tube_kA(P[IP.KAF_F], P[IP.KAW_F], W, W)[0],
         P[IP.TG_F],
         h_ms,
         "the final SH gas side",
@@ -162,19 +162,19 @@ def _rated_design(
         h_up,
         Wp,
         p_nom,
-        _kA(P[IP.KAF_P], P[IP.KAW_P], Wp, W)[0],
+        tube_kA(P[IP.KAF_P], P[IP.KAW_P], Wp, W)[0],
         P[IP.TG_P],
         h_po,
         "the primary SH gas side",
     )
     Wr = P[IP.FRH] * W
-    prh, _ = _reheat_pressure(Pk, 1.0)
-    kA_r = _kA(P[IP.KAF_R], P[IP.KAW_R], Wr, Wr)[0]
+    prh, _ = reheat_pressure(Pk, 1.0)
+    kA_r = tube_kA(P[IP.KAF_R], P[IP.KAW_R], Wr, Wr)[0]
     stage(
         IP.UAG_R,
         o_r,
         n4,
-        _tab(Pk, ITAB.HCRH, 1.0),
+        table(Pk, ITAB.HCRH, 1.0),
         Wr,
         prh,
         kA_r,
@@ -197,7 +197,7 @@ def _conductances(
 
 
 @functools.lru_cache(maxsize=32)
-def _pack(params: BoilerTurbineParams) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
+def pack_params(params: BoilerTurbineParams) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
     q = params
     P = np.zeros(N_P)
     write_copies(P, IP, COPIED, params)

@@ -20,7 +20,7 @@ from steamtemp_gym.steam import T_dTdh_ph, T_ph
 
 
 @njit(cache=True)
-def _pressure(P, lw):
+def pressure(P, lw):
     """Superheater pressure (Pa) and its derivative by the steam-flow fraction lw."""
     knee, lmin = P[IP.KNEE], P[IP.LMIN]
     if lw >= knee:
@@ -33,7 +33,7 @@ def _pressure(P, lw):
 
 
 @njit(cache=True)
-def _reheat_pressure(P, lw):
+def reheat_pressure(P, lw):
     """Reheater pressure (Pa) ~ steam flow, and its derivative by lw."""
     p = P[IP.PRH] * lw
     if p < P[IP.PRHMIN]:
@@ -42,7 +42,7 @@ def _reheat_pressure(P, lw):
 
 
 @njit(cache=True)
-def _tab(P, k, load):
+def table(P, k, load):
     """Linear interpolation of schedule table k over TAB_LOADS."""
     off = IP.TAB + k * N_TAB
     x = (min(max(load, 0.2), 1.2) - 0.2) / 0.05
@@ -52,7 +52,7 @@ def _tab(P, k, load):
 
 
 @njit(cache=True)
-def _kA(kA_film_nom, kA_wall, W, W_nom):
+def tube_kA(kA_film_nom, kA_wall, W, W_nom):
     """Eq. (4)-(5): film kA ~ w^0.8 in series with the wall term; (kA, dkA/dW) in W/K."""
     kf, dkf = steam_side_kA(kA_film_nom, W, W_nom)
     kA = 1.0 / (1.0 / kf + 1.0 / kA_wall)
@@ -60,12 +60,12 @@ def _kA(kA_film_nom, kA_wall, W, W_nom):
 
 
 @njit(cache=True)
-def _gas(P, lf, g, d):
+def gas_side(P, lf, g, d):
     """Gas side: (UAg_primary, UAg_final, UAg_reheat, Tg_p, Tg_f, Tg_r, Q_platen), whole stages."""
     lf = min(max(lf, 0.05), 1.3)
     r = P[IP.RMAX] * min(max(g, 0.0), 1.0)
     flow = lf * (1.0 + r) / (1.0 + P[IP.RNOM])
-    heat = max(1.0 + d[D_HEAT_BIAS], 0.0)  # heat-absorption bias (the evaporator's: _h_up_target)
+    heat = max(1.0 + d[D_HEAT_BIAS], 0.0)  # heat-absorption bias (the evaporator's: h_up_target)
     conv = flow ** P[IP.GEXP] * max(d[D_FOULING], 0.0) * heat
     dT = P[IP.DTG] * (1.0 - lf)
     dTr = P[IP.DTGR] * (1.0 - lf)
@@ -82,14 +82,14 @@ def _gas(P, lf, g, d):
 
 
 @njit(cache=True)
-def _sprays(P, x, d, lw):
+def sprays(P, x, d, lw):
     """(h_sp, w1, w2, dw1/dv1, dw2/dv2) at steam-flow fraction lw (valves linear)."""
-    h_sp = _tab(P, ITAB.HSP, lw) + _tab(P, ITAB.CPSP, lw) * d[D_SPRAY_T]
+    h_sp = table(P, ITAB.HSP, lw) + table(P, ITAB.CPSP, lw) * d[D_SPRAY_T]
     dp = P[IP.DPB] * lw * lw
-    s = math.sqrt(_tab(P, ITAB.RHOSP, lw) * max(dp, 0.0))
+    s = math.sqrt(table(P, ITAB.RHOSP, lw) * max(dp, 0.0))
     W = lw * P[IP.WNOM]
-    w1 = spray_flow(x[IX.V1], P[IP.CV1], _tab(P, ITAB.RHOSP, lw), dp)
-    w2 = spray_flow(x[IX.V2], P[IP.CV2], _tab(P, ITAB.RHOSP, lw), dp)
+    w1 = spray_flow(x[IX.V1], P[IP.CV1], table(P, ITAB.RHOSP, lw), dp)
+    w2 = spray_flow(x[IX.V2], P[IP.CV2], table(P, ITAB.RHOSP, lw), dp)
     c1, c2 = P[IP.CV1] * s, P[IP.CV2] * s
     if w1 > 0.2 * W:
         w1, c1 = 0.2 * W, 0.0
@@ -99,7 +99,7 @@ def _sprays(P, x, d, lw):
 
 
 @njit(cache=True)
-def _h_up_target(P, lf, lw, bias):
+def h_up_target(P, lf, lw, bias):
     """Evaporator outlet enthalpy: the FWR loop's setpoint (design schedule plus the
     commissioning error e_50 4 L (1 - L)) plus the uncorrected share of the ratio error of
     heat to the evaporator, firing (1 + s_b bias), to feedwater flow."""
@@ -107,9 +107,9 @@ def _h_up_target(P, lf, lw, bias):
     lf = min(max(lf, 0.05), 1.3)
     ratio = lf * max(1.0 + P[IP.BUP] * bias, 0.0) / lw
     return (
-        _tab(P, ITAB.HUP, lw)
+        table(P, ITAB.HUP, lw)
         + P[IP.HERR] * 4.0 * lw * (1.0 - lw)
-        + P[IP.FWR] * (ratio - 1.0) * _tab(P, ITAB.RISE, lw)
+        + P[IP.FWR] * (ratio - 1.0) * table(P, ITAB.RISE, lw)
     )
 
 
@@ -119,28 +119,28 @@ def design_spray(P, lw):
     what the schedules are designed for (the undisturbed plant's steady spray without the
     schedule error)."""
     lw = min(max(lw, 0.05), 1.3)
-    rho = _tab(P, ITAB.RHOSP, lw)
+    rho = table(P, ITAB.RHOSP, lw)
     dp = P[IP.DPB] * lw * lw
     return spray_flow(P[IP.VD], P[IP.CV1], rho, dp) + spray_flow(P[IP.VD], P[IP.CV2], rho, dp)
 
 
 @njit(cache=True)
-def _line_offsets(P):
+def line_offsets(P):
     """(first main-steam line cell, first hot-reheat line cell)."""
-    o_r = _offsets(P)[3]
+    o_r = offsets(P)[3]
     o_l = o_r + 2 * int(P[IP.N4])
     return o_l, o_l + int(P[IP.NL])
 
 
 @njit(cache=True)
-def _h_crh_target(P, T_ms, lw):
+def h_crh_target(P, T_ms, lw):
     """Cold-reheat enthalpy of the HP-turbine exhaust for main-steam temperature T_ms (K)."""
-    T = T_ms * _tab(P, ITAB.CRHR, lw)
-    return _tab(P, ITAB.HCRH, lw) + _tab(P, ITAB.CPCRH, lw) * (T - _tab(P, ITAB.TCRH, lw))
+    T = T_ms * table(P, ITAB.CRHR, lw)
+    return table(P, ITAB.HCRH, lw) + table(P, ITAB.CPCRH, lw) * (T - table(P, ITAB.TCRH, lw))
 
 
 @njit(cache=True)
-def _offsets(P):
+def offsets(P):
     n1, n2, n3 = int(P[IP.N1]), int(P[IP.N2]), int(P[IP.N3])
     o_p = IX.CHAIN
     o_pl = o_p + 2 * n1
@@ -180,7 +180,7 @@ def firing_travel(m0, l0, fd, tau_m, tau_f, h):
 def rhs(x, u, d, P, f, jd, ju, jl, want_jac):
     """dx/dt of the unit (see package docstring); Jacobian pattern from BoilerTurbineMIMO.pack."""
     n1, n2, n3, n4 = int(P[IP.N1]), int(P[IP.N2]), int(P[IP.N3]), int(P[IP.N4])
-    o_p, o_pl, o_f, o_r = _offsets(P)
+    o_p, o_pl, o_f, o_r = offsets(P)
     # coordinated control: MWD -> steam flow, firing (BIR lead + FF bias) through the mills
     # and the furnace, evaporator outlet. The step kernel passes the interval-mean heat
     # release as u[N_U_HELD - 1] (exact two-lag solution, see step); without it
@@ -195,7 +195,7 @@ def rhs(x, u, d, P, f, jd, ju, jl, want_jac):
         f[IX.MILL] = (fuel_demand(x, d, P) - x[IX.MILL]) / P[IP.TAUM]  # mills
         f[IX.LF] = (x[IX.MILL] - x[IX.LF]) / P[IP.TAUF]  # furnace heat release
     f[IX.LW] = (d[D_LOAD] - x[IX.LW]) / P[IP.TAUW]
-    f[IX.HUP] = (_h_up_target(P, lf, x[IX.LW], d[D_HEAT_BIAS]) - x[IX.HUP]) / P[IP.TAUUP]
+    f[IX.HUP] = (h_up_target(P, lf, x[IX.LW], d[D_HEAT_BIAS]) - x[IX.HUP]) / P[IP.TAUUP]
     # SP1, SP2, RGD: exact chord velocities from the shared kernel (plants/integrator.py)
     f[IX.V1], jv1 = u[0], 0.0
     f[IX.V2], jv2 = u[1], 0.0
@@ -207,12 +207,12 @@ def rhs(x, u, d, P, f, jd, ju, jl, want_jac):
     lw = min(max(x[IX.LW], 0.05), 1.3)
     dW = P[IP.WNOM] if 0.05 < x[IX.LW] < 1.3 else 0.0
     W = lw * P[IP.WNOM]
-    p, dp = _pressure(P, lw)
-    h_sp, w1, w2, c1, c2 = _sprays(P, x, d, lw)
-    uag_p, uag_f, uag_r, tg_p, tg_f, tg_r, q_pl = _gas(P, lf, x[IX.G], d)
+    p, dp = pressure(P, lw)
+    h_sp, w1, w2, c1, c2 = sprays(P, x, d, lw)
+    uag_p, uag_f, uag_r, tg_p, tg_f, tg_r, q_pl = gas_side(P, lf, x[IX.G], d)
     # primary SH
     Wp = W - w1 - w2
-    kA, dkA = _kA(P[IP.KAF_P], P[IP.KAW_P], Wp, P[IP.WNOM])
+    kA, dkA = tube_kA(P[IP.KAF_P], P[IP.KAW_P], Wp, P[IP.WNOM])
     dh0 = np.ones(1)
     chain_rhs(
         x,
@@ -244,7 +244,7 @@ def rhs(x, u, d, P, f, jd, ju, jl, want_jac):
     Wpl = W - w2
     h_pli = (Wp * h_po + w1 * h_sp) / Wpl
     dh1 = np.array([Wp / Wpl, (h_sp - h_po) * c1 / Wpl, (h_pli - h_po) * c2 / Wpl])
-    kA, dkA = _kA(P[IP.KAF_PL], P[IP.KAW_PL], Wpl, P[IP.WNOM])
+    kA, dkA = tube_kA(P[IP.KAF_PL], P[IP.KAW_PL], Wpl, P[IP.WNOM])
     chain_rhs(
         x,
         o_pl,
@@ -274,7 +274,7 @@ def rhs(x, u, d, P, f, jd, ju, jl, want_jac):
     h_plo = x[o_f - 1]
     h_fi = (Wpl * h_plo + w2 * h_sp) / W
     dh2 = np.array([Wpl / W, (h_sp - h_plo) * c2 / W])
-    kA, dkA = _kA(P[IP.KAF_F], P[IP.KAW_F], W, P[IP.WNOM])
+    kA, dkA = tube_kA(P[IP.KAF_F], P[IP.KAW_F], W, P[IP.WNOM])
     chain_rhs(
         x,
         o_f,
@@ -301,7 +301,7 @@ def rhs(x, u, d, P, f, jd, ju, jl, want_jac):
         True,
     )
     # SH outlet header and main-steam line to the turbine (superheater.pipe_rhs)
-    o_l, o_rl = _line_offsets(P)
+    o_l, o_rl = line_offsets(P)
     T_ms, _ = pipe_rhs(
         x,
         o_l,
@@ -321,10 +321,10 @@ def rhs(x, u, d, P, f, jd, ju, jl, want_jac):
         True,
     )
     # HP turbine exhaust and reheater
-    f[IX.CRH] = (_h_crh_target(P, T_ms, lw) - x[IX.CRH]) / P[IP.TAUHP]
-    prh, dprh = _reheat_pressure(P, lw)
+    f[IX.CRH] = (h_crh_target(P, T_ms, lw) - x[IX.CRH]) / P[IP.TAUHP]
+    prh, dprh = reheat_pressure(P, lw)
     Wr = P[IP.FRH] * W
-    kA, dkA = _kA(P[IP.KAF_R], P[IP.KAW_R], Wr, P[IP.FRH] * P[IP.WNOM])
+    kA, dkA = tube_kA(P[IP.KAF_R], P[IP.KAW_R], Wr, P[IP.FRH] * P[IP.WNOM])
     chain_rhs(
         x,
         o_r,
@@ -390,13 +390,13 @@ def rhs(x, u, d, P, f, jd, ju, jl, want_jac):
 @njit(cache=True)
 def outputs(x, u, d, P, z):
     """Physical outputs (order of BoilerTurbineMIMO.outputs)."""
-    o_p, o_pl, o_f, o_r = _offsets(P)
+    o_p, o_pl, o_f, o_r = offsets(P)
     lw = min(max(x[IX.LW], 0.05), 1.3)
     W = lw * P[IP.WNOM]
-    p, _ = _pressure(P, lw)
-    prh, _ = _reheat_pressure(P, lw)
-    h_sp, w1, w2, _, _ = _sprays(P, x, d, lw)
-    uag_p, uag_f, uag_r, tg_p, tg_f, tg_r, q_pl = _gas(P, x[IX.LF], x[IX.G], d)
+    p, _ = pressure(P, lw)
+    prh, _ = reheat_pressure(P, lw)
+    h_sp, w1, w2, _, _ = sprays(P, x, d, lw)
+    uag_p, uag_f, uag_r, tg_p, tg_f, tg_r, q_pl = gas_side(P, x[IX.LF], x[IX.G], d)
     Wp, Wpl = W - w1 - w2, W - w2
     h_pli = (Wp * x[o_pl - 1] + w1 * h_sp) / Wpl
     h_fi = (Wpl * x[o_f - 1] + w2 * h_sp) / W
@@ -410,7 +410,7 @@ def outputs(x, u, d, P, z):
         q_sh += uag_f / n3 * (tg_f - x[o_f + 2 * i])
     for i in range(n4):
         q_rh += uag_r / n4 * (tg_r - x[o_r + 2 * i])
-    o_l, o_rl = _line_offsets(P)
+    o_l, o_rl = line_offsets(P)
     for i in range(IX.CHAIN, o_l, 2):
         tm_max = max(tm_max, x[i])
     z[IZ.outlet_temp_C] = T_ph(p, x[o_rl - 1]) - K0  # turbine inlet, after the main-steam line
@@ -449,7 +449,7 @@ def project(x, P):
     x[IX.LW] = min(max(x[IX.LW], 0.05), 1.3)
     x[IX.HUP] = min(max(x[IX.HUP], 1.8e6), 4.0e6)
     x[IX.CRH] = min(max(x[IX.CRH], 2.6e6), 4.0e6)
-    o_l = _line_offsets(P)[0]
+    o_l = line_offsets(P)[0]
     for i in range(IX.CHAIN, o_l, 2):
         x[i] = min(max(x[i], 400.0), 1300.0)
         x[i + 1] = min(max(x[i + 1], 1.5e6), 4.2e6)

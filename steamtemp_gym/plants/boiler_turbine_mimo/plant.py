@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from steamtemp_gym.plants.base import MAIN, SCHEDULED, Plant, Signal
-from steamtemp_gym.plants.boiler_turbine_mimo.calibration import _pack
+from steamtemp_gym.plants.boiler_turbine_mimo.calibration import pack_params
 from steamtemp_gym.plants.boiler_turbine_mimo.kernel import ACTUATORS, KERNELS, step
 from steamtemp_gym.plants.boiler_turbine_mimo.layout import OUTPUTS
 from steamtemp_gym.plants.boiler_turbine_mimo.params import BoilerTurbineParams
@@ -72,7 +72,7 @@ class BoilerTurbineMIMO(Plant):
         "heat_absorption_MW",
     )
 
-    pack = staticmethod(_pack)
+    pack = staticmethod(pack_params)
     steady = staticmethod(_steady)
     kernels = KERNELS
     actuators = ACTUATORS

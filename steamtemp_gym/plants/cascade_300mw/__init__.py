@@ -149,12 +149,16 @@ The package, one task per module: ``params`` (CascadeParams, with the parameters
 sources), ``layout`` (the outputs and the named slots of the packed parameters, states
 and outputs), ``discretization`` (the sections' exact zero-order-hold models over load,
 packed into P), ``kernel`` (the compiled step and steady state), ``plant`` (the Plant
-class) and ``scenarios`` (the paper's named scenarios, declared on the class).
+class) and ``scenarios`` (the paper's named scenarios, the class's ``scenarios``).
 """
 
 from steamtemp_gym.plants.base import K0
-from steamtemp_gym.plants.cascade_300mw import scenarios as _scenarios  # noqa: F401 (declares them)
-from steamtemp_gym.plants.cascade_300mw.discretization import _block, _pack, continuous_model, zoh
+from steamtemp_gym.plants.cascade_300mw.discretization import (
+    block,
+    continuous_model,
+    pack_params,
+    zoh,
+)
 from steamtemp_gym.plants.cascade_300mw.kernel import SEED_SALT, steady, step
 from steamtemp_gym.plants.cascade_300mw.layout import IP, IX, IZ, LOAD_STEP, N_GRID, OUTPUTS
 from steamtemp_gym.plants.cascade_300mw.params import (
@@ -175,8 +179,8 @@ __all__ = [
     "LOAD_MAX",
     "continuous_model",
     "zoh",
-    "_block",
-    "_pack",
+    "block",
+    "pack_params",
     "step",
     "steady",
     "SEED_SALT",

@@ -47,7 +47,7 @@ def zoh(A: np.ndarray, B: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray
     return E[:n, :n], E[:n, n:]
 
 
-def _block(params: CascadeParams, load: float) -> np.ndarray:
+def block(params: CascadeParams, load: float) -> np.ndarray:
     """Packed lower triangle of Ad (row-major), then Bd[:, 0] and Bd[:, 1]."""
     Ad, Bd = zoh(*continuous_model(params, load), params.dt_s)
     n = Ad.shape[0]
@@ -56,7 +56,7 @@ def _block(params: CascadeParams, load: float) -> np.ndarray:
 
 
 @functools.lru_cache(maxsize=32)
-def _pack(params: CascadeParams) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
+def pack_params(params: CascadeParams) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
     n1, n2 = params.lead_order, params.inertia_order
     n = n1 + n2
     nb = n * (n + 1) // 2 + 2 * n
@@ -72,10 +72,10 @@ def _pack(params: CascadeParams) -> tuple[np.ndarray, np.ndarray, np.ndarray, in
     tau_om = params.omega_corr_time_s
     P[IP.COM] = math.exp(-params.dt_s / tau_om) if tau_om > 0.0 else 0.0
     if params.load_dependent:
-        blocks = [_block(params, L) for L in np.linspace(LOAD_MIN, LOAD_MAX, N_GRID)]
+        blocks = [block(params, L) for L in np.linspace(LOAD_MIN, LOAD_MAX, N_GRID)]
     else:  # never read: the exact 100 % block is used at every load
         blocks = [np.zeros(nb)] * N_GRID
-    exact = _block(params, 1.0)
+    exact = block(params, 1.0)
     P[IP.GRID :] = np.concatenate(blocks + [exact, exact])
     P.setflags(write=False)
     return P, np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64), IX.X + n

@@ -9,13 +9,14 @@ from steamtemp_gym.plants.base import (
     Plant,
     Signal,
 )
-from steamtemp_gym.plants.cascade_300mw.discretization import _pack
+from steamtemp_gym.plants.cascade_300mw.discretization import pack_params
 from steamtemp_gym.plants.cascade_300mw.kernel import SEED_SALT, steady, step
 from steamtemp_gym.plants.cascade_300mw.layout import IX, OUTPUTS
 from steamtemp_gym.plants.cascade_300mw.params import (
     PLANT_ID,
     CascadeParams,
 )
+from steamtemp_gym.plants.cascade_300mw.scenarios import SCENARIOS
 from steamtemp_gym.rng import splitmix64
 
 
@@ -52,8 +53,9 @@ class Cascade300MW(Plant):
     }
     extra_info = ("intermediate_temp_C", "omega_K", "omega2_kg_s", "outer_disturbance_K")
     default_duration_s = 3600.0
+    scenarios = SCENARIOS
 
-    pack = staticmethod(_pack)
+    pack = staticmethod(pack_params)
     setpoint_param = "T_out_C"
 
     def kernel(self):

@@ -1,14 +1,14 @@
-"""The paper's named scenarios of the 300 MW cascade plant, declared on its class."""
+"""The paper's named scenarios of the 300 MW cascade plant (the class's ``scenarios``)."""
 
 from __future__ import annotations
 
 from steamtemp_gym import scenarios as sc
-from steamtemp_gym.plants.cascade_300mw.plant import Cascade300MW
 from steamtemp_gym.scenarios.library import declare
 
 MIN = 60.0
 _RAMP = 0.5 / (2.0 / 100.0 / MIN)  # 100 -> 50 % at 2 %/min: 1500 s
-Cascade300MW.scenarios = declare(
+#: name -> Scenario, with the disturbances of real operation switched on (``declare``).
+SCENARIOS = declare(
     sc.Scenario(
         name="setpoint_step_535_545",
         duration_s=2000.0,

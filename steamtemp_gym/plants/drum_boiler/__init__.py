@@ -91,8 +91,8 @@ itself is plants/drum.py.
 """
 
 from steamtemp_gym.plants.base import K0
-from steamtemp_gym.plants.drum_boiler.calibration import _pack
-from steamtemp_gym.plants.drum_boiler.kernel import KERNELS, _boundary, outputs, project, rhs
+from steamtemp_gym.plants.drum_boiler.calibration import pack_params
+from steamtemp_gym.plants.drum_boiler.kernel import KERNELS, boundary, outputs, project, rhs
 from steamtemp_gym.plants.drum_boiler.layout import (
     DSP_LOADS,
     IP,
@@ -125,8 +125,8 @@ __all__ = [
     "s_mill",
     "s_line",
     "sensors",
-    "_pack",
-    "_boundary",
+    "pack_params",
+    "boundary",
     # the layout: outputs and the named slots of P, x, z and the Jacobian
     "OUTPUTS",
     "DSP_LOADS",

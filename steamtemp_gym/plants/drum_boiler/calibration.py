@@ -14,7 +14,7 @@ from steamtemp_gym.plants import drum as dr
 from steamtemp_gym.plants.attemperator import mix
 from steamtemp_gym.plants.base import D_FOULING, D_LOAD, K0
 from steamtemp_gym.plants.copies import write_copies
-from steamtemp_gym.plants.drum_boiler.kernel import _boundary, _fw
+from steamtemp_gym.plants.drum_boiler.kernel import boundary, feedwater
 from steamtemp_gym.plants.drum_boiler.layout import (
     COPIED,
     DSP_LOADS,
@@ -53,7 +53,7 @@ def _calibrate(params: DrumBoilerParams, P: np.ndarray, n_x: int) -> None:
     c2 = IX.CHAIN1 + 2 * n
     p = params.p_drum_MPa * 1e6
     q_s = params.q_s_nom_kg_s
-    h_f, _, _ = _fw(Pk, P[IP.TFW])
+    h_f, _, _ = feedwater(Pk, P[IP.TFW])
     # level reference: l = 0 at V_wt = V_wt,nom in the rated steady state
     P[IP.DRUM + dr.D_L0] = 0.0
     Q, _ = dr.drum_steady(p, q_s, h_f, 0.0, Pk, IP.DRUM, x, IX.DRUM)
@@ -75,7 +75,7 @@ def _calibrate(params: DrumBoilerParams, P: np.ndarray, n_x: int) -> None:
         q1,
         1.2 * q1,
     )
-    h_sp, rho_sp, _ = _fw(Pk, P[IP.TFW])
+    h_sp, rho_sp, _ = feedwater(Pk, P[IP.TFW])
     _, h_att = mix(q_s, h1_target, w_sp, h_sp)
     h_out = h_pT(p2, params.T_out_C + K0)
     q2 = W * (h_out - h_att) / n / 500.0
@@ -88,7 +88,7 @@ def _calibrate(params: DrumBoilerParams, P: np.ndarray, n_x: int) -> None:
 
 
 @functools.lru_cache(maxsize=32)
-def _pack(params: DrumBoilerParams) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
+def pack_params(params: DrumBoilerParams) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
     n = params.n_segments
     P = np.zeros(N_P)
     write_copies(P, IP, COPIED, params)
@@ -144,7 +144,7 @@ def _pack(params: DrumBoilerParams) -> tuple[np.ndarray, np.ndarray, np.ndarray,
     Pk = read_only(P)
     steady(D, np.full(len(DSP_LOADS), params.T_out_C + K0), Pk, X)
     for k in range(len(DSP_LOADS)):
-        P[IP.DSP + k] = _boundary(X[k], D[k], Pk)[4]
+        P[IP.DSP + k] = boundary(X[k], D[k], Pk)[4]
     pat = pattern(n, params.n_line)
     jrow, jcol = pattern_arrays(pat)
     P.setflags(write=False)

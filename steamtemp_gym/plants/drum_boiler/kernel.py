@@ -42,7 +42,7 @@ from steamtemp_gym.steam import T_dTdh_ph, Tsat_p, h_pT, sat_p
 
 
 @njit(cache=True)
-def _fw(P, T):
+def feedwater(P, T):
     """Feedwater (h J/kg, rho kg/m3, dh/dT J/(kg K)) at T (K): linear in the IF97 table at p_fw."""
     x = (min(max(T, FW_T0_K), FW_T0_K + FW_DT_K * (N_FW - 1)) - FW_T0_K) / FW_DT_K
     k = min(int(x), N_FW - 2)
@@ -53,7 +53,7 @@ def _fw(P, T):
 
 
 @njit(cache=True)
-def _boundary(x, d, P):
+def boundary(x, d, P):
     """Algebraic quantities shared by rhs, outputs and the steady state.
 
     Returns (W, lw, dWok, q_s, w_sp, dw_dv, h_f, h_sp, p1, p2, dp1, dp2, L_f, UAg_mult)
@@ -65,8 +65,8 @@ def _boundary(x, d, P):
     dWok = 1.0 if 0.05 * Wn < x[IX.W] < 1.3 * Wn else 0.0
     lw = W / Wn
     T_fw = P[IP.TFW] - P[IP.DTFW] * (1.0 - lw)
-    h_f, _, cp_f = _fw(P, T_fw)
-    h_sp, rho_sp, _ = _fw(P, T_fw + d[D_SPRAY_T])
+    h_f, _, cp_f = feedwater(P, T_fw)
+    h_sp, rho_sp, _ = feedwater(P, T_fw + d[D_SPRAY_T])
     v = min(max(x[IX.V], 0.0), 1.0)
     cap = spray_flow(1.0, P[IP.CV], rho_sp, P[IP.DPSP])
     dpsh = P[IP.DPSH] * lw * lw
@@ -184,7 +184,7 @@ def rhs(x, u, d, P, f, jd, ju, jl, want_jac):
     """dx/dt of the drum boiler plant (see package docstring); pattern from :func:`pattern`."""
     n = int(P[IP.N])
     c2 = IX.CHAIN1 + 2 * n
-    W, lw, dWok, q_s, w_sp, dw_dv, h_f, dhf, h_sp, p1, p2, dp1, dp2, L_f, mult = _boundary(x, d, P)
+    W, lw, dWok, q_s, w_sp, dw_dv, h_f, dhf, h_sp, p1, p2, dp1, dp2, L_f, mult = boundary(x, d, P)
     # turbine load controller, boiler master, feedwater
     f[IX.W] = (min(max(d[D_LOAD], 0.0), 1.3) * P[IP.WNOM] - x[IX.W]) / P[IP.TAUW]
     u_f, e_p = _firing_demand(x, d, P)
@@ -332,7 +332,7 @@ def outputs(x, u, d, P, z):
     """Physical outputs (order of DrumBoilerSH.outputs)."""
     n = int(P[IP.N])
     c2 = IX.CHAIN1 + 2 * n
-    W, lw, dWok, q_s, w_sp, dw_dv, h_f, dhf, h_sp, p1, p2, dp1, dp2, L_f, mult = _boundary(x, d, P)
+    W, lw, dWok, q_s, w_sp, dw_dv, h_f, dhf, h_sp, p1, p2, dp1, dp2, L_f, mult = boundary(x, d, P)
     h1 = x[c2 - 1]
     _, h_att = mix(q_s, h1, w_sp, h_sp)
     nl = int(P[IP.NL])

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from steamtemp_gym.plants.base import Plant, Signal
-from steamtemp_gym.plants.drum_boiler.calibration import _pack
+from steamtemp_gym.plants.drum_boiler.calibration import pack_params
 from steamtemp_gym.plants.drum_boiler.kernel import KERNELS
 from steamtemp_gym.plants.drum_boiler.layout import IP, IX, OUTPUTS
 from steamtemp_gym.plants.drum_boiler.params import DrumBoilerParams
@@ -46,7 +46,7 @@ class DrumBoilerSH(Plant):
         "firing_rate",
     )
 
-    pack = staticmethod(_pack)
+    pack = staticmethod(pack_params)
     steady = staticmethod(_steady)
     kernels = KERNELS
     actuators = ((IX.V, IP.TAUV, IP.RATEV),)

@@ -7,7 +7,7 @@ from steamtemp_gym._jit import njit
 from steamtemp_gym.plants import drum as dr
 from steamtemp_gym.plants.attemperator import mix
 from steamtemp_gym.plants.base import D_LOAD, D_LOAD_RATE
-from steamtemp_gym.plants.drum_boiler.kernel import _boundary
+from steamtemp_gym.plants.drum_boiler.kernel import boundary
 from steamtemp_gym.plants.drum_boiler.layout import IP, IW, IX, S_P, s_line, s_mill, sensors
 from steamtemp_gym.plants.superheater import chain_steady, pipe_steady, steam_side_kA
 from steamtemp_gym.plants.valve import steady_opening
@@ -27,7 +27,7 @@ def _steady_at(x, v, d, P):
     h_out = 0.0
     # fixed point on the spray: the protection cap depends on the primary SH outlet
     for _ in range(30):
-        bd = _boundary(x, d, P)
+        bd = boundary(x, d, P)
         q_s, h_f = bd[3], bd[6]
         Q, _ = dr.drum_steady(P[IP.PSP], q_s, h_f, 0.0, P, IP.DRUM, x, IX.DRUM)
         L_f = Q / P[IP.QNOM]
@@ -36,7 +36,7 @@ def _steady_at(x, v, d, P):
         x[IX.QF] = q_s
         x[IX.IL] = 0.0
         x[IX.IP] = L_f - min(max(d[D_LOAD], 0.0), 1.3) - P[IP.TBIR] * d[D_LOAD_RATE]
-        W, lw, dWok, q_s, w_sp, dw_dv, h_f, dhf, h_sp, p1, p2, dp1, dp2, L_f, mult = _boundary(
+        W, lw, dWok, q_s, w_sp, dw_dv, h_f, dhf, h_sp, p1, p2, dp1, dp2, L_f, mult = boundary(
             x, d, P
         )
         h_s = sat_p(P[IP.PSP])[4]
@@ -73,7 +73,7 @@ def steady(D, sp_K, P, X):
         p2 = P[IP.PSP] - P[IP.DPSH] * (x[IX.W] / P[IP.WNOM]) ** 2
         v = _opening_for(x, d, P, p2, sp_K[b])
         h_out = _steady_at(x, v, d, P)
-        bd = _boundary(x, d, P)
+        bd = boundary(x, d, P)
         q_s, w_sp, h_sp, p1, p2 = bd[3], bd[4], bd[8], bd[9], bd[10]
         _, h_att = mix(q_s, x[IX.CHAIN1 + 2 * int(P[IP.N]) - 1], w_sp, h_sp)
         T_out, _ = T_dTdh_ph(p2, h_out)

@@ -106,16 +106,16 @@ schedule) and ``plant`` (the Plant class).
 """
 
 from steamtemp_gym.plants.base import K0
-from steamtemp_gym.plants.supercritical_fsh.calibration import _pack
+from steamtemp_gym.plants.supercritical_fsh.calibration import pack_params
 from steamtemp_gym.plants.supercritical_fsh.kernel import (
     KERNELS,
-    _boundary,
-    _pressure,
-    _table,
+    boundary,
     outputs,
+    pressure,
     project,
     rhs,
     spray_water,
+    table,
 )
 from steamtemp_gym.plants.supercritical_fsh.layout import (
     INLET_COLS,
@@ -146,10 +146,10 @@ __all__ = [
     "steady",
     "KERNELS",
     "spray_water",
-    "_boundary",
-    "_pressure",
-    "_table",
-    "_pack",
+    "boundary",
+    "pressure",
+    "table",
+    "pack_params",
     # the layout: outputs and the named slots of P, x and z
     "OUTPUTS",
     "IP",

@@ -14,7 +14,7 @@ from steamtemp_gym.plants.copies import write_copies
 from steamtemp_gym.plants.integrator import pattern_arrays
 from steamtemp_gym.plants.roots import secant
 from steamtemp_gym.plants.supercritical_fsh.kernel import (
-    _pressure,
+    pressure,
 )
 from steamtemp_gym.plants.supercritical_fsh.layout import (
     COPIED,
@@ -37,7 +37,7 @@ from steamtemp_gym.steam import h_pT, rho_ph
 
 def _spray_water_exact(P: np.ndarray, lw: float, dT: float) -> tuple[float, float, float]:
     """Spray water (h J/kg, rho kg/m3, valve dp Pa) from IF97 at steam-flow fraction lw."""
-    p = _pressure(P, lw)
+    p = pressure(P, lw)
     dp = P[IP.DPB] * lw * lw
     T_fw = P[IP.TFW] - P[IP.DTFW] * (1.0 - lw) + dT
     h = h_pT(p + dp, T_fw)
@@ -48,7 +48,7 @@ def _design_inlet(P: np.ndarray, lw: float, h_target: float, x: np.ndarray) -> f
     """Inlet enthalpy h_e such that the steady chain at load lw gives outlet h_target."""
     n = int(P[IP.N])
     W = lw * P[IP.WNOM]
-    p = _pressure(P, lw)
+    p = pressure(P, lw)
     kA = steam_side_kA(P[IP.KA], W, P[IP.WNOM])[0]
     UAg = P[IP.UAG] * lw ** P[IP.GEXP]
     Tg = P[IP.TGN] - P[IP.DTG] * (1.0 - lw)
@@ -90,7 +90,7 @@ def _calibrate(params: FSHParams, P: np.ndarray, n_x: int) -> None:
         P[IP.HFW + k], P[IP.RHOFW + k] = h_sp, rho_sp
         P[IP.CPFW + k] = 0.5 * (h_p - h_m)
         P[IP.DCPFW + k] = h_p - 2.0 * h_sp + h_m
-        p = _pressure(Pk, L)
+        p = pressure(Pk, L)
         h_out = h_pT(p, params.T_out_C + K0)
         h_e = _design_inlet(Pk, L, h_out, x)
         P[IP.HUP + k] = (h_e - s * h_sp) / (1.0 - s)
@@ -101,7 +101,7 @@ def _calibrate(params: FSHParams, P: np.ndarray, n_x: int) -> None:
 
 
 @functools.lru_cache(maxsize=32)
-def _pack(params: FSHParams) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
+def pack_params(params: FSHParams) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
     n = params.n_segments
     area_flow = math.pi / 4.0 * params.tube_id_m**2
     area_metal = math.pi / 4.0 * (params.tube_od_m**2 - params.tube_id_m**2)

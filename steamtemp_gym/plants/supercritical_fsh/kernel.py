@@ -28,7 +28,7 @@ from steamtemp_gym.steam import T_dTdh_ph, Tsat_p, h_pT
 
 
 @njit(cache=True, error_model="numpy")
-def _pressure(P, lw):
+def pressure(P, lw):
     """Sliding pressure (Pa) at steam-flow fraction lw."""
     lo, hi = P[IP.SLL], P[IP.SLH]
     r = min(max((lw - lo) / (hi - lo), 0.0), 1.0)
@@ -36,7 +36,7 @@ def _pressure(P, lw):
 
 
 @njit(cache=True, error_model="numpy")
-def _table(P, off, load):
+def table(P, off, load):
     """Linear interpolation of a schedule table stored in P over TAB_LOADS."""
     x = (min(max(load, 0.2), 1.2) - 0.2) / 0.05
     k = min(int(x), N_TAB - 2)
@@ -52,9 +52,9 @@ def spray_water(P, lw, dT):
     temperature offset enters by a second-order Taylor step in T
     (h + cp dT + dcp/dT dT^2 / 2; error < 0.05 kJ/kg at +-15 K).
     """
-    cp = _table(P, IP.CPFW, lw)
-    h = _table(P, IP.HFW, lw) + dT * (cp + 0.5 * dT * _table(P, IP.DCPFW, lw))
-    return h, _table(P, IP.RHOFW, lw), P[IP.DPB] * lw * lw
+    cp = table(P, IP.CPFW, lw)
+    h = table(P, IP.HFW, lw) + dT * (cp + 0.5 * dT * table(P, IP.DCPFW, lw))
+    return h, table(P, IP.RHOFW, lw), P[IP.DPB] * lw * lw
 
 
 @njit(cache=True, error_model="numpy")
@@ -68,7 +68,7 @@ def spray_enthalpies(P, flow_fraction):
 
 
 @njit(cache=True, error_model="numpy")
-def _boundary(x, u, d, P):
+def boundary(x, u, d, P):
     """Algebraic part shared by rhs and outputs.
 
     Returns (W, p, w_sp, h0, h_sp, kA_seg, UAg_seg, Tg, capped) for state x, command u,
@@ -78,7 +78,7 @@ def _boundary(x, u, d, P):
     lw = min(max(x[IX.LW], 0.05), 1.3)
     lf = min(max(x[IX.LF], 0.05), 1.3)
     W = lw * P[IP.WNOM]
-    p = _pressure(P, lw)
+    p = pressure(P, lw)
     h_sp, rho_sp, dp = spray_water(P, lw, d[D_SPRAY_T])
     w_valve = spray_flow(x[IX.V], P[IP.CV], rho_sp, dp)
     w_sp = min(w_valve, 0.5 * W)
@@ -95,7 +95,7 @@ def _boundary(x, u, d, P):
 
 
 @njit(cache=True, error_model="numpy")
-def _h_up_target(P, lf, lw, bias):
+def h_up_target(P, lf, lw, bias):
     """Upstream SH outlet enthalpy: fuel/water-ratio schedule, its error and ratio error.
 
     ``bias`` is the relative heat-absorption error (D[2]); its share bias_upstream_share
@@ -103,8 +103,8 @@ def _h_up_target(P, lf, lw, bias):
     """
     lw = min(max(lw, 0.05), 1.3)
     lf = min(max(lf, 0.05), 1.3)
-    h_up = _table(P, IP.HUP, lw)
-    dh_rise = _table(P, IP.DHUP, lw)
+    h_up = table(P, IP.HUP, lw)
+    dh_rise = table(P, IP.DHUP, lw)
     mis = P[IP.MIS] * 4.0 * lw * (1.0 - lw)  # FWR schedule error, zero at rated load
     return h_up + (P[IP.FWR] * (lf / lw - 1.0) + mis + P[IP.BUP] * bias) * dh_rise
 
@@ -126,9 +126,9 @@ def rhs(x, u, d, P, f, jd, ju, jl, want_jac):
     f[sm] = (fd - x[sm]) / P[IP.TAUM]
     f[IX.LF] = (x[sm] - x[IX.LF]) / P[IP.TAUF]
     f[IX.LW] = (d[D_LOAD] - x[IX.LW]) / P[IP.TAUW]
-    f[IX.HUP] = (_h_up_target(P, x[IX.LF], x[IX.LW], d[D_HEAT_BIAS]) - x[IX.HUP]) / P[IP.TAUUP]
+    f[IX.HUP] = (h_up_target(P, x[IX.LF], x[IX.LW], d[D_HEAT_BIAS]) - x[IX.HUP]) / P[IP.TAUUP]
     f[IX.V] = u[0]  # exact chord velocity of the valve (plants/integrator.py)
-    W, p, w_sp, h0, h_sp, kA, UAg, Tg, capped = _boundary(x, u, d, P)
+    W, p, w_sp, h0, h_sp, kA, UAg, Tg, capped = boundary(x, u, d, P)
     # dh0/d(h_up) and dh0/dv (attemperator balance, linear valve), order of INLET_COLS
     v = min(max(x[IX.V], 1e-6), 1.0)
     dh0 = ((W - w_sp) / W, (h_sp - x[IX.HUP]) * w_sp / v / W)
@@ -196,7 +196,7 @@ def rhs(x, u, d, P, f, jd, ju, jl, want_jac):
 def outputs(x, u, d, P, z):
     """Physical outputs (order of FSHPlant.outputs)."""
     n = int(P[IP.N])
-    W, p, w_sp, h0, h_sp, kA, UAg, Tg, capped = _boundary(x, u, d, P)
+    W, p, w_sp, h0, h_sp, kA, UAg, Tg, capped = boundary(x, u, d, P)
     T_fsh, _ = T_dTdh_ph(p, x[IX.CHAIN + 2 * n - 1])
     T_out, _ = T_dTdh_ph(p, x[s_line(n) + int(P[IP.NL]) - 1])
     T_att, _ = T_dTdh_ph(p, h0)

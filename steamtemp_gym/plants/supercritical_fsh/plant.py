@@ -11,7 +11,7 @@ from steamtemp_gym.plants.base import (
     Signal,
 )
 from steamtemp_gym.plants.perturb import BOILER_VARIANTS
-from steamtemp_gym.plants.supercritical_fsh.calibration import _pack
+from steamtemp_gym.plants.supercritical_fsh.calibration import pack_params
 from steamtemp_gym.plants.supercritical_fsh.kernel import KERNELS, spray_enthalpies
 from steamtemp_gym.plants.supercritical_fsh.layout import IP, IX, OUTPUTS
 from steamtemp_gym.plants.supercritical_fsh.params import FSHParams
@@ -48,7 +48,7 @@ class SupercriticalFSH(Plant):
     }
     extra_info = ("attemp_out_temp_C", "heat_absorption_MW", "pressure_MPa", "steam_flow_kg_s")
 
-    pack = staticmethod(_pack)
+    pack = staticmethod(pack_params)
     steady = staticmethod(_steady)
     kernels = KERNELS
     actuators = ((IX.V, IP.TAUV, IP.RATEV),)

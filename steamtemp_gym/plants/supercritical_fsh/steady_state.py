@@ -9,9 +9,9 @@ from steamtemp_gym.plants.base import (
     D_LOAD,
 )
 from steamtemp_gym.plants.supercritical_fsh.kernel import (
-    _boundary,
-    _h_up_target,
-    _pressure,
+    boundary,
+    h_up_target,
+    pressure,
 )
 from steamtemp_gym.plants.supercritical_fsh.layout import IP, IX, s_line, s_mill
 from steamtemp_gym.plants.superheater import (
@@ -27,7 +27,7 @@ def _outlet_steady(x, v, d, P, lw):
     """Steady FSH outlet enthalpy for valve opening v (x holds h_up; chain written into x)."""
     n = int(P[IP.N])
     x[IX.V] = v
-    W, p, w_sp, h0, h_sp, kA, UAg, Tg, capped = _boundary(x, x[IX.V : IX.V + 1], d, P)
+    W, p, w_sp, h0, h_sp, kA, UAg, Tg, capped = boundary(x, x[IX.V : IX.V + 1], d, P)
     return chain_steady(x, IX.CHAIN, n, h0, W, p, kA[0], UAg, Tg, 0.0)
 
 
@@ -51,11 +51,11 @@ def steady(D, sp_K, P, X):
         x[IX.LF] = L
         x[s_mill(n)] = L
         x[IX.LW] = L
-        x[IX.HUP] = _h_up_target(P, L, L, d[D_HEAT_BIAS])
-        p = _pressure(P, L)
+        x[IX.HUP] = h_up_target(P, L, L, d[D_HEAT_BIAS])
+        p = pressure(P, L)
         v = _opening_for(x, d, P, (p, L), sp_K[b])
         h_out = _outlet_steady(x, v, d, P, L)
-        W, p, w_sp, h0, h_sp, kA, UAg, Tg, capped = _boundary(x, x[IX.V : IX.V + 1], d, P)
+        W, p, w_sp, h0, h_sp, kA, UAg, Tg, capped = boundary(x, x[IX.V : IX.V + 1], d, P)
         T_out, _ = T_dTdh_ph(p, h_out)
         T_att, _ = T_dTdh_ph(p, h0)
         x[IX.TC1] = T_out
