@@ -149,7 +149,7 @@ def _literal(node: ast.AST) -> Any:
     return ast.literal_eval(node)
 
 
-def _dict_string(key: str, value: Any) -> dict:
+def dict_string(key: str, value: Any) -> dict:
     """RL Zoo's "dict(a=1, b=dict(c=[2]))" strings (literals only; no code is run)."""
     if isinstance(value, dict):
         return dict(value)
@@ -376,9 +376,9 @@ def _completed(path: Path, hp: dict[str, Any], algo: str) -> dict[str, Any]:
     hp = dict(hp)
     hp["residual_base"] = RESIDUAL_BASES.get(algo)
     hp["privileged_critic"] = algo in PRIVILEGED
-    hp["policy_kwargs"] = _dict_string("policy_kwargs", hp.get("policy_kwargs", {}))
+    hp["policy_kwargs"] = dict_string("policy_kwargs", hp.get("policy_kwargs", {}))
     norm = hp.get("normalize", False)
-    hp["normalize"] = norm if isinstance(norm, bool) else _dict_string("normalize", norm)
+    hp["normalize"] = norm if isinstance(norm, bool) else dict_string("normalize", norm)
     try:
         hp["env_wrapper"] = memory_options(hp["env_wrapper"]) if "env_wrapper" in hp else None
     except ValueError as exc:

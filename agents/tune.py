@@ -29,7 +29,7 @@ import yaml
 
 import steamtemp_gym
 from agents.files import stem
-from agents.train_config import ALGOS, HYPERPARAMS, ConfigError, _dict_string, read_hyperparams
+from agents.train_config import ALGOS, HYPERPARAMS, ConfigError, dict_string, read_hyperparams
 from agents.training import train
 
 #: The search space per algorithm: key -> categorical choices. ``train_ratio`` is SAC/TD3's
@@ -66,7 +66,7 @@ SPACES["sac_caps"] = {
 def trial_entry(base: dict[str, Any], params: dict[str, Any]) -> dict[str, Any]:
     """The YAML entry of one trial: the shipped ``base`` entry with ``params`` applied."""
     entry = dict(base)
-    kwargs = _dict_string("policy_kwargs", entry.get("policy_kwargs") or {})
+    kwargs = dict_string("policy_kwargs", entry.get("policy_kwargs") or {})
     for key, value in params.items():
         if key == "train_ratio":
             entry["train_freq"], entry["gradient_steps"] = value
