@@ -14,7 +14,7 @@ import yaml
 import steamtemp_gym
 from agents.files import steamtemp_paths
 from agents.train_config import ALGOS, HYPERPARAMS, ConfigError
-from agents.training import train
+from agents.training import checked_run, train
 from steamtemp_gym.envs import resolve_id
 
 ZOO = Path(__file__).with_name("zoo")
@@ -69,7 +69,7 @@ def zoo_run(job: dict[str, Any]) -> dict[str, Any]:
     """One training run of ``--zoo`` at nice 10 (a Ray task with ``--backend ray``):
     :func:`train` with the keyword arguments ``job``; its metadata."""
     _nice()
-    return train(**job)
+    return train(checked_run(**job))
 
 
 def zoo_jobs(

@@ -30,7 +30,7 @@ import yaml
 import steamtemp_gym
 from agents.files import stem
 from agents.train_config import ALGOS, HYPERPARAMS, ConfigError, dict_string, read_hyperparams
-from agents.training import train
+from agents.training import checked_run, train
 
 #: The search space per algorithm: key -> categorical choices. ``train_ratio`` is SAC/TD3's
 #: (train_freq, gradient_steps) pair; ``log_std_init`` and ``net`` go to policy_kwargs.
@@ -111,14 +111,16 @@ def search(
             yml = Path(tmp) / f"{algo}.yml"
             yml.write_text(yaml.safe_dump({env_id: trial_entry(raw, params)}), encoding="utf-8")
             meta = train(
-                env_id,
-                algo,
-                hyperparams=yml,
-                timesteps=timesteps,
-                seed=seed,
-                out=Path(tmp),
-                max_minutes=max_minutes,
-                quiet=True,
+                checked_run(
+                    env_id,
+                    algo,
+                    hyperparams=yml,
+                    timesteps=timesteps,
+                    seed=seed,
+                    out=Path(tmp),
+                    max_minutes=max_minutes,
+                    quiet=True,
+                )
             )
         best = meta["validation"]["best"]
         records.append(
