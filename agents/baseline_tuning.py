@@ -256,7 +256,7 @@ def search(
     e = ends(env_id)
     start = defaults(factory, env_id)
     x0 = np.array([k.to_unit(start[k.name]) for k in ks])
-    stored = {_key(r["knobs"]): r for r in replay or ()}
+    stored = {knobs_key(r["knobs"]): r for r in replay or ()}
     replayed = 0
     confirm = _confirmer(name, env_id, log)
 
@@ -266,13 +266,13 @@ def search(
             values = dict(start)  # the start exactly
         else:
             values = {k.name: k.from_unit(ui) for k, ui in zip(ks, u, strict=True)}
-        r = None if np.array_equal(u, x0) else stored.get(_key(values))
+        r = None if np.array_equal(u, x0) else stored.get(knobs_key(values))
         if r is not None:
             replayed += 1
             return Evaluation(dict(values), r["score"], r["travel_ratio"], r["trips"])
         res = evaluate(name, env_id, values, e)
         if np.array_equal(u, x0) and stored:
-            r = stored.get(_key(values))
+            r = stored.get(knobs_key(values))
             got = (res.score, res.travel_ratio, res.trips)
             same = r is not None and (r["score"], r["travel_ratio"], r["trips"]) == got
             if not same:
@@ -352,7 +352,8 @@ def _confirmer(name: str, env_id: str, log: Any) -> Any:
     return confirm
 
 
-def _key(knobs: dict[str, float]) -> tuple[tuple[str, float], ...]:
+def knobs_key(knobs: dict[str, float]) -> tuple[tuple[str, float], ...]:
+    """A knob setting as the key of its stored row: names and values, sorted."""
     return tuple(sorted((k, float(v)) for k, v in knobs.items()))
 
 
@@ -510,6 +511,7 @@ __all__ = [
     "Evaluation",
     "ends",
     "evaluate",
+    "knobs_key",
     "search",
     "seeds",
     "write",

@@ -43,8 +43,13 @@ from typing import Any
 
 import numpy as np
 
+import agents
 import steamtemp_gym
-from agents.files import steamtemp_paths
+from agents.files import find, steamtemp_paths
+from agents.horizons import from_plant
+from agents.memory import MemoryConfig
+from agents.tuning_terms import TUNING_TRAVEL_BUDGET
+from agents.validation import better_checkpoint, reference_result, scored
 from steamtemp_gym import envs as envs_
 
 ALGO = "bc"
@@ -65,7 +70,7 @@ EPSILON, CLIP_OBS = 1e-8, 10.0
 
 def _imitation_entry(env_id: str) -> dict[str, Any]:
     """The :data:`IMITATION` entry of ``env_id`` with its plant rules applied."""
-    from agents.horizons import from_plant
+    # torch (the agents extra) through agents.train_config: this module imports without it
     from agents.train_config import HYPERPARAMS, read_hyperparams
 
     path = HYPERPARAMS / f"{IMITATION}.yml"
@@ -89,8 +94,10 @@ def transitions(
     observations but its last (with the controller ``memory`` appended, computed along the
     episode as agents.policy.AgentPolicy does, for ``env``'s observation layout), and the
     action the policy chose there (module docstring)."""
+    # torch (the agents extra) through agents.datasets: this module imports without it
     from agents.datasets import POLICY_ACTION
-    from agents.memory import MemoryConfig
+
+    # torch (the agents extra) through agents.wrappers: this module imports without it
     from agents.wrappers import MemoryState
 
     obs, act = [], []
@@ -139,6 +146,7 @@ def fit(
     Training stops after ``epochs`` or ``max_seconds``, whichever comes first."""
     import torch
 
+    # torch (the agents extra) through agents.policy: this module imports without it
     from agents.policy import normalize_obs
 
     if obs.ndim != 2 or act.ndim != 2 or len(obs) != len(act) or not len(obs):
@@ -237,6 +245,7 @@ def save(
     import torch
     from stable_baselines3 import TD3
 
+    # torch (the agents extra) through agents.wrappers: this module imports without it
     from agents.wrappers import ControllerMemory
 
     model_path, meta_path = steamtemp_paths(out, env_id, ALGO, run)
@@ -324,6 +333,7 @@ def train(
 
 def zoo_dataset_id(env_id: str, noise: float) -> str:
     """The id of the shipped clones' dataset of ``env_id`` with ``noise``."""
+    # torch (the agents extra) through agents.datasets: this module imports without it
     from agents import datasets
 
     name = datasets.dataset_name(ZOO_DATASET["policy"], noise=noise)
@@ -337,10 +347,8 @@ def choose_noise(env_id: str, staging: Path, log: Any = None) -> tuple[str, dict
     the tuner's travel bound."""
     from minari.storage import get_dataset_path
 
+    # torch (the agents extra) through agents.datasets: this module imports without it
     from agents import datasets
-    from agents.files import find
-    from agents.tuning_terms import TUNING_TRAVEL_BUDGET
-    from agents.validation import better_checkpoint, reference_result, scored
 
     ref = reference_result(env_id)
     tried, best, chosen, folder = {}, {}, None, None
@@ -490,8 +498,6 @@ def main(argv: list[str] | None = None) -> int:
 
     say = lambda m: print(m, file=sys.stderr)  # noqa: E731
     if args.zoo:
-        import agents
-
         for model in rebuild_zoo(env_ids, args.out or agents.ZOO, log=say):
             print(model)
         return 0

@@ -44,6 +44,8 @@ from typing import Any
 
 import yaml
 
+from agents.memory import MemoryConfig, memory_options
+
 #: steamtemp-train's layout and RL Zoo's.
 STEAMTEMP, RL_ZOO = "steamtemp-train", "rl-zoo"
 #: RL Zoo's algo names of the model classes whose names are not the algo upper-cased.
@@ -119,6 +121,7 @@ class AgentFiles:
         """The agent as a Policy (agents.policy.AgentPolicy) on a new env of its id."""
         import gymnasium as gym
 
+        # torch (the agents extra) through agents.policy: agents.files imports without it
         from agents.policy import AgentPolicy
 
         memory = self._memory()
@@ -173,6 +176,7 @@ def _model(cls: str, path: str, stat: tuple) -> Any:
     """The SB3 model of class ``cls`` in file ``path``, read once per process and state
     (size, modification time) of the file: a leaderboard loads an agent for every scenario,
     and its policies only read the model."""
+    # torch (the agents extra) through agents.policy: agents.files imports without it
     from agents.policy import model_class
 
     return model_class(cls).load(path, device="cpu")
@@ -189,7 +193,7 @@ def _env(env_id: str) -> Any:
 @functools.lru_cache(maxsize=256)
 def _check(files: AgentFiles, stat: tuple) -> None:
     """:meth:`AgentFiles.check` (once per agent and state of its files)."""
-    from agents.memory import MemoryConfig
+    # torch (the agents extra) through agents.moves: agents.files imports without it
     from agents.moves import n_actions, tie_map
 
     obs, act = files.shapes()
@@ -442,8 +446,6 @@ def _zoo_yaml(path: Path) -> Any:
 
 def _rl_zoo_pipeline(model: Path, meta: tuple[Path, ...]) -> dict | None:
     """The controller-memory options of an RL Zoo run (its config.yml's ``env_wrapper``)."""
-    from agents.memory import memory_options
-
     config = [f for f in meta if f.name == "config.yml"]
     hp = _zoo_yaml(config[0]) if config else {}
     wrapper = (hp or {}).get("env_wrapper")
@@ -458,6 +460,7 @@ def _rl_zoo_pipeline(model: Path, meta: tuple[Path, ...]) -> dict | None:
 def _vecnormalize_stats(path: Path) -> dict | None:
     """Frozen observation statistics of a saved VecNormalize (None if it does not
     normalize observations), in the form agents.policy.normalize_obs takes."""
+    # torch (the agents extra) through agents.policy: agents.files imports without it
     from agents.policy import frozen_stats
 
     with path.open("rb") as f:

@@ -32,6 +32,7 @@ from __future__ import annotations
 import functools
 import math
 
+from baselines.identification import step_test
 from steamtemp_gym import plants
 from steamtemp_gym.plants.base import MAIN
 
@@ -58,8 +59,6 @@ REPEAT_FACTOR = 0.1
 def time_scale(env_id: str) -> tuple[float, float]:
     """(dead time, time constant) in s of the true main-steam temperature after a step of
     the slowest main-steam valve at :data:`LOAD` (module docstring)."""
-    from baselines.identification import step_test
-
     plant = plants.make(env_id)
     best = (0.0, 0.0)
     for j, (_, outer) in enumerate(plant.control_loops):
@@ -124,6 +123,7 @@ def from_plant(env_id: str, hp: dict) -> dict:
     (:func:`action_repeat`, :func:`discount` and :func:`gae_lambda` per decision,
     :func:`action_filter`, :func:`exploration_time_constant`, :func:`history_stride`); the
     entry states the rule instead of numbers."""
+    # torch (the agents extra) through agents.repeat: agents.horizons imports without it
     from agents.repeat import check_repeat
 
     out = dict(hp)

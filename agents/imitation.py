@@ -35,8 +35,17 @@ from typing import Any
 
 import numpy as np
 
+import baselines
+from agents.behaviour_cloning import regress, standardization
+from agents.memory import MemoryConfig
+from agents.moves import command_state
+from agents.policy import AgentPolicy, MlpActor, normalize_obs
 from agents.run_clock import RunClock
 from agents.train_config import DAGGER_KEYS, EXPERTS, IMITATION_DEFAULTS
+from agents.tuning_terms import TUNING_TRAVEL_BUDGET
+from agents.validation import better_checkpoint, scored
+from agents.vec_env import make_training_env
+from agents.wrappers import MemoryState
 
 
 def actor_net(model: Any) -> Any:
@@ -63,11 +72,6 @@ def collect(
     (module docstring); ``filter_s``: the learner's positions pass the output filter
     (agents/moves.py ``LowPassState``), started at each step from the applied command."""
     import gymnasium as gym
-
-    import baselines
-    from agents.memory import MemoryConfig
-    from agents.moves import command_state
-    from agents.wrappers import MemoryState
 
     n = len(seeds)
     venv = gym.make_vec(
@@ -108,8 +112,6 @@ def collect(
 
 def _learner(model: Any, stats: dict[str, Any] | None) -> Any:
     """The model's deterministic action of a raw memory-extended observation."""
-    from agents.policy import MlpActor, normalize_obs
-
     actor = MlpActor.of(model)
     return lambda z: actor(normalize_obs(z, stats))
 
@@ -124,9 +126,6 @@ def _fit(
     """Fit the actor to every pair in ``data`` (:func:`collect`'s), with the move term where
     ``move_weight`` > 0; the last epoch's mean squared error."""
     import torch
-
-    from agents.behaviour_cloning import regress
-    from agents.policy import normalize_obs
 
     def tensor(j: int, obs: bool) -> Any:
         a = np.concatenate([d[j] for d in data])
@@ -164,12 +163,6 @@ def train(
     Training episodes: seeds ``seed + i * n_envs + k`` in iteration i. ``max_minutes``: CPU
     minutes on ``clock`` (the run's; a new one if None)."""
     from stable_baselines3 import PPO
-
-    from agents.behaviour_cloning import standardization
-    from agents.policy import AgentPolicy
-    from agents.tuning_terms import TUNING_TRAVEL_BUDGET
-    from agents.validation import better_checkpoint, scored
-    from agents.vec_env import make_training_env
 
     settings = {k: hp.get(k, IMITATION_DEFAULTS[k]) for k in DAGGER_KEYS}
     expert, memory, filter_s = EXPERTS[algo], hp["env_wrapper"], hp.get("action_filter_s")
@@ -262,8 +255,6 @@ def anchor(
     timesteps. While the actor is held still (critic warm-up) there is no term."""
     import torch
     from stable_baselines3.common.callbacks import BaseCallback
-
-    from agents.policy import normalize_obs
 
     x = torch.as_tensor(normalize_obs(np.concatenate([d[0] for d in data]), stats))
     y = torch.as_tensor(

@@ -22,8 +22,10 @@ from typing import Any
 
 import numpy as np
 
+from agents.caps import SACCAPS
 from agents.moves import command_state
 from agents.repeat import Decisions
+from agents.residual import ResidualBase
 from agents.wrappers import MemoryConfig, MemoryState
 from baselines.loops import restart_rows
 from baselines.policy import check_predict_args, observation_size
@@ -172,8 +174,6 @@ class AgentPolicy:
         self.residual_scale = residual_scale
         self.base = None
         if residual_scale is not None:
-            from agents.residual import ResidualBase
-
             self.base = ResidualBase(env, residual_scale, residual_base)
         elif residual_base is not None:
             raise ValueError("residual_base needs residual_scale (a residual agent)")
@@ -268,8 +268,6 @@ def model_class(name: str):
     if hasattr(sb3, name):
         return getattr(sb3, name)
     if name == "SACCAPS":
-        from agents.caps import SACCAPS
-
         return SACCAPS
     try:
         import sb3_contrib

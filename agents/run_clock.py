@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import time
 
+from steamtemp_gym.plants.threads import set_threads
+
 
 class RunClock:
     """CPU and wall seconds since the clock was made."""
@@ -32,8 +34,6 @@ class RunClock:
 def one_core() -> None:
     """Run this process's numerical work on one core (torch and the plant's row threads)."""
     import torch
-
-    from steamtemp_gym.plants.threads import set_threads
 
     torch.set_num_threads(1)
     set_threads(1)

@@ -11,11 +11,15 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+import baselines
 import steamtemp_gym
+from agents import privileged
 from agents.files import steamtemp_paths, stem
 from agents.run_clock import RunClock
 from agents.train_config import HYPERPARAMS
+from agents.tuning_terms import TUNING_TRAVEL_BUDGET
 from agents.validation import N_VALIDATION, VALIDATION_SEED
+from steamtemp_gym import plants
 
 
 @dataclass(frozen=True)
@@ -70,9 +74,6 @@ def metadata(
     curve: list,
 ) -> dict[str, Any]:
     """The run's ``<stem>.json``: everything ``agents.load`` needs and how the run went."""
-    import baselines
-    from agents.tuning_terms import TUNING_TRAVEL_BUDGET
-
     env_id, hp = spec.env_id, spec.hp
     return {
         "env_id": env_id,
@@ -129,8 +130,6 @@ def privileged_record(env_id: str, hp: dict[str, Any]) -> dict[str, Any] | None:
     shipped actor never sees it), None for an ordinary critic."""
     if not hp.get("privileged_critic"):
         return None
-    from agents import privileged
-    from steamtemp_gym import plants
 
     names = privileged.signal_names(plants.make(env_id))
     return {"signals": names, "look_ahead_s": list(privileged.LOOK_AHEAD_S)}

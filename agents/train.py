@@ -79,7 +79,7 @@ from agents.train_runs import (
     zoo_jobs,
     zoo_run,
 )
-from agents.training import train
+from agents.training import checked_run, train
 
 
 def _run_count(text: str) -> int:
@@ -251,15 +251,17 @@ def main(argv: list[str] | None = None) -> None:
             ap.error("--env and --algo are required (or --zoo)")
         out = Path(args.out or "trained")
         meta = train(
-            args.env,
-            args.algo,
-            args.hyperparams,
-            args.timesteps,
-            args.seed,
-            args.n_envs,
-            out,
-            args.max_minutes,
-            args.tensorboard,
+            checked_run(
+                args.env,
+                args.algo,
+                args.hyperparams,
+                args.timesteps,
+                args.seed,
+                args.n_envs,
+                out,
+                args.max_minutes,
+                args.tensorboard,
+            )
         )
     except ConfigError as exc:
         ap.error(str(exc))

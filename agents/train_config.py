@@ -12,9 +12,14 @@ from typing import Any
 import numpy as np
 import yaml
 
-from agents.moves import check_max_move, tie_map
+from agents.horizons import from_plant
+from agents.moves import check_filter, check_max_move, tie_map
 from agents.policy import model_class
+from agents.residual import check_residual
+from agents.travel_price import PRICE_MAX, PRICE_MIN
 from agents.wrappers import memory_options
+from steamtemp_gym.plants import perturb, plant_class
+from steamtemp_gym.rewards import RewardConfig
 
 #: Algorithm names: SB3's PPO, SAC, TD3, PPO as a residual on a base controller
 #: (:data:`RESIDUAL_BASES`; each its own YAML file, whose entries need ``residual_scale``)
@@ -149,7 +154,7 @@ def _literal(node: ast.AST) -> Any:
     return ast.literal_eval(node)
 
 
-def _dict_string(key: str, value: Any) -> dict:
+def dict_string(key: str, value: Any) -> dict:
     """RL Zoo's "dict(a=1, b=dict(c=[2]))" strings (literals only; no code is run)."""
     if isinstance(value, dict):
         return dict(value)
@@ -204,7 +209,6 @@ def _entry(path: Path, env_id: str) -> dict[str, Any]:
     hp = doc[env_id]
     if not isinstance(hp, dict):
         raise ConfigError(f"--hyperparams {path}: {env_id} must map to a mapping")
-    from agents.horizons import from_plant
 
     try:
         return from_plant(env_id, hp)  # "plant": the setting read from the plant's time scale
@@ -245,8 +249,6 @@ def _check_action_form(path: Path, hp: dict[str, Any], env_id: str, algo: str) -
             f"algo ({list(RESIDUAL_BASES)}) and only there (algo {algo!r})"
         )
     if "residual_scale" in hp:
-        from agents.residual import check_residual
-
         _checked(path, check_residual, hp["residual_scale"], RESIDUAL_BASES[algo])
     if "max_move" in hp:
         if "residual_scale" in hp:
@@ -256,8 +258,6 @@ def _check_action_form(path: Path, hp: dict[str, Any], env_id: str, algo: str) -
             )
         _checked(path, check_max_move, hp["max_move"])
     if "action_filter_s" in hp:
-        from agents.moves import check_filter
-
         if "max_move" in hp or "residual_scale" in hp:
             raise ConfigError(
                 f"--hyperparams {path}: action_filter_s filters position "
@@ -270,7 +270,6 @@ def _check_action_form(path: Path, hp: dict[str, Any], env_id: str, algo: str) -
                 f"--hyperparams {path}: tied_valves needs incremental "
                 "(max_move) or filtered (action_filter_s) actions"
             )
-        from steamtemp_gym.plants import plant_class  # the valves of the default options
 
         _checked(path, tie_map, tuple(plant_class(env_id).valves), hp["tied_valves"])
 
@@ -303,15 +302,11 @@ def _check_training_terms(path: Path, hp: dict[str, Any], env_id: str) -> None:
     """ConfigError for a bad training reward, travel price, plant randomization or
     discount (gamma, gae_lambda)."""
     if "train_reward" in hp:
-        from steamtemp_gym.rewards import RewardConfig
-
         try:
             RewardConfig.from_options(hp["train_reward"])
         except ValueError as exc:
             raise ConfigError(f"--hyperparams {path}: train_reward: {exc}") from None
     if "travel_price" in hp:
-        from agents.travel_price import PRICE_MAX, PRICE_MIN
-
         v = hp["travel_price"]
         ok = isinstance(v, (int, float)) and not isinstance(v, bool)
         if not (ok and PRICE_MIN <= v <= PRICE_MAX):
@@ -331,8 +326,6 @@ def _check_training_terms(path: Path, hp: dict[str, Any], env_id: str) -> None:
                 f"got {v!r}"
             )
     if "plant_randomization" in hp:
-        from steamtemp_gym.plants import perturb
-
         _checked(path, perturb.parse, env_id, hp["plant_randomization"])
     for key in ("gamma", "gae_lambda"):
         v = hp.get(key, 0.5)
@@ -376,9 +369,9 @@ def _completed(path: Path, hp: dict[str, Any], algo: str) -> dict[str, Any]:
     hp = dict(hp)
     hp["residual_base"] = RESIDUAL_BASES.get(algo)
     hp["privileged_critic"] = algo in PRIVILEGED
-    hp["policy_kwargs"] = _dict_string("policy_kwargs", hp.get("policy_kwargs", {}))
+    hp["policy_kwargs"] = dict_string("policy_kwargs", hp.get("policy_kwargs", {}))
     norm = hp.get("normalize", False)
-    hp["normalize"] = norm if isinstance(norm, bool) else _dict_string("normalize", norm)
+    hp["normalize"] = norm if isinstance(norm, bool) else dict_string("normalize", norm)
     try:
         hp["env_wrapper"] = memory_options(hp["env_wrapper"]) if "env_wrapper" in hp else None
     except ValueError as exc:

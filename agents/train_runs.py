@@ -12,8 +12,10 @@ from typing import Any
 import yaml
 
 import steamtemp_gym
+from agents.files import steamtemp_paths
 from agents.train_config import ALGOS, HYPERPARAMS, ConfigError
-from agents.training import train
+from agents.training import checked_run, train
+from steamtemp_gym.envs import resolve_id
 
 ZOO = Path(__file__).with_name("zoo")
 #: Run k of ``--zoo --runs K`` trains with seed ``--seed + RUN_SEED_STRIDE * k``: more than
@@ -44,8 +46,6 @@ def zoo_entries_of(algo: str) -> list[str]:
 def finished(job: dict[str, Any]) -> bool:
     """Whether the run of a :func:`zoo_jobs` job has written its files (model and
     metadata) in its output directory."""
-    from agents.files import steamtemp_paths
-
     model, meta = steamtemp_paths(Path(job["out"]), job["env_id"], job["algo"], job["run"])
     return model.is_file() and meta.is_file()
 
@@ -69,7 +69,7 @@ def zoo_run(job: dict[str, Any]) -> dict[str, Any]:
     """One training run of ``--zoo`` at nice 10 (a Ray task with ``--backend ray``):
     :func:`train` with the keyword arguments ``job``; its metadata."""
     _nice()
-    return train(**job)
+    return train(checked_run(**job))
 
 
 def zoo_jobs(
@@ -107,7 +107,6 @@ def zoo_env(name: str | None) -> str | None:
     """``--env`` of ``--zoo`` as a registered id (the namespace may be left out)."""
     if not name:
         return None
-    from steamtemp_gym.envs import resolve_id
 
     try:
         return resolve_id(name)

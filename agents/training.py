@@ -41,8 +41,9 @@ def checked_run(
     run: int | None = None,
     default_minutes: float | None = None,
 ) -> RunSpec:
-    """The run :func:`train` makes of its arguments, or a ConfigError naming what is wrong;
-    ``max_minutes`` None: the entry's ``max_minutes``, else ``default_minutes``."""
+    """The run :func:`train` makes of steamtemp-train's arguments, or a ConfigError naming
+    what is wrong. ``run``: the training run's index in the file names (None: names without
+    one). ``max_minutes`` None: the entry's ``max_minutes``, else ``default_minutes``."""
     try:
         env_id = resolve_id(env_id)  # the namespace may be left out
     except ValueError:
@@ -77,38 +78,9 @@ def checked_run(
     )
 
 
-def train(
-    env_id: str,
-    algo: str,
-    hyperparams: Path | None = None,
-    timesteps: int | None = None,
-    seed: int = 0,
-    n_envs: int | None = None,
-    out: Path = Path("trained"),
-    max_minutes: float | None = None,
-    tensorboard: str | None = None,
-    quiet: bool = False,
-    run: int | None = None,
-    default_minutes: float | None = None,
-) -> dict[str, Any]:
-    """Train one agent (agents/train.py's module docstring); returns its metadata. Input is
-    checked first (:func:`checked_run`). ``run``: the training run's index in the file
-    names (None: names without one). ``max_minutes`` None: the entry's ``max_minutes``,
-    else ``default_minutes``."""
-    spec = checked_run(
-        env_id,
-        algo,
-        hyperparams,
-        timesteps,
-        seed,
-        n_envs,
-        out,
-        max_minutes,
-        tensorboard,
-        quiet,
-        run,
-        default_minutes,
-    )
+def train(spec: RunSpec) -> dict[str, Any]:
+    """Train one agent (agents/train.py's module docstring): the run ``spec``, checked input
+    (:func:`checked_run` makes it of steamtemp-train's arguments); returns its metadata."""
     hp = spec.hp
     one_core()  # a run's budget is minutes of one core
     reference = reference_result(spec.env_id)

@@ -52,6 +52,7 @@ from stable_baselines3.common.buffers import ReplayBuffer
 from stable_baselines3.common.vec_env.base_vec_env import VecEnv, VecEnvWrapper
 
 from agents.tuning_terms import TUNING_TRAVEL_BUDGET
+from agents.validation import validate
 from baselines.loops import observation_layout
 
 #: Training travel target (multiple of the reference's travel rate): the tuner's.
@@ -244,8 +245,6 @@ def travel_probe(env_id: str, policy: Any, k: int, reference_rate: float) -> flo
     reference's), in closed loop on :data:`PROBE_EPISODES` episodes of the ``random``
     scenario, the k-th probe's seeds (a measurement cost of about 0.1 CPU s per episode
     and 4,096 transitions)."""
-    from agents.validation import validate
-
     seed = PROBE_SEED + PROBE_EPISODES * k
     return validate(env_id, policy, n=PROBE_EPISODES, seed=seed)["travel_per_s"] / reference_rate
 

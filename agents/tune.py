@@ -29,8 +29,8 @@ import yaml
 
 import steamtemp_gym
 from agents.files import stem
-from agents.train_config import ALGOS, HYPERPARAMS, ConfigError, _dict_string, read_hyperparams
-from agents.training import train
+from agents.train_config import ALGOS, HYPERPARAMS, ConfigError, dict_string, read_hyperparams
+from agents.training import checked_run, train
 
 #: The search space per algorithm: key -> categorical choices. ``train_ratio`` is SAC/TD3's
 #: (train_freq, gradient_steps) pair; ``log_std_init`` and ``net`` go to policy_kwargs.
@@ -66,7 +66,7 @@ SPACES["sac_caps"] = {
 def trial_entry(base: dict[str, Any], params: dict[str, Any]) -> dict[str, Any]:
     """The YAML entry of one trial: the shipped ``base`` entry with ``params`` applied."""
     entry = dict(base)
-    kwargs = _dict_string("policy_kwargs", entry.get("policy_kwargs") or {})
+    kwargs = dict_string("policy_kwargs", entry.get("policy_kwargs") or {})
     for key, value in params.items():
         if key == "train_ratio":
             entry["train_freq"], entry["gradient_steps"] = value
@@ -111,14 +111,16 @@ def search(
             yml = Path(tmp) / f"{algo}.yml"
             yml.write_text(yaml.safe_dump({env_id: trial_entry(raw, params)}), encoding="utf-8")
             meta = train(
-                env_id,
-                algo,
-                hyperparams=yml,
-                timesteps=timesteps,
-                seed=seed,
-                out=Path(tmp),
-                max_minutes=max_minutes,
-                quiet=True,
+                checked_run(
+                    env_id,
+                    algo,
+                    hyperparams=yml,
+                    timesteps=timesteps,
+                    seed=seed,
+                    out=Path(tmp),
+                    max_minutes=max_minutes,
+                    quiet=True,
+                )
             )
         best = meta["validation"]["best"]
         records.append(

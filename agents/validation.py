@@ -17,6 +17,10 @@ from typing import Any
 
 import numpy as np
 
+import baselines
+from agents.evaluation import run_batch
+from agents.tuning_terms import check_breach, check_metrics
+
 #: Seeds of the validation episodes (``random`` scenario); training uses --seed + i.
 #: Sixteen: the seed-to-seed spread of a return (about 70 on the FSH) over 16 is about 18,
 #: below the differences between checkpoints worth choosing between.
@@ -32,8 +36,6 @@ def validate(
     is ``gym.make(env_id, scenario="random")`` reset with seed ``seed`` + k, bit for bit).
     ``policy``: a Policy, or a factory ``venv -> Policy``."""
     import gymnasium as gym
-
-    from agents.evaluation import run_batch
 
     venv = gym.make_vec(
         env_id, num_envs=n, vectorization_mode="vector_entry_point", scenario="random"
@@ -55,8 +57,6 @@ def reference_result(env_id: str) -> dict[str, Any]:
     """The industrial reference's (``cascade_pi_ff``) :func:`validate` result on ``env_id``,
     and under ``checks`` its metrics on the commissioning checks (the unit of
     :func:`scored`'s travel ratio and the judge of its checks)."""
-    import baselines
-    from agents.tuning_terms import check_metrics
 
     def make(v):
         return baselines.make(baselines.INDUSTRIAL_REFERENCE, v)
@@ -69,8 +69,6 @@ def scored(env_id: str, policy, ref: dict[str, Any]) -> dict[str, Any]:
     the reference's ``ref``, :func:`reference_result`), and its commissioning checks: ``check``,
     what a plant engineer would reject in them ("" if nothing), and ``check_travel_ratio``,
     the largest travel ratio to the reference's over them."""
-    from agents.tuning_terms import check_breach, check_metrics
-
     out: dict[str, Any] = validate(env_id, policy)
     out["travel_ratio"] = out["valve_travel"] / ref["valve_travel"]
     out["check"], out["check_travel_ratio"] = check_breach(

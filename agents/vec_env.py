@@ -25,6 +25,12 @@ import numpy as np
 from gymnasium.vector import AutoresetMode
 from stable_baselines3.common.vec_env.base_vec_env import VecEnv, VecEnvIndices
 
+from agents.moves import VecMoves
+from agents.privileged import VecPrivileged
+from agents.repeat import VecRepeat
+from agents.train_config import ConfigError
+from agents.travel_price import VecTravelPrice
+from agents.wrappers import VecControllerMemory, VecResidual
 from steamtemp_gym.envs.vector_env import SteamTempVectorEnv
 
 
@@ -169,11 +175,6 @@ def make_training_env(
     entry needs (agents/travel_price.py)."""
     from stable_baselines3.common.vec_env import VecMonitor, VecNormalize
 
-    from agents.moves import VecMoves
-    from agents.train_config import ConfigError
-    from agents.travel_price import VecTravelPrice
-    from agents.wrappers import VecControllerMemory, VecResidual
-
     base = NativeVecEnv(
         env_id,
         n_envs,
@@ -196,12 +197,8 @@ def make_training_env(
     if hp["env_wrapper"] is not None:
         venv = VecControllerMemory(venv, base.venv, **hp["env_wrapper"])
     if hp.get("action_repeat", 1) > 1:
-        from agents.repeat import VecRepeat
-
         venv = VecRepeat(venv, hp["action_repeat"], incremental=hp.get("max_move") is not None)
     if hp.get("privileged_critic"):
-        from agents.privileged import VecPrivileged
-
         venv = VecPrivileged(venv, base.venv)
     venv = VecMonitor(venv)
     if hp["normalize"]:

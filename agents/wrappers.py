@@ -41,6 +41,7 @@ import numpy as np
 from stable_baselines3.common.vec_env.base_vec_env import VecEnv, VecEnvWrapper
 
 from agents.memory import MEMORY_WRAPPER, MemoryConfig, memory_options  # noqa: F401 - re-exported
+from agents.residual import ResidualBase
 from baselines.loops import observation_layout
 from steamtemp_gym.signals import OBS_LIMIT
 
@@ -230,8 +231,6 @@ class VecResidual(VecEnvWrapper):
     of its last step)."""
 
     def __init__(self, venv: VecEnv, env: Any, scale: float, base: str | None = None) -> None:
-        from agents.residual import ResidualBase
-
         self.base = ResidualBase(env, scale, base)
         super().__init__(venv, observation_space=self.base.extend_space(venv.observation_space))
 

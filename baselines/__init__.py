@@ -32,7 +32,9 @@ class Tuned:
         return factory(self.name)(env, **{**values, **kwargs})
 
 
-_REGISTRY: dict[str, str | Callable[..., Any]] = {
+#: Every baseline by name: its factory, or a ``module:attr`` reference imported on first use
+#: (register() adds to it).
+REGISTRY: dict[str, str | Callable[..., Any]] = {
     "cascade_pi": "baselines.cascade_pi:CascadePI",
     "cascade_pi_ff": "baselines.cascade_pi:CascadePIFF",
     "fao_sf": "baselines.fao:FaoSF",
@@ -48,13 +50,13 @@ _REGISTRY: dict[str, str | Callable[..., Any]] = {
 #: Rows of the benchmark's common tuning for controllers whose own parameters are published
 #: (SIMC for the cascades): ``<name>_tuned`` (baselines/tuning.py).
 TUNED_ROWS = ("cascade_pi", "cascade_pi_ff", "fao_sf", "fao_fac", "neuro_pid_mee", "neuro_pid_mse")
-_REGISTRY.update({f"{n}_tuned": Tuned(n) for n in TUNED_ROWS})
+REGISTRY.update({f"{n}_tuned": Tuned(n) for n in TUNED_ROWS})
 #: The industrial reference: the cascade as a commissioned unit runs it (load-scheduled
 #: gains, load feed-forward). The leaderboard's score 0, the unit of the valve-travel
 #: budget, the base a residual agent corrects.
 INDUSTRIAL_REFERENCE = "cascade_pi_ff"
 #: The shipped controllers (register() cannot replace them).
-SHIPPED: tuple[str, ...] = tuple(_REGISTRY)
+SHIPPED: tuple[str, ...] = tuple(REGISTRY)
 NAMES: tuple[str, ...] = SHIPPED
 #: A registered name: a letter, then letters, digits, ``_``, ``-`` or ``.`` (no ``:`` or
 #: ``,``, which the command lines read as a module path and a list separator).
@@ -91,17 +93,17 @@ def register(name: str, factory: Callable[..., Policy] | str) -> None:
         )
     if name in SHIPPED:
         raise ValueError(f"{name!r} is a shipped baseline; register under another name")
-    old = _REGISTRY.get(name)
+    old = REGISTRY.get(name)
     if old is not None and old != factory:
         raise ValueError(f"baseline {name!r} is already registered (with {old!r})")
-    _REGISTRY[name] = factory
-    NAMES = tuple(_REGISTRY)
+    REGISTRY[name] = factory
+    NAMES = tuple(REGISTRY)
 
 
 def factory(name: str) -> Callable[..., Any]:
     """The class or function behind the baseline ``name`` (imported on first use)."""
     try:
-        ref = _REGISTRY[name]
+        ref = REGISTRY[name]
     except (KeyError, TypeError):
         raise ValueError(f"unknown baseline {name!r}; valid names: {list(NAMES)}") from None
     if isinstance(ref, str):
@@ -115,7 +117,7 @@ def factory(name: str) -> Callable[..., Any]:
 def tuning_source(name: str) -> str:
     """The controller whose stored tuning (baselines/tuning.py) the row ``name`` reads: the
     base controller of a ``<base>_tuned`` row, else ``name`` itself."""
-    ref = _REGISTRY.get(name)
+    ref = REGISTRY.get(name)
     return ref.name if isinstance(ref, Tuned) else name
 
 
@@ -124,4 +126,14 @@ def make(name: str, env: Any, **kwargs: Any) -> Policy:
     return checked(factory(name)(env, **kwargs), env)
 
 
-__all__ = ["NAMES", "SHIPPED", "Policy", "Tuned", "factory", "make", "register", "tuning_source"]
+__all__ = [
+    "NAMES",
+    "REGISTRY",
+    "SHIPPED",
+    "Policy",
+    "Tuned",
+    "factory",
+    "make",
+    "register",
+    "tuning_source",
+]

@@ -101,7 +101,7 @@ def sequences(
     )
 
 
-def _basis(w: np.ndarray, gamma: np.ndarray) -> np.ndarray:
+def gaussian_basis(w: np.ndarray, gamma: np.ndarray) -> np.ndarray:
     """(..., 1 + n_w0): f_0 = 1 and f_i = exp(-gamma_i (w - w0_i)^2), eq. (13); no
     Gaussian columns where gamma is empty (a plain ARX)."""
     w0 = np.asarray(W0)[: len(gamma)]
@@ -113,7 +113,7 @@ def evarx_predict(
     theta: np.ndarray, gamma: np.ndarray, phi: np.ndarray, w: np.ndarray
 ) -> np.ndarray:
     """One-step prediction of one output, eq. (11)-(12): theta (1 + n_w0, p)."""
-    return np.einsum("ti,ip,tp->t", _basis(w, gamma), theta, phi)
+    return np.einsum("ti,ip,tp->t", gaussian_basis(w, gamma), theta, phi)
 
 
 def lstsq_scaled(J: np.ndarray, r: np.ndarray) -> np.ndarray:
@@ -134,12 +134,12 @@ def fit_evarx(
     gamma = np.full(n0, gamma0)
 
     def jac_theta(g: np.ndarray) -> np.ndarray:
-        return (_basis(w, g)[:, :, None] * phi[:, None, :]).reshape(len(w), -1)
+        return (gaussian_basis(w, g)[:, :, None] * phi[:, None, :]).reshape(len(w), -1)
 
     theta = lstsq_scaled(jac_theta(gamma), y).reshape(n0 + 1, p)
     cost = [float(np.sum((y - evarx_predict(theta, gamma, phi, w)) ** 2))]
     for _ in range(iters):
-        f = _basis(w, gamma)
+        f = gaussian_basis(w, gamma)
         r = y - evarx_predict(theta, gamma, phi, w)
         d2 = (w[:, None] - np.asarray(W0)) ** 2
         Jg = -d2 * f[:, 1:] * (phi @ theta[1:].T)  # d yhat / d gamma_i
@@ -161,7 +161,7 @@ def fit_evarx(
     return theta, gamma, {"cost": cost}
 
 
-def _simulate(C: np.ndarray, phi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def simulate_coef(C: np.ndarray, phi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Eq. (14) on sequences: coefficients C (K, S, n_out, p) frozen per step, regressors
     phi (K, S, p) whose output lags are replaced by the model's own outputs (started from
     the measured ones). Returns (yhat (K, S, n_out), the regressors used (K, S, p))."""
@@ -189,9 +189,9 @@ def simulation_sensitivities(
     n0 = nb - 1
     K, S, _ = phi.shape
     ny = N_Y * no
-    F = np.stack([_basis(w, gamma[j]) for j in range(no)], 2)  # (K, S, no, nb)
+    F = np.stack([gaussian_basis(w, gamma[j]) for j in range(no)], 2)  # (K, S, no, nb)
     C = np.einsum("ksjb,jbp->ksjp", F, theta)
-    yh, x = _simulate(C, phi)
+    yh, x = simulate_coef(C, phi)
     d2 = (w[..., None] - np.asarray(W0)[:n0]) ** 2
     D = np.zeros((K, S, no, theta.size + gamma.size))
     for j in range(no):  # the derivatives with the fed-back lags held
@@ -239,9 +239,11 @@ def fit_output_error(
 
     def cost(x: np.ndarray) -> float:
         th, ga = unpack(x)
-        C = np.einsum("ksjb,jbp->ksjp", np.stack([_basis(w, ga[j]) for j in range(len(th))], 2), th)
+        C = np.einsum(
+            "ksjb,jbp->ksjp", np.stack([gaussian_basis(w, ga[j]) for j in range(len(th))], 2), th
+        )
         with np.errstate(all="ignore"):
-            c = float(np.sum(((y - _simulate(C, phi)[0]) / sy) ** 2))
+            c = float(np.sum(((y - simulate_coef(C, phi)[0]) / sy) ** 2))
         return c if np.isfinite(c) else np.inf
 
     x = np.clip(np.concatenate([theta0.ravel(), gamma0.ravel()]), lo, hi)
@@ -286,7 +288,7 @@ class Model:
         """Coefficients (..., n_out, p) frozen at the load(s) w."""
         w = np.asarray(w, float)
         if self.kind == "evarx":
-            F = np.stack([_basis(w, self.gamma[j]) for j in range(self.n_out)], -2)
+            F = np.stack([gaussian_basis(w, self.gamma[j]) for j in range(self.n_out)], -2)
             return np.einsum("...jb,jbp->...jp", F, self.theta)
         L = np.asarray(ARX_LOADS)
         x = np.clip(w, L[0], L[-1])
@@ -374,7 +376,7 @@ def simulate(model: Model, data: dict[str, np.ndarray]) -> tuple[np.ndarray, np.
     """Eq. (14): the model fed its own past outputs over ``data``, every interleaved
     sequence; (measured y, simulated yhat), each (K S, n_out)."""
     phi, w, y = sequences(data, model.n)
-    yh, _ = _simulate(model.coef(w), phi)
+    yh, _ = simulate_coef(model.coef(w), phi)
     return y.reshape(-1, model.n_out), yh.reshape(-1, model.n_out)
 
 

@@ -47,7 +47,7 @@ output is added to the same target. The inner loop holds the attemperator-outlet
 temperature, so a normalized bias c = KK2 theta_A + KK1 xi_c is converted to kelvin of
 that temperature by the plant's steam tables: b = c (h_a0 - h_e0) dT/dh(p, h) at the
 attemperator outlet of the undisturbed steady state, tabulated over the schedule loads
-at commissioning and interpolated on U_3 (fao_observer._fsh_unit_K): 63 K per unit at rated
+at commissioning and interpolated on U_3 (fao_observer.fsh_unit_K): 63 K per unit at rated
 load, 80 K at 50 % (the FSH's average T_a0 - T_e0 = 68.5 K would hold only for the whole
 surface's mean heat capacity). T0 = 20 K normalizes the FAC's temperature input only.
 (The paper's simulator's target units are not given; this is our reading.) The

@@ -202,7 +202,7 @@ def _fsh_nominal(env_id: str, params_json: str) -> tuple[np.ndarray, np.ndarray,
 
 
 @commissioned(maxsize=8)
-def _fsh_unit_K(env_id: str, params_json: str) -> tuple[np.ndarray, np.ndarray]:
+def fsh_unit_K(env_id: str, params_json: str) -> tuple[np.ndarray, np.ndarray]:
     """(U_3, K per normalized unit): the attemperator-outlet temperature change that moves
     the FSH inlet enthalpy by one normalized unit, h_a0 - h_e0 = 217.8 kJ/kg, i.e.
     DH0 dT/dh(p, h) at the undisturbed steady state of each schedule load (the plant's
@@ -272,7 +272,7 @@ class FSHObserver:
             )
         ]
         self.u3_tab, self.h0_tab, self.ha_tab = _fsh_nominal(plant.id, params_json)
-        self.unit_tab = _fsh_unit_K(plant.id, params_json)
+        self.unit_tab = fsh_unit_K(plant.id, params_json)
         self.unit_K = np.zeros(0)
         self.kc, self.ti = _fsh_observer_gains(plant.id, params_json)
         self.q0 = self.par[2] * DH0_J_KG

@@ -119,7 +119,7 @@ OSQP_SETTINGS = {
 
 
 # -- the QP of one row ---------------------------------------------------------------------
-class _QP:
+class QP:
     """OSQP on the condensed QP of one row: a dense pattern fixed at setup, values updated."""
 
     def __init__(self, H: np.ndarray, A: np.ndarray) -> None:
@@ -486,7 +486,7 @@ class MPCLinear:
         lo[:nv], hi[:nv] = np.tile(-u_prev, n_mv), np.tile(1.0 - u_prev, n_mv)
         lo[2 * nv + n_s : 2 * nv + 2 * n_s] -= esoft
         hi[2 * nv : 2 * nv + n_s] -= esoft
-        qp = st["qp"] or _QP(m["H"], m["A"])
+        qp = st["qp"] or QP(m["H"], m["A"])
         res = qp.solve(key, m["H"], m["A"], g, lo, hi, st["warm"])
         self.stats["solves"] += 1
         self.stats["iterations"] += int(res.info.iter)

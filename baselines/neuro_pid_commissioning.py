@@ -36,6 +36,7 @@ import numpy as np
 from baselines.cascade_pi import FILTER_S, GAIN_LOADS, simc_pi
 from baselines.commissioned import commissioned
 from baselines.identification import FOPDT
+from steamtemp_gym import plants
 from steamtemp_gym.metrics import step_response_metrics
 from steamtemp_gym.plants.base import MAIN
 from steamtemp_gym.scenarios import Scenario
@@ -102,8 +103,6 @@ def commissioning_gains(controller: type, env_id: str, params_json: str) -> np.n
     load of :data:`GAIN_LOADS` (zeros off MAIN), and the loop direction (sign of the outer
     gain) as a 4th column; see the module docstring. ``controller``: as for
     :func:`outer_models`."""
-    from steamtemp_gym import plants
-
     dt = plants.make(env_id, **json.loads(params_json)).dt_s
     table = []
     for load in GAIN_LOADS:

@@ -67,7 +67,7 @@ GAIN_RANGE = 0.5
 
 
 @njit(cache=True)
-def _forward(w, x, h, g):
+def forward(w, x, h, g):
     """Eq. (5)-(8): hidden tanh outputs h (N_HIDDEN), output g(net) in (0, 1) (3)."""
     for p in range(N_HIDDEN):
         a = w[p * (N_IN + 1)]
@@ -83,7 +83,7 @@ def _forward(w, x, h, g):
 
 
 @njit(cache=True)
-def _sensitivity(w, x, h, g, du, scale, s):
+def sensitivity(w, x, h, g, du, scale, s):
     """de_k/dw of every weight (eq. (11), (12), (15)-(18)), plant Jacobian by its sign (+1
     after the loop's direction): de/dO_l = -dU_l, O_l = s_l g(net_l)."""
     c = np.empty(3)
@@ -127,8 +127,8 @@ def npid_step(X, E, W, G, V, Ebuf, Sbuf, nbuf, head, base, scale, mee, sigma, la
         du[1] = E[b, 0]
         du[2] = E[b, 0] - 2.0 * E[b, 1] + E[b, 2]
         w = W[b]
-        _forward(w, X[b], h, g)
-        _sensitivity(w, X[b], h, g, du, scale[b], s)
+        forward(w, X[b], h, g)
+        sensitivity(w, X[b], h, g, du, scale[b], s)
         if mee:  # eq. (3), (10), (14); ascent eq. (9), (13)
             vsum = 0.0
             for j in range(N_W):
@@ -155,7 +155,7 @@ def npid_step(X, E, W, G, V, Ebuf, Sbuf, nbuf, head, base, scale, mee, sigma, la
             for j in range(N_W):
                 G[b, j] = (1.0 - lam) * G[b, j] + lam * e * s[j]
                 w[j] -= eta * G[b, j]
-        _forward(w, X[b], h, g)  # Section 4 step (5): the PID gains of the updated net
+        forward(w, X[b], h, g)  # Section 4 step (5): the PID gains of the updated net
         for m in range(3):
             gains[b, m] = base[b, m] + scale[b, m] * g[m]
 

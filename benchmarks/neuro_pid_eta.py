@@ -33,7 +33,7 @@ import numpy as np
 import baselines
 from agents.evaluation import run_batch
 from baselines.neuro_pid import NeuroPID, Recorder
-from baselines.neuro_pid_net import ETA, GAIN_RANGE, N_HIDDEN, N_IN, _forward
+from baselines.neuro_pid_net import ETA, GAIN_RANGE, N_HIDDEN, N_IN, forward
 
 TRAVEL_MAX, ADAPT_MIN = 2.0, 0.10
 
@@ -62,7 +62,7 @@ def learned(pol: NeuroPID) -> np.ndarray:
     h, g = np.empty(N_HIDDEN), np.empty(3)
     out = []
     for w in W:
-        _forward(w, np.zeros(N_IN), h, g)
+        forward(w, np.zeros(N_IN), h, g)
         out.append(GAIN_RANGE * np.abs(g / 0.5 - 1.0))  # k / k0 - 1 = 2 r (g - 1/2)
     return np.array(out)
 

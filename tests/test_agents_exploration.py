@@ -112,6 +112,8 @@ def test_td3_explores_with_the_low_pass_noise_per_decision(tmp_path):
     )
     assert isinstance(model.action_noise, LowPassActionNoise)
     assert model.action_noise.a == pytest.approx(np.exp(-4.0 / hp["noise_tau_s"]))
-    meta = training.train(ENV_ID, "td3", path, timesteps=200, seed=0, out=tmp_path, quiet=True)
+    meta = training.train(
+        training.checked_run(ENV_ID, "td3", path, timesteps=200, seed=0, out=tmp_path, quiet=True)
+    )
     assert meta["timesteps_trained"] >= 200
     assert meta["hyperparameters"]["noise_tau_s"] == hp["noise_tau_s"]

@@ -394,7 +394,15 @@ def test_an_off_policy_agents_price_moves_on_its_deterministic_travel(tmp_path):
         )
     )
     meta = training.train(
-        env_id, "td3", path, timesteps=2 * OFF_POLICY_EVERY + 8, seed=0, out=tmp_path, quiet=True
+        training.checked_run(
+            env_id,
+            "td3",
+            path,
+            timesteps=2 * OFF_POLICY_EVERY + 8,
+            seed=0,
+            out=tmp_path,
+            quiet=True,
+        )
     )
     course = meta["travel_price"]["course"]
     assert [c[0] for c in course] == [OFF_POLICY_EVERY, 2 * OFF_POLICY_EVERY]
@@ -435,7 +443,11 @@ def test_an_on_policy_price_can_read_the_closed_loop_travel(tmp_path):
     with pytest.raises(ValueError, match="needs travel_price"):
         train_config.read_hyperparams(path, env_id, "ppo")
     path.write_text(yaml.safe_dump({env_id: entry}))
-    meta = training.train(env_id, "ppo", path, timesteps=4 * 256, seed=0, out=tmp_path, quiet=True)
+    meta = training.train(
+        training.checked_run(
+            env_id, "ppo", path, timesteps=4 * 256, seed=0, out=tmp_path, quiet=True
+        )
+    )
     course = meta["travel_price"]["course"]
     assert [c[0] for c in course] == [512, 1024]  # rollouts of 256 transitions
     assert all(c[1] != c[2] for c in course)  # the scored policy's travel, not the rollout's

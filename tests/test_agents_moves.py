@@ -178,13 +178,15 @@ def test_an_incremental_agent_trains_and_acts_within_its_move_bound(tmp_path):
     from agents import training
 
     training.train(
-        ENV,
-        "ppo",
-        _ppo_yaml(tmp_path, max_move=MAX_MOVE),
-        timesteps=128,
-        seed=0,
-        out=tmp_path,
-        quiet=True,
+        training.checked_run(
+            ENV,
+            "ppo",
+            _ppo_yaml(tmp_path, max_move=MAX_MOVE),
+            timesteps=128,
+            seed=0,
+            out=tmp_path,
+            quiet=True,
+        )
     )
     meta = json.loads((tmp_path / "steamtemp__Cascade300MW-v0__ppo.json").read_text())
     assert meta["max_move"] == MAX_MOVE
@@ -311,7 +313,9 @@ def test_tied_valves_in_the_hyperparameters_train_and_load(tmp_path):
     hp = yaml.safe_load(_ppo_yaml(tmp_path, max_move=MAX_MOVE, tied_valves=SPRAYS).read_text())
     path = tmp_path / "mimo.yml"
     path.write_text(yaml.safe_dump({MIMO: hp[ENV]}))
-    training.train(MIMO, "ppo", path, timesteps=128, seed=0, out=tmp_path, quiet=True)
+    training.train(
+        training.checked_run(MIMO, "ppo", path, timesteps=128, seed=0, out=tmp_path, quiet=True)
+    )
     meta = json.loads((tmp_path / "steamtemp__BoilerTurbineMIMO-v0__ppo.json").read_text())
     assert meta["tied_valves"] == SPRAYS
     (files,) = agents.files.find(tmp_path)

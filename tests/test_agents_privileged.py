@@ -122,7 +122,9 @@ def test_a_trained_agent_acts_on_its_observation_alone(tmp_path):
         tmp_path, ENV, 32, env_wrapper=[{"agents.wrappers.ControllerMemory": {"history": 2}}]
     )
     meta = training.train(
-        ENV, "ppo_privileged", hp, timesteps=128, seed=0, out=tmp_path, quiet=True
+        training.checked_run(
+            ENV, "ppo_privileged", hp, timesteps=128, seed=0, out=tmp_path, quiet=True
+        )
     )
     names = meta["privileged_critic"]["signals"]
     assert names == privileged.signal_names(gym.make(ENV).unwrapped.plant)

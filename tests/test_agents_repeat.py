@@ -235,13 +235,15 @@ def test_an_agent_with_action_repeat_trains_and_acts_every_k_intervals(tmp_path)
     from agents import training
 
     training.train(
-        ENV,
-        "ppo",
-        _ppo_yaml(tmp_path, max_move=0.05, action_repeat=3),
-        timesteps=64,
-        seed=0,
-        out=tmp_path,
-        quiet=True,
+        training.checked_run(
+            ENV,
+            "ppo",
+            _ppo_yaml(tmp_path, max_move=0.05, action_repeat=3),
+            timesteps=64,
+            seed=0,
+            out=tmp_path,
+            quiet=True,
+        )
     )
     meta = json.loads((tmp_path / "steamtemp__Cascade300MW-v0__ppo.json").read_text())
     assert meta["action_repeat"] == 3

@@ -110,7 +110,9 @@ def trained(tmp_path_factory) -> dict[str, Path]:
     for algo in ALGOS:
         d = tmp_path_factory.mktemp(algo)
         training.train(
-            ENV_ID, algo, _yaml(d, algo), timesteps=STEPS[algo], seed=1, out=d, quiet=True
+            training.checked_run(
+                ENV_ID, algo, _yaml(d, algo), timesteps=STEPS[algo], seed=1, out=d, quiet=True
+            )
         )
         out[algo] = d
     return out

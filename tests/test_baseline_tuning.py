@@ -386,11 +386,11 @@ def test_every_stored_tuning_was_chosen_under_the_current_terms(name, env_id):
     # its result (a term that refused a move the stored search made would leave its path)
     rows = {}  # knobs met twice: the time they were checked, if one was
     for r in res["history"]:
-        if r["check"] is not None or bt._key(r["knobs"]) not in rows:
-            rows[bt._key(r["knobs"])] = r
+        if r["check"] is not None or bt.knobs_key(r["knobs"]) not in rows:
+            rows[bt.knobs_key(r["knobs"])] = r
 
     def row(knobs):
-        r = rows.get(bt._key(knobs))
+        r = rows.get(bt.knobs_key(knobs))
         assert r is not None, f"the search under the current terms meets {knobs}, never stored"
         return r
 

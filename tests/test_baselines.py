@@ -125,7 +125,7 @@ class _Proportional:
 def test_a_baseline_added_to_the_registry_is_held_to_the_observation_checks(monkeypatch):
     """baselines.make checks every registered baseline's predict arguments, so a baseline
     added later passes check_bad_observations_rejected without code of its own."""
-    monkeypatch.setitem(baselines._REGISTRY, "proportional", f"{__name__}:_Proportional")
+    monkeypatch.setitem(baselines.REGISTRY, "proportional", f"{__name__}:_Proportional")
     cascade = "steamtemp/Cascade300MW-v0"
     check_bad_observations_rejected(
         lambda env: baselines.make("proportional", env), cascade, quick=True

@@ -30,7 +30,7 @@ from agents.evaluation import run_batch
 from baselines.cascade_pi import inner_schedule
 from baselines.fao import F_GAINS, KK1, KK2, FaoFAC, FaoSF
 from baselines.fao_fuzzy import CENTRES, FAM, HALF_WIDTH, LABELS, fac_output
-from baselines.fao_observer import DH0_J_KG, _fsh_unit_K
+from baselines.fao_observer import DH0_J_KG, fsh_unit_K
 from steamtemp_gym.scenarios import Scenario
 from steamtemp_gym.steam import h_pT
 
@@ -232,7 +232,7 @@ def test_unit_conversion_moves_the_inlet_enthalpy_by_one_normalized_unit():
     9) as kelvin of the attemperator outlet: a change of 0.01 unit of the inner setpoint
     in the plant's undisturbed steady state moves the inlet enthalpy by 2.178 kJ/kg (+-1 %)
     at 100 and 50 % load (63 and 80 K per unit: not the FSH's average 68.5 K)."""
-    u3, unit = _fsh_unit_K(FSH, "{}")
+    u3, unit = fsh_unit_K(FSH, "{}")
     loads, T_in = inner_schedule(FSH, "{}", "attemp_out_temp_meas_C")
     p = inner_schedule(FSH, "{}", "pressure_MPa")[1] * 1e6
     for load in (1.0, 0.5):

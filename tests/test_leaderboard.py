@@ -69,7 +69,7 @@ def fake_policies(monkeypatch):
     """Policies ``frozen`` and ``flaky`` (Scripted) next to the baselines, run in this process
     as the shipped ones are."""
     for name in ("frozen", "flaky"):
-        monkeypatch.setitem(baselines._REGISTRY, name, lambda env, name=name: Scripted(env, name))
+        monkeypatch.setitem(baselines.REGISTRY, name, lambda env, name=name: Scripted(env, name))
     monkeypatch.setattr(baselines, "NAMES", (*baselines.NAMES, "frozen", "flaky"))
     monkeypatch.setattr(baselines, "SHIPPED", (*baselines.SHIPPED, "frozen", "flaky"))
     real = specs.Spec.make

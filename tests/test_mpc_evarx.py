@@ -47,8 +47,10 @@ def _synthetic(kind: str, noise: float, seed: int = 0) -> tuple:
     gamma = np.array([[20.0, 30.0, 25.0], [25.0, 20.0, 30.0]])[:, :n0]
     w = 0.45 + 0.6 * rng.random((K, S))
     phi = np.concatenate([np.zeros((K, S, E.N_Y * no)), rng.standard_normal((K, S, 4))], 2)
-    C = np.einsum("ksjb,jbp->ksjp", np.stack([E._basis(w, gamma[j]) for j in range(no)], 2), theta)
-    y = E._simulate(C, phi)[0] + noise * rng.standard_normal((K, S, no))
+    C = np.einsum(
+        "ksjb,jbp->ksjp", np.stack([E.gaussian_basis(w, gamma[j]) for j in range(no)], 2), theta
+    )
+    y = E.simulate_coef(C, phi)[0] + noise * rng.standard_normal((K, S, no))
     return theta, gamma, phi, w, y
 
 

@@ -83,7 +83,7 @@ def test_batched_predict_equals_unbatched_bit_for_bit(env_id):
 
 
 def test_the_solver_called_directly_acts_as_through_osqps_wrapper(monkeypatch):
-    """The QP goes to OSQP's compiled solver directly (``_QP.core``); through the public
+    """The QP goes to OSQP's compiled solver directly (``QP.core``); through the public
     wrapper (an osqp without it) every action is the same to the bit, along a ramp with
     noise where the local models, the QP matrices and OSQP's adapted rho change."""
     from baselines import mpc_linear
@@ -103,7 +103,7 @@ def test_the_solver_called_directly_acts_as_through_osqps_wrapper(monkeypatch):
         return np.array(out), pol.stats["iterations"]
 
     direct, iters = actions()
-    init = mpc_linear._QP.__init__
+    init = mpc_linear.QP.__init__
     made = []
 
     def wrapped_only(self, H, A):
@@ -112,7 +112,7 @@ def test_the_solver_called_directly_acts_as_through_osqps_wrapper(monkeypatch):
         self.core = None
         made.append(self)
 
-    monkeypatch.setattr(mpc_linear._QP, "__init__", wrapped_only)
+    monkeypatch.setattr(mpc_linear.QP, "__init__", wrapped_only)
     wrapped, iters_w = actions()
     assert made and iters_w == iters
     np.testing.assert_array_equal(direct, wrapped)

@@ -40,8 +40,8 @@ def _net(w, x, scale, base=0.0):
 def _sens(w, x, E, scale):
     h, g, s = np.empty(npnet.N_HIDDEN), np.empty(3), np.empty(npnet.N_W)
     du = np.array([E[0] - E[1], E[0], E[0] - 2 * E[1] + E[2]])
-    npnet._forward(w, x, h, g)
-    npnet._sensitivity(w, x, h, g, du, scale, s)
+    npnet.forward(w, x, h, g)
+    npnet.sensitivity(w, x, h, g, du, scale, s)
     return s, du
 
 

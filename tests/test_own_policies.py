@@ -418,7 +418,7 @@ def test_check_cli_takes_sb3_names_and_factories(at_root, capsys):
 @pytest.fixture
 def registry(monkeypatch):
     """baselines' and scenarios' registries restored after the test."""
-    monkeypatch.setattr(baselines, "_REGISTRY", dict(baselines._REGISTRY))
+    monkeypatch.setattr(baselines, "REGISTRY", dict(baselines.REGISTRY))
     monkeypatch.setattr(baselines, "NAMES", baselines.NAMES)
     monkeypatch.setattr(scenarios.registry, "_REGISTRY", dict(scenarios.registry._REGISTRY))
 
@@ -464,8 +464,8 @@ def test_registered_baseline_reaches_a_worker_through_import(registry, tmp_path,
         r.get("error") for r in rows
     )
     # a fresh worker: the registry without the name, the module not imported
-    monkeypatch.setattr(baselines, "_REGISTRY", dict(baselines._REGISTRY))
-    del baselines._REGISTRY["single_loop_pi"]
+    monkeypatch.setattr(baselines, "REGISTRY", dict(baselines.REGISTRY))
+    del baselines.REGISTRY["single_loop_pi"]
     monkeypatch.delitem(__import__("sys").modules, "my_registry")
     unit = episodes.Unit(ENV, "tiny", TINY, "single_loop_pi", [0], "fp", None, ("my_registry",))
     (row,), _ = episodes.run_unit(unit)

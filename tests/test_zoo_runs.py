@@ -362,15 +362,17 @@ def test_local_runs_write_run_indexed_files_with_their_seeds(local_zoo, tmp_path
     pol = agents.load(ENV, "ppo", zoo=local_zoo, run=1)
     assert pol.predict(np.zeros(pol.n_obs))[0].shape == (2,)
     again = training.train(
-        ENV,
-        "ppo",
-        local_zoo.parent / "ppo.yml",
-        timesteps=256,
-        seed=1000,
-        out=tmp_path,
-        max_minutes=30,
-        quiet=True,
-        run=1,
+        training.checked_run(
+            ENV,
+            "ppo",
+            local_zoo.parent / "ppo.yml",
+            timesteps=256,
+            seed=1000,
+            out=tmp_path,
+            max_minutes=30,
+            quiet=True,
+            run=1,
+        )
     )
     assert _outcome(again) == _outcome(m1)  # same seed, same run
     assert files.steamtemp_paths(tmp_path, ENV, "ppo", 1)[0].is_file()
@@ -475,12 +477,16 @@ def test_an_entrys_max_minutes_bounds_its_runs_where_the_command_does_not(tmp_pa
     rollout) where --max-minutes is not given; --max-minutes wins where it is."""
     yml = tmp_path / "ppo.yml"
     yml.write_text(yaml.safe_dump({ENV: {**TINY_PPO[ENV], "max_minutes": 1e-4}}))
-    meta = training.train(ENV, "ppo", yml, timesteps=100_000, seed=0, out=tmp_path, quiet=True)
+    meta = training.train(
+        training.checked_run(ENV, "ppo", yml, timesteps=100_000, seed=0, out=tmp_path, quiet=True)
+    )
     assert meta["timesteps_trained"] < 100_000
     (job,) = train_runs.zoo_jobs([(ENV, "ppo")], tmp_path, 0, None, None)
     assert job["max_minutes"] is None and job["default_minutes"] == train_runs.ZOO_MINUTES
     meta = training.train(
-        ENV, "ppo", yml, timesteps=128, seed=0, out=tmp_path, quiet=True, max_minutes=5.0
+        training.checked_run(
+            ENV, "ppo", yml, timesteps=128, seed=0, out=tmp_path, quiet=True, max_minutes=5.0
+        )
     )
     assert meta["timesteps_trained"] == 128
     # a run under a time budget is validated at its marks of that budget and at the end of
