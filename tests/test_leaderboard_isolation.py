@@ -437,45 +437,20 @@ def test_a_factory_module_that_patches_the_scoring_at_import_changes_nothing(tmp
     (tmp_path / "tiny.yaml").write_text(TINY)
     real = episodes._ok_row
     out = tmp_path / "out"
-    lb.main(
-        [
-            "--envs",
-            ENV,
-            "--policies",
-            f"cascade_pi,{tmp_path / 'patcher.py'}:make",
-            "--scenarios",
-            str(tmp_path / "tiny.yaml"),
-            "--seeds",
-            "0",
-            "--jobs",
-            "1",
-            "--no-oracle",
-            "--out",
-            str(out),
-        ]
-    )
+
+    def run(policies: str, to: Path) -> None:
+        lb.main(
+            ["--envs", ENV, "--policies", policies, "--scenarios", str(tmp_path / "tiny.yaml")]
+            + ["--seeds", "0", "--jobs", "1", "--no-oracle", "--out", str(to)]
+        )
+
+    run(f"cascade_pi,{tmp_path / 'patcher.py'}:make", out)
     assert episodes._ok_row is real
     assert "patcher" not in sys.modules
     rows = _rows(out)
     assert rows["make", 0]["metrics"]["return"] < 0  # the valve held shut, scored as it is
     clean = tmp_path / "clean"
-    lb.main(
-        [
-            "--envs",
-            ENV,
-            "--policies",
-            "cascade_pi",
-            "--scenarios",
-            str(tmp_path / "tiny.yaml"),
-            "--seeds",
-            "0",
-            "--jobs",
-            "1",
-            "--no-oracle",
-            "--out",
-            str(clean),
-        ]
-    )
+    run("cascade_pi", clean)
     for key, row in _rows(clean).items():
         assert rows[key]["metrics"] == row["metrics"], key
 

@@ -244,6 +244,21 @@ def test_rl_zoo_run_is_scored_by_the_leaderboard(tmp_path, tiny):
 
 
 # --------------------------------------------------------------------------- bad names
+def _refused_argv(name: str, tiny: Path, out: Path) -> list[str]:
+    """The leaderboard's arguments for a run of policy ``name`` that must be refused."""
+    return [
+        "--envs",
+        ENV,
+        "--policies",
+        name,
+        "--scenarios",
+        str(tiny),
+        "--out",
+        str(out),
+        "--no-oracle",
+    ]
+
+
 def _bad_module(tmp_path: Path) -> Path:
     path = tmp_path / "not_a_policy.py"
     path.write_text(
@@ -273,19 +288,7 @@ def test_bad_policy_is_an_argparse_error_of_both_clis(name, words, tmp_path, tin
     name = name.format(bad=_bad_module(tmp_path), tmp=tmp_path)
     out = tmp_path / "out"
     with pytest.raises(SystemExit) as exc:
-        lb.main(
-            [
-                "--envs",
-                ENV,
-                "--policies",
-                name,
-                "--scenarios",
-                str(tiny),
-                "--out",
-                str(out),
-                "--no-oracle",
-            ]
-        )
+        lb.main(_refused_argv(name, tiny, out))
     err = capsys.readouterr().err
     assert exc.value.code == 2 and "--policies" in err and "Traceback" not in err
     assert all(w in err for w in words), err
@@ -361,19 +364,7 @@ def test_agent_files_that_do_not_fit_their_env_are_refused_when_named(
     assert all(w in str(exc.value) for w in words), str(exc.value)
     out = tmp_path / "out"
     with pytest.raises(SystemExit) as code:
-        lb.main(
-            [
-                "--envs",
-                ENV,
-                "--policies",
-                name,
-                "--scenarios",
-                str(tiny),
-                "--out",
-                str(out),
-                "--no-oracle",
-            ]
-        )
+        lb.main(_refused_argv(name, tiny, out))
     assert code.value.code == 2 and not out.exists()
     err = capsys.readouterr().err
     assert all(w in err for w in words), err
